@@ -1,0 +1,6 @@
+#!/usr/bin/env bash
+# Regenerates include/sketchbody.h with the cbindgen version pinned in Cargo.toml.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SKB_BLESS_HEADER=1 cargo test --quiet --test header
+echo "include/sketchbody.h regenerated"

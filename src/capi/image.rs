@@ -1,0 +1,104 @@
+//! `skb_image` views and the image functions (Canny, Gaussian blur).
+
+use crate::image::{canny_into, gaussian_blur, CannyParams, ImageView};
+
+use super::error::fail;
+use super::ptr::{try_ref, try_slice, try_slice_mut};
+use super::status::skb_status;
+
+/// A borrowed 8-bit image owned by the caller: `height` rows of `width` pixels, each pixel
+/// `channels` interleaved bytes (1 gray, 3 R,G,B, 4 R,G,B,A with alpha ignored), rows `stride`
+/// bytes apart (`stride >= width * channels`). sketchbody only reads it during the call and
+/// never keeps the pointer. A plain struct: copy it freely; its layout is part of the ABI.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct skb_image {
+    /// First byte of the first row.
+    pub data: *const u8,
+    /// Width in pixels, 1..=16384.
+    pub width: u32,
+    /// Height in pixels, 1..=16384.
+    pub height: u32,
+    /// Bytes between the starts of consecutive rows.
+    pub stride: u32,
+    /// Bytes per pixel: 1, 3 or 4.
+    pub channels: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<skb_image>() == 24 || std::mem::size_of::<usize>() != 8);
+
+/// Validates an `skb_image` and borrows it as a core view.
+///
+/// # Safety
+/// `img` must be NULL or point to an `skb_image` whose `data` is valid for the described rows.
+pub(crate) unsafe fn view_of<'a>(img: *const skb_image) -> Result<ImageView<'a>, skb_status> {
+    let img = try_ref(img, "image")?;
+    let (w, h, c, s) = (img.width as usize, img.height as usize, img.channels as usize, img.stride as usize);
+    let len = ImageView::required_len(w, h, c, s).map_err(|e| fail(&e))?;
+    let data = try_slice(img.data, len, "image->data")?;
+    ImageView::new(data, w, h, c, s).map_err(|e| fail(&e))
+}
+
+/// Canny edges of `src`, bit-exact with OpenCV 4.6
+/// `cv::Canny(gray, dst, threshold1, threshold2, aperture, l2_gradient)` where `gray` is `src`
+/// (1 channel) or `cv::cvtColor(src, COLOR_RGB2GRAY)` (3/4 channels). Writes `src->height` rows
+/// of `src->width` bytes (255 edge, 0 not) into `dst`, rows `dst_stride` bytes apart;
+/// `dst_len` is the size of `dst` in bytes and must be at least
+/// `dst_stride * (height - 1) + width`. Thresholds may be given in either order; `aperture` is
+/// 3, 5 or 7. On error nothing is written. Thread-safe; runs on the rayon thread pool.
+#[no_mangle]
+pub unsafe extern "C" fn skb_canny(
+    src: *const skb_image,
+    threshold1: f64,
+    threshold2: f64,
+    aperture: i32,
+    l2_gradient: bool,
+    dst: *mut u8,
+    dst_stride: usize,
+    dst_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        let view = try_status!(view_of(src));
+        if !matches!(aperture, 3 | 5 | 7) {
+            return fail(&crate::Error::InvalidAperture(aperture as i64));
+        }
+        let params = CannyParams { threshold1, threshold2, aperture: aperture as u32, l2_gradient };
+        let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
+        try_core!(canny_into(&view, &params, out, dst_stride));
+        skb_status::SKB_OK
+    }
+}
+
+/// Gaussian blur of a 1-channel `src` with standard deviation `sigma` pixels (0 < sigma <= 1024),
+/// compatible with OpenCV 4.x `cv::GaussianBlur(src, dst, cv::Size(0, 0), sigma)`. Output
+/// layout as in [`skb_canny`]. On error nothing is written. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_gaussian_blur(
+    src: *const skb_image,
+    sigma: f64,
+    dst: *mut u8,
+    dst_stride: usize,
+    dst_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        let view = try_status!(view_of(src));
+        let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
+        let (w, h) = (view.width(), view.height());
+        if dst_stride < w {
+            return fail(&crate::Error::BadStride { stride: dst_stride, row_bytes: w });
+        }
+        let needed = dst_stride * (h - 1) + w;
+        if dst_len < needed {
+            return fail(&crate::Error::BufferTooSmall { len: dst_len, needed });
+        }
+        let blurred = try_core!(gaussian_blur(&view, sigma));
+        for (y, row) in blurred.as_bytes().chunks_exact(w).enumerate() {
+            out[y * dst_stride..y * dst_stride + w].copy_from_slice(row);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Largest accepted image width or height, in pixels.
+pub const SKB_MAX_IMAGE_SIDE: u32 = 16384;
+const _: () = assert!(SKB_MAX_IMAGE_SIDE as usize == crate::error::MAX_IMAGE_SIDE);

@@ -1,0 +1,26 @@
+//! The C ABI: the only module with `extern "C"` functions and raw pointers.
+//!
+//! Conventions (see `docs/c-api.md`): every function returns an [`skb_status`] (0 = OK) and
+//! writes results through trailing out-parameters; on failure a thread-local message is
+//! available from [`skb_last_error_message`] and no output is written. Every entry point checks
+//! its pointers and sizes and runs inside a panic boundary, so a Rust panic becomes
+//! `SKB_ERR_PANIC` instead of aborting the host. Only the three text getters (`skb_version`,
+//! `skb_status_str`, `skb_last_error_message`) return a pointer instead of a status.
+#![allow(non_camel_case_types)]
+
+#[macro_use]
+mod panic;
+#[macro_use]
+mod ptr;
+mod error;
+mod image;
+mod status;
+mod version;
+
+pub use error::skb_last_error_message;
+pub use image::{skb_canny, skb_gaussian_blur, skb_image, SKB_MAX_IMAGE_SIDE};
+pub use status::{skb_status, skb_status_str};
+pub use version::{skb_version, SKB_VERSION_MAJOR, SKB_VERSION_MINOR, SKB_VERSION_PATCH, SKB_VERSION_STRING};
+
+pub(crate) use error::{clear_last_error as error_reset, fail as error_fail};
+pub(crate) use panic::panic_status;

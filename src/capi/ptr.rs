@@ -1,0 +1,58 @@
+//! Typed pointer checks: NULL becomes `SKB_ERR_NULL_POINTER` with the argument's name.
+
+use super::error::fail_with;
+use super::status::skb_status;
+
+/// Borrows `*p`, or fails naming `name` when `p` is NULL.
+///
+/// # Safety
+/// `p` must be NULL or point to a valid `T` that outlives `'a`.
+pub(crate) unsafe fn try_ref<'a, T>(p: *const T, name: &str) -> Result<&'a T, skb_status> {
+    p.as_ref().ok_or_else(|| null(name))
+}
+
+/// Borrows `len` bytes at `p`, or fails naming `name` when `p` is NULL.
+///
+/// # Safety
+/// `p` must be NULL or valid for reads of `len` bytes for `'a`.
+pub(crate) unsafe fn try_slice<'a>(p: *const u8, len: usize, name: &str) -> Result<&'a [u8], skb_status> {
+    if p.is_null() {
+        return Err(null(name));
+    }
+    Ok(std::slice::from_raw_parts(p, len))
+}
+
+/// Mutably borrows `len` bytes at `p`, or fails naming `name` when `p` is NULL.
+///
+/// # Safety
+/// `p` must be NULL or valid for writes of `len` bytes for `'a`, with no other live reference.
+pub(crate) unsafe fn try_slice_mut<'a>(p: *mut u8, len: usize, name: &str) -> Result<&'a mut [u8], skb_status> {
+    if p.is_null() {
+        return Err(null(name));
+    }
+    Ok(std::slice::from_raw_parts_mut(p, len))
+}
+
+fn null(name: &str) -> skb_status {
+    fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL"))
+}
+
+/// Evaluates a `Result<T, skb_status>`, returning the status from the enclosing function on error.
+macro_rules! try_status {
+    ($e:expr) => {
+        match $e {
+            Ok(v) => v,
+            Err(status) => return status,
+        }
+    };
+}
+
+/// Evaluates a core `Result<T, Error>`, recording the error and returning its status on failure.
+macro_rules! try_core {
+    ($e:expr) => {
+        match $e {
+            Ok(v) => v,
+            Err(e) => return $crate::capi::error_fail(&e),
+        }
+    };
+}

@@ -1,0 +1,61 @@
+//! The library's error type. Every fallible core function returns [`Result`]; the C ABI maps
+//! each variant to one `skb_status` code (see `capi::status`).
+
+use std::path::PathBuf;
+
+/// Largest accepted image side, in pixels (inputs larger than this are rejected).
+pub const MAX_IMAGE_SIDE: usize = 16384;
+
+/// Everything that can go wrong in sketchbody. Messages carry the offending value.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A width or height is zero.
+    #[error("image size {width}x{height} is empty: width and height must be at least 1")]
+    EmptyImage { width: usize, height: usize },
+    /// A width or height exceeds [`MAX_IMAGE_SIDE`].
+    #[error("image size {width}x{height} exceeds the limit of {MAX_IMAGE_SIDE} px a side")]
+    ImageTooLarge { width: usize, height: usize },
+    /// A row stride is smaller than one row of pixels.
+    #[error("row stride {stride} bytes is smaller than one row ({row_bytes} bytes)")]
+    BadStride { stride: usize, row_bytes: usize },
+    /// A pixel buffer is shorter than its declared geometry needs.
+    #[error("buffer holds {len} bytes but the image needs {needed}")]
+    BufferTooSmall { len: usize, needed: usize },
+    /// The channel count is not 1, 3 or 4.
+    #[error("unsupported channel count {0}: expected 1 (gray), 3 (RGB) or 4 (RGBA)")]
+    UnsupportedChannels(usize),
+    /// The Sobel aperture is not 3, 5 or 7.
+    #[error("invalid aperture {0}: expected 3, 5 or 7")]
+    InvalidAperture(i64),
+    /// A parameter that must be finite is NaN or infinite.
+    #[error("{name} must be finite (got {value})")]
+    NonFinite { name: &'static str, value: f64 },
+    /// A parameter is outside its documented range.
+    #[error("{name} is out of range: {detail}")]
+    OutOfRange { name: &'static str, detail: String },
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    /// A file is not a decodable image (or is truncated).
+    #[error("{}: not a readable image: {reason}", path.display())]
+    Decode { path: PathBuf, reason: String },
+    /// A model or data file is corrupt, truncated or of the wrong format version.
+    #[error("corrupt or unsupported data: {0}")]
+    CorruptData(String),
+    /// The operation was cancelled by the caller's progress callback.
+    #[error("cancelled by the progress callback")]
+    Cancelled,
+}
+
+/// `Result` with [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Checks that `value` is finite, naming it in the error otherwise.
+pub fn ensure_finite(name: &'static str, value: f64) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::NonFinite { name, value })
+    }
+}

@@ -1,0 +1,15 @@
+//! Images: borrowed 8-bit views with an explicit row stride, owned gray images, decoding,
+//! colour conversion and the OpenCV-compatible filters (Gaussian blur, Sobel, Canny).
+
+mod blur;
+mod canny;
+mod decode;
+mod gray;
+mod sobel;
+mod view;
+
+pub use blur::{gaussian_blur, gaussian_kernel_size};
+pub use canny::{canny, canny_into, CannyParams};
+pub use decode::{load_image, save_gray_png};
+pub use gray::to_gray;
+pub use view::{GrayImage, ImageView};

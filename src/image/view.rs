@@ -1,0 +1,144 @@
+//! Borrowed image views and owned gray images.
+
+use crate::error::{Error, Result, MAX_IMAGE_SIDE};
+
+/// A borrowed, validated 8-bit image: `channels` interleaved bytes per pixel (1 gray, 3 RGB,
+/// 4 RGBA), rows `stride` bytes apart (`stride >= width * channels`). The last row only needs
+/// `width * channels` bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageView<'a> {
+    data: &'a [u8],
+    width: usize,
+    height: usize,
+    channels: usize,
+    stride: usize,
+}
+
+/// Checks a width/height pair against the empty and [`MAX_IMAGE_SIDE`] limits.
+pub(crate) fn check_size(width: usize, height: usize) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::EmptyImage { width, height });
+    }
+    if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+        return Err(Error::ImageTooLarge { width, height });
+    }
+    Ok(())
+}
+
+/// Bytes needed by an image of this geometry: `stride * (height - 1) + row_bytes`.
+pub(crate) fn needed_bytes(width: usize, height: usize, channels: usize, stride: usize) -> usize {
+    stride * (height - 1) + width * channels
+}
+
+impl<'a> ImageView<'a> {
+    /// Validates geometry and wraps `data`. Errors: empty or oversized images, channel counts
+    /// other than 1/3/4, strides shorter than a row, buffers too short for the geometry.
+    pub fn new(
+        data: &'a [u8],
+        width: usize,
+        height: usize,
+        channels: usize,
+        stride: usize,
+    ) -> Result<Self> {
+        let needed = Self::required_len(width, height, channels, stride)?;
+        if data.len() < needed {
+            return Err(Error::BufferTooSmall { len: data.len(), needed });
+        }
+        Ok(Self { data, width, height, channels, stride })
+    }
+
+    /// Validates a geometry (size limits, channel count, stride) and returns the number of bytes
+    /// a buffer needs for it: `stride * (height - 1) + width * channels`.
+    pub fn required_len(width: usize, height: usize, channels: usize, stride: usize) -> Result<usize> {
+        check_size(width, height)?;
+        if !matches!(channels, 1 | 3 | 4) {
+            return Err(Error::UnsupportedChannels(channels));
+        }
+        let row_bytes = width * channels;
+        if stride < row_bytes {
+            return Err(Error::BadStride { stride, row_bytes });
+        }
+        Ok(needed_bytes(width, height, channels, stride))
+    }
+
+    /// A tightly packed single-channel view of `data` (`stride == width`).
+    pub fn gray(data: &'a [u8], width: usize, height: usize) -> Result<Self> {
+        Self::new(data, width, height, 1, width)
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+    /// Height in pixels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+    /// Interleaved channels per pixel: 1, 3 or 4.
+    pub fn channels(&self) -> usize {
+        self.channels
+    }
+    /// Bytes between the starts of consecutive rows.
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+    /// Row `y` (`width * channels` bytes). Panics if `y >= height` (internal use only).
+    pub fn row(&self, y: usize) -> &'a [u8] {
+        let start = y * self.stride;
+        &self.data[start..start + self.width * self.channels]
+    }
+}
+
+/// An owned, tightly packed 8-bit gray image (`data.len() == width * height`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct GrayImage {
+    width: usize,
+    height: usize,
+    data: Vec<u8>,
+}
+
+impl GrayImage {
+    /// A `width` x `height` image filled with `value`. Errors on empty or oversized sizes.
+    pub fn filled(width: usize, height: usize, value: u8) -> Result<Self> {
+        check_size(width, height)?;
+        Ok(Self { width, height, data: vec![value; width * height] })
+    }
+
+    /// Takes ownership of tightly packed pixels. Errors unless `data.len() == width * height`.
+    pub fn from_vec(width: usize, height: usize, data: Vec<u8>) -> Result<Self> {
+        check_size(width, height)?;
+        if data.len() != width * height {
+            return Err(Error::BufferTooSmall { len: data.len(), needed: width * height });
+        }
+        Ok(Self { width, height, data })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+    /// Height in pixels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+    /// The pixels, row-major, `width` bytes per row.
+    pub fn as_bytes(&self) -> &[u8] {
+        &self.data
+    }
+    /// Mutable pixels, row-major.
+    pub fn as_bytes_mut(&mut self) -> &mut [u8] {
+        &mut self.data
+    }
+    /// Consumes the image, returning its pixels.
+    pub fn into_vec(self) -> Vec<u8> {
+        self.data
+    }
+    /// Pixel at (x, y); `None` outside the image.
+    pub fn get(&self, x: usize, y: usize) -> Option<u8> {
+        (x < self.width && y < self.height).then(|| self.data[y * self.width + x])
+    }
+    /// A borrowed single-channel view of this image.
+    pub fn view(&self) -> ImageView<'_> {
+        ImageView { data: &self.data, width: self.width, height: self.height, channels: 1, stride: self.width }
+    }
+}

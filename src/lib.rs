@@ -1,0 +1,18 @@
+//! sketchbody: turn a 2-D concept sketch of a human character into a rigged 3-D base mesh.
+//!
+//! The core (everything except [`capi`]) is safe Rust: it returns [`Error`] values and never
+//! panics on bad input. Conventions (joint order, image and 3-D frames, camera) are those of
+//! `DESIGN.md`: image space is pixels with the origin at the top-left corner of the top-left
+//! pixel, x right, y down; 3-D space is metres, right-handed, +Y up, +Z toward the viewer.
+
+pub mod camera;
+pub mod capi;
+pub mod error;
+pub mod fsutil;
+pub mod image;
+pub mod skeleton;
+
+pub use error::{Error, Result};
+
+/// The library version, `MAJOR.MINOR.PATCH`, taken from Cargo.toml at build time.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
