@@ -1,1 +1,45 @@
-fn main() {}
+//! The `sketchbody` command-line tool. One file per subcommand; each exposes an `Args` struct
+//! (clap) and `run(args) -> Result<(), CliError>`. Errors print one line (`sketchbody: ...`)
+//! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
+
+mod edges;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// A failure to report: one line of text.
+pub struct CliError(pub String);
+
+impl From<sketchbody::Error> for CliError {
+    fn from(e: sketchbody::Error) -> Self {
+        CliError(e.to_string())
+    }
+}
+
+#[derive(Parser)]
+#[command(name = "sketchbody", version, about = "Concept sketch of a human character to a rigged 3-D base mesh")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Canny edge map of an image (bit-exact with OpenCV's cv::Canny).
+    Edges(edges::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Edges(a) => edges::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(CliError(msg)) => {
+            eprintln!("sketchbody: {msg}");
+            ExitCode::from(1)
+        }
+    }
+}

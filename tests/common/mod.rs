@@ -1,0 +1,21 @@
+//! Shared helpers for integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// The reference data folder (`../shared/data` beside the repository, or `$SKB_SHARED_DATA`).
+/// When it is missing: panics if `SKB_REQUIRE_SHARED_DATA` is set (CI sets it in `.ci/run`),
+/// otherwise prints a SKIPPED line naming `what` and returns `None`.
+pub fn shared_data(what: &str) -> Option<PathBuf> {
+    let dir = std::env::var_os("SKB_SHARED_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
+        panic!("{what}: reference data not found at {} but SKB_REQUIRE_SHARED_DATA is set", dir.display());
+    }
+    eprintln!("SKIPPED {what}: reference data not found at {}", dir.display());
+    None
+}
