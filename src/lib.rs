@@ -10,6 +10,7 @@ pub mod capi;
 pub mod error;
 pub mod fsutil;
 pub mod image;
+pub mod pose;
 pub mod skeleton;
 
 pub use error::{Error, Result};

@@ -2,7 +2,10 @@
 //! (clap) and `run(args) -> Result<(), CliError>`. Errors print one line (`sketchbody: ...`)
 //! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
 
+mod bench_pose;
 mod edges;
+mod learn_poses;
+mod pose;
 
 use std::process::ExitCode;
 
@@ -28,12 +31,21 @@ struct Cli {
 enum Command {
     /// Canny edge map of an image (bit-exact with OpenCV's cv::Canny).
     Edges(edges::Args),
+    /// Learn the 3-D basis-pose dictionary from motion tables and BVH files.
+    LearnPoses(learn_poses::Args),
+    /// 3-D pose and weak-perspective camera from 2-D joints (JSON in, JSON out).
+    Pose(pose::Args),
+    /// Measure the 3-D pose step on held-out motion clips (accuracy table and speed).
+    BenchPose(bench_pose::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Edges(a) => edges::run(a),
+        Command::LearnPoses(a) => learn_poses::run(a),
+        Command::BenchPose(a) => bench_pose::run(a),
+        Command::Pose(a) => pose::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
