@@ -29,6 +29,46 @@
 #define SKB_VERSION_PATCH 0
 
 /**
+ * Number of canonical joints (the paper's P).
+ */
+#define NUM_JOINTS 15
+
+/**
+ * Number of bones.
+ */
+#define NUM_BONES 14
+
+#define HEAD 0
+
+#define NECK 1
+
+#define R_SHOULDER 2
+
+#define R_ELBOW 3
+
+#define R_WRIST 4
+
+#define L_SHOULDER 5
+
+#define L_ELBOW 6
+
+#define L_WRIST 7
+
+#define PELVIS 8
+
+#define R_HIP 9
+
+#define R_KNEE 10
+
+#define R_ANKLE 11
+
+#define L_HIP 12
+
+#define L_KNEE 13
+
+#define L_ANKLE 14
+
+/**
  * Result of every sketchbody C function. 0 is success; any other value is an error whose text
  * is given by [`skb_status_str`] (generic) and `skb_last_error_message` (specific).
  */
@@ -192,3 +232,8 @@ const char *skb_version(void);
 #endif  // __cplusplus
 
 #endif  /* SKETCHBODY_H */
+
+#define SKB_STRINGIFY_(x) #x
+#define SKB_STRINGIFY(x) SKB_STRINGIFY_(x)
+/** "MAJOR.MINOR.PATCH" of the library this header belongs to; compare with skb_version(). */
+#define SKB_VERSION_STRING SKB_STRINGIFY(SKB_VERSION_MAJOR) "." SKB_STRINGIFY(SKB_VERSION_MINOR) "." SKB_STRINGIFY(SKB_VERSION_PATCH)
