@@ -18,7 +18,8 @@ pub struct EmOptions {
     pub regularisation: f64,
     /// Iteration cap.
     pub max_iterations: usize,
-    /// Stop when the mean log-likelihood per point improves by less than this.
+    /// Stop when the mean log-likelihood per point changes by less than this (it can fall slightly
+    /// because of the regularisation, so a change either way counts).
     pub tolerance: f64,
 }
 
@@ -151,7 +152,7 @@ pub fn fit_gmm(data: &[Vec<f64>], opts: &EmOptions, rng: &mut ChaCha8Rng) -> Res
         }
         let mean_ll = ll / n as f64;
         iterations += 1;
-        if mean_ll - prev < opts.tolerance || iterations >= opts.max_iterations {
+        if (mean_ll - prev).abs() < opts.tolerance || iterations >= opts.max_iterations {
             return Ok(EmFit { gmm, mean_log_likelihood: mean_ll, iterations });
         }
         prev = mean_ll;

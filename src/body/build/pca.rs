@@ -42,9 +42,10 @@ pub fn pca(samples: &[Vec<f64>], side: &[Vec<f64>], k: usize) -> Result<Pca> {
     }
     let (mean, x) = centre(samples);
     let (side_mean, xs) = centre(side);
+    // Upper triangle only (row i holds j = i..n); every dot product runs in index order.
     let gram_rows: Vec<Vec<f64>> =
-        (0..n).into_par_iter().map(|i| (0..n).map(|j| x[i].iter().zip(&x[j]).map(|(a, b)| a * b).sum()).collect()).collect();
-    let gram = DMatrix::from_fn(n, n, |i, j| 0.5 * (gram_rows[i][j] + gram_rows[j][i]));
+        (0..n).into_par_iter().map(|i| (i..n).map(|j| x[i].iter().zip(&x[j]).map(|(a, b)| a * b).sum()).collect()).collect();
+    let gram = DMatrix::from_fn(n, n, |i, j| if i <= j { gram_rows[i][j - i] } else { gram_rows[j][i - j] });
     let eig = SymmetricEigen::new(gram);
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]).then(a.cmp(&b)));
@@ -52,8 +53,15 @@ pub fn pca(samples: &[Vec<f64>], side: &[Vec<f64>], k: usize) -> Result<Pca> {
     if eigenvalues[k - 1] <= 0.0 {
         return Err(Error::OutOfRange { name: "PCA components", detail: format!("only {} non-zero components", eigenvalues.iter().filter(|&&l| l > 0.0).count()) });
     }
+    // Σ_i u_i · row_i / s, accumulated over the rows in order.
     let combine = |rows: &[Vec<f64>], u: &[f64], s: f64| -> Vec<f64> {
-        (0..rows[0].len()).map(|d| rows.iter().zip(u).map(|(r, ui)| r[d] * ui).sum::<f64>() / s).collect()
+        let mut acc = vec![0.0; rows[0].len()];
+        for (r, ui) in rows.iter().zip(u) {
+            for (a, v) in acc.iter_mut().zip(r) {
+                *a += ui * v;
+            }
+        }
+        acc.iter().map(|a| a / s).collect()
     };
     let parts: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = (0..k)
         .into_par_iter()
