@@ -280,6 +280,7 @@ void solve_ceres(const Model& m, const skb_pose3d& start, bool on_manifold, doub
   o.gradient_tolerance = 1e-15;
   o.parameter_tolerance = 1e-15;
   o.num_threads = 1;
+  o.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(o, &problem, &summary);
 }
@@ -389,7 +390,7 @@ int main(int argc, char** argv) {
     }
     std::printf("pose_vs_ceres [%s, kappa %.3g rel]: %d problems (0 and 2 px noise), %d pass, ours lower on %d, Ceres bound active on %d\n",
                 prior > 0 ? "library defaults, prior 0.01 m" : "eq. (3), no prior", kappa, problems, passed, ours_lower, ceres_on_bound);
-    std::printf("  worst f_ours/f_ceres = %.9f at %s\n", worst_ratio, worst_desc.c_str());
+    std::printf("  worst f_ours/f_ceres = %.12f at %s\n", worst_ratio, worst_desc.c_str());
     std::printf("  worst bound excess of ours (relative to sum l^2, <= 0 means satisfied): %.3g\n", worst_excess);
     std::printf("  time: ours %.3f ms/problem, Ceres %.3f ms/problem, ours/Ceres = %.3f\n", 1e3 * t_ours / problems,
                 1e3 * t_ceres / problems, t_ours / t_ceres);

@@ -11,7 +11,7 @@
 //!   ∇g (a scalar quadratic);
 //! - a candidate is accepted when it lowers the objective (damping ÷3), else damping ×4.
 //!
-//! Stops after 3 accepted steps in a row each lowering the objective by < 1e-15 relative, when
+//! Stops after 3 accepted steps in a row each lowering the objective by < 1e-12 relative, when
 //! the damping exceeds 1e16, or after 500 iterations. The rotation prior α plays no part here:
 //! it acts through the pursuit's starting point.
 
@@ -138,17 +138,12 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
                 if g <= bound && g >= -bound {
                     return Some((c, nw));
                 }
-                if k < 2 {
-                    // One weight: the bound fixes it up to sign; keep the camera step only.
-                    let target = if g > bound { bound } else { -bound };
-                    let n = con.gradient(&w);
-                    return con.retract(&w, &n, target).map(|nw| (c, nw));
-                }
                 let target = if g > bound { bound } else { -bound };
                 let n = con.gradient(&w);
                 if !(n.norm() > 0.0) {
                     return None;
                 }
+                // With one weight the tangent space is empty: a camera-only step.
                 let t = tangent_basis(&n);
                 let mut jr = DMatrix::zeros(j.nrows(), 7 + k - 1);
                 jr.columns_mut(0, 7).copy_from(&j.columns(0, 7));
@@ -163,7 +158,7 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
                 Some((c, nw)) => {
                     let nf = objective(&c, &nw);
                     if nf < f {
-                        small = if f - nf < 1e-15 * f { small + 1 } else { 0 };
+                        small = if f - nf < 1e-12 * f { small + 1 } else { 0 };
                         cam = c;
                         w = nw;
                         f = nf;
