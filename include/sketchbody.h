@@ -177,7 +177,7 @@ typedef struct skb_pose_dictionary skb_pose_dictionary;
 
 /**
  * Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
- * α = 0.8, 10 bases, 0.5 px, refinement on, prior 0.01 m). Not synchronised: do not change it
+ * α = 0.8, 10 bases, 0.5 px, refinement on, prior 0.03 m). Not synchronised: do not change it
  * while another thread uses it. Free with `skb_pose_options_free`.
  */
 typedef struct skb_pose_options skb_pose_options;

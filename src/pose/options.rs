@@ -52,9 +52,9 @@ pub struct PoseOptions {
 }
 
 impl Default for PoseOptions {
-    /// The library default: κ = 0.05, α = 0.8, up to 10 bases, 0.5 px, refined.
+    /// The library default: κ = 0.05, α = 0.8, up to 10 bases, 0.5 px, refined, prior 0.03 m.
     fn default() -> Self {
-        PoseOptions { kappa: 0.05, alpha: PAPER_ALPHA, max_bases: 10, tolerance: 0.5, refine: true, prior: 0.01 }
+        PoseOptions { kappa: 0.05, alpha: PAPER_ALPHA, max_bases: 10, tolerance: 0.5, refine: true, prior: 0.03 }
     }
 }
 
