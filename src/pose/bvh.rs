@@ -281,7 +281,7 @@ impl Bvh {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A Mixamo-style rig: every canonical joint, offsets in centimetres.

@@ -105,3 +105,39 @@ pub fn held_out_of(d: &Dictionary) -> Vec<String> {
         .map(|s| s.split(',').filter(|x| !x.is_empty()).map(str::to_string).collect())
         .unwrap_or_default()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pose::bvh::tests::mixamo_bvh;
+
+    #[test]
+    fn learns_from_bvh_files_and_skips_held_out_clips() {
+        let dir = std::env::temp_dir().join(format!("skb-learn-bvh-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let frames: Vec<[f64; 6]> = (0..12).map(|f| [0.0, 0.0, 0.0, 3.0 * f as f64, 0.0, 10.0 * f as f64]).collect();
+        let text = mixamo_bvh(&frames);
+        // Bend the right knee differently per frame so the action has variance.
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        let n = lines.len();
+        for (i, line) in lines.iter_mut().skip(n - 12).enumerate() {
+            let mut v: Vec<String> = line.split(' ').map(str::to_string).collect();
+            let len = v.len();
+            v[len - 10] = (5.0 * i as f64).to_string();
+            v[len - 20] = (-4.0 * i as f64).to_string();
+            *line = v.join(" ");
+        }
+        let (a, b) = (dir.join("swing.bvh"), dir.join("heldout.bvh"));
+        std::fs::write(&a, lines.join("\n")).unwrap();
+        std::fs::write(&b, lines.join("\n")).unwrap();
+        let spec = LearnSpec { held_out: vec!["heldout".into()], excluded: vec![], params: LearnParams::default() };
+        let d = learn_from_sources(None, &[a.clone(), b.clone()], &spec).unwrap();
+        assert_eq!(d.actions.len(), 1);
+        assert_eq!(d.actions[0].name, "swing");
+        assert!(d.provenance.contains("clips: swing\n"));
+        assert_eq!(held_out_of(&d), vec!["heldout".to_string()]);
+        std::fs::write(&a, "HIERARCHY\nROOT x\n{").unwrap();
+        assert!(learn_from_sources(None, &[a], &spec).is_err());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

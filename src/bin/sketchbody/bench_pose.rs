@@ -141,13 +141,6 @@ pub fn run(a: Args) -> Result<(), CliError> {
                     Ok(est) => {
                         e1 += mpjpe(&in_camera(&est.joints, &est.camera.r), &in_camera(&s.gt, &s.cam.r));
                         e2 += pa_mpjpe(&est.joints, &s.gt);
-                        if std::env::var_os("SKB_FLIPDIAG").is_some() {
-                            let ec = in_camera(&est.joints, &est.camera.r);
-                            let fl: Joints3 = std::array::from_fn(|j| [ec[j][0], ec[j][1], -ec[j][2]]);
-                            let gc = in_camera(&s.gt, &s.cam.r);
-                            rms += 0.0;
-                            e2 += pa_mpjpe(&fl, &gc).min(pa_mpjpe(&ec, &gc)) - pa_mpjpe(&est.joints, &s.gt);
-                        }
                         nb += est.bases.len();
                         rms += est.rms;
                         n += 1;
