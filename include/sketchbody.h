@@ -101,10 +101,25 @@ enum skb_status
    * A bug: Rust code panicked. The library stays usable; please report the message.
    */
   SKB_ERR_PANIC = 15,
+  /**
+   * Two joints of a bone coincide (zero-length bone).
+   */
+  SKB_ERR_DEGENERATE_BONE = 16,
+  /**
+   * The projected mesh lies wholly outside the image.
+   */
+  SKB_ERR_MESH_OUTSIDE_IMAGE = 17,
 };
 #ifndef __cplusplus
 typedef uint32_t skb_status;
 #endif // __cplusplus
+
+/**
+ * A reusable silhouette rasteriser: keeps its buffers between calls so that repeated
+ * rasterisation allocates nothing. Create with [`skb_rasterizer_new`], release with
+ * [`skb_rasterizer_free`]. Not thread-safe: use one per thread (it may move between threads).
+ */
+typedef struct skb_rasterizer skb_rasterizer;
 
 /**
  * A borrowed 8-bit image owned by the caller: `height` rows of `width` pixels, each pixel
@@ -134,6 +149,31 @@ typedef struct skb_image {
    */
   uint32_t channels;
 } skb_image;
+
+/**
+ * The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
+ * +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
+ * `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
+ * layout (104 bytes) is part of the ABI.
+ */
+typedef struct skb_camera {
+  /**
+   * Horizontal scale, pixels per metre (> 0).
+   */
+  double sx;
+  /**
+   * Vertical scale, pixels per metre (> 0).
+   */
+  double sy;
+  /**
+   * Rotation model -> camera, row-major, orthonormal with determinant +1.
+   */
+  double r[9];
+  /**
+   * Image position of the model origin, pixels.
+   */
+  double t[2];
+} skb_camera;
 
 #ifdef __cplusplus
 extern "C" {
@@ -174,6 +214,41 @@ skb_status skb_gaussian_blur(const struct skb_image *src,
                              uint8_t *dst,
                              size_t dst_stride,
                              size_t dst_len);
+
+/**
+ * Creates a rasteriser and stores it in `*out` (caller owns it; free with
+ * [`skb_rasterizer_free`]).
+ */
+skb_status skb_rasterizer_new(struct skb_rasterizer **out);
+
+/**
+ * Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
+ */
+void skb_rasterizer_free(struct skb_rasterizer *r);
+
+/**
+ * Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
+ * points as x, y, z floats (metres, model frame), `tris` holds `ntris` triangles as three
+ * 0-based vertex indices. Pixel (i, j) is set to 255 when its centre (i + 0.5, j + 0.5) lies
+ * inside a projected triangle (top-left fill rule, both windings), else 0. Writes `h` rows of
+ * `w` bytes into `mask`, rows `mask_stride` bytes apart; `mask_len` must be at least
+ * `mask_stride * (h - 1) + w`. Sizes 1..=4096 a side. Errors: NULL pointers, bad sizes or
+ * strides, an invalid camera, index out of range, non-finite vertices, vertices projecting
+ * beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
+ * entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
+ * Arrays are only read during the call. Thread-safe with distinct rasterisers.
+ */
+skb_status skb_rasterize_triangles(struct skb_rasterizer *rasterizer,
+                                   const float *verts,
+                                   size_t nverts,
+                                   const uint32_t *tris,
+                                   size_t ntris,
+                                   const struct skb_camera *cam,
+                                   uint32_t w,
+                                   uint32_t h,
+                                   uint8_t *mask,
+                                   size_t mask_stride,
+                                   size_t mask_len);
 
 /**
  * Static, NUL-terminated English text for a status code; "unknown status" for numbers this

@@ -9,8 +9,10 @@ pub mod body;
 pub mod camera;
 pub mod capi;
 pub mod error;
+pub mod export;
 pub mod fsutil;
 pub mod image;
+pub mod render;
 pub mod skeleton;
 
 pub use error::{Error, Result};

@@ -54,12 +54,14 @@ pub struct Pose {
     pub rotations: [UnitQuaternion<f64>; NUM_BONES],
     /// Stretch of each bone along its rest direction (1 without retargeting).
     pub stretch: [f64; NUM_BONES],
+    /// Rotation of the pelvis frame (hip line and spine), rest → posed.
+    pub root: UnitQuaternion<f64>,
 }
 
 impl Pose {
     /// The rest pose itself (identity rotations, unit stretch).
     pub fn rest(rest: &Joints3) -> Pose {
-        Pose { rest: *rest, joints: *rest, rotations: [UnitQuaternion::identity(); NUM_BONES], stretch: [1.0; NUM_BONES] }
+        Pose { rest: *rest, joints: *rest, rotations: [UnitQuaternion::identity(); NUM_BONES], stretch: [1.0; NUM_BONES], root: UnitQuaternion::identity() }
     }
 
     /// The affine map of bone `b`: posed = `m * rest + t` (rotation times stretch, and offset).
@@ -78,12 +80,12 @@ impl Pose {
         Matrix3::identity() + (self.stretch[b] - 1.0) * d * d.transpose()
     }
 
-    /// Rotation of bone `b` relative to its parent bone (`R_parent^T R_b`; global for bones that
-    /// start at the pelvis).
+    /// Rotation of bone `b` relative to its parent bone (`R_parent^T R_b`; relative to the
+    /// pelvis frame [`Pose::root`] for bones that start at the pelvis).
     pub fn local_rotation(&self, b: usize) -> UnitQuaternion<f64> {
         match parent_bone(b) {
             Some(p) => self.rotations[p].inverse() * self.rotations[b],
-            None => self.rotations[b],
+            None => self.root.inverse() * self.rotations[b],
         }
     }
 }
@@ -237,7 +239,7 @@ pub fn solve(rest: &Joints3, target: &Joints3, opts: &IkOptions) -> Result<Pose>
         let p = v(&joints, s) + rot[b] * d0[b] * len;
         joints[c] = [p.x, p.y, p.z];
     }
-    Ok(Pose { rest: *rest, joints, rotations: rot, stretch })
+    Ok(Pose { rest: *rest, joints, rotations: rot, stretch, root })
 }
 
 #[cfg(test)]

@@ -95,3 +95,34 @@ pub fn quads_to_triangles(quads: &[[u32; 4]]) -> Vec<[u32; 3]> {
     }
     out
 }
+
+/// Area-weighted unit vertex normals of a quad mesh (each quad as two triangles, see
+/// [`quads_to_triangles`]); a vertex with no non-degenerate face gets +Y. Indices must be in
+/// range (see [`RiggedMesh::validate`]); out-of-range faces are skipped.
+pub fn vertex_normals(vertices: &[[f32; 3]], quads: &[[u32; 4]]) -> Vec<[f32; 3]> {
+    let mut acc = vec![[0.0f64; 3]; vertices.len()];
+    let n = vertices.len();
+    for t in quads_to_triangles(quads) {
+        if t.iter().any(|&i| i as usize >= n) {
+            continue;
+        }
+        let p = t.map(|i| vertices[i as usize].map(|c| c as f64));
+        let (e1, e2) = ([0, 1, 2].map(|k| p[1][k] - p[0][k]), [0, 1, 2].map(|k| p[2][k] - p[0][k]));
+        let c = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+        for &i in &t {
+            for k in 0..3 {
+                acc[i as usize][k] += c[k];
+            }
+        }
+    }
+    acc.iter()
+        .map(|a| {
+            let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            if l > 1e-20 {
+                a.map(|c| (c / l) as f32)
+            } else {
+                [0.0, 1.0, 0.0]
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,3 @@
+//! Rendering: the silhouette/depth rasteriser used by the shape fit, and preview images.
+
+pub mod raster;
