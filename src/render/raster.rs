@@ -20,7 +20,7 @@ use crate::error::{Error, Result};
 /// Largest raster width or height, pixels.
 pub const MAX_RASTER_SIDE: usize = 4096;
 /// Sub-pixel precision: vertices are snapped to 1/`SUB` pixel (1/16384).
-const SUB: i64 = 1 << 14;
+pub(crate) const SUB: i64 = 1 << 14;
 const HALF: i64 = SUB / 2;
 /// Projected vertices must lie within ±this many pixels of the image origin (8× the largest
 /// raster side; keeps the integer edge functions exact in i64: |e| < 2^61).
