@@ -101,9 +101,17 @@ Mesh random_body(std::mt19937_64& rng, int rings, int segs) {
     V3 uu = normalize(cross(axis, helper)), ww = cross(axis, uu);
     double r = radius[b], len = std::sqrt(dot(sub(e, a), sub(e, a)));
     uint32_t base = (uint32_t)(m.v.size() / 3);
+    double quarter = r * PI / 2;  // profile points evenly spaced along the capsule's arc
     for (int i = 0; i <= rings; ++i) {
-      double th = PI * i / rings;
-      double z = (i * 2 < rings ? 0 : len) - r * std::cos(th), rad = r * std::sin(th);
+      double arc = (len + 2 * quarter) * i / rings, z, rad;
+      if (arc < quarter) {
+        z = -r * std::cos(arc / r), rad = r * std::sin(arc / r);
+      } else if (arc <= quarter + len) {
+        z = arc - quarter, rad = r;
+      } else {
+        double th = (arc - quarter - len) / r + PI / 2;
+        z = len - r * std::cos(th), rad = r * std::sin(th);
+      }
       for (int k = 0; k < segs; ++k) {
         double ph = 2 * PI * k / segs;
         V3 p = add(add(a, mul(axis, z)), mul(add(mul(uu, std::cos(ph)), mul(ww, std::sin(ph))), rad));

@@ -98,13 +98,19 @@ pub fn capsule_humanoid(joints: &Joints3, rings: usize, segs: usize) -> RiggedMe
         let w = axis.cross(&u);
         let (r, len) = (RADIUS[b], (e - a).norm());
         let base = vertices.len() as u32;
-        // Profile: a hemisphere at each end joined by a cylinder; `rings + 1` profile points.
+        // Profile: a hemisphere at each end joined by a cylinder, `rings + 1` points spaced
+        // evenly along its arc length.
+        let quarter = r * std::f64::consts::FRAC_PI_2;
         for i in 0..=rings {
-            let t = i as f64 / rings as f64;
-            let theta = t * std::f64::consts::PI; // 0 at the start pole, pi at the end pole
-            let along = -r * theta.cos();
-            let radial = r * theta.sin();
-            let z = if t < 0.5 { along } else { len + along };
+            let arc = i as f64 / rings as f64 * (len + 2.0 * quarter);
+            let (z, radial) = if arc < quarter {
+                (-r * (arc / r).cos(), r * (arc / r).sin())
+            } else if arc <= quarter + len {
+                (arc - quarter, r)
+            } else {
+                let theta = (arc - quarter - len) / r + std::f64::consts::FRAC_PI_2;
+                (len - r * theta.cos(), r * theta.sin())
+            };
             for k in 0..segs {
                 let phi = k as f64 / segs as f64 * std::f64::consts::TAU;
                 let p = a + axis * z + (u * phi.cos() + w * phi.sin()) * radial;

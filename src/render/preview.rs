@@ -55,7 +55,7 @@ fn draw_view(img: &mut RgbImage, x0: usize, size: usize, vertices: &[[f32; 3]], 
         let shade = 0.3 + 0.7 * (n.normalize().dot(&light)).abs() as f32;
         let rgb = BASE.map(|c| (c * shade).min(255.0) as u8);
         let z = [cam[a].z as f32, cam[b].z as f32, cam[c].z as f32];
-        let Some(s) = setup([px[a], px[b], px[c]], z, size, size) else { continue };
+        let Some(s) = setup([px[a], px[b], px[c]], z, size, size, true) else { continue };
         scan(&s, size, |idx, i, j, d| {
             if d > depth[idx] {
                 depth[idx] = d;

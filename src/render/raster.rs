@@ -20,7 +20,8 @@ use crate::error::{Error, Result};
 /// Largest raster width or height, pixels.
 pub const MAX_RASTER_SIDE: usize = 4096;
 /// Sub-pixel precision: vertices are snapped to 1/`SUB` pixel (1/16384).
-pub(crate) const SUB: i64 = 1 << 14;
+pub(crate) const SUB: i64 = 1 << SUB_BITS;
+const SUB_BITS: u32 = 14;
 const HALF: i64 = SUB / 2;
 /// Projected vertices must lie within ±this many pixels of the image origin (8× the largest
 /// raster side; keeps the integer edge functions exact in i64: |e| < 2^61).
@@ -65,8 +66,9 @@ pub(crate) struct Setup {
 }
 
 /// Sets up triangle (a, b, c) in fixed point for a `w`×`h` image; `None` when it is degenerate
-/// or its bounding box contains no pixel centre of the image.
-pub(crate) fn setup(p: [[i64; 2]; 3], z: [f32; 3], w: usize, h: usize) -> Option<Setup> {
+/// or its bounding box contains no pixel centre of the image. The depth plane is computed only
+/// when `with_depth` (otherwise it is 0).
+pub(crate) fn setup(p: [[i64; 2]; 3], z: [f32; 3], w: usize, h: usize, with_depth: bool) -> Option<Setup> {
     let [a, mut b, mut c] = p;
     let [za, mut zb, mut zc] = z;
     let area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
@@ -78,8 +80,9 @@ pub(crate) fn setup(p: [[i64; 2]; 3], z: [f32; 3], w: usize, h: usize) -> Option
         std::mem::swap(&mut zb, &mut zc);
     }
     let area = area.abs();
-    let lo = |v: i64| (v - HALF + SUB - 1).div_euclid(SUB); // first pixel whose centre >= v
-    let hi = |v: i64| (v - HALF).div_euclid(SUB); // last pixel whose centre <= v
+    // Arithmetic shifts are floor divisions by SUB (a power of two).
+    let lo = |v: i64| (v - HALF + SUB - 1) >> SUB_BITS; // first pixel whose centre >= v
+    let hi = |v: i64| (v - HALF) >> SUB_BITS; // last pixel whose centre <= v
     let i0 = lo(a[0].min(b[0]).min(c[0])).max(0);
     let j0 = lo(a[1].min(b[1]).min(c[1])).max(0);
     let i1 = hi(a[0].max(b[0]).max(c[0])).min(w as i64 - 1);
@@ -100,6 +103,9 @@ pub(crate) fn setup(p: [[i64; 2]; 3], z: [f32; 3], w: usize, h: usize) -> Option
         dx[k] = -ey * SUB;
         dy[k] = ex * SUB;
     }
+    if !with_depth {
+        return Some(Setup { i0: i0 as usize, i1: i1 as usize, j0: j0 as usize, j1: j1 as usize, e, dx, dy, z0: 0.0, zx: 0.0, zy: 0.0 });
+    }
     // Barycentric weight of vertex k is the edge opposite it: a <- e[1] (b->c), b <- e[2], c <- e[0].
     let inv = 1.0 / area as f64;
     let unbias = |k: usize| {
@@ -115,26 +121,79 @@ pub(crate) fn setup(p: [[i64; 2]; 3], z: [f32; 3], w: usize, h: usize) -> Option
     Some(Setup { i0: i0 as usize, i1: i1 as usize, j0: j0 as usize, j1: j1 as usize, e, dx, dy, z0: z0 as f32, zx: zx as f32, zy: zy as f32 })
 }
 
+/// The covered pixels of one row: offsets `k` from `i0` (0 <= k < n) where every biased edge
+/// value `e[m] + k * dx[m]` is >= 0, as an inclusive range (empty when `lo > hi`). Exact.
+#[inline]
+fn row_span(e: [i64; 3], dx: [i64; 3], n: i64) -> (i64, i64) {
+    if n <= 4 {
+        // Narrow rows: testing each pixel is cheaper than dividing.
+        let inside = |k: i64| (0..3).all(|m| e[m] + k * dx[m] >= 0);
+        let Some(lo) = (0..n).find(|&k| inside(k)) else { return (1, 0) };
+        let hi = (lo..n).rev().find(|&k| inside(k)).unwrap_or(lo);
+        return (lo, hi);
+    }
+    let (mut lo, mut hi) = (0, n - 1);
+    for m in 0..3 {
+        if dx[m] > 0 {
+            if e[m] < 0 {
+                lo = lo.max((-e[m] + dx[m] - 1) / dx[m]);
+            }
+        } else if e[m] < 0 {
+            return (1, 0);
+        } else if dx[m] < 0 {
+            hi = hi.min(e[m] / -dx[m]);
+        }
+    }
+    (lo, hi)
+}
+
 /// Calls `visit(pixel_index, x, y, depth)` for every covered pixel centre of a set-up triangle
 /// in a row-major `w`-wide image.
 #[inline]
 pub(crate) fn scan<F: FnMut(usize, usize, usize, f32)>(s: &Setup, w: usize, mut visit: F) {
     let mut row = s.e;
+    let n = (s.i1 - s.i0 + 1) as i64;
     for j in s.j0..=s.j1 {
-        let mut e = row;
-        let base = j * w;
+        let (lo, hi) = row_span(row, s.dx, n);
         let zr = s.z0 + s.zy * (j - s.j0) as f32;
-        for i in s.i0..=s.i1 {
-            if (e[0] | e[1] | e[2]) >= 0 {
-                visit(base + i, i, j, zr + s.zx * (i - s.i0) as f32);
-            }
-            for k in 0..3 {
-                e[k] += s.dx[k];
-            }
+        for k in lo..=hi {
+            let i = s.i0 + k as usize;
+            visit(j * w + i, i, j, zr + s.zx * k as f32);
         }
         for k in 0..3 {
             row[k] += s.dy[k];
         }
+    }
+}
+
+/// Sets the covered pixels of a set-up triangle to 255 in a row-major `w`-wide mask.
+#[inline]
+fn scan_mask(s: &Setup, w: usize, mask: &mut [u8]) {
+    let mut row = s.e;
+    let n = (s.i1 - s.i0 + 1) as i64;
+    for j in s.j0..=s.j1 {
+        let (lo, hi) = row_span(row, s.dx, n);
+        if lo <= hi {
+            let base = j * w + s.i0;
+            mask[base + lo as usize..=base + hi as usize].fill(255);
+        }
+        for k in 0..3 {
+            row[k] += s.dy[k];
+        }
+    }
+}
+
+/// Rounds to the nearest integer (ties away from zero) without a libm call.
+#[inline]
+fn round_i64(x: f64) -> i64 {
+    let t = x as i64; // truncates toward zero
+    let frac = x - t as f64;
+    if frac >= 0.5 {
+        t + 1
+    } else if frac <= -0.5 {
+        t - 1
+    } else {
+        t
     }
 }
 
@@ -199,7 +258,7 @@ impl Rasterizer {
                 });
             }
             bb = [bb[0].min(u), bb[1].min(w), bb[2].max(u), bb[3].max(w)];
-            self.fixed.push([(u * SUB as f64).round() as i64, (w * SUB as f64).round() as i64]);
+            self.fixed.push([round_i64(u * SUB as f64), round_i64(w * SUB as f64)]);
             self.z.push((r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z) as f32);
         }
         Ok(bb)
@@ -244,7 +303,7 @@ impl Rasterizer {
         for t in tris {
             let p = [fixed[t[0] as usize], fixed[t[1] as usize], fixed[t[2] as usize]];
             let zz = [z[t[0] as usize], z[t[1] as usize], z[t[2] as usize]];
-            let Some(s) = setup(p, zz, width, height) else { continue };
+            let Some(s) = setup(p, zz, width, height, with_depth) else { continue };
             stats.triangles_scanned += 1;
             if with_depth {
                 scan(&s, width, |idx, _, _, d| {
@@ -254,7 +313,7 @@ impl Rasterizer {
                     }
                 });
             } else {
-                scan(&s, width, |idx, _, _, _| mask[idx] = 255);
+                scan_mask(&s, width, mask);
             }
         }
         stats.covered = mask.iter().filter(|&&m| m != 0).count();
