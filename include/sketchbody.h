@@ -9,6 +9,31 @@
 #include <stdint.h>
 
 /**
+ * Female shape space (value of the `gender` arguments).
+ */
+#define SKB_GENDER_FEMALE 0
+
+/**
+ * Male shape space (value of the `gender` arguments).
+ */
+#define SKB_GENDER_MALE 1
+
+/**
+ * Number of canonical joints of every mesh.
+ */
+#define SKB_NUM_JOINTS 15
+
+/**
+ * Number of canonical bones that skin weights refer to.
+ */
+#define SKB_NUM_BONES 14
+
+/**
+ * Skin-weight slots per vertex.
+ */
+#define SKB_MAX_INFLUENCES 4
+
+/**
  * Largest accepted image width or height, in pixels.
  */
 #define SKB_MAX_IMAGE_SIDE 16384
@@ -115,6 +140,22 @@ typedef uint32_t skb_status;
 #endif // __cplusplus
 
 /**
+ * The library context: holds the body model (the embedded one for [`skb_context_new`]).
+ * Create with `skb_context_new`, release with `skb_context_free`. Immutable after creation, so
+ * one context may be used from several threads at once. Meshes keep the model alive on their
+ * own: a context may be freed before the meshes made from it.
+ */
+typedef struct skb_context skb_context;
+
+/**
+ * A body mesh: a shape of one gender in the rest pose (MakeHuman's A-pose), metres, model frame
+ * (+Y up, +Z toward the viewer, the character's right at −X). Create with
+ * `skb_mesh_new_from_shape`, release with `skb_mesh_free`. Getters only read it, so several
+ * threads may call them at once; a function that changes a mesh needs exclusive use of it.
+ */
+typedef struct skb_mesh skb_mesh;
+
+/**
  * A reusable silhouette rasteriser: keeps its buffers between calls so that repeated
  * rasterisation allocates nothing. Create with [`skb_rasterizer_new`], release with
  * [`skb_rasterizer_free`]. Not thread-safe: use one per thread (it may move between threads).
@@ -178,6 +219,109 @@ typedef struct skb_camera {
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+/**
+ * Creates a context holding the body model compiled into the library. On success `*out`
+ * receives a new context the caller owns (release with `skb_context_free`); on failure `*out`
+ * is untouched. Thread-safe.
+ */
+skb_status skb_context_new(struct skb_context **out);
+
+/**
+ * Releases a context from `skb_context_new`. NULL is a no-op. Meshes made from it stay valid.
+ */
+void skb_context_free(struct skb_context *ctx);
+
+/**
+ * Number of principal components of `gender`'s shape space (the most weights
+ * `skb_mesh_new_from_shape` accepts) into `*out`. Thread-safe.
+ */
+skb_status skb_context_num_components(const struct skb_context *ctx, uint32_t gender, size_t *out);
+
+/**
+ * The default fitting dimension of `gender`'s shape space (components holding 96% of the
+ * training variance) into `*out`. Thread-safe.
+ */
+skb_status skb_context_default_dim(const struct skb_context *ctx, uint32_t gender, size_t *out);
+
+/**
+ * Builds the rest-pose mesh of `gender` (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) with PCA
+ * weights `weights[0..n]` (metres along unit basis vectors; missing trailing weights are 0, so
+ * `n = 0` gives the mean shape and `weights` may then be NULL). Errors: unknown gender
+ * (`SKB_ERR_OUT_OF_RANGE`), `n` above the component count (`SKB_ERR_OUT_OF_RANGE`), a NaN or
+ * infinite weight (`SKB_ERR_NON_FINITE`). On success `*out` receives a new mesh the caller owns
+ * (release with `skb_mesh_free`); on failure `*out` is untouched. Thread-safe.
+ */
+skb_status skb_mesh_new_from_shape(const struct skb_context *ctx,
+                                   uint32_t gender,
+                                   const float *weights,
+                                   size_t n,
+                                   struct skb_mesh **out);
+
+/**
+ * Releases a mesh. NULL is a no-op.
+ */
+void skb_mesh_free(struct skb_mesh *mesh);
+
+/**
+ * The mesh's gender (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) into `*out`.
+ */
+skb_status skb_mesh_gender(const struct skb_mesh *mesh, uint32_t *out);
+
+/**
+ * Number of vertices (13380) into `*out`.
+ */
+skb_status skb_mesh_vertex_count(const struct skb_mesh *mesh, size_t *out);
+
+/**
+ * Number of quad faces (13378) into `*out`; the triangle count is twice that.
+ */
+skb_status skb_mesh_face_count(const struct skb_mesh *mesh, size_t *out);
+
+/**
+ * Number of joints (always `SKB_NUM_JOINTS`) into `*out`.
+ */
+skb_status skb_mesh_joint_count(const struct skb_mesh *mesh, size_t *out);
+
+/**
+ * Number of skin-weight slots, `vertex count × SKB_MAX_INFLUENCES`, into `*out`.
+ */
+skb_status skb_mesh_skin_weight_count(const struct skb_mesh *mesh, size_t *out);
+
+/**
+ * Copies the rest-pose vertices as x, y, z floats (metres) into `dst`, which holds `dst_len`
+ * floats (at least 3 × vertex count). On error nothing is written.
+ */
+skb_status skb_mesh_copy_vertices(const struct skb_mesh *mesh, float *dst, size_t dst_len);
+
+/**
+ * Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside) into
+ * `dst`, which holds `dst_len` integers (at least 4 × face count). On error nothing is written.
+ */
+skb_status skb_mesh_copy_faces(const struct skb_mesh *mesh, uint32_t *dst, size_t dst_len);
+
+/**
+ * Copies the faces split into triangles ((a,b,c), (a,c,d) per quad; 3 indices each) into `dst`,
+ * which holds `dst_len` integers (at least 6 × face count). On error nothing is written.
+ */
+skb_status skb_mesh_copy_triangles(const struct skb_mesh *mesh, uint32_t *dst, size_t dst_len);
+
+/**
+ * Copies the 15 rest-pose joints (canonical order, x, y, z doubles, metres) into `dst`, which
+ * holds `dst_len` doubles (at least 45). On error nothing is written.
+ */
+skb_status skb_mesh_copy_joints(const struct skb_mesh *mesh, double *dst, size_t dst_len);
+
+/**
+ * Copies the skin weights: for vertex v, slots `4v .. 4v+3` of `bones` (bone indices 0..13,
+ * DESIGN.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
+ * Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count). On error
+ * nothing is written.
+ */
+skb_status skb_mesh_copy_skin_weights(const struct skb_mesh *mesh,
+                                      uint32_t *bones,
+                                      float *weights,
+                                      size_t len);
 
 /**
  * The message of the last failed sketchbody call on this thread ("" after a success).

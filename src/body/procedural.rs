@@ -7,6 +7,7 @@ use rand::Rng;
 
 use super::ik::{parent_bone, BONE_ORDER};
 use super::rig::{RiggedMesh, VertexWeights};
+use super::MAX_INFLUENCES;
 use crate::skeleton::{Joints3, BONES, NUM_BONES, NUM_JOINTS};
 
 /// Rest joints of a 1.7 m adult in an A-pose (arms 50° below horizontal, legs straight),
@@ -143,15 +144,18 @@ fn distance_weights(joints: &Joints3, p: &[f32; 3]) -> VertexWeights {
         })
         .collect();
     d.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    let mut w: VertexWeights = [(0, 0.0); 4];
+    let mut w = VertexWeights { bones: [0; MAX_INFLUENCES], weights: [0.0; MAX_INFLUENCES] };
     let mut sum = 0.0;
-    for (slot, &(dist, b)) in d.iter().take(4).enumerate() {
-        let x = (1.0 - (dist - d[0].0) / 0.04).max(0.0).powi(2);
-        w[slot] = (b as u8, x as f32);
-        sum += x as f32;
+    for (slot, &(dist, b)) in d.iter().take(MAX_INFLUENCES).enumerate() {
+        let x = (1.0 - (dist - d[0].0) / 0.04).max(0.0).powi(2) as f32;
+        if x > 0.0 {
+            w.bones[slot] = b as u8;
+            w.weights[slot] = x;
+            sum += x;
+        }
     }
-    for slot in &mut w {
-        slot.1 /= sum;
+    for x in &mut w.weights {
+        *x /= sum;
     }
     w
 }

@@ -2,12 +2,18 @@
 //! rasterising and export consume. Frame: metres, +Y up, +Z toward the viewer, the character's
 //! right at −X; the rest (bind) pose is the shape model's (MakeHuman's A-pose).
 
+use super::{BodyModel, Gender};
 use crate::error::{Error, Result};
 use crate::skeleton::{Joints3, NUM_BONES};
 
-/// Up to four bone influences of one vertex: `(bone, weight)` with `bone` an index into
-/// [`crate::skeleton::BONES`]. Unused slots have weight 0. Weights of a vertex sum to 1.
-pub type VertexWeights = [(u8, f32); 4];
+pub use super::model::VertexWeights;
+
+impl VertexWeights {
+    /// The `(bone, weight)` pairs with non-zero weight.
+    pub fn influences(&self) -> impl Iterator<Item = (usize, f32)> + '_ {
+        self.bones.iter().zip(self.weights).filter(|&(_, w)| w != 0.0).map(|(&b, w)| (b as usize, w))
+    }
+}
 
 /// Texture coordinates indexed per face corner (MakeHuman's UVs are not per vertex).
 #[derive(Clone, Debug, PartialEq)]
@@ -58,9 +64,9 @@ impl RiggedMesh {
             return corrupt(format!("face {f} indexes a vertex >= {n}"));
         }
         for (i, w) in self.weights.iter().enumerate() {
-            let bad_bone = w.iter().any(|&(b, x)| x != 0.0 && b as usize >= NUM_BONES);
-            let sum: f32 = w.iter().map(|&(_, x)| x).sum();
-            if bad_bone || w.iter().any(|&(_, x)| !(x >= 0.0)) || (sum - 1.0).abs() > 1e-3 {
+            let bad_bone = w.influences().any(|(b, _)| b >= NUM_BONES);
+            let sum: f32 = w.weights.iter().sum();
+            if bad_bone || w.weights.iter().any(|&x| !(x >= 0.0)) || (sum - 1.0).abs() > 1e-3 {
                 return corrupt(format!("skin weights of vertex {i} are invalid: {w:?}"));
             }
         }
@@ -74,6 +80,19 @@ impl RiggedMesh {
             }
         }
         Ok(())
+    }
+
+    /// The body of `gender` with PCA weights `shape` (see [`super::ShapeSpace::synthesize`]) from
+    /// `model`, in the rest pose, with MakeHuman's UVs and the model's skin weights.
+    pub fn from_model(model: &BodyModel, gender: Gender, shape: &[f64]) -> Result<RiggedMesh> {
+        let rest = model.space(gender).synthesize(shape)?;
+        Ok(RiggedMesh {
+            vertices: rest.vertices,
+            quads: model.faces().to_vec(),
+            uvs: Some(FaceUvs { coords: model.uvs().to_vec(), quads: model.face_uvs().to_vec() }),
+            joints: rest.joints,
+            weights: model.skin_weights().to_vec(),
+        })
     }
 
     /// Triangles of the quads (each quad split along its 0–2 diagonal; repeated-corner quads
@@ -125,4 +144,35 @@ pub fn vertex_normals(vertices: &[[f32; 3]], quads: &[[u32; 4]]) -> Vec<[f32; 3]
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::body::ik::{solve, IkOptions};
+    use crate::body::procedural::random_pose;
+    use crate::body::skin::{skin, SkinMethod};
+    use crate::camera::WeakPerspective;
+    use crate::render::raster::Rasterizer;
+    use rand::SeedableRng;
+
+    /// The embedded MakeHuman body poses, skins and rasterises: single-bone vertices follow
+    /// their bone exactly and the silhouette is non-empty.
+    #[test]
+    fn embedded_body_poses_skins_and_rasterises() {
+        let model = BodyModel::embedded().unwrap();
+        let mesh = RiggedMesh::from_model(&model, Gender::Female, &[]).unwrap();
+        mesh.validate().unwrap();
+        assert_eq!((mesh.vertices.len(), mesh.quads.len()), (13380, 13378));
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let target = random_pose(&mesh.joints, &mut rng, 0.1);
+        let pose = solve(&mesh.joints, &target, &IkOptions { retarget: true }).unwrap();
+        for method in [SkinMethod::Linear, SkinMethod::DualQuaternion] {
+            let posed = skin(&mesh.vertices, &mesh.weights, &pose, method).unwrap();
+            assert!(posed.iter().flatten().all(|c| c.is_finite()));
+            let cam = WeakPerspective { sx: 100.0, sy: 100.0, r: nalgebra::Matrix3::identity(), t: [128.0, 128.0] };
+            let stats = Rasterizer::new().rasterize(&posed, &mesh.triangles(), &cam, 256, 256, true).unwrap();
+            assert!(stats.covered > 1000, "{method:?}: {} px", stats.covered);
+        }
+    }
 }

@@ -75,11 +75,8 @@ fn apply(m: &[[f32; 3]; 3], p: [f32; 3]) -> [f32; 3] {
 
 fn lbs_vertex(bones: &[BoneXf; NUM_BONES], p: [f32; 3], w: &VertexWeights) -> [f32; 3] {
     let mut out = [0.0f32; 3];
-    for &(b, x) in w {
-        if x == 0.0 {
-            continue;
-        }
-        let bx = &bones[b as usize];
+    for (b, x) in w.influences() {
+        let bx = &bones[b];
         let q = apply(&bx.m, p);
         for k in 0..3 {
             out[k] += x * (q[k] + bx.t[k]);
@@ -93,11 +90,8 @@ fn dqs_vertex(bones: &[BoneXf; NUM_BONES], p: [f32; 3], w: &VertexWeights) -> [f
     let mut x = [0.0f32; 3];
     let (mut real, mut dual) = ([0.0f32; 4], [0.0f32; 4]);
     let mut pivot: Option<[f32; 4]> = None;
-    for &(b, wt) in w {
-        if wt == 0.0 {
-            continue;
-        }
-        let bx = &bones[b as usize];
+    for (b, wt) in w.influences() {
+        let bx = &bones[b];
         let d = [p[0] - bx.o[0], p[1] - bx.o[1], p[2] - bx.o[2]];
         let s = apply(&bx.s, d);
         for k in 0..3 {
@@ -138,7 +132,7 @@ pub fn skin_into(
             detail: format!("{} weight entries for {} vertices", weights.len(), rest.len()),
         });
     }
-    if let Some(w) = weights.iter().find(|w| w.iter().any(|&(b, x)| x != 0.0 && b as usize >= NUM_BONES)) {
+    if let Some(w) = weights.iter().find(|w| w.influences().any(|(b, _)| b >= NUM_BONES)) {
         return Err(Error::OutOfRange { name: "skin weights", detail: format!("bone index >= {NUM_BONES} in {w:?}") });
     }
     let bones = prepare(pose);
@@ -212,8 +206,8 @@ mod tests {
         let dqs = skin(&mesh.vertices, &mesh.weights, &pose, SkinMethod::DualQuaternion).unwrap();
         let mut rigid = 0;
         for (i, w) in mesh.weights.iter().enumerate() {
-            if w[0].1 > 0.99999 {
-                let (m, t) = pose.bone_affine(w[0].0 as usize);
+            if w.weights[0] > 0.99999 {
+                let (m, t) = pose.bone_affine(w.bones[0] as usize);
                 let p = mesh.vertices[i];
                 let e = m * Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64) + t;
                 for (name, got) in [("lbs", lbs[i]), ("dqs", dqs[i])] {

