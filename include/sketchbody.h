@@ -39,6 +39,16 @@
 #define SKB_MAX_IMAGE_SIDE 16384
 
 /**
+ * `skb_mesh_pose` flag: scale bones along their length so the joints land on the targets.
+ */
+#define SKB_POSE_RETARGET 1
+
+/**
+ * `skb_mesh_pose` flag: dual-quaternion skinning instead of linear blend skinning.
+ */
+#define SKB_POSE_DUAL_QUATERNION 2
+
+/**
  * Major version of the library this header belongs to.
  */
 #define SKB_VERSION_MAJOR 0
@@ -393,6 +403,66 @@ skb_status skb_rasterize_triangles(struct skb_rasterizer *rasterizer,
                                    uint8_t *mask,
                                    size_t mask_stride,
                                    size_t mask_len);
+
+/**
+ * Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,
+ * metres, model frame; `joints_len` must be 45) by inverse kinematics and skinning. `flags` is
+ * 0 or a combination of `SKB_POSE_RETARGET` and `SKB_POSE_DUAL_QUATERNION`. The pose replaces
+ * any earlier one (the rest shape is kept; posing to the rest joints gives the rest pose).
+ * Errors: non-finite joints (`SKB_ERR_NON_FINITE`), coincident joints
+ * (`SKB_ERR_DEGENERATE_BONE`), unknown flags or a wrong length (`SKB_ERR_OUT_OF_RANGE`); on
+ * error the mesh is unchanged. Needs exclusive use of `mesh`; skinning runs on the rayon pool.
+ */
+skb_status skb_mesh_pose(struct skb_mesh *mesh,
+                         const double *joints,
+                         size_t joints_len,
+                         uint32_t flags);
+
+/**
+ * Copies the posed vertices (the rest vertices before any `skb_mesh_pose`) as x, y, z floats
+ * (metres) into `dst` of `dst_len` floats (at least 3 × vertex count). On error nothing is
+ * written. Only reads `mesh`.
+ */
+skb_status skb_mesh_copy_posed_vertices(const struct skb_mesh *mesh, float *dst, size_t dst_len);
+
+/**
+ * Copies the posed joints (15 × x, y, z doubles, metres; the rest joints before any
+ * `skb_mesh_pose`) into `dst` of `dst_len` doubles (at least 45). Only reads `mesh`.
+ */
+skb_status skb_mesh_copy_posed_joints(const struct skb_mesh *mesh, double *dst, size_t dst_len);
+
+/**
+ * Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
+ * [`skb_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
+ */
+skb_status skb_mesh_rasterize(const struct skb_mesh *mesh,
+                              struct skb_rasterizer *rasterizer,
+                              const struct skb_camera *cam,
+                              uint32_t w,
+                              uint32_t h,
+                              uint8_t *mask,
+                              size_t mask_stride,
+                              size_t mask_len);
+
+/**
+ * Writes the mesh as Wavefront OBJ to `path` (UTF-8): the posed vertices when `posed`, else the
+ * rest pose; normals, MakeHuman UVs, quads. Written atomically: on error no file is left.
+ * Only reads `mesh`.
+ */
+skb_status skb_mesh_write_obj(const struct skb_mesh *mesh, const char *path, bool posed);
+
+/**
+ * Writes the mesh as binary glTF 2.0 to `path` (UTF-8): rest mesh with skin, 15 joint nodes,
+ * a "posed" scene (the current pose; the rest pose if never posed) and a "rest" scene. See
+ * docs/formats.md. Written atomically. Only reads `mesh`.
+ */
+skb_status skb_mesh_write_glb(const struct skb_mesh *mesh, const char *path);
+
+/**
+ * Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
+ * `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
+ */
+skb_status skb_mesh_write_preview(const struct skb_mesh *mesh, const char *path, uint32_t size);
 
 /**
  * Static, NUL-terminated English text for a status code; "unknown status" for numbers this

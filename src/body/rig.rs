@@ -2,7 +2,7 @@
 //! rasterising and export consume. Frame: metres, +Y up, +Z toward the viewer, the character's
 //! right at −X; the rest (bind) pose is the shape model's (MakeHuman's A-pose).
 
-use super::{BodyModel, Gender};
+use super::{BodyModel, Gender, RestShape};
 use crate::error::{Error, Result};
 use crate::skeleton::{Joints3, NUM_BONES};
 
@@ -85,14 +85,18 @@ impl RiggedMesh {
     /// The body of `gender` with PCA weights `shape` (see [`super::ShapeSpace::synthesize`]) from
     /// `model`, in the rest pose, with MakeHuman's UVs and the model's skin weights.
     pub fn from_model(model: &BodyModel, gender: Gender, shape: &[f64]) -> Result<RiggedMesh> {
-        let rest = model.space(gender).synthesize(shape)?;
-        Ok(RiggedMesh {
-            vertices: rest.vertices,
+        Ok(RiggedMesh::from_rest(model, &model.space(gender).synthesize(shape)?))
+    }
+
+    /// A rest shape of `model` with the model's topology, UVs and skin weights (copied).
+    pub fn from_rest(model: &BodyModel, rest: &RestShape) -> RiggedMesh {
+        RiggedMesh {
+            vertices: rest.vertices.clone(),
             quads: model.faces().to_vec(),
             uvs: Some(FaceUvs { coords: model.uvs().to_vec(), quads: model.face_uvs().to_vec() }),
             joints: rest.joints,
             weights: model.skin_weights().to_vec(),
-        })
+        }
     }
 
     /// Triangles of the quads (each quad split along its 0–2 diagonal; repeated-corner quads

@@ -28,7 +28,11 @@ pub use body::{
 };
 pub use error::skb_last_error_message;
 pub use image::{skb_canny, skb_gaussian_blur, skb_image, SKB_MAX_IMAGE_SIDE};
-pub use mesh_ops::{skb_camera, skb_rasterize_triangles, skb_rasterizer, skb_rasterizer_free, skb_rasterizer_new};
+pub use mesh_ops::{
+    skb_camera, skb_mesh_copy_posed_joints, skb_mesh_copy_posed_vertices, skb_mesh_pose, skb_mesh_rasterize, skb_mesh_write_glb,
+    skb_mesh_write_obj, skb_mesh_write_preview, skb_rasterize_triangles, skb_rasterizer, skb_rasterizer_free, skb_rasterizer_new,
+    SKB_POSE_DUAL_QUATERNION, SKB_POSE_RETARGET,
+};
 pub use status::{skb_status, skb_status_str};
 pub use version::{skb_version, SKB_VERSION_MAJOR, SKB_VERSION_MINOR, SKB_VERSION_PATCH, SKB_VERSION_STRING};
 
