@@ -1,5 +1,6 @@
 //! Runs the Khronos glTF validator (npm `gltf-validator`, via scripts/validate-gltf.mjs) on the
-//! .glb files we export: rest, posed and retargeted poses, with per-corner UVs. Needs node and
+//! .glb files we export: rest, posed and retargeted poses, with per-corner UVs, and the
+//! embedded MakeHuman body. Needs node and
 //! npm (the package is installed under the cargo target dir on first use); without them the
 //! test prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set (CI).
 
@@ -9,7 +10,8 @@ use std::process::Command;
 use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions, Pose};
 use sketchbody::body::procedural::{capsule_humanoid, random_pose, rest_joints};
-use sketchbody::body::rig::FaceUvs;
+use sketchbody::body::rig::{FaceUvs, RiggedMesh};
+use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::gltf::write_glb;
 
 const VALIDATOR: &str = "gltf-validator@2.0.0-dev.3.10";
@@ -74,6 +76,13 @@ fn exported_glb_files_have_no_validator_errors() {
         write_glb(&path, &mesh, pose).unwrap();
         files.push(path);
     }
+    // The embedded MakeHuman body with its UVs, posed with retargeting.
+    let model = BodyModel::embedded().unwrap();
+    let body = RiggedMesh::from_model(&model, Gender::Female, &[]).unwrap();
+    let pose = solve(&body.joints, &random_pose(&body.joints, &mut rng, 0.1), &IkOptions { retarget: true }).unwrap();
+    let path = out.join("makehuman-female.glb");
+    write_glb(&path, &body, &pose).unwrap();
+    files.push(path);
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/validate-gltf.mjs");
     let run = Command::new("node").arg(&script).args(&files).env("GLTF_VALIDATOR_DIR", &dir).output().unwrap();
     let text = String::from_utf8_lossy(&run.stdout);

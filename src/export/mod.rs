@@ -2,4 +2,5 @@
 //! is written atomically (temporary file, then rename).
 
 pub mod gltf;
+pub mod joints;
 pub mod obj;

