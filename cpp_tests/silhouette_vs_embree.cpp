@@ -1,7 +1,7 @@
 // Silhouette raster vs Embree: sketchbody's skb_rasterize_triangles against one Embree ray per
-// pixel centre along the weak-perspective camera's view direction, on random posed capsule
-// humanoids (random shapes, poses, cameras; some partly outside the image) at 128², 512² and
-// 1024². Passes when every image agrees on >= 99.99% of pixels and every disagreeing pixel
+// pixel centre along the weak-perspective camera's view direction, on 100 random posed capsule
+// humanoids and 30 MakeHuman bodies from the embedded model (random shapes, poses via
+// skb_mesh_pose, cameras; every fifth partly outside the image) at 128², 512² and 1024². Passes when every image agrees on >= 99.99% of pixels and every disagreeing pixel
 // centre lies within 1 px of a projected triangle edge. Also times ours vs Embree (BVH build +
 // 16-ray packets, one thread) at 256² and 512² on a ~27k-triangle body: ratio lines are the
 // benchmark record, not pass/fail.
@@ -70,17 +70,14 @@ struct Mesh {
   std::vector<uint32_t> t;   // 3 indices per triangle
 };
 
-// A random posed capsule humanoid: bones rotated by random angles down the hierarchy, bone
-// lengths and radii scaled randomly (the "shape"), capsules tessellated rings x segs.
-Mesh random_body(std::mt19937_64& rng, int rings, int segs) {
+// Random posed joints: each bone of `rest` rotated by a random angle down the hierarchy (the
+// root turned about +Y and tilted), bone lengths scaled by [1 - jitter, 1 + jitter].
+std::array<V3, 15> random_joints(std::mt19937_64& rng, const std::array<V3, 15>& rest, double jitter) {
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
-  auto rest = rest_joints();
   std::array<V3, 15> j{};
   std::array<Mat3, 15> rot{};  // global rotation of the bone ending at each joint
   Mat3 root = axis_angle({0, 1, 0}, 3.1 * u(rng)) * axis_angle({u(rng), u(rng), u(rng) + 1e-3}, 0.3 * u01(rng));
   j[8] = rest[8];
-  double girth = 0.75 + 0.6 * u01(rng);
-  std::array<double, 14> radius{};
   for (int b = 0; b < 14; ++b) {
     int p = BONES[b][0], c = BONES[b][1];
     Mat3 parent = root;
@@ -88,10 +85,20 @@ Mesh random_body(std::mt19937_64& rng, int rings, int segs) {
       if (BONES[q][1] == p) parent = rot[p];
     Mat3 local = axis_angle({u(rng), u(rng), u(rng) + 1e-3}, MAX_ANGLE[b] * u01(rng));
     rot[c] = parent * local;
-    double scale = 0.85 + 0.3 * u01(rng);
+    double scale = 1 - jitter + 2 * jitter * u01(rng);
     j[c] = add(j[p], mul(rot[c] * sub(rest[c], rest[p]), scale));
-    radius[b] = RADIUS[b] * girth * (0.85 + 0.3 * u01(rng));
   }
+  return j;
+}
+
+// A random posed capsule humanoid: random joints, radii scaled randomly (the "shape"), capsules
+// tessellated rings x segs.
+Mesh random_body(std::mt19937_64& rng, int rings, int segs) {
+  std::uniform_real_distribution<double> u01(0, 1);
+  std::array<V3, 15> j = random_joints(rng, rest_joints(), 0.15);
+  double girth = 0.75 + 0.6 * u01(rng);
+  std::array<double, 14> radius{};
+  for (int b = 0; b < 14; ++b) radius[b] = RADIUS[b] * girth * (0.85 + 0.3 * u01(rng));
   Mesh m;
   const double PI = 3.14159265358979323846;
   for (int b = 0; b < 14; ++b) {
@@ -130,9 +137,10 @@ Mesh random_body(std::mt19937_64& rng, int rings, int segs) {
   return m;
 }
 
-// A random camera for a w x h image: turned about +Y, tilted a little, scaled so the body is
-// 50-95% of the image height; `outside` shifts it partly off the image.
-skb_camera random_camera(std::mt19937_64& rng, int w, int h, bool outside) {
+// A random camera for a w x h image looking at mesh `m`: turned about +Y, tilted a little,
+// scaled so a 1.9 m figure is 50-95% of the image height, the mesh's bounding-box centre near
+// the image centre; `outside` shifts it partly off the image.
+skb_camera random_camera(std::mt19937_64& rng, int w, int h, bool outside, const Mesh& m) {
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
   Mat3 r = axis_angle({1, 0, 0}, 0.3 * u(rng)) * axis_angle({0, 1, 0}, 0.6 * u(rng)) * axis_angle({0, 0, 1}, 0.2 * u(rng));
   skb_camera c{};
@@ -141,9 +149,49 @@ skb_camera random_camera(std::mt19937_64& rng, int w, int h, bool outside) {
   for (int i = 0; i < 9; ++i) c.r[i] = r.m[i];
   double shift = outside ? 0.45 + 0.3 * u01(rng) : 0.05 * u(rng);
   double dir = 2 * 3.14159265 * u01(rng);
-  c.t[0] = w * (0.5 + shift * std::cos(dir));
-  c.t[1] = h * (0.5 + shift * std::sin(dir)) + c.sy * 0.85;  // the model origin is at the feet
+  V3 lo{1e30, 1e30, 1e30}, hi{-1e30, -1e30, -1e30};
+  for (size_t i = 0; i < m.v.size(); i += 3)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], (double)m.v[i + d]), hi[d] = std::max(hi[d], (double)m.v[i + d]);
+  V3 centre = r * mul(add(lo, hi), 0.5);
+  c.t[0] = w * (0.5 + shift * std::cos(dir)) - c.sx * centre[0];
+  c.t[1] = h * (0.5 + shift * std::sin(dir)) + c.sy * centre[1];
   return c;
+}
+
+[[noreturn]] void die(const char* what, skb_status st) {
+  std::printf("FAIL: %s: status %u: %s\n", what, st, skb_last_error_message());
+  std::exit(1);
+}
+
+// A random MakeHuman body through the C API: random gender and leading PCA weights (about their
+// spread in the embedded model), posed by IK and skinning (linear or dual-quaternion) to joints
+// made by rotating its own rig.
+Mesh makehuman_body(skb_context* ctx, std::mt19937_64& rng) {
+  std::normal_distribution<double> n01(0, 1);
+  const double SD[5] = {10.0, 2.7, 1.9, 1.3, 1.0};
+  float w[5];
+  for (int k = 0; k < 5; ++k) w[k] = (float)(SD[k] * std::clamp(n01(rng), -2.0, 2.0));
+  skb_mesh* mesh = nullptr;
+  skb_status st = skb_mesh_new_from_shape(ctx, (uint32_t)(rng() % 2), w, 5, &mesh);
+  if (st != SKB_OK) die("skb_mesh_new_from_shape", st);
+  double flat[45];
+  if ((st = skb_mesh_copy_posed_joints(mesh, flat, 45)) != SKB_OK) die("skb_mesh_copy_posed_joints", st);
+  std::array<V3, 15> rest{};
+  for (int i = 0; i < 15; ++i) rest[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
+  std::array<V3, 15> j = random_joints(rng, rest, 0.0);
+  for (int i = 0; i < 15; ++i)
+    for (int d = 0; d < 3; ++d) flat[3 * i + d] = j[i][d];
+  if ((st = skb_mesh_pose(mesh, flat, 45, rng() % 2 ? SKB_POSE_DUAL_QUATERNION : 0)) != SKB_OK) die("skb_mesh_pose", st);
+  size_t nv = 0, nf = 0;
+  skb_mesh_vertex_count(mesh, &nv);
+  skb_mesh_face_count(mesh, &nf);
+  Mesh m;
+  m.v.resize(3 * nv);
+  m.t.resize(6 * nf);
+  if ((st = skb_mesh_copy_posed_vertices(mesh, m.v.data(), m.v.size())) != SKB_OK) die("copy posed vertices", st);
+  if ((st = skb_mesh_copy_triangles(mesh, m.t.data(), m.t.size())) != SKB_OK) die("copy triangles", st);
+  skb_mesh_free(mesh);
+  return m;
 }
 
 RTCScene build_scene(RTCDevice dev, const Mesh& m) {
@@ -237,16 +285,20 @@ int main() {
   if (skb_rasterizer_new(&ras) != SKB_OK) return 1;
   std::mt19937_64 rng(20261122);
   const int sizes[3] = {128, 512, 1024};
-  const int MESHES = 100;
+  const int CAPSULES = 100, MAKEHUMAN = 30;
+  skb_context* ctx = nullptr;
+  skb_status cst = skb_context_new(&ctx);
+  if (cst != SKB_OK) die("skb_context_new", cst);
   int failures = 0, images = 0, outside_checked = 0;
   double worst_agree = 100.0, worst_edge = 0.0;
   std::vector<uint8_t> ours, ref;
-  for (int i = 0; i < MESHES; ++i) {
-    Mesh m = random_body(rng, 10 + (int)(rng() % 20), 8 + (int)(rng() % 16));
+  for (int i = 0; i < CAPSULES + MAKEHUMAN; ++i) {
+    bool mh = i >= CAPSULES;
+    Mesh m = mh ? makehuman_body(ctx, rng) : random_body(rng, 10 + (int)(rng() % 20), 8 + (int)(rng() % 16));
     RTCScene scene = build_scene(dev, m);
     bool outside = i % 5 == 0;
-    skb_camera unit = random_camera(rng, 1, 1, outside);
-    std::printf("mesh %3d (%zu tris%s):", i, m.t.size() / 3, outside ? ", partly outside" : "");
+    skb_camera unit = random_camera(rng, 1, 1, outside, m);
+    std::printf("mesh %3d (%s, %zu tris%s):", i, mh ? "MakeHuman" : "capsules", m.t.size() / 3, outside ? ", partly outside" : "");
     for (int s : sizes) {
       skb_camera c = unit;
       c.sx *= s, c.sy *= s, c.t[0] *= s, c.t[1] *= s;
@@ -299,7 +351,7 @@ int main() {
   // Deliberately wholly outside: a specific status, mask untouched.
   {
     Mesh m = random_body(rng, 8, 8);
-    skb_camera c = random_camera(rng, 64, 64, false);
+    skb_camera c = random_camera(rng, 64, 64, false, m);
     c.t[0] += 10000;
     std::vector<uint8_t> mask(64 * 64, 7);
     skb_status st = skb_rasterize_triangles(ras, m.v.data(), m.v.size() / 3, m.t.data(), m.t.size() / 3, &c, 64, 64,
@@ -309,14 +361,14 @@ int main() {
     failures += !ok;
   }
 
-  // Benchmark: a new ~27k-triangle body per iteration; ours (raster) vs Embree (BVH build +
-  // 16-ray packets), one thread each.
+  // Benchmark: a new posed MakeHuman body (26756 triangles) per iteration; ours (raster) vs
+  // Embree (BVH build + 16-ray packets), one thread each.
   for (int s : {256, 512}) {
     const int N = 20;
     double t_ours = 0, t_build = 0, t_cast = 0;
     for (int it = 0; it < N; ++it) {
-      Mesh m = random_body(rng, 40, 24);
-      skb_camera c = random_camera(rng, s, s, false);
+      Mesh m = makehuman_body(ctx, rng);
+      skb_camera c = random_camera(rng, s, s, false, m);
       ours.assign((size_t)s * s, 0);
       double t0 = now_s();
       skb_status st = skb_rasterize_triangles(ras, m.v.data(), m.v.size() / 3, m.t.data(), m.t.size() / 3, &c, s, s,
@@ -329,7 +381,7 @@ int main() {
       rtcReleaseScene(scene);
       if (st != SKB_OK) ++failures;
       t_ours += t1 - t0, t_build += t2 - t1, t_cast += t3 - t2;
-      if (it == 0) std::printf("benchmark body: %zu triangles\n", m.t.size() / 3);
+      if (it == 0) std::printf("benchmark body (MakeHuman, posed): %zu triangles\n", m.t.size() / 3);
     }
     std::printf("raster %d²: ours %.3f ms, embree build %.3f ms + cast %.3f ms = %.3f ms per mesh; ratio embree/ours = %.1fx\n",
                 s, 1e3 * t_ours / N, 1e3 * t_build / N, 1e3 * t_cast / N, 1e3 * (t_build + t_cast) / N,
@@ -337,6 +389,7 @@ int main() {
   }
   skb_rasterizer_free(ras);
   skb_rasterizer_free(nullptr);
+  skb_context_free(ctx);
   rtcReleaseDevice(dev);
   std::printf("%s\n", failures == 0 ? "PASS" : "FAIL");
   return failures == 0 ? 0 : 1;
