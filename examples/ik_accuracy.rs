@@ -1,12 +1,14 @@
 //! IK accuracy over random plausible poses made by rotating the rig (docs/benchmarks.md,
 //! "Posing and raster"): mean and max angle between posed and target bone directions, and with
-//! bone-length retargeting (bones also scaled by up to ±15%) the max joint position error.
+//! bone-length retargeting (bones also scaled by up to ±15%) the max joint position error. Rigs:
+//! the embedded MakeHuman mean female and male, and the procedural capsule rig.
 //! Usage: cargo run --release --example ik_accuracy [N=500] [SEED=1]
 
 use nalgebra::Vector3;
 use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::{random_pose, rest_joints};
+use sketchbody::body::{BodyModel, Gender};
 use sketchbody::skeleton::{Joints3, BONES, NUM_JOINTS};
 
 fn dir(j: &Joints3, b: usize) -> Vector3<f64> {
@@ -18,7 +20,19 @@ fn main() {
     let args: Vec<u64> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
     let n = args.first().copied().unwrap_or(500) as usize;
     let seed = args.get(1).copied().unwrap_or(1);
-    let rest = rest_joints();
+    let model = BodyModel::embedded().expect("embedded model");
+    let rigs = [
+        ("MakeHuman mean female", *model.space(Gender::Female).mean_joints()),
+        ("MakeHuman mean male", *model.space(Gender::Male).mean_joints()),
+        ("procedural 1.7 m A-pose", rest_joints()),
+    ];
+    for (name, rest) in rigs {
+        measure(name, &rest, n, seed);
+    }
+}
+
+fn measure(name: &str, rest: &Joints3, n: usize, seed: u64) {
+    let rest = *rest;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let (mut sum, mut max, mut count) = (0.0f64, 0.0f64, 0usize);
     let mut max_pos = 0.0f64;
@@ -41,7 +55,7 @@ fn main() {
         }
     }
     let dt = t0.elapsed().as_secs_f64();
-    println!("IK over {n} random poses (seed {seed}), procedural 1.7 m A-pose rig:");
+    println!("IK over {n} random poses (seed {seed}), {name} rig:");
     println!("  bone direction error: mean {:.2e} deg, max {:.2e} deg (goal <= 0.1 deg)", sum / count as f64, max);
     println!("  retargeted (bone lengths x U[0.85, 1.15]): max joint position error {:.2e} mm (goal <= 1 mm)", max_pos * 1e3);
     println!("  {:.1} us per solve", dt / (2 * n) as f64 * 1e6);
