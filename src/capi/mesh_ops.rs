@@ -167,10 +167,10 @@ unsafe fn path_arg<'a>(p: *const c_char, name: &str) -> Result<&'a Path, skb_sta
 pub unsafe extern "C" fn skb_mesh_pose(mesh: *mut skb_mesh, joints: *const f64, joints_len: usize, flags: u32) -> skb_status {
     ffi_boundary! {
         let m = try_status!(try_mut(mesh, "mesh"));
-        let j = try_status!(try_slice_of(joints, joints_len, "joints"));
         if joints_len != 3 * NUM_JOINTS {
             return fail(&Error::OutOfRange { name: "joints_len", detail: format!("{joints_len}, expected {}", 3 * NUM_JOINTS) });
         }
+        let j = try_status!(try_slice_of(joints, joints_len, "joints"));
         if flags & !(SKB_POSE_RETARGET | SKB_POSE_DUAL_QUATERNION) != 0 {
             return fail(&Error::OutOfRange { name: "flags", detail: format!("unknown bits in {flags:#x}") });
         }

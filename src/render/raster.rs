@@ -4,7 +4,8 @@
 //!
 //! Sampling: pixel (i, j) is covered when its centre (i + 0.5, j + 0.5) lies inside a projected
 //! triangle. Vertices are snapped to 1/16384 pixel and the edge functions are evaluated exactly in
-//! 64-bit integers over each triangle's clipped bounding box, with the top-left fill rule
+//! 64-bit integers over each triangle's clipped bounding box (each row's covered span is solved
+//! exactly from the three edge functions, then filled), with the top-left fill rule
 //! (a centre exactly on an edge belongs to the triangle whose edge is a top or a left edge in
 //! the y-down image), so triangles sharing an edge never both cover, nor both miss, a centre on
 //! it. Both windings are drawn (a silhouette has no back faces). Depth is the camera-frame
