@@ -481,3 +481,8 @@ const char *skb_version(void);
 #endif  // __cplusplus
 
 #endif  /* SKETCHBODY_H */
+
+#define SKB_STRINGIFY_(x) #x
+#define SKB_STRINGIFY(x) SKB_STRINGIFY_(x)
+/** "MAJOR.MINOR.PATCH" of the library this header belongs to; compare with skb_version(). */
+#define SKB_VERSION_STRING SKB_STRINGIFY(SKB_VERSION_MAJOR) "." SKB_STRINGIFY(SKB_VERSION_MINOR) "." SKB_STRINGIFY(SKB_VERSION_PATCH)

@@ -112,7 +112,7 @@ pub fn canny_into(src: &ImageView<'_>, params: &CannyParams, out: &mut [u8], out
     for y in 0..h {
         let mrow = &map[(y + 1) * mw + 1..(y + 1) * mw + 1 + w];
         for (o, &m) in out[y * out_stride..y * out_stride + w].iter_mut().zip(mrow) {
-            *o = if m == STRONG { 255 } else { 0 };
+            *o = ((m == STRONG) as u8).wrapping_neg();
         }
     }
     Ok(())
@@ -140,7 +140,10 @@ fn edge_map(gray: &ImageView<'_>, aperture: usize, l2: bool, t: &IntThresholds) 
         let mut band = Band::new(gray, aperture, l2, t);
         band.run(y0, y1, rows, mw)
     };
-    let strong: Vec<Vec<u32>> = if h > BAND_ROWS && w * h >= 1 << 16 {
+    // With one worker (or a small image) stay on the calling thread: handing work to the pool
+    // would only add two thread wake-ups per call.
+    let parallel = rayon::current_num_threads() > 1 && h > BAND_ROWS && w * h >= 1 << 16;
+    let strong: Vec<Vec<u32>> = if parallel {
         bands.into_par_iter().map(process).collect()
     } else {
         bands.into_iter().map(process).collect()
@@ -151,7 +154,10 @@ fn edge_map(gray: &ImageView<'_>, aperture: usize, l2: bool, t: &IntThresholds) 
 
 /// Grows strong pixels through 8-connected weak pixels. `strong` holds map indices.
 fn hysteresis(map: &mut [u8], mw: usize, strong: Vec<Vec<u32>>) {
-    let mut stack: Vec<u32> = strong.into_iter().flatten().collect();
+    let mut stack = Vec::with_capacity(strong.iter().map(Vec::len).sum());
+    for band in &strong {
+        stack.extend_from_slice(band);
+    }
     let offsets = [1isize, -1, mw as isize - 1, mw as isize, mw as isize + 1, -(mw as isize) - 1, -(mw as isize), -(mw as isize) + 1];
     while let Some(i) = stack.pop() {
         for &o in &offsets {
@@ -170,21 +176,29 @@ struct Band<'a, 'g> {
     aperture: usize,
     l2: bool,
     t: &'a IntThresholds,
-    /// Horizontal smooth/deriv rows, slot = logical row mod aperture.
+    /// Aperture 5/7: horizontal smooth/deriv rows, slot = logical row mod aperture.
     hs: Vec<Vec<i32>>,
     hd: Vec<Vec<i32>>,
-    /// Gradient rows of the last three image rows g: slot = (g + 3) mod 3.
-    dx: [Vec<i32>; 3],
-    dy: [Vec<i32>; 3],
+    /// Aperture 5/7: vertical-pass scratch.
+    vx: Vec<i32>,
+    vy: Vec<i32>,
+    /// Aperture 3: the three source rows around the current one, padded by replication.
+    pad: [Vec<u8>; 3],
+    /// Gradient rows of the last three image rows g: slot = (g + 3) mod 3. Every aperture's
+    /// gradients fit in i16 (OpenCV stores them as CV_16S too).
+    dx: [Vec<i16>; 3],
+    dy: [Vec<i16>; 3],
     /// Magnitudes with one zero column on each side.
     mag: [Vec<i32>; 3],
+    /// Scratch for the strong pixels of one row (written branch-free).
+    found: Vec<u32>,
 }
 
 impl<'a, 'g> Band<'a, 'g> {
     fn new(gray: &'a ImageView<'g>, aperture: usize, l2: bool, t: &'a IntThresholds) -> Self {
         let w = gray.width();
-        let ring = || vec![vec![0i32; w]; aperture];
-        let three = || [vec![0i32; w], vec![0i32; w], vec![0i32; w]];
+        let ring = || if aperture == 3 { Vec::new() } else { vec![vec![0i32; w]; aperture] };
+        let three16 = || [vec![0i16; w], vec![0i16; w], vec![0i16; w]];
         Self {
             gray,
             aperture,
@@ -192,9 +206,13 @@ impl<'a, 'g> Band<'a, 'g> {
             t,
             hs: ring(),
             hd: ring(),
-            dx: three(),
-            dy: three(),
+            vx: vec![0; if aperture == 3 { 0 } else { w }],
+            vy: vec![0; if aperture == 3 { 0 } else { w }],
+            pad: [vec![0u8; w + 2], vec![0u8; w + 2], vec![0u8; w + 2]],
+            dx: three16(),
+            dy: three16(),
             mag: [vec![0i32; w + 2], vec![0i32; w + 2], vec![0i32; w + 2]],
+            found: vec![0; w],
         }
     }
 
@@ -207,11 +225,16 @@ impl<'a, 'g> Band<'a, 'g> {
         for gy in y0 as isize - 1..=y1 as isize {
             let slot = (gy + 3) as usize % 3;
             if gy >= 0 && gy < h {
-                while next_h <= gy + r {
-                    self.horizontal(next_h);
-                    next_h += 1;
+                if self.aperture == 3 {
+                    self.gradient3(gy, slot);
+                } else {
+                    while next_h <= gy + r {
+                        self.horizontal(next_h);
+                        next_h += 1;
+                    }
+                    self.gradient_generic(gy, slot);
                 }
-                self.gradient(gy, slot);
+                self.magnitude(slot);
             } else {
                 self.mag[slot].fill(0);
             }
@@ -225,7 +248,33 @@ impl<'a, 'g> Band<'a, 'g> {
         strong
     }
 
-    /// Horizontal pass of logical row `ly` (source row clamped into the image).
+    /// Aperture 3, fused: dx and dy of image row `gy` from the replicated-border rows around it,
+    /// with adds and shifts only (exact in i16: |dx|, |dy| <= 1020).
+    fn gradient3(&mut self, gy: isize, slot: usize) {
+        let h = self.gray.height() as isize;
+        let w = self.gray.width();
+        for (i, pad) in self.pad.iter_mut().enumerate() {
+            let src = self.gray.row((gy + i as isize - 1).clamp(0, h - 1) as usize);
+            pad[1..w + 1].copy_from_slice(src);
+            pad[0] = src[0];
+            pad[w + 1] = src[w - 1];
+        }
+        let [p0, p1, p2] = &self.pad;
+        let (l0, c0, r0) = (&p0[..w], &p0[1..w + 1], &p0[2..w + 2]);
+        let (l1, r1) = (&p1[..w], &p1[2..w + 2]);
+        let (l2, c2, r2) = (&p2[..w], &p2[1..w + 1], &p2[2..w + 2]);
+        let dx = &mut self.dx[slot][..w];
+        let dy = &mut self.dy[slot][..w];
+        for x in 0..w {
+            let (a, b, c) = (l0[x] as i16, c0[x] as i16, r0[x] as i16);
+            let (d, f) = (l1[x] as i16, r1[x] as i16);
+            let (g, k, m) = (l2[x] as i16, c2[x] as i16, r2[x] as i16);
+            dx[x] = (c - a) + ((f - d) << 1) + (m - g);
+            dy[x] = (g + (k << 1) + m) - (a + (b << 1) + c);
+        }
+    }
+
+    /// Horizontal pass of logical row `ly` (source row clamped into the image), apertures 5/7.
     fn horizontal(&mut self, ly: isize) {
         let h = self.gray.height() as isize;
         let src = self.gray.row(ly.clamp(0, h - 1) as usize);
@@ -233,76 +282,123 @@ impl<'a, 'g> Band<'a, 'g> {
         horizontal_pass(src, smooth_kernel(self.aperture), deriv_kernel(self.aperture), &mut self.hs[slot], &mut self.hd[slot]);
     }
 
-    /// Gradient and magnitude of image row `gy` into ring slot `slot`.
-    fn gradient(&mut self, gy: isize, slot: usize) {
+    /// Gradient of image row `gy` for apertures 5 and 7 (7: scaled by 1/16, rounded half-even).
+    fn gradient_generic(&mut self, gy: isize, slot: usize) {
         let k = self.aperture;
         let r = (k / 2) as isize;
-        let idx: Vec<usize> = (0..k as isize).map(|i| (gy + i - r).rem_euclid(k as isize) as usize).collect();
-        {
-            let hd: Vec<&[i32]> = idx.iter().map(|&s| self.hd[s].as_slice()).collect();
-            vertical_pass(&hd, smooth_kernel(k), &mut self.dx[slot]);
-            let hs: Vec<&[i32]> = idx.iter().map(|&s| self.hs[s].as_slice()).collect();
-            vertical_pass(&hs, deriv_kernel(k), &mut self.dy[slot]);
+        let mut hd: [&[i32]; 7] = [&[]; 7];
+        let mut hs: [&[i32]; 7] = [&[]; 7];
+        for i in 0..k {
+            let s = (gy + i as isize - r).rem_euclid(k as isize) as usize;
+            hd[i] = &self.hd[s];
+            hs[i] = &self.hs[s];
         }
-        let (dx, dy) = (&mut self.dx[slot], &mut self.dy[slot]);
-        if k == 7 {
-            dx.iter_mut().for_each(|v| *v = div16_round_even(*v));
-            dy.iter_mut().for_each(|v| *v = div16_round_even(*v));
+        vertical_pass(&hd[..k], smooth_kernel(k), &mut self.vx);
+        vertical_pass(&hs[..k], deriv_kernel(k), &mut self.vy);
+        let scale = |v: i32| if k == 7 { div16_round_even(v) } else { v };
+        for (o, &v) in self.dx[slot].iter_mut().zip(&self.vx) {
+            *o = scale(v) as i16;
         }
-        let mag = &mut self.mag[slot];
+        for (o, &v) in self.dy[slot].iter_mut().zip(&self.vy) {
+            *o = scale(v) as i16;
+        }
+    }
+
+    /// Magnitude of the gradient row in `slot`: `|dx| + |dy|` or `dx² + dy²`.
+    fn magnitude(&mut self, slot: usize) {
+        let (dx, dy) = (&self.dx[slot], &self.dy[slot]);
         let w = dx.len();
-        let inner = &mut mag[1..w + 1];
+        let inner = &mut self.mag[slot][1..w + 1];
         if self.l2 {
             for ((m, &a), &b) in inner.iter_mut().zip(dx.iter()).zip(dy.iter()) {
-                *m = a * a + b * b;
+                *m = a as i32 * a as i32 + b as i32 * b as i32;
             }
         } else {
             for ((m, &a), &b) in inner.iter_mut().zip(dx.iter()).zip(dy.iter()) {
-                *m = a.abs() + b.abs();
+                *m = (a as i32).abs() + (b as i32).abs();
             }
         }
     }
 
     /// Non-maximum suppression of image row `y` into its map row.
-    fn suppress(&self, y: isize, map_row: &mut [u8], base: usize, strong: &mut Vec<u32>) {
-        const TG22: i32 = 13573;
+    fn suppress(&mut self, y: isize, map_row: &mut [u8], base: usize, strong: &mut Vec<u32>) {
+        const CHUNK: usize = 16;
         // Gradient row g lives in ring slot (g + 3) mod 3 (see `run`).
         let slot = |g: isize| (g + 3) as usize % 3;
-        let (prev, cur, next) = (&self.mag[slot(y - 1)], &self.mag[slot(y)], &self.mag[slot(y + 1)]);
-        let (dx, dy) = (&self.dx[slot(y)], &self.dy[slot(y)]);
+        let w = self.gray.width();
+        let (prev, cur, next) = (&self.mag[slot(y - 1)][..w + 2], &self.mag[slot(y)][..w + 2], &self.mag[slot(y + 1)][..w + 2]);
+        let (dx, dy) = (&self.dx[slot(y)][..w], &self.dy[slot(y)][..w]);
+        let out = &mut map_row[1..w + 1];
         let (low, high) = (self.t.low, self.t.high);
-        let w = dx.len();
-        for x in 0..w {
-            let m = cur[x + 1];
-            let mut state = NOT_EDGE;
-            if m > low {
-                let (xs, ys) = (dx[x], dy[x]);
-                let ax = xs.abs();
-                let ay = ys.abs() << 15;
-                let tg22x = ax.wrapping_mul(TG22);
-                let local_max = if ay < tg22x {
-                    m > cur[x] && m >= cur[x + 2]
-                } else {
-                    let tg67x = tg22x.wrapping_add(ax << 16);
-                    if ay > tg67x {
-                        m > prev[x + 1] && m >= next[x + 1]
-                    } else {
-                        let s: isize = if (xs ^ ys) < 0 { -1 } else { 1 };
-                        m > prev[(x as isize + 1 - s) as usize] && m > next[(x as isize + 1 + s) as usize]
-                    }
+        // Magnitudes are >= 0, so for low >= 0 `low - m` cannot overflow and is negative exactly
+        // when m > low: OR-ing sign bits finds a candidate in a chunk with plain SSE2 ops.
+        let skippable = |chunk: &[i32]| low >= 0 && chunk.iter().fold(0, |acc, &m| acc | (low - m)) >= 0;
+        let found = &mut self.found[..w];
+        let mut n = 0;
+        let mut x = 0;
+        while x < w {
+            let end = (x + CHUNK).min(w);
+            if end - x == CHUNK && skippable(&cur[x + 1..end + 1]) {
+                out[x..end].fill(NOT_EDGE);
+            } else {
+                let rows = NmsRows {
+                    up: [&prev[x..end], &prev[x + 1..end + 1], &prev[x + 2..end + 2]],
+                    mid: [&cur[x..end], &cur[x + 1..end + 1], &cur[x + 2..end + 2]],
+                    down: [&next[x..end], &next[x + 1..end + 1], &next[x + 2..end + 2]],
                 };
-                if local_max {
-                    if m > high {
-                        state = STRONG;
-                        strong.push((base + x + 1) as u32);
-                    } else {
-                        state = WEAK;
-                    }
+                nms_span(&rows, &dx[x..end], &dy[x..end], low, high, &mut out[x..end]);
+                for i in x..end {
+                    found[n] = (base + i + 1) as u32;
+                    n += (out[i] == STRONG) as usize;
                 }
             }
-            map_row[x + 1] = state;
+            x = end;
         }
+        strong.extend_from_slice(&found[..n]);
         map_row[0] = NOT_EDGE;
         map_row[w + 1] = NOT_EDGE;
+    }
+}
+
+/// Magnitudes of a span and its 8 neighbours: `up/mid/down[k][i]` is the magnitude at column
+/// `i + k - 1` of the row above / the row itself / the row below.
+struct NmsRows<'a> {
+    up: [&'a [i32]; 3],
+    mid: [&'a [i32]; 3],
+    down: [&'a [i32]; 3],
+}
+
+/// OpenCV's non-maximum suppression test on a span, written branch-free so it vectorises:
+/// the direction is horizontal when `|dy| 2^15 < |dx| 13573` (tan 22.5°), vertical when
+/// `|dy| 2^15 > |dx| (13573 + 2^16)` (tan 67.5°), else diagonal (up-left/down-right when dx and dy
+/// have the same sign). A candidate beats the neighbour before it strictly and the one after it
+/// with `>=` on the axes, `>` on the diagonals, and has `m > low`; it is strong when `m > high`.
+#[inline(always)]
+fn nms_span(rows: &NmsRows<'_>, dx: &[i16], dy: &[i16], low: i32, high: i32, out: &mut [u8]) {
+    const TG22: i32 = 13573;
+    let n = out.len();
+    let (dx, dy) = (&dx[..n], &dy[..n]);
+    let [ul, u, ur] = rows.up.map(|r| &r[..n]);
+    let [l, m, r] = rows.mid.map(|r| &r[..n]);
+    let [dl, d, dr] = rows.down.map(|r| &r[..n]);
+    for i in 0..n {
+        let mv = m[i];
+        let (xs, ys) = (dx[i] as i32, dy[i] as i32);
+        let ax = xs.abs();
+        let ay = ys.abs() << 15;
+        let tg22x = ax * TG22;
+        let tg67x = tg22x + (ax << 16);
+        let horizontal = ay < tg22x;
+        let vertical = ay > tg67x;
+        let anti = (xs ^ ys) < 0;
+        let diag_before = if anti { ur[i] } else { ul[i] };
+        let diag_after = if anti { dl[i] } else { dr[i] };
+        let before = if horizontal { l[i] } else if vertical { u[i] } else { diag_before };
+        let after = if horizontal { r[i] } else if vertical { d[i] } else { diag_after };
+        let axis = horizontal | vertical;
+        let beats_after = (mv > after) | (axis & (mv == after));
+        let candidate = (mv > low) & (mv > before) & beats_after;
+        let is_strong = candidate & (mv > high);
+        out[i] = (!candidate) as u8 * NOT_EDGE + is_strong as u8 * STRONG;
     }
 }

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Runs every test of sketchbody on a fresh Debian 12 machine: installs the Debian packages it
+# needs when missing, then cargo tests, the CMake/ctest harness (OpenCV, Ceres, Embree
+# cross-checks, C and C++ API tests under sanitizers) and the Python ctypes test.
+# Set SKB_REQUIRE_SHARED_DATA=1 to turn "skipped: ../shared/data missing" into failures (CI does).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(cmake g++ pkg-config python3 libopencv-dev libceres-dev libembree-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "== installing Debian packages: ${missing[*]}"
+  sudo_cmd=()
+  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  "${sudo_cmd[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq "${missing[@]}"
+fi
+
+jobs=$(nproc)
+echo "== cargo test (release build, shared with the CMake build)"
+cargo test --release --all-targets
+cargo test --release --doc
+
+echo "== CMake build + ctest"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j "$jobs"
+(cd build && ctest --output-on-failure -j 1)
+
+echo "== Python ctypes test"
+python3 tests/python/test_capi.py
+
+echo "== all tests passed"
