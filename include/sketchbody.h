@@ -49,6 +49,16 @@
 #define SKB_POSE_MAX_BASES 32
 
 /**
+ * `skb_mesh_pose` flag: scale bones along their length so the joints land on the targets.
+ */
+#define SKB_POSE_RETARGET 1
+
+/**
+ * `skb_mesh_pose` flag: dual-quaternion skinning instead of linear blend skinning.
+ */
+#define SKB_POSE_DUAL_QUATERNION 2
+
+/**
  * Major version of the library this header belongs to.
  */
 #define SKB_VERSION_MAJOR 0
@@ -148,6 +158,14 @@ enum skb_status
    * The input geometry is degenerate (collinear joints, zero extent, rank-deficient fit).
    */
   SKB_ERR_DEGENERATE = 18,
+  /**
+   * Two joints of a bone coincide (zero-length bone).
+   */
+  SKB_ERR_DEGENERATE_BONE = 19,
+  /**
+   * The projected mesh lies wholly outside the image.
+   */
+  SKB_ERR_MESH_OUTSIDE_IMAGE = 20,
 };
 #ifndef __cplusplus
 typedef uint32_t skb_status;
@@ -181,6 +199,13 @@ typedef struct skb_pose_dictionary skb_pose_dictionary;
  * while another thread uses it. Free with `skb_pose_options_free`.
  */
 typedef struct skb_pose_options skb_pose_options;
+
+/**
+ * A reusable silhouette rasteriser: keeps its buffers between calls so that repeated
+ * rasterisation allocates nothing. Create with [`skb_rasterizer_new`], release with
+ * [`skb_rasterizer_free`]. Not thread-safe: use one per thread (it may move between threads).
+ */
+typedef struct skb_rasterizer skb_rasterizer;
 
 /**
  * A borrowed 8-bit image owned by the caller: `height` rows of `width` pixels, each pixel
@@ -288,6 +313,31 @@ typedef struct skb_pose3d {
    */
   uint32_t reserved;
 } skb_pose3d;
+
+/**
+ * The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
+ * +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
+ * `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
+ * layout (104 bytes) is part of the ABI.
+ */
+typedef struct skb_camera {
+  /**
+   * Horizontal scale, pixels per metre (> 0).
+   */
+  double sx;
+  /**
+   * Vertical scale, pixels per metre (> 0).
+   */
+  double sy;
+  /**
+   * Rotation model -> camera, row-major, orthonormal with determinant +1.
+   */
+  double r[9];
+  /**
+   * Image position of the model origin, pixels.
+   */
+  double t[2];
+} skb_camera;
 
 #ifdef __cplusplus
 extern "C" {
@@ -547,6 +597,101 @@ skb_status skb_pose_refine(const struct skb_pose_dictionary *dict,
                            const struct skb_pose_options *opts,
                            const struct skb_pose3d *start,
                            struct skb_pose3d *out);
+
+/**
+ * Creates a rasteriser and stores it in `*out` (caller owns it; free with
+ * [`skb_rasterizer_free`]).
+ */
+skb_status skb_rasterizer_new(struct skb_rasterizer **out);
+
+/**
+ * Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
+ */
+void skb_rasterizer_free(struct skb_rasterizer *r);
+
+/**
+ * Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
+ * points as x, y, z floats (metres, model frame), `tris` holds `ntris` triangles as three
+ * 0-based vertex indices. Pixel (i, j) is set to 255 when its centre (i + 0.5, j + 0.5) lies
+ * inside a projected triangle (top-left fill rule, both windings), else 0. Writes `h` rows of
+ * `w` bytes into `mask`, rows `mask_stride` bytes apart; `mask_len` must be at least
+ * `mask_stride * (h - 1) + w`. Sizes 1..=4096 a side. Errors: NULL pointers, bad sizes or
+ * strides, an invalid camera, index out of range, non-finite vertices, vertices projecting
+ * beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
+ * entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
+ * Arrays are only read during the call. Thread-safe with distinct rasterisers.
+ */
+skb_status skb_rasterize_triangles(struct skb_rasterizer *rasterizer,
+                                   const float *verts,
+                                   size_t nverts,
+                                   const uint32_t *tris,
+                                   size_t ntris,
+                                   const struct skb_camera *cam,
+                                   uint32_t w,
+                                   uint32_t h,
+                                   uint8_t *mask,
+                                   size_t mask_stride,
+                                   size_t mask_len);
+
+/**
+ * Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,
+ * metres, model frame; `joints_len` must be 45) by inverse kinematics and skinning. `flags` is
+ * 0 or a combination of `SKB_POSE_RETARGET` and `SKB_POSE_DUAL_QUATERNION`. The pose replaces
+ * any earlier one (the rest shape is kept; posing to the rest joints gives the rest pose).
+ * Errors: non-finite joints (`SKB_ERR_NON_FINITE`), coincident joints
+ * (`SKB_ERR_DEGENERATE_BONE`), unknown flags or a wrong length (`SKB_ERR_OUT_OF_RANGE`); on
+ * error the mesh is unchanged. Needs exclusive use of `mesh`; skinning runs on the rayon pool.
+ */
+skb_status skb_mesh_pose(struct skb_mesh *mesh,
+                         const double *joints,
+                         size_t joints_len,
+                         uint32_t flags);
+
+/**
+ * Copies the posed vertices (the rest vertices before any `skb_mesh_pose`) as x, y, z floats
+ * (metres) into `dst` of `dst_len` floats (at least 3 × vertex count). On error nothing is
+ * written. Only reads `mesh`.
+ */
+skb_status skb_mesh_copy_posed_vertices(const struct skb_mesh *mesh, float *dst, size_t dst_len);
+
+/**
+ * Copies the posed joints (15 × x, y, z doubles, metres; the rest joints before any
+ * `skb_mesh_pose`) into `dst` of `dst_len` doubles (at least 45). Only reads `mesh`.
+ */
+skb_status skb_mesh_copy_posed_joints(const struct skb_mesh *mesh, double *dst, size_t dst_len);
+
+/**
+ * Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
+ * [`skb_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
+ */
+skb_status skb_mesh_rasterize(const struct skb_mesh *mesh,
+                              struct skb_rasterizer *rasterizer,
+                              const struct skb_camera *cam,
+                              uint32_t w,
+                              uint32_t h,
+                              uint8_t *mask,
+                              size_t mask_stride,
+                              size_t mask_len);
+
+/**
+ * Writes the mesh as Wavefront OBJ to `path` (UTF-8): the posed vertices when `posed`, else the
+ * rest pose; normals, MakeHuman UVs, quads. Written atomically: on error no file is left.
+ * Only reads `mesh`.
+ */
+skb_status skb_mesh_write_obj(const struct skb_mesh *mesh, const char *path, bool posed);
+
+/**
+ * Writes the mesh as binary glTF 2.0 to `path` (UTF-8): rest mesh with skin, 15 joint nodes,
+ * a "posed" scene (the current pose; the rest pose if never posed) and a "rest" scene. See
+ * docs/formats.md. Written atomically. Only reads `mesh`.
+ */
+skb_status skb_mesh_write_glb(const struct skb_mesh *mesh, const char *path);
+
+/**
+ * Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
+ * `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
+ */
+skb_status skb_mesh_write_preview(const struct skb_mesh *mesh, const char *path, uint32_t size);
 
 /**
  * Static, NUL-terminated English text for a status code; "unknown status" for numbers this

@@ -55,6 +55,12 @@ pub enum Error {
     /// The input has no usable geometry (all joints collinear, zero extent, rank-deficient fit).
     #[error("degenerate configuration: {0}")]
     Degenerate(String),
+    /// A bone of a skeleton has (near) zero length: its two joints coincide.
+    #[error("bone {from}-{to} has length {length:e} m: its joints coincide")]
+    DegenerateBone { from: &'static str, to: &'static str, length: f64 },
+    /// A mesh to rasterise projects wholly outside the image.
+    #[error("the projected mesh lies wholly outside the {width}x{height} image")]
+    MeshOutsideImage { width: usize, height: usize },
 }
 
 /// `Result` with [`Error`].

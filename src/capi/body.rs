@@ -40,6 +40,8 @@ pub struct skb_mesh {
     pub(crate) model: Arc<BodyModel>,
     pub(crate) gender: Gender,
     pub(crate) rest: RestShape,
+    /// The current pose and posed vertices (`None`: rest pose), set by `skb_mesh_pose`.
+    pub(crate) posed: Option<Box<super::mesh_ops::Posed>>,
 }
 
 /// Mutable view of `len` elements at `p`, which must hold at least `needed`: NULL gives
@@ -153,7 +155,7 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
             std::slice::from_raw_parts(weights, n).iter().map(|&x| x as f64).collect()
         };
         let rest = try_core!(space.synthesize(&w));
-        *out = Box::into_raw(Box::new(skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest }));
+        *out = Box::into_raw(Box::new(skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, posed: None }));
         skb_status::SKB_OK
     }
 }

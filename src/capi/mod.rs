@@ -17,6 +17,7 @@ mod body;
 mod error;
 mod image;
 mod pose;
+mod mesh_ops;
 mod status;
 mod version;
 
@@ -35,6 +36,11 @@ pub use pose::{
     skb_pose_options_new, skb_pose_options_set_alpha, skb_pose_options_set_kappa, skb_pose_options_set_max_bases,
     skb_pose_options_set_prior, skb_pose_options_set_refine, skb_pose_options_set_tolerance, skb_pose_refine,
     SKB_POSE_DIM, SKB_POSE_MAX_BASES,
+};
+pub use mesh_ops::{
+    skb_camera, skb_mesh_copy_posed_joints, skb_mesh_copy_posed_vertices, skb_mesh_pose, skb_mesh_rasterize, skb_mesh_write_glb,
+    skb_mesh_write_obj, skb_mesh_write_preview, skb_rasterize_triangles, skb_rasterizer, skb_rasterizer_free, skb_rasterizer_new,
+    SKB_POSE_DUAL_QUATERNION, SKB_POSE_RETARGET,
 };
 pub use status::{skb_status, skb_status_str};
 pub use version::{skb_version, SKB_VERSION_MAJOR, SKB_VERSION_MINOR, SKB_VERSION_PATCH, SKB_VERSION_STRING};

@@ -47,6 +47,10 @@ pub enum skb_status {
     SKB_ERR_COINCIDENT_JOINTS = 17,
     /// The input geometry is degenerate (collinear joints, zero extent, rank-deficient fit).
     SKB_ERR_DEGENERATE = 18,
+    /// Two joints of a bone coincide (zero-length bone).
+    SKB_ERR_DEGENERATE_BONE = 19,
+    /// The projected mesh lies wholly outside the image.
+    SKB_ERR_MESH_OUTSIDE_IMAGE = 20,
 }
 
 impl From<&Error> for skb_status {
@@ -68,6 +72,8 @@ impl From<&Error> for skb_status {
             Error::TooFewJoints { .. } => SKB_ERR_TOO_FEW_JOINTS,
             Error::CoincidentJoints { .. } => SKB_ERR_COINCIDENT_JOINTS,
             Error::Degenerate(_) => SKB_ERR_DEGENERATE,
+            Error::DegenerateBone { .. } => SKB_ERR_DEGENERATE_BONE,
+            Error::MeshOutsideImage { .. } => SKB_ERR_MESH_OUTSIDE_IMAGE,
         }
     }
 }
@@ -96,6 +102,8 @@ pub extern "C" fn skb_status_str(status: u32) -> *const c_char {
         16 => b"too few usable joints\0",
         17 => b"two joints that must be distinct coincide\0",
         18 => b"degenerate joint configuration\0",
+        19 => b"two joints of a bone coincide (zero-length bone)\0",
+        20 => b"the projected mesh lies wholly outside the image\0",
         _ => b"unknown status\0",
     };
     s.as_ptr().cast()
@@ -108,11 +116,11 @@ mod tests {
     #[test]
     fn every_status_has_its_own_text() {
         let text = |c: u32| unsafe { std::ffi::CStr::from_ptr(skb_status_str(c)) }.to_str().unwrap().to_owned();
-        let all: Vec<String> = (0..=18).map(text).collect();
+        let all: Vec<String> = (0..=20).map(text).collect();
         let unique: std::collections::HashSet<_> = all.iter().collect();
         assert_eq!(unique.len(), all.len());
         assert!(!all.contains(&"unknown status".to_owned()));
-        assert_eq!(text(19), "unknown status");
+        assert_eq!(text(21), "unknown status");
         assert_eq!(std::mem::size_of::<skb_status>(), 4);
     }
 }

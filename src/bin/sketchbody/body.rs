@@ -1,0 +1,77 @@
+//! `sketchbody body`: a body of the embedded shape model, optionally posed to a 3-D joints file,
+//! written as .glb (skinned, posed and rest scenes) or .obj, with an optional preview PNG.
+
+use std::path::PathBuf;
+
+use sketchbody::body::ik::{solve, IkOptions, Pose};
+use sketchbody::body::rig::RiggedMesh;
+use sketchbody::body::skin::{skin, SkinMethod};
+use sketchbody::body::{BodyModel, Gender};
+use sketchbody::export::gltf::write_glb;
+use sketchbody::export::joints::load_joints3_json;
+use sketchbody::export::obj::write_obj;
+use sketchbody::render::preview::{preview, save_rgb_png};
+
+use crate::CliError;
+
+/// Arguments of `sketchbody body`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Shape space: f (female) or m (male).
+    #[arg(long)]
+    gender: String,
+    /// PCA shape weights, comma-separated (metres along unit basis vectors; missing trailing
+    /// weights are 0, none gives the mean shape).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    weights: Vec<f64>,
+    /// 3-D joints file to pose the body to (JSON, see docs/formats.md); rest pose without it.
+    #[arg(long)]
+    pose: Option<PathBuf>,
+    /// Scale bones so the joints land exactly on the pose file's joints.
+    #[arg(long)]
+    retarget: bool,
+    /// Dual-quaternion skinning instead of linear blend skinning (for OBJ and the preview).
+    #[arg(long)]
+    dqs: bool,
+    /// Output: .glb (skinned mesh, skeleton, posed and rest scenes) or .obj (posed mesh).
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write front and side views of the posed mesh as a PNG.
+    #[arg(long)]
+    preview: Option<PathBuf>,
+    /// Side of each preview view, pixels.
+    #[arg(long, default_value_t = 512)]
+    preview_size: usize,
+}
+
+/// Runs the command.
+pub fn run(a: Args) -> Result<(), CliError> {
+    let ext = a.out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("glb" | "obj")) {
+        return Err(CliError(format!("{}: output must end in .glb or .obj", a.out.display())));
+    }
+    let gender = Gender::parse(&a.gender)?;
+    let model = BodyModel::embedded()?;
+    let mesh = RiggedMesh::from_model(&model, gender, &a.weights)?;
+    let pose = match &a.pose {
+        Some(p) => solve(&mesh.joints, &load_joints3_json(p)?, &IkOptions { retarget: a.retarget })
+            .map_err(|e| CliError(format!("{}: {e}", p.display())))?,
+        None => Pose::rest(&mesh.joints),
+    };
+    let method = if a.dqs { SkinMethod::DualQuaternion } else { SkinMethod::Linear };
+    let posed = skin(&mesh.vertices, &mesh.weights, &pose, method)?;
+    // Render the preview first so that a bad size fails before any file is written.
+    let image = match &a.preview {
+        Some(_) => Some(preview(&posed, &mesh.triangles(), a.preview_size)?),
+        None => None,
+    };
+    if ext.as_deref() == Some("glb") {
+        write_glb(&a.out, &mesh, &pose)?;
+    } else {
+        write_obj(&a.out, &posed, &mesh.quads, mesh.uvs.as_ref())?;
+    }
+    if let (Some(p), Some(img)) = (&a.preview, &image) {
+        save_rgb_png(img, p)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,279 @@
+//! Mesh operations: the weak-perspective camera struct, the silhouette rasteriser
+//! (`skb_rasterizer`, also on raw arrays), and posing, rasterising and exporting an `skb_mesh`.
+
+use std::ffi::{c_char, CStr};
+use std::path::Path;
+
+use nalgebra::Matrix3;
+
+use crate::body::ik::{solve, IkOptions, Pose};
+use crate::body::rig::{FaceUvs, RiggedMesh};
+use crate::body::skin::{skin, SkinMethod};
+use crate::camera::WeakPerspective;
+use crate::error::Error;
+use crate::export::gltf::write_glb;
+use crate::export::obj::write_obj;
+use crate::render::preview::{preview, save_rgb_png};
+use crate::render::raster::Rasterizer;
+use crate::skeleton::{Joints3, NUM_JOINTS};
+
+use super::body::{out_slice, skb_mesh};
+use super::error::{fail, fail_with};
+use super::ptr::{try_ref, try_slice_mut, try_slice_of};
+use super::status::skb_status;
+
+/// Mutably borrows `*p`, or fails naming `name` when `p` is NULL.
+///
+/// # Safety
+/// `p` must be NULL or point to a valid `T` with no other live reference for `'a`.
+unsafe fn try_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, skb_status> {
+    p.as_mut().ok_or_else(|| fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")))
+}
+
+/// The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
+/// +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
+/// `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
+/// layout (104 bytes) is part of the ABI.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct skb_camera {
+    /// Horizontal scale, pixels per metre (> 0).
+    pub sx: f64,
+    /// Vertical scale, pixels per metre (> 0).
+    pub sy: f64,
+    /// Rotation model -> camera, row-major, orthonormal with determinant +1.
+    pub r: [f64; 9],
+    /// Image position of the model origin, pixels.
+    pub t: [f64; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<skb_camera>() == 104);
+
+impl From<&skb_camera> for WeakPerspective {
+    fn from(c: &skb_camera) -> Self {
+        WeakPerspective { sx: c.sx, sy: c.sy, r: Matrix3::from_row_slice(&c.r), t: c.t }
+    }
+}
+
+/// A reusable silhouette rasteriser: keeps its buffers between calls so that repeated
+/// rasterisation allocates nothing. Create with [`skb_rasterizer_new`], release with
+/// [`skb_rasterizer_free`]. Not thread-safe: use one per thread (it may move between threads).
+pub struct skb_rasterizer {
+    inner: Rasterizer,
+}
+
+/// Creates a rasteriser and stores it in `*out` (caller owns it; free with
+/// [`skb_rasterizer_free`]).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rasterizer_new(out: *mut *mut skb_rasterizer) -> skb_status {
+    ffi_boundary! {
+        if out.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+        }
+        *out = Box::into_raw(Box::new(skb_rasterizer { inner: Rasterizer::new() }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_rasterizer_free(r: *mut skb_rasterizer) {
+    if !r.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(r))));
+    }
+}
+
+/// Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
+/// points as x, y, z floats (metres, model frame), `tris` holds `ntris` triangles as three
+/// 0-based vertex indices. Pixel (i, j) is set to 255 when its centre (i + 0.5, j + 0.5) lies
+/// inside a projected triangle (top-left fill rule, both windings), else 0. Writes `h` rows of
+/// `w` bytes into `mask`, rows `mask_stride` bytes apart; `mask_len` must be at least
+/// `mask_stride * (h - 1) + w`. Sizes 1..=4096 a side. Errors: NULL pointers, bad sizes or
+/// strides, an invalid camera, index out of range, non-finite vertices, vertices projecting
+/// beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
+/// entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
+/// Arrays are only read during the call. Thread-safe with distinct rasterisers.
+#[no_mangle]
+pub unsafe extern "C" fn skb_rasterize_triangles(
+    rasterizer: *mut skb_rasterizer,
+    verts: *const f32,
+    nverts: usize,
+    tris: *const u32,
+    ntris: usize,
+    cam: *const skb_camera,
+    w: u32,
+    h: u32,
+    mask: *mut u8,
+    mask_stride: usize,
+    mask_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        let cam = WeakPerspective::from(try_status!(try_ref(cam, "cam")));
+        let v3 = try_status!(try_slice_of(verts.cast::<[f32; 3]>(), nverts, "verts"));
+        let t3 = try_status!(try_slice_of(tris.cast::<[u32; 3]>(), ntris, "tris"));
+        let (w, h) = (w as usize, h as usize);
+        try_core!(crate::render::raster::check_size(w, h));
+        if mask_stride < w {
+            return fail(&crate::Error::BadStride { stride: mask_stride, row_bytes: w });
+        }
+        let needed = try_status!(mask_stride.checked_mul(h - 1).and_then(|x| x.checked_add(w))
+            .ok_or_else(|| fail_with(skb_status::SKB_ERR_OUT_OF_RANGE, "mask_stride is absurd")));
+        if mask_len < needed {
+            return fail(&crate::Error::BufferTooSmall { len: mask_len, needed });
+        }
+        let out = try_status!(try_slice_mut(mask, mask_len, "mask"));
+        let mut temp = None;
+        let r = if rasterizer.is_null() { temp.insert(Rasterizer::new()) } else { &mut (*rasterizer).inner };
+        try_core!(r.rasterize(v3, t3, &cam, w, h, false));
+        for (y, row) in r.mask().chunks_exact(w).enumerate() {
+            out[y * mask_stride..y * mask_stride + w].copy_from_slice(row);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// `skb_mesh_pose` flag: scale bones along their length so the joints land on the targets.
+pub const SKB_POSE_RETARGET: u32 = 1;
+/// `skb_mesh_pose` flag: dual-quaternion skinning instead of linear blend skinning.
+pub const SKB_POSE_DUAL_QUATERNION: u32 = 2;
+
+/// The pose of an `skb_mesh` and its skinned vertices.
+pub(crate) struct Posed {
+    pub(crate) pose: Pose,
+    pub(crate) vertices: Vec<[f32; 3]>,
+}
+
+fn posed_vertices(m: &skb_mesh) -> &[[f32; 3]] {
+    m.posed.as_ref().map_or(&m.rest.vertices, |p| &p.vertices)
+}
+
+/// Borrows a NUL-terminated UTF-8 path.
+unsafe fn path_arg<'a>(p: *const c_char, name: &str) -> Result<&'a Path, skb_status> {
+    if p.is_null() {
+        return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")));
+    }
+    let s = CStr::from_ptr(p).to_str().map_err(|_| fail_with(skb_status::SKB_ERR_INVALID_ARGUMENT, &format!("{name} is not UTF-8")))?;
+    Ok(Path::new(s))
+}
+
+/// Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,
+/// metres, model frame; `joints_len` must be 45) by inverse kinematics and skinning. `flags` is
+/// 0 or a combination of `SKB_POSE_RETARGET` and `SKB_POSE_DUAL_QUATERNION`. The pose replaces
+/// any earlier one (the rest shape is kept; posing to the rest joints gives the rest pose).
+/// Errors: non-finite joints (`SKB_ERR_NON_FINITE`), coincident joints
+/// (`SKB_ERR_DEGENERATE_BONE`), unknown flags or a wrong length (`SKB_ERR_OUT_OF_RANGE`); on
+/// error the mesh is unchanged. Needs exclusive use of `mesh`; skinning runs on the rayon pool.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_pose(mesh: *mut skb_mesh, joints: *const f64, joints_len: usize, flags: u32) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_mut(mesh, "mesh"));
+        if joints_len != 3 * NUM_JOINTS {
+            return fail(&Error::OutOfRange { name: "joints_len", detail: format!("{joints_len}, expected {}", 3 * NUM_JOINTS) });
+        }
+        let j = try_status!(try_slice_of(joints, joints_len, "joints"));
+        if flags & !(SKB_POSE_RETARGET | SKB_POSE_DUAL_QUATERNION) != 0 {
+            return fail(&Error::OutOfRange { name: "flags", detail: format!("unknown bits in {flags:#x}") });
+        }
+        let target: Joints3 = std::array::from_fn(|i| [j[3 * i], j[3 * i + 1], j[3 * i + 2]]);
+        let pose = try_core!(solve(&m.rest.joints, &target, &IkOptions { retarget: flags & SKB_POSE_RETARGET != 0 }));
+        let method = if flags & SKB_POSE_DUAL_QUATERNION != 0 { SkinMethod::DualQuaternion } else { SkinMethod::Linear };
+        let vertices = try_core!(skin(&m.rest.vertices, m.model.skin_weights(), &pose, method));
+        m.posed = Some(Box::new(Posed { pose, vertices }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the posed vertices (the rest vertices before any `skb_mesh_pose`) as x, y, z floats
+/// (metres) into `dst` of `dst_len` floats (at least 3 × vertex count). On error nothing is
+/// written. Only reads `mesh`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_posed_vertices(mesh: *const skb_mesh, dst: *mut f32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let v = posed_vertices(m);
+        let out = try_status!(out_slice(dst, dst_len, 3 * v.len(), "dst"));
+        for (o, p) in out.chunks_exact_mut(3).zip(v) {
+            o.copy_from_slice(p);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the posed joints (15 × x, y, z doubles, metres; the rest joints before any
+/// `skb_mesh_pose`) into `dst` of `dst_len` doubles (at least 45). Only reads `mesh`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_posed_joints(mesh: *const skb_mesh, dst: *mut f64, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let j = m.posed.as_ref().map_or(&m.rest.joints, |p| &p.pose.joints);
+        let out = try_status!(out_slice(dst, dst_len, 3 * NUM_JOINTS, "dst"));
+        for (o, p) in out.chunks_exact_mut(3).zip(j) {
+            o.copy_from_slice(p);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
+/// [`skb_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_rasterize(
+    mesh: *const skb_mesh,
+    rasterizer: *mut skb_rasterizer,
+    cam: *const skb_camera,
+    w: u32,
+    h: u32,
+    mask: *mut u8,
+    mask_stride: usize,
+    mask_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let v = posed_vertices(m);
+        let t = m.model.triangles();
+        skb_rasterize_triangles(rasterizer, v.as_ptr().cast(), v.len(), t.as_ptr().cast(), t.len(), cam, w, h, mask, mask_stride, mask_len)
+    }
+}
+
+/// Writes the mesh as Wavefront OBJ to `path` (UTF-8): the posed vertices when `posed`, else the
+/// rest pose; normals, MakeHuman UVs, quads. Written atomically: on error no file is left.
+/// Only reads `mesh`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_write_obj(mesh: *const skb_mesh, path: *const c_char, posed: bool) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let path = try_status!(path_arg(path, "path"));
+        let v = if posed { posed_vertices(m) } else { &m.rest.vertices };
+        let uvs = FaceUvs { coords: m.model.uvs().to_vec(), quads: m.model.face_uvs().to_vec() };
+        try_core!(write_obj(path, v, m.model.faces(), Some(&uvs)));
+        skb_status::SKB_OK
+    }
+}
+
+/// Writes the mesh as binary glTF 2.0 to `path` (UTF-8): rest mesh with skin, 15 joint nodes,
+/// a "posed" scene (the current pose; the rest pose if never posed) and a "rest" scene. See
+/// docs/formats.md. Written atomically. Only reads `mesh`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_write_glb(mesh: *const skb_mesh, path: *const c_char) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let path = try_status!(path_arg(path, "path"));
+        let rest_pose = Pose::rest(&m.rest.joints);
+        let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
+        try_core!(write_glb(path, &RiggedMesh::from_rest(&m.model, &m.rest), pose));
+        skb_status::SKB_OK
+    }
+}
+
+/// Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
+/// `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_write_preview(mesh: *const skb_mesh, path: *const c_char, size: u32) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let path = try_status!(path_arg(path, "path"));
+        let img = try_core!(preview(posed_vertices(m), &m.model.triangles(), size as usize));
+        try_core!(save_rgb_png(&img, path));
+        skb_status::SKB_OK
+    }
+}

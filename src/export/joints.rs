@@ -1,0 +1,76 @@
+//! 3-D joint files (JSON): `{"units": "m", "joints": {"head": [x, y, z], ...}}` with all 15
+//! canonical joint names ([`JOINT_NAMES`]), metres, model frame (+Y up, +Z toward the viewer,
+//! the character's right at −X). Used by `sketchbody body --pose`.
+
+use std::path::Path;
+
+use serde_json::{json, Map, Value};
+
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::skeleton::{Joints3, JOINT_NAMES, NUM_JOINTS};
+
+/// Parses a joints JSON document. Errors name the missing or malformed joint.
+pub fn parse_joints3_json(text: &str) -> Result<Joints3> {
+    let doc: Value = serde_json::from_str(text).map_err(|e| Error::CorruptData(format!("joints JSON: {e}")))?;
+    if let Some(u) = doc.get("units") {
+        if u != "m" {
+            return Err(Error::CorruptData(format!("joints JSON: units {u} (expected \"m\")")));
+        }
+    }
+    let joints = doc.get("joints").and_then(Value::as_object).ok_or_else(|| Error::CorruptData("joints JSON: no \"joints\" object".into()))?;
+    let mut out = [[0.0; 3]; NUM_JOINTS];
+    for (j, name) in JOINT_NAMES.iter().enumerate() {
+        let v = joints.get(*name).and_then(Value::as_array).ok_or_else(|| Error::CorruptData(format!("joints JSON: joint {name:?} missing")))?;
+        if v.len() != 3 {
+            return Err(Error::CorruptData(format!("joints JSON: joint {name:?} has {} coordinates, expected 3", v.len())));
+        }
+        for (k, c) in v.iter().enumerate() {
+            out[j][k] = c.as_f64().ok_or_else(|| Error::CorruptData(format!("joints JSON: joint {name:?} coordinate {k} is not a number")))?;
+        }
+    }
+    Ok(out)
+}
+
+/// Reads a joints JSON file.
+pub fn load_joints3_json(path: &Path) -> Result<Joints3> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    parse_joints3_json(&text).map_err(|e| match e {
+        Error::CorruptData(m) => Error::CorruptData(format!("{}: {m}", path.display())),
+        other => other,
+    })
+}
+
+/// Writes joints as JSON to `path` atomically. Errors on non-finite coordinates.
+pub fn write_joints3_json(path: &Path, joints: &Joints3) -> Result<()> {
+    let mut map = Map::new();
+    for (j, name) in JOINT_NAMES.iter().enumerate() {
+        if let Some(&c) = joints[j].iter().find(|c| !c.is_finite()) {
+            return Err(Error::NonFinite { name: "joint coordinate", value: c });
+        }
+        map.insert((*name).into(), json!(joints[j]));
+    }
+    let text = serde_json::to_string_pretty(&json!({"units": "m", "joints": map})).map_err(|e| Error::CorruptData(e.to_string()))?;
+    write_atomic(path, text.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::body::procedural::rest_joints;
+
+    #[test]
+    fn round_trips_and_rejects_bad_files() {
+        let j = rest_joints();
+        let dir = std::env::temp_dir().join(format!("skb-joints-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("j.json");
+        write_joints3_json(&p, &j).unwrap();
+        assert_eq!(load_joints3_json(&p).unwrap(), j);
+        assert!(matches!(load_joints3_json(&dir.join("none.json")), Err(Error::Io { .. })));
+        std::fs::remove_dir_all(&dir).unwrap();
+        for bad in ["{", "{\"joints\": {}}", "{\"units\": \"cm\", \"joints\": {}}", "{\"joints\": {\"head\": [1, 2]}}"] {
+            assert!(matches!(parse_joints3_json(bad), Err(Error::CorruptData(_))), "{bad}");
+        }
+    }
+}
