@@ -8,6 +8,7 @@
 pub mod camera;
 pub mod body;
 pub mod capi;
+pub mod detect;
 pub mod error;
 pub mod fsutil;
 pub mod image;
