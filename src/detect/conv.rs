@@ -72,9 +72,43 @@ pub fn response(feat: &FeatureMap, f: &Filter) -> Option<ScoreMap> {
     Some(out)
 }
 
-/// Responses of all `filters` on `feat`, computed in parallel (index = filter id).
+/// Responses of all `filters` on `feat` (index = filter id; `None` where a filter does not fit).
+/// Rows are computed in parallel; within a row every filter reuses the same few feature rows
+/// while they are in cache.
 pub fn responses(feat: &FeatureMap, filters: &[Filter]) -> Vec<Option<ScoreMap>> {
-    filters.par_iter().map(|f| response(feat, f)).collect()
+    let same = filters.first().map(|f| (f.rows, f.cols));
+    if filters.len() < 2 || filters.iter().any(|f| Some((f.rows, f.cols)) != same) {
+        return filters.par_iter().map(|f| response(feat, f)).collect();
+    }
+    let (fr, fc) = same.unwrap_or((1, 1));
+    if feat.rows < fr || feat.cols < fc {
+        return filters.iter().map(|_| None).collect();
+    }
+    let (rows, cols, nf) = (feat.rows - fr + 1, feat.cols - fc + 1, filters.len());
+    let row_len = feat.cols * FEAT_DIM;
+    let span = fc * FEAT_DIM;
+    // Layout (y, filter, x) while computing, then split per filter.
+    let mut buf = vec![0f32; rows * nf * cols];
+    buf.par_chunks_mut(nf * cols).enumerate().for_each(|(y, out)| {
+        for (f, o) in filters.iter().zip(out.chunks_exact_mut(cols)) {
+            for dy in 0..fr {
+                let frow = &feat.data[(y + dy) * row_len..(y + dy + 1) * row_len];
+                let wrow = &f.w[dy * span..(dy + 1) * span];
+                for (x, v) in o.iter_mut().enumerate() {
+                    *v += dot(&frow[x * FEAT_DIM..x * FEAT_DIM + span], wrow);
+                }
+            }
+        }
+    });
+    (0..nf)
+        .map(|k| {
+            let mut m = ScoreMap::filled(rows, cols, 0.0);
+            for y in 0..rows {
+                m.data[y * cols..(y + 1) * cols].copy_from_slice(&buf[(y * nf + k) * cols..(y * nf + k + 1) * cols]);
+            }
+            Some(m)
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -106,5 +140,11 @@ mod tests {
         }
         let big = Filter { rows: 7, cols: 1, w: vec![0.0; 7 * FEAT_DIM] };
         assert!(response(&feat, &big).is_none());
+        // The batched path (equal sizes) equals the single-filter path.
+        let g = Filter { w: f.w.iter().map(|v| -0.5 * v).collect(), ..f.clone() };
+        let all = responses(&feat, &[f.clone(), g.clone()]);
+        assert_eq!(all[0].as_ref(), Some(&r));
+        assert_eq!(all[1], response(&feat, &g));
+        assert!(responses(&feat, &[big.clone(), big]).iter().all(Option::is_none));
     }
 }

@@ -132,16 +132,25 @@ pub fn prepare_image(image: &ImageView<'_>, max_side: usize) -> Result<(Planes, 
     Ok((small, long as f64 / max_side as f64))
 }
 
-/// All candidates scoring at least `thresh` on `im` (working pixels), at most `per_level` per
-/// pyramid level, best first; levels with cells outside [min_cell_px, max_cell_px] are skipped.
-pub fn candidates(im: &Planes, model: &Model, thresh: f64, min_cell_px: f64, max_cell_px: f64, per_level: usize) -> Result<Vec<Candidate>> {
+/// Candidates scoring at least `thresh` on `im` (working pixels) that `accept` admits, at most
+/// `per_level` per pyramid level, best first; levels with cells outside
+/// [min_cell_px, max_cell_px] are skipped.
+pub fn candidates(
+    im: &Planes,
+    model: &Model,
+    thresh: f64,
+    min_cell_px: f64,
+    max_cell_px: f64,
+    per_level: usize,
+    accept: &(dyn Fn(&Candidate) -> bool + Sync),
+) -> Result<Vec<Candidate>> {
     let (padx, pady) = model.padding();
     let pyr = pyramid::build(im, model.sbin, model.interval, padx, pady, min_cell_px)?;
     let mut all: Vec<Candidate> = pyr
         .levels
         .par_iter()
         .filter(|l| l.cell_px <= max_cell_px)
-        .flat_map_iter(|l| tree::detect_level(model, l, padx, pady, thresh, per_level))
+        .flat_map_iter(|l| tree::detect_level(model, l, padx, pady, thresh, per_level, accept))
         .collect();
     all.sort_by(|a, b| b.score.total_cmp(&a.score));
     Ok(all)
@@ -170,7 +179,7 @@ pub fn detect(image: &ImageView<'_>, model: &Model, options: &DetectOptions) -> 
     options.validate()?;
     let (planes, scale) = prepare_image(image, options.max_side)?;
     let thresh = options.threshold.unwrap_or(model.thresh);
-    let cands = candidates(&planes, model, f64::NEG_INFINITY, options.min_cell_px, options.max_cell_px, 64)?;
+    let cands = candidates(&planes, model, f64::NEG_INFINITY, options.min_cell_px, options.max_cell_px, 64, &|_| true)?;
     let best_score = cands.first().map_or(f64::NEG_INFINITY, |c| c.score);
     let above: Vec<Candidate> = cands.into_iter().filter(|c| c.score >= thresh).collect();
     if above.is_empty() {

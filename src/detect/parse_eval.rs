@@ -8,6 +8,7 @@ use std::path::Path;
 use super::model::{Model, NUM_PARSE_JOINTS, PARSE_JOINT_NAMES};
 use super::tree::Candidate;
 use crate::error::{Error, Result};
+use crate::image::ImageView;
 
 /// One labelled PARSE image: file name and the 14 joints in 0-based pixel-index coordinates
 /// (pixel centres at integers, as in the CSV).
@@ -96,6 +97,26 @@ pub fn predicted_joints(c: &Candidate, model: &Model) -> [[f64; 2]; NUM_PARSE_JO
         p[1] -= 0.5;
     }
     xy
+}
+
+/// Test-time threshold of the protocol: min(model threshold, −2), as the authors' demo sets it.
+pub fn protocol_threshold(model: &Model) -> f64 {
+    model.thresh.min(-2.0)
+}
+
+/// Runs the protocol on one image: all candidates above [`protocol_threshold`], the best one
+/// overlapping the ground-truth box, and which joints it gets right at `alpha` (all wrong when no
+/// candidate overlaps). Also returns the chosen candidate's score.
+pub fn evaluate_image(image: &ImageView<'_>, model: &Model, gt: &[[f64; 2]; NUM_PARSE_JOINTS], alpha: f64) -> Result<([bool; NUM_PARSE_JOINTS], Option<f64>)> {
+    let planes = super::pyramid::planes_from_view(image);
+    let gtbox = tight_box(gt);
+    // Per level only the best overlapping candidate can win.
+    let accept = |c: &Candidate| best_overlap(std::slice::from_ref(c), gtbox, 0.3).is_some();
+    let cands = super::candidates(&planes, model, protocol_threshold(model), 0.0, f64::INFINITY, 1, &accept)?;
+    Ok(match cands.first() {
+        Some(c) => (correct_joints(&predicted_joints(c, model), gt, alpha), Some(c.score)),
+        None => ([false; NUM_PARSE_JOINTS], None),
+    })
 }
 
 /// Joint groups of the PCK table: name and the (left, right) PARSE joints averaged.

@@ -67,9 +67,17 @@ struct Trace {
     pcols: usize,
 }
 
-/// Runs the DP on one level and returns the candidates with score ≥ `thresh`, at most
-/// `max_candidates` of them (the best). Empty when a filter does not fit the level.
-pub fn detect_level(model: &Model, level: &Level, padx: usize, pady: usize, thresh: f64, max_candidates: usize) -> Vec<Candidate> {
+/// Runs the DP on one level and returns the best candidates with score ≥ `thresh` that `accept`
+/// admits, at most `max_candidates` of them, best first. Empty when a filter does not fit.
+pub fn detect_level(
+    model: &Model,
+    level: &Level,
+    padx: usize,
+    pady: usize,
+    thresh: f64,
+    max_candidates: usize,
+    accept: &(dyn Fn(&Candidate) -> bool + Sync),
+) -> Vec<Candidate> {
     let resp = responses(&level.feat, &model.filters);
     let np = model.parts.len();
     // Per part, per mixture: score maps (start as the filter responses).
@@ -138,7 +146,6 @@ pub fn detect_level(model: &Model, level: &Level, padx: usize, pady: usize, thre
         }
     }
     found.sort_by(|a, b| b.0.total_cmp(&a.0));
-    found.truncate(max_candidates);
     let s = level.cell_px;
     found
         .into_iter()
@@ -166,6 +173,8 @@ pub fn detect_level(model: &Model, level: &Level, padx: usize, pady: usize, thre
                 .collect();
             Candidate { score: score as f64, cell_px: s, parts }
         })
+        .filter(|c| accept(c))
+        .take(max_candidates)
         .collect()
 }
 
@@ -205,7 +214,7 @@ mod tests {
         let (rows, cols) = (9, 10);
         let feat = FeatureMap { rows, cols, data: (0..rows * cols * FEAT_DIM).map(|i| ((i * 31 % 53) as f32 - 26.0) / 13.0).collect() };
         let level = Level { feat: feat.clone(), cell_px: 4.0 };
-        let c = detect_level(&model, &level, 0, 0, f64::NEG_INFINITY, 1);
+        let c = detect_level(&model, &level, 0, 0, f64::NEG_INFINITY, 1, &|_| true);
         assert_eq!(c.len(), 1);
         let r: Vec<ScoreMap> = model.filters.iter().map(|f| super::super::conv::response(&feat, f).unwrap()).collect();
         let (rr, rc) = (r[0].rows, r[0].cols);

