@@ -54,46 +54,6 @@
 #define SKB_VERSION_PATCH 0
 
 /**
- * Number of canonical joints (the paper's P).
- */
-#define NUM_JOINTS 15
-
-/**
- * Number of bones.
- */
-#define NUM_BONES 14
-
-#define HEAD 0
-
-#define NECK 1
-
-#define R_SHOULDER 2
-
-#define R_ELBOW 3
-
-#define R_WRIST 4
-
-#define L_SHOULDER 5
-
-#define L_ELBOW 6
-
-#define L_WRIST 7
-
-#define PELVIS 8
-
-#define R_HIP 9
-
-#define R_KNEE 10
-
-#define R_ANKLE 11
-
-#define L_HIP 12
-
-#define L_KNEE 13
-
-#define L_ANKLE 14
-
-/**
  * Result of every sketchbody C function. 0 is success; any other value is an error whose text
  * is given by [`skb_status_str`] (generic) and `skb_last_error_message` (specific).
  */
