@@ -39,6 +39,16 @@
 #define SKB_MAX_IMAGE_SIDE 16384
 
 /**
+ * Length of a pose vector (x, y, z of each joint in canonical order).
+ */
+#define SKB_POSE_DIM 45
+
+/**
+ * Size of the basis arrays of `skb_pose3d` (the most bases a pose may use).
+ */
+#define SKB_POSE_MAX_BASES 32
+
+/**
  * Major version of the library this header belongs to.
  */
 #define SKB_VERSION_MAJOR 0
@@ -127,6 +137,18 @@ enum skb_status
    */
   SKB_ERR_PANIC = 15,
   /**
+   * Too few usable (finite, visible) joints for the 3-D pose solver.
+   */
+  SKB_ERR_TOO_FEW_JOINTS = 16,
+  /**
+   * Two joints that must be distinct coincide.
+   */
+  SKB_ERR_COINCIDENT_JOINTS = 17,
+  /**
+   * The input geometry is degenerate (collinear joints, zero extent, rank-deficient fit).
+   */
+  SKB_ERR_DEGENERATE = 18,
+  /**
    * The detector found no figure scoring at least the threshold.
    */
   SKB_ERR_NO_FIGURE = 30,
@@ -163,6 +185,19 @@ typedef struct skb_detector skb_detector;
 typedef struct skb_mesh skb_mesh;
 
 /**
+ * The basis-pose dictionary (mean pose, bases, bone lengths). Immutable after creation: one
+ * dictionary may be used from many threads at once. Free with `skb_pose_dictionary_free`.
+ */
+typedef struct skb_pose_dictionary skb_pose_dictionary;
+
+/**
+ * Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
+ * α = 0.8, 10 bases, 0.5 px, refinement on, prior 0.03 m). Not synchronised: do not change it
+ * while another thread uses it. Free with `skb_pose_options_free`.
+ */
+typedef struct skb_pose_options skb_pose_options;
+
+/**
  * A borrowed 8-bit image owned by the caller: `height` rows of `width` pixels, each pixel
  * `channels` interleaved bytes (1 gray, 3 R,G,B, 4 R,G,B,A with alpha ignored), rows `stride`
  * bytes apart (`stride >= width * channels`). sketchbody only reads it during the call and
@@ -190,6 +225,84 @@ typedef struct skb_image {
    */
   uint32_t channels;
 } skb_image;
+
+/**
+ * 15 image joints in canonical order (head, neck, r_shoulder, r_elbow, r_wrist, l_shoulder,
+ * l_elbow, l_wrist, pelvis, r_hip, r_knee, r_ankle, l_hip, l_knee, l_ankle): pixels, origin at
+ * the top-left image corner, y down. Every position must be finite; `visible[j] == 0` marks a
+ * joint whose position is only a guess (its residuals are dropped; at least 8 must be visible).
+ * Plain data, 256 bytes; its layout is part of the ABI.
+ */
+typedef struct skb_joints2d {
+  /**
+   * (x, y) of each joint, pixels.
+   */
+  double xy[15][2];
+  /**
+   * 1 = known, 0 = missing.
+   */
+  uint8_t visible[15];
+  /**
+   * Set to 0.
+   */
+  uint8_t reserved;
+} skb_joints2d;
+
+/**
+ * A 3-D pose and its weak-perspective camera: `u = sx (R X)_x + tx`, `v = −sy (R X)_y + ty`.
+ * Joints are metres of a 1.75 m person in the model frame (+Y up, +Z toward the viewer when
+ * R = I, pelvis at the origin). Plain data, 880 bytes; its layout is part of the ABI.
+ */
+typedef struct skb_pose3d {
+  /**
+   * (x, y, z) of each joint, metres, canonical order.
+   */
+  double joints[15][3];
+  /**
+   * Horizontal scale, pixels per metre.
+   */
+  double sx;
+  /**
+   * Vertical scale, pixels per metre.
+   */
+  double sy;
+  /**
+   * Rotation R, row-major 3 × 3.
+   */
+  double r[9];
+  /**
+   * Translation (tx, ty), pixels.
+   */
+  double t[2];
+  /**
+   * RMS reprojection error per visible joint, pixels.
+   */
+  double rms_px;
+  /**
+   * (Σ‖X_i − X_j‖² − Σ l²) / Σ l² over the bones: within ±kappa when the constraint holds.
+   */
+  double length_excess;
+  /**
+   * Weight of the prior residuals `prior_weight · weights[k] / sigma_k`, pixels (0 = none).
+   */
+  double prior_weight;
+  /**
+   * Weight of each chosen basis, metres (first `num_bases` entries used, the rest 0).
+   */
+  double weights[32];
+  /**
+   * Number of chosen bases, 0..=32.
+   */
+  uint32_t num_bases;
+  /**
+   * Dictionary columns of the chosen bases (first `num_bases` entries used).
+   */
+  uint32_t bases[32];
+  /**
+   * Set to 0.
+   */
+  uint32_t reserved;
+} skb_pose3d;
 
 #ifdef __cplusplus
 extern "C" {
@@ -369,6 +482,122 @@ skb_status skb_gaussian_blur(const struct skb_image *src,
                              uint8_t *dst,
                              size_t dst_stride,
                              size_t dst_len);
+
+/**
+ * Creates the embedded default dictionary (learned from the DeepMimic clips, see
+ * assets/README.md). On success `*out` owns it. Thread-safe.
+ */
+skb_status skb_pose_dictionary_new_default(struct skb_pose_dictionary **out);
+
+/**
+ * Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody learn-poses`);
+ * `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
+ * `*out` owns the dictionary. Thread-safe.
+ */
+skb_status skb_pose_dictionary_load(const char *path, struct skb_pose_dictionary **out);
+
+/**
+ * Frees a dictionary. NULL is a no-op. Do not use it afterwards.
+ */
+void skb_pose_dictionary_free(struct skb_pose_dictionary *dict);
+
+/**
+ * Writes the number of basis poses K to `*out`. Thread-safe.
+ */
+skb_status skb_pose_dictionary_num_bases(const struct skb_pose_dictionary *dict, uint32_t *out);
+
+/**
+ * Copies the mean pose μ (45 values, metres) into `out` (`len` ≥ 45). Thread-safe.
+ */
+skb_status skb_pose_dictionary_mean(const struct skb_pose_dictionary *dict,
+                                    double *out,
+                                    size_t len);
+
+/**
+ * Copies basis `index` (< K; a unit 45-vector) into `out` (`len` ≥ 45) and its spread σ
+ * (metres, used by the weight prior) into `*sigma` (may be NULL). Thread-safe.
+ */
+skb_status skb_pose_dictionary_basis(const struct skb_pose_dictionary *dict,
+                                     uint32_t index,
+                                     double *out,
+                                     size_t len,
+                                     double *sigma);
+
+/**
+ * Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
+ * (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
+ */
+skb_status skb_pose_dictionary_bone_lengths(const struct skb_pose_dictionary *dict,
+                                            double *out,
+                                            size_t len);
+
+/**
+ * Creates options with the defaults. On success `*out` owns them. Thread-safe.
+ */
+skb_status skb_pose_options_new(struct skb_pose_options **out);
+
+/**
+ * Frees options. NULL is a no-op.
+ */
+void skb_pose_options_free(struct skb_pose_options *opts);
+
+/**
+ * Sets κ, the relative limb-length tolerance: |Σ‖X_i − X_j‖² − Σ l²| ≤ κ Σ l², in [0, 10]
+ * (0 = equality; the paper's κ = 8 CMU units² is about 0.017, see docs/formats.md).
+ */
+skb_status skb_pose_options_set_kappa(struct skb_pose_options *opts,
+                                      double kappa);
+
+/**
+ * Sets α of eq. (4), the pull of the camera rotation toward identity, in [0, 1].
+ */
+skb_status skb_pose_options_set_alpha(struct skb_pose_options *opts, double alpha);
+
+/**
+ * Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).
+ */
+skb_status skb_pose_options_set_max_bases(struct skb_pose_options *opts, uint32_t max_bases);
+
+/**
+ * Sets the stopping tolerance on the reprojection RMS, pixels, in [0, 10000].
+ */
+skb_status skb_pose_options_set_tolerance(struct skb_pose_options *opts, double tolerance_px);
+
+/**
+ * Turns the final Levenberg–Marquardt refinement on (non-zero) or off.
+ */
+skb_status skb_pose_options_set_refine(struct skb_pose_options *opts, bool refine);
+
+/**
+ * Sets the weight prior, metres in [0, 1] (0 = the paper's eq. (3) exactly; see docs).
+ */
+skb_status skb_pose_options_set_prior(struct skb_pose_options *opts, double prior_m);
+
+/**
+ * Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
+ * refinement if enabled). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
+ * joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
+ * (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
+ * beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
+ * distinct `out`); about 2–5 ms on one core.
+ */
+skb_status skb_estimate_pose(const struct skb_pose_dictionary *dict,
+                             const struct skb_joints2d *joints,
+                             const struct skb_pose_options *opts,
+                             struct skb_pose3d *out);
+
+/**
+ * The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
+ * joints are ignored), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
+ * and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
+ * is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
+ * to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
+ */
+skb_status skb_pose_refine(const struct skb_pose_dictionary *dict,
+                           const struct skb_joints2d *joints,
+                           const struct skb_pose_options *opts,
+                           const struct skb_pose3d *start,
+                           struct skb_pose3d *out);
 
 /**
  * Static, NUL-terminated English text for a status code; "unknown status" for numbers this

@@ -52,6 +52,15 @@ pub enum Error {
     /// The operation was cancelled by the caller's progress callback.
     #[error("cancelled by the progress callback")]
     Cancelled,
+    /// Too few usable (finite, visible) 2-D joints for the 3-D pose solver.
+    #[error("too few usable joints: {detail}")]
+    TooFewJoints { detail: String },
+    /// Two joints that must be distinct coincide (e.g. both ends of a bone at one pixel).
+    #[error("joints {a} and {b} coincide at ({x}, {y}) px")]
+    CoincidentJoints { a: &'static str, b: &'static str, x: f64, y: f64 },
+    /// The input has no usable geometry (all joints collinear, zero extent, rank-deficient fit).
+    #[error("degenerate configuration: {0}")]
+    Degenerate(String),
 }
 
 /// `Result` with [`Error`].

@@ -12,6 +12,7 @@ pub mod detect;
 pub mod error;
 pub mod fsutil;
 pub mod image;
+pub mod pose;
 pub mod skeleton;
 
 pub use error::{Error, Result};

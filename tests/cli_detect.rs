@@ -62,6 +62,7 @@ fn detect_finds_the_example_sketch_and_rejects_tiny_images() {
         .unwrap();
     assert!(st.success());
     let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(j["format"], "sketchbody-joints2d");
     let y = |name: &str| j["joints"][name][1].as_f64().unwrap();
     assert!(y("head") < y("neck") && y("neck") < y("pelvis") && y("pelvis") < y("l_knee") && y("l_knee") < y("l_ankle"));
     // The example figure faces the viewer: its right side is on the image's left.

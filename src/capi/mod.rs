@@ -17,6 +17,7 @@ mod body;
 mod detect;
 mod error;
 mod image;
+mod pose;
 mod status;
 mod version;
 
@@ -29,6 +30,14 @@ pub use body::{
 pub use detect::{skb_detector, skb_detector_detect, skb_detector_free, skb_detector_new_from_file};
 pub use error::skb_last_error_message;
 pub use image::{skb_canny, skb_gaussian_blur, skb_image, SKB_MAX_IMAGE_SIDE};
+pub use pose::{
+    skb_estimate_pose, skb_joints2d, skb_pose3d, skb_pose_dictionary, skb_pose_dictionary_basis,
+    skb_pose_dictionary_bone_lengths, skb_pose_dictionary_free, skb_pose_dictionary_load, skb_pose_dictionary_mean,
+    skb_pose_dictionary_new_default, skb_pose_dictionary_num_bases, skb_pose_options, skb_pose_options_free,
+    skb_pose_options_new, skb_pose_options_set_alpha, skb_pose_options_set_kappa, skb_pose_options_set_max_bases,
+    skb_pose_options_set_prior, skb_pose_options_set_refine, skb_pose_options_set_tolerance, skb_pose_refine,
+    SKB_POSE_DIM, SKB_POSE_MAX_BASES,
+};
 pub use status::{skb_status, skb_status_str};
 pub use version::{skb_version, SKB_VERSION_MAJOR, SKB_VERSION_MINOR, SKB_VERSION_PATCH, SKB_VERSION_STRING};
 

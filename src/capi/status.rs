@@ -41,6 +41,12 @@ pub enum skb_status {
     SKB_ERR_CANCELLED = 14,
     /// A bug: Rust code panicked. The library stays usable; please report the message.
     SKB_ERR_PANIC = 15,
+    /// Too few usable (finite, visible) joints for the 3-D pose solver.
+    SKB_ERR_TOO_FEW_JOINTS = 16,
+    /// Two joints that must be distinct coincide.
+    SKB_ERR_COINCIDENT_JOINTS = 17,
+    /// The input geometry is degenerate (collinear joints, zero extent, rank-deficient fit).
+    SKB_ERR_DEGENERATE = 18,
     /// The detector found no figure scoring at least the threshold.
     SKB_ERR_NO_FIGURE = 30,
     /// The image is too small to search for a figure.
@@ -63,6 +69,9 @@ impl From<&Error> for skb_status {
             Error::Decode { .. } => SKB_ERR_DECODE,
             Error::CorruptData(_) => SKB_ERR_CORRUPT_DATA,
             Error::Cancelled => SKB_ERR_CANCELLED,
+            Error::TooFewJoints { .. } => SKB_ERR_TOO_FEW_JOINTS,
+            Error::CoincidentJoints { .. } => SKB_ERR_COINCIDENT_JOINTS,
+            Error::Degenerate(_) => SKB_ERR_DEGENERATE,
             Error::NoFigure { .. } => SKB_ERR_NO_FIGURE,
             Error::ImageTooSmall { .. } => SKB_ERR_IMAGE_TOO_SMALL,
         }
@@ -90,6 +99,9 @@ pub extern "C" fn skb_status_str(status: u32) -> *const c_char {
         13 => b"corrupt, truncated or unsupported data\0",
         14 => b"cancelled by the progress callback\0",
         15 => b"internal error (Rust panic)\0",
+        16 => b"too few usable joints\0",
+        17 => b"two joints that must be distinct coincide\0",
+        18 => b"degenerate joint configuration\0",
         30 => b"no figure found (best score below the threshold)\0",
         31 => b"image is too small to detect a figure\0",
         _ => b"unknown status\0",
@@ -104,11 +116,11 @@ mod tests {
     #[test]
     fn every_status_has_its_own_text() {
         let text = |c: u32| unsafe { std::ffi::CStr::from_ptr(skb_status_str(c)) }.to_str().unwrap().to_owned();
-        let all: Vec<String> = (0..=15).chain(30..=31).map(text).collect();
+        let all: Vec<String> = (0..=18).chain(30..=31).map(text).collect();
         let unique: std::collections::HashSet<_> = all.iter().collect();
         assert_eq!(unique.len(), all.len());
         assert!(!all.contains(&"unknown status".to_owned()));
-        assert_eq!(text(16), "unknown status");
+        assert_eq!(text(19), "unknown status");
         assert_eq!(text(32), "unknown status");
         assert_eq!(std::mem::size_of::<skb_status>(), 4);
     }

@@ -18,7 +18,8 @@ pub struct Args {
     /// Detector model: a binary `.skbd` model or the PARSE model JSON.
     #[arg(long)]
     model: PathBuf,
-    /// Output joints JSON (pixels, origin at the image's top-left corner, y down).
+    /// Output joints JSON: the `sketchbody-joints2d` format (input of `sketchbody pose`) plus the
+    /// confidences, PARSE joints and other figures (pixels, origin top-left, y down).
     #[arg(long)]
     out: PathBuf,
     /// Also write the input with the skeleton drawn on it (PNG).
@@ -91,6 +92,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let dets = detect(&img.view(), &model, &opts)?;
     let best = dets.best();
     let doc = json!({
+        "format": "sketchbody-joints2d",
+        "version": 1,
         "image": a.input.display().to_string(),
         "width": img.width(),
         "height": img.height(),

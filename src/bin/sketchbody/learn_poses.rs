@@ -1,0 +1,61 @@
+//! `sketchbody learn-poses`: learns the basis-pose dictionary from motion tables and BVH files.
+
+use std::path::PathBuf;
+
+use sketchbody::pose::dict_io;
+use sketchbody::pose::learn::{default_held_out, learn_from_sources, lying_clips, LearnSpec};
+use sketchbody::pose::LearnParams;
+
+use crate::CliError;
+
+/// Arguments of `sketchbody learn-poses`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder of motion tables (`*.csv`, canonical joints, e.g. ../shared/data/mocap/deepmimic).
+    #[arg(long)]
+    mocap: Option<PathBuf>,
+    /// BVH files to learn from (CMU-, Mixamo- or Rokoko-style joint names); repeatable.
+    #[arg(long)]
+    bvh: Vec<PathBuf>,
+    /// Clip names held out for measurement (comma-separated); default: the library's list.
+    #[arg(long, value_delimiter = ',')]
+    holdout: Option<Vec<String>>,
+    /// Further clip names to leave out (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    exclude: Vec<String>,
+    /// Also leave out the lying / upside-down clips (crawl, roll, getup_*, backflip, cartwheel, sideflip).
+    #[arg(long)]
+    exclude_lying: bool,
+    /// Most principal components per action.
+    #[arg(long, default_value_t = LearnParams::default().max_per_action)]
+    max_per_action: usize,
+    /// Fraction of each action's variance to keep, in (0, 1].
+    #[arg(long, default_value_t = LearnParams::default().energy)]
+    energy: f64,
+    /// Do not add left/right mirrored poses.
+    #[arg(long)]
+    no_mirror: bool,
+    /// Output dictionary file (.skbpd).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Runs the command.
+pub fn run(a: Args) -> Result<(), CliError> {
+    if a.mocap.is_none() && a.bvh.is_empty() {
+        return Err(CliError("learn-poses: give --mocap DIR and/or --bvh FILE".into()));
+    }
+    let mut excluded = a.exclude.clone();
+    if a.exclude_lying {
+        excluded.extend(lying_clips());
+    }
+    let spec = LearnSpec {
+        held_out: a.holdout.unwrap_or_else(default_held_out),
+        excluded,
+        params: LearnParams { max_per_action: a.max_per_action, energy: a.energy, mirror: !a.no_mirror },
+    };
+    let d = learn_from_sources(a.mocap.as_deref(), &a.bvh, &spec)?;
+    dict_io::write(&d, &a.out)?;
+    println!("{}: {} bases in {} actions", a.out.display(), d.num_bases(), d.actions.len());
+    Ok(())
+}

@@ -1,0 +1,452 @@
+//! The 3-D pose step (paper §II-B): `skb_pose_dictionary`, `skb_pose_options`,
+//! `skb_estimate_pose` and the fixed-basis refinement `skb_pose_refine`.
+
+use std::ffi::{c_char, CStr};
+use std::path::Path;
+
+use nalgebra::Matrix3;
+
+use crate::camera::WeakPerspective;
+use crate::pose::dictionary::POSE_DIM;
+use crate::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate, PoseOptions};
+use crate::skeleton::{Joints2, NUM_BONES};
+
+use super::error::{fail, fail_with};
+use super::ptr::try_ref;
+use super::status::skb_status;
+
+/// Length of a pose vector (x, y, z of each joint in canonical order).
+pub const SKB_POSE_DIM: u32 = 45;
+/// Size of the basis arrays of `skb_pose3d` (the most bases a pose may use).
+pub const SKB_POSE_MAX_BASES: u32 = 32;
+
+const _: () = assert!(SKB_POSE_DIM as usize == POSE_DIM && SKB_POSE_MAX_BASES as usize == crate::pose::options::MAX_BASES);
+
+/// 15 image joints in canonical order (head, neck, r_shoulder, r_elbow, r_wrist, l_shoulder,
+/// l_elbow, l_wrist, pelvis, r_hip, r_knee, r_ankle, l_hip, l_knee, l_ankle): pixels, origin at
+/// the top-left image corner, y down. Every position must be finite; `visible[j] == 0` marks a
+/// joint whose position is only a guess (its residuals are dropped; at least 8 must be visible).
+/// Plain data, 256 bytes; its layout is part of the ABI.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct skb_joints2d {
+    /// (x, y) of each joint, pixels.
+    pub xy: [[f64; 2]; 15],
+    /// 1 = known, 0 = missing.
+    pub visible: [u8; 15],
+    /// Set to 0.
+    pub reserved: u8,
+}
+
+/// A 3-D pose and its weak-perspective camera: `u = sx (R X)_x + tx`, `v = −sy (R X)_y + ty`.
+/// Joints are metres of a 1.75 m person in the model frame (+Y up, +Z toward the viewer when
+/// R = I, pelvis at the origin). Plain data, 880 bytes; its layout is part of the ABI.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct skb_pose3d {
+    /// (x, y, z) of each joint, metres, canonical order.
+    pub joints: [[f64; 3]; 15],
+    /// Horizontal scale, pixels per metre.
+    pub sx: f64,
+    /// Vertical scale, pixels per metre.
+    pub sy: f64,
+    /// Rotation R, row-major 3 × 3.
+    pub r: [f64; 9],
+    /// Translation (tx, ty), pixels.
+    pub t: [f64; 2],
+    /// RMS reprojection error per visible joint, pixels.
+    pub rms_px: f64,
+    /// (Σ‖X_i − X_j‖² − Σ l²) / Σ l² over the bones: within ±kappa when the constraint holds.
+    pub length_excess: f64,
+    /// Weight of the prior residuals `prior_weight · weights[k] / sigma_k`, pixels (0 = none).
+    pub prior_weight: f64,
+    /// Weight of each chosen basis, metres (first `num_bases` entries used, the rest 0).
+    pub weights: [f64; 32],
+    /// Number of chosen bases, 0..=32.
+    pub num_bases: u32,
+    /// Dictionary columns of the chosen bases (first `num_bases` entries used).
+    pub bases: [u32; 32],
+    /// Set to 0.
+    pub reserved: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<skb_joints2d>() == 256);
+const _: () = assert!(std::mem::size_of::<skb_pose3d>() == 880);
+
+/// The basis-pose dictionary (mean pose, bases, bone lengths). Immutable after creation: one
+/// dictionary may be used from many threads at once. Free with `skb_pose_dictionary_free`.
+pub struct skb_pose_dictionary {
+    inner: Dictionary,
+}
+
+/// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
+/// α = 0.8, 10 bases, 0.5 px, refinement on, prior 0.03 m). Not synchronised: do not change it
+/// while another thread uses it. Free with `skb_pose_options_free`.
+pub struct skb_pose_options {
+    inner: PoseOptions,
+}
+
+fn null(name: &str) -> skb_status {
+    fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL"))
+}
+
+fn out_of_range(name: &'static str, detail: String) -> skb_status {
+    fail(&crate::Error::OutOfRange { name, detail })
+}
+
+/// Creates the embedded default dictionary (learned from the DeepMimic clips, see
+/// assets/README.md). On success `*out` owns it. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_dictionary_new_default(out: *mut *mut skb_pose_dictionary) -> skb_status {
+    ffi_boundary! {
+        if out.is_null() {
+            return null("out");
+        }
+        let inner = try_core!(dict_io::embedded());
+        *out = Box::into_raw(Box::new(skb_pose_dictionary { inner }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody learn-poses`);
+/// `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
+/// `*out` owns the dictionary. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_dictionary_load(path: *const c_char, out: *mut *mut skb_pose_dictionary) -> skb_status {
+    ffi_boundary! {
+        if path.is_null() {
+            return null("path");
+        }
+        if out.is_null() {
+            return null("out");
+        }
+        let Ok(p) = CStr::from_ptr(path).to_str() else {
+            return fail_with(skb_status::SKB_ERR_INVALID_ARGUMENT, "path is not UTF-8");
+        };
+        let inner = try_core!(dict_io::read(Path::new(p)));
+        *out = Box::into_raw(Box::new(skb_pose_dictionary { inner }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Frees a dictionary. NULL is a no-op. Do not use it afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_dictionary_free(dict: *mut skb_pose_dictionary) {
+    if !dict.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(dict))));
+    }
+}
+
+/// Writes the number of basis poses K to `*out`. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_dictionary_num_bases(dict: *const skb_pose_dictionary, out: *mut u32) -> skb_status {
+    ffi_boundary! {
+        let d = try_status!(try_ref(dict, "dict"));
+        if out.is_null() {
+            return null("out");
+        }
+        *out = d.inner.num_bases() as u32;
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the mean pose μ (45 values, metres) into `out` (`len` ≥ 45). Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_dictionary_mean(dict: *const skb_pose_dictionary, out: *mut f64, len: usize) -> skb_status {
+    ffi_boundary! {
+        let d = try_status!(try_ref(dict, "dict"));
+        if out.is_null() {
+            return null("out");
+        }
+        if len < POSE_DIM {
+            return fail(&crate::Error::BufferTooSmall { len, needed: POSE_DIM });
+        }
+        std::slice::from_raw_parts_mut(out, POSE_DIM).copy_from_slice(d.inner.mean.as_slice());
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies basis `index` (< K; a unit 45-vector) into `out` (`len` ≥ 45) and its spread σ
+/// (metres, used by the weight prior) into `*sigma` (may be NULL). Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_dictionary_basis(
+    dict: *const skb_pose_dictionary,
+    index: u32,
+    out: *mut f64,
+    len: usize,
+    sigma: *mut f64,
+) -> skb_status {
+    ffi_boundary! {
+        let d = try_status!(try_ref(dict, "dict"));
+        if out.is_null() {
+            return null("out");
+        }
+        let k = index as usize;
+        if k >= d.inner.num_bases() {
+            return out_of_range("basis index", format!("{k} is not below {}", d.inner.num_bases()));
+        }
+        if len < POSE_DIM {
+            return fail(&crate::Error::BufferTooSmall { len, needed: POSE_DIM });
+        }
+        std::slice::from_raw_parts_mut(out, POSE_DIM).copy_from_slice(d.inner.bases.column(k).as_slice());
+        if !sigma.is_null() {
+            *sigma = d.inner.sigma[k];
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
+/// (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_dictionary_bone_lengths(dict: *const skb_pose_dictionary, out: *mut f64, len: usize) -> skb_status {
+    ffi_boundary! {
+        let d = try_status!(try_ref(dict, "dict"));
+        if out.is_null() {
+            return null("out");
+        }
+        if len < NUM_BONES {
+            return fail(&crate::Error::BufferTooSmall { len, needed: NUM_BONES });
+        }
+        std::slice::from_raw_parts_mut(out, NUM_BONES).copy_from_slice(&d.inner.bone_lengths);
+        skb_status::SKB_OK
+    }
+}
+
+/// Creates options with the defaults. On success `*out` owns them. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_new(out: *mut *mut skb_pose_options) -> skb_status {
+    ffi_boundary! {
+        if out.is_null() {
+            return null("out");
+        }
+        *out = Box::into_raw(Box::new(skb_pose_options { inner: PoseOptions::default() }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Frees options. NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_free(opts: *mut skb_pose_options) {
+    if !opts.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(opts))));
+    }
+}
+
+/// Applies `set` to a copy of the options, validates the copy and stores it only if valid.
+unsafe fn set_option(opts: *mut skb_pose_options, set: impl FnOnce(&mut PoseOptions)) -> skb_status {
+    let Some(o) = opts.as_mut() else { return null("opts") };
+    let mut next = o.inner;
+    set(&mut next);
+    try_core!(next.validate());
+    o.inner = next;
+    skb_status::SKB_OK
+}
+
+/// Sets κ, the relative limb-length tolerance: |Σ‖X_i − X_j‖² − Σ l²| ≤ κ Σ l², in [0, 10]
+/// (0 = equality; the paper's κ = 8 CMU units² is about 0.017, see docs/formats.md).
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_kappa(opts: *mut skb_pose_options, kappa: f64) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.kappa = kappa) }
+}
+
+/// Sets α of eq. (4), the pull of the camera rotation toward identity, in [0, 1].
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_alpha(opts: *mut skb_pose_options, alpha: f64) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.alpha = alpha) }
+}
+
+/// Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_max_bases(opts: *mut skb_pose_options, max_bases: u32) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.max_bases = max_bases as usize) }
+}
+
+/// Sets the stopping tolerance on the reprojection RMS, pixels, in [0, 10000].
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_tolerance(opts: *mut skb_pose_options, tolerance_px: f64) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.tolerance = tolerance_px) }
+}
+
+/// Turns the final Levenberg–Marquardt refinement on (non-zero) or off.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_refine(opts: *mut skb_pose_options, refine: bool) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.refine = refine) }
+}
+
+/// Sets the weight prior, metres in [0, 1] (0 = the paper's eq. (3) exactly; see docs).
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_prior(opts: *mut skb_pose_options, prior_m: f64) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.prior = prior_m) }
+}
+
+fn joints_in(j: &skb_joints2d) -> Joints2 {
+    Joints2 { xy: j.xy, visible: std::array::from_fn(|k| j.visible[k] != 0) }
+}
+
+fn pose_out(e: &PoseEstimate, prior_weight: f64) -> skb_pose3d {
+    let mut out = skb_pose3d {
+        joints: e.joints,
+        sx: e.camera.sx,
+        sy: e.camera.sy,
+        r: std::array::from_fn(|i| e.camera.r[(i / 3, i % 3)]),
+        t: e.camera.t,
+        rms_px: e.rms,
+        length_excess: e.length_excess,
+        prior_weight,
+        weights: [0.0; 32],
+        num_bases: e.bases.len() as u32,
+        bases: [0; 32],
+        reserved: 0,
+    };
+    for (k, (&b, &w)) in e.bases.iter().zip(&e.weights).enumerate() {
+        out.bases[k] = b as u32;
+        out.weights[k] = w;
+    }
+    out
+}
+
+fn prior_weight(d: &Dictionary, j: &Joints2, o: &PoseOptions) -> f64 {
+    crate::pose::problem::Problem::new(d, j, o.prior).map(|p| p.prior_w).unwrap_or(0.0)
+}
+
+/// Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
+/// refinement if enabled). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
+/// joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
+/// (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
+/// beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
+/// distinct `out`); about 2–5 ms on one core.
+#[no_mangle]
+pub unsafe extern "C" fn skb_estimate_pose(
+    dict: *const skb_pose_dictionary,
+    joints: *const skb_joints2d,
+    opts: *const skb_pose_options,
+    out: *mut skb_pose3d,
+) -> skb_status {
+    ffi_boundary! {
+        let d = try_status!(try_ref(dict, "dict"));
+        let j = joints_in(try_status!(try_ref(joints, "joints")));
+        let o = opts.as_ref().map(|o| o.inner).unwrap_or_default();
+        if out.is_null() {
+            return null("out");
+        }
+        let e = try_core!(estimate_pose(&d.inner, &j, &o));
+        *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
+        skb_status::SKB_OK
+    }
+}
+
+/// The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
+/// joints are ignored), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
+/// and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
+/// is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
+/// to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_refine(
+    dict: *const skb_pose_dictionary,
+    joints: *const skb_joints2d,
+    opts: *const skb_pose_options,
+    start: *const skb_pose3d,
+    out: *mut skb_pose3d,
+) -> skb_status {
+    ffi_boundary! {
+        let d = try_status!(try_ref(dict, "dict"));
+        let j = joints_in(try_status!(try_ref(joints, "joints")));
+        let s = *try_status!(try_ref(start, "start"));
+        let o = opts.as_ref().map(|o| o.inner).unwrap_or_default();
+        if out.is_null() {
+            return null("out");
+        }
+        let n = s.num_bases as usize;
+        if n == 0 || n > SKB_POSE_MAX_BASES as usize {
+            return out_of_range("start->num_bases", format!("{n} is not in 1..=32"));
+        }
+        let camera = WeakPerspective { sx: s.sx, sy: s.sy, r: Matrix3::from_row_slice(&s.r), t: s.t };
+        let start_est = PoseEstimate {
+            joints: s.joints,
+            camera,
+            bases: s.bases[..n].iter().map(|&b| b as usize).collect(),
+            weights: s.weights[..n].to_vec(),
+            rms: s.rms_px,
+            length_excess: s.length_excess,
+        };
+        let e = try_core!(refine_pose(&d.inner, &j, &o, &start_est));
+        *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
+        skb_status::SKB_OK
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn figure() -> skb_joints2d {
+        let d = dict_io::embedded().unwrap();
+        let mut j = skb_joints2d { xy: [[0.0; 2]; 15], visible: [1; 15], reserved: 0 };
+        for (k, p) in j.xy.iter_mut().enumerate() {
+            *p = [256.0 + 280.0 * d.mean[3 * k], 300.0 - 280.0 * d.mean[3 * k + 1]];
+        }
+        j
+    }
+
+    #[test]
+    fn layout_is_pinned() {
+        assert!(std::mem::size_of::<skb_joints2d>() == 256);
+        assert!(std::mem::size_of::<skb_pose3d>() == 880);
+        assert_eq!(std::mem::align_of::<skb_pose3d>(), 8);
+    }
+
+    #[test]
+    fn estimate_refine_and_errors() {
+        unsafe {
+            let mut d = std::ptr::null_mut();
+            assert_eq!(skb_pose_dictionary_new_default(&mut d), skb_status::SKB_OK);
+            let mut o = std::ptr::null_mut();
+            assert_eq!(skb_pose_options_new(&mut o), skb_status::SKB_OK);
+            assert_eq!(skb_pose_options_set_alpha(o, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
+            assert_eq!(skb_pose_options_set_alpha(o, 2.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_pose_options_set_max_bases(o, 33), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_pose_options_set_kappa(o, 0.02), skb_status::SKB_OK);
+            assert_eq!(skb_pose_options_set_max_bases(o, 4), skb_status::SKB_OK);
+            let j = figure();
+            let mut p: skb_pose3d = std::mem::zeroed();
+            assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
+            assert!(p.rms_px < 1.0, "rms {}", p.rms_px);
+            assert!(p.length_excess.abs() <= 0.02 + 1e-9);
+            let mut q: skb_pose3d = std::mem::zeroed();
+            if p.num_bases > 0 {
+                assert_eq!(skb_pose_refine(d, &j, o, &p, &mut q), skb_status::SKB_OK);
+                assert!(q.rms_px <= p.rms_px + 1e-9);
+            }
+            let mut bad = j;
+            bad.xy[3] = [f64::NAN, 0.0];
+            assert_eq!(skb_estimate_pose(d, &bad, o, &mut q), skb_status::SKB_ERR_TOO_FEW_JOINTS);
+            let mut bad = j;
+            bad.xy[3] = bad.xy[2];
+            assert_eq!(skb_estimate_pose(d, &bad, o, &mut q), skb_status::SKB_ERR_COINCIDENT_JOINTS);
+            let mut bad = j;
+            for (k, xy) in bad.xy.iter_mut().enumerate() {
+                *xy = [k as f64, 2.0 * k as f64];
+            }
+            assert_eq!(skb_estimate_pose(d, &bad, o, &mut q), skb_status::SKB_ERR_DEGENERATE);
+            let mut bad = j;
+            bad.visible = [0; 15];
+            assert_eq!(skb_estimate_pose(d, &bad, o, &mut q), skb_status::SKB_ERR_TOO_FEW_JOINTS);
+            assert_eq!(skb_estimate_pose(std::ptr::null(), &j, o, &mut q), skb_status::SKB_ERR_NULL_POINTER);
+            assert_eq!(skb_estimate_pose(d, &j, o, std::ptr::null_mut()), skb_status::SKB_ERR_NULL_POINTER);
+            let mut v = [0.0; 45];
+            let mut sigma = 0.0;
+            assert_eq!(skb_pose_dictionary_basis(d, 0, v.as_mut_ptr(), 45, &mut sigma), skb_status::SKB_OK);
+            assert!(sigma > 0.0);
+            assert_eq!(skb_pose_dictionary_basis(d, 0, v.as_mut_ptr(), 44, &mut sigma), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
+            assert_eq!(skb_pose_dictionary_basis(d, 100000, v.as_mut_ptr(), 45, &mut sigma), skb_status::SKB_ERR_OUT_OF_RANGE);
+            let path = c"/nonexistent/x.skbpd";
+            let mut d2 = std::ptr::null_mut();
+            assert_eq!(skb_pose_dictionary_load(path.as_ptr(), &mut d2), skb_status::SKB_ERR_IO);
+            skb_pose_options_free(o);
+            skb_pose_options_free(std::ptr::null_mut());
+            skb_pose_dictionary_free(d);
+            skb_pose_dictionary_free(std::ptr::null_mut());
+        }
+    }
+}

@@ -1,0 +1,36 @@
+//! Step 2 of the paper (§II-B, eqs. 1–4): 3-D joints and a weak-perspective camera from 2-D
+//! joints, by projected matching pursuit over a dictionary of action-specific basis poses.
+//!
+//! - [`motion`]: motion tables (canonical-joint CSV), pose normalisation, mirroring.
+//! - [`bvh`]: BVH reader with a joint-name mapping for CMU-, Mixamo- and Rokoko-style rigs.
+//! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
+//! - [`learn`]: clip selection and provenance for learning from folders and BVH files.
+//! - [`dict_io`]: the dictionary's binary file format and the embedded default.
+//! - [`options`]: solver options (κ, α, basis count, tolerance).
+//! - [`problem`]: a validated 2-D input with the model of eq. (1)–(3).
+//! - [`qcls`]: least squares under the two-sided limb-length constraint of eq. (3).
+//! - [`camera_fit`]: the camera step (SVD of M, eq. 4 blend, projection onto SO(3)).
+//! - [`pursuit`]: the matching pursuit driver ([`estimate_pose`]).
+//! - [`refine`]: the joint Levenberg–Marquardt refinement with the constraint kept exactly.
+//! - [`metrics`]: MPJPE and PA-MPJPE.
+//!
+//! Units: 3-D joints are metres of a 1.75 m person (every pose is normalised to that stature,
+//! see [`motion::normalize_pose`]); 2-D joints are image pixels (origin top-left, y down).
+
+pub mod bvh;
+pub mod camera_fit;
+pub mod dict_io;
+pub mod dictionary;
+pub mod learn;
+pub mod metrics;
+pub mod motion;
+pub mod options;
+pub mod problem;
+pub mod pursuit;
+pub mod qcls;
+pub mod refine;
+
+pub use dictionary::{Dictionary, LearnParams};
+pub use options::PoseOptions;
+pub use pursuit::{estimate_pose, PoseEstimate};
+pub use refine::refine_pose;

@@ -1,0 +1,110 @@
+//! Options of the 3-D pose solver and the mapping of the paper's κ to the scale-free form.
+//!
+//! κ here is relative: the constraint of eq. (3) is
+//! `|Σ‖X_i − X_j‖² − Σ l_ij²| ≤ κ · Σ l_ij²`, so κ = 0.05 lets the summed squared bone length
+//! deviate by 5 % from the dictionary's. The paper's κ = 8 is in CMU motion-capture units
+//! (1 unit = 1/0.45 inch = 56.44 mm) on a CMU-sized skeleton; [`kappa_from_paper`] converts it
+//! with this dictionary's Σ l² for a 1.75 m person: κ_rel = 8 · (0.05644 m)² / Σ l² (≈ 0.02).
+
+use crate::error::{ensure_finite, Error, Result};
+
+/// Most bases the solver may choose (also the size of the C API's basis arrays).
+pub const MAX_BASES: usize = 32;
+
+/// Length of the CMU motion-capture unit, metres (1/0.45 inch).
+pub const CMU_UNIT_M: f64 = 0.0254 / 0.45;
+
+/// The paper's κ, CMU units squared.
+pub const PAPER_KAPPA: f64 = 8.0;
+
+/// The paper's α (eq. 4).
+pub const PAPER_ALPHA: f64 = 0.8;
+
+/// Largest accepted relative κ.
+pub const MAX_KAPPA: f64 = 10.0;
+
+/// Largest accepted stopping tolerance, pixels.
+pub const MAX_TOLERANCE: f64 = 1.0e4;
+
+/// Converts a κ in CMU units² (the paper's κ = 8) to the relative κ of [`PoseOptions::kappa`],
+/// given the dictionary's Σ l² in m².
+pub fn kappa_from_paper(kappa_cmu: f64, sum_sq_lengths_m2: f64) -> f64 {
+    kappa_cmu * CMU_UNIT_M * CMU_UNIT_M / sum_sq_lengths_m2
+}
+
+/// Options of [`super::estimate_pose`]. Plain data; validated by [`PoseOptions::validate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseOptions {
+    /// Relative limb-length tolerance κ ≥ 0 (0 = equality, Ramakrishna et al.), ≤ [`MAX_KAPPA`].
+    pub kappa: f64,
+    /// Pull of the camera rotation toward identity in eq. (4), in [0, 1] (0 = none).
+    pub alpha: f64,
+    /// Most bases to choose, 0..=[`MAX_BASES`] (0 = the mean pose with a fitted camera).
+    pub max_bases: usize,
+    /// Stop adding bases once the reprojection RMS is at most this many pixels (≥ 0).
+    pub tolerance: f64,
+    /// Run the joint Levenberg–Marquardt refinement after the pursuit.
+    pub refine: bool,
+    /// Weight prior, metres in [0, 1]: adds residuals `s̄ · prior · w_k / σ_k` (s̄ the figure's
+    /// px per metre, σ_k the basis spread) — a Gaussian prior on the weights with the 2-D
+    /// error taken as `prior` metres at the figure's scale. 0 = the paper's eq. (3) exactly.
+    pub prior: f64,
+}
+
+impl Default for PoseOptions {
+    /// The library default: κ = 0.05, α = 0.8, up to 10 bases, 0.5 px, refined, prior 0.03 m.
+    fn default() -> Self {
+        PoseOptions { kappa: 0.05, alpha: PAPER_ALPHA, max_bases: 10, tolerance: 0.5, refine: true, prior: 0.03 }
+    }
+}
+
+impl PoseOptions {
+    /// Checks every field: finite and within its documented range.
+    pub fn validate(&self) -> Result<()> {
+        ensure_finite("kappa", self.kappa)?;
+        ensure_finite("alpha", self.alpha)?;
+        ensure_finite("tolerance", self.tolerance)?;
+        ensure_finite("prior", self.prior)?;
+        let range = |name: &'static str, detail: String| Err(Error::OutOfRange { name, detail });
+        if !(0.0..=MAX_KAPPA).contains(&self.kappa) {
+            return range("kappa", format!("{} is not in [0, {MAX_KAPPA}]", self.kappa));
+        }
+        if !(0.0..=1.0).contains(&self.alpha) {
+            return range("alpha", format!("{} is not in [0, 1]", self.alpha));
+        }
+        if self.max_bases > MAX_BASES {
+            return range("max_bases", format!("{} is not in [0, {MAX_BASES}]", self.max_bases));
+        }
+        if !(0.0..=MAX_TOLERANCE).contains(&self.tolerance) {
+            return range("tolerance", format!("{} px is not in [0, {MAX_TOLERANCE}]", self.tolerance));
+        }
+        if !(0.0..=1.0).contains(&self.prior) {
+            return range("prior", format!("{} m is not in [0, 1]", self.prior));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn validation_names_the_bad_option() {
+        PoseOptions::default().validate().unwrap();
+        let bad = [
+            PoseOptions { kappa: f64::NAN, ..Default::default() },
+            PoseOptions { kappa: -0.1, ..Default::default() },
+            PoseOptions { alpha: 1.5, ..Default::default() },
+            PoseOptions { max_bases: 33, ..Default::default() },
+            PoseOptions { tolerance: f64::INFINITY, ..Default::default() },
+            PoseOptions { prior: -1.0, ..Default::default() },
+        ];
+        for o in bad {
+            assert!(o.validate().is_err(), "{o:?}");
+        }
+        // CMU: 8 unit² on a skeleton with Σ l² = 436 unit² is 1.8 %.
+        let k = kappa_from_paper(8.0, 436.0 * CMU_UNIT_M * CMU_UNIT_M);
+        assert!((k - 8.0 / 436.0).abs() < 1e-12);
+    }
+}

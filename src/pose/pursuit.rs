@@ -1,0 +1,148 @@
+//! The projected matching pursuit of eq. (3) ([`estimate_pose`]).
+//!
+//! Start from the mean pose with its fitted camera. Each step adds the unused basis whose
+//! projection (current camera, no translation) is most correlated with the reprojection residual
+//! (|aᵀr| / ‖a‖), then alternates the weights Ω ([`super::qcls`], constraint
+//! |g| ≤ κ Σl²) and the camera ([`super::camera_fit`], eq. 4 with α) until the RMS changes by
+//! less than 1e-6 relative (at most 50 rounds). Stopping rules: RMS ≤ tolerance, `max_bases`
+//! reached, or a step that lowers the objective (reprojection plus the optional weight prior)
+//! by less than 0.2 % (that step is undone) — except that
+//! steps are always kept while the current state violates the constraint. Then, if enabled, the
+//! joint refinement [`super::refine::refine_pose`].
+
+use nalgebra::{DVector, Vector3};
+
+use super::camera_fit::fit_camera;
+use super::dictionary::Dictionary;
+use super::options::PoseOptions;
+use super::problem::Problem;
+use super::qcls;
+use crate::camera::WeakPerspective;
+use crate::error::Result;
+use crate::skeleton::{Joints2, Joints3, NUM_JOINTS};
+
+/// Result of the 3-D pose step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseEstimate {
+    /// 3-D joints, metres of a 1.75 m person, model frame (+Y up, facing +Z when R = I).
+    pub joints: Joints3,
+    /// Weak-perspective camera (eq. 1).
+    pub camera: WeakPerspective,
+    /// Chosen basis columns of the dictionary, in the order chosen.
+    pub bases: Vec<usize>,
+    /// Weight of each chosen basis, metres.
+    pub weights: Vec<f64>,
+    /// RMS reprojection error per visible joint, pixels.
+    pub rms: f64,
+    /// g / Σl²: relative excess of the summed squared bone lengths (|·| ≤ κ when feasible).
+    pub length_excess: f64,
+}
+
+/// How many of the most correlated bases each pursuit step tries.
+const CANDIDATES: usize = 1;
+/// Most Ω/camera alternation rounds after adding a basis.
+const ALTERNATIONS: usize = 20;
+
+pub(crate) fn to_joints(x: &[Vector3<f64>; NUM_JOINTS]) -> Joints3 {
+    std::array::from_fn(|j| [x[j].x, x[j].y, x[j].z])
+}
+
+/// Builds the estimate for a state.
+pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, weights: Vec<f64>) -> PoseEstimate {
+    let x = prob.pose(&bases, &weights);
+    let con = prob.constraint(&bases);
+    let excess = con.value(&DVector::from_column_slice(&weights)) / con.sum_sq;
+    PoseEstimate { joints: to_joints(&x), rms: prob.rms(&cam, &x), camera: cam, bases, weights, length_excess: excess }
+}
+
+/// Estimates the 3-D pose and camera from 2-D joints (see the module doc). Invisible joints
+/// (`visible[j] == false`) drop their residuals; see [`Problem::new`] for the input checks.
+pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
+    opts.validate()?;
+    let prob = Problem::new(dict, joints, opts.prior)?;
+    let bound = opts.kappa * dict.sum_sq_lengths();
+    let mean = prob.pose(&[], &[]);
+    let mut cam = fit_camera(&mean, &prob.uv, &prob.vis, opts.alpha)?;
+    let mut bases: Vec<usize> = Vec::new();
+    let mut w: Vec<f64> = Vec::new();
+    let mut rms = prob.rms(&cam, &mean);
+    let mut obj = prob.objective(&cam, &mean);
+    let mut feasible = prob.constraint(&[]).value(&DVector::zeros(0)).abs() <= bound;
+    let max_bases = opts.max_bases.min(dict.num_bases()).min(2 * prob.vis.len() - 7);
+    while bases.len() < max_bases && (rms > opts.tolerance || !feasible) {
+        let x = prob.pose(&bases, &w);
+        let r = prob.residuals(&cam, &x);
+        let mut scored: Vec<(usize, f64)> = Vec::with_capacity(dict.num_bases());
+        for b in 0..dict.num_bases() {
+            if bases.contains(&b) {
+                continue;
+            }
+            let col = dict.bases.column(b);
+            let (mut dot, mut norm2) = (0.0, 0.0);
+            for (i, &p) in prob.vis.iter().enumerate() {
+                let y = cam.r * Vector3::new(col[3 * p], col[3 * p + 1], col[3 * p + 2]);
+                let (au, av) = (cam.sx * y.x, -cam.sy * y.y);
+                dot += au * r[2 * i] + av * r[2 * i + 1];
+                norm2 += au * au + av * av;
+            }
+            if norm2 > 0.0 {
+                scored.push((b, dot.abs() / norm2.sqrt()));
+            }
+        }
+        // The CANDIDATES most correlated with the residual are tried with the constrained weight
+        // solve for the current camera; the one leaving the smallest objective is added.
+        scored.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let mut best: Option<(usize, f64)> = None;
+        for &(b, _) in scored.iter().take(CANDIDATES) {
+            let mut nb = bases.clone();
+            nb.push(b);
+            let (a, r0) = prob.linear_system(&cam, &nb);
+            let sol = qcls::solve(&a, &r0, &prob.constraint(&nb), -bound, bound);
+            let f = (&a * &sol.w - &r0).norm_squared() + if sol.feasible { 0.0 } else { f64::MAX / 4.0 };
+            if best.is_none_or(|(_, s)| f < s) {
+                best = Some((b, f));
+            }
+        }
+        let Some((b, _)) = best else { break };
+        let mut nb = bases.clone();
+        nb.push(b);
+        let con = prob.constraint(&nb);
+        let mut ncam = cam;
+        let mut nw = DVector::zeros(nb.len());
+        let mut nrms = f64::INFINITY;
+        let mut nobj = f64::INFINITY;
+        let mut nfeasible = false;
+        for _ in 0..ALTERNATIONS {
+            let (a, r0) = prob.linear_system(&ncam, &nb);
+            let sol = qcls::solve(&a, &r0, &con, -bound, bound);
+            nw = sol.w;
+            nfeasible = sol.feasible;
+            let x = prob.pose(&nb, nw.as_slice());
+            ncam = match fit_camera(&x, &prob.uv, &prob.vis, opts.alpha) {
+                Ok(c) => c,
+                Err(_) => break,
+            };
+            let new = prob.total_objective(&ncam, &nb, nw.as_slice());
+            let done = (nobj - new).abs() <= 1e-6 * nobj;
+            nobj = new;
+            nrms = prob.rms(&ncam, &x);
+            if done {
+                break;
+            }
+        }
+        if feasible && !(nobj < obj * (1.0 - 2e-3)) {
+            break;
+        }
+        bases = nb;
+        w = nw.iter().copied().collect();
+        cam = ncam;
+        rms = nrms;
+        obj = nobj;
+        feasible = nfeasible;
+    }
+    let est = finish(&prob, cam, bases, w);
+    if opts.refine && !est.bases.is_empty() {
+        return super::refine::refine_problem(&prob, opts, &est);
+    }
+    Ok(est)
+}

@@ -1,0 +1,61 @@
+//! `sketchbody pose` end to end: JSON in, JSON out, and one-line errors for bad input.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use sketchbody::pose::dict_io;
+use sketchbody::skeleton::JOINT_NAMES;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("skb-cli-pose-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The mean pose seen from the front, as a joints2d document.
+fn joints_doc() -> serde_json::Value {
+    let d = dict_io::embedded().unwrap();
+    let mut joints = serde_json::Map::new();
+    for (k, name) in JOINT_NAMES.iter().enumerate() {
+        joints.insert(name.to_string(), serde_json::json!([256.0 + 280.0 * d.mean[3 * k], 300.0 - 280.0 * d.mean[3 * k + 1]]));
+    }
+    serde_json::json!({"format": "sketchbody-joints2d", "version": 1, "joints": joints, "missing": ["l_wrist"]})
+}
+
+fn run(input: &serde_json::Value, dir: &std::path::Path) -> std::process::Output {
+    let (inp, out) = (dir.join("in.json"), dir.join("out.json"));
+    std::fs::write(&inp, serde_json::to_vec(input).unwrap()).unwrap();
+    Command::new(env!("CARGO_BIN_EXE_sketchbody")).arg("pose").arg(&inp).arg("--out").arg(&out).output().unwrap()
+}
+
+#[test]
+fn pose_writes_joints_camera_and_bases() {
+    let dir = scratch("ok");
+    let out = run(&joints_doc(), &dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("out.json")).unwrap()).unwrap();
+    assert_eq!(v["format"], "sketchbody-pose3d");
+    assert_eq!(v["joints"].as_object().unwrap().len(), 15);
+    assert_eq!(v["camera"]["r"].as_array().unwrap().len(), 3);
+    assert!(v["reprojection_rms_px"].as_f64().unwrap() < 1.0);
+    assert!(v["bases"].is_array());
+}
+
+#[test]
+fn pose_rejects_bad_joints_in_one_line_and_writes_nothing() {
+    let dir = scratch("bad");
+    let mut doc = joints_doc();
+    doc["joints"].as_object_mut().unwrap().remove("head");
+    let mut coincident = joints_doc();
+    coincident["joints"]["r_elbow"] = coincident["joints"]["r_shoulder"].clone();
+    let mut unknown = joints_doc();
+    unknown["joints"]["tail"] = serde_json::json!([1.0, 2.0]);
+    for (bad, expect) in [(doc, "head is missing"), (coincident, "coincide"), (unknown, "unknown joint")] {
+        let out = run(&bad, &dir);
+        assert!(!out.status.success());
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains(expect), "{err}");
+        assert!(!dir.join("out.json").exists());
+    }
+}

@@ -1,0 +1,54 @@
+//! The committed pose dictionary must equal a fresh `learn-poses` build from the shared motion
+//! data byte for byte, and the solver must recover a training pose from its exact projection.
+
+mod common;
+
+use nalgebra::{Rotation3, Vector3};
+use sketchbody::camera::WeakPerspective;
+use sketchbody::pose::learn::{learn_from_sources, LearnSpec};
+use sketchbody::pose::metrics::pa_mpjpe;
+use sketchbody::pose::motion::{normalize_pose, read_motion_csv};
+use sketchbody::pose::{dict_io, estimate_pose, PoseOptions};
+use sketchbody::skeleton::{Joints2, NUM_JOINTS};
+
+#[test]
+fn rebuilt_dictionary_matches_the_committed_asset() {
+    let Some(data) = common::shared_data("pose dictionary rebuild") else { return };
+    let d = learn_from_sources(Some(&data.join("mocap/deepmimic")), &[], &LearnSpec::default()).unwrap();
+    let fresh = dict_io::to_bytes(&d);
+    let committed = dict_io::embedded_bytes();
+    assert!(
+        fresh == committed,
+        "assets/pose_dictionary.skbpd differs from a fresh build ({} vs {} bytes): rerun \
+         `sketchbody learn-poses --mocap ../shared/data/mocap/deepmimic --out assets/pose_dictionary.skbpd`",
+        fresh.len(),
+        committed.len()
+    );
+    assert!(d.provenance.contains("held_out: dance_b,jog,kick,long_long_walk3,long_long_walk3_mirror,long_stealthy_walk1"));
+}
+
+#[test]
+fn solver_recovers_a_training_pose_and_drops_invisible_joints() {
+    let Some(data) = common::shared_data("pose solver on a training frame") else { return };
+    let dict = dict_io::embedded().unwrap();
+    let frames = read_motion_csv(&data.join("mocap/deepmimic/walk.csv")).unwrap();
+    let gt = normalize_pose(&frames[10]).unwrap();
+    let r = *Rotation3::from_axis_angle(&Vector3::y_axis(), 0.2).matrix();
+    let cam = WeakPerspective { sx: 290.0, sy: 290.0, r, t: [256.0, 300.0] };
+    let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
+    for p in 0..NUM_JOINTS {
+        j.xy[p] = cam.project(&Vector3::new(gt[p][0], gt[p][1], gt[p][2]));
+    }
+    let opts = PoseOptions::default();
+    let est = estimate_pose(&dict, &j, &opts).unwrap();
+    assert!(est.rms < 3.0, "reprojection RMS {} px", est.rms);
+    assert!(est.length_excess.abs() <= opts.kappa + 1e-9);
+    let pa = pa_mpjpe(&est.joints, &gt);
+    assert!(pa < 0.1, "PA-MPJPE {pa} m");
+    // A wildly wrong guess for an invisible joint must not matter.
+    let mut hidden = j;
+    hidden.visible[4] = false;
+    hidden.xy[4] = [5000.0, -3000.0];
+    let est2 = estimate_pose(&dict, &hidden, &opts).unwrap();
+    assert!(est2.rms < 3.0, "reprojection RMS with a hidden wrist {} px", est2.rms);
+}
