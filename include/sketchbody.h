@@ -54,44 +54,9 @@
 #define SKB_VERSION_PATCH 0
 
 /**
- * Number of canonical joints (the paper's P).
+ * Distances above this many raster pixels count as this much in [`MatchScore::Chamfer`].
  */
-#define NUM_JOINTS 15
-
-/**
- * Number of bones.
- */
-#define NUM_BONES 14
-
-#define HEAD 0
-
-#define NECK 1
-
-#define R_SHOULDER 2
-
-#define R_ELBOW 3
-
-#define R_WRIST 4
-
-#define L_SHOULDER 5
-
-#define L_ELBOW 6
-
-#define L_WRIST 7
-
-#define PELVIS 8
-
-#define R_HIP 9
-
-#define R_KNEE 10
-
-#define R_ANKLE 11
-
-#define L_HIP 12
-
-#define L_KNEE 13
-
-#define L_ANKLE 14
+#define CHAMFER_CAP 12.0
 
 /**
  * Result of every sketchbody C function. 0 is success; any other value is an error whose text
@@ -166,6 +131,14 @@ enum skb_status
    * A bug: Rust code panicked. The library stays usable; please report the message.
    */
   SKB_ERR_PANIC = 15,
+  /**
+   * Two joints of a bone coincide (zero-length bone).
+   */
+  SKB_ERR_DEGENERATE_BONE = 16,
+  /**
+   * The projected mesh lies wholly outside the image.
+   */
+  SKB_ERR_MESH_OUTSIDE_IMAGE = 17,
 };
 #ifndef __cplusplus
 typedef uint32_t skb_status;
@@ -186,6 +159,13 @@ typedef struct skb_context skb_context;
  * threads may call them at once; a function that changes a mesh needs exclusive use of it.
  */
 typedef struct skb_mesh skb_mesh;
+
+/**
+ * A reusable silhouette rasteriser: keeps its buffers between calls so that repeated
+ * rasterisation allocates nothing. Create with [`skb_rasterizer_new`], release with
+ * [`skb_rasterizer_free`]. Not thread-safe: use one per thread (it may move between threads).
+ */
+typedef struct skb_rasterizer skb_rasterizer;
 
 /**
  * A borrowed 8-bit image owned by the caller: `height` rows of `width` pixels, each pixel
@@ -215,6 +195,31 @@ typedef struct skb_image {
    */
   uint32_t channels;
 } skb_image;
+
+/**
+ * The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
+ * +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
+ * `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
+ * layout (104 bytes) is part of the ABI.
+ */
+typedef struct skb_camera {
+  /**
+   * Horizontal scale, pixels per metre (> 0).
+   */
+  double sx;
+  /**
+   * Vertical scale, pixels per metre (> 0).
+   */
+  double sy;
+  /**
+   * Rotation model -> camera, row-major, orthonormal with determinant +1.
+   */
+  double r[9];
+  /**
+   * Image position of the model origin, pixels.
+   */
+  double t[2];
+} skb_camera;
 
 #ifdef __cplusplus
 extern "C" {
@@ -358,6 +363,41 @@ skb_status skb_gaussian_blur(const struct skb_image *src,
                              uint8_t *dst,
                              size_t dst_stride,
                              size_t dst_len);
+
+/**
+ * Creates a rasteriser and stores it in `*out` (caller owns it; free with
+ * [`skb_rasterizer_free`]).
+ */
+skb_status skb_rasterizer_new(struct skb_rasterizer **out);
+
+/**
+ * Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
+ */
+void skb_rasterizer_free(struct skb_rasterizer *r);
+
+/**
+ * Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
+ * points as x, y, z floats (metres, model frame), `tris` holds `ntris` triangles as three
+ * 0-based vertex indices. Pixel (i, j) is set to 255 when its centre (i + 0.5, j + 0.5) lies
+ * inside a projected triangle (top-left fill rule, both windings), else 0. Writes `h` rows of
+ * `w` bytes into `mask`, rows `mask_stride` bytes apart; `mask_len` must be at least
+ * `mask_stride * (h - 1) + w`. Sizes 1..=4096 a side. Errors: NULL pointers, bad sizes or
+ * strides, an invalid camera, index out of range, non-finite vertices, vertices projecting
+ * beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
+ * entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
+ * Arrays are only read during the call. Thread-safe with distinct rasterisers.
+ */
+skb_status skb_rasterize_triangles(struct skb_rasterizer *rasterizer,
+                                   const float *verts,
+                                   size_t nverts,
+                                   const uint32_t *tris,
+                                   size_t ntris,
+                                   const struct skb_camera *cam,
+                                   uint32_t w,
+                                   uint32_t h,
+                                   uint8_t *mask,
+                                   size_t mask_stride,
+                                   size_t mask_len);
 
 /**
  * Static, NUL-terminated English text for a status code; "unknown status" for numbers this

@@ -7,7 +7,11 @@ pub mod build;
 mod format;
 mod gender;
 mod gmm;
+pub mod ik;
 mod model;
+pub mod procedural;
+pub mod rig;
+pub mod skin;
 
 pub use format::{SKBM_MAGIC, SKBM_VERSION};
 pub use gender::Gender;

@@ -21,6 +21,13 @@ pub struct VertexWeights {
     pub weights: [f32; MAX_INFLUENCES],
 }
 
+impl VertexWeights {
+    /// The same weights as (bone, weight) pairs, the layout the skinning code takes.
+    pub fn pairs(&self) -> [(u8, f32); MAX_INFLUENCES] {
+        std::array::from_fn(|i| (self.bones[i], self.weights[i]))
+    }
+}
+
 /// A body in the rest pose (MakeHuman's A-pose): vertex positions and the 15 canonical joints,
 /// metres, model frame (+Y up, +Z toward the viewer, the character's right side at −X; the origin
 /// is MakeHuman's, near the pelvis, not at the feet).
