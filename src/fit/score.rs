@@ -211,7 +211,7 @@ fn filled_figure(edges: &[u8], w: usize, h: usize, skeleton_px: &[[f64; 2]]) -> 
     // Label 0 = unvisited, 1 = wall, 2 = background, 3.. = enclosed components.
     let mut label: Vec<u32> = wall.iter().map(|&v| v as u32).collect();
     let mut stack = Vec::new();
-    let mut flood = |label: &mut Vec<u32>, seed: usize, id: u32, stack: &mut Vec<usize>| {
+    let flood = |label: &mut Vec<u32>, seed: usize, id: u32, stack: &mut Vec<usize>| {
         label[seed] = id;
         stack.push(seed);
         while let Some(i) = stack.pop() {
@@ -269,17 +269,17 @@ fn filled_figure(edges: &[u8], w: usize, h: usize, skeleton_px: &[[f64; 2]]) -> 
     }
     let any_kept = keep.iter().any(|&k| k);
     let mut figure: Vec<u8> = label.iter().map(|&l| (l >= 3 && (!any_kept || keep[l as usize])) as u8).collect();
-    // Strokes bordering kept regions belong to the figure too.
-    for y in 0..h {
-        for x in 0..w {
-            let i = y * w + x;
-            if label[i] == 1 {
-                let near = [(x > 0).then(|| i - 1), (x + 1 < w).then(|| i + 1), (y > 0).then(|| i - w), (y + 1 < h).then(|| i + w)]
-                    .into_iter()
-                    .flatten()
-                    .any(|j| label[j] >= 3 && (!any_kept || keep[label[j] as usize]));
-                if near {
-                    figure[i] = 1;
+    // The strokes around kept regions belong to the figure: grow (8-connected) into wall pixels by the
+    // dilation (1 px) plus the stroke itself (1 px).
+    for _ in 0..2 {
+        let grown = figure.clone();
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                if label[i] == 1 && grown[i] == 0 {
+                    let near = (y.saturating_sub(1)..(y + 2).min(h))
+                        .any(|ny| (x.saturating_sub(1)..(x + 2).min(w)).any(|nx| grown[ny * w + nx] != 0));
+                    figure[i] = near as u8;
                 }
             }
         }
