@@ -74,6 +74,11 @@
 #define SKB_VERSION_PATCH 0
 
 /**
+ * Distances above this many raster pixels count as this much in [`MatchScore::Chamfer`].
+ */
+#define CHAMFER_CAP 12.0
+
+/**
  * Result of every sketchbody C function. 0 is success; any other value is an error whose text
  * is given by [`skb_status_str`] (generic) and `skb_last_error_message` (specific).
  */

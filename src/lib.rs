@@ -11,6 +11,7 @@ pub mod capi;
 pub mod detect;
 pub mod error;
 pub mod export;
+pub mod fit;
 pub mod fsutil;
 pub mod image;
 pub mod pose;

@@ -1,0 +1,9 @@
+//! Fitting the body shape to the sketch (paper §II-C): the SIR of eqs. 5–9 and match scores.
+
+mod score;
+mod sir;
+mod transition;
+
+pub use score::{distance_transform, MatchScore, SketchEvidence, CHAMFER_CAP};
+pub use sir::{fit_shape, FitOptions, FitProblem, FitResult, IterationStats};
+pub use transition::Transition;

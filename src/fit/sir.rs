@@ -1,0 +1,324 @@
+//! Shape fitting by sampling importance resampling (paper §II-C, eqs. 5–9).
+//!
+//! Iteration 1 draws `samples` shapes from the GMM prior (eq. 8); later iterations draw each
+//! sample's successor from `N(y; y_prev, Σ) · P(y | θ)` (eq. 9, sampled exactly, see
+//! [`Transition`]). Every sample is posed to the estimated 3-D joints (IK + skinning), projected
+//! with the estimated camera and rasterised, and weighted by its match score (eqs. 6–7); the
+//! population is then resampled (systematic resampling). The fit stops when the weighted mean
+//! moves less than `tolerance` standard deviations in every component, or after
+//! `max_iterations`. The result is `Y* = Σ w Y` of the last iteration (and the best sample).
+//!
+//! Σ is `diag(s² λ_k)` with `λ_k` the PCA variances: the paper's `Σ = I` in whitened weights is
+//! `s = 1`; the default `s = 0.3` explores less per step. Determinism: each sample's random
+//! stream is derived from (seed, iteration, index), so results do not depend on thread count.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::score::{MatchScore, SketchEvidence};
+use super::transition::Transition;
+use crate::body::ik::{self, IkOptions};
+use crate::body::skin::{skin_into, SkinMethod};
+use crate::body::{BodyModel, Gender};
+use crate::camera::WeakPerspective;
+use crate::error::{ensure_finite, Error, Result};
+use crate::image::GrayImage;
+use crate::render::raster::Rasterizer;
+use crate::skeleton::{Joints3, BONES};
+
+/// Options of [`fit_shape`], with documented defaults ([`FitOptions::default`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitOptions {
+    /// Samples per iteration, S (default 200).
+    pub samples: usize,
+    /// Most iterations, T (default 8).
+    pub max_iterations: usize,
+    /// PCA dimensions searched (default: the shape space's 96%-energy dimension).
+    pub dims: Option<usize>,
+    /// Transition step `s` in standard deviations: Σ = diag(s² λ_k) (default 0.3).
+    pub transition_scale: f64,
+    /// The match score (default [`MatchScore::FilledIou`]).
+    pub score: MatchScore,
+    /// For the non-paper scores, sample likelihood = exp(score / temperature) (default 0.02).
+    pub temperature: f64,
+    /// Longest raster side in pixels; the sketch is scored at this resolution (default 256).
+    pub raster_max_side: usize,
+    /// Convergence: stop when Y* moves less than this many standard deviations (default 0.02).
+    pub tolerance: f64,
+    /// Seed of every random step (default 1).
+    pub seed: u64,
+    /// Skinning method (default linear blend skinning, as the paper).
+    pub skinning: SkinMethod,
+    /// Stretch bones so joints land exactly on the estimated 3-D joints (default off: bone
+    /// lengths come from the shape, as in the paper).
+    pub retarget: bool,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self {
+            samples: 200,
+            max_iterations: 8,
+            dims: None,
+            transition_scale: 0.3,
+            score: MatchScore::FilledIou,
+            temperature: 0.02,
+            raster_max_side: 256,
+            tolerance: 0.02,
+            seed: 1,
+            skinning: SkinMethod::Linear,
+            retarget: false,
+        }
+    }
+}
+
+/// What the fit works on: the model, a gender, the estimated 3-D pose (metres, model frame),
+/// the estimated camera (image pixels) and the sketch's edge map (non-zero = edge).
+pub struct FitProblem<'a> {
+    pub model: &'a BodyModel,
+    pub gender: Gender,
+    pub pose: &'a Joints3,
+    pub camera: &'a WeakPerspective,
+    pub edges: &'a GrayImage,
+}
+
+/// Per-iteration figures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IterationStats {
+    /// Best and weighted-mean score of the iteration's samples.
+    pub best_score: f64,
+    pub mean_score: f64,
+    /// Effective sample size 1 / Σ w² before resampling.
+    pub effective_samples: f64,
+}
+
+/// The fit's result. Weights are PCA weights of the gender's shape space (first `dims`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitResult {
+    /// Y* = Σ w Y over the last iteration.
+    pub weights: Vec<f64>,
+    /// The best-scoring sample seen.
+    pub best_weights: Vec<f64>,
+    pub best_score: f64,
+    pub history: Vec<IterationStats>,
+    /// Samples evaluated (synthesis + posing + skinning + raster + score).
+    pub evaluations: usize,
+}
+
+/// Splits 64-bit seeds (SplitMix64 finaliser).
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
+    z ^ (z >> 31)
+}
+
+fn sample_rng(seed: u64, iteration: usize, index: usize) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(mix(mix(seed ^ 0x5eed) ^ (iteration as u64) << 32 ^ index as u64))
+}
+
+impl FitOptions {
+    fn validate(&self) -> Result<()> {
+        let positive = |name: &'static str, v: f64| -> Result<()> {
+            ensure_finite(name, v)?;
+            if v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::OutOfRange { name, detail: format!("{v} must be > 0") })
+            }
+        };
+        positive("transition scale", self.transition_scale)?;
+        positive("temperature", self.temperature)?;
+        positive("tolerance", self.tolerance)?;
+        if !(2..=100_000).contains(&self.samples) {
+            return Err(Error::OutOfRange { name: "samples", detail: format!("{} not in 2..=100000", self.samples) });
+        }
+        if !(1..=1000).contains(&self.max_iterations) {
+            return Err(Error::OutOfRange { name: "iterations", detail: format!("{} not in 1..=1000", self.max_iterations) });
+        }
+        if !(16..=4096).contains(&self.raster_max_side) {
+            return Err(Error::OutOfRange { name: "raster size", detail: format!("{} not in 16..=4096", self.raster_max_side) });
+        }
+        Ok(())
+    }
+}
+
+/// Everything fixed during one fit.
+struct Evaluator<'a> {
+    problem: &'a FitProblem<'a>,
+    options: &'a FitOptions,
+    triangles: Vec<[u32; 3]>,
+    raster_camera: WeakPerspective,
+    evidence: SketchEvidence,
+}
+
+/// Per-thread scratch.
+struct Scratch {
+    raster: Rasterizer,
+    posed: Vec<[f32; 3]>,
+}
+
+impl Evaluator<'_> {
+    /// Score of one shape (higher is better); a shape that cannot be posed or lands outside the
+    /// image scores −∞.
+    fn score(&self, y: &[f64], s: &mut Scratch) -> Result<f64> {
+        let space = self.problem.model.space(self.problem.gender);
+        let rest = space.synthesize(y)?;
+        let pose = match ik::solve(&rest.joints, self.problem.pose, &IkOptions { retarget: self.options.retarget }) {
+            Ok(p) => p,
+            Err(Error::NonFinite { .. }) => return Err(Error::NonFinite { name: "pose", value: f64::NAN }),
+            Err(_) => return Ok(f64::NEG_INFINITY),
+        };
+        skin_into(&rest.vertices, self.problem.model.skin_weights(), &pose, self.options.skinning, &mut s.posed)?;
+        let (w, h) = (self.evidence.width(), self.evidence.height());
+        match s.raster.rasterize(&s.posed, &self.triangles, &self.raster_camera, w, h, false) {
+            Ok(_) => Ok(self.evidence.score(s.raster.mask(), self.options.score)),
+            Err(Error::MeshOutsideImage { .. }) | Err(Error::OutOfRange { name: "projected vertex", .. }) => Ok(f64::NEG_INFINITY),
+            Err(e) => Err(e),
+        }
+    }
+}
+
+/// Fits the shape (see the module documentation). `progress(fraction)` is called after every
+/// iteration from the calling thread; returning `false` cancels with [`Error::Cancelled`].
+pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut dyn FnMut(f32) -> bool) -> Result<FitResult> {
+    options.validate()?;
+    problem.camera.validate()?;
+    crate::body::ik::check_joints("pose", problem.pose)?;
+    let space = problem.model.space(problem.gender);
+    let dims = options.dims.unwrap_or(space.default_dim());
+    let prior_full = space.gmm();
+    if dims == 0 || dims > prior_full.dims() {
+        return Err(Error::OutOfRange { name: "fit dimensions", detail: format!("{dims} not in 1..={}", prior_full.dims()) });
+    }
+    let prior = prior_full.marginal(dims)?;
+    let sigma: Vec<f64> = space.variances()[..dims].iter().map(|l| options.transition_scale.powi(2) * l).collect();
+    let transition = Transition::new(&prior, &sigma)?;
+
+    let (iw, ih) = (problem.edges.width(), problem.edges.height());
+    let f = (options.raster_max_side as f64 / iw.max(ih) as f64).min(1.0);
+    let (rw, rh) = (((iw as f64 * f).round() as usize).max(1), ((ih as f64 * f).round() as usize).max(1));
+    let cam = problem.camera;
+    let raster_camera = WeakPerspective { sx: cam.sx * f, sy: cam.sy * f, r: cam.r, t: [cam.t[0] * f, cam.t[1] * f] };
+    let skeleton_px: Vec<[f64; 2]> = BONES
+        .iter()
+        .flat_map(|&(a, b)| {
+            let (pa, pb) = (problem.pose[a], problem.pose[b]);
+            (0..=8).map(move |i| {
+                let t = i as f64 / 8.0;
+                nalgebra::Vector3::new(pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1]), pa[2] + t * (pb[2] - pa[2]))
+            })
+        })
+        .map(|p| raster_camera.project(&p))
+        .collect();
+    let evaluator = Evaluator {
+        problem,
+        options,
+        triangles: problem.model.triangles(),
+        raster_camera,
+        evidence: SketchEvidence::new(problem.edges, rw, rh, &skeleton_px)?,
+    };
+
+    let stds: Vec<f64> = space.variances()[..dims].iter().map(|l| l.sqrt()).collect();
+    let mut population: Vec<Vec<f64>> = (0..options.samples).map(|i| prior.sample(&mut sample_rng(options.seed, 0, i))).collect();
+    let mut history = Vec::new();
+    let mut best = (f64::NEG_INFINITY, population[0].clone());
+    let mut previous_mean: Option<Vec<f64>> = None;
+    let mut weighted_mean = vec![0.0; dims];
+    let mut evaluations = 0;
+    for t in 0..options.max_iterations {
+        if t > 0 {
+            population = population
+                .par_iter()
+                .enumerate()
+                .map(|(i, y)| transition.sample(y, &mut sample_rng(options.seed, t, i)))
+                .collect();
+        }
+        let scores: Vec<f64> = population
+            .par_iter()
+            .map_init(|| Scratch { raster: Rasterizer::new(), posed: Vec::new() }, |s, y| evaluator.score(y, s))
+            .collect::<Result<_>>()?;
+        evaluations += scores.len();
+        let weights = importance_weights(&scores, options)?;
+        for (y, &s) in population.iter().zip(&scores) {
+            if s > best.0 {
+                best = (s, y.clone());
+            }
+        }
+        weighted_mean = (0..dims).map(|k| population.iter().zip(&weights).map(|(y, w)| w * y[k]).sum()).collect();
+        let finite: Vec<f64> = scores.iter().copied().filter(|s| s.is_finite()).collect();
+        history.push(IterationStats {
+            best_score: finite.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+            mean_score: scores.iter().zip(&weights).filter(|(s, _)| s.is_finite()).map(|(s, w)| s * w).sum(),
+            effective_samples: 1.0 / weights.iter().map(|w| w * w).sum::<f64>(),
+        });
+        if !progress((t + 1) as f32 / options.max_iterations as f32) {
+            return Err(Error::Cancelled);
+        }
+        let converged = previous_mean
+            .as_ref()
+            .is_some_and(|p| p.iter().zip(&weighted_mean).zip(&stds).all(|((a, b), s)| (a - b).abs() < options.tolerance * s));
+        if converged || t + 1 == options.max_iterations {
+            break;
+        }
+        previous_mean = Some(weighted_mean.clone());
+        population = systematic_resample(&population, &weights, &mut sample_rng(options.seed, t, usize::MAX));
+    }
+    Ok(FitResult { weights: weighted_mean, best_weights: best.1, best_score: best.0, history, evaluations })
+}
+
+/// Normalised importance weights (eqs. 6–7): the paper's score is used as the likelihood
+/// itself; other scores through exp(score / temperature). All-hopeless populations are an error.
+fn importance_weights(scores: &[f64], options: &FitOptions) -> Result<Vec<f64>> {
+    let max = scores.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    if !max.is_finite() {
+        return Err(Error::OutOfRange { name: "fit", detail: "no sample projects into the image: check the camera and pose".into() });
+    }
+    let raw: Vec<f64> = match options.score {
+        MatchScore::Paper => scores.iter().map(|&s| if s.is_finite() { s.max(0.0) } else { 0.0 }).collect(),
+        _ => scores.iter().map(|&s| ((s - max) / options.temperature).exp()).collect(),
+    };
+    let total: f64 = raw.iter().sum();
+    if total <= 0.0 {
+        return Ok(vec![1.0 / scores.len() as f64; scores.len()]);
+    }
+    Ok(raw.iter().map(|w| w / total).collect())
+}
+
+/// Systematic resampling: one uniform offset, `n` evenly spaced pointers into the CDF.
+fn systematic_resample(population: &[Vec<f64>], weights: &[f64], rng: &mut ChaCha8Rng) -> Vec<Vec<f64>> {
+    let n = population.len();
+    let u0: f64 = rng.random::<f64>() / n as f64;
+    let mut out = Vec::with_capacity(n);
+    let (mut cdf, mut j) = (weights[0], 0);
+    for i in 0..n {
+        let u = u0 + i as f64 / n as f64;
+        while u > cdf && j + 1 < n {
+            j += 1;
+            cdf += weights[j];
+        }
+        out.push(population[j].clone());
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn systematic_resampling_follows_the_weights() {
+        let pop: Vec<Vec<f64>> = (0..4).map(|i| vec![i as f64]).collect();
+        let out = systematic_resample(&pop, &[0.0, 0.5, 0.5, 0.0], &mut ChaCha8Rng::seed_from_u64(3));
+        assert_eq!(out.iter().filter(|y| y[0] == 1.0).count(), 2);
+        assert_eq!(out.iter().filter(|y| y[0] == 2.0).count(), 2);
+    }
+
+    #[test]
+    fn paper_weights_are_the_scores_normalised() {
+        let o = FitOptions { score: MatchScore::Paper, ..FitOptions::default() };
+        let w = importance_weights(&[0.1, 0.3, f64::NEG_INFINITY], &o).unwrap();
+        assert!((w[0] - 0.25).abs() < 1e-12 && (w[1] - 0.75).abs() < 1e-12 && w[2] == 0.0);
+        assert!(importance_weights(&[f64::NEG_INFINITY; 2], &o).is_err());
+    }
+}

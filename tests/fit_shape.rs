@@ -1,0 +1,81 @@
+//! The SIR shape fit end to end on the embedded model: an outline sketch of a known body (its
+//! silhouette's Canny edges) must be fitted closer than the mean shape, deterministically on any
+//! thread count, and a cancelling progress callback must stop it.
+
+use nalgebra::Matrix3;
+use sketchbody::body::{BodyModel, Gender};
+use sketchbody::camera::WeakPerspective;
+use sketchbody::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
+use sketchbody::image::{canny, CannyParams, GrayImage};
+use sketchbody::render::raster::Rasterizer;
+use sketchbody::Error;
+
+fn aed(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+    let sum: f64 = a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (p[c] as f64 - q[c] as f64).powi(2)).sum::<f64>().sqrt()).sum();
+    sum / a.len() as f64
+}
+
+struct Case {
+    model: BodyModel,
+    truth: sketchbody::body::RestShape,
+    camera: WeakPerspective,
+    edges: GrayImage,
+}
+
+fn case() -> Case {
+    let model = BodyModel::embedded().unwrap();
+    let space = model.space(Gender::Male);
+    // A clearly non-average body: about one standard deviation along every component.
+    let sd: Vec<f64> = space.variances().iter().take(space.default_dim()).map(|v| v.sqrt()).collect();
+    let truth_w: Vec<f64> = sd.iter().enumerate().map(|(k, s)| if k < 2 { 1.2 * s } else { -0.8 * s }).collect();
+    let truth = space.synthesize(&truth_w).unwrap();
+    let camera = WeakPerspective { sx: 110.0, sy: 110.0, r: Matrix3::identity(), t: [128.0, 135.0] };
+    let mut raster = Rasterizer::new();
+    raster.rasterize(&truth.vertices, &model.triangles(), &camera, 256, 256, false).unwrap();
+    let drawing: Vec<u8> = raster.mask().iter().map(|&m| if m != 0 { 40 } else { 235 }).collect();
+    let edges = canny(&GrayImage::from_vec(256, 256, drawing).unwrap().view(), &CannyParams::default()).unwrap();
+    Case { model, truth, camera, edges }
+}
+
+fn options() -> FitOptions {
+    FitOptions { samples: 64, max_iterations: 6, raster_max_side: 128, seed: 11, ..FitOptions::default() }
+}
+
+#[test]
+fn fit_beats_the_mean_shape_and_is_deterministic() {
+    let c = case();
+    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges };
+    let space = c.model.space(Gender::Male);
+    let mean_error = aed(&c.truth.vertices, &space.synthesize(&[]).unwrap().vertices);
+    let mut calls = 0;
+    let result = fit_shape(&problem, &options(), &mut |f| {
+        calls += 1;
+        assert!(f > 0.0 && f <= 1.0);
+        true
+    })
+    .unwrap();
+    assert_eq!(calls, result.history.len());
+    let fitted = aed(&c.truth.vertices, &space.synthesize(&result.weights).unwrap().vertices);
+    assert!(fitted < 0.75 * mean_error, "fitted AED {fitted:.4} m vs mean shape {mean_error:.4} m");
+    assert!(result.best_score > 0.8, "best filled IoU {}", result.best_score);
+
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let again = one_thread.install(|| fit_shape(&problem, &options(), &mut |_| true)).unwrap();
+    assert_eq!(again, result, "same seed must give the same fit on 1 thread");
+}
+
+#[test]
+fn paper_score_and_cancellation() {
+    let c = case();
+    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges };
+    let paper = fit_shape(&problem, &FitOptions { score: MatchScore::Paper, max_iterations: 2, ..options() }, &mut |_| true).unwrap();
+    assert!(paper.best_score > 0.0 && paper.best_score < 0.5, "eq. 7 IoU of a filled mask with thin edges is small: {}", paper.best_score);
+    let cancelled = fit_shape(&problem, &options(), &mut |_| false);
+    assert!(matches!(cancelled, Err(Error::Cancelled)));
+    let bad = FitOptions { samples: 1, ..options() };
+    assert!(matches!(fit_shape(&problem, &bad, &mut |_| true), Err(Error::OutOfRange { .. })));
+    let blank = GrayImage::filled(256, 256, 0).unwrap();
+    let blank_problem = FitProblem { edges: &blank, ..problem };
+    assert!(fit_shape(&blank_problem, &options(), &mut |_| true).is_err());
+}
+
