@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let dims = space.default_dim();
         let truth_w = space.gmm().marginal(dims)?.sample(&mut rng);
         let truth = space.synthesize(&truth_w)?;
-        let cam = WeakPerspective { sx: 240.0, sy: 240.0, r: Matrix3::identity(), t: [256.0, 270.0] };
+        let cam = WeakPerspective { sx: 200.0, sy: 200.0, r: Matrix3::identity(), t: [256.0, 262.0] };
         let mut raster = Rasterizer::new();
         raster.rasterize(&truth.vertices, &model.triangles(), &cam, 512, 512, false)?;
         let silhouette: Vec<u8> = raster.mask().iter().map(|&m| if m != 0 { 40 } else { 235 }).collect();
