@@ -38,9 +38,13 @@ pub struct FitOptions {
     pub dims: Option<usize>,
     /// Transition step `s` in standard deviations: Σ = diag(s² λ_k) (default 0.3).
     pub transition_scale: f64,
-    /// The match score (default [`MatchScore::FilledIou`]).
+    /// The match score (default [`MatchScore::Chamfer`], chosen by measurement: on outline
+    /// sketches of 6 known bodies, `cargo run --release --example fit_demo -- 6 7` gave mean
+    /// AED/height 0.0092 for chamfer, 0.0185 for filled IoU, 0.0293 for the paper's eq. 7 and
+    /// 0.0381 for the mean shape).
     pub score: MatchScore,
-    /// For the non-paper scores, sample likelihood = exp(score / temperature) (default 0.02).
+    /// For the non-paper scores, sample likelihood = exp(score / temperature) (default 0.02; for
+    /// the chamfer score the unit is raster pixels of mean boundary distance).
     pub temperature: f64,
     /// Longest raster side in pixels; the sketch is scored at this resolution (default 256).
     pub raster_max_side: usize,
@@ -62,7 +66,7 @@ impl Default for FitOptions {
             max_iterations: 8,
             dims: None,
             transition_scale: 0.3,
-            score: MatchScore::FilledIou,
+            score: MatchScore::Chamfer,
             temperature: 0.02,
             raster_max_side: 256,
             tolerance: 0.02,
