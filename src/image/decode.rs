@@ -2,28 +2,16 @@
 
 use std::path::Path;
 
-use super::gray::rgb_to_gray_pixel;
-use super::view::{check_size, GrayImage};
+use super::gray::to_gray;
+use super::rgb::load_rgb_image;
+use super::view::GrayImage;
 use crate::error::{Error, Result};
 
 /// Loads a PNG or JPEG file as gray (colour converted with OpenCV's `COLOR_RGB2GRAY` weights,
 /// alpha ignored). Errors name the file: missing/unreadable (`Io`), not an image or truncated
 /// (`Decode`), oversized (`ImageTooLarge`).
 pub fn load_image(path: &Path) -> Result<GrayImage> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
-    let decode_err = |reason: String| Error::Decode { path: path.to_path_buf(), reason };
-    let reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
-        .with_guessed_format()
-        .map_err(|e| decode_err(e.to_string()))?;
-    if reader.format().is_none() {
-        return Err(decode_err("unknown format (expected PNG or JPEG)".into()));
-    }
-    let (w, h) = reader.into_dimensions().map_err(|e| decode_err(e.to_string()))?;
-    check_size(w as usize, h as usize)?;
-    let img = image::load_from_memory(&bytes).map_err(|e| decode_err(e.to_string()))?;
-    let rgb = img.to_rgb8();
-    let data = rgb.pixels().map(|p| rgb_to_gray_pixel(p[0], p[1], p[2])).collect();
-    GrayImage::from_vec(w as usize, h as usize, data)
+    to_gray(&load_rgb_image(path)?.view())
 }
 
 /// Writes `img` as an 8-bit gray PNG through a temporary file renamed into place, so a failure
