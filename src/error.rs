@@ -46,6 +46,12 @@ pub enum Error {
     /// The operation was cancelled by the caller's progress callback.
     #[error("cancelled by the progress callback")]
     Cancelled,
+    /// A bone of a skeleton has (near) zero length: its two joints coincide.
+    #[error("bone {from}-{to} has length {length:e} m: its joints coincide")]
+    DegenerateBone { from: &'static str, to: &'static str, length: f64 },
+    /// A mesh to rasterise projects wholly outside the image.
+    #[error("the projected mesh lies wholly outside the {width}x{height} image")]
+    MeshOutsideImage { width: usize, height: usize },
 }
 
 /// `Result` with [`Error`].

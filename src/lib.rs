@@ -5,12 +5,14 @@
 //! `DESIGN.md`: image space is pixels with the origin at the top-left corner of the top-left
 //! pixel, x right, y down; 3-D space is metres, right-handed, +Y up, +Z toward the viewer.
 
-pub mod camera;
 pub mod body;
+pub mod camera;
 pub mod capi;
 pub mod error;
+pub mod export;
 pub mod fsutil;
 pub mod image;
+pub mod render;
 pub mod skeleton;
 
 pub use error::{Error, Result};

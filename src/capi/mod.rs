@@ -16,6 +16,7 @@ mod ptr;
 mod body;
 mod error;
 mod image;
+mod mesh_ops;
 mod status;
 mod version;
 
@@ -27,6 +28,7 @@ pub use body::{
 };
 pub use error::skb_last_error_message;
 pub use image::{skb_canny, skb_gaussian_blur, skb_image, SKB_MAX_IMAGE_SIDE};
+pub use mesh_ops::{skb_camera, skb_rasterize_triangles, skb_rasterizer, skb_rasterizer_free, skb_rasterizer_new};
 pub use status::{skb_status, skb_status_str};
 pub use version::{skb_version, SKB_VERSION_MAJOR, SKB_VERSION_MINOR, SKB_VERSION_PATCH, SKB_VERSION_STRING};
 

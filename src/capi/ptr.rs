@@ -56,3 +56,18 @@ macro_rules! try_core {
         }
     };
 }
+
+/// Borrows `len` elements of `T` at `p`, or fails naming `name` when `p` is NULL or `len`
+/// elements would exceed the address space.
+///
+/// # Safety
+/// `p` must be NULL or valid for reads of `len` elements of `T` for `'a`, suitably aligned.
+pub(crate) unsafe fn try_slice_of<'a, T>(p: *const T, len: usize, name: &str) -> Result<&'a [T], skb_status> {
+    if p.is_null() {
+        return Err(null(name));
+    }
+    if len.checked_mul(std::mem::size_of::<T>()).map_or(true, |b| b > isize::MAX as usize) {
+        return Err(fail_with(skb_status::SKB_ERR_OUT_OF_RANGE, &format!("{name}: {len} elements is absurd")));
+    }
+    Ok(std::slice::from_raw_parts(p, len))
+}

@@ -41,6 +41,10 @@ pub enum skb_status {
     SKB_ERR_CANCELLED = 14,
     /// A bug: Rust code panicked. The library stays usable; please report the message.
     SKB_ERR_PANIC = 15,
+    /// Two joints of a bone coincide (zero-length bone).
+    SKB_ERR_DEGENERATE_BONE = 16,
+    /// The projected mesh lies wholly outside the image.
+    SKB_ERR_MESH_OUTSIDE_IMAGE = 17,
 }
 
 impl From<&Error> for skb_status {
@@ -59,6 +63,8 @@ impl From<&Error> for skb_status {
             Error::Decode { .. } => SKB_ERR_DECODE,
             Error::CorruptData(_) => SKB_ERR_CORRUPT_DATA,
             Error::Cancelled => SKB_ERR_CANCELLED,
+            Error::DegenerateBone { .. } => SKB_ERR_DEGENERATE_BONE,
+            Error::MeshOutsideImage { .. } => SKB_ERR_MESH_OUTSIDE_IMAGE,
         }
     }
 }
@@ -84,6 +90,8 @@ pub extern "C" fn skb_status_str(status: u32) -> *const c_char {
         13 => b"corrupt, truncated or unsupported data\0",
         14 => b"cancelled by the progress callback\0",
         15 => b"internal error (Rust panic)\0",
+        16 => b"two joints of a bone coincide (zero-length bone)\0",
+        17 => b"the projected mesh lies wholly outside the image\0",
         _ => b"unknown status\0",
     };
     s.as_ptr().cast()
@@ -96,11 +104,11 @@ mod tests {
     #[test]
     fn every_status_has_its_own_text() {
         let text = |c: u32| unsafe { std::ffi::CStr::from_ptr(skb_status_str(c)) }.to_str().unwrap().to_owned();
-        let all: Vec<String> = (0..=15).map(text).collect();
+        let all: Vec<String> = (0..=17).map(text).collect();
         let unique: std::collections::HashSet<_> = all.iter().collect();
         assert_eq!(unique.len(), all.len());
         assert!(!all.contains(&"unknown status".to_owned()));
-        assert_eq!(text(16), "unknown status");
+        assert_eq!(text(18), "unknown status");
         assert_eq!(std::mem::size_of::<skb_status>(), 4);
     }
 }

@@ -1,0 +1,119 @@
+//! Preview images: a mesh shaded (z-buffer + two-sided Lambert, flat per triangle) from the
+//! front and from its right side, side by side in one RGB PNG, so people can look at results.
+
+use std::path::Path;
+
+use nalgebra::{Matrix3, Rotation3, Vector3};
+
+use super::raster::{check_size, scan, setup, SUB};
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+
+/// An RGB image, rows of `width * 3` bytes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RgbImage {
+    /// Width, pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// Interleaved R, G, B bytes, row-major, no padding.
+    pub data: Vec<u8>,
+}
+
+const BACKGROUND: [u8; 3] = [236, 238, 242];
+const BASE: [f32; 3] = [205.0, 180.0, 165.0];
+
+/// One view of `vertices`/`tris` (metres, model frame) seen through rotation `r` (model →
+/// camera, orthographic along −Z of the camera), fitted into a `size`×`size` tile with a 5%
+/// margin, written into `img` at column offset `x0`.
+fn draw_view(img: &mut RgbImage, x0: usize, size: usize, vertices: &[[f32; 3]], tris: &[[u32; 3]], r: &Matrix3<f64>) {
+    let cam: Vec<Vector3<f64>> = vertices.iter().map(|v| r * Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)).collect();
+    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+    for p in &cam {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let extent = (hi.x - lo.x).max(hi.y - lo.y).max(1e-9);
+    let scale = 0.9 * size as f64 / extent;
+    let (cx, cy) = ((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0);
+    let px: Vec<[i64; 2]> = cam
+        .iter()
+        .map(|p| {
+            let u = (p.x - cx) * scale + size as f64 / 2.0;
+            let v = -(p.y - cy) * scale + size as f64 / 2.0;
+            [(u * SUB as f64).round() as i64, (v * SUB as f64).round() as i64]
+        })
+        .collect();
+    let light = Vector3::new(-0.4, 0.5, 1.0).normalize();
+    let mut depth = vec![f32::NEG_INFINITY; size * size];
+    for t in tris {
+        let [a, b, c] = t.map(|i| i as usize);
+        let n = (cam[b] - cam[a]).cross(&(cam[c] - cam[a]));
+        if n.norm() < 1e-20 {
+            continue;
+        }
+        let shade = 0.3 + 0.7 * (n.normalize().dot(&light)).abs() as f32;
+        let rgb = BASE.map(|c| (c * shade).min(255.0) as u8);
+        let z = [cam[a].z as f32, cam[b].z as f32, cam[c].z as f32];
+        let Some(s) = setup([px[a], px[b], px[c]], z, size, size) else { continue };
+        scan(&s, size, |idx, i, j, d| {
+            if d > depth[idx] {
+                depth[idx] = d;
+                let o = (j * img.width + x0 + i) * 3;
+                img.data[o..o + 3].copy_from_slice(&rgb);
+            }
+        });
+    }
+}
+
+/// Front and right-side views of a mesh, each `size`×`size` pixels (1..=4096), side by side.
+/// Errors: bad size, no triangles, out-of-range indices, non-finite vertices.
+pub fn preview(vertices: &[[f32; 3]], tris: &[[u32; 3]], size: usize) -> Result<RgbImage> {
+    check_size(size, size)?;
+    if tris.is_empty() {
+        return Err(Error::OutOfRange { name: "triangles", detail: "no triangles to draw".into() });
+    }
+    let n = vertices.len();
+    if let Some(t) = tris.iter().position(|t| t.iter().any(|&i| i as usize >= n)) {
+        return Err(Error::OutOfRange { name: "triangle index", detail: format!("triangle {t} indexes a vertex >= {n}") });
+    }
+    if let Some(v) = vertices.iter().flatten().find(|c| !c.is_finite()) {
+        return Err(Error::NonFinite { name: "mesh vertex", value: *v as f64 });
+    }
+    let mut img = RgbImage { width: 2 * size, height: size, data: BACKGROUND.repeat(2 * size * size) };
+    draw_view(&mut img, 0, size, vertices, tris, &Matrix3::identity());
+    // The character's right side (−X) faces the viewer: turn the model 90° about +Y.
+    let side = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2).into_inner();
+    draw_view(&mut img, size, size, vertices, tris, &side);
+    Ok(img)
+}
+
+/// Encodes an RGB image as PNG and writes it to `path` atomically.
+pub fn save_rgb_png(img: &RgbImage, path: &Path) -> Result<()> {
+    let mut bytes = Vec::new();
+    let enc = image::codecs::png::PngEncoder::new(&mut bytes);
+    image::ImageEncoder::write_image(enc, &img.data, img.width as u32, img.height as u32, image::ExtendedColorType::Rgb8)
+        .map_err(|e| Error::Io { path: path.to_path_buf(), source: std::io::Error::other(e.to_string()) })?;
+    write_atomic(path, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::body::procedural::{capsule_humanoid, rest_joints};
+
+    #[test]
+    fn front_and_side_views_show_the_body_shaded() {
+        let m = capsule_humanoid(&rest_joints(), 10, 8);
+        let img = preview(&m.vertices, &m.triangles(), 128).unwrap();
+        assert_eq!(img.data.len(), 256 * 128 * 3);
+        let covered = |x0: usize| (0..128 * 128).filter(|&k| img.data[((k / 128) * 256 + x0 + k % 128) * 3..][..3] != BACKGROUND).count();
+        let (front, side) = (covered(0), covered(128));
+        // The A-pose is wider from the front than from the side.
+        assert!(front > side && side > 500, "front {front}, side {side}");
+        let shades: std::collections::HashSet<u8> = img.data.chunks(3).map(|p| p[0]).collect();
+        assert!(shades.len() > 20, "shading should vary");
+        assert!(preview(&m.vertices, &[[0, 1, 999_999]], 64).is_err());
+        assert!(preview(&m.vertices, &m.triangles(), 0).is_err());
+    }
+}
