@@ -9,6 +9,7 @@ pub mod body;
 pub mod camera;
 pub mod capi;
 pub mod error;
+pub mod eval;
 pub mod export;
 pub mod fsutil;
 pub mod image;

