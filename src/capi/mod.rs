@@ -17,6 +17,7 @@ mod body;
 mod error;
 mod image;
 mod mesh_ops;
+mod sketch;
 mod status;
 mod version;
 
@@ -29,6 +30,10 @@ pub use body::{
 pub use error::skb_last_error_message;
 pub use image::{skb_canny, skb_gaussian_blur, skb_image, SKB_MAX_IMAGE_SIDE};
 pub use mesh_ops::{skb_camera, skb_rasterize_triangles, skb_rasterizer, skb_rasterizer_free, skb_rasterizer_new};
+pub use sketch::{
+    skb_render_sketch, skb_sketch_options, skb_sketch_options_free, skb_sketch_options_new, skb_sketch_options_set_camera,
+    skb_sketch_options_set_style, SKB_SKETCH_STYLE_CLEAN, SKB_SKETCH_STYLE_RANDOM,
+};
 pub use status::{skb_status, skb_status_str};
 pub use version::{skb_version, SKB_VERSION_MAJOR, SKB_VERSION_MINOR, SKB_VERSION_PATCH, SKB_VERSION_STRING};
 

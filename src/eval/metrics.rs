@@ -150,7 +150,7 @@ mod tests {
         let b: Vec<[f64; 3]> = a.iter().map(|p| [p[0] + 0.3, p[1] + 0.4, p[2]]).collect();
         assert!((aed(&a, &b, 2.0).unwrap() - 0.25).abs() < 1e-12);
         assert!((aed(&centred(&a), &centred(&b), 2.0).unwrap()).abs() < 1e-12, "centring removes it");
-        assert_eq!(mpjpe(&a, &b, 0).unwrap(), 0.0, "root alignment removes a translation");
+        assert!(mpjpe(&a, &b, 0).unwrap() < 1e-12, "root alignment removes a translation");
         // One joint off by (0, 0, 0.5) after root alignment: mean 0.5 / 5 = 0.1.
         let mut c = a.clone();
         c[4][2] += 0.5;

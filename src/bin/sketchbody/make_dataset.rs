@@ -37,6 +37,36 @@ pub struct Args {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Also write a contact sheet of the first 24 samples (6 × 4, half size) to this PNG.
+    #[arg(long)]
+    contact_sheet: Option<PathBuf>,
+}
+
+/// Tiles the first (up to) 24 sample images of `dir`, halved, 6 to a row, into a gray PNG.
+fn contact_sheet(dir: &std::path::Path, n: usize, out: &std::path::Path) -> Result<(), CliError> {
+    let count = n.min(24);
+    let imgs = (0..count)
+        .map(|i| sketchbody::image::load_image(&dir.join(format!("{}.png", stem(i)))))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (tw, th) = imgs.iter().fold((1, 1), |(w, h), im| (w.max(im.width() / 2), h.max(im.height() / 2)));
+    let cols = count.min(6);
+    let rows = count.div_ceil(6);
+    let gap = 4;
+    let (w, h) = (cols * (tw + gap) + gap, rows * (th + gap) + gap);
+    let mut px = vec![96u8; w * h];
+    for (k, im) in imgs.iter().enumerate() {
+        let (ox, oy) = (gap + (k % 6) * (tw + gap), gap + (k / 6) * (th + gap));
+        let (iw, src) = (im.width(), im.as_bytes());
+        for y in 0..im.height() / 2 {
+            for x in 0..iw / 2 {
+                let s: u32 = [(0, 0), (1, 0), (0, 1), (1, 1)].iter().map(|&(a, b)| src[(2 * y + b) * iw + 2 * x + a] as u32).sum();
+                px[(oy + y) * w + ox + x] = ((s + 2) / 4) as u8;
+            }
+        }
+    }
+    let img = sketchbody::image::GrayImage::from_vec(w, h, px)?;
+    sketchbody::image::save_gray_png(&img, out)?;
+    Ok(())
 }
 
 /// File stem of sample `i`.
@@ -93,6 +123,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
     });
     eprintln!();
     result?;
+    if let Some(cs) = &a.contact_sheet {
+        contact_sheet(&a.out, a.n, cs)?;
+    }
     let el = t0.elapsed().as_secs_f64();
     println!(
         "{}: {} samples written, {skipped} already complete, {:.1} s ({:.2} sketches/s on {} threads)",
