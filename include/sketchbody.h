@@ -39,6 +39,16 @@
 #define SKB_MAX_IMAGE_SIDE 16384
 
 /**
+ * Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
+ */
+#define SKB_SKETCH_STYLE_RANDOM 0
+
+/**
+ * Style: clean line art (no costume, hair, shading or clutter, white paper).
+ */
+#define SKB_SKETCH_STYLE_CLEAN 1
+
+/**
  * Major version of the library this header belongs to.
  */
 #define SKB_VERSION_MAJOR 0
@@ -54,44 +64,14 @@
 #define SKB_VERSION_PATCH 0
 
 /**
- * Number of canonical joints (the paper's P).
+ * Default image side, pixels.
  */
-#define NUM_JOINTS 15
+#define DEFAULT_SIZE 512
 
 /**
- * Number of bones.
+ * Frames whose spine leans more than this from vertical (degrees) are dropped.
  */
-#define NUM_BONES 14
-
-#define HEAD 0
-
-#define NECK 1
-
-#define R_SHOULDER 2
-
-#define R_ELBOW 3
-
-#define R_WRIST 4
-
-#define L_SHOULDER 5
-
-#define L_ELBOW 6
-
-#define L_WRIST 7
-
-#define PELVIS 8
-
-#define R_HIP 9
-
-#define R_KNEE 10
-
-#define R_ANKLE 11
-
-#define L_HIP 12
-
-#define L_KNEE 13
-
-#define L_ANKLE 14
+#define MAX_SPINE_TILT_DEG 35.0
 
 /**
  * Result of every sketchbody C function. 0 is success; any other value is an error whose text
@@ -166,6 +146,14 @@ enum skb_status
    * A bug: Rust code panicked. The library stays usable; please report the message.
    */
   SKB_ERR_PANIC = 15,
+  /**
+   * Two joints of a bone coincide (zero-length bone).
+   */
+  SKB_ERR_DEGENERATE_BONE = 16,
+  /**
+   * The projected mesh lies wholly outside the image.
+   */
+  SKB_ERR_MESH_OUTSIDE_IMAGE = 17,
 };
 #ifndef __cplusplus
 typedef uint32_t skb_status;
@@ -186,6 +174,21 @@ typedef struct skb_context skb_context;
  * threads may call them at once; a function that changes a mesh needs exclusive use of it.
  */
 typedef struct skb_mesh skb_mesh;
+
+/**
+ * A reusable silhouette rasteriser: keeps its buffers between calls so that repeated
+ * rasterisation allocates nothing. Create with [`skb_rasterizer_new`], release with
+ * [`skb_rasterizer_free`]. Not thread-safe: use one per thread (it may move between threads).
+ */
+typedef struct skb_rasterizer skb_rasterizer;
+
+/**
+ * Options of [`skb_render_sketch`]: the style and the camera angles. Create with
+ * `skb_sketch_options_new` (random style, random near-frontal camera), release with
+ * `skb_sketch_options_free`. Setters need exclusive use; a configured handle may be read by
+ * several threads at once.
+ */
+typedef struct skb_sketch_options skb_sketch_options;
 
 /**
  * A borrowed 8-bit image owned by the caller: `height` rows of `width` pixels, each pixel
@@ -215,6 +218,31 @@ typedef struct skb_image {
    */
   uint32_t channels;
 } skb_image;
+
+/**
+ * The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
+ * +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
+ * `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
+ * layout (104 bytes) is part of the ABI.
+ */
+typedef struct skb_camera {
+  /**
+   * Horizontal scale, pixels per metre (> 0).
+   */
+  double sx;
+  /**
+   * Vertical scale, pixels per metre (> 0).
+   */
+  double sy;
+  /**
+   * Rotation model -> camera, row-major, orthonormal with determinant +1.
+   */
+  double r[9];
+  /**
+   * Image position of the model origin, pixels.
+   */
+  double t[2];
+} skb_camera;
 
 #ifdef __cplusplus
 extern "C" {
@@ -358,6 +386,97 @@ skb_status skb_gaussian_blur(const struct skb_image *src,
                              uint8_t *dst,
                              size_t dst_stride,
                              size_t dst_len);
+
+/**
+ * Creates a rasteriser and stores it in `*out` (caller owns it; free with
+ * [`skb_rasterizer_free`]).
+ */
+skb_status skb_rasterizer_new(struct skb_rasterizer **out);
+
+/**
+ * Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
+ */
+void skb_rasterizer_free(struct skb_rasterizer *r);
+
+/**
+ * Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
+ * points as x, y, z floats (metres, model frame), `tris` holds `ntris` triangles as three
+ * 0-based vertex indices. Pixel (i, j) is set to 255 when its centre (i + 0.5, j + 0.5) lies
+ * inside a projected triangle (top-left fill rule, both windings), else 0. Writes `h` rows of
+ * `w` bytes into `mask`, rows `mask_stride` bytes apart; `mask_len` must be at least
+ * `mask_stride * (h - 1) + w`. Sizes 1..=4096 a side. Errors: NULL pointers, bad sizes or
+ * strides, an invalid camera, index out of range, non-finite vertices, vertices projecting
+ * beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
+ * entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
+ * Arrays are only read during the call. Thread-safe with distinct rasterisers.
+ */
+skb_status skb_rasterize_triangles(struct skb_rasterizer *rasterizer,
+                                   const float *verts,
+                                   size_t nverts,
+                                   const uint32_t *tris,
+                                   size_t ntris,
+                                   const struct skb_camera *cam,
+                                   uint32_t w,
+                                   uint32_t h,
+                                   uint8_t *mask,
+                                   size_t mask_stride,
+                                   size_t mask_len);
+
+/**
+ * Creates options with the defaults. `*out` receives a handle the caller owns.
+ */
+skb_status skb_sketch_options_new(struct skb_sketch_options **out);
+
+/**
+ * Releases options. NULL is a no-op.
+ */
+void skb_sketch_options_free(struct skb_sketch_options *opts);
+
+/**
+ * Sets the style: `SKB_SKETCH_STYLE_RANDOM` or `SKB_SKETCH_STYLE_CLEAN`; anything else is
+ * `SKB_ERR_OUT_OF_RANGE`.
+ */
+skb_status skb_sketch_options_set_style(struct skb_sketch_options *opts, uint32_t style);
+
+/**
+ * Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; each within ±90°)
+ * instead of random near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+ */
+skb_status skb_sketch_options_set_camera(struct skb_sketch_options *opts,
+                                         double yaw_deg,
+                                         double pitch_deg,
+                                         double roll_deg);
+
+/**
+ * Renders a `width`×`height` gray sketch (0 ink … 255 paper) of a body of `gender`
+ * (`SKB_GENDER_*`) with `n_weights` PCA shape `weights` (`n_weights` 0: a random shape from the
+ * model's prior), posed onto `joints3d` (15 × x y z metres, +Y up, canonical order; only the
+ * bone directions are used) or, when `joints3d` is NULL, a random procedural pose. Every
+ * random choice comes from `seed`. `opts` may be NULL (random style and camera).
+ *
+ * Writes the image to `out_pixels` (`out_stride` ≥ `width` bytes a row, `out_len` bytes in
+ * all) and, when not NULL, the 15 projected joints to `out_joints2d` (15 × x y pixels) and
+ * their visibility (1 visible, 0 hidden by another body part) to `out_visible` (15 bytes).
+ * Errors: NULL context or pixels, an unknown gender or too many weights
+ * (`SKB_ERR_OUT_OF_RANGE`), non-finite weights or joints (`SKB_ERR_NON_FINITE`), zero-length
+ * bones (`SKB_ERR_DEGENERATE_BONE`), sizes outside 1..=4096, short stride or buffer. Nothing
+ * is written on failure. Thread-safe for distinct output buffers; builds its edge tables on
+ * each call (a few ms).
+ */
+skb_status skb_render_sketch(const struct skb_context *ctx,
+                             uint32_t gender,
+                             const float *weights,
+                             size_t n_weights,
+                             const double *joints3d,
+                             uint64_t seed,
+                             uint32_t width,
+                             uint32_t height,
+                             const struct skb_sketch_options *opts,
+                             uint8_t *out_pixels,
+                             size_t out_stride,
+                             size_t out_len,
+                             double *out_joints2d,
+                             uint8_t *out_visible);
 
 /**
  * Static, NUL-terminated English text for a status code; "unknown status" for numbers this

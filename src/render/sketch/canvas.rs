@@ -80,7 +80,7 @@ impl Canvas {
             return;
         }
         let total = 0.6 * (n - 1) as f64;
-        let (l1, l2) = (rng.random_range(25.0..70.0), rng.random_range(8.0..20.0));
+        let (l1, l2) = (rng.random_range(30.0..90.0), rng.random_range(14.0..30.0));
         let (f1, f2, f3) = (rng.random_range(0.0..TAU), rng.random_range(0.0..TAU), rng.random_range(0.0..TAU));
         let lp = rng.random_range(20.0..60.0);
         let taper_len = (pen.taper * total).max(1e-9);
@@ -90,7 +90,7 @@ impl Canvas {
             let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
             let tl = (tx * tx + ty * ty).sqrt().max(1e-9);
             let (nx, ny) = (-ty / tl, tx / tl);
-            let w = pen.wobble * (0.7 * (TAU * s / l1 + f1).sin() + 0.3 * (TAU * s / l2 + f2).sin());
+            let w = pen.wobble * (0.8 * (TAU * s / l1 + f1).sin() + 0.2 * (TAU * s / l2 + f2).sin());
             let end = (s.min(total - s) / taper_len).clamp(0.0, 1.0);
             let press = end.sqrt() * (1.0 - pen.jitter * 0.5 * (1.0 + (TAU * s / lp + f3).sin()));
             let r = 0.5 * pen.width * (0.35 + 0.65 * press);

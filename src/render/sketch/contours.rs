@@ -57,6 +57,29 @@ impl EdgeTopology {
         Ok(EdgeTopology { edges })
     }
 
+    /// Marks the vertices within `rings` edge steps of an open boundary (the eye and mouth holes
+    /// of the body mesh): their small folds would otherwise draw goggle-like rings on the face.
+    pub fn near_boundary(&self, num_vertices: usize, rings: usize) -> Vec<bool> {
+        let mut mark = vec![false; num_vertices];
+        for e in &self.edges {
+            if e[3] == u32::MAX {
+                mark[e[0] as usize] = true;
+                mark[e[1] as usize] = true;
+            }
+        }
+        for _ in 0..rings {
+            let prev = mark.clone();
+            for e in &self.edges {
+                let (a, b) = (e[0] as usize, e[1] as usize);
+                if prev[a] || prev[b] {
+                    mark[a] = true;
+                    mark[b] = true;
+                }
+            }
+        }
+        mark
+    }
+
     /// Number of edges.
     pub fn len(&self) -> usize {
         self.edges.len()
@@ -170,9 +193,12 @@ fn chain(edges: &[[u32; 2]]) -> Vec<Vec<u32>> {
 
 /// Extracts the visible lines of a posed quad mesh seen by `cam` (see the module doc).
 /// `crease_deg` is the dihedral angle above which an edge between two front faces is drawn
-/// (≥ 180 turns creases off). Runs shorter than `min_len` pixels are dropped.
+/// (≥ 180 turns creases off). Runs shorter than `min_len` pixels are dropped. Edges with both
+/// vertices marked in `skip` are not drawn.
+#[allow(clippy::too_many_arguments)]
 pub fn extract_lines(
     topo: &EdgeTopology,
+    skip: &[bool],
     quads: &[[u32; 4]],
     vertices: &[[f32; 3]],
     cam: &WeakPerspective,
@@ -185,6 +211,9 @@ pub fn extract_lines(
     let mut contour = Vec::new();
     let mut crease = Vec::new();
     for &[a, b, f0, f1] in &topo.edges {
+        if skip.get(a as usize).copied().unwrap_or(false) && skip.get(b as usize).copied().unwrap_or(false) {
+            continue;
+        }
         let n0 = normals[f0 as usize];
         if f1 == u32::MAX {
             continue; // open boundaries are the eye and mouth holes: not drawn
@@ -250,6 +279,9 @@ mod tests {
         let quads = [[0, 1, 2, 3], [1, 4, 5, 2]];
         let t = EdgeTopology::new(&quads, 6).unwrap();
         assert_eq!(t.len(), 7);
+        // Every edge of the two-quad strip is on the boundary except the shared one (1-2).
+        let near = t.near_boundary(6, 0);
+        assert!(near.iter().all(|&m| m));
         assert!(EdgeTopology::new(&quads, 5).is_err());
         let d = [f32::NEG_INFINITY, 1.0, 1.0, 1.0];
         let view = DepthView { depth: &d, width: 2, height: 2 };

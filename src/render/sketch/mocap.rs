@@ -33,6 +33,8 @@ pub struct MocapFrame {
 #[derive(Clone, Debug, Default)]
 pub struct MocapLibrary {
     frames: Vec<MocapFrame>,
+    /// Start index of each clip's frames in `frames` (frames are grouped by clip).
+    clips: Vec<usize>,
 }
 
 fn spine_tilt_deg(j: &Joints3) -> f64 {
@@ -103,7 +105,8 @@ impl MocapLibrary {
         if frames.is_empty() {
             return Err(Error::OutOfRange { name: "mocap frames", detail: "no frames".into() });
         }
-        Ok(MocapLibrary { frames })
+        let clips = (0..frames.len()).filter(|&i| i == 0 || frames[i].clip != frames[i - 1].clip).collect();
+        Ok(MocapLibrary { frames, clips })
     }
 
     /// Number of kept frames.
@@ -116,12 +119,20 @@ impl MocapLibrary {
         self.frames.is_empty()
     }
 
-    /// A uniformly random kept frame (`None` when empty).
+    /// A random kept frame: a clip uniformly, then one of its frames uniformly, so that long
+    /// clips (the walks) do not crowd out the short ones. `None` when empty.
     pub fn random<R: Rng + ?Sized>(&self, rng: &mut R) -> Option<&MocapFrame> {
-        if self.frames.is_empty() {
+        if self.clips.is_empty() {
             return None;
         }
-        Some(&self.frames[rng.random_range(0..self.frames.len())])
+        let c = rng.random_range(0..self.clips.len());
+        let (start, end) = (self.clips[c], self.clips.get(c + 1).copied().unwrap_or(self.frames.len()));
+        Some(&self.frames[rng.random_range(start..end)])
+    }
+
+    /// Number of clips with at least one kept frame.
+    pub fn num_clips(&self) -> usize {
+        self.clips.len()
     }
 }
 

@@ -93,6 +93,7 @@ pub struct SketchRenderer {
     triangles: Vec<[u32; 3]>,
     weights: Vec<RigWeights>,
     dominant: Vec<u8>,
+    face_detail: Vec<bool>,
     mocap: Option<MocapLibrary>,
 }
 
@@ -142,7 +143,8 @@ impl SketchRenderer {
         let triangles = model.triangles();
         let weights = scene::rig_weights(model.skin_weights());
         let dominant = weights.iter().map(dominant_bone).collect();
-        Ok(SketchRenderer { model, topo, triangles, weights, dominant, mocap })
+        let face_detail = topo.near_boundary(model.num_vertices(), 4);
+        Ok(SketchRenderer { model, topo, triangles, weights, dominant, face_detail, mocap })
     }
 
     /// The body model.
@@ -198,7 +200,7 @@ impl SketchRenderer {
         let mut canvas = Canvas::new(req.width, req.height);
         let pen = Pen { width: style.stroke_width * unit, ink: style.ink, wobble: style.wobble * unit, jitter: style.pressure_jitter, taper: 0.15 };
         let crease_pen = Pen { width: pen.width * 0.7, ink: style.ink * style.crease_ink, ..pen };
-        let lines = contours::extract_lines(&self.topo, self.model.faces(), &posed, &cam, &depth, style.crease_deg, 2.5 * unit);
+        let lines = contours::extract_lines(&self.topo, &self.face_detail, self.model.faces(), &posed, &cam, &depth, style.crease_deg, 2.5 * unit);
         for mut line in lines {
             canvas::smooth(&mut line.pts, 2);
             let p = if line.kind == LineKind::Contour { pen } else { crease_pen };
