@@ -59,6 +59,16 @@
 #define SKB_POSE_DUAL_QUATERNION 2
 
 /**
+ * Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
+ */
+#define SKB_SKETCH_STYLE_RANDOM 0
+
+/**
+ * Style: clean line art (no costume, hair, shading or clutter, white paper).
+ */
+#define SKB_SKETCH_STYLE_CLEAN 1
+
+/**
  * Major version of the library this header belongs to.
  */
 #define SKB_VERSION_MAJOR 0
@@ -77,6 +87,16 @@
  * Distances above this many raster pixels count as this much in [`MatchScore::Chamfer`].
  */
 #define CHAMFER_CAP 12.0
+
+/**
+ * Default image side, pixels.
+ */
+#define DEFAULT_SIZE 512
+
+/**
+ * Frames whose spine leans more than this from vertical (degrees) are dropped.
+ */
+#define MAX_SPINE_TILT_DEG 35.0
 
 /**
  * Result of every sketchbody C function. 0 is success; any other value is an error whose text
@@ -226,6 +246,14 @@ typedef struct skb_pose_options skb_pose_options;
  * [`skb_rasterizer_free`]. Not thread-safe: use one per thread (it may move between threads).
  */
 typedef struct skb_rasterizer skb_rasterizer;
+
+/**
+ * Options of [`skb_render_sketch`]: the style and the camera angles. Create with
+ * `skb_sketch_options_new` (random style, random near-frontal camera), release with
+ * `skb_sketch_options_free`. Setters need exclusive use; a configured handle may be read by
+ * several threads at once.
+ */
+typedef struct skb_sketch_options skb_sketch_options;
 
 /**
  * A borrowed 8-bit image owned by the caller: `height` rows of `width` pixels, each pixel
@@ -748,6 +776,62 @@ skb_status skb_mesh_write_glb(const struct skb_mesh *mesh, const char *path);
  * `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
  */
 skb_status skb_mesh_write_preview(const struct skb_mesh *mesh, const char *path, uint32_t size);
+
+/**
+ * Creates options with the defaults. `*out` receives a handle the caller owns.
+ */
+skb_status skb_sketch_options_new(struct skb_sketch_options **out);
+
+/**
+ * Releases options. NULL is a no-op.
+ */
+void skb_sketch_options_free(struct skb_sketch_options *opts);
+
+/**
+ * Sets the style: `SKB_SKETCH_STYLE_RANDOM` or `SKB_SKETCH_STYLE_CLEAN`; anything else is
+ * `SKB_ERR_OUT_OF_RANGE`.
+ */
+skb_status skb_sketch_options_set_style(struct skb_sketch_options *opts, uint32_t style);
+
+/**
+ * Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; each within ±90°)
+ * instead of random near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+ */
+skb_status skb_sketch_options_set_camera(struct skb_sketch_options *opts,
+                                         double yaw_deg,
+                                         double pitch_deg,
+                                         double roll_deg);
+
+/**
+ * Renders a `width`×`height` gray sketch (0 ink … 255 paper) of a body of `gender`
+ * (`SKB_GENDER_*`) with `n_weights` PCA shape `weights` (`n_weights` 0: a random shape from the
+ * model's prior), posed onto `joints3d` (15 × x y z metres, +Y up, canonical order; only the
+ * bone directions are used) or, when `joints3d` is NULL, a random procedural pose. Every
+ * random choice comes from `seed`. `opts` may be NULL (random style and camera).
+ *
+ * Writes the image to `out_pixels` (`out_stride` ≥ `width` bytes a row, `out_len` bytes in
+ * all) and, when not NULL, the 15 projected joints to `out_joints2d` (15 × x y pixels) and
+ * their visibility (1 visible, 0 hidden by another body part) to `out_visible` (15 bytes).
+ * Errors: NULL context or pixels, an unknown gender or too many weights
+ * (`SKB_ERR_OUT_OF_RANGE`), non-finite weights or joints (`SKB_ERR_NON_FINITE`), zero-length
+ * bones (`SKB_ERR_DEGENERATE_BONE`), sizes outside 1..=4096, short stride or buffer. Nothing
+ * is written on failure. Thread-safe for distinct output buffers; builds its edge tables on
+ * each call (a few ms).
+ */
+skb_status skb_render_sketch(const struct skb_context *ctx,
+                             uint32_t gender,
+                             const float *weights,
+                             size_t n_weights,
+                             const double *joints3d,
+                             uint64_t seed,
+                             uint32_t width,
+                             uint32_t height,
+                             const struct skb_sketch_options *opts,
+                             uint8_t *out_pixels,
+                             size_t out_stride,
+                             size_t out_len,
+                             double *out_joints2d,
+                             uint8_t *out_visible);
 
 /**
  * Static, NUL-terminated English text for a status code; "unknown status" for numbers this

@@ -10,6 +10,7 @@ pub mod camera;
 pub mod capi;
 pub mod detect;
 pub mod error;
+pub mod eval;
 pub mod export;
 pub mod fit;
 pub mod fsutil;

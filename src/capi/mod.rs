@@ -19,6 +19,7 @@ mod error;
 mod image;
 mod pose;
 mod mesh_ops;
+mod sketch;
 mod status;
 mod version;
 
@@ -43,6 +44,10 @@ pub use mesh_ops::{
     skb_camera, skb_mesh_copy_posed_joints, skb_mesh_copy_posed_vertices, skb_mesh_pose, skb_mesh_rasterize, skb_mesh_write_glb,
     skb_mesh_write_obj, skb_mesh_write_preview, skb_rasterize_triangles, skb_rasterizer, skb_rasterizer_free, skb_rasterizer_new,
     SKB_POSE_DUAL_QUATERNION, SKB_POSE_RETARGET,
+};
+pub use sketch::{
+    skb_render_sketch, skb_sketch_options, skb_sketch_options_free, skb_sketch_options_new, skb_sketch_options_set_camera,
+    skb_sketch_options_set_style, SKB_SKETCH_STYLE_CLEAN, SKB_SKETCH_STYLE_RANDOM,
 };
 pub use status::{skb_status, skb_status_str};
 pub use version::{skb_version, SKB_VERSION_MAJOR, SKB_VERSION_MINOR, SKB_VERSION_PATCH, SKB_VERSION_STRING};

@@ -1,4 +1,6 @@
-//! Rendering: the silhouette/depth rasteriser used by the shape fit, and preview images.
+//! Rendering: the silhouette/depth rasteriser used by the shape fit, preview images, and the
+//! synthetic concept-sketch renderer.
 
 pub mod preview;
 pub mod raster;
+pub mod sketch;

@@ -11,6 +11,9 @@ mod edges;
 mod learn_poses;
 mod pose;
 mod eval_parse;
+mod eval;
+mod make_dataset;
+mod render_sketch;
 
 use std::process::ExitCode;
 
@@ -52,6 +55,12 @@ enum Command {
     ConvertDetector(convert_detector::Args),
     /// PCK of a detector model on the PARSE test images, given the ground-truth person box.
     EvalParse(eval_parse::Args),
+    /// Render one synthetic concept sketch with its ground truth (JSON, meshes) beside it.
+    RenderSketch(render_sketch::Args),
+    /// Score a results folder against a sketch dataset: AED, MPJPE, PA-MPJPE, PCK (docs/dataset.md).
+    Eval(eval::Args),
+    /// Render a dataset of N synthetic sketches in parallel (resumable; see docs/dataset.md).
+    MakeDataset(make_dataset::Args),
 }
 
 fn main() -> ExitCode {
@@ -66,6 +75,9 @@ fn main() -> ExitCode {
         Command::EvalParse(a) => eval_parse::run(a),
         Command::Detect(a) => detect::run(a),
         Command::ConvertDetector(a) => convert_detector::run(a),
+        Command::RenderSketch(a) => render_sketch::run(a),
+        Command::Eval(a) => eval::run(a),
+        Command::MakeDataset(a) => make_dataset::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,207 @@
+//! `skb_render_sketch`: a synthetic concept sketch of a body for plug-in previews, with its 2-D
+//! joints; `skb_sketch_options` chooses the style and camera.
+
+use std::sync::Arc;
+
+use crate::body::Gender;
+use crate::error::Error;
+use crate::image::ImageView;
+use crate::render::sketch::{CameraAngles, SketchRenderer, SketchRequest, SketchStyle};
+use crate::skeleton::NUM_JOINTS;
+
+use super::body::skb_context;
+use super::error::{fail, fail_with};
+use super::ptr::{try_ref, try_slice_mut, try_slice_of};
+use super::status::skb_status;
+
+/// Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
+pub const SKB_SKETCH_STYLE_RANDOM: u32 = 0;
+/// Style: clean line art (no costume, hair, shading or clutter, white paper).
+pub const SKB_SKETCH_STYLE_CLEAN: u32 = 1;
+
+/// Options of [`skb_render_sketch`]: the style and the camera angles. Create with
+/// `skb_sketch_options_new` (random style, random near-frontal camera), release with
+/// `skb_sketch_options_free`. Setters need exclusive use; a configured handle may be read by
+/// several threads at once.
+pub struct skb_sketch_options {
+    style: u32,
+    camera: Option<CameraAngles>,
+}
+
+/// Creates options with the defaults. `*out` receives a handle the caller owns.
+#[no_mangle]
+pub unsafe extern "C" fn skb_sketch_options_new(out: *mut *mut skb_sketch_options) -> skb_status {
+    ffi_boundary! {
+        if out.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+        }
+        *out = Box::into_raw(Box::new(skb_sketch_options { style: SKB_SKETCH_STYLE_RANDOM, camera: None }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Releases options. NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_sketch_options_free(opts: *mut skb_sketch_options) {
+    if !opts.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(opts))));
+    }
+}
+
+/// Sets the style: `SKB_SKETCH_STYLE_RANDOM` or `SKB_SKETCH_STYLE_CLEAN`; anything else is
+/// `SKB_ERR_OUT_OF_RANGE`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_sketch_options_set_style(opts: *mut skb_sketch_options, style: u32) -> skb_status {
+    ffi_boundary! {
+        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
+        if style > SKB_SKETCH_STYLE_CLEAN {
+            return fail(&Error::OutOfRange { name: "sketch style", detail: format!("{style} (expected 0 random or 1 clean)") });
+        }
+        o.style = style;
+        skb_status::SKB_OK
+    }
+}
+
+/// Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; each within ±90°)
+/// instead of random near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+#[no_mangle]
+pub unsafe extern "C" fn skb_sketch_options_set_camera(opts: *mut skb_sketch_options, yaw_deg: f64, pitch_deg: f64, roll_deg: f64) -> skb_status {
+    ffi_boundary! {
+        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
+        let a = CameraAngles { yaw_deg, pitch_deg, roll_deg };
+        try_core!(a.rotation());
+        o.camera = Some(a);
+        skb_status::SKB_OK
+    }
+}
+
+/// Renders a `width`×`height` gray sketch (0 ink … 255 paper) of a body of `gender`
+/// (`SKB_GENDER_*`) with `n_weights` PCA shape `weights` (`n_weights` 0: a random shape from the
+/// model's prior), posed onto `joints3d` (15 × x y z metres, +Y up, canonical order; only the
+/// bone directions are used) or, when `joints3d` is NULL, a random procedural pose. Every
+/// random choice comes from `seed`. `opts` may be NULL (random style and camera).
+///
+/// Writes the image to `out_pixels` (`out_stride` ≥ `width` bytes a row, `out_len` bytes in
+/// all) and, when not NULL, the 15 projected joints to `out_joints2d` (15 × x y pixels) and
+/// their visibility (1 visible, 0 hidden by another body part) to `out_visible` (15 bytes).
+/// Errors: NULL context or pixels, an unknown gender or too many weights
+/// (`SKB_ERR_OUT_OF_RANGE`), non-finite weights or joints (`SKB_ERR_NON_FINITE`), zero-length
+/// bones (`SKB_ERR_DEGENERATE_BONE`), sizes outside 1..=4096, short stride or buffer. Nothing
+/// is written on failure. Thread-safe for distinct output buffers; builds its edge tables on
+/// each call (a few ms).
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn skb_render_sketch(
+    ctx: *const skb_context,
+    gender: u32,
+    weights: *const f32,
+    n_weights: usize,
+    joints3d: *const f64,
+    seed: u64,
+    width: u32,
+    height: u32,
+    opts: *const skb_sketch_options,
+    out_pixels: *mut u8,
+    out_stride: usize,
+    out_len: usize,
+    out_joints2d: *mut f64,
+    out_visible: *mut u8,
+) -> skb_status {
+    ffi_boundary! {
+        let ctx = try_status!(try_ref(ctx, "ctx"));
+        let g = try_core!(Gender::from_index(gender));
+        let (w, h) = (width as usize, height as usize);
+        try_core!(crate::render::raster::check_size(w, h));
+        let needed = try_core!(ImageView::required_len(w, h, 1, out_stride));
+        if out_pixels.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out_pixels is NULL");
+        }
+        if out_len < needed {
+            return fail(&Error::BufferTooSmall { len: out_len, needed });
+        }
+        let shape_weights = if n_weights == 0 {
+            None
+        } else {
+            let s = try_status!(try_slice_of(weights, n_weights, "weights"));
+            Some(s.iter().map(|&x| x as f64).collect::<Vec<f64>>())
+        };
+        let joints = if joints3d.is_null() {
+            None
+        } else {
+            let s = std::slice::from_raw_parts(joints3d, 3 * NUM_JOINTS);
+            Some(std::array::from_fn(|k| [s[3 * k], s[3 * k + 1], s[3 * k + 2]]))
+        };
+        let (style, camera) = match opts.as_ref() {
+            Some(o) => ((o.style == SKB_SKETCH_STYLE_CLEAN).then(SketchStyle::default), o.camera),
+            None => (None, None),
+        };
+        let renderer = try_core!(SketchRenderer::new(Arc::clone(&ctx.model), None));
+        let req = SketchRequest { seed, width: w, height: h, gender: Some(g), shape_weights, joints, camera, style };
+        let sketch = try_core!(renderer.render(&req));
+        let px = try_status!(try_slice_mut(out_pixels, out_len, "out_pixels"));
+        for (row, src) in sketch.pixels.chunks(w).enumerate() {
+            px[row * out_stride..row * out_stride + w].copy_from_slice(src);
+        }
+        if let Some(j) = out_joints2d.as_mut() {
+            let j = std::slice::from_raw_parts_mut(j, 2 * NUM_JOINTS);
+            for (k, p) in sketch.truth.joints2d.iter().enumerate() {
+                j[2 * k] = p[0];
+                j[2 * k + 1] = p[1];
+            }
+        }
+        if let Some(v) = out_visible.as_mut() {
+            let v = std::slice::from_raw_parts_mut(v, NUM_JOINTS);
+            for (k, &vis) in sketch.truth.visible.iter().enumerate() {
+                v[k] = vis as u8;
+            }
+        }
+        skb_status::SKB_OK
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::capi::{skb_context_free, skb_context_new};
+
+    #[test]
+    fn renders_into_a_strided_buffer_and_rejects_bad_input() {
+        unsafe {
+            let mut ctx = std::ptr::null_mut();
+            assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
+            let mut opts = std::ptr::null_mut();
+            assert_eq!(skb_sketch_options_new(&mut opts), skb_status::SKB_OK);
+            assert_eq!(skb_sketch_options_set_style(opts, SKB_SKETCH_STYLE_CLEAN), skb_status::SKB_OK);
+            assert_eq!(skb_sketch_options_set_style(opts, 7), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_sketch_options_set_camera(opts, 0.0, f64::NAN, 0.0), skb_status::SKB_ERR_NON_FINITE);
+            assert_eq!(skb_sketch_options_set_camera(opts, 10.0, 0.0, 0.0), skb_status::SKB_OK);
+            let (w, h, stride) = (96u32, 128u32, 100usize);
+            let mut px = vec![7u8; stride * h as usize];
+            let mut j2 = [0.0f64; 30];
+            let mut vis = [9u8; 15];
+            let st = skb_render_sketch(ctx, 1, std::ptr::null(), 0, std::ptr::null(), 5, w, h, opts, px.as_mut_ptr(), stride, px.len(), j2.as_mut_ptr(), vis.as_mut_ptr());
+            assert_eq!(st, skb_status::SKB_OK);
+            assert!(px.chunks(stride).all(|r| r[96..].iter().all(|&p| p == 7)), "padding untouched");
+            assert!(px.iter().any(|&p| p < 100), "some ink");
+            assert!(j2.chunks(2).all(|p| p[0] > 0.0 && p[0] < 96.0 && p[1] > 0.0 && p[1] < 128.0));
+            assert!(vis.iter().all(|&v| v <= 1) && vis.iter().filter(|&&v| v == 1).count() >= 8);
+            let (pp, full) = (px.as_mut_ptr(), px.len());
+            let bad = |g: u32, w: u32, len: usize| skb_render_sketch(ctx, g, std::ptr::null(), 0, std::ptr::null(), 5, w, h, opts, pp, stride, len, std::ptr::null_mut(), std::ptr::null_mut());
+            assert_eq!(bad(2, 96, full), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(bad(0, 0, full), skb_status::SKB_ERR_EMPTY_IMAGE);
+            assert_eq!(bad(0, 96, 10), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
+            assert_eq!(bad(0, 101, full), skb_status::SKB_ERR_BAD_STRIDE);
+            let nan_joints = [f64::NAN; 45];
+            let st = skb_render_sketch(ctx, 0, std::ptr::null(), 0, nan_joints.as_ptr(), 5, w, h, opts, px.as_mut_ptr(), stride, px.len(), std::ptr::null_mut(), std::ptr::null_mut());
+            assert_eq!(st, skb_status::SKB_ERR_NON_FINITE);
+            let many = [0.0f32; 1000];
+            let st = skb_render_sketch(ctx, 0, many.as_ptr(), 1000, std::ptr::null(), 5, w, h, opts, px.as_mut_ptr(), stride, px.len(), std::ptr::null_mut(), std::ptr::null_mut());
+            assert_eq!(st, skb_status::SKB_ERR_OUT_OF_RANGE);
+            let st = skb_render_sketch(std::ptr::null(), 0, std::ptr::null(), 0, std::ptr::null(), 5, w, h, opts, px.as_mut_ptr(), stride, px.len(), std::ptr::null_mut(), std::ptr::null_mut());
+            assert_eq!(st, skb_status::SKB_ERR_NULL_POINTER);
+            skb_sketch_options_free(opts);
+            skb_sketch_options_free(std::ptr::null_mut());
+            skb_context_free(ctx);
+        }
+    }
+}
