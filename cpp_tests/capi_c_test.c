@@ -11,15 +11,7 @@
 _Static_assert(sizeof(skb_image) == 24, "skb_image layout is part of the ABI");
 _Static_assert(sizeof(skb_status) == 4, "skb_status is uint32_t");
 
-static int failures = 0;
-
-#define CHECK(cond)                                                              \
-    do {                                                                         \
-        if (!(cond)) {                                                           \
-            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-            ++failures;                                                          \
-        }                                                                        \
-    } while (0)
+#include "c_check.h"
 
 enum { W = 8, H = 6, SENTINEL = 0xAB };
 

@@ -33,8 +33,7 @@ pub use truth::GroundTruth;
 
 use self::canvas::{Canvas, Pen};
 use self::contours::{DepthView, EdgeTopology, LineKind};
-use crate::body::rig::VertexWeights as RigWeights;
-use crate::body::{BodyModel, Gender};
+use crate::body::{BodyModel, Gender, VertexWeights};
 use crate::camera::WeakPerspective;
 use crate::error::Result;
 use crate::render::raster::{check_size, Rasterizer};
@@ -91,13 +90,12 @@ pub struct SketchRenderer {
     model: Arc<BodyModel>,
     topo: EdgeTopology,
     triangles: Vec<[u32; 3]>,
-    weights: Vec<RigWeights>,
     dominant: Vec<u8>,
     face_detail: Vec<bool>,
     mocap: Option<MocapLibrary>,
 }
 
-fn dominant_bone(w: &RigWeights) -> u8 {
+fn dominant_bone(w: &VertexWeights) -> u8 {
     w.influences().max_by(|a, b| a.1.total_cmp(&b.1)).map_or(0, |x| x.0 as u8)
 }
 
@@ -141,10 +139,9 @@ impl SketchRenderer {
     pub fn new(model: Arc<BodyModel>, mocap: Option<MocapLibrary>) -> Result<SketchRenderer> {
         let topo = EdgeTopology::new(model.faces(), model.num_vertices())?;
         let triangles = model.triangles();
-        let weights = scene::rig_weights(model.skin_weights());
-        let dominant = weights.iter().map(dominant_bone).collect();
+        let dominant = model.skin_weights().iter().map(dominant_bone).collect();
         let face_detail = topo.near_boundary(model.num_vertices(), 4);
-        Ok(SketchRenderer { model, topo, triangles, weights, dominant, face_detail, mocap })
+        Ok(SketchRenderer { model, topo, triangles, dominant, face_detail, mocap })
     }
 
     /// The body model.
@@ -176,7 +173,7 @@ impl SketchRenderer {
             None => space.gmm().sample(&mut rng),
         };
         let shape = space.synthesize(&weights)?;
-        let (rest_v, rest_j) = scene::apply_proportions(&shape.vertices, &shape.joints, &self.weights, &style.proportions)?;
+        let (rest_v, rest_j) = scene::apply_proportions(&shape.vertices, &shape.joints, self.model.skin_weights(), &style.proportions)?;
         let (source, pose_source) = match (&req.joints, &self.mocap) {
             (Some(j), _) => (*j, "given".to_string()),
             (None, Some(lib)) => match lib.random(&mut rng) {
@@ -186,7 +183,7 @@ impl SketchRenderer {
             (None, None) => (mocap::normalize_frame(&crate::body::procedural::random_pose(&rest_j, &mut rng, 0.0)), "procedural".into()),
         };
         let target = scene::retarget_directions(&rest_j, &source)?;
-        let (posed, pose) = scene::pose_mesh(&rest_v, &rest_j, &self.weights, &target)?;
+        let (posed, pose) = scene::pose_mesh(&rest_v, &rest_j, self.model.skin_weights(), &target)?;
         let angles = match req.camera {
             Some(a) => a,
             None => CameraAngles::random(&mut rng),

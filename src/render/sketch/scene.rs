@@ -19,7 +19,6 @@ use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use rand::Rng;
 
 use crate::body::ik::{self, IkOptions, Pose, BONE_ORDER};
-use crate::body::rig::VertexWeights as RigWeights;
 use crate::body::skin::{skin, SkinMethod};
 use crate::body::VertexWeights;
 use crate::camera::WeakPerspective;
@@ -82,14 +81,9 @@ impl Proportions {
     }
 }
 
-/// Skin weights of the body model in the rig's `(bone, weight)` form.
-pub fn rig_weights(w: &[VertexWeights]) -> Vec<RigWeights> {
-    w.to_vec()
-}
-
 /// Applies `props` to a rest mesh and its joints (see the module doc). Returns the new rest
 /// vertices and joints.
-pub fn apply_proportions(vertices: &[[f32; 3]], joints: &Joints3, weights: &[RigWeights], props: &Proportions) -> Result<(Vec<[f32; 3]>, Joints3)> {
+pub fn apply_proportions(vertices: &[[f32; 3]], joints: &Joints3, weights: &[VertexWeights], props: &Proportions) -> Result<(Vec<[f32; 3]>, Joints3)> {
     props.validate()?;
     ik::check_joints("rest joint", joints)?;
     let k = props.bone_factors();
@@ -163,7 +157,7 @@ pub fn retarget_directions(rest: &Joints3, source: &Joints3) -> Result<Joints3> 
 }
 
 /// Poses a rest mesh onto `target` joints (IK without retargeting, then LBS).
-pub fn pose_mesh(rest_vertices: &[[f32; 3]], rest_joints: &Joints3, weights: &[RigWeights], target: &Joints3) -> Result<(Vec<[f32; 3]>, Pose)> {
+pub fn pose_mesh(rest_vertices: &[[f32; 3]], rest_joints: &Joints3, weights: &[VertexWeights], target: &Joints3) -> Result<(Vec<[f32; 3]>, Pose)> {
     let pose = ik::solve(rest_joints, target, &IkOptions { retarget: false })?;
     let posed = skin(rest_vertices, weights, &pose, SkinMethod::Linear)?;
     Ok((posed, pose))
