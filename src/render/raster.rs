@@ -8,7 +8,11 @@
 //! exactly from the three edge functions, then filled), with the top-left fill rule
 //! (a centre exactly on an edge belongs to the triangle whose edge is a top or a left edge in
 //! the y-down image), so triangles sharing an edge never both cover, nor both miss, a centre on
-//! it. Both windings are drawn (a silhouette has no back faces). Depth is the camera-frame
+//! it. Both windings are drawn (a silhouette has no back faces) unless
+//! [`Rasterizer::rasterize_mask`] is asked for viewer-facing triangles only ([`Facing`]). The
+//! mask-only path (`mask.rs`) rejects triangles whose bounding box holds no pixel centre before
+//! any multiplication and tests narrow triangles centre by centre without divisions; it draws
+//! exactly the pixels the general path does. Depth is the camera-frame
 //! `(R X)_z` in metres (larger = nearer the viewer), interpolated linearly, nearest kept.
 //!
 //! A mesh whose projected bounding box misses the image entirely is reported as
@@ -17,6 +21,9 @@
 
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
+
+mod mask;
+pub use mask::Facing;
 
 /// Largest raster width or height, pixels.
 pub const MAX_RASTER_SIDE: usize = 4096;
@@ -45,8 +52,10 @@ pub struct Rasterizer {
     height: usize,
     mask: Vec<u8>,
     depth: Vec<f32>,
-    fixed: Vec<[i64; 2]>,
+    /// Snapped projected vertices, 1/SUB px (|coordinate| <= 2^29 by the guard band).
+    fixed: Vec<[i32; 2]>,
     z: Vec<f32>,
+    bounds: Option<[usize; 4]>,
 }
 
 /// A projected, snapped triangle ready for scanning.
@@ -64,6 +73,27 @@ pub(crate) struct Setup {
     pub z0: f32,
     pub zx: f32,
     pub zy: f32,
+}
+
+/// The biased edge functions of a positively oriented snapped triangle at the centre of pixel
+/// (i0, j0), and their steps per pixel in x and y: edge k runs from vertex k to vertex k + 1,
+/// inside is `>= 0`, and a centre exactly on an edge counts only for top and left edges (the
+/// others are biased by −1).
+#[inline(always)]
+fn edge_functions(verts: [[i64; 2]; 3], i0: i64, j0: i64) -> ([i64; 3], [i64; 3], [i64; 3]) {
+    let (px, py) = (i0 * SUB + HALF, j0 * SUB + HALF);
+    let mut e = [0i64; 3];
+    let mut dx = [0i64; 3];
+    let mut dy = [0i64; 3];
+    for k in 0..3 {
+        let (s, t) = (verts[k], verts[(k + 1) % 3]);
+        let (ex, ey) = (t[0] - s[0], t[1] - s[1]);
+        let top_left = ey < 0 || (ey == 0 && ex > 0);
+        e[k] = ex * (py - s[1]) - ey * (px - s[0]) - (!top_left) as i64;
+        dx[k] = -ey * SUB;
+        dy[k] = ex * SUB;
+    }
+    (e, dx, dy)
 }
 
 /// Sets up triangle (a, b, c) in fixed point for a `w`×`h` image; `None` when it is degenerate
@@ -93,17 +123,7 @@ pub(crate) fn setup(p: [[i64; 2]; 3], z: [f32; 3], w: usize, h: usize, with_dept
     }
     let (px, py) = (i0 * SUB + HALF, j0 * SUB + HALF);
     let verts = [a, b, c];
-    let mut e = [0i64; 3];
-    let mut dx = [0i64; 3];
-    let mut dy = [0i64; 3];
-    for k in 0..3 {
-        let (s, t) = (verts[k], verts[(k + 1) % 3]);
-        let (ex, ey) = (t[0] - s[0], t[1] - s[1]);
-        let top_left = ey < 0 || (ey == 0 && ex > 0);
-        e[k] = ex * (py - s[1]) - ey * (px - s[0]) - if top_left { 0 } else { 1 };
-        dx[k] = -ey * SUB;
-        dy[k] = ex * SUB;
-    }
+    let (e, dx, dy) = edge_functions(verts, i0, j0);
     if !with_depth {
         return Some(Setup { i0: i0 as usize, i1: i1 as usize, j0: j0 as usize, j1: j1 as usize, e, dx, dy, z0: 0.0, zx: 0.0, zy: 0.0 });
     }
@@ -167,35 +187,12 @@ pub(crate) fn scan<F: FnMut(usize, usize, usize, f32)>(s: &Setup, w: usize, mut 
     }
 }
 
-/// Sets the covered pixels of a set-up triangle to 255 in a row-major `w`-wide mask.
-#[inline]
-fn scan_mask(s: &Setup, w: usize, mask: &mut [u8]) {
-    let mut row = s.e;
-    let n = (s.i1 - s.i0 + 1) as i64;
-    for j in s.j0..=s.j1 {
-        let (lo, hi) = row_span(row, s.dx, n);
-        if lo <= hi {
-            let base = j * w + s.i0;
-            mask[base + lo as usize..=base + hi as usize].fill(255);
-        }
-        for k in 0..3 {
-            row[k] += s.dy[k];
-        }
-    }
-}
-
-/// Rounds to the nearest integer (ties away from zero) without a libm call.
-#[inline]
+/// Rounds to the nearest integer (ties away from zero) without a libm call or a branch.
+#[inline(always)]
 fn round_i64(x: f64) -> i64 {
     let t = x as i64; // truncates toward zero
     let frac = x - t as f64;
-    if frac >= 0.5 {
-        t + 1
-    } else if frac <= -0.5 {
-        t - 1
-    } else {
-        t
-    }
+    t + (frac >= 0.5) as i64 - (frac <= -0.5) as i64
 }
 
 /// Checks a raster size: 1..=[`MAX_RASTER_SIDE`] a side.
@@ -239,49 +236,76 @@ impl Rasterizer {
         &self.depth
     }
 
-    /// Projects `vertices` (metres, model frame) with `cam` into the snapped scratch buffers.
-    fn project(&mut self, vertices: &[[f32; 3]], cam: &WeakPerspective) -> Result<[f64; 4]> {
-        let r = cam.r;
-        let mut bb = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    /// A pixel box `[x0, y0, x1, y1]` (inclusive) of the last raster that contains every
+    /// covered pixel (the projected vertices' bounding box clipped to the image), or `None`
+    /// when the last call failed or covered nothing. Lets callers scan only that box.
+    pub fn covered_bounds(&self) -> Option<[usize; 4]> {
+        self.bounds
+    }
+
+    /// Projects `vertices` (metres, model frame) with `cam` into the snapped scratch buffers
+    /// (and camera-frame depths when `with_depth`); returns the snapped bounding box
+    /// `[min x, min y, max x, max y]` in 1/SUB px.
+    fn project(&mut self, vertices: &[[f32; 3]], cam: &WeakPerspective, with_depth: bool) -> Result<[i64; 4]> {
+        let (r, k) = (cam.r, SUB as f64);
+        // Pixel coordinates times SUB: u = a . v + ta, w = b . v + tb.
+        let a = [cam.sx * k * r[(0, 0)], cam.sx * k * r[(0, 1)], cam.sx * k * r[(0, 2)]];
+        let b = [-cam.sy * k * r[(1, 0)], -cam.sy * k * r[(1, 1)], -cam.sy * k * r[(1, 2)]];
+        let (ta, tb) = (cam.t[0] * k, cam.t[1] * k);
+        let guard = GUARD_BAND * k;
+        let mut bb = [i64::MAX, i64::MAX, i64::MIN, i64::MIN];
         self.fixed.clear();
         self.z.clear();
         for (i, v) in vertices.iter().enumerate() {
             let (x, y, z) = (v[0] as f64, v[1] as f64, v[2] as f64);
-            if !(x.is_finite() && y.is_finite() && z.is_finite()) {
-                return Err(Error::NonFinite { name: "mesh vertex", value: if x.is_finite() { if y.is_finite() { z } else { y } } else { x } });
-            }
-            let u = cam.sx * (r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z) + cam.t[0];
-            let w = -cam.sy * (r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z) + cam.t[1];
-            if !(u.abs() <= GUARD_BAND && w.abs() <= GUARD_BAND) {
+            let u = a[0] * x + a[1] * y + a[2] * z + ta;
+            let w = b[0] * x + b[1] * y + b[2] * z + tb;
+            // Also false for NaN: a non-finite vertex always gives a non-finite u or w.
+            if !(u.abs() <= guard && w.abs() <= guard) {
+                if let Some(&value) = v.iter().find(|c| !c.is_finite()) {
+                    return Err(Error::NonFinite { name: "mesh vertex", value: value as f64 });
+                }
                 return Err(Error::OutOfRange {
                     name: "projected vertex",
-                    detail: format!("vertex {i} projects to ({u}, {w}) px, beyond the ±{GUARD_BAND} px guard band"),
+                    detail: format!("vertex {i} projects to ({}, {}) px, beyond the ±{GUARD_BAND} px guard band", u / k, w / k),
                 });
             }
-            bb = [bb[0].min(u), bb[1].min(w), bb[2].max(u), bb[3].max(w)];
-            self.fixed.push([round_i64(u * SUB as f64), round_i64(w * SUB as f64)]);
-            self.z.push((r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z) as f32);
+            let (fu, fw) = (round_i64(u), round_i64(w));
+            bb = [bb[0].min(fu), bb[1].min(fw), bb[2].max(fu), bb[3].max(fw)];
+            // |fu|, |fw| <= 2^29 by the guard band.
+            self.fixed.push([fu as i32, fw as i32]);
+            if with_depth {
+                self.z.push((r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z) as f32);
+            }
         }
         Ok(bb)
     }
 
     /// Rasterises triangles `tris` (indices into `vertices`, metres, model frame) seen by `cam`
-    /// into a `width`×`height` mask, and into the depth buffer when `with_depth`. Errors: bad
-    /// size, invalid camera, no triangles, an index out of range, non-finite vertices, vertices
-    /// beyond the guard band, and [`Error::MeshOutsideImage`].
-    pub fn rasterize(
-        &mut self,
-        vertices: &[[f32; 3]],
-        tris: &[[u32; 3]],
-        cam: &WeakPerspective,
-        width: usize,
-        height: usize,
-        with_depth: bool,
-    ) -> Result<RasterStats> {
+    /// into a `width`×`height` mask, and into the depth buffer when `with_depth`. Both windings
+    /// are drawn. Errors: bad size, invalid camera, no triangles, an index out of range,
+    /// non-finite vertices, vertices beyond the guard band, and [`Error::MeshOutsideImage`].
+    #[rustfmt::skip]
+    pub fn rasterize(&mut self, vertices: &[[f32; 3]], tris: &[[u32; 3]], cam: &WeakPerspective, width: usize, height: usize, with_depth: bool) -> Result<RasterStats> {
+        self.draw(vertices, tris, cam, width, height, with_depth, Facing::Both)
+    }
+
+    /// Rasterises the mask only (no depth), drawing the triangles selected by `facing`
+    /// ([`Facing::Front`] halves the work on a closed mesh). Same errors as
+    /// [`Rasterizer::rasterize`]; with [`Facing::Both`] the mask is identical to it.
+    #[rustfmt::skip]
+    pub fn rasterize_mask(&mut self, vertices: &[[f32; 3]], tris: &[[u32; 3]], cam: &WeakPerspective, width: usize, height: usize, facing: Facing) -> Result<RasterStats> {
+        self.draw(vertices, tris, cam, width, height, false, facing)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[rustfmt::skip]
+    fn draw(&mut self, vertices: &[[f32; 3]], tris: &[[u32; 3]], cam: &WeakPerspective, width: usize, height: usize, with_depth: bool, facing: Facing) -> Result<RasterStats> {
         check_size(width, height)?;
         cam.validate()?;
         self.width = width;
         self.height = height;
+        self.bounds = None;
         self.mask.clear();
         self.mask.resize(width * height, 0);
         self.depth.clear();
@@ -295,29 +319,46 @@ impl Rasterizer {
         if let Some(t) = tris.iter().position(|t| t.iter().any(|&i| i as usize >= n)) {
             return Err(Error::OutOfRange { name: "triangle index", detail: format!("triangle {t} indexes a vertex >= {n}") });
         }
-        let bb = self.project(vertices, cam)?;
-        if bb[2] < 0.0 || bb[3] < 0.0 || bb[0] > width as f64 || bb[1] > height as f64 {
+        let bb = self.project(vertices, cam, with_depth)?;
+        let (wf, hf) = (width as i64 * SUB, height as i64 * SUB);
+        if bb[2] < 0 || bb[3] < 0 || bb[0] > wf || bb[1] > hf {
             return Err(Error::MeshOutsideImage { width, height });
         }
         let mut stats = RasterStats::default();
         let (fixed, z, mask, depth) = (&self.fixed, &self.z, &mut self.mask, &mut self.depth);
-        for t in tris {
-            let p = [fixed[t[0] as usize], fixed[t[1] as usize], fixed[t[2] as usize]];
-            let zz = [z[t[0] as usize], z[t[1] as usize], z[t[2] as usize]];
-            let Some(s) = setup(p, zz, width, height, with_depth) else { continue };
-            stats.triangles_scanned += 1;
-            if with_depth {
+        if with_depth {
+            let p64 = |i: u32| {
+                let f = fixed[i as usize];
+                [f[0] as i64, f[1] as i64]
+            };
+            for t in tris {
+                let zz = [z[t[0] as usize], z[t[1] as usize], z[t[2] as usize]];
+                let Some(s) = setup([p64(t[0]), p64(t[1]), p64(t[2])], zz, width, height, true) else { continue };
+                stats.triangles_scanned += 1;
                 scan(&s, width, |idx, _, _, d| {
                     mask[idx] = 255;
                     if d > depth[idx] {
                         depth[idx] = d;
                     }
                 });
-            } else {
-                scan_mask(&s, width, mask);
+            }
+        } else {
+            stats.triangles_scanned = mask::draw_mask(fixed, tris, width, height, facing, mask);
+        }
+        // Every covered centre lies in the clipped bounding box of the projected vertices.
+        let x0 = ((bb[0] - HALF + SUB - 1) >> SUB_BITS).max(0) as usize;
+        let y0 = ((bb[1] - HALF + SUB - 1) >> SUB_BITS).max(0) as usize;
+        let x1 = ((bb[2] - HALF) >> SUB_BITS).min(width as i64 - 1);
+        let y1 = ((bb[3] - HALF) >> SUB_BITS).min(height as i64 - 1);
+        if x1 >= x0 as i64 && y1 >= y0 as i64 {
+            let (x1, y1) = (x1 as usize, y1 as usize);
+            stats.covered = (y0..=y1)
+                .map(|y| mask[y * width + x0..=y * width + x1].iter().map(|&m| (m != 0) as usize).sum::<usize>())
+                .sum();
+            if stats.covered > 0 {
+                self.bounds = Some([x0, y0, x1, y1]);
             }
         }
-        stats.covered = mask.iter().filter(|&&m| m != 0).count();
         Ok(stats)
     }
 }
