@@ -216,7 +216,7 @@ impl Reader<'_> {
             .collect();
         let female = self.space(s)?;
         let male = self.space(s)?;
-        Ok(BodyModel { faces, face_uvs, uvs, skin, spaces: [female, male] })
+        Ok(BodyModel { faces, face_uvs, uvs, skin, spaces: [female, male], proxy: Default::default() })
     }
 
     fn space(&mut self, s: &Sizes) -> Result<ShapeSpace> {
@@ -263,6 +263,7 @@ pub(crate) mod tests {
             uvs: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
             skin: vec![w; 4],
             spaces: [space.clone(), space],
+            proxy: Default::default(),
         }
     }
 

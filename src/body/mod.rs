@@ -5,12 +5,14 @@
 //! `build` makes it from the MakeHuman data (`sketchbody build-model`).
 
 pub mod build;
+pub mod decimate;
 mod format;
 mod gender;
 mod gmm;
 pub mod ik;
 mod model;
 pub mod procedural;
+mod proxy;
 pub mod rig;
 pub mod skin;
 
@@ -18,6 +20,7 @@ pub use format::{SKBM_MAGIC, SKBM_VERSION};
 pub use gender::Gender;
 pub use gmm::Gmm;
 pub use model::{BodyModel, RestShape, ShapeSpace, VertexWeights, MAX_INFLUENCES};
+pub use proxy::{FitProxy, ProxySpace, PROXY_VERTICES};
 
 /// The committed model asset (`assets/body_model.skbm`, rebuilt by `sketchbody build-model`).
 pub(crate) static EMBEDDED_MODEL: &[u8] = include_bytes!("../../assets/body_model.skbm");

@@ -174,6 +174,8 @@ pub struct BodyModel {
     pub(crate) uvs: Vec<[f32; 2]>,
     pub(crate) skin: Vec<VertexWeights>,
     pub(crate) spaces: [ShapeSpace; 2],
+    /// The fit proxy, built on first use ([`BodyModel::fit_proxy`]).
+    pub(crate) proxy: super::proxy::ProxyCell,
 }
 
 impl BodyModel {

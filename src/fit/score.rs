@@ -78,26 +78,37 @@ impl SketchEvidence {
     /// Scores a mask (non-zero inside, `width`×`height`): higher is better for every kind
     /// (the chamfer cost is negated).
     pub fn score(&self, mask: &[u8], kind: MatchScore) -> f64 {
+        self.score_in(mask, Some([0, 0, self.width - 1, self.height - 1]), kind)
+    }
+
+    /// [`SketchEvidence::score`] of a mask whose non-zero pixels all lie in the inclusive box
+    /// `bounds = [x0, y0, x1, y1]` (`None`: the mask is empty), e.g.
+    /// [`crate::render::raster::Rasterizer::covered_bounds`]; only that box is scanned, and
+    /// the result equals `score`'s.
+    pub fn score_in(&self, mask: &[u8], bounds: Option<[usize; 4]>, kind: MatchScore) -> f64 {
+        let b = bounds.map(|[x0, y0, x1, y1]| [x0, y0, x1.min(self.width - 1), y1.min(self.height - 1)]);
         match kind {
-            MatchScore::Paper => iou(mask, &self.edges, self.edge_count),
-            MatchScore::FilledIou => iou(mask, &self.figure, self.figure_count),
-            MatchScore::Chamfer => -self.boundary_chamfer(mask),
+            MatchScore::Paper => self.iou(mask, b, &self.edges, self.edge_count),
+            MatchScore::FilledIou => self.iou(mask, b, &self.figure, self.figure_count),
+            MatchScore::Chamfer => -self.boundary_chamfer(mask, b),
         }
     }
 
-    fn boundary_chamfer(&self, mask: &[u8]) -> f64 {
+    fn boundary_chamfer(&self, mask: &[u8], bounds: Option<[usize; 4]>) -> f64 {
         let (w, h) = (self.width, self.height);
         let inside = |x: usize, y: usize| mask[y * w + x] != 0;
         let (mut sum, mut n) = (0.0f64, 0usize);
-        for y in 0..h {
-            for x in 0..w {
-                if !inside(x, y) {
-                    continue;
-                }
-                let border = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
-                if border || !inside(x - 1, y) || !inside(x + 1, y) || !inside(x, y - 1) || !inside(x, y + 1) {
-                    sum += self.distance[y * w + x].min(CHAMFER_CAP) as f64;
-                    n += 1;
+        if let Some([x0, y0, x1, y1]) = bounds {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    if !inside(x, y) {
+                        continue;
+                    }
+                    let border = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
+                    if border || !inside(x - 1, y) || !inside(x + 1, y) || !inside(x, y - 1) || !inside(x, y + 1) {
+                        sum += self.distance[y * w + x].min(CHAMFER_CAP) as f64;
+                        n += 1;
+                    }
                 }
             }
         }
@@ -107,21 +118,26 @@ impl SketchEvidence {
             sum / n as f64
         }
     }
-}
 
-/// |a ∩ b| / |a ∪ b| for 0/non-zero masks, given |b|.
-fn iou(a: &[u8], b: &[u8], b_count: usize) -> f64 {
-    let (mut inter, mut a_count) = (0usize, 0usize);
-    for (&x, &y) in a.iter().zip(b) {
-        let ax = (x != 0) as usize;
-        a_count += ax;
-        inter += ax & (y != 0) as usize;
-    }
-    let union = a_count + b_count - inter;
-    if union == 0 {
-        0.0
-    } else {
-        inter as f64 / union as f64
+    /// |mask ∩ b| / |mask ∪ b| for 0/non-zero images, given |b| and a box holding the mask.
+    fn iou(&self, mask: &[u8], bounds: Option<[usize; 4]>, b: &[u8], b_count: usize) -> f64 {
+        let (mut inter, mut a_count) = (0usize, 0usize);
+        if let Some([x0, y0, x1, y1]) = bounds {
+            for y in y0..=y1 {
+                let row = y * self.width;
+                for (&x, &y) in mask[row + x0..=row + x1].iter().zip(&b[row + x0..=row + x1]) {
+                    let ax = (x != 0) as usize;
+                    a_count += ax;
+                    inter += ax & (y != 0) as usize;
+                }
+            }
+        }
+        let union = a_count + b_count - inter;
+        if union == 0 {
+            0.0
+        } else {
+            inter as f64 / union as f64
+        }
     }
 }
 
@@ -333,6 +349,14 @@ mod tests {
         for kind in [MatchScore::Paper, MatchScore::FilledIou, MatchScore::Chamfer] {
             assert!(ev.score(&good, kind) > ev.score(&bad, kind), "{kind:?}");
         }
+        // Scanning only a box that holds the mask gives the same scores.
+        let empty = vec![0u8; n * n];
+        for kind in [MatchScore::Paper, MatchScore::FilledIou, MatchScore::Chamfer] {
+            assert_eq!(ev.score_in(&good, Some([10, 10, 29, 29]), kind), ev.score(&good, kind), "{kind:?}");
+            assert_eq!(ev.score_in(&bad, Some([14, 8, 36, 31]), kind), ev.score(&bad, kind), "{kind:?}");
+            assert_eq!(ev.score_in(&empty, None, kind), ev.score(&empty, kind), "{kind:?}");
+        }
+        assert_eq!(ev.score_in(&empty, None, MatchScore::Chamfer), -(CHAMFER_CAP as f64));
         assert!((ev.score(&good, MatchScore::Paper) - 76.0 / 400.0).abs() < 1e-12);
         assert_eq!(ev.score(&good, MatchScore::Chamfer), 0.0);
     }

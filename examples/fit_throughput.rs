@@ -1,0 +1,82 @@
+//! Shape-fit throughput exactly as `fit_shape` does it: sample evaluations per second (proxy
+//! synthesis + IK + skinning + raster + score, in parallel over samples) and the whole fit's
+//! time with default options, on outline sketches (512², Canny edges of a known body's
+//! silhouette) of `N` random bodies, genders alternating. The fit proxy is built once before
+//! timing (its build time is printed). Times are wall clock; process CPU time is printed too,
+//! and "per CPU-second" is what each busy core delivers (robust on a shared machine).
+//! Usage: cargo run --release --example fit_throughput [N=6] [THREADS=2] [SEED=3]
+
+use nalgebra::Matrix3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use sketchbody::body::{BodyModel, Gender};
+use sketchbody::camera::WeakPerspective;
+use sketchbody::fit::{fit_shape, FitOptions, FitProblem};
+use sketchbody::image::{canny, CannyParams, GrayImage};
+use sketchbody::render::raster::Rasterizer;
+
+fn process_cpu() -> f64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: clock_gettime writes one timespec.
+    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<u64> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
+    let n = args.first().copied().unwrap_or(6) as usize;
+    let threads = args.get(1).copied().unwrap_or(2) as usize;
+    let seed = args.get(2).copied().unwrap_or(3);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let model = BodyModel::embedded()?;
+    let t0 = std::time::Instant::now();
+    let proxy = model.fit_proxy()?;
+    println!(
+        "fit proxy: {} of {} vertices, {} triangles, built in {:.1} ms",
+        proxy.kept().len(),
+        model.num_vertices(),
+        proxy.triangles().len(),
+        t0.elapsed().as_secs_f64() * 1e3
+    );
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut evals, mut wall, mut cpu) = (0usize, 0.0f64, 0.0f64);
+    let mut fit_times = Vec::new();
+    for i in 0..n {
+        let gender = if i % 2 == 0 { Gender::Female } else { Gender::Male };
+        let space = model.space(gender);
+        let truth = space.synthesize(&space.gmm().marginal(space.default_dim())?.sample(&mut rng))?;
+        let cam = WeakPerspective { sx: 200.0, sy: 200.0, r: Matrix3::identity(), t: [256.0, 262.0] };
+        let mut raster = Rasterizer::new();
+        raster.rasterize(&truth.vertices, &model.triangles(), &cam, 512, 512, false)?;
+        let drawing: Vec<u8> = raster.mask().iter().map(|&m| if m != 0 { 40 } else { 235 }).collect();
+        let edges = canny(&GrayImage::from_vec(512, 512, drawing)?.view(), &CannyParams::default())?;
+        let problem = FitProblem { model: &model, gender, pose: &truth.joints, camera: &cam, edges: &edges };
+        let options = FitOptions { seed: 100 + i as u64, ..FitOptions::default() };
+        let (start, c0) = (std::time::Instant::now(), process_cpu());
+        let result = pool.install(|| fit_shape(&problem, &options, &mut |_| true))?;
+        let (dt, dc) = (start.elapsed().as_secs_f64(), process_cpu() - c0);
+        println!(
+            "fit {i} ({gender:?}): {} evaluations in {} iterations, {:.1} ms wall, {:.1} ms CPU: {:.0} evaluations/s",
+            result.evaluations,
+            result.history.len(),
+            dt * 1e3,
+            dc * 1e3,
+            result.evaluations as f64 / dt
+        );
+        evals += result.evaluations;
+        wall += dt;
+        cpu += dc;
+        fit_times.push(dt);
+    }
+    fit_times.sort_by(f64::total_cmp);
+    let median = 0.5 * (fit_times[(n - 1) / 2] + fit_times[n / 2]);
+    println!(
+        "{n} fits with default options on {threads} threads: {:.0} evaluations/s wall ({evals} in {:.2} s), {:.0} per CPU-second; whole fit median {:.1} ms, max {:.1} ms",
+        evals as f64 / wall,
+        wall,
+        evals as f64 / cpu,
+        median * 1e3,
+        fit_times[n - 1] * 1e3
+    );
+    Ok(())
+}
