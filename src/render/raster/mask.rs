@@ -25,6 +25,27 @@ pub enum Facing {
     Front,
 }
 
+/// Triangles whose bounding box spans fewer than this many pixel centres in x and in y are
+/// drawn by testing a fixed 2×2 or BLOCK×BLOCK block of centres without branches.
+const BLOCK: i64 = 4;
+
+/// Sets to 255 the pixels of an N×N block at `base` (row pitch `w`) whose centres
+/// lie inside the triangle with biased edge values `e` at the block's first centre and steps
+/// `dx`, `dy` (all three non-negative <=> their OR is non-negative).
+#[inline(always)]
+fn cover_block<const N: usize>(mask: &mut [u8], base: usize, w: usize, e: [i64; 3], dx: [i64; 3], dy: [i64; 3]) {
+    let mut row = e;
+    for r in 0..N {
+        let line: &mut [u8; N] = (&mut mask[base + r * w..base + r * w + N]).try_into().expect("N bytes");
+        for (k, px) in line.iter_mut().enumerate() {
+            let k = k as i64;
+            let v = (row[0] + k * dx[0]) | (row[1] + k * dx[1]) | (row[2] + k * dx[2]);
+            *px |= ((v >= 0) as u8).wrapping_neg();
+        }
+        row = [row[0] + dy[0], row[1] + dy[1], row[2] + dy[2]];
+    }
+}
+
 /// First pixel whose centre is >= `v` (fixed point); arithmetic shifts floor-divide by SUB.
 #[inline(always)]
 fn lo(v: i64) -> i64 {
@@ -53,32 +74,31 @@ pub(super) fn draw_mask(fixed: &[[i32; 2]], tris: &[[u32; 3]], w: usize, h: usiz
         let j0 = lo(ay.min(by).min(cy)).max(0);
         let j1 = hi(ay.max(by).max(cy)).min(last_j);
         let area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
-        if i1 - i0 <= 1 && j1 - j0 <= 1 && i0 < last_i && j0 < last_j {
-            // At most 2x2 candidate centres (maybe none): test the four centres from (i0, j0)
-            // without branching (centres outside the bounding box test as outside; a
-            // degenerate triangle covers nothing since one of its edges is always biased).
-            let culled = facing == Facing::Front && area > 0;
+        // In the y-down image a viewer-facing (counter-clockwise) triangle has negative area.
+        if facing == Facing::Front && area > 0 {
+            continue;
+        }
+        let (span_i, span_j) = (i1 - i0, j1 - j0);
+        if span_i < BLOCK && span_j < BLOCK && i0 + BLOCK - 1 <= last_i && j0 + BLOCK - 1 <= last_j {
+            // At most BLOCK x BLOCK candidate centres (maybe none): test a fixed block of
+            // centres from (i0, j0) without branching (centres outside the bounding box test
+            // as outside; a degenerate triangle covers nothing since one of its edges is
+            // always biased).
             let (b, c) = if area < 0 { ([cx, cy], [bx, by]) } else { ([bx, by], [cx, cy]) };
             let (e, dx, dy) = edge_functions([[ax, ay], b, c], i0, j0);
-            // OR of the edge values: non-negative iff all are.
-            let or = |o: [i64; 3]| (e[0] + o[0]) | (e[1] + o[1]) | (e[2] + o[2]);
-            let (e00, e10) = (or([0; 3]), or(dx));
-            let (e01, e11) = (or(dy), or([dx[0] + dy[0], dx[1] + dy[1], dx[2] + dy[2]]));
-            let keep = (!culled as u8).wrapping_neg();
-            let cover = |e: i64| ((e >= 0) as u8).wrapping_neg() & keep;
             let base = j0 as usize * w + i0 as usize;
-            mask[base] |= cover(e00);
-            mask[base + 1] |= cover(e10);
-            mask[base + w] |= cover(e01);
-            mask[base + w + 1] |= cover(e11);
-            scanned += (i0 <= i1 && j0 <= j1 && area != 0 && !culled) as usize;
+            if span_i < 2 && span_j < 2 {
+                cover_block::<2>(mask, base, w, e, dx, dy);
+            } else {
+                cover_block::<{ BLOCK as usize }>(mask, base, w, e, dx, dy);
+            }
+            scanned += (i0 <= i1 && j0 <= j1 && area != 0) as usize;
             continue;
         }
         if i0 > i1 || j0 > j1 {
             continue;
         }
-        // In the y-down image a viewer-facing (counter-clockwise) triangle has negative area.
-        if area == 0 || (facing == Facing::Front && area > 0) {
+        if area == 0 {
             continue;
         }
         scanned += 1;
