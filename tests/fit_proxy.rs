@@ -23,9 +23,11 @@ fn proxy_is_a_deterministic_closed_subset_and_synthesises_like_the_model() {
     let kept = proxy.kept();
     assert!(kept.len() <= PROXY_VERTICES && kept.len() > PROXY_VERTICES - 50, "{} vertices", kept.len());
     assert!(kept.windows(2).all(|w| w[0] < w[1]) && (*kept.last().unwrap() as usize) < model.num_vertices());
-    assert!(proxy.triangles().len() > 5000 && proxy.triangles().iter().flatten().all(|&i| (i as usize) < kept.len()));
-    // Boundary edges are kept exactly: as many open edges as the body has.
-    assert_eq!(boundary_edges(proxy.triangles()).len(), boundary_edges(&model.triangles()).len());
+    assert!(proxy.triangles().iter().flatten().all(|&i| (i as usize) < kept.len()));
+    // The body is a closed genus-0 surface (F = 2V − 4, no open edge); the collapses keep it so,
+    // which is what lets the fit draw viewer-facing triangles only.
+    assert_eq!((model.triangles().len(), boundary_edges(&model.triangles()).len()), (2 * model.num_vertices() - 4, 0));
+    assert_eq!((proxy.triangles().len(), boundary_edges(proxy.triangles()).len()), (2 * kept.len() - 4, 0));
     let again = FitProxy::new(&model, PROXY_VERTICES).unwrap();
     assert_eq!((again.kept(), again.triangles()), (kept, proxy.triangles()));
     assert_eq!(proxy.skin_weights(), &kept.iter().map(|&i| model.skin_weights()[i as usize]).collect::<Vec<_>>()[..]);
@@ -49,10 +51,10 @@ fn proxy_is_a_deterministic_closed_subset_and_synthesises_like_the_model() {
     assert!(matches!(decimate(&[[0.0; 3]; 3], &[[0, 1, 3]], 2), Err(Error::OutOfRange { .. })));
 }
 
-/// Full-mesh (both windings) vs proxy (viewer-facing triangles only) silhouettes at 256²: per
-/// image, the pixels where they differ are under 4% of the full silhouette's area, and every
-/// differing pixel lies within 2 px of the full silhouette's boundary; over all images under
-/// 2.5% differ and 99% of them within 1 px of it.
+/// Full-mesh (both windings) vs proxy (viewer-facing triangles only) silhouettes at 256², 24
+/// random shapes, poses and cameras (80–130 px/m): per image, the pixels where they differ are
+/// under 2.5% of the full silhouette's area, and every differing pixel lies within 2 px of the
+/// full silhouette's boundary; over all images under 1.5% differ and 99% of them within 1 px.
 #[test]
 fn proxy_silhouette_agrees_with_the_full_mesh() {
     let model = BodyModel::embedded().unwrap();
@@ -94,7 +96,7 @@ fn proxy_silhouette_agrees_with_the_full_mesh() {
         let max_d = differ.iter().map(|&i| dist[i]).fold(0.0, f32::max);
         let fraction = differ.len() as f64 / area as f64;
         assert!(area > 1000, "case {case}: {area} px");
-        assert!(fraction < 0.04 && max_d <= 2.0, "case {case} ({g:?}): {} of {area} px differ, max {max_d} px from the boundary", differ.len());
+        assert!(fraction < 0.025 && max_d <= 2.0, "case {case} ({g:?}): {} of {area} px differ, max {max_d} px from the boundary", differ.len());
         differ_total += differ.len();
         area_total += area;
         within1 += differ.iter().filter(|&&i| dist[i] <= 1.0).count();
@@ -104,5 +106,5 @@ fn proxy_silhouette_agrees_with_the_full_mesh() {
     let overall = differ_total as f64 / area_total as f64;
     let near = within1 as f64 / differ_total.max(1) as f64;
     println!("proxy vs full silhouettes: {differ_total} of {area_total} px differ ({:.2}%), worst image {:.2}%, worst distance {worst_dist} px, {:.1}% within 1 px", 100.0 * overall, 100.0 * worst_fraction, 100.0 * near);
-    assert!(overall < 0.025 && near >= 0.99, "{overall} {near}");
+    assert!(overall < 0.015 && near >= 0.99, "{overall} {near}");
 }

@@ -16,7 +16,7 @@ use crate::error::Result;
 use crate::skeleton::Joints3;
 
 /// Vertices kept by the proxy of [`BodyModel::fit_proxy`] (of 13380 in the MakeHuman body).
-pub const PROXY_VERTICES: usize = 3000;
+pub const PROXY_VERTICES: usize = 2500;
 
 /// One gender's shape space restricted to the proxy's vertices.
 #[derive(Clone, Debug)]
