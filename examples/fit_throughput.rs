@@ -29,14 +29,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let seed = args.get(2).copied().unwrap_or(3);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let model = BodyModel::embedded()?;
-    let t0 = std::time::Instant::now();
+    let (t0, c0) = (std::time::Instant::now(), process_cpu());
     let proxy = model.fit_proxy()?;
     println!(
-        "fit proxy: {} of {} vertices, {} triangles, built in {:.1} ms",
+        "fit proxy: {} of {} vertices, {} triangles, built in {:.1} ms wall, {:.1} ms CPU",
         proxy.kept().len(),
         model.num_vertices(),
         proxy.triangles().len(),
-        t0.elapsed().as_secs_f64() * 1e3
+        t0.elapsed().as_secs_f64() * 1e3,
+        (process_cpu() - c0) * 1e3
     );
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (mut evals, mut wall, mut cpu) = (0usize, 0.0f64, 0.0f64);

@@ -76,7 +76,7 @@ impl PartialOrd for Candidate {
     }
 }
 
-struct State<'a> {
+struct State {
     pos: Vec<[f64; 3]>,
     tris: Vec<[u32; 3]>,
     alive_tri: Vec<bool>,
@@ -87,26 +87,26 @@ struct State<'a> {
     alive: Vec<bool>,
     stamp: Vec<u32>,
     heap: BinaryHeap<Candidate>,
-    scratch: &'a mut Vec<u32>,
+    /// Reused neighbour lists.
+    scratch: [Vec<u32>; 2],
 }
 
-impl State<'_> {
+impl State {
     fn face_normal(&self, t: [u32; 3]) -> [f64; 3] {
         let p = t.map(|i| self.pos[i as usize]);
         cross(sub(p[1], p[0]), sub(p[2], p[0]))
     }
 
-    /// Distinct live neighbours of `u`, into the scratch buffer (sorted).
-    fn neighbours(&mut self, u: u32) -> Vec<u32> {
-        self.scratch.clear();
+    /// Distinct live neighbours of `u` into `out` (sorted).
+    fn neighbours_into(&self, u: u32, out: &mut Vec<u32>) {
+        out.clear();
         for &f in &self.faces_of[u as usize] {
             if self.alive_tri[f as usize] {
-                self.scratch.extend(self.tris[f as usize].iter().copied().filter(|&x| x != u));
+                out.extend(self.tris[f as usize].iter().copied().filter(|&x| x != u));
             }
         }
-        self.scratch.sort_unstable();
-        self.scratch.dedup();
-        self.scratch.clone()
+        out.sort_unstable();
+        out.dedup();
     }
 
     fn push(&mut self, from: u32, to: u32) {
@@ -123,12 +123,15 @@ impl State<'_> {
 
     /// Whether collapsing `u` into `v` keeps the mesh manifold and its faces unflipped.
     fn can_collapse(&mut self, u: u32, v: u32) -> bool {
-        let nu = self.neighbours(u);
-        if nu.binary_search(&v).is_err() {
+        let (mut nu, mut nv) = (std::mem::take(&mut self.scratch[0]), std::mem::take(&mut self.scratch[1]));
+        self.neighbours_into(u, &mut nu);
+        self.neighbours_into(v, &mut nv);
+        let linked = nu.binary_search(&v).is_ok();
+        let common = nu.iter().filter(|x| nv.binary_search(x).is_ok()).count();
+        self.scratch = [nu, nv];
+        if !linked {
             return false;
         }
-        let nv = self.neighbours(v);
-        let common = nu.iter().filter(|x| nv.binary_search(x).is_ok()).count();
         let opposite = self.faces_of[u as usize]
             .iter()
             .filter(|&&f| self.alive_tri[f as usize] && self.tris[f as usize].contains(&v))
@@ -175,10 +178,13 @@ impl State<'_> {
         }
         // Only costs involving v's quadric changed; entries holding v's old stamp are stale.
         self.stamp[v as usize] += 1;
-        for w in self.neighbours(v) {
+        let mut nv = std::mem::take(&mut self.scratch[0]);
+        self.neighbours_into(v, &mut nv);
+        for &w in &nv {
             self.push(v, w);
             self.push(w, v);
         }
+        self.scratch[0] = nv;
     }
 }
 
@@ -196,7 +202,6 @@ pub fn decimate(positions: &[[f32; 3]], triangles: &[[u32; 3]], target_vertices:
     if let Some(&c) = positions.iter().flatten().find(|c| !c.is_finite()) {
         return Err(Error::NonFinite { name: "mesh vertex", value: c as f64 });
     }
-    let mut scratch = Vec::new();
     let mut s = State {
         pos: positions.iter().map(|p| p.map(|c| c as f64)).collect(),
         tris: triangles.to_vec(),
@@ -207,7 +212,7 @@ pub fn decimate(positions: &[[f32; 3]], triangles: &[[u32; 3]], target_vertices:
         alive: vec![false; n],
         stamp: vec![0; n],
         heap: BinaryHeap::new(),
-        scratch: &mut scratch,
+        scratch: [Vec::new(), Vec::new()],
     };
     for (f, t) in triangles.iter().enumerate() {
         let nrm = s.face_normal(*t);
