@@ -44,7 +44,7 @@ pub struct FitOptions {
     pub transition_scale: f64,
     /// The match score (default [`MatchScore::Chamfer`], chosen by measurement: on outline
     /// sketches of 6 known bodies, `cargo run --release --example fit_demo -- 6 7` gave mean
-    /// AED/height 0.0092 for chamfer, 0.0185 for filled IoU, 0.0293 for the paper's eq. 7 and
+    /// AED/height 0.0091 for chamfer, 0.0186 for filled IoU, 0.0291 for the paper's eq. 7 and
     /// 0.0381 for the mean shape).
     pub score: MatchScore,
     /// For the non-paper scores, sample likelihood = exp(score / temperature) (default 0.02; for
