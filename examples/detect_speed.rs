@@ -2,17 +2,18 @@
 //! of `detect`, in one process, plus the best detection (score, part placements) so that runs of
 //! two engine versions can be compared.
 //!
-//! Usage: cargo run --release --example detect_speed -- MODEL IMAGE [RUNS] [MIN_CELL|default|all]
+//! Usage: cargo run --release --example detect_speed -- MODEL IMAGE [RUNS] [default|all|fMIN|MIN_CELL]
 //! `default` uses the documented sketch search range (`DetectOptions::default()`), `all` every
-//! pyramid level, a number the old `min_cell_px` cut-off with no upper limit.
+//! pyramid level, `fMIN` figures of at least MIN × the shorter side (e.g. `f0.5`), a number
+//! every level with cells of at least that many px.
 
-use sketchbody::detect::{detect, DetectOptions, Model};
+use sketchbody::detect::{detect, DetectOptions, Model, SearchScales};
 use sketchbody::image::load_rgb_image;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     if args.len() < 3 {
-        eprintln!("usage: detect_speed MODEL IMAGE [RUNS] [MIN_CELL|default|all]");
+        eprintln!("usage: detect_speed MODEL IMAGE [RUNS] [default|all|fMIN|MIN_CELL]");
         std::process::exit(2);
     }
     let model = Model::load_any(std::path::Path::new(&args[1])).expect("model");
@@ -55,8 +56,11 @@ fn main() {
 fn options(mode: &str) -> DetectOptions {
     match mode {
         "default" => DetectOptions::default(),
-        "all" => DetectOptions { min_cell_px: 0.0, max_cell_px: f64::INFINITY, ..Default::default() },
-        c => DetectOptions { min_cell_px: c.parse().expect("MIN_CELL"), max_cell_px: f64::INFINITY, ..Default::default() },
+        "all" => DetectOptions { search: SearchScales::All, ..Default::default() },
+        f if f.starts_with('f') => {
+            DetectOptions { search: SearchScales::FigureFraction { min: f[1..].parse().expect("fMIN"), max: 1.0 }, ..Default::default() }
+        }
+        c => DetectOptions { search: SearchScales::All, min_cell_px: c.parse().expect("MIN_CELL"), ..Default::default() },
     }
 }
 
