@@ -79,32 +79,30 @@ pub fn detect_level(
     max_candidates: usize,
     accept: &(dyn Fn(&Candidate) -> bool + Sync),
 ) -> Vec<Candidate> {
-    detect_level_with(model, level, (padx, pady), thresh, max_candidates, accept, false)
+    detect_level_with(model, level, (padx, pady), thresh, max_candidates, accept, Kernels::Optimised)
 }
 
-/// [`detect_level`] on the plain reference kernels ([`responses_reference`],
-/// [`distance_transform_reference`]): slower, for checking the optimised path.
-pub fn detect_level_reference(
-    model: &Model,
-    level: &Level,
-    padx: usize,
-    pady: usize,
-    thresh: f64,
-    max_candidates: usize,
-    accept: &(dyn Fn(&Candidate) -> bool + Sync),
-) -> Vec<Candidate> {
-    detect_level_with(model, level, (padx, pady), thresh, max_candidates, accept, true)
+/// Which kernels [`detect_level_with`] runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernels {
+    /// Matrix-product filter responses and the fast distance transform (what [`detect_level`] uses).
+    Optimised,
+    /// The plain reference kernels ([`responses_reference`], [`distance_transform_reference`]):
+    /// slower, for checking the optimised path.
+    Reference,
 }
 
-fn detect_level_with(
+/// [`detect_level`] with a choice of kernels; `pad` = (padx, pady).
+pub fn detect_level_with(
     model: &Model,
     level: &Level,
     (padx, pady): (usize, usize),
     thresh: f64,
     max_candidates: usize,
     accept: &(dyn Fn(&Candidate) -> bool + Sync),
-    reference: bool,
+    kernels: Kernels,
 ) -> Vec<Candidate> {
+    let reference = kernels == Kernels::Reference;
     let resp = if reference { responses_reference(&level.feat, &model.filters) } else { responses(&level.feat, &model.filters) };
     let dt = if reference { distance_transform_reference } else { distance_transform };
     let np = model.parts.len();
@@ -334,7 +332,7 @@ mod tests {
         let mut compared = 0;
         for level in &pyr.levels {
             let fast = detect_level(&model, level, padx, pady, f64::NEG_INFINITY, 5, &|_| true);
-            let slow = detect_level_reference(&model, level, padx, pady, f64::NEG_INFINITY, 5, &|_| true);
+            let slow = detect_level_with(&model, level, (padx, pady), f64::NEG_INFINITY, 5, &|_| true, Kernels::Reference);
             assert_eq!(fast.len(), slow.len(), "level {}", level.cell_px);
             for (a, b) in fast.iter().zip(&slow) {
                 assert!((a.score - b.score).abs() <= 1e-4 * b.score.abs().max(1.0), "level {}: {} vs {}", level.cell_px, a.score, b.score);
