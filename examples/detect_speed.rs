@@ -7,7 +7,7 @@
 //! pyramid level, `fMIN` figures of at least MIN × the shorter side (e.g. `f0.5`), a number
 //! every level with cells of at least that many px.
 
-use sketchbody::detect::{detect, DetectOptions, Model, SearchScales};
+use sketchbody::detect::{detect, prepare_image, pyramid, tree, DetectOptions, Model, SearchScales};
 use sketchbody::image::load_rgb_image;
 
 fn main() {
@@ -51,6 +51,55 @@ fn main() {
         }
         Err(e) => println!("no detection: {e}"),
     }
+    compare_kernels(&model, &img, &opts);
+}
+
+/// One thread, the levels `opts` searches: the DP with the optimised kernels vs the plain
+/// reference kernels (the engine before the speed work): thread CPU time and whether the best
+/// candidate of every level is the same.
+fn compare_kernels(model: &Model, img: &sketchbody::image::RgbImage, opts: &DetectOptions) {
+    let (planes, _) = prepare_image(&img.view(), opts.max_side).expect("image");
+    let (lo, hi) = opts.search.cell_range(model, planes.width, planes.height);
+    let (lo, hi) = (lo.max(opts.min_cell_px), hi.min(opts.max_cell_px));
+    let (padx, pady) = model.padding();
+    let pyr = pyramid::build(&planes, model.sbin, model.interval, padx, pady, lo).expect("pyramid");
+    let levels: Vec<_> = pyr.levels.iter().filter(|l| l.cell_px <= hi).collect();
+    let mut cpu = [0f64; 2];
+    let mut best: [Vec<tree::Candidate>; 2] = [Vec::new(), Vec::new()];
+    // A one-thread pool, so that every parallel loop inside runs on the timed thread.
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("pool");
+    for (i, k) in [tree::Kernels::Optimised, tree::Kernels::Reference].into_iter().enumerate() {
+        pool.install(|| {
+            let c0 = thread_cpu();
+            for l in &levels {
+                best[i].extend(tree::detect_level_with(model, l, (padx, pady), f64::NEG_INFINITY, 1, &|_| true, k));
+            }
+            cpu[i] = (thread_cpu() - c0) * 1e3;
+        });
+    }
+    let same = best[0].len() == best[1].len()
+        && best[0].iter().zip(&best[1]).all(|(a, b)| {
+            (a.score - b.score).abs() <= 1e-4 * b.score.abs().max(1.0)
+                && a.parts.iter().zip(&b.parts).all(|(p, q)| (p.x1, p.y1, p.mixture) == (q.x1, q.y1, q.mixture))
+        });
+    let max_rel = best[0].iter().zip(&best[1]).map(|(a, b)| (a.score - b.score).abs() / b.score.abs().max(1.0)).fold(0.0, f64::max);
+    println!(
+        "one thread, {} levels (cells {:.2}..{:.2} px), DP incl. filter responses: optimised {:.0} ms, reference {:.0} ms CPU ({:.2}x); best per level identical: {same} (max relative score difference {max_rel:.1e})",
+        levels.len(),
+        levels.first().map_or(0.0, |l| l.cell_px),
+        levels.last().map_or(0.0, |l| l.cell_px),
+        cpu[0],
+        cpu[1],
+        cpu[1] / cpu[0]
+    );
+}
+
+/// CPU time of this thread, seconds.
+fn thread_cpu() -> f64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: clock_gettime writes one timespec.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
 }
 
 fn options(mode: &str) -> DetectOptions {

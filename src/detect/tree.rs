@@ -138,12 +138,13 @@ pub fn detect_level_with(
             let mut arg = vec![0u8; prows * pcols];
             for (m, t) in dts.iter().enumerate() {
                 let b = model.bias[brow[m]] as f32;
+                let mu = m as u8;
+                // Branch-free selects (vectorised): the first mixture attaining the maximum wins.
                 for ((bv, a), &s) in best.iter_mut().zip(arg.iter_mut()).zip(&t.score.data) {
                     let v = s + b;
-                    if v > *bv {
-                        *bv = v;
-                        *a = m as u8;
-                    }
+                    let gt = v > *bv;
+                    *bv = if gt { v } else { *bv };
+                    *a = if gt { mu } else { *a };
                 }
             }
             for (ps, v) in scores[par][l].data.iter_mut().zip(&best) {
