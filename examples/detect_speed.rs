@@ -7,7 +7,7 @@
 //! pyramid level, `fMIN` figures of at least MIN × the shorter side (e.g. `f0.5`), a number
 //! every level with cells of at least that many px.
 
-use sketchbody::detect::{detect, prepare_image, pyramid, tree, DetectOptions, Model, SearchScales};
+use sketchbody::detect::{conv, detect, prepare_image, pyramid, tree, DetectOptions, Model, SearchScales};
 use sketchbody::image::load_rgb_image;
 
 fn main() {
@@ -77,6 +77,27 @@ fn compare_kernels(model: &Model, img: &sketchbody::image::RgbImage, opts: &Dete
             cpu[i] = (thread_cpu() - c0) * 1e3;
         });
     }
+    // The filter responses alone, same pool.
+    let mut conv = [0f64; 2];
+    pool.install(|| {
+        for (i, reference) in [false, true].into_iter().enumerate() {
+            let c0 = thread_cpu();
+            for l in &levels {
+                let r = if reference { conv::responses_reference(&l.feat, &model.filters) } else { conv::responses(&l.feat, &model.filters) };
+                std::hint::black_box(r);
+            }
+            conv[i] = (thread_cpu() - c0) * 1e3;
+        }
+    });
+    println!(
+        "one thread, filter responses alone: optimised {:.0} ms, reference {:.0} ms CPU ({:.2}x); the rest of the DP (distance transforms, messages, back-tracking): optimised {:.0} ms, reference {:.0} ms ({:.2}x)",
+        conv[0],
+        conv[1],
+        conv[1] / conv[0],
+        cpu[0] - conv[0],
+        cpu[1] - conv[1],
+        (cpu[1] - conv[1]) / (cpu[0] - conv[0])
+    );
     let same = best[0].len() == best[1].len()
         && best[0].iter().zip(&best[1]).all(|(a, b)| {
             (a.score - b.score).abs() <= 1e-4 * b.score.abs().max(1.0)
