@@ -72,10 +72,16 @@ pub fn response(feat: &FeatureMap, f: &Filter) -> Option<ScoreMap> {
     Some(out)
 }
 
-/// Responses of all `filters` on `feat` (index = filter id; `None` where a filter does not fit).
-/// Rows are computed in parallel; within a row every filter reuses the same few feature rows
-/// while they are in cache.
+/// Responses of all `filters` on `feat` (index = filter id; `None` where a filter does not fit),
+/// by matrix products ([`super::fastconv`]); equal to [`responses_reference`] up to float
+/// summation order (relative differences ~1e-6).
 pub fn responses(feat: &FeatureMap, filters: &[Filter]) -> Vec<Option<ScoreMap>> {
+    super::fastconv::responses(feat, filters)
+}
+
+/// The plain scalar reference of [`responses`]: dot products per position, rows in parallel;
+/// within a row every filter reuses the same few feature rows while they are in cache.
+pub fn responses_reference(feat: &FeatureMap, filters: &[Filter]) -> Vec<Option<ScoreMap>> {
     let same = filters.first().map(|f| (f.rows, f.cols));
     if filters.len() < 2 || filters.iter().any(|f| Some((f.rows, f.cols)) != same) {
         return filters.par_iter().map(|f| response(feat, f)).collect();
@@ -142,9 +148,40 @@ mod tests {
         assert!(response(&feat, &big).is_none());
         // The batched path (equal sizes) equals the single-filter path.
         let g = Filter { w: f.w.iter().map(|v| -0.5 * v).collect(), ..f.clone() };
-        let all = responses(&feat, &[f.clone(), g.clone()]);
+        let all = responses_reference(&feat, &[f.clone(), g.clone()]);
         assert_eq!(all[0].as_ref(), Some(&r));
         assert_eq!(all[1], response(&feat, &g));
+        assert!(responses_reference(&feat, &[big.clone(), big.clone()]).iter().all(Option::is_none));
         assert!(responses(&feat, &[big.clone(), big]).iter().all(Option::is_none));
+    }
+
+    /// The matrix-product path equals the scalar reference on random maps and filters of mixed
+    /// sizes (some not fitting), up to float summation order.
+    #[test]
+    fn fast_path_matches_the_reference_on_random_data() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let sizes = [(5, 5), (5, 5), (3, 2), (5, 5), (1, 1), (2, 4), (5, 5), (9, 3)];
+        let filters: Vec<Filter> = sizes
+            .iter()
+            .map(|&(rows, cols)| Filter { rows, cols, w: (0..rows * cols * FEAT_DIM).map(|_| rng.random_range(-1.0..1.0)).collect() })
+            .collect();
+        for &(rows, cols) in &[(5usize, 5usize), (6, 40), (37, 23), (120, 9), (8, 70)] {
+            let feat = FeatureMap { rows, cols, data: (0..rows * cols * FEAT_DIM).map(|_| rng.random_range(0.0..0.4)).collect() };
+            let fast = responses(&feat, &filters);
+            for (k, f) in filters.iter().enumerate() {
+                let want = response(&feat, f);
+                match (&fast[k], &want) {
+                    (None, None) => assert!(f.rows > rows || f.cols > cols),
+                    (Some(a), Some(b)) => {
+                        assert_eq!((a.rows, a.cols), (b.rows, b.cols), "filter {k} on {rows}x{cols}");
+                        for (i, (x, y)) in a.data.iter().zip(&b.data).enumerate() {
+                            assert!((x - y).abs() <= 1e-4 * (1.0 + y.abs()), "filter {k} on {rows}x{cols} at {i}: {x} vs {y}");
+                        }
+                    }
+                    _ => panic!("filter {k} on {rows}x{cols}: fits in one path only"),
+                }
+            }
+        }
     }
 }

@@ -7,6 +7,7 @@
 
 pub mod conv;
 pub mod dt;
+pub mod fastconv;
 pub mod format;
 pub mod hog;
 pub mod joints;
@@ -31,8 +32,45 @@ pub const MIN_DETECT_SIDE: usize = 32;
 /// before detection and the joints mapped back to the input's pixels.
 pub const DEFAULT_MAX_DETECT_SIDE: usize = 1024;
 
-/// Detection options. `Default` gives the model's threshold, all pyramid levels, NMS at 0.3 and
-/// up to 10 detections.
+/// Which figure sizes [`detect`] searches (which pyramid levels it scores).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SearchScales {
+    /// Every pyramid level: figures from about 5 cells (the ×2 octave) up to the image size; the
+    /// PARSE protocol and photos with small people.
+    All,
+    /// Figures whose height is between `min` × the image's shorter side and `max` × its longer
+    /// side (fractions, 0 < min < max). A figure F px tall is found at pyramid cells of about F /
+    /// H px, H = [`Model::rest_height_cells`]; the deformations let a figure span 0.75 H to
+    /// 1.25 H cells, so levels with cells in [min · short / (1.25 H), max · long / (0.75 H)] are
+    /// scored.
+    FigureFraction {
+        /// Smallest figure height as a fraction of the shorter image side.
+        min: f64,
+        /// Largest figure height as a fraction of the longer image side.
+        max: f64,
+    },
+}
+
+/// The documented default search range for concept sketches: one figure filling much of the
+/// canvas, at least a quarter of the shorter side tall and at most the longer side.
+pub const SKETCH_SEARCH: SearchScales = SearchScales::FigureFraction { min: 0.25, max: 1.0 };
+
+impl SearchScales {
+    /// Pyramid cell range (px of the image searched, `width` x `height`) for `model`.
+    pub fn cell_range(&self, model: &Model, width: usize, height: usize) -> (f64, f64) {
+        match *self {
+            SearchScales::All => (0.0, f64::INFINITY),
+            SearchScales::FigureFraction { min, max } => {
+                let h = model.rest_height_cells();
+                let (short, long) = (width.min(height) as f64, width.max(height) as f64);
+                (min * short / (1.25 * h), max * long / (0.75 * h))
+            }
+        }
+    }
+}
+
+/// Detection options. `Default` gives the model's threshold, the sketch search range
+/// [`SKETCH_SEARCH`], NMS at 0.3 and up to 10 detections.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DetectOptions {
     /// Score threshold; `None` uses the model's own.
@@ -48,11 +86,14 @@ pub struct DetectOptions {
     pub nms_overlap: f64,
     /// Most detections returned (≥ 1).
     pub max_detections: usize,
+    /// Figure sizes searched; combined with `min_cell_px` / `max_cell_px` (a level is scored
+    /// when it passes both).
+    pub search: SearchScales,
 }
 
 impl Default for DetectOptions {
     fn default() -> Self {
-        Self { threshold: None, max_side: DEFAULT_MAX_DETECT_SIDE, min_cell_px: 0.0, max_cell_px: f64::INFINITY, nms_overlap: 0.3, max_detections: 10 }
+        Self { threshold: None, max_side: DEFAULT_MAX_DETECT_SIDE, min_cell_px: 0.0, max_cell_px: f64::INFINITY, nms_overlap: 0.3, max_detections: 10, search: SKETCH_SEARCH }
     }
 }
 
@@ -76,6 +117,11 @@ impl DetectOptions {
         }
         if self.max_detections == 0 {
             return range("max_detections", "must be ≥ 1".into());
+        }
+        if let SearchScales::FigureFraction { min, max } = self.search {
+            if !(min > 0.0 && min < max && max.is_finite()) {
+                return range("search", format!("figure fractions {min}..{max}: need 0 < min < max, finite"));
+            }
         }
         Ok(())
     }
@@ -170,8 +216,10 @@ pub fn to_detection(c: &Candidate, model: &Model, scale: f64) -> Detection {
     Detection { score: c.score, joints: j2, confidence: conf, parse_joints: pxy, bbox: scaled.bbox(), parts: scaled.parts }
 }
 
-/// Detects human figures in `image` (1, 3 or 4 channels; colour is used by the HOG). Returns the
-/// best figure and the other non-overlapping ones scoring above the threshold.
+/// Detects human figures in `image` (1, 3 or 4 channels; colour is used by the HOG) at the
+/// scales `options.search` names. Returns the best figure and the other non-overlapping ones
+/// scoring above the threshold. When no pyramid level lies in the searched range the result is
+/// [`Error::NoFigure`] with score −∞.
 /// Errors: [`Error::ImageTooSmall`] (side < [`MIN_DETECT_SIDE`]), [`Error::OutOfRange`] /
 /// [`Error::NonFinite`] for bad options, [`Error::NoFigure`] (with the best score found) when
 /// nothing reaches the threshold.
@@ -179,7 +227,9 @@ pub fn detect(image: &ImageView<'_>, model: &Model, options: &DetectOptions) -> 
     options.validate()?;
     let (planes, scale) = prepare_image(image, options.max_side)?;
     let thresh = options.threshold.unwrap_or(model.thresh);
-    let cands = candidates(&planes, model, f64::NEG_INFINITY, options.min_cell_px, options.max_cell_px, 64, &|_| true)?;
+    let (lo, hi) = options.search.cell_range(model, planes.width, planes.height);
+    let (lo, hi) = (lo.max(options.min_cell_px), hi.min(options.max_cell_px));
+    let cands = candidates(&planes, model, f64::NEG_INFINITY, lo, hi, 64, &|_| true)?;
     let best_score = cands.first().map_or(f64::NEG_INFINITY, |c| c.score);
     let above: Vec<Candidate> = cands.into_iter().filter(|c| c.score >= thresh).collect();
     if above.is_empty() {
@@ -205,6 +255,41 @@ mod tests {
         assert!(matches!(detect(&v, &m, &o), Err(Error::OutOfRange { name: "nms_overlap", .. })));
         let o = DetectOptions { threshold: Some(f64::NAN), ..Default::default() };
         assert!(matches!(detect(&v, &m, &o), Err(Error::NonFinite { .. })));
+    }
+
+    #[test]
+    fn search_scales_select_the_documented_cell_range() {
+        let m = model::tests::tiny_model(); // rest height 4 cells
+        let (lo, hi) = SKETCH_SEARCH.cell_range(&m, 200, 100);
+        assert!((lo - 0.25 * 100.0 / 5.0).abs() < 1e-12, "{lo}");
+        assert!((hi - 200.0 / 3.0).abs() < 1e-12, "{hi}");
+        assert_eq!(SearchScales::All.cell_range(&m, 200, 100), (0.0, f64::INFINITY));
+        let data = vec![0u8; 64 * 64];
+        let v = ImageView::gray(&data, 64, 64).unwrap();
+        for (min, max) in [(0.0, 1.0), (0.5, 0.5), (0.2, f64::INFINITY), (f64::NAN, 1.0)] {
+            let o = DetectOptions { search: SearchScales::FigureFraction { min, max }, ..Default::default() };
+            assert!(matches!(detect(&v, &m, &o), Err(Error::OutOfRange { name: "search", .. })), "{min}..{max}");
+        }
+        // A range holding no pyramid level finds nothing, with score −∞.
+        let o = DetectOptions { search: SearchScales::FigureFraction { min: 50.0, max: 60.0 }, threshold: Some(-1e6), ..Default::default() };
+        assert!(matches!(detect(&v, &m, &o), Err(Error::NoFigure { score, .. }) if score == f64::NEG_INFINITY));
+    }
+
+    /// The sketch range scores a subset of the levels: its best detection is the best of
+    /// exactly those levels of the full search.
+    #[test]
+    fn sketch_range_equals_the_full_search_restricted_to_its_levels() {
+        let m = model::tests::tiny_model();
+        let data: Vec<u8> = (0..96 * 80).map(|i| if (i % 96) / 8 % 3 == 0 { 30 } else { 220 }).collect();
+        let v = ImageView::gray(&data, 96, 80).unwrap();
+        let o = DetectOptions { threshold: Some(-1e6), ..Default::default() };
+        let sketch = detect(&v, &m, &o).unwrap();
+        let (lo, hi) = SKETCH_SEARCH.cell_range(&m, 96, 80);
+        let (planes, _) = prepare_image(&v, o.max_side).unwrap();
+        let all = candidates(&planes, &m, f64::NEG_INFINITY, 0.0, f64::INFINITY, 64, &|_| true).unwrap();
+        let best_in = all.iter().find(|c| c.cell_px >= lo && c.cell_px <= hi).unwrap();
+        assert_eq!(sketch.best().score, best_in.score);
+        assert!(all.iter().any(|c| c.cell_px < lo), "the full search has finer levels");
     }
 
     #[test]

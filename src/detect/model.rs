@@ -180,6 +180,29 @@ impl Model {
         (r, c)
     }
 
+    /// Height in cells of the model's figure at rest: the vertical extent of the part boxes when
+    /// every part sits at its anchor, the tallest over the layouts that use mixture m for every
+    /// part (m = 0..K−1, clamped to each part's mixtures). 29 for the PARSE model; a figure F px
+    /// tall is found near cells of F / this many px.
+    pub fn rest_height_cells(&self) -> f64 {
+        let k = self.parts.iter().map(|p| p.filter.len()).max().unwrap_or(1);
+        let mut best = 0i64;
+        for mix in 0..k {
+            let mut top = vec![0i64; self.parts.len()];
+            let (mut y1, mut y2) = (i64::MAX, i64::MIN);
+            for (i, p) in self.parts.iter().enumerate() {
+                let m = mix.min(p.filter.len() - 1);
+                if let (Some(par), Some(&d)) = (p.parent, p.def.get(m)) {
+                    top[i] = top[par] + self.defs[d].anchor[1] as i64 - 1;
+                }
+                y1 = y1.min(top[i]);
+                y2 = y2.max(top[i] + self.filters[p.filter[m]].rows as i64);
+            }
+            best = best.max(y2 - y1);
+        }
+        best.max(1) as f64
+    }
+
     /// Pyramid padding in cells (x, y) as `getpadding`: largest filter side − 2 (at least 0).
     pub fn padding(&self) -> (usize, usize) {
         let (r, c) = self.max_filter_size();
@@ -314,6 +337,16 @@ pub(crate) mod tests {
         let mut bad = m;
         bad.sbin = 3;
         assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn rest_height_spans_the_part_boxes_at_their_anchors() {
+        let m = tiny_model();
+        // Mixture 0: child top at 0 + 3 − 1 = 2, 2 rows -> 0..4; mixture 1: the same anchor y.
+        assert_eq!(m.rest_height_cells(), 4.0);
+        let mut up = m.clone();
+        up.defs[1].anchor = [2, -4]; // child above the root: top −5, boxes −5..2 -> 7 cells
+        assert_eq!(up.rest_height_cells(), 7.0);
     }
 
     #[test]

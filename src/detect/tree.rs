@@ -4,8 +4,8 @@
 //! co-occurrence bias added, and the message is added to the parent's score. Root positions
 //! scoring at least the threshold are back-tracked to part boxes.
 
-use super::conv::{responses, ScoreMap};
-use super::dt::distance_transform;
+use super::conv::{responses, responses_reference, ScoreMap};
+use super::dt::{distance_transform, distance_transform_reference};
 use super::model::Model;
 use super::pyramid::Level;
 
@@ -69,6 +69,7 @@ struct Trace {
 
 /// Runs the DP on one level and returns the best candidates with score ≥ `thresh` that `accept`
 /// admits, at most `max_candidates` of them, best first. Empty when a filter does not fit.
+/// Uses the optimised kernels (matrix-product filter responses, fast distance transform).
 pub fn detect_level(
     model: &Model,
     level: &Level,
@@ -78,7 +79,32 @@ pub fn detect_level(
     max_candidates: usize,
     accept: &(dyn Fn(&Candidate) -> bool + Sync),
 ) -> Vec<Candidate> {
-    let resp = responses(&level.feat, &model.filters);
+    detect_level_with(model, level, (padx, pady), thresh, max_candidates, accept, Kernels::Optimised)
+}
+
+/// Which kernels [`detect_level_with`] runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernels {
+    /// Matrix-product filter responses and the fast distance transform (what [`detect_level`] uses).
+    Optimised,
+    /// The plain reference kernels ([`responses_reference`], [`distance_transform_reference`]):
+    /// slower, for checking the optimised path.
+    Reference,
+}
+
+/// [`detect_level`] with a choice of kernels; `pad` = (padx, pady).
+pub fn detect_level_with(
+    model: &Model,
+    level: &Level,
+    (padx, pady): (usize, usize),
+    thresh: f64,
+    max_candidates: usize,
+    accept: &(dyn Fn(&Candidate) -> bool + Sync),
+    kernels: Kernels,
+) -> Vec<Candidate> {
+    let reference = kernels == Kernels::Reference;
+    let resp = if reference { responses_reference(&level.feat, &model.filters) } else { responses(&level.feat, &model.filters) };
+    let dt = if reference { distance_transform_reference } else { distance_transform };
     let np = model.parts.len();
     // Per part, per mixture: score maps (start as the filter responses).
     let mut scores: Vec<Vec<ScoreMap>> = Vec::with_capacity(np);
@@ -103,7 +129,7 @@ pub fn detect_level(
             .zip(&part.def)
             .map(|(s, &d)| {
                 let def = &model.defs[d];
-                distance_transform(s, def.w, def.anchor[0] as i64 - 1, def.anchor[1] as i64 - 1, prows, pcols)
+                dt(s, def.w, def.anchor[0] as i64 - 1, def.anchor[1] as i64 - 1, prows, pcols)
             })
             .collect();
         let mut ik = Vec::with_capacity(part.bias.len());
@@ -112,12 +138,13 @@ pub fn detect_level(
             let mut arg = vec![0u8; prows * pcols];
             for (m, t) in dts.iter().enumerate() {
                 let b = model.bias[brow[m]] as f32;
+                let mu = m as u8;
+                // Branch-free selects (vectorised): the first mixture attaining the maximum wins.
                 for ((bv, a), &s) in best.iter_mut().zip(arg.iter_mut()).zip(&t.score.data) {
                     let v = s + b;
-                    if v > *bv {
-                        *bv = v;
-                        *a = m as u8;
-                    }
+                    let gt = v > *bv;
+                    *bv = if gt { v } else { *bv };
+                    *a = if gt { mu } else { *a };
                 }
             }
             for (ps, v) in scores[par][l].data.iter_mut().zip(&best) {
@@ -256,6 +283,67 @@ mod tests {
             - (d.w[0] * dx * dx + d.w[1] * dx + d.w[2] * dy * dy + d.w[3] * dy);
         assert!((s - best).abs() < 1e-3, "back-tracked score {s} vs {best}");
         assert_eq!(p1.local, r[2 + p1.mixture].at(cx, cy));
+    }
+
+    /// A seeded random model of the PARSE family's shape (5x5 filters, 6 mixtures, a chain and a
+    /// branch), big enough for the matrix-product path.
+    fn random_model(seed: u64) -> Model {
+        use super::super::model::{Deformation, Filter, Part};
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let (np, k) = (4, 6);
+        let filters = (0..np * k).map(|_| Filter { rows: 5, cols: 5, w: (0..25 * FEAT_DIM).map(|_| rng.random_range(-0.3..0.3)).collect() }).collect();
+        let defs = (0..np * k)
+            .map(|_| Deformation {
+                w: [rng.random_range(0.01..0.1), rng.random_range(-0.05..0.05), rng.random_range(0.01..0.1), rng.random_range(-0.05..0.05)],
+                anchor: [rng.random_range(-3..5), rng.random_range(-3..5)],
+            })
+            .collect();
+        let bias: Vec<f64> = (0..1 + np * k * k).map(|_| rng.random_range(-0.5..0.5)).collect();
+        let parents = [None, Some(0), Some(1), Some(0)];
+        let parts = (0..np)
+            .map(|i| Part {
+                parent: parents[i],
+                filter: (0..k).map(|m| i * k + m).collect(),
+                def: if i == 0 { vec![] } else { (0..k).map(|m| i * k + m).collect() },
+                bias: if i == 0 { vec![vec![0]] } else { (0..k).map(|l| (0..k).map(|m| 1 + (i * k + l) * k + m).collect()).collect() },
+            })
+            .collect();
+        Model::new(4, 5, -1.0, filters, defs, bias, parts, [0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1]).unwrap()
+    }
+
+    /// End to end on a small image: every level of its pyramid gives the same candidates with the
+    /// optimised kernels as with the reference ones (scores within 1e-4 relative, same boxes).
+    #[test]
+    fn optimised_kernels_give_the_reference_detections() {
+        let model = random_model(3);
+        let (w, h) = (120, 104);
+        let data: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f32, (i / w) as f32);
+                let ring = ((x - 60.0).hypot(y - 40.0) - 18.0).abs() < 2.0;
+                let bar = (x - 60.0).abs() < 2.0 && y > 58.0 && y < 100.0;
+                if ring || bar { 20.0 } else { 230.0 + ((i * 7919) % 13) as f32 }
+            })
+            .collect();
+        let im = super::super::hog::Planes { width: w, height: h, channels: 1, data };
+        let (padx, pady) = model.padding();
+        let pyr = super::super::pyramid::build(&im, model.sbin, model.interval, padx, pady, 0.0).unwrap();
+        assert!(pyr.levels.len() >= 8);
+        let mut compared = 0;
+        for level in &pyr.levels {
+            let fast = detect_level(&model, level, padx, pady, f64::NEG_INFINITY, 5, &|_| true);
+            let slow = detect_level_with(&model, level, (padx, pady), f64::NEG_INFINITY, 5, &|_| true, Kernels::Reference);
+            assert_eq!(fast.len(), slow.len(), "level {}", level.cell_px);
+            for (a, b) in fast.iter().zip(&slow) {
+                assert!((a.score - b.score).abs() <= 1e-4 * b.score.abs().max(1.0), "level {}: {} vs {}", level.cell_px, a.score, b.score);
+                for (p, q) in a.parts.iter().zip(&b.parts) {
+                    assert_eq!((p.x1, p.y1, p.mixture), (q.x1, q.y1, q.mixture), "level {}", level.cell_px);
+                }
+                compared += 1;
+            }
+        }
+        assert!(compared >= 20, "{compared} candidates compared");
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use serde_json::{json, Map, Value};
-use sketchbody::detect::{detect, DetectOptions, Detection, Model, PARSE_JOINT_NAMES};
+use sketchbody::detect::{detect, DetectOptions, Detection, Model, SearchScales, PARSE_JOINT_NAMES};
 use sketchbody::image::{load_rgb_image, RgbImage};
 use sketchbody::skeleton::{BONES, JOINT_NAMES};
 
@@ -31,6 +31,16 @@ pub struct Args {
     /// Skip pyramid levels with cells smaller than this many pixels (faster; misses small figures).
     #[arg(long, default_value_t = 0.0)]
     min_cell: f64,
+    /// Smallest figure searched, as a fraction of the shorter image side (default: the sketch
+    /// search range of `DetectOptions`, 0.25).
+    #[arg(long)]
+    min_figure: Option<f64>,
+    /// Largest figure searched, as a fraction of the longer image side (default 1.0).
+    #[arg(long)]
+    max_figure: Option<f64>,
+    /// Search every pyramid level (small figures in photos) instead of the sketch range.
+    #[arg(long, conflicts_with_all = ["min_figure", "max_figure"])]
+    all_scales: bool,
     /// Longer-side cap in pixels; larger images are downscaled first.
     #[arg(long, default_value_t = sketchbody::detect::DEFAULT_MAX_DETECT_SIDE)]
     max_side: usize,
@@ -88,7 +98,14 @@ fn overlay(img: &RgbImage, d: &Detection) -> Vec<u8> {
 pub fn run(a: Args) -> Result<(), CliError> {
     let model = Model::load_any(&a.model)?;
     let img = load_rgb_image(&a.input)?;
-    let opts = DetectOptions { threshold: a.threshold, min_cell_px: a.min_cell, max_side: a.max_side, ..Default::default() };
+    let search = match (a.all_scales, sketchbody::detect::SKETCH_SEARCH) {
+        (true, _) => SearchScales::All,
+        (false, SearchScales::FigureFraction { min, max }) => {
+            SearchScales::FigureFraction { min: a.min_figure.unwrap_or(min), max: a.max_figure.unwrap_or(max) }
+        }
+        (false, s) => s,
+    };
+    let opts = DetectOptions { threshold: a.threshold, min_cell_px: a.min_cell, max_side: a.max_side, search, ..Default::default() };
     let dets = detect(&img.view(), &model, &opts)?;
     let best = dets.best();
     let doc = json!({
