@@ -119,6 +119,11 @@
 #define MAX_LIMB_CANDIDATES 4096
 
 /**
+ * Largest accepted blend temperature ([`PoseOptions::blend`]), px².
+ */
+#define MAX_BLEND 1.0e6
+
+/**
  * Default image side, pixels.
  */
 #define DEFAULT_SIZE 512
@@ -265,8 +270,8 @@ typedef struct skb_pose_dictionary skb_pose_dictionary;
 
 /**
  * Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
- * α = 0, 10 bases, 0.5 px, refinement on, prior 0.1 m, 2 exemplar starts, 64 limb
- * candidates). Not synchronised: do not change it
+ * α = 0, 4 bases, 0.5 px, refinement on, prior 0.1 m, 12 exemplar starts, 64 limb
+ * candidates, blend 30 px²). Not synchronised: do not change it
  * while another thread uses it. Free with `skb_pose_options_free`.
  */
 typedef struct skb_pose_options skb_pose_options;
@@ -699,6 +704,12 @@ skb_status skb_pose_options_set_starts(struct skb_pose_options *opts, uint32_t s
  * training poses).
  */
 skb_status skb_pose_options_set_limb_candidates(struct skb_pose_options *opts, uint32_t count);
+
+/**
+ * Sets the blend temperature of the exemplar starts' hypotheses, px² per visible joint in
+ * [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
+ */
+skb_status skb_pose_options_set_blend(struct skb_pose_options *opts, double tau_px2);
 
 /**
  * Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint

@@ -80,8 +80,8 @@ pub struct skb_pose_dictionary {
 }
 
 /// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
-/// α = 0, 10 bases, 0.5 px, refinement on, prior 0.1 m, 2 exemplar starts, 64 limb
-/// candidates). Not synchronised: do not change it
+/// α = 0, 4 bases, 0.5 px, refinement on, prior 0.1 m, 12 exemplar starts, 64 limb
+/// candidates, blend 30 px²). Not synchronised: do not change it
 /// while another thread uses it. Free with `skb_pose_options_free`.
 pub struct skb_pose_options {
     inner: PoseOptions,
@@ -296,6 +296,13 @@ pub unsafe extern "C" fn skb_pose_options_set_limb_candidates(opts: *mut skb_pos
     ffi_boundary! { set_option(opts, |o| o.limb_candidates = count as usize) }
 }
 
+/// Sets the blend temperature of the exemplar starts' hypotheses, px² per visible joint in
+/// [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options, tau_px2: f64) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.blend = tau_px2) }
+}
+
 fn joints_in(j: &skb_joints2d) -> Joints2 {
     Joints2 { xy: j.xy, visible: std::array::from_fn(|k| j.visible[k] != 0) }
 }
@@ -438,6 +445,8 @@ mod tests {
             assert_eq!(skb_pose_options_set_max_bases(o, 4), skb_status::SKB_OK);
             assert_eq!(skb_pose_options_set_starts(o, 33), skb_status::SKB_ERR_OUT_OF_RANGE);
             assert_eq!(skb_pose_options_set_limb_candidates(o, 5000), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_pose_options_set_blend(o, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
+            assert_eq!(skb_pose_options_set_blend(o, -1.0), skb_status::SKB_ERR_OUT_OF_RANGE);
             let j = figure();
             // From an exemplar start (the default): refining the result must not undo the fit,
             // which holds only if the base pose is recovered as joints − Σ basis · weight.

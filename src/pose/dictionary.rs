@@ -278,7 +278,7 @@ impl Dictionary {
 }
 
 /// Joints ordered parents first (breadth-first from the pelvis).
-const TREE_ORDER: [usize; NUM_JOINTS] = [8, 1, 9, 12, 0, 2, 5, 10, 13, 3, 6, 11, 14, 4, 7];
+pub(crate) const TREE_ORDER: [usize; NUM_JOINTS] = [8, 1, 9, 12, 0, 2, 5, 10, 13, 3, 6, 11, 14, 4, 7];
 
 /// `pose` with every bone set to `lengths[b]` along its own direction (a zero-length bone
 /// keeps its offset), rebuilt from the pelvis outward.

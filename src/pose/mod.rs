@@ -2,6 +2,7 @@
 //! joints, by projected matching pursuit over a dictionary of action-specific basis poses.
 //!
 //! - [`motion`]: motion tables (canonical-joint CSV), pose normalisation, mirroring.
+//! - [`blend`]: posterior-mean blend of the exemplar starts' hypotheses.
 //! - [`bvh`]: BVH reader with a joint-name mapping for CMU-, Mixamo- and Rokoko-style rigs.
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
 //! - [`exemplar`]: the nearest-neighbour starts (exemplar poses ranked by an affine camera fit).
@@ -18,6 +19,7 @@
 //! Units: 3-D joints are metres of a 1.75 m person (every pose is normalised to that stature,
 //! see [`motion::normalize_pose`]); 2-D joints are image pixels (origin top-left, y down).
 
+pub mod blend;
 pub mod bvh;
 pub mod camera_fit;
 pub mod dict_io;

@@ -29,6 +29,9 @@ pub const MAX_STARTS: usize = 32;
 /// Most limb candidates ([`PoseOptions::limb_candidates`]).
 pub const MAX_LIMB_CANDIDATES: usize = 4096;
 
+/// Largest accepted blend temperature ([`PoseOptions::blend`]), px².
+pub const MAX_BLEND: f64 = 1.0e6;
+
 /// Largest accepted stopping tolerance, pixels.
 pub const MAX_TOLERANCE: f64 = 1.0e4;
 
@@ -64,14 +67,18 @@ pub struct PoseOptions {
     /// start may come from any of this many exemplars that best explain the whole figure
     /// (affine-camera ranking); 0 = starts are whole exemplars. Used only when `starts` > 0.
     pub limb_candidates: usize,
+    /// Blend temperature τ, px² per visible joint, in [0, [`MAX_BLEND`]]: the hypotheses of
+    /// the exemplar starts are averaged with weights exp(−Δobjective / (τ V))
+    /// ([`super::blend`]); 0 = return the single best. Used only when `starts` > 1.
+    pub blend: f64,
 }
 
 impl Default for PoseOptions {
     /// The library default (chosen on a validation split of training clips, docs/benchmarks.md):
-    /// κ = 0.05, α = 0, up to 10 bases, 0.5 px, refined, prior 0.1 m, 2 exemplar starts
-    /// recomposed from 64 limb candidates.
+    /// κ = 0.05, α = 0, up to 4 bases, 0.5 px, refined, prior 0.1 m, 12 exemplar starts
+    /// recomposed from 64 limb candidates, blended at τ = 30 px² per joint.
     fn default() -> Self {
-        PoseOptions { kappa: 0.05, alpha: 0.0, max_bases: 10, tolerance: 0.5, refine: true, prior: 0.1, starts: 2, limb_candidates: 64 }
+        PoseOptions { kappa: 0.05, alpha: 0.0, max_bases: 4, tolerance: 0.5, refine: true, prior: 0.1, starts: 12, limb_candidates: 64, blend: 30.0 }
     }
 }
 
@@ -82,6 +89,7 @@ impl PoseOptions {
         ensure_finite("alpha", self.alpha)?;
         ensure_finite("tolerance", self.tolerance)?;
         ensure_finite("prior", self.prior)?;
+        ensure_finite("blend", self.blend)?;
         let range = |name: &'static str, detail: String| Err(Error::OutOfRange { name, detail });
         if !(0.0..=MAX_KAPPA).contains(&self.kappa) {
             return range("kappa", format!("{} is not in [0, {MAX_KAPPA}]", self.kappa));
@@ -100,6 +108,9 @@ impl PoseOptions {
         }
         if self.limb_candidates > MAX_LIMB_CANDIDATES {
             return range("limb_candidates", format!("{} is not in [0, {MAX_LIMB_CANDIDATES}]", self.limb_candidates));
+        }
+        if !(0.0..=MAX_BLEND).contains(&self.blend) {
+            return range("blend", format!("{} px² is not in [0, {MAX_BLEND}]", self.blend));
         }
         if !(0.0..=1.0).contains(&self.prior) {
             return range("prior", format!("{} m is not in [0, 1]", self.prior));
@@ -124,6 +135,8 @@ mod tests {
             PoseOptions { prior: -1.0, ..Default::default() },
             PoseOptions { starts: 33, ..Default::default() },
             PoseOptions { limb_candidates: 5000, ..Default::default() },
+            PoseOptions { blend: -1.0, ..Default::default() },
+            PoseOptions { blend: f64::NAN, ..Default::default() },
         ];
         for o in bad {
             assert!(o.validate().is_err(), "{o:?}");

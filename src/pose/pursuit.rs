@@ -65,8 +65,9 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
 /// (`visible[j] == false`) drop their residuals; see [`Problem::new`] for the input checks.
 /// With [`PoseOptions::starts`] > 0 and a dictionary with exemplars, the pursuit and refinement
 /// run from each of the `starts` best exemplar starts ([`super::exemplar`]; recomposed limb by
-/// limb when [`PoseOptions::limb_candidates`] > 0) instead of from μ, and the result with the
-/// lowest objective (reprojection plus weight prior) is returned.
+/// limb when [`PoseOptions::limb_candidates`] > 0) instead of from μ; the results are blended
+/// by their objectives (reprojection plus weight prior; [`super::blend`], temperature
+/// [`PoseOptions::blend`]; 0 = the one with the lowest objective).
 pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
     opts.validate()?;
     let prob = Problem::new(dict, joints, opts.prior)?;
@@ -76,7 +77,7 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
     }
     let ranking = super::exemplar::affine_ranking(&prob);
     let candidates: Vec<usize> = ranking.iter().take(opts.limb_candidates).map(|r| r.0).collect();
-    let mut best: Option<(f64, PoseEstimate)> = None;
+    let mut hyps: Vec<(f64, PoseEstimate)> = Vec::new();
     let mut last_err = None;
     for s in super::exemplar::nearest(&prob, &ranking, opts.starts, opts.alpha)? {
         let (p, cam, parts) = if candidates.is_empty() {
@@ -94,16 +95,13 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
         };
         match pursue(&p, opts, cam, Some(parts)) {
             Ok(est) => {
-                let f = p.total_objective(&est.camera, &est.bases, &est.weights);
-                if best.as_ref().is_none_or(|(b, _)| f < *b) {
-                    best = Some((f, est));
-                }
+                hyps.push((p.total_objective(&est.camera, &est.bases, &est.weights), est));
             }
             Err(e) => last_err = Some(e),
         }
     }
-    match (best, last_err) {
-        (Some((_, est)), _) => Ok(est),
+    match (super::blend::blend(&prob, &hyps, opts.blend), last_err) {
+        (Some(est), _) => Ok(est),
         (None, Some(e)) => Err(e),
         (None, None) => Err(crate::error::Error::Degenerate("no exemplar start admitted a camera".into())),
     }

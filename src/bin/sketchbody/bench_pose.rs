@@ -61,6 +61,9 @@ pub struct Args {
     /// Override the limb candidates of configuration (d).
     #[arg(long)]
     limb_candidates: Option<usize>,
+    /// Override the blend temperature (px² per joint) of configuration (d).
+    #[arg(long)]
+    blend: Option<f64>,
     /// Run configuration (d) only.
     #[arg(long)]
     only_default: bool,
@@ -133,6 +136,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         prior: a.prior.unwrap_or(def.prior),
         starts: a.starts.unwrap_or(def.starts),
         limb_candidates: a.limb_candidates.unwrap_or(def.limb_candidates),
+        blend: a.blend.unwrap_or(def.blend),
         ..def
     };
     let paper_kappa = kappa_from_paper(PAPER_KAPPA, dict.sum_sq_lengths());

@@ -42,6 +42,9 @@ pub struct Args {
     /// Limb candidates for recomposing exemplar starts (0 = whole exemplars).
     #[arg(long, default_value_t = PoseOptions::default().limb_candidates)]
     limb_candidates: usize,
+    /// Blend temperature of the exemplar starts' hypotheses, px² per joint (0 = the best one).
+    #[arg(long, default_value_t = PoseOptions::default().blend)]
+    blend: f64,
     /// Skip the final Levenberg–Marquardt refinement.
     #[arg(long)]
     no_refine: bool,
@@ -100,6 +103,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         prior: a.prior,
         starts: a.starts,
         limb_candidates: a.limb_candidates,
+        blend: a.blend,
     };
     let est = estimate_pose(&dict, &joints, &opts)?;
     let mut j3 = Map::new();
@@ -127,7 +131,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         "reprojection_rms_px": est.rms,
         "length_excess": est.length_excess,
         "base_exemplars": est.base_parts,
-        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior, "starts": opts.starts, "limb_candidates": opts.limb_candidates},
+        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior, "starts": opts.starts, "limb_candidates": opts.limb_candidates, "blend": opts.blend},
     });
     let mut bytes = serde_json::to_vec_pretty(&doc).map_err(|e| CliError(e.to_string()))?;
     bytes.push(b'\n');
