@@ -140,10 +140,23 @@ pub fn run(a: Args) -> Result<(), CliError> {
         ..def
     };
     let paper_kappa = kappa_from_paper(PAPER_KAPPA, dict.sum_sq_lengths());
+    // (a)–(c): the paper's pursuit from the mean pose (≤ 10 bases, 0.5 px), no prior, no
+    // exemplar starts — spelled out so that changes of the library default do not move them.
+    let paper = PoseOptions {
+        kappa: paper_kappa,
+        alpha: PAPER_ALPHA,
+        max_bases: 10,
+        tolerance: 0.5,
+        refine: true,
+        prior: 0.0,
+        starts: 0,
+        limb_candidates: 0,
+        blend: 0.0,
+    };
     let configs = [
-        ("(a) mean pose, camera fitted", PoseOptions { max_bases: 0, alpha: 0.0, refine: false, prior: 0.0, starts: 0, ..def }),
-        ("(b) kappa=0 (equality), alpha=0", PoseOptions { kappa: 0.0, alpha: 0.0, prior: 0.0, starts: 0, ..def }),
-        ("(c) paper: kappa=8 CMU, alpha=0.8", PoseOptions { kappa: paper_kappa, alpha: PAPER_ALPHA, prior: 0.0, starts: 0, ..def }),
+        ("(a) mean pose, camera fitted", PoseOptions { max_bases: 0, alpha: 0.0, refine: false, ..paper }),
+        ("(b) kappa=0 (equality), alpha=0", PoseOptions { kappa: 0.0, alpha: 0.0, ..paper }),
+        ("(c) paper: kappa=8 CMU, alpha=0.8", PoseOptions { kappa: paper_kappa, alpha: PAPER_ALPHA, ..paper }),
         ("(d) default", ours),
     ];
     println!("bench-pose: {} bases in {} actions, {} exemplars; clips {}; {} poses; seed {}", dict.num_bases(), dict.actions.len(), dict.exemplars.ncols(), clips.join(","), samples.len(), a.seed);
