@@ -15,8 +15,8 @@
 // the weight is held constant on the manifold). So both solutions satisfy the bound exactly.
 // Pass: on every problem f_ours <= f_ceres * (1 + 1e-6) + 1e-9 and our bound holds (1e-9 rel).
 // Both objectives are evaluated here by the same function. Two passes: prior 0 from the mean
-// pose (eq. 3 exactly, library kappa default) and the library defaults (exemplar starts, prior
-// 0.1 m). The model's base pose (mean or exemplar start) is the start's joints minus its bases,
+// pose with up to 10 bases (eq. 3 exactly, library kappa default) and the library defaults
+// (12 blended exemplar starts, up to 4 bases, prior 0.1 m). The model's base pose (mean or exemplar start) is the start's joints minus its bases,
 // as skb_pose_refine takes it.
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -323,6 +323,7 @@ int main(int argc, char** argv) {
     if (pass == 0) {
       check(skb_pose_options_set_prior(opts, 0.0), "prior");
       check(skb_pose_options_set_starts(opts, 0), "starts");
+      check(skb_pose_options_set_max_bases(opts, 10), "max bases");  // the paper's pursuit size
     }
     std::mt19937_64 rng(12345 + pass);
     std::uniform_real_distribution<double> U(-1.0, 1.0);

@@ -713,11 +713,12 @@ skb_status skb_pose_options_set_blend(struct skb_pose_options *opts, double tau_
 
 /**
  * Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
- * refinement if enabled). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
+ * refinement if enabled; by default from 12 exemplar starts whose results are blended, see
+ * `skb_pose_options_set_starts`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
  * joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
  * (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
  * beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
- * distinct `out`); about 2–5 ms on one core.
+ * distinct `out`); about 1.6 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
  */
 skb_status skb_estimate_pose(const struct skb_pose_dictionary *dict,
                              const struct skb_joints2d *joints,
