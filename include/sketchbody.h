@@ -89,6 +89,41 @@
 #define CHAMFER_CAP 12.0
 
 /**
+ * Default [`LearnParams::exemplar_spacing`], metres.
+ */
+#define DEFAULT_EXEMPLAR_SPACING 0.03
+
+/**
+ * Most exemplars a dictionary may hold.
+ */
+#define MAX_EXEMPLARS 65536
+
+/**
+ * Shortlist size per requested start.
+ */
+#define SHORTLIST_FACTOR 4
+
+/**
+ * Smallest shortlist.
+ */
+#define MIN_SHORTLIST 16
+
+/**
+ * Most nearest-neighbour starts ([`PoseOptions::starts`]).
+ */
+#define MAX_STARTS 32
+
+/**
+ * Most limb candidates ([`PoseOptions::limb_candidates`]).
+ */
+#define MAX_LIMB_CANDIDATES 4096
+
+/**
+ * Largest accepted blend temperature ([`PoseOptions::blend`]), px².
+ */
+#define MAX_BLEND 1.0e6
+
+/**
  * Default image side, pixels.
  */
 #define DEFAULT_SIZE 512
@@ -235,7 +270,8 @@ typedef struct skb_pose_dictionary skb_pose_dictionary;
 
 /**
  * Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
- * α = 0.8, 10 bases, 0.5 px, refinement on, prior 0.03 m). Not synchronised: do not change it
+ * α = 0, 4 bases, 0.5 px, refinement on, prior 0.1 m, 12 exemplar starts, 64 limb
+ * candidates, blend 30 px²). Not synchronised: do not change it
  * while another thread uses it. Free with `skb_pose_options_free`.
  */
 typedef struct skb_pose_options skb_pose_options;
@@ -657,12 +693,32 @@ skb_status skb_pose_options_set_refine(struct skb_pose_options *opts, bool refin
 skb_status skb_pose_options_set_prior(struct skb_pose_options *opts, double prior_m);
 
 /**
+ * Sets the number of nearest-neighbour starts, 0..=32: the pursuit runs from each of this
+ * many training poses of the dictionary that best explain the 2-D joints and keeps the best
+ * result (0 = from the mean pose, as in the paper).
+ */
+skb_status skb_pose_options_set_starts(struct skb_pose_options *opts, uint32_t starts);
+
+/**
+ * Sets the limb candidates for recomposing nearest-neighbour starts, 0..=4096 (0 = whole
+ * training poses).
+ */
+skb_status skb_pose_options_set_limb_candidates(struct skb_pose_options *opts, uint32_t count);
+
+/**
+ * Sets the blend temperature of the exemplar starts' hypotheses, px² per visible joint in
+ * [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
+ */
+skb_status skb_pose_options_set_blend(struct skb_pose_options *opts, double tau_px2);
+
+/**
  * Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
- * refinement if enabled). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
+ * refinement if enabled; by default from 12 exemplar starts whose results are blended, see
+ * `skb_pose_options_set_starts`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
  * joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
  * (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
  * beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
- * distinct `out`); about 2–5 ms on one core.
+ * distinct `out`); about 1.6 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
  */
 skb_status skb_estimate_pose(const struct skb_pose_dictionary *dict,
                              const struct skb_joints2d *joints,
@@ -671,7 +727,8 @@ skb_status skb_estimate_pose(const struct skb_pose_dictionary *dict,
 
 /**
  * The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
- * joints are ignored), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
+ * base pose is taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
+ * start `skb_estimate_pose` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
  * and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
  * is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
  * to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.

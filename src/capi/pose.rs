@@ -80,7 +80,8 @@ pub struct skb_pose_dictionary {
 }
 
 /// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
-/// α = 0.8, 10 bases, 0.5 px, refinement on, prior 0.03 m). Not synchronised: do not change it
+/// α = 0, 4 bases, 0.5 px, refinement on, prior 0.1 m, 12 exemplar starts, 64 limb
+/// candidates, blend 30 px²). Not synchronised: do not change it
 /// while another thread uses it. Free with `skb_pose_options_free`.
 pub struct skb_pose_options {
     inner: PoseOptions,
@@ -280,6 +281,28 @@ pub unsafe extern "C" fn skb_pose_options_set_prior(opts: *mut skb_pose_options,
     ffi_boundary! { set_option(opts, |o| o.prior = prior_m) }
 }
 
+/// Sets the number of nearest-neighbour starts, 0..=32: the pursuit runs from each of this
+/// many training poses of the dictionary that best explain the 2-D joints and keeps the best
+/// result (0 = from the mean pose, as in the paper).
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_starts(opts: *mut skb_pose_options, starts: u32) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.starts = starts as usize) }
+}
+
+/// Sets the limb candidates for recomposing nearest-neighbour starts, 0..=4096 (0 = whole
+/// training poses).
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_limb_candidates(opts: *mut skb_pose_options, count: u32) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.limb_candidates = count as usize) }
+}
+
+/// Sets the blend temperature of the exemplar starts' hypotheses, px² per visible joint in
+/// [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options, tau_px2: f64) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.blend = tau_px2) }
+}
+
 fn joints_in(j: &skb_joints2d) -> Joints2 {
     Joints2 { xy: j.xy, visible: std::array::from_fn(|k| j.visible[k] != 0) }
 }
@@ -311,11 +334,12 @@ fn prior_weight(d: &Dictionary, j: &Joints2, o: &PoseOptions) -> f64 {
 }
 
 /// Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
-/// refinement if enabled). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
+/// refinement if enabled; by default from 12 exemplar starts whose results are blended, see
+/// `skb_pose_options_set_starts`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
 /// joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
 /// (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
 /// beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
-/// distinct `out`); about 2–5 ms on one core.
+/// distinct `out`); about 1.6 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
 #[no_mangle]
 pub unsafe extern "C" fn skb_estimate_pose(
     dict: *const skb_pose_dictionary,
@@ -337,7 +361,8 @@ pub unsafe extern "C" fn skb_estimate_pose(
 }
 
 /// The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
-/// joints are ignored), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
+/// base pose is taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
+/// start `skb_estimate_pose` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
 /// and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
 /// is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
 /// to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
@@ -362,6 +387,15 @@ pub unsafe extern "C" fn skb_pose_refine(
             return out_of_range("start->num_bases", format!("{n} is not in 1..=32"));
         }
         let camera = WeakPerspective { sx: s.sx, sy: s.sy, r: Matrix3::from_row_slice(&s.r), t: s.t };
+        // The base pose (μ or an exemplar start) is what the joints are without the bases.
+        let mut base = crate::pose::dictionary::pose_to_vec(&s.joints);
+        for (&b, &w) in s.bases[..n].iter().zip(&s.weights[..n]) {
+            if b as usize >= d.inner.num_bases() {
+                return out_of_range("start->bases", format!("index {b} is not below {}", d.inner.num_bases()));
+            }
+            base.axpy(-w, &d.inner.bases.column(b as usize), 1.0);
+        }
+        let base = crate::pose::dictionary::vec_to_pose(base.as_slice());
         let start_est = PoseEstimate {
             joints: s.joints,
             camera,
@@ -369,6 +403,8 @@ pub unsafe extern "C" fn skb_pose_refine(
             weights: s.weights[..n].to_vec(),
             rms: s.rms_px,
             length_excess: s.length_excess,
+            base,
+            base_parts: None,
         };
         let e = try_core!(refine_pose(&d.inner, &j, &o, &start_est));
         *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
@@ -408,12 +444,24 @@ mod tests {
             assert_eq!(skb_pose_options_set_max_bases(o, 33), skb_status::SKB_ERR_OUT_OF_RANGE);
             assert_eq!(skb_pose_options_set_kappa(o, 0.02), skb_status::SKB_OK);
             assert_eq!(skb_pose_options_set_max_bases(o, 4), skb_status::SKB_OK);
+            assert_eq!(skb_pose_options_set_starts(o, 33), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_pose_options_set_limb_candidates(o, 5000), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_pose_options_set_blend(o, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
+            assert_eq!(skb_pose_options_set_blend(o, -1.0), skb_status::SKB_ERR_OUT_OF_RANGE);
             let j = figure();
+            // From an exemplar start (the default): refining the result must not undo the fit,
+            // which holds only if the base pose is recovered as joints − Σ basis · weight.
             let mut p: skb_pose3d = std::mem::zeroed();
+            assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
+            assert!(p.num_bases > 0);
+            let mut q: skb_pose3d = std::mem::zeroed();
+            assert_eq!(skb_pose_refine(d, &j, o, &p, &mut q), skb_status::SKB_OK);
+            assert!(q.rms_px <= p.rms_px + 1e-9, "{} > {}", q.rms_px, p.rms_px);
+            // The figure is the mean pose seen from the front: from μ (the paper) it fits.
+            assert_eq!(skb_pose_options_set_starts(o, 0), skb_status::SKB_OK);
             assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
             assert!(p.rms_px < 1.0, "rms {}", p.rms_px);
             assert!(p.length_excess.abs() <= 0.02 + 1e-9);
-            let mut q: skb_pose3d = std::mem::zeroed();
             if p.num_bases > 0 {
                 assert_eq!(skb_pose_refine(d, &j, o, &p, &mut q), skb_status::SKB_OK);
                 assert!(q.rms_px <= p.rms_px + 1e-9);

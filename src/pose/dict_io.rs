@@ -1,11 +1,13 @@
 //! The pose dictionary's binary file format (`.skbpd`, documented in docs/formats.md) and the
 //! embedded default (`assets/pose_dictionary.skbpd`, compiled in with `include_bytes!`).
 //!
-//! Layout, all little-endian: magic `b"SKBPOSED"`; u32 version (= 1); u32 joints (= 15);
-//! u32 bones (= 14); u32 K (bases, 1..=4096); u32 A (actions, 1..=1024); f64 × 45 mean;
-//! f64 × 14 bone lengths; f64 × 45·K bases, column after column; f64 × K basis spreads σ_k; A × (u32 name length ≤ 256,
-//! UTF-8 name, u32 first column, u32 column count); u32 provenance length (≤ 1 MiB), UTF-8
-//! provenance; u64 FNV-1a-64 checksum of every preceding byte. Nothing may follow.
+//! Layout, all little-endian: magic `b"SKBPOSED"`; u32 version (= 2; 1 is still read); u32
+//! joints (= 15); u32 bones (= 14); u32 K (bases, 1..=4096); u32 A (actions, 1..=1024); f64 × 45
+//! mean; f64 × 14 bone lengths; f64 × 45·K bases, column after column; f64 × K basis spreads
+//! σ_k; A × (u32 name length ≤ 256, UTF-8 name, u32 first column, u32 column count); version 2
+//! only: u32 N (exemplars, 0..=65536) and f64 × 45·N exemplar poses, one after another; u32
+//! provenance length (≤ 1 MiB), UTF-8 provenance; u64 FNV-1a-64 checksum of every preceding
+//! byte. Nothing may follow. A version-1 file has no exemplars (N = 0).
 
 use std::path::Path;
 
@@ -18,7 +20,7 @@ use crate::skeleton::{NUM_BONES, NUM_JOINTS};
 /// File magic.
 const MAGIC: &[u8; 8] = b"SKBPOSED";
 /// Current format version.
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 const MAX_BASES: usize = 4096;
 const MAX_ACTIONS: usize = 1024;
 const MAX_NAME: usize = 256;
@@ -47,6 +49,10 @@ pub fn to_bytes(d: &Dictionary) -> Vec<u8> {
         out.extend_from_slice(a.name.as_bytes());
         out.extend_from_slice(&(a.first as u32).to_le_bytes());
         out.extend_from_slice(&(a.count as u32).to_le_bytes());
+    }
+    out.extend_from_slice(&(d.exemplars.ncols() as u32).to_le_bytes());
+    for v in d.exemplars.iter() {
+        out.extend_from_slice(&v.to_le_bytes());
     }
     out.extend_from_slice(&(d.provenance.len() as u32).to_le_bytes());
     out.extend_from_slice(d.provenance.as_bytes());
@@ -95,8 +101,8 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Dictionary> {
     let (body, sum) = bytes.split_at(bytes.len() - 8);
     let mut r = Reader { b: body, pos: 8 };
     let version = r.u32()?;
-    if version != VERSION as usize {
-        return Err(corrupt(&format!("unsupported version {version} (this library reads {VERSION})")));
+    if version != 1 && version != VERSION as usize {
+        return Err(corrupt(&format!("unsupported version {version} (this library reads 1 and {VERSION})")));
     }
     let stored = u64::from_le_bytes(sum.try_into().map_err(|_| corrupt("truncated"))?);
     if stored != fnv1a64(body) {
@@ -117,11 +123,20 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Dictionary> {
         let (first, count) = (r.u32()?, r.u32()?);
         actions.push(Action { name, first, count });
     }
+    let exemplars = if version >= 2 {
+        let n = r.u32()?;
+        if n > super::dictionary::MAX_EXEMPLARS {
+            return Err(corrupt(&format!("{n} exemplars (at most {})", super::dictionary::MAX_EXEMPLARS)));
+        }
+        DMatrix::from_vec(POSE_DIM, n, r.f64s(POSE_DIM * n)?)
+    } else {
+        DMatrix::zeros(POSE_DIM, 0)
+    };
     let provenance = r.text(MAX_PROVENANCE)?;
     if r.pos != body.len() {
         return Err(corrupt("trailing bytes before the checksum"));
     }
-    let d = Dictionary { mean, bases, sigma, bone_lengths, actions, provenance };
+    let d = Dictionary { mean, bases, sigma, bone_lengths, actions, exemplars, provenance };
     d.validate()?;
     Ok(d)
 }
@@ -166,9 +181,21 @@ mod tests {
         let mut flipped = bytes.clone();
         flipped[100] ^= 1;
         assert!(matches!(from_bytes(&flipped), Err(Error::CorruptData(m)) if m.contains("checksum")));
-        let mut v2 = bytes.clone();
-        v2[8] = 2;
-        assert!(matches!(from_bytes(&v2), Err(Error::CorruptData(m)) if m.contains("version")));
+        assert!(d.exemplars.ncols() > 0);
+        let mut v3 = bytes.clone();
+        v3[8] = 3;
+        assert!(matches!(from_bytes(&v3), Err(Error::CorruptData(m)) if m.contains("version")));
+        // A version-1 file: the same without the exemplar block; it reads with no exemplars.
+        let mut d1 = d.clone();
+        d1.exemplars = DMatrix::zeros(POSE_DIM, 0);
+        let b2 = to_bytes(&d1);
+        let tail = 4 + d1.provenance.len() + 8;
+        let mut v1 = b2[..b2.len() - tail - 4].to_vec();
+        v1.extend_from_slice(&b2[b2.len() - tail..b2.len() - 8]);
+        v1[8] = 1;
+        let sum = fnv1a64(&v1);
+        v1.extend_from_slice(&sum.to_le_bytes());
+        assert_eq!(from_bytes(&v1).unwrap(), d1);
     }
 
     #[test]

@@ -16,7 +16,10 @@
 //! [`LearnParams::max_per_action`]. Each component's sign makes its largest-magnitude entry
 //! positive. Each basis also has a spread σ_k: the standard deviation of the action's poses
 //! along a component, or |mean_a − μ| for the action-mean direction (used by the optional
-//! weight prior of [`super::PoseOptions::prior`]).
+//! weight prior of [`super::PoseOptions::prior`]). Exemplars (the candidates of the
+//! nearest-neighbour starts of [`super::PoseOptions::starts`]): the normalised poses of each
+//! action (mirrors included, in clip order) thinned greedily so that no two kept poses of an
+//! action are closer than [`LearnParams::exemplar_spacing`] (RMS over the 15 joints).
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
@@ -26,6 +29,12 @@ use crate::skeleton::{Joints3, BONES, NUM_BONES, NUM_JOINTS};
 
 /// Length of a pose vector (3 × 15).
 pub const POSE_DIM: usize = 3 * NUM_JOINTS;
+
+/// Default [`LearnParams::exemplar_spacing`], metres.
+pub const DEFAULT_EXEMPLAR_SPACING: f64 = 0.03;
+
+/// Most exemplars a dictionary may hold.
+pub const MAX_EXEMPLARS: usize = 65536;
 
 /// One action's block of consecutive basis columns.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,11 +56,16 @@ pub struct LearnParams {
     pub energy: f64,
     /// Add the left/right mirror of every pose.
     pub mirror: bool,
+    /// Exemplar spacing, metres (0 = no exemplars): a training pose (per action, mirrors
+    /// included, in order) becomes an exemplar for the nearest-neighbour starts of
+    /// [`super::PoseOptions::starts`] unless an exemplar already kept for its action lies
+    /// within this RMS joint distance.
+    pub exemplar_spacing: f64,
 }
 
 impl Default for LearnParams {
     fn default() -> Self {
-        LearnParams { max_per_action: 6, energy: 0.9, mirror: true }
+        LearnParams { max_per_action: 6, energy: 0.9, mirror: true, exemplar_spacing: DEFAULT_EXEMPLAR_SPACING }
     }
 }
 
@@ -68,6 +82,9 @@ pub struct Dictionary {
     pub bone_lengths: [f64; NUM_BONES],
     /// Column blocks per action, in column order, covering 0..K.
     pub actions: Vec<Action>,
+    /// Exemplar training poses, 45 × N (N may be 0), normalised like the training poses
+    /// (metres of a 1.75 m person, pelvis at the origin, facing +Z).
+    pub exemplars: DMatrix<f64>,
     /// Free text: how the dictionary was made (clips, held-out clips, parameters).
     pub provenance: String,
 }
@@ -120,6 +137,12 @@ impl Dictionary {
         if self.mean.len() != POSE_DIM || self.bases.nrows() != POSE_DIM || self.bases.ncols() == 0 {
             return bad("wrong dimensions".into());
         }
+        if self.exemplars.nrows() != POSE_DIM || self.exemplars.ncols() > MAX_EXEMPLARS {
+            return bad("wrong exemplar dimensions".into());
+        }
+        if self.exemplars.iter().any(|v| !v.is_finite()) {
+            return bad("non-finite exemplar value".into());
+        }
         if self.sigma.len() != self.bases.ncols() {
             return bad("wrong number of basis spreads".into());
         }
@@ -153,10 +176,13 @@ impl Dictionary {
     /// Learns a dictionary from clips `(clip name, frames in any rigid placement and scale)`
     /// (see the module doc). `provenance` is stored as given.
     pub fn learn(clips: &[(String, Vec<Joints3>)], params: &LearnParams, provenance: String) -> Result<Dictionary> {
-        if params.max_per_action == 0 || !(params.energy > 0.0 && params.energy <= 1.0) {
+        if params.max_per_action == 0 || !(params.energy > 0.0 && params.energy <= 1.0) || !(params.exemplar_spacing >= 0.0 && params.exemplar_spacing.is_finite()) {
             return Err(Error::OutOfRange {
                 name: "learn parameters",
-                detail: format!("max_per_action = {} must be ≥ 1, energy = {} in (0, 1]", params.max_per_action, params.energy),
+                detail: format!(
+                    "max_per_action = {} must be ≥ 1, energy = {} in (0, 1], exemplar_spacing = {} finite and ≥ 0",
+                    params.max_per_action, params.energy, params.exemplar_spacing
+                ),
             });
         }
         // Group clips into actions, keeping first-seen order.
@@ -193,6 +219,22 @@ impl Dictionary {
         }
         let mean = with_bone_lengths(&raw_mean, &bone_lengths);
         let mut cols: Vec<DVector<f64>> = Vec::new();
+        let mut exemplars: Vec<DVector<f64>> = Vec::new();
+        if params.exemplar_spacing > 0.0 {
+            let min_sq = NUM_JOINTS as f64 * params.exemplar_spacing * params.exemplar_spacing;
+            for (_, poses) in &groups {
+                let first = exemplars.len();
+                for v in poses.iter().map(pose_to_vec) {
+                    if exemplars[first..].iter().all(|e| (e - &v).norm_squared() >= min_sq) {
+                        exemplars.push(v);
+                    }
+                }
+            }
+        }
+        if exemplars.len() > MAX_EXEMPLARS {
+            return Err(Error::OutOfRange { name: "exemplar_spacing", detail: format!("{} exemplars exceed {MAX_EXEMPLARS}", exemplars.len()) });
+        }
+        let exemplars = if exemplars.is_empty() { DMatrix::zeros(POSE_DIM, 0) } else { DMatrix::from_columns(&exemplars) };
         let mut sigma: Vec<f64> = Vec::new();
         let mut actions = Vec::new();
         for ((name, poses), m) in groups.iter().zip(&means) {
@@ -229,14 +271,14 @@ impl Dictionary {
             }
         }
         let bases = DMatrix::from_columns(&cols);
-        let dict = Dictionary { mean, bases, sigma: DVector::from_vec(sigma), bone_lengths, actions, provenance };
+        let dict = Dictionary { mean, bases, sigma: DVector::from_vec(sigma), bone_lengths, actions, exemplars, provenance };
         dict.validate()?;
         Ok(dict)
     }
 }
 
 /// Joints ordered parents first (breadth-first from the pelvis).
-const TREE_ORDER: [usize; NUM_JOINTS] = [8, 1, 9, 12, 0, 2, 5, 10, 13, 3, 6, 11, 14, 4, 7];
+pub(crate) const TREE_ORDER: [usize; NUM_JOINTS] = [8, 1, 9, 12, 0, 2, 5, 10, 13, 3, 6, 11, 14, 4, 7];
 
 /// `pose` with every bone set to `lengths[b]` along its own direction (a zero-length bone
 /// keeps its offset), rebuilt from the pelvis outward.
@@ -299,6 +341,21 @@ pub(crate) mod tests {
         d.validate().unwrap();
         assert!(d.sum_sq_lengths() > 0.5);
         assert_eq!(d.action_of(0), Some("swing"));
+        // Exemplars of one action are at least the spacing apart (RMS over the joints), and a
+        // finer spacing keeps more.
+        let one = Dictionary::learn(&synthetic_clips()[..1], &LearnParams::default(), "test".into()).unwrap();
+        let ex = &one.exemplars;
+        assert!(ex.ncols() >= 3, "{} exemplars", ex.ncols());
+        for a in 0..ex.ncols() {
+            for b in 0..a {
+                let rms = ((ex.column(a) - ex.column(b)).norm_squared() / NUM_JOINTS as f64).sqrt();
+                assert!(rms >= DEFAULT_EXEMPLAR_SPACING, "exemplars {a}, {b}: {rms} m apart");
+            }
+        }
+        let fine = LearnParams { exemplar_spacing: 0.003, ..LearnParams::default() };
+        assert!(Dictionary::learn(&synthetic_clips(), &fine, "test".into()).unwrap().exemplars.ncols() > d.exemplars.ncols());
+        let none = LearnParams { exemplar_spacing: 0.0, ..LearnParams::default() };
+        assert_eq!(Dictionary::learn(&synthetic_clips(), &none, "test".into()).unwrap().exemplars.ncols(), 0);
         let bad = LearnParams { energy: 0.0, ..LearnParams::default() };
         assert!(Dictionary::learn(&synthetic_clips(), &bad, String::new()).is_err());
         assert!(Dictionary::learn(&[], &LearnParams::default(), String::new()).is_err());

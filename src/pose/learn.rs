@@ -86,13 +86,14 @@ pub fn learn_from_sources(mocap: Option<&Path>, bvh: &[PathBuf], spec: &LearnSpe
     let used: Vec<&str> = clips.iter().map(|c| c.0.as_str()).collect();
     let p = &spec.params;
     let provenance = format!(
-        "sketchbody pose dictionary\nclips: {}\nheld_out: {}\nexcluded: {}\nparams: max_per_action={} energy={} mirror={}\n",
+        "sketchbody pose dictionary\nclips: {}\nheld_out: {}\nexcluded: {}\nparams: max_per_action={} energy={} mirror={} exemplar_spacing={}\n",
         used.join(","),
         spec.held_out.join(","),
         spec.excluded.join(","),
         p.max_per_action,
         p.energy,
-        p.mirror
+        p.mirror,
+        p.exemplar_spacing
     );
     Dictionary::learn(&clips, p, provenance)
 }

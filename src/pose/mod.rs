@@ -2,8 +2,10 @@
 //! joints, by projected matching pursuit over a dictionary of action-specific basis poses.
 //!
 //! - [`motion`]: motion tables (canonical-joint CSV), pose normalisation, mirroring.
+//! - [`blend`]: posterior-mean blend of the exemplar starts' hypotheses.
 //! - [`bvh`]: BVH reader with a joint-name mapping for CMU-, Mixamo- and Rokoko-style rigs.
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
+//! - [`exemplar`]: the nearest-neighbour starts (exemplar poses ranked by an affine camera fit).
 //! - [`learn`]: clip selection and provenance for learning from folders and BVH files.
 //! - [`dict_io`]: the dictionary's binary file format and the embedded default.
 //! - [`options`]: solver options (κ, α, basis count, tolerance).
@@ -17,10 +19,12 @@
 //! Units: 3-D joints are metres of a 1.75 m person (every pose is normalised to that stature,
 //! see [`motion::normalize_pose`]); 2-D joints are image pixels (origin top-left, y down).
 
+pub mod blend;
 pub mod bvh;
 pub mod camera_fit;
 pub mod dict_io;
 pub mod dictionary;
+pub mod exemplar;
 pub mod learn;
 pub mod metrics;
 pub mod motion;

@@ -23,6 +23,15 @@ pub const PAPER_ALPHA: f64 = 0.8;
 /// Largest accepted relative κ.
 pub const MAX_KAPPA: f64 = 10.0;
 
+/// Most nearest-neighbour starts ([`PoseOptions::starts`]).
+pub const MAX_STARTS: usize = 32;
+
+/// Most limb candidates ([`PoseOptions::limb_candidates`]).
+pub const MAX_LIMB_CANDIDATES: usize = 4096;
+
+/// Largest accepted blend temperature ([`PoseOptions::blend`]), px².
+pub const MAX_BLEND: f64 = 1.0e6;
+
 /// Largest accepted stopping tolerance, pixels.
 pub const MAX_TOLERANCE: f64 = 1.0e4;
 
@@ -49,12 +58,27 @@ pub struct PoseOptions {
     /// px per metre, σ_k the basis spread) — a Gaussian prior on the weights with the 2-D
     /// error taken as `prior` metres at the figure's scale. 0 = the paper's eq. (3) exactly.
     pub prior: f64,
+    /// Nearest-neighbour starts, 0..=[`MAX_STARTS`]: run the pursuit from each of this many
+    /// exemplar poses that best explain the 2-D joints and keep the result with the lowest
+    /// objective; 0 = from the mean pose μ (the paper). Ignored for a dictionary without
+    /// exemplars.
+    pub starts: usize,
+    /// Limb recomposition of exemplar starts, 0..=[`MAX_LIMB_CANDIDATES`]: each limb of a
+    /// start may come from any of this many exemplars that best explain the whole figure
+    /// (affine-camera ranking); 0 = starts are whole exemplars. Used only when `starts` > 0.
+    pub limb_candidates: usize,
+    /// Blend temperature τ, px² per visible joint, in [0, [`MAX_BLEND`]]: the hypotheses of
+    /// the exemplar starts are averaged with weights exp(−Δobjective / (τ V))
+    /// ([`super::blend`]); 0 = return the single best. Used only when `starts` > 1.
+    pub blend: f64,
 }
 
 impl Default for PoseOptions {
-    /// The library default: κ = 0.05, α = 0.8, up to 10 bases, 0.5 px, refined, prior 0.03 m.
+    /// The library default (chosen on a validation split of training clips, docs/benchmarks.md):
+    /// κ = 0.05, α = 0, up to 4 bases, 0.5 px, refined, prior 0.1 m, 12 exemplar starts
+    /// recomposed from 64 limb candidates, blended at τ = 30 px² per joint.
     fn default() -> Self {
-        PoseOptions { kappa: 0.05, alpha: PAPER_ALPHA, max_bases: 10, tolerance: 0.5, refine: true, prior: 0.03 }
+        PoseOptions { kappa: 0.05, alpha: 0.0, max_bases: 4, tolerance: 0.5, refine: true, prior: 0.1, starts: 12, limb_candidates: 64, blend: 30.0 }
     }
 }
 
@@ -65,6 +89,7 @@ impl PoseOptions {
         ensure_finite("alpha", self.alpha)?;
         ensure_finite("tolerance", self.tolerance)?;
         ensure_finite("prior", self.prior)?;
+        ensure_finite("blend", self.blend)?;
         let range = |name: &'static str, detail: String| Err(Error::OutOfRange { name, detail });
         if !(0.0..=MAX_KAPPA).contains(&self.kappa) {
             return range("kappa", format!("{} is not in [0, {MAX_KAPPA}]", self.kappa));
@@ -77,6 +102,15 @@ impl PoseOptions {
         }
         if !(0.0..=MAX_TOLERANCE).contains(&self.tolerance) {
             return range("tolerance", format!("{} px is not in [0, {MAX_TOLERANCE}]", self.tolerance));
+        }
+        if self.starts > MAX_STARTS {
+            return range("starts", format!("{} is not in [0, {MAX_STARTS}]", self.starts));
+        }
+        if self.limb_candidates > MAX_LIMB_CANDIDATES {
+            return range("limb_candidates", format!("{} is not in [0, {MAX_LIMB_CANDIDATES}]", self.limb_candidates));
+        }
+        if !(0.0..=MAX_BLEND).contains(&self.blend) {
+            return range("blend", format!("{} px² is not in [0, {MAX_BLEND}]", self.blend));
         }
         if !(0.0..=1.0).contains(&self.prior) {
             return range("prior", format!("{} m is not in [0, 1]", self.prior));
@@ -99,6 +133,10 @@ mod tests {
             PoseOptions { max_bases: 33, ..Default::default() },
             PoseOptions { tolerance: f64::INFINITY, ..Default::default() },
             PoseOptions { prior: -1.0, ..Default::default() },
+            PoseOptions { starts: 33, ..Default::default() },
+            PoseOptions { limb_candidates: 5000, ..Default::default() },
+            PoseOptions { blend: -1.0, ..Default::default() },
+            PoseOptions { blend: f64::NAN, ..Default::default() },
         ];
         for o in bad {
             assert!(o.validate().is_err(), "{o:?}");

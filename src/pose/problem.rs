@@ -25,6 +25,9 @@ pub struct Problem<'a> {
     pub vis: Vec<usize>,
     /// Weight of the prior residuals `prior_w · w_k / σ_k`, pixels (0 = pure eq. 3).
     pub prior_w: f64,
+    /// The pose the bases are added to (45 values, metres): the dictionary's mean μ, or an
+    /// start composed from exemplars (see [`Problem::with_base`] and [`super::exemplar`]).
+    pub base: DVector<f64>,
 }
 
 impl<'a> Problem<'a> {
@@ -90,7 +93,12 @@ impl<'a> Problem<'a> {
         }
         let spread3: f64 = vis.iter().map(|&k| (dict.mean[3 * k] - mx3).powi(2) + (dict.mean[3 * k + 1] - my3).powi(2)).sum();
         let s_bar = if spread3 > 0.0 { (tr / spread3).sqrt() } else { 0.0 };
-        Ok(Problem { dict, uv: j.xy, vis, prior_w: s_bar * prior_m })
+        Ok(Problem { dict, uv: j.xy, vis, prior_w: s_bar * prior_m, base: dict.mean.clone() })
+    }
+
+    /// The same problem with the bases added to `base` (45 values, metres).
+    pub fn with_base(&self, base: DVector<f64>) -> Problem<'a> {
+        Problem { base, ..self.clone() }
     }
 
     /// The prior residuals `prior_w · w_k / σ_{bases[k]}`, pixels.
@@ -103,9 +111,9 @@ impl<'a> Problem<'a> {
         self.objective(cam, &self.pose(bases, w)) + self.prior_residuals(bases, w).iter().map(|r| r * r).sum::<f64>()
     }
 
-    /// 3-D joints μ + Σ_k B_{bases[k]} w_k, metres.
+    /// 3-D joints base + Σ_k B_{bases[k]} w_k, metres (base = μ unless [`Problem::with_base`]).
     pub fn pose(&self, bases: &[usize], w: &[f64]) -> [Vector3<f64>; NUM_JOINTS] {
-        let mut v = self.dict.mean.clone();
+        let mut v = self.base.clone();
         for (&b, &wk) in bases.iter().zip(w) {
             v.axpy(wk, &self.dict.bases.column(b), 1.0);
         }
@@ -135,7 +143,7 @@ impl<'a> Problem<'a> {
 
     /// The linear model of the projections in the weights: `A w ≈ r0` with `A` (2V + k rows ×
     /// k) the projected bases (without translation) over the prior rows `diag(prior_w / σ)`,
-    /// and `r0` the observed minus projected mean pose over k zeros.
+    /// and `r0` the observed minus projected base pose over k zeros.
     pub fn linear_system(&self, cam: &WeakPerspective, bases: &[usize]) -> (DMatrix<f64>, DVector<f64>) {
         let m = 2 * self.vis.len() + bases.len();
         let v2 = 2 * self.vis.len();
@@ -159,14 +167,14 @@ impl<'a> Problem<'a> {
         (a, r0)
     }
 
-    /// The limb-length constraint of eq. (3) restricted to `bases`.
+    /// The limb-length constraint of eq. (3) restricted to `bases` (bone vectors of the base pose).
     pub fn constraint(&self, bases: &[usize]) -> LengthConstraint {
         let d = &self.dict;
         let mut e = DVector::zeros(3 * NUM_BONES);
         let mut em = DMatrix::zeros(3 * NUM_BONES, bases.len());
         for (b, &(p, c)) in BONES.iter().enumerate() {
             for a in 0..3 {
-                e[3 * b + a] = d.mean[3 * c + a] - d.mean[3 * p + a];
+                e[3 * b + a] = self.base[3 * c + a] - self.base[3 * p + a];
                 for (k, &col) in bases.iter().enumerate() {
                     em[(3 * b + a, k)] = d.bases[(3 * c + a, col)] - d.bases[(3 * p + a, col)];
                 }
@@ -179,7 +187,7 @@ impl<'a> Problem<'a> {
 /// `g(w) = ‖e + E w‖² − Σ l²`: the summed squared bone lengths minus the dictionary's, m².
 #[derive(Clone, Debug)]
 pub struct LengthConstraint {
-    /// Bone vectors of the mean pose (42).
+    /// Bone vectors of the base pose (42).
     pub e: DVector<f64>,
     /// Bone vectors of the chosen bases (42 × k).
     pub em: DMatrix<f64>,

@@ -1,6 +1,7 @@
 //! The projected matching pursuit of eq. (3) ([`estimate_pose`]).
 //!
-//! Start from the mean pose with its fitted camera. Each step adds the unused basis whose
+//! Start from the mean pose (the paper; [`PoseOptions::starts`] = 0) or from exemplar starts
+//! ([`super::exemplar`]) with the fitted camera. Each step adds the unused basis whose
 //! projection (current camera, no translation) is most correlated with the reprojection residual
 //! (|aᵀr| / ‖a‖), then alternates the weights Ω ([`super::qcls`], constraint
 //! |g| ≤ κ Σl²) and the camera ([`super::camera_fit`], eq. 4 with α) until the RMS changes by
@@ -36,6 +37,11 @@ pub struct PoseEstimate {
     pub rms: f64,
     /// g / Σl²: relative excess of the summed squared bone lengths (|·| ≤ κ when feasible).
     pub length_excess: f64,
+    /// The pose the bases are added to, metres: μ (eq. 2) or an exemplar start.
+    pub base: Joints3,
+    /// For an exemplar start: the exemplar columns of its torso and of its limbs (right arm,
+    /// left arm, right leg, left leg; all equal unless recomposed); `None` for μ.
+    pub base_parts: Option<[usize; 5]>,
 }
 
 /// How many of the most correlated bases each pursuit step tries.
@@ -52,17 +58,66 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
     let x = prob.pose(&bases, &weights);
     let con = prob.constraint(&bases);
     let excess = con.value(&DVector::from_column_slice(&weights)) / con.sum_sq;
-    PoseEstimate { joints: to_joints(&x), rms: prob.rms(&cam, &x), camera: cam, bases, weights, length_excess: excess }
+    PoseEstimate { joints: to_joints(&x), rms: prob.rms(&cam, &x), camera: cam, bases, weights, length_excess: excess, base: crate::pose::dictionary::vec_to_pose(prob.base.as_slice()), base_parts: None }
 }
 
 /// Estimates the 3-D pose and camera from 2-D joints (see the module doc). Invisible joints
 /// (`visible[j] == false`) drop their residuals; see [`Problem::new`] for the input checks.
+/// With [`PoseOptions::starts`] > 0 and a dictionary with exemplars, the pursuit and refinement
+/// run from each of the `starts` best exemplar starts ([`super::exemplar`]; recomposed limb by
+/// limb when [`PoseOptions::limb_candidates`] > 0) instead of from μ; the results are blended
+/// by their objectives (reprojection plus weight prior; [`super::blend`], temperature
+/// [`PoseOptions::blend`]; 0 = the one with the lowest objective) and, if refinement is on, a
+/// blend of several is refined once more from its own base pose.
 pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
     opts.validate()?;
     let prob = Problem::new(dict, joints, opts.prior)?;
+    if opts.starts == 0 || dict.exemplars.ncols() == 0 {
+        let cam = fit_camera(&prob.pose(&[], &[]), &prob.uv, &prob.vis, opts.alpha)?;
+        return pursue(&prob, opts, cam, None);
+    }
+    let ranking = super::exemplar::affine_ranking(&prob);
+    let candidates: Vec<usize> = ranking.iter().take(opts.limb_candidates).map(|r| r.0).collect();
+    let mut hyps: Vec<(f64, PoseEstimate)> = Vec::new();
+    let mut last_err = None;
+    for s in super::exemplar::nearest(&prob, &ranking, opts.starts, opts.alpha)? {
+        let (p, cam, parts) = if candidates.is_empty() {
+            (prob.with_base(dict.exemplars.column(s.index).into_owned()), s.camera, [s.index; 5])
+        } else {
+            let (base, parts) = super::exemplar::compose(&prob, &s, &candidates);
+            let p = prob.with_base(base);
+            match fit_camera(&p.pose(&[], &[]), &p.uv, &p.vis, opts.alpha) {
+                Ok(cam) => (p, cam, parts),
+                Err(e) => {
+                    last_err = Some(e);
+                    continue;
+                }
+            }
+        };
+        match pursue(&p, opts, cam, Some(parts)) {
+            Ok(est) => {
+                hyps.push((p.total_objective(&est.camera, &est.bases, &est.weights), est));
+            }
+            Err(e) => last_err = Some(e),
+        }
+    }
+    match (super::blend::blend(&prob, &hyps, opts.blend), last_err) {
+        // A blend of several results is refined once more from its own base pose (the average
+        // fits the 2-D joints less well than each result; the 3-D error is unchanged).
+        (Some(est), _) if opts.refine && hyps.len() > 1 && opts.blend > 0.0 && !est.bases.is_empty() => {
+            super::refine::refine_problem(&prob.with_base(super::dictionary::pose_to_vec(&est.base)), opts, &est)
+        }
+        (Some(est), _) => Ok(est),
+        (None, Some(e)) => Err(e),
+        (None, None) => Err(crate::error::Error::Degenerate("no exemplar start admitted a camera".into())),
+    }
+}
+
+/// The pursuit (and refinement, if enabled) from the base pose of `prob` with camera `cam`.
+fn pursue(prob: &Problem, opts: &PoseOptions, mut cam: WeakPerspective, parts: Option<[usize; 5]>) -> Result<PoseEstimate> {
+    let dict = prob.dict;
     let bound = opts.kappa * dict.sum_sq_lengths();
     let mean = prob.pose(&[], &[]);
-    let mut cam = fit_camera(&mean, &prob.uv, &prob.vis, opts.alpha)?;
     let mut bases: Vec<usize> = Vec::new();
     let mut w: Vec<f64> = Vec::new();
     let mut rms = prob.rms(&cam, &mean);
@@ -140,9 +195,9 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
         obj = nobj;
         feasible = nfeasible;
     }
-    let est = finish(&prob, cam, bases, w);
+    let est = PoseEstimate { base_parts: parts, ..finish(prob, cam, bases, w) };
     if opts.refine && !est.bases.is_empty() {
-        return super::refine::refine_problem(&prob, opts, &est);
+        return super::refine::refine_problem(prob, opts, &est);
     }
     Ok(est)
 }

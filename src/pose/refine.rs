@@ -26,10 +26,11 @@ use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
 use crate::skeleton::Joints2;
 
-/// Refines `start` (its bases, weights and camera) on `joints` (see the module doc). The basis
-/// set is kept. A start whose weights violate the constraint is first moved onto it (weights
+/// Refines `start` (its bases, weights, camera and base pose) on `joints`
+/// (see the module doc). The basis set is kept. A start whose weights violate the constraint is first moved onto it (weights
 /// re-solved for the start camera). Errors as [`super::estimate_pose`], plus `OutOfRange` for a
-/// basis index ≥ K, a weight count ≠ basis count or more than 32 bases, and camera errors.
+/// basis index ≥ K, a weight count ≠ basis count or more than 32 bases, `NonFinite` for a
+/// non-finite weight or base-pose value, and camera errors.
 pub fn refine_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions, start: &PoseEstimate) -> Result<PoseEstimate> {
     opts.validate()?;
     let prob = Problem::new(dict, joints, opts.prior)?;
@@ -44,7 +45,10 @@ pub fn refine_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions, star
         }
         crate::error::ensure_finite("start weight", start.weights[i])?;
     }
-    refine_problem(&prob, opts, start)
+    for q in start.base.iter().flatten() {
+        crate::error::ensure_finite("start base pose", *q)?;
+    }
+    refine_problem(&prob.with_base(super::dictionary::pose_to_vec(&start.base)), opts, start)
 }
 
 /// Orthonormal basis (k × (k−1)) of the complement of `n` (Householder).
@@ -177,5 +181,5 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
     }
     // Re-orthonormalise the rotation (it accumulates products of exact rotations).
     cam.r = super::camera_fit::project_so3(&cam.r)?;
-    Ok(finish(prob, cam, bases, w.iter().copied().collect()))
+    Ok(PoseEstimate { base_parts: start.base_parts, ..finish(prob, cam, bases, w.iter().copied().collect()) })
 }

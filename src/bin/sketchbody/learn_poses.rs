@@ -32,6 +32,10 @@ pub struct Args {
     /// Fraction of each action's variance to keep, in (0, 1].
     #[arg(long, default_value_t = LearnParams::default().energy)]
     energy: f64,
+    /// Exemplar spacing, metres: the RMS joint distance below which a training pose is not kept
+    /// as another exemplar of its action (0 = no exemplars).
+    #[arg(long, default_value_t = LearnParams::default().exemplar_spacing)]
+    exemplar_spacing: f64,
     /// Do not add left/right mirrored poses.
     #[arg(long)]
     no_mirror: bool,
@@ -52,10 +56,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let spec = LearnSpec {
         held_out: a.holdout.unwrap_or_else(default_held_out),
         excluded,
-        params: LearnParams { max_per_action: a.max_per_action, energy: a.energy, mirror: !a.no_mirror },
+        params: LearnParams { max_per_action: a.max_per_action, energy: a.energy, mirror: !a.no_mirror, exemplar_spacing: a.exemplar_spacing },
     };
     let d = learn_from_sources(a.mocap.as_deref(), &a.bvh, &spec)?;
     dict_io::write(&d, &a.out)?;
-    println!("{}: {} bases in {} actions", a.out.display(), d.num_bases(), d.actions.len());
+    println!("{}: {} bases in {} actions, {} exemplars", a.out.display(), d.num_bases(), d.actions.len(), d.exemplars.ncols());
     Ok(())
 }

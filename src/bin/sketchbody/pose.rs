@@ -36,6 +36,15 @@ pub struct Args {
     /// Weight prior, metres (0 = the paper's eq. 3).
     #[arg(long, default_value_t = PoseOptions::default().prior)]
     prior: f64,
+    /// Nearest-neighbour starts (exemplar poses tried; 0 = start from the mean pose, the paper).
+    #[arg(long, default_value_t = PoseOptions::default().starts)]
+    starts: usize,
+    /// Limb candidates for recomposing exemplar starts (0 = whole exemplars).
+    #[arg(long, default_value_t = PoseOptions::default().limb_candidates)]
+    limb_candidates: usize,
+    /// Blend temperature of the exemplar starts' hypotheses, px² per joint (0 = the best one).
+    #[arg(long, default_value_t = PoseOptions::default().blend)]
+    blend: f64,
     /// Skip the final Levenberg–Marquardt refinement.
     #[arg(long)]
     no_refine: bool,
@@ -92,6 +101,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         tolerance: a.tolerance,
         refine: !a.no_refine,
         prior: a.prior,
+        starts: a.starts,
+        limb_candidates: a.limb_candidates,
+        blend: a.blend,
     };
     let est = estimate_pose(&dict, &joints, &opts)?;
     let mut j3 = Map::new();
@@ -118,7 +130,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         "bases": bases,
         "reprojection_rms_px": est.rms,
         "length_excess": est.length_excess,
-        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior},
+        "base_exemplars": est.base_parts,
+        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior, "starts": opts.starts, "limb_candidates": opts.limb_candidates, "blend": opts.blend},
     });
     let mut bytes = serde_json::to_vec_pretty(&doc).map_err(|e| CliError(e.to_string()))?;
     bytes.push(b'\n');
