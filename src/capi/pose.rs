@@ -76,14 +76,14 @@ const _: () = assert!(std::mem::size_of::<skb_pose3d>() == 880);
 /// The basis-pose dictionary (mean pose, bases, bone lengths). Immutable after creation: one
 /// dictionary may be used from many threads at once. Free with `skb_pose_dictionary_free`.
 pub struct skb_pose_dictionary {
-    inner: Dictionary,
+    pub(crate) inner: Dictionary,
 }
 
 /// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
 /// α = 0.8, 10 bases, 0.5 px, refinement on, prior 0.03 m). Not synchronised: do not change it
 /// while another thread uses it. Free with `skb_pose_options_free`.
 pub struct skb_pose_options {
-    inner: PoseOptions,
+    pub(crate) inner: PoseOptions,
 }
 
 fn null(name: &str) -> skb_status {
@@ -280,7 +280,7 @@ pub unsafe extern "C" fn skb_pose_options_set_prior(opts: *mut skb_pose_options,
     ffi_boundary! { set_option(opts, |o| o.prior = prior_m) }
 }
 
-fn joints_in(j: &skb_joints2d) -> Joints2 {
+pub(crate) fn joints_in(j: &skb_joints2d) -> Joints2 {
     Joints2 { xy: j.xy, visible: std::array::from_fn(|k| j.visible[k] != 0) }
 }
 

@@ -38,6 +38,10 @@ pub struct FitArgs {
     /// Dual-quaternion skinning instead of linear blend skinning.
     #[arg(long)]
     pub dqs: bool,
+    /// Stretch bones so the joints land exactly on the estimated 3-D joints (in the fit and the
+    /// posed outputs; the rest mesh keeps the shape's bone lengths).
+    #[arg(long)]
+    pub retarget: bool,
 }
 
 /// Parses a match-score name.
@@ -46,7 +50,8 @@ pub fn parse_score(s: &str) -> Result<MatchScore, CliError> {
         "paper" => Ok(MatchScore::Paper),
         "filled" | "filled-iou" => Ok(MatchScore::FilledIou),
         "chamfer" => Ok(MatchScore::Chamfer),
-        _ => Err(CliError(format!("--score {s:?}: expected paper, filled or chamfer"))),
+        "chamfer2" | "two-sided" => Ok(MatchScore::TwoSidedChamfer),
+        _ => Err(CliError(format!("--score {s:?}: expected paper, filled, chamfer or chamfer2"))),
     }
 }
 
@@ -56,6 +61,7 @@ pub fn score_name(s: MatchScore) -> &'static str {
         MatchScore::Paper => "paper",
         MatchScore::FilledIou => "filled",
         MatchScore::Chamfer => "chamfer",
+        MatchScore::TwoSidedChamfer => "chamfer2",
     }
 }
 
@@ -73,7 +79,7 @@ impl FitArgs {
             tolerance: self.tolerance,
             seed: self.seed,
             skinning: if self.dqs { SkinMethod::DualQuaternion } else { SkinMethod::Linear },
-            retarget: false,
+            retarget: self.retarget,
         })
     }
 }
