@@ -111,3 +111,29 @@ fn bad_input_gives_specific_errors() {
     let bad_fit = PipelineOptions { fit: FitOptions { temperature: f64::NAN, ..o.fit.clone() }, ..o.clone() };
     assert!(matches!(run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad_fit, &mut |_| true), Err(Error::NonFinite { .. })));
 }
+
+#[test]
+fn camera_refit_recovers_the_scale_of_the_body_skeleton() {
+    use sketchbody::camera::WeakPerspective;
+    use sketchbody::pipeline::refit_camera;
+    use sketchbody::pose::PoseEstimate;
+    let model = BodyModel::embedded().unwrap();
+    let rest = *model.space(Gender::Male).mean_joints();
+    let truth = WeakPerspective { sx: 300.0, sy: 310.0, r: nalgebra::Matrix3::identity(), t: [250.0, 260.0] };
+    let mut j = Joints2 { xy: [[0.0; 2]; 15], visible: [true; 15] };
+    for k in 0..15 {
+        j.xy[k] = truth.project(&nalgebra::Vector3::from(rest[k]));
+    }
+    j.visible[joint::L_WRIST] = false;
+    j.xy[joint::L_WRIST] = [0.0, 0.0]; // a wrong guess, ignored
+    let wrong = WeakPerspective { sx: 200.0, sy: 180.0, t: [0.0, 0.0], ..truth };
+    let est = PoseEstimate { joints: rest, camera: wrong, bases: vec![], weights: vec![], rms: 0.0, length_excess: 0.0 };
+    let fixed = refit_camera(&est, &rest, &j).unwrap();
+    assert!((fixed.camera.sx - 300.0).abs() < 1e-6 && (fixed.camera.sy - 310.0).abs() < 1e-6, "{:?}", fixed.camera);
+    assert!((fixed.camera.t[0] - 250.0).abs() < 1e-6 && (fixed.camera.t[1] - 260.0).abs() < 1e-6);
+    assert_eq!(fixed.joints, rest);
+    let mut few = j;
+    few.visible = [false; 15];
+    few.visible[0] = true;
+    assert!(matches!(refit_camera(&est, &rest, &few), Err(Error::Degenerate(_))));
+}

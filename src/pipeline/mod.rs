@@ -23,7 +23,7 @@ use crate::error::{Error, Result};
 use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult};
 use crate::image::{canny, CannyParams, GrayImage};
 use crate::pose::{estimate_pose, Dictionary, PoseEstimate, PoseOptions};
-use crate::skeleton::Joints2;
+use crate::skeleton::{Joints2, Joints3};
 
 pub use joints::{GivenJoints, JointsSource, NoDetector};
 
@@ -45,6 +45,53 @@ pub struct PipelineOptions {
     /// Skip the fit and use the gender's mean shape, posed the same way (the baseline of the
     /// benchmark). Needs `gender`.
     pub mean_shape: bool,
+    /// Keep the pose solver's camera (fitted to a 1.75 m person of the dictionary's proportions)
+    /// instead of refitting its scales and translation to each gender's mean skeleton (see
+    /// [`refit_camera`]). Default `false` (refit).
+    pub keep_pose_scale: bool,
+}
+
+/// The pose estimate with its camera refitted to a body's skeleton: the body's rest joints
+/// `rest` are posed to the estimate's bone directions by IK (its own bone lengths), rotated by
+/// the estimate's R, and `sx, tx` / `sy, ty` are the least-squares fit of their projections to
+/// the visible 2-D joints. The pose solver reports a 1.75 m person of its dictionary's
+/// proportions, and a single weak-perspective view cannot tell a small near figure from a large
+/// far one; without this the shape fit spends shape weights on the solver's arbitrary scale.
+/// Errors: IK's; [`Error::Degenerate`] when a scale comes out non-positive.
+pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> Result<PoseEstimate> {
+    let posed = ik::solve(rest, &pose.joints, &IkOptions { retarget: false })?.joints;
+    let r = pose.camera.r;
+    let fit_axis = |coord: &dyn Fn(&nalgebra::Vector3<f64>) -> f64, axis: usize| -> Result<(f64, f64)> {
+        let (mut n, mut sa, mut sb, mut saa, mut sab) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for (k, p) in posed.iter().enumerate() {
+            if !joints2d.visible[k] {
+                continue;
+            }
+            let a = coord(&(r * nalgebra::Vector3::from(*p)));
+            let b = joints2d.xy[k][axis];
+            n += 1.0;
+            sa += a;
+            sb += b;
+            saa += a * a;
+            sab += a * b;
+        }
+        let den = n * saa - sa * sa;
+        if n < 2.0 || den.abs() < 1e-12 {
+            return Err(Error::Degenerate("cannot refit the camera: the joints do not span the image".into()));
+        }
+        let scale = (n * sab - sa * sb) / den;
+        Ok((scale, (sb - scale * sa) / n))
+    };
+    let (sx, tx) = fit_axis(&|c| c.x, 0)?;
+    let (sy, ty) = fit_axis(&|c| -c.y, 1)?;
+    if !(sx > 0.0 && sy > 0.0) {
+        return Err(Error::Degenerate(format!("camera refit gave scales {sx}, {sy}")));
+    }
+    let mut out = pose.clone();
+    out.camera.sx = sx;
+    out.camera.sy = sy;
+    out.camera.t = [tx, ty];
+    Ok(out)
 }
 
 /// One gender's fit.
@@ -86,7 +133,8 @@ pub struct PipelineResult {
     pub joints2d: Joints2,
     /// Name of the joints source ([`JointsSource::name`]).
     pub joints_source: String,
-    /// 3-D joints (metres of a 1.75 m person, model frame) and camera (pixels).
+    /// 3-D joints (metres of a 1.75 m person, model frame) and camera (pixels) used for the
+    /// chosen gender: the camera refitted to that gender's mean skeleton (unless `keep_pose_scale`).
     pub pose: PoseEstimate,
     /// The fits, in order: the given gender, or female then male.
     pub fits: Vec<GenderFit>,
@@ -178,8 +226,12 @@ pub fn run_pipeline(
     let mut fits = Vec::with_capacity(genders.len());
     let t = Instant::now();
     let span = 0.9 / genders.len() as f32;
+    let mut poses = Vec::with_capacity(genders.len());
     for (i, &gender) in genders.iter().enumerate() {
         let tf = Instant::now();
+        let pose = if options.keep_pose_scale { pose.clone() } else { refit_camera(&pose, model.space(gender).mean_joints(), &joints2d)? };
+        poses.push(pose);
+        let pose = &poses[i];
         if options.mean_shape {
             fits.push(GenderFit { gender, fit: None, score: f64::NAN, seconds: 0.0 });
             continue;
@@ -196,6 +248,7 @@ pub fn run_pipeline(
     let gender = fits[chosen].gender;
     let weights = fits[chosen].fit.as_ref().map_or_else(Vec::new, |f| f.weights.clone());
     let score = fits[chosen].score;
+    let pose = poses.swap_remove(chosen);
 
     let t = Instant::now();
     let mesh = RiggedMesh::from_model(model, gender, &weights)?;

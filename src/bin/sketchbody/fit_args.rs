@@ -42,6 +42,10 @@ pub struct FitArgs {
     /// posed outputs; the rest mesh keeps the shape's bone lengths).
     #[arg(long)]
     pub retarget: bool,
+    /// Keep the pose solver's camera instead of refitting its scales and translation to the
+    /// gender's mean skeleton before the fit.
+    #[arg(long)]
+    pub keep_pose_scale: bool,
 }
 
 /// Parses a match-score name.

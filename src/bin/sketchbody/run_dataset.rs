@@ -134,7 +134,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     write_atomic(&a.out.join("run.json"), manifest.to_string().as_bytes())?;
     let model = BodyModel::embedded()?;
     let dict = dict_io::embedded()?;
-    let shared = Shared { model: &model, dict: &dict, base: PipelineOptions { fit, mean_shape: a.mean_shape, ..PipelineOptions::default() }, mode };
+    let shared = Shared { model: &model, dict: &dict, base: PipelineOptions { fit, mean_shape: a.mean_shape, keep_pose_scale: a.fit.keep_pose_scale, ..PipelineOptions::default() }, mode };
     let todo: Vec<&String> = stems.iter().filter(|s| !a.out.join(format!("{s}_posed.obj")).is_file()).collect();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build().map_err(|e| CliError(format!("thread pool: {e}")))?;
     catch_interrupt();
