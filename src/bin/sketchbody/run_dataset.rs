@@ -110,6 +110,7 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
 
 /// Runs the command.
 pub fn run(a: Args) -> Result<(), CliError> {
+    let fit = a.fit.options()?;
     let mode = match a.gender.as_str() {
         "truth" => GenderMode::Truth,
         "auto" => GenderMode::Auto,
@@ -124,7 +125,6 @@ pub fn run(a: Args) -> Result<(), CliError> {
     }
     stems.truncate(a.first.unwrap_or(usize::MAX));
     std::fs::create_dir_all(&a.out).map_err(|e| CliError(format!("{}: cannot create the results folder: {e}", a.out.display())))?;
-    let fit = a.fit.options()?;
     let manifest = json!({
         "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
         "gender": a.gender, "mean_shape": a.mean_shape, "score": score_name(fit.score), "seed": fit.seed,
