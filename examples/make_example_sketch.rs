@@ -1,9 +1,12 @@
 //! Draws `assets/examples/sketch.png`: a front-facing figure in outline strokes on paper tone,
 //! built from capsules around the canonical bones (a stand-in concept sketch for the README and
-//! tests). Deterministic. Run: `cargo run --release --example make_example_sketch -- OUT.png`.
+//! tests) and its 2-D joints: the very joint positions the figure is drawn around, written as a
+//! `sketchbody-joints2d` file. Deterministic. Run:
+//! `cargo run --release --example make_example_sketch -- OUT.png [JOINTS.json]`.
 
+use sketchbody::export::joints2d::write_joints2d;
 use sketchbody::image::{save_gray_png, GrayImage};
-use sketchbody::skeleton::{BONES, NUM_JOINTS};
+use sketchbody::skeleton::{Joints2, BONES, NUM_JOINTS};
 
 /// Joint positions in pixels (512x512 image), canonical order, the figure's right on image left.
 const JOINTS: [[f64; 2]; NUM_JOINTS] = [
@@ -65,5 +68,12 @@ fn main() {
     if let Err(e) = save_gray_png(&img, std::path::Path::new(&out)) {
         eprintln!("make_example_sketch: {e}");
         std::process::exit(1);
+    }
+    if let Some(path) = std::env::args().nth(2) {
+        let joints = Joints2 { xy: JOINTS, visible: [true; NUM_JOINTS] };
+        if let Err(e) = write_joints2d(std::path::Path::new(&path), &joints) {
+            eprintln!("make_example_sketch: {e}");
+            std::process::exit(1);
+        }
     }
 }

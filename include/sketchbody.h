@@ -34,6 +34,42 @@
 #define SKB_MAX_INFLUENCES 4
 
 /**
+ * `skb_fit_options_set_score`: the paper's eq. 7 (IoU of the silhouette with the edge map).
+ */
+#define SKB_SCORE_PAPER 0
+
+/**
+ * `skb_fit_options_set_score`: IoU with the figure region filled from the closed strokes.
+ */
+#define SKB_SCORE_FILLED_IOU 1
+
+/**
+ * `skb_fit_options_set_score`: silhouette boundary to edge chamfer distance (the default).
+ */
+#define SKB_SCORE_CHAMFER 2
+
+/**
+ * `skb_fit_options_set_score`: chamfer plus the mean distance of the sketch's edges to the
+ * silhouette (two-sided).
+ */
+#define SKB_SCORE_TWO_SIDED_CHAMFER 3
+
+/**
+ * `skb_fit_options_set_skinning`: linear blend skinning (the default).
+ */
+#define SKB_SKIN_LINEAR 0
+
+/**
+ * `skb_fit_options_set_skinning`: dual-quaternion skinning.
+ */
+#define SKB_SKIN_DUAL_QUATERNION 1
+
+/**
+ * `skb_fit_options_set_gender`: fit both shape spaces and keep the better-scoring one (default).
+ */
+#define SKB_GENDER_AUTO 2
+
+/**
  * Largest accepted image width or height, in pixels.
  */
 #define SKB_MAX_IMAGE_SIDE 16384
@@ -57,6 +93,21 @@
  * `skb_mesh_pose` flag: dual-quaternion skinning instead of linear blend skinning.
  */
 #define SKB_POSE_DUAL_QUATERNION 2
+
+/**
+ * `skb_result_copy_joints3d`: the rest joints of the fitted shape.
+ */
+#define SKB_JOINTS_REST 0
+
+/**
+ * `skb_result_copy_joints3d`: the posed joints of the fitted mesh.
+ */
+#define SKB_JOINTS_POSED 1
+
+/**
+ * `skb_result_copy_joints3d`: the 3-D pose estimated from the 2-D joints (a 1.75 m person).
+ */
+#define SKB_JOINTS_ESTIMATED 2
 
 /**
  * Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
@@ -234,10 +285,27 @@ enum skb_status
    * The image is too small to search for a figure.
    */
   SKB_ERR_IMAGE_TOO_SMALL = 22,
+  /**
+   * No 2-D joints were given and no joint detector is available.
+   */
+  SKB_ERR_NO_JOINTS = 23,
+  /**
+   * A visible 2-D joint lies outside the image.
+   */
+  SKB_ERR_JOINT_OUTSIDE_IMAGE = 24,
+  /**
+   * The sketch has no edges (blank, uniform or too faint).
+   */
+  SKB_ERR_BLANK_IMAGE = 25,
 };
 #ifndef __cplusplus
 typedef uint32_t skb_status;
 #endif // __cplusplus
+
+/**
+ * Which figure sizes [`detect`] searches (which pyramid levels it scores).
+ */
+typedef struct SearchScales SearchScales;
 
 /**
  * The library context: holds the body model (the embedded one for [`skb_context_new`]).
@@ -255,6 +323,23 @@ typedef struct skb_context skb_context;
 typedef struct skb_detector skb_detector;
 
 /**
+ * Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
+ * (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 0.02, raster
+ * side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
+ * dimension, gender automatic). Every setter validates its value and leaves the options
+ * unchanged on error. Not synchronised: do not change it while another thread uses it; reading
+ * it from several calls at once is fine. Free with `skb_fit_options_free`.
+ */
+typedef struct skb_fit_options skb_fit_options;
+
+/**
+ * A decoded image file, 8-bit gray (colour converted with OpenCV's weights). Create with
+ * `skb_gray_image_load`, view with `skb_gray_image_view`, free with `skb_gray_image_free`.
+ * Immutable: several threads may read it at once.
+ */
+typedef struct skb_gray_image skb_gray_image;
+
+/**
  * A body mesh: a shape of one gender in the rest pose (MakeHuman's A-pose), metres, model frame
  * (+Y up, +Z toward the viewer, the character's right at −X). Create with
  * `skb_mesh_new_from_shape`, release with `skb_mesh_free`. Getters only read it, so several
@@ -270,7 +355,7 @@ typedef struct skb_pose_dictionary skb_pose_dictionary;
 
 /**
  * Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
- * α = 0, 4 bases, 0.5 px, refinement on, prior 0.1 m, 12 exemplar starts, 64 limb
+ * α = 0.8, 4 bases, 0.5 px, refinement on, prior 0.1 m, 12 exemplar starts, 64 limb
  * candidates, blend 30 px²). Not synchronised: do not change it
  * while another thread uses it. Free with `skb_pose_options_free`.
  */
@@ -282,6 +367,12 @@ typedef struct skb_pose_options skb_pose_options;
  * [`skb_rasterizer_free`]. Not thread-safe: use one per thread (it may move between threads).
  */
 typedef struct skb_rasterizer skb_rasterizer;
+
+/**
+ * The result of `skb_run_pipeline`, owned by the caller (free with `skb_result_free`). It owns
+ * all its data (nothing refers to the inputs). Immutable: several threads may read it at once.
+ */
+typedef struct skb_result skb_result;
 
 /**
  * Options of [`skb_render_sketch`]: the style and the camera angles. Create with
@@ -319,6 +410,39 @@ typedef struct skb_image {
    */
   uint32_t channels;
 } skb_image;
+
+/**
+ * The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
+ * +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
+ * `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
+ * layout (104 bytes) is part of the ABI.
+ */
+typedef struct skb_camera {
+  /**
+   * Horizontal scale, pixels per metre (> 0).
+   */
+  double sx;
+  /**
+   * Vertical scale, pixels per metre (> 0).
+   */
+  double sy;
+  /**
+   * Rotation model -> camera, row-major, orthonormal with determinant +1.
+   */
+  double r[9];
+  /**
+   * Image position of the model origin, pixels.
+   */
+  double t[2];
+} skb_camera;
+
+/**
+ * Progress callback: called from the calling thread with the fraction of the work done
+ * (0..=1, non-decreasing) after each stage and each fit iteration; `user` is the caller's
+ * pointer, passed through untouched. Return 0 to continue, non-zero to cancel: the call then
+ * returns `SKB_ERR_CANCELLED` within one fit iteration, having freed everything it made.
+ */
+typedef int (*skb_progress_fn)(void *user, float fraction);
 
 /**
  * 15 image joints in canonical order (head, neck, r_shoulder, r_elbow, r_wrist, l_shoulder,
@@ -398,30 +522,7 @@ typedef struct skb_pose3d {
   uint32_t reserved;
 } skb_pose3d;
 
-/**
- * The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
- * +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
- * `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
- * layout (104 bytes) is part of the ABI.
- */
-typedef struct skb_camera {
-  /**
-   * Horizontal scale, pixels per metre (> 0).
-   */
-  double sx;
-  /**
-   * Vertical scale, pixels per metre (> 0).
-   */
-  double sy;
-  /**
-   * Rotation model -> camera, row-major, orthonormal with determinant +1.
-   */
-  double r[9];
-  /**
-   * Image position of the model origin, pixels.
-   */
-  double t[2];
-} skb_camera;
+
 
 #ifdef __cplusplus
 extern "C" {
@@ -531,6 +632,18 @@ skb_status skb_mesh_copy_skin_weights(const struct skb_mesh *mesh,
                                       size_t len);
 
 /**
+ * Number of PCA shape weights the mesh was made from (as given to `skb_mesh_new_from_shape`,
+ * or found by `skb_fit_shape`) into `*out`.
+ */
+skb_status skb_mesh_shape_weight_count(const struct skb_mesh *mesh, size_t *out);
+
+/**
+ * Copies the mesh's PCA shape weights (metres; `skb_mesh_shape_weight_count` of them) into
+ * `dst`, which holds `dst_len` doubles. On error nothing is written.
+ */
+skb_status skb_mesh_copy_shape_weights(const struct skb_mesh *mesh, double *dst, size_t dst_len);
+
+/**
  * Loads a detector model from `path` (NUL-terminated UTF-8): the binary `.skbd` format
  * (`docs/formats.md`, "Detector model") or the PARSE model JSON. Errors: `SKB_ERR_IO` (cannot
  * read), `SKB_ERR_CORRUPT_DATA` (bad magic, version, checksum, truncated or inconsistent
@@ -572,6 +685,102 @@ skb_status skb_detector_detect(const struct skb_detector *det,
  * Never NULL.
  */
 const char *skb_last_error_message(void);
+
+/**
+ * Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
+ */
+skb_status skb_fit_options_new(struct skb_fit_options **out);
+
+/**
+ * Frees fit options. NULL is a no-op.
+ */
+void skb_fit_options_free(struct skb_fit_options *opts);
+
+/**
+ * Sets the samples per SIR iteration, S, in 2..=100000.
+ */
+skb_status skb_fit_options_set_samples(struct skb_fit_options *opts, uint32_t samples);
+
+/**
+ * Sets the most SIR iterations, T, in 1..=1000.
+ */
+skb_status skb_fit_options_set_iterations(struct skb_fit_options *opts, uint32_t iterations);
+
+/**
+ * Sets the transition step s in standard deviations (Σ = diag(s² λ_k)), finite and > 0.
+ */
+skb_status skb_fit_options_set_transition_scale(struct skb_fit_options *opts, double scale);
+
+/**
+ * Sets the match score: `SKB_SCORE_PAPER`, `SKB_SCORE_FILLED_IOU`, `SKB_SCORE_CHAMFER` or
+ * `SKB_SCORE_TWO_SIDED_CHAMFER`.
+ */
+skb_status skb_fit_options_set_score(struct skb_fit_options *opts, uint32_t score);
+
+/**
+ * Sets the likelihood temperature of the non-paper scores (exp(score / temperature)), > 0.
+ */
+skb_status skb_fit_options_set_temperature(struct skb_fit_options *opts, double temperature);
+
+/**
+ * Sets the longest raster side of the fit, pixels, in 16..=4096.
+ */
+skb_status skb_fit_options_set_raster_side(struct skb_fit_options *opts, uint32_t side);
+
+/**
+ * Sets the convergence tolerance in standard deviations of the weights, finite and > 0.
+ */
+skb_status skb_fit_options_set_tolerance(struct skb_fit_options *opts, double tolerance);
+
+/**
+ * Sets the seed of every random step (same seed, same result on any thread count).
+ */
+skb_status skb_fit_options_set_seed(struct skb_fit_options *opts, uint64_t seed);
+
+/**
+ * Sets the skinning: `SKB_SKIN_LINEAR` or `SKB_SKIN_DUAL_QUATERNION`.
+ */
+skb_status skb_fit_options_set_skinning(struct skb_fit_options *opts, uint32_t method);
+
+/**
+ * Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
+ * dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
+ */
+skb_status skb_fit_options_set_dims(struct skb_fit_options *opts, uint32_t dims);
+
+/**
+ * Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (fit both,
+ * keep the better score).
+ */
+skb_status skb_fit_options_set_gender(struct skb_fit_options *opts, uint32_t gender);
+
+/**
+ * Fits the body shape (SIR, paper §II-C) to an edge map for a known 3-D pose and camera.
+ * `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
+ * `skb_pose3d.joints` from `skb_estimate_pose`); `camera` maps them to `edges`' pixels; `edges`
+ * is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
+ * `skb_canny`); `opts` may be NULL for the defaults (gender automatic: both shape spaces are
+ * fitted and the better score kept). `progress` may be NULL; a non-zero return cancels
+ * (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
+ * caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
+ * weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
+ * options' skinning; read with `skb_mesh_copy_posed_vertices`); `*score` (may be NULL) receives
+ * the best sample's match score (higher is better). Errors: non-finite joints or camera
+ * (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
+ * without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with
+ * (`SKB_ERR_OUT_OF_RANGE`). Thread-safe (the context is shared read-only); runs on the rayon
+ * pool; the callback is called on the calling thread.
+ */
+skb_status skb_fit_shape(const struct skb_context *ctx,
+                         const double *joints,
+                         size_t joints_len,
+                         const struct skb_camera *camera,
+                         const struct skb_image *edges,
+                         const struct skb_fit_options *opts,
+                         skb_progress_fn progress,
+                         void *user,
+                         double *score,
+                         struct skb_mesh **out);
 
 /**
  * Canny edges of `src`, bit-exact with OpenCV 4.6
@@ -833,6 +1042,131 @@ skb_status skb_mesh_write_glb(const struct skb_mesh *mesh, const char *path);
  * `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
  */
 skb_status skb_mesh_write_preview(const struct skb_mesh *mesh, const char *path, uint32_t size);
+
+/**
+ * Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as gray into `*out` (caller owns it).
+ * Errors: `SKB_ERR_IO` (missing, unreadable), `SKB_ERR_DECODE` (not an image, truncated),
+ * `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
+ */
+skb_status skb_gray_image_load(const char *path, struct skb_gray_image **out);
+
+/**
+ * A borrowed 1-channel `skb_image` view of `img` into `*out`, valid while `img` lives.
+ */
+skb_status skb_gray_image_view(const struct skb_gray_image *img, struct skb_image *out);
+
+/**
+ * Frees an image from `skb_gray_image_load`. NULL is a no-op.
+ */
+void skb_gray_image_free(struct skb_gray_image *img);
+
+/**
+ * Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
+ * edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL means "no
+ * joints" and fails with `SKB_ERR_NO_JOINTS` until a sketch-trained joint detector is built
+ * in), the 3-D pose and camera, the shape fit, and the fitted shape posed to the estimate.
+ * `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
+ * fit options' gender defaults to automatic, fitting both and keeping the better score) are
+ * only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
+ * cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
+ * `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
+ * untouched. Errors: `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BLANK_IMAGE`,
+ * `SKB_ERR_NO_JOINTS`, `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
+ * NaN), the pose solver's (`SKB_ERR_TOO_FEW_JOINTS`, `SKB_ERR_COINCIDENT_JOINTS`,
+ * `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
+ * callback is called on the calling thread.
+ */
+skb_status skb_run_pipeline(const struct skb_context *ctx,
+                            const struct skb_image *sketch,
+                            const struct skb_joints2d *joints,
+                            const struct skb_pose_dictionary *dict,
+                            const struct skb_pose_options *pose_opts,
+                            const struct skb_fit_options *fit_opts,
+                            skb_progress_fn progress,
+                            void *user,
+                            struct skb_result **out);
+
+/**
+ * Frees a result. NULL is a no-op.
+ */
+void skb_result_free(struct skb_result *result);
+
+/**
+ * The chosen gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`, and whether it
+ * was chosen by score (1) or given (0) into `*by_score` (may be NULL).
+ */
+skb_status skb_result_gender(const struct skb_result *result, uint32_t *gender, bool *by_score);
+
+/**
+ * The best match score (higher is better) of the fit of `gender` into `*score`. Errors:
+ * `SKB_ERR_OUT_OF_RANGE` when that gender was not fitted (a gender was given).
+ */
+skb_status skb_result_score(const struct skb_result *result, uint32_t gender, double *score);
+
+/**
+ * Vertex count (13380) and quad-face count (13378) into `*vertices` and `*faces` (either may
+ * be NULL).
+ */
+skb_status skb_result_counts(const struct skb_result *result, size_t *vertices, size_t *faces);
+
+/**
+ * Copies the posed (`posed` non-zero) or rest vertices, x, y, z floats in metres, model frame,
+ * into `dst` of `dst_len` floats (≥ 3 × vertex count). On error nothing is written.
+ */
+skb_status skb_result_copy_vertices(const struct skb_result *result,
+                                    bool posed,
+                                    float *dst,
+                                    size_t dst_len);
+
+/**
+ * Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside; a
+ * triangle repeats its third index) into `dst` of `dst_len` integers (≥ 4 × face count).
+ */
+skb_status skb_result_copy_faces(const struct skb_result *result, uint32_t *dst, size_t dst_len);
+
+/**
+ * The 2-D joints used (pixels, with visibility) into `*out`.
+ */
+skb_status skb_result_joints2d(const struct skb_result *result, struct skb_joints2d *out);
+
+/**
+ * Copies 15 3-D joints (x, y, z doubles, metres, model frame) into `dst` (`dst_len` ≥ 45):
+ * `which` is `SKB_JOINTS_REST`, `SKB_JOINTS_POSED` or `SKB_JOINTS_ESTIMATED`.
+ */
+skb_status skb_result_copy_joints3d(const struct skb_result *result,
+                                    uint32_t which,
+                                    double *dst,
+                                    size_t dst_len);
+
+/**
+ * The estimated weak-perspective camera (model metres → sketch pixels) into `*out`.
+ */
+skb_status skb_result_camera(const struct skb_result *result, struct skb_camera *out);
+
+/**
+ * Copies the skin weights as `skb_mesh_copy_skin_weights` does: for vertex v, slots
+ * `4v .. 4v+3` of `bones` (bone indices 0..13) and `weights` (summing to 1); both hold `len`
+ * elements (≥ 4 × vertex count).
+ */
+skb_status skb_result_copy_skin_weights(const struct skb_result *result,
+                                        uint32_t *bones,
+                                        float *weights,
+                                        size_t len);
+
+/**
+ * The fitted PCA shape weights (metres): their number into `*count` (may be NULL) and, when
+ * `dst` is not NULL, the weights into `dst` (`dst_len` ≥ count).
+ */
+skb_status skb_result_shape_weights(const struct skb_result *result,
+                                    double *dst,
+                                    size_t dst_len,
+                                    size_t *count);
+
+/**
+ * A new `skb_mesh` of the result (the fitted rest shape, posed as in the result) into `*out`,
+ * for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
+ */
+skb_status skb_result_mesh(const struct skb_result *result, struct skb_mesh **out);
 
 /**
  * Creates options with the defaults. `*out` receives a handle the caller owns.

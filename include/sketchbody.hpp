@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -90,6 +91,132 @@ inline GrayImage gaussian_blur(const skb_image &src, double sigma) {
     GrayImage out{src.width, src.height, std::vector<uint8_t>(size_t(src.width) * src.height)};
     check(skb_gaussian_blur(&src, sigma, out.pixels.data(), src.width, out.pixels.size()));
     return out;
+}
+
+/// A decoded image file (PNG/JPEG) as 8-bit gray; see skb_gray_image_load.
+class LoadedImage {
+public:
+    explicit LoadedImage(const std::string &path) { check(skb_gray_image_load(path.c_str(), img_.out())); }
+    /// A borrowed view, valid while this object lives.
+    skb_image view() const {
+        skb_image v{};
+        check(skb_gray_image_view(img_.get(), &v));
+        return v;
+    }
+
+private:
+    Handle<skb_gray_image, skb_gray_image_free> img_;
+};
+
+/// The library context (holds the body model); shareable across threads.
+class Context {
+public:
+    Context() { check(skb_context_new(ctx_.out())); }
+    const skb_context *get() const noexcept { return ctx_.get(); }
+
+private:
+    Handle<skb_context, skb_context_free> ctx_;
+};
+
+/// Shape-fit options (defaults as documented in sketchbody.h); setters throw Error on bad values.
+class FitOptions {
+public:
+    FitOptions() { check(skb_fit_options_new(o_.out())); }
+    FitOptions &samples(uint32_t v) { check(skb_fit_options_set_samples(o_.get(), v)); return *this; }
+    FitOptions &iterations(uint32_t v) { check(skb_fit_options_set_iterations(o_.get(), v)); return *this; }
+    FitOptions &transition_scale(double v) { check(skb_fit_options_set_transition_scale(o_.get(), v)); return *this; }
+    FitOptions &score(uint32_t v) { check(skb_fit_options_set_score(o_.get(), v)); return *this; }
+    FitOptions &temperature(double v) { check(skb_fit_options_set_temperature(o_.get(), v)); return *this; }
+    FitOptions &raster_side(uint32_t v) { check(skb_fit_options_set_raster_side(o_.get(), v)); return *this; }
+    FitOptions &tolerance(double v) { check(skb_fit_options_set_tolerance(o_.get(), v)); return *this; }
+    FitOptions &seed(uint64_t v) { check(skb_fit_options_set_seed(o_.get(), v)); return *this; }
+    FitOptions &skinning(uint32_t v) { check(skb_fit_options_set_skinning(o_.get(), v)); return *this; }
+    FitOptions &dims(uint32_t v) { check(skb_fit_options_set_dims(o_.get(), v)); return *this; }
+    FitOptions &gender(uint32_t v) { check(skb_fit_options_set_gender(o_.get(), v)); return *this; }
+    const skb_fit_options *get() const noexcept { return o_.get(); }
+
+private:
+    Handle<skb_fit_options, skb_fit_options_free> o_;
+};
+
+/// Progress callback for run_pipeline: return false to cancel (the call then throws Error with
+/// status SKB_ERR_CANCELLED).
+using Progress = std::function<bool(float)>;
+
+namespace detail {
+inline int progress_trampoline(void *user, float fraction) {
+    auto *p = static_cast<Progress *>(user);
+    try {
+        return (*p)(fraction) ? 0 : 1;
+    } catch (...) {
+        return 1;  // an exception in the callback cancels the run
+    }
+}
+}  // namespace detail
+
+/// Skin weights of a mesh: for vertex v, bones[4v..4v+3] (bone indices 0..13) and weights.
+struct SkinWeights {
+    std::vector<uint32_t> bones;
+    std::vector<float> weights;
+};
+
+/// The owned result of run_pipeline (see skb_result_*). Move-only.
+class Result {
+public:
+    explicit Result(skb_result *raw) noexcept : r_(raw) {}
+    uint32_t gender() const { uint32_t g = 0; check(skb_result_gender(r_.get(), &g, nullptr)); return g; }
+    bool gender_by_score() const { uint32_t g = 0; bool b = false; check(skb_result_gender(r_.get(), &g, &b)); return b; }
+    /// Best match score of gender g's fit (throws when g was not fitted).
+    double score(uint32_t g) const { double s = 0; check(skb_result_score(r_.get(), g, &s)); return s; }
+    size_t vertex_count() const { size_t v = 0; check(skb_result_counts(r_.get(), &v, nullptr)); return v; }
+    size_t face_count() const { size_t f = 0; check(skb_result_counts(r_.get(), nullptr, &f)); return f; }
+    /// x, y, z per vertex, metres (posed or rest).
+    std::vector<float> vertices(bool posed) const {
+        std::vector<float> v(3 * vertex_count());
+        check(skb_result_copy_vertices(r_.get(), posed, v.data(), v.size()));
+        return v;
+    }
+    /// 4 vertex indices per quad face.
+    std::vector<uint32_t> faces() const {
+        std::vector<uint32_t> f(4 * face_count());
+        check(skb_result_copy_faces(r_.get(), f.data(), f.size()));
+        return f;
+    }
+    skb_joints2d joints2d() const { skb_joints2d j{}; check(skb_result_joints2d(r_.get(), &j)); return j; }
+    /// 45 doubles: SKB_JOINTS_REST, SKB_JOINTS_POSED or SKB_JOINTS_ESTIMATED.
+    std::vector<double> joints3d(uint32_t which) const {
+        std::vector<double> j(3 * SKB_NUM_JOINTS);
+        check(skb_result_copy_joints3d(r_.get(), which, j.data(), j.size()));
+        return j;
+    }
+    skb_camera camera() const { skb_camera c{}; check(skb_result_camera(r_.get(), &c)); return c; }
+    SkinWeights skin_weights() const {
+        SkinWeights s{std::vector<uint32_t>(SKB_MAX_INFLUENCES * vertex_count()), std::vector<float>(SKB_MAX_INFLUENCES * vertex_count())};
+        check(skb_result_copy_skin_weights(r_.get(), s.bones.data(), s.weights.data(), s.bones.size()));
+        return s;
+    }
+    std::vector<double> shape_weights() const {
+        size_t n = 0;
+        check(skb_result_shape_weights(r_.get(), nullptr, 0, &n));
+        std::vector<double> w(n);
+        if (n > 0) check(skb_result_shape_weights(r_.get(), w.data(), w.size(), &n));
+        return w;
+    }
+    const skb_result *get() const noexcept { return r_.get(); }
+
+private:
+    Handle<skb_result, skb_result_free> r_;
+};
+
+/// Runs the main job (skb_run_pipeline) with the embedded pose dictionary and default pose
+/// options. `joints` may be nullptr (fails with SKB_ERR_NO_JOINTS until a detector is built in).
+inline Result run_pipeline(const Context &ctx, const skb_image &sketch, const skb_joints2d *joints,
+                           const FitOptions *fit = nullptr, Progress progress = {}) {
+    skb_result *raw = nullptr;
+    skb_progress_fn fn = progress ? &detail::progress_trampoline : nullptr;
+    check(skb_run_pipeline(ctx.get(), &sketch, joints, nullptr, nullptr, fit ? fit->get() : nullptr, fn,
+                           progress ? static_cast<void *>(&progress) : nullptr, &raw));
+    return Result(raw);
 }
 
 }  // namespace sketchbody

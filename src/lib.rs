@@ -15,6 +15,7 @@ pub mod export;
 pub mod fit;
 pub mod fsutil;
 pub mod image;
+pub mod pipeline;
 pub mod pose;
 pub mod render;
 pub mod skeleton;

@@ -40,6 +40,9 @@ pub struct skb_mesh {
     pub(crate) model: Arc<BodyModel>,
     pub(crate) gender: Gender,
     pub(crate) rest: RestShape,
+    /// The PCA shape weights the rest shape was made from (metres; may be shorter than the
+    /// component count).
+    pub(crate) weights: Vec<f64>,
     /// The current pose and posed vertices (`None`: rest pose), set by `skb_mesh_pose`.
     pub(crate) posed: Option<Box<super::mesh_ops::Posed>>,
 }
@@ -155,7 +158,7 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
             std::slice::from_raw_parts(weights, n).iter().map(|&x| x as f64).collect()
         };
         let rest = try_core!(space.synthesize(&w));
-        *out = Box::into_raw(Box::new(skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, posed: None }));
+        *out = Box::into_raw(Box::new(skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, weights: w, posed: None }));
         skb_status::SKB_OK
     }
 }
@@ -284,16 +287,47 @@ pub unsafe extern "C" fn skb_mesh_copy_joints(mesh: *const skb_mesh, dst: *mut f
 pub unsafe extern "C" fn skb_mesh_copy_skin_weights(mesh: *const skb_mesh, bones: *mut u32, weights: *mut f32, len: usize) -> skb_status {
     ffi_boundary! {
         let m = try_status!(try_ref(mesh, "mesh"));
-        let skin = m.model.skin_weights();
-        let needed = MAX_INFLUENCES * skin.len();
-        let b = try_status!(out_slice(bones, len, needed, "bones"));
-        let w = try_status!(out_slice(weights, len, needed, "weights"));
-        for ((bo, wo), s) in b.chunks_exact_mut(MAX_INFLUENCES).zip(w.chunks_exact_mut(MAX_INFLUENCES)).zip(skin) {
-            for k in 0..MAX_INFLUENCES {
-                bo[k] = s.bones[k] as u32;
-                wo[k] = s.weights[k];
-            }
+        copy_skin_weights(m.model.skin_weights(), bones, weights, len)
+    }
+}
+
+/// Writes skin weights into the caller's `bones`/`weights` arrays of `len` elements each (slots
+/// `4v .. 4v+3` per vertex); shared by the mesh and result getters.
+///
+/// # Safety
+/// `bones` and `weights` must be NULL or valid for writes of `len` elements.
+pub(crate) unsafe fn copy_skin_weights(skin: &[crate::body::VertexWeights], bones: *mut u32, weights: *mut f32, len: usize) -> skb_status {
+    let needed = MAX_INFLUENCES * skin.len();
+    let b = try_status!(out_slice(bones, len, needed, "bones"));
+    let w = try_status!(out_slice(weights, len, needed, "weights"));
+    for ((bo, wo), s) in b.chunks_exact_mut(MAX_INFLUENCES).zip(w.chunks_exact_mut(MAX_INFLUENCES)).zip(skin) {
+        for k in 0..MAX_INFLUENCES {
+            bo[k] = s.bones[k] as u32;
+            wo[k] = s.weights[k];
         }
+    }
+    skb_status::SKB_OK
+}
+
+/// Number of PCA shape weights the mesh was made from (as given to `skb_mesh_new_from_shape`,
+/// or found by `skb_fit_shape`) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_shape_weight_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        try_status!(write_out(out, m.weights.len(), "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the mesh's PCA shape weights (metres; `skb_mesh_shape_weight_count` of them) into
+/// `dst`, which holds `dst_len` doubles. On error nothing is written.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_shape_weights(mesh: *const skb_mesh, dst: *mut f64, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let out = try_status!(out_slice(dst, dst_len, m.weights.len(), "dst"));
+        out[..m.weights.len()].copy_from_slice(&m.weights);
         skb_status::SKB_OK
     }
 }

@@ -148,7 +148,7 @@ fn posed_vertices(m: &skb_mesh) -> &[[f32; 3]] {
 }
 
 /// Borrows a NUL-terminated UTF-8 path.
-unsafe fn path_arg<'a>(p: *const c_char, name: &str) -> Result<&'a Path, skb_status> {
+pub(crate) unsafe fn path_arg<'a>(p: *const c_char, name: &str) -> Result<&'a Path, skb_status> {
     if p.is_null() {
         return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")));
     }

@@ -76,7 +76,7 @@ const _: () = assert!(std::mem::size_of::<skb_pose3d>() == 880);
 /// The basis-pose dictionary (mean pose, bases, bone lengths). Immutable after creation: one
 /// dictionary may be used from many threads at once. Free with `skb_pose_dictionary_free`.
 pub struct skb_pose_dictionary {
-    inner: Dictionary,
+    pub(crate) inner: Dictionary,
 }
 
 /// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
@@ -84,7 +84,7 @@ pub struct skb_pose_dictionary {
 /// candidates, blend 30 px²). Not synchronised: do not change it
 /// while another thread uses it. Free with `skb_pose_options_free`.
 pub struct skb_pose_options {
-    inner: PoseOptions,
+    pub(crate) inner: PoseOptions,
 }
 
 fn null(name: &str) -> skb_status {
@@ -303,7 +303,7 @@ pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options,
     ffi_boundary! { set_option(opts, |o| o.blend = tau_px2) }
 }
 
-fn joints_in(j: &skb_joints2d) -> Joints2 {
+pub(crate) fn joints_in(j: &skb_joints2d) -> Joints2 {
     Joints2 { xy: j.xy, visible: std::array::from_fn(|k| j.visible[k] != 0) }
 }
 

@@ -55,6 +55,12 @@ pub enum skb_status {
     SKB_ERR_NO_FIGURE = 21,
     /// The image is too small to search for a figure.
     SKB_ERR_IMAGE_TOO_SMALL = 22,
+    /// No 2-D joints were given and no joint detector is available.
+    SKB_ERR_NO_JOINTS = 23,
+    /// A visible 2-D joint lies outside the image.
+    SKB_ERR_JOINT_OUTSIDE_IMAGE = 24,
+    /// The sketch has no edges (blank, uniform or too faint).
+    SKB_ERR_BLANK_IMAGE = 25,
 }
 
 impl From<&Error> for skb_status {
@@ -80,6 +86,9 @@ impl From<&Error> for skb_status {
             Error::MeshOutsideImage { .. } => SKB_ERR_MESH_OUTSIDE_IMAGE,
             Error::NoFigure { .. } => SKB_ERR_NO_FIGURE,
             Error::ImageTooSmall { .. } => SKB_ERR_IMAGE_TOO_SMALL,
+            Error::NoJoints(_) => SKB_ERR_NO_JOINTS,
+            Error::JointOutsideImage { .. } => SKB_ERR_JOINT_OUTSIDE_IMAGE,
+            Error::BlankImage { .. } => SKB_ERR_BLANK_IMAGE,
         }
     }
 }
@@ -112,6 +121,9 @@ pub extern "C" fn skb_status_str(status: u32) -> *const c_char {
         20 => b"the projected mesh lies wholly outside the image\0",
         21 => b"no figure found (best score below the threshold)\0",
         22 => b"image is too small to detect a figure\0",
+        23 => b"no 2-D joints given and no joint detector available\0",
+        24 => b"a 2-D joint lies outside the image\0",
+        25 => b"the sketch has no edges (blank or too faint)\0",
         _ => b"unknown status\0",
     };
     s.as_ptr().cast()
@@ -124,11 +136,11 @@ mod tests {
     #[test]
     fn every_status_has_its_own_text() {
         let text = |c: u32| unsafe { std::ffi::CStr::from_ptr(skb_status_str(c)) }.to_str().unwrap().to_owned();
-        let all: Vec<String> = (0..=22).map(text).collect();
+        let all: Vec<String> = (0..=25).map(text).collect();
         let unique: std::collections::HashSet<_> = all.iter().collect();
         assert_eq!(unique.len(), all.len());
         assert!(!all.contains(&"unknown status".to_owned()));
-        assert_eq!(text(23), "unknown status");
+        assert_eq!(text(26), "unknown status");
         assert_eq!(std::mem::size_of::<skb_status>(), 4);
     }
 }

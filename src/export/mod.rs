@@ -3,4 +3,6 @@
 
 pub mod gltf;
 pub mod joints;
+pub mod joints2d;
+pub mod pose3d;
 pub mod obj;

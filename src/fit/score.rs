@@ -17,6 +17,11 @@ pub enum MatchScore {
     /// Mean distance (raster px, capped at [`CHAMFER_CAP`]) from the mask's boundary pixels to
     /// the nearest edge pixel, as a cost.
     Chamfer,
+    /// [`MatchScore::Chamfer`] plus the mean distance (raster px, capped) from every edge pixel
+    /// to the mask (0 for edges inside it), as a cost. The second term penalises silhouettes
+    /// that leave the sketch's outer strokes uncovered; without it interior strokes (creases,
+    /// costume lines, hatching) let a shrunken silhouette score well.
+    TwoSidedChamfer,
 }
 
 /// Distances above this many raster pixels count as this much in [`MatchScore::Chamfer`].
@@ -91,7 +96,18 @@ impl SketchEvidence {
             MatchScore::Paper => self.iou(mask, b, &self.edges, self.edge_count),
             MatchScore::FilledIou => self.iou(mask, b, &self.figure, self.figure_count),
             MatchScore::Chamfer => -self.boundary_chamfer(mask, b),
+            MatchScore::TwoSidedChamfer => -(self.boundary_chamfer(mask, b) + self.uncovered_edges(mask)),
         }
+    }
+
+    /// Mean over edge pixels of the distance to the nearest mask pixel (0 inside), capped.
+    fn uncovered_edges(&self, mask: &[u8]) -> f64 {
+        if !mask.iter().any(|&m| m != 0) {
+            return CHAMFER_CAP as f64;
+        }
+        let d = distance_transform(mask, self.width, self.height);
+        let sum: f64 = self.edges.iter().zip(&d).filter(|(&e, _)| e != 0).map(|(_, &x)| x.min(CHAMFER_CAP) as f64).sum();
+        sum / self.edge_count as f64
     }
 
     fn boundary_chamfer(&self, mask: &[u8], bounds: Option<[usize; 4]>) -> f64 {

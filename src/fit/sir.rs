@@ -126,7 +126,9 @@ fn sample_rng(seed: u64, iteration: usize, index: usize) -> ChaCha8Rng {
 }
 
 impl FitOptions {
-    fn validate(&self) -> Result<()> {
+    /// Checks every field: positive finite scale, temperature and tolerance; samples in
+    /// 2..=100000, iterations in 1..=1000, raster side in 16..=4096.
+    pub fn validate(&self) -> Result<()> {
         let positive = |name: &'static str, v: f64| -> Result<()> {
             ensure_finite(name, v)?;
             if v > 0.0 {

@@ -8,12 +8,15 @@ mod build_model;
 mod convert_detector;
 mod detect;
 mod edges;
+mod fit_args;
 mod learn_poses;
 mod pose;
 mod eval_parse;
 mod eval;
 mod make_dataset;
 mod render_sketch;
+mod run;
+mod run_dataset;
 
 use std::process::ExitCode;
 
@@ -37,6 +40,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The main job: sketch (+ 2-D joints) to a rigged, posed 3-D body and its report.
+    Run(run::Args),
+    /// Run the pipeline on every sample of a sketch dataset with its ground-truth 2-D joints.
+    RunDataset(run_dataset::Args),
     /// Canny edge map of an image (bit-exact with OpenCV's cv::Canny).
     Edges(edges::Args),
     /// Learn the 3-D basis-pose dictionary from motion tables and BVH files.
@@ -66,6 +73,8 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Run(a) => run::run(a),
+        Command::RunDataset(a) => run_dataset::run(a),
         Command::Body(a) => body::run(a),
         Command::Edges(a) => edges::run(a),
         Command::LearnPoses(a) => learn_poses::run(a),

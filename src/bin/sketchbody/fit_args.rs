@@ -1,0 +1,89 @@
+//! Shape-fit options shared by `run` and `run-dataset` (defaults are `FitOptions::default()`).
+
+use sketchbody::body::skin::SkinMethod;
+use sketchbody::fit::{FitOptions, MatchScore};
+
+use crate::CliError;
+
+/// Fit options on the command line.
+#[derive(clap::Args, Clone, Debug)]
+pub struct FitArgs {
+    /// Match score: paper (eq. 7), filled (IoU with the filled figure) or chamfer (default).
+    #[arg(long, default_value = "chamfer")]
+    pub score: String,
+    /// Seed of every random step of the fit.
+    #[arg(long, default_value_t = FitOptions::default().seed)]
+    pub seed: u64,
+    /// Samples per SIR iteration (S).
+    #[arg(long, default_value_t = FitOptions::default().samples)]
+    pub samples: usize,
+    /// Most SIR iterations (T).
+    #[arg(long, default_value_t = FitOptions::default().max_iterations)]
+    pub iterations: usize,
+    /// Transition step in standard deviations (Σ = diag(s² λ)).
+    #[arg(long, default_value_t = FitOptions::default().transition_scale)]
+    pub transition_scale: f64,
+    /// Likelihood temperature of the non-paper scores.
+    #[arg(long, default_value_t = FitOptions::default().temperature)]
+    pub temperature: f64,
+    /// Longest raster side of the fit, pixels.
+    #[arg(long, default_value_t = FitOptions::default().raster_max_side)]
+    pub raster_side: usize,
+    /// Convergence tolerance, standard deviations.
+    #[arg(long, default_value_t = FitOptions::default().tolerance)]
+    pub tolerance: f64,
+    /// PCA dimensions searched (default: the shape space's 96%-energy dimension).
+    #[arg(long)]
+    pub dims: Option<usize>,
+    /// Dual-quaternion skinning instead of linear blend skinning.
+    #[arg(long)]
+    pub dqs: bool,
+    /// Stretch bones so the joints land exactly on the estimated 3-D joints (in the fit and the
+    /// posed outputs; the rest mesh keeps the shape's bone lengths).
+    #[arg(long)]
+    pub retarget: bool,
+    /// Keep the pose solver's camera instead of refitting its scales and translation to the
+    /// gender's mean skeleton before the fit.
+    #[arg(long)]
+    pub keep_pose_scale: bool,
+}
+
+/// Parses a match-score name.
+pub fn parse_score(s: &str) -> Result<MatchScore, CliError> {
+    match s.to_ascii_lowercase().as_str() {
+        "paper" => Ok(MatchScore::Paper),
+        "filled" | "filled-iou" => Ok(MatchScore::FilledIou),
+        "chamfer" => Ok(MatchScore::Chamfer),
+        "chamfer2" | "two-sided" => Ok(MatchScore::TwoSidedChamfer),
+        _ => Err(CliError(format!("--score {s:?}: expected paper, filled, chamfer or chamfer2"))),
+    }
+}
+
+/// Short name of a match score (the CLI's spelling).
+pub fn score_name(s: MatchScore) -> &'static str {
+    match s {
+        MatchScore::Paper => "paper",
+        MatchScore::FilledIou => "filled",
+        MatchScore::Chamfer => "chamfer",
+        MatchScore::TwoSidedChamfer => "chamfer2",
+    }
+}
+
+impl FitArgs {
+    /// The fit options these arguments describe.
+    pub fn options(&self) -> Result<FitOptions, CliError> {
+        Ok(FitOptions {
+            samples: self.samples,
+            max_iterations: self.iterations,
+            dims: self.dims,
+            transition_scale: self.transition_scale,
+            score: parse_score(&self.score)?,
+            temperature: self.temperature,
+            raster_max_side: self.raster_side,
+            tolerance: self.tolerance,
+            seed: self.seed,
+            skinning: if self.dqs { SkinMethod::DualQuaternion } else { SkinMethod::Linear },
+            retarget: self.retarget,
+        })
+    }
+}

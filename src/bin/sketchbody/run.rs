@@ -1,0 +1,209 @@
+//! `sketchbody run SKETCH --out DIR [--joints JOINTS.json] [--gender m|f] ...`: the main job.
+//! Edges → 2-D joints → 3-D pose and camera → shape fit, then every output is written into a
+//! staging folder and moved into DIR together (`fsutil::StagingDir`): a failed, cancelled or
+//! interrupted (Ctrl-C) run leaves no file of its own in DIR.
+//!
+//! Files: `body.glb` (rigged; scenes "posed" and "rest"), `body.obj` (posed mesh), `body_rest.obj`,
+//! `joints2d.json` (sketchbody-joints2d), `pose3d.json` (sketchbody-pose3d: 3-D joints and
+//! camera), `overlay.png`, `preview.png` (front and side of the posed mesh), `report.md`.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use sketchbody::body::{BodyModel, Gender};
+use sketchbody::export::gltf::write_glb;
+use sketchbody::export::joints2d::{load_joints2d, write_joints2d};
+use sketchbody::export::obj::write_obj;
+use sketchbody::export::pose3d::pose3d_json;
+use sketchbody::fsutil::{write_atomic, StagingDir};
+use sketchbody::image::load_image;
+use sketchbody::pipeline::overlay::overlay;
+use sketchbody::pipeline::{run_pipeline, GivenJoints, JointsSource, NoDetector, PipelineOptions, PipelineResult};
+use sketchbody::pose::dict_io;
+use sketchbody::render::preview::{preview, save_rgb_png};
+
+use crate::fit_args::{score_name, FitArgs};
+use crate::CliError;
+
+/// Arguments of `sketchbody run`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The sketch (PNG or JPEG; colour is converted to gray).
+    sketch: PathBuf,
+    /// Output folder (created when missing; existing files of the same names are replaced).
+    #[arg(long)]
+    out: PathBuf,
+    /// 2-D joints of the figure (sketchbody-joints2d JSON). Required until a joint detector
+    /// trained on sketches is available.
+    #[arg(long)]
+    joints: Option<PathBuf>,
+    /// Shape space: f or m; both are fitted and the better score is kept when omitted.
+    #[arg(long)]
+    gender: Option<String>,
+    /// Skip the fit: the gender's mean shape posed the same way (baseline; needs --gender).
+    #[arg(long)]
+    mean_shape: bool,
+    #[command(flatten)]
+    fit: FitArgs,
+    /// Side of each preview view, pixels.
+    #[arg(long, default_value_t = 512)]
+    preview_size: usize,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Set by Ctrl-C (see [`catch_interrupt`]).
+pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_sigint(_: libc::c_int) {
+    INTERRUPTED.store(true, Ordering::SeqCst);
+}
+
+/// Makes Ctrl-C cancel the run (through the progress callback) instead of killing it, so the
+/// staging folder is cleaned up.
+pub fn catch_interrupt() {
+    // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
+    unsafe {
+        libc::signal(libc::SIGINT, on_sigint as extern "C" fn(libc::c_int) as libc::sighandler_t);
+    }
+}
+
+/// A progress bar on stderr, redrawn at most every 0.1 s.
+pub struct Bar {
+    start: Instant,
+    last: f64,
+    quiet: bool,
+}
+
+impl Bar {
+    /// A bar starting now; `quiet` draws nothing.
+    pub fn new(quiet: bool) -> Bar {
+        Bar { start: Instant::now(), last: -1.0, quiet }
+    }
+
+    /// Draws `fraction` done; returns `false` once Ctrl-C was pressed.
+    pub fn update(&mut self, fraction: f32) -> bool {
+        let el = self.start.elapsed().as_secs_f64();
+        if !self.quiet && (el - self.last >= 0.1 || fraction >= 1.0) {
+            self.last = el;
+            let bar: String = (0..30).map(|k| if (k as f32) < fraction * 30.0 { '#' } else { '.' }).collect();
+            eprint!("\r[{bar}] {:3.0}% {el:.1} s ", fraction * 100.0);
+            let _ = std::io::stderr().flush();
+        }
+        !INTERRUPTED.load(Ordering::SeqCst)
+    }
+
+    /// Ends the bar's line.
+    pub fn finish(&self) {
+        if !self.quiet && self.last >= 0.0 {
+            eprintln!();
+        }
+    }
+}
+
+fn report(a: &Args, opts: &PipelineOptions, r: &PipelineResult, size: (usize, usize), load_s: f64, write_s: f64) -> String {
+    let mut s = String::new();
+    let f = &opts.fit;
+    let _ = writeln!(s, "# sketchbody run\n");
+    let _ = writeln!(s, "- sketch: `{}` ({}×{} px)", a.sketch.display(), size.0, size.1);
+    let joints = a.joints.as_ref().map_or("none".to_string(), |p| format!("`{}`", p.display()));
+    let _ = writeln!(s, "- 2-D joints: {joints} (source: {})", r.joints_source);
+    let _ = writeln!(s, "- library: sketchbody {}\n", sketchbody::VERSION);
+    let _ = writeln!(s, "## Options\n");
+    let _ = writeln!(s, "- Canny: thresholds {}/{}, aperture {}", opts.canny.threshold1, opts.canny.threshold2, opts.canny.aperture);
+    let p = &opts.pose;
+    let _ = writeln!(s, "- pose: κ {}, α {}, ≤ {} bases, tolerance {} px, refine {}, prior {} m", p.kappa, p.alpha, p.max_bases, p.tolerance, p.refine, p.prior);
+    let _ = writeln!(
+        s,
+        "- fit: score {}, samples {}, ≤ {} iterations, transition scale {}, temperature {}, raster side {} px, tolerance {}, dims {}, seed {}, skinning {:?}{}\n",
+        score_name(f.score), f.samples, f.max_iterations, f.transition_scale, f.temperature, f.raster_max_side, f.tolerance,
+        f.dims.map_or("default".into(), |d| d.to_string()), f.seed, f.skinning,
+        format!("{}{}{}", if f.retarget { ", retarget" } else { "" }, if opts.keep_pose_scale { ", solver camera kept" } else { ", camera refitted to the mean skeleton" }, if opts.mean_shape { " (mean shape: fit skipped)" } else { "" })
+    );
+    let _ = writeln!(s, "## Results\n");
+    let _ = writeln!(s, "- 3-D pose: {} bases, reprojection RMS {:.3} px, length excess {:+.4}", r.pose.bases.len(), r.pose.rms, r.pose.length_excess);
+    let _ = writeln!(s, "- camera: sx {:.2}, sy {:.2} px/m, t ({:.1}, {:.1}) px", r.pose.camera.sx, r.pose.camera.sy, r.pose.camera.t[0], r.pose.camera.t[1]);
+    for g in &r.fits {
+        let it = g.fit.as_ref().map_or(0, |f| f.history.len());
+        let ev = g.fit.as_ref().map_or(0, |f| f.evaluations);
+        let _ = writeln!(s, "- {} fit: best score {:.5}, {it} iterations, {ev} sample evaluations, {:.2} s", g.gender.name(), g.score, g.seconds);
+    }
+    let how = if r.gender_by_score { "chosen by score (higher is better)" } else { "given" };
+    let _ = writeln!(s, "- gender: {} ({how})", r.gender.name());
+    let w: Vec<String> = r.weights.iter().map(|x| format!("{x:.4}")).collect();
+    let _ = writeln!(s, "- shape weights (m): [{}]\n", w.join(", "));
+    let t = &r.timings;
+    let _ = writeln!(s, "## Timings (wall clock, s)\n");
+    let _ = writeln!(
+        s,
+        "load {load_s:.3}, edges {:.3}, joints {:.3}, pose {:.3}, fit {:.3}, posing {:.3}, pipeline {:.3}, writing {write_s:.3}",
+        t.edges, t.joints, t.pose, t.fit, t.posing, t.total
+    );
+    let _ = writeln!(s, "\n## Files\n\nbody.glb, body.obj, body_rest.obj, joints2d.json, pose3d.json, overlay.png, preview.png, report.md");
+    s
+}
+
+/// Parses `--gender`.
+pub fn parse_gender(g: Option<&str>) -> Result<Option<Gender>, CliError> {
+    g.map(Gender::parse).transpose().map_err(CliError::from)
+}
+
+/// Runs the command.
+pub fn run(a: Args) -> Result<(), CliError> {
+    let t_all = Instant::now();
+    let opts = PipelineOptions {
+        fit: a.fit.options()?,
+        gender: parse_gender(a.gender.as_deref())?,
+        mean_shape: a.mean_shape,
+        keep_pose_scale: a.fit.keep_pose_scale,
+        ..PipelineOptions::default()
+    };
+    let sketch = load_image(&a.sketch)?;
+    let source: Box<dyn JointsSource> = match &a.joints {
+        Some(p) => Box::new(GivenJoints(load_joints2d(p)?)),
+        None => Box::new(NoDetector),
+    };
+    // Fail on an unwritable output folder before the work.
+    let staging = StagingDir::new(&a.out).map_err(|e| CliError(format!("cannot write the output folder: {e}")))?;
+    let model = BodyModel::embedded()?;
+    let dict = dict_io::embedded()?;
+    let load_s = t_all.elapsed().as_secs_f64();
+    catch_interrupt();
+    let mut bar = Bar::new(a.quiet);
+    let result = run_pipeline(&model, &dict, &sketch, source.as_ref(), &opts, &mut |f| bar.update(f));
+    bar.finish();
+    let r = result.map_err(|e| match (&e, &a.joints) {
+        (sketchbody::Error::JointOutsideImage { .. }, Some(p)) => CliError(format!("{}: {e}", p.display())),
+        _ => CliError(format!("{}: {e}", a.sketch.display())),
+    })?;
+    let t_write = Instant::now();
+    let tris = r.mesh.triangles();
+    let over = overlay(&sketch, &r.joints2d, &r.posed_vertices, &tris, &r.pose.camera)?;
+    let views = preview(&r.posed_vertices, &tris, a.preview_size)?;
+    write_glb(&staging.path("body.glb"), &r.mesh, &r.ik_pose)?;
+    write_obj(&staging.path("body.obj"), &r.posed_vertices, &r.mesh.quads, r.mesh.uvs.as_ref())?;
+    write_obj(&staging.path("body_rest.obj"), &r.mesh.vertices, &r.mesh.quads, r.mesh.uvs.as_ref())?;
+    write_joints2d(&staging.path("joints2d.json"), &r.joints2d)?;
+    let mut pose_bytes = serde_json::to_vec_pretty(&pose3d_json(&r.pose, &dict, &opts.pose)).map_err(|e| CliError(e.to_string()))?;
+    pose_bytes.push(b'\n');
+    write_atomic(&staging.path("pose3d.json"), &pose_bytes)?;
+    save_rgb_png(&over, &staging.path("overlay.png"))?;
+    save_rgb_png(&views, &staging.path("preview.png"))?;
+    let text = report(&a, &opts, &r, (sketch.width(), sketch.height()), load_s, t_write.elapsed().as_secs_f64());
+    write_atomic(&staging.path("report.md"), text.as_bytes())?;
+    staging.commit()?;
+    let scores: Vec<String> = r.fits.iter().map(|g| format!("{} {:.4}", g.gender.name(), g.score)).collect();
+    println!(
+        "{}: {} ({}), score {}, {:.2} s",
+        a.out.display(),
+        r.gender.name(),
+        if r.gender_by_score { "by score" } else { "given" },
+        scores.join(", "),
+        t_all.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

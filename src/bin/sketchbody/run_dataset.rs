@@ -1,0 +1,185 @@
+//! `sketchbody run-dataset DATASET --out RESULTS [--gender truth|auto|f|m] [--mean-shape] ...`:
+//! the pipeline on every sample of a synthetic-sketch dataset with the sample's ground-truth
+//! 2-D joints (the user-correction path), writing the results layout `sketchbody eval` reads
+//! (docs/dataset.md): `STEM.json` (joints2d, joints3d = the fitted mesh's posed joints,
+//! camera_r, gender, scores), `STEM_rest.obj`, `STEM_posed.obj`, each atomically, the posed OBJ
+//! last. Samples whose `STEM_posed.obj` exists are skipped (resumable). Samples run in parallel
+//! (rayon); each fit's seed is the same `--seed`, so results do not depend on the thread count
+//! or the order. Ground-truth joints outside the image are marked missing.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde_json::json;
+use sketchbody::body::{BodyModel, Gender};
+use sketchbody::eval::score::dataset_samples;
+use sketchbody::export::obj::write_obj;
+use sketchbody::fsutil::write_atomic;
+use sketchbody::image::load_image;
+use sketchbody::pipeline::{run_pipeline, GivenJoints, PipelineOptions};
+use sketchbody::pose::{dict_io, Dictionary};
+use sketchbody::render::sketch::truth::GroundTruth;
+use sketchbody::skeleton::{Joints2, NUM_JOINTS};
+
+use crate::fit_args::{score_name, FitArgs};
+use crate::run::{catch_interrupt, parse_gender, INTERRUPTED};
+use crate::CliError;
+
+/// Arguments of `sketchbody run-dataset`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Dataset folder (from make-dataset).
+    dataset: PathBuf,
+    /// Results folder (created when missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Gender: truth (the sample's, as a user would say), auto (fit both, choose by score), f or m.
+    #[arg(long, default_value = "truth")]
+    gender: String,
+    /// The mean-shape baseline: the gender's mean shape posed the same way (no fit).
+    #[arg(long)]
+    mean_shape: bool,
+    #[command(flatten)]
+    fit: FitArgs,
+    /// Only the first N samples (sorted by name).
+    #[arg(long)]
+    first: Option<usize>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+enum GenderMode {
+    Truth,
+    Auto,
+    Fixed(Gender),
+}
+
+/// Ground-truth joints of a sample; joints outside the image are marked missing.
+fn truth_joints(t: &GroundTruth) -> Joints2 {
+    let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
+    for k in 0..NUM_JOINTS {
+        j.xy[k] = t.joints2d[k];
+        let [x, y] = j.xy[k];
+        j.visible[k] = (0.0..=t.width as f64).contains(&x) && (0.0..=t.height as f64).contains(&y);
+    }
+    j
+}
+
+struct Shared<'a> {
+    model: &'a BodyModel,
+    dict: &'a Dictionary,
+    base: PipelineOptions,
+    mode: GenderMode,
+}
+
+/// Runs one sample and writes its three files. Returns the pipeline's seconds.
+fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliError> {
+    let jp = dataset.join(format!("{stem}.json"));
+    let text = std::fs::read_to_string(&jp).map_err(|e| CliError(format!("{}: {e}", jp.display())))?;
+    let truth = GroundTruth::from_json(&text, &jp.display().to_string())?;
+    let sketch = load_image(&dataset.join(format!("{stem}.png")))?;
+    let gender = match s.mode {
+        GenderMode::Truth => Some(Gender::parse(&truth.gender)?),
+        GenderMode::Auto => None,
+        GenderMode::Fixed(g) => Some(g),
+    };
+    let opts = PipelineOptions { gender, ..s.base.clone() };
+    let r = run_pipeline(s.model, s.dict, &sketch, &GivenJoints(truth_joints(&truth)), &opts, &mut |_| !INTERRUPTED.load(Ordering::SeqCst))
+        .map_err(|e| CliError(format!("sample {stem}: {e}")))?;
+    let rm = r.pose.camera.r;
+    let scores: serde_json::Map<String, serde_json::Value> = r.fits.iter().map(|g| (g.gender.name().to_string(), json!(if g.score.is_finite() { Some(g.score) } else { None }))).collect();
+    let doc = json!({
+        "joints2d": r.joints2d.xy,
+        "joints3d": r.posed_joints,
+        "camera_r": [[rm[(0, 0)], rm[(0, 1)], rm[(0, 2)]], [rm[(1, 0)], rm[(1, 1)], rm[(1, 2)]], [rm[(2, 0)], rm[(2, 1)], rm[(2, 2)]]],
+        "gender": r.gender.name(),
+        "gender_by_score": r.gender_by_score,
+        "scores": scores,
+        "shape_weights": r.weights,
+        "seconds": r.timings.total,
+    });
+    write_atomic(&out.join(format!("{stem}.json")), doc.to_string().as_bytes())?;
+    write_obj(&out.join(format!("{stem}_rest.obj")), &r.mesh.vertices, &r.mesh.quads, None)?;
+    write_obj(&out.join(format!("{stem}_posed.obj")), &r.posed_vertices, &r.mesh.quads, None)?;
+    Ok(r.timings.total)
+}
+
+/// Runs the command.
+pub fn run(a: Args) -> Result<(), CliError> {
+    let fit = a.fit.options()?;
+    let mode = match a.gender.as_str() {
+        "truth" => GenderMode::Truth,
+        "auto" => GenderMode::Auto,
+        g => GenderMode::Fixed(parse_gender(Some(g))?.ok_or_else(|| CliError("--gender: missing".into()))?),
+    };
+    if a.mean_shape && matches!(mode, GenderMode::Auto) {
+        return Err(CliError("--mean-shape needs --gender truth, f or m (there is no score to choose by)".into()));
+    }
+    let mut stems = dataset_samples(&a.dataset)?;
+    if stems.is_empty() {
+        return Err(CliError(format!("{}: no samples (STEM.json + STEM.mesh) found", a.dataset.display())));
+    }
+    stems.truncate(a.first.unwrap_or(usize::MAX));
+    std::fs::create_dir_all(&a.out).map_err(|e| CliError(format!("{}: cannot create the results folder: {e}", a.out.display())))?;
+    let manifest = json!({
+        "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
+        "gender": a.gender, "mean_shape": a.mean_shape, "score": score_name(fit.score), "seed": fit.seed,
+        "fit_samples": fit.samples, "iterations": fit.max_iterations, "transition_scale": fit.transition_scale,
+        "temperature": fit.temperature, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
+    });
+    write_atomic(&a.out.join("run.json"), manifest.to_string().as_bytes())?;
+    let model = BodyModel::embedded()?;
+    let dict = dict_io::embedded()?;
+    let shared = Shared { model: &model, dict: &dict, base: PipelineOptions { fit, mean_shape: a.mean_shape, keep_pose_scale: a.fit.keep_pose_scale, ..PipelineOptions::default() }, mode };
+    let todo: Vec<&String> = stems.iter().filter(|s| !a.out.join(format!("{s}_posed.obj")).is_file()).collect();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build().map_err(|e| CliError(format!("thread pool: {e}")))?;
+    catch_interrupt();
+    let done = AtomicUsize::new(0);
+    let failures = Mutex::new(Vec::new());
+    let seconds = Mutex::new(Vec::new());
+    let t0 = Instant::now();
+    let bar = Mutex::new(crate::run::Bar::new(false));
+    pool.install(|| {
+        todo.par_iter().for_each(|stem| {
+            if INTERRUPTED.load(Ordering::SeqCst) {
+                return;
+            }
+            match one(&shared, &a.dataset, &a.out, stem) {
+                Ok(s) => seconds.lock().unwrap_or_else(|p| p.into_inner()).push(s),
+                Err(CliError(m)) => failures.lock().unwrap_or_else(|p| p.into_inner()).push(m),
+            }
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+            bar.lock().unwrap_or_else(|p| p.into_inner()).update(n as f32 / todo.len().max(1) as f32);
+        })
+    });
+    bar.lock().unwrap_or_else(|p| p.into_inner()).finish();
+    let failures = failures.into_inner().unwrap_or_else(|p| p.into_inner());
+    for f in &failures {
+        eprintln!("sketchbody: {f}");
+    }
+    if INTERRUPTED.load(Ordering::SeqCst) {
+        return Err(CliError(format!("interrupted after {} of {} samples (rerun to resume)", done.load(Ordering::Relaxed), todo.len())));
+    }
+    let mut secs = seconds.into_inner().unwrap_or_else(|p| p.into_inner());
+    secs.sort_by(f64::total_cmp);
+    let median = if secs.is_empty() { f64::NAN } else { secs[secs.len() / 2] };
+    println!(
+        "{}: {} samples run, {} already done, {} failed; {:.1} s ({} threads), median pipeline {:.2} s per sample",
+        a.out.display(),
+        todo.len() - failures.len(),
+        stems.len() - todo.len(),
+        failures.len(),
+        t0.elapsed().as_secs_f64(),
+        pool.current_num_threads(),
+        median
+    );
+    if failures.is_empty() {
+        Ok(())
+    } else {
+        Err(CliError(format!("{} of {} samples failed (listed above)", failures.len(), todo.len())))
+    }
+}

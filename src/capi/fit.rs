@@ -1,0 +1,264 @@
+//! The shape fit from C: `skb_fit_options` (an opaque options handle with setters), the
+//! progress callback type `skb_progress_fn` and `skb_fit_shape`.
+
+use std::ffi::{c_int, c_void};
+use std::sync::Arc;
+
+use crate::body::ik::{solve, IkOptions};
+use crate::body::skin::{skin, SkinMethod};
+use crate::body::Gender;
+use crate::camera::WeakPerspective;
+use crate::error::Error;
+use crate::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
+use crate::image::to_gray;
+use crate::skeleton::{Joints3, NUM_JOINTS};
+
+use super::body::{skb_context, skb_mesh, write_out};
+use super::error::{fail, fail_with};
+use super::image::{skb_image, view_of};
+use super::mesh_ops::{skb_camera, Posed};
+use super::ptr::{try_ref, try_slice_of};
+use super::status::skb_status;
+
+/// Progress callback: called from the calling thread with the fraction of the work done
+/// (0..=1, non-decreasing) after each stage and each fit iteration; `user` is the caller's
+/// pointer, passed through untouched. Return 0 to continue, non-zero to cancel: the call then
+/// returns `SKB_ERR_CANCELLED` within one fit iteration, having freed everything it made.
+pub type skb_progress_fn = Option<unsafe extern "C" fn(user: *mut c_void, fraction: f32) -> c_int>;
+
+/// `skb_fit_options_set_score`: the paper's eq. 7 (IoU of the silhouette with the edge map).
+pub const SKB_SCORE_PAPER: u32 = 0;
+/// `skb_fit_options_set_score`: IoU with the figure region filled from the closed strokes.
+pub const SKB_SCORE_FILLED_IOU: u32 = 1;
+/// `skb_fit_options_set_score`: silhouette boundary to edge chamfer distance (the default).
+pub const SKB_SCORE_CHAMFER: u32 = 2;
+/// `skb_fit_options_set_score`: chamfer plus the mean distance of the sketch's edges to the
+/// silhouette (two-sided).
+pub const SKB_SCORE_TWO_SIDED_CHAMFER: u32 = 3;
+/// `skb_fit_options_set_skinning`: linear blend skinning (the default).
+pub const SKB_SKIN_LINEAR: u32 = 0;
+/// `skb_fit_options_set_skinning`: dual-quaternion skinning.
+pub const SKB_SKIN_DUAL_QUATERNION: u32 = 1;
+/// `skb_fit_options_set_gender`: fit both shape spaces and keep the better-scoring one (default).
+pub const SKB_GENDER_AUTO: u32 = 2;
+
+/// Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
+/// (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 0.02, raster
+/// side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
+/// dimension, gender automatic). Every setter validates its value and leaves the options
+/// unchanged on error. Not synchronised: do not change it while another thread uses it; reading
+/// it from several calls at once is fine. Free with `skb_fit_options_free`.
+pub struct skb_fit_options {
+    pub(crate) fit: FitOptions,
+    pub(crate) gender: Option<Gender>,
+}
+
+/// Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_new(out: *mut *mut skb_fit_options) -> skb_status {
+    ffi_boundary! {
+        if out.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+        }
+        *out = Box::into_raw(Box::new(skb_fit_options { fit: FitOptions::default(), gender: None }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Frees fit options. NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_free(opts: *mut skb_fit_options) {
+    if !opts.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(opts))));
+    }
+}
+
+/// Applies `set` to a copy, validates it and stores it only if valid.
+unsafe fn set_fit(opts: *mut skb_fit_options, set: impl FnOnce(&mut FitOptions) -> Result<(), Error>) -> skb_status {
+    let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
+    let mut next = o.fit.clone();
+    try_core!(set(&mut next));
+    try_core!(next.validate());
+    o.fit = next;
+    skb_status::SKB_OK
+}
+
+/// Sets the samples per SIR iteration, S, in 2..=100000.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_samples(opts: *mut skb_fit_options, samples: u32) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.samples = samples as usize; Ok(()) }) }
+}
+
+/// Sets the most SIR iterations, T, in 1..=1000.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_iterations(opts: *mut skb_fit_options, iterations: u32) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.max_iterations = iterations as usize; Ok(()) }) }
+}
+
+/// Sets the transition step s in standard deviations (Σ = diag(s² λ_k)), finite and > 0.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_transition_scale(opts: *mut skb_fit_options, scale: f64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.transition_scale = scale; Ok(()) }) }
+}
+
+/// Sets the match score: `SKB_SCORE_PAPER`, `SKB_SCORE_FILLED_IOU`, `SKB_SCORE_CHAMFER` or
+/// `SKB_SCORE_TWO_SIDED_CHAMFER`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_score(opts: *mut skb_fit_options, score: u32) -> skb_status {
+    ffi_boundary! {
+        set_fit(opts, |o| {
+            o.score = match score {
+                SKB_SCORE_PAPER => MatchScore::Paper,
+                SKB_SCORE_FILLED_IOU => MatchScore::FilledIou,
+                SKB_SCORE_CHAMFER => MatchScore::Chamfer,
+                SKB_SCORE_TWO_SIDED_CHAMFER => MatchScore::TwoSidedChamfer,
+                _ => return Err(Error::OutOfRange { name: "score", detail: format!("{score} (expected 0 paper, 1 filled IoU, 2 chamfer, 3 two-sided chamfer)") }),
+            };
+            Ok(())
+        })
+    }
+}
+
+/// Sets the likelihood temperature of the non-paper scores (exp(score / temperature)), > 0.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_temperature(opts: *mut skb_fit_options, temperature: f64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.temperature = temperature; Ok(()) }) }
+}
+
+/// Sets the longest raster side of the fit, pixels, in 16..=4096.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_raster_side(opts: *mut skb_fit_options, side: u32) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.raster_max_side = side as usize; Ok(()) }) }
+}
+
+/// Sets the convergence tolerance in standard deviations of the weights, finite and > 0.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_tolerance(opts: *mut skb_fit_options, tolerance: f64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.tolerance = tolerance; Ok(()) }) }
+}
+
+/// Sets the seed of every random step (same seed, same result on any thread count).
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_seed(opts: *mut skb_fit_options, seed: u64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.seed = seed; Ok(()) }) }
+}
+
+/// Sets the skinning: `SKB_SKIN_LINEAR` or `SKB_SKIN_DUAL_QUATERNION`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_skinning(opts: *mut skb_fit_options, method: u32) -> skb_status {
+    ffi_boundary! {
+        set_fit(opts, |o| {
+            o.skinning = match method {
+                SKB_SKIN_LINEAR => SkinMethod::Linear,
+                SKB_SKIN_DUAL_QUATERNION => SkinMethod::DualQuaternion,
+                _ => return Err(Error::OutOfRange { name: "skinning", detail: format!("{method} (expected 0 linear, 1 dual quaternion)") }),
+            };
+            Ok(())
+        })
+    }
+}
+
+/// Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
+/// dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, dims: u32) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.dims = (dims > 0).then_some(dims as usize); Ok(()) }) }
+}
+
+/// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (fit both,
+/// keep the better score).
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_gender(opts: *mut skb_fit_options, gender: u32) -> skb_status {
+    ffi_boundary! {
+        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
+        o.gender = if gender == SKB_GENDER_AUTO {
+            None
+        } else {
+            match Gender::from_index(gender) {
+                Ok(g) => Some(g),
+                Err(_) => return fail(&Error::OutOfRange { name: "gender", detail: format!("{gender} (expected 0 female, 1 male, 2 auto)") }),
+            }
+        };
+        skb_status::SKB_OK
+    }
+}
+
+/// Wraps a C progress callback as the core's `FnMut(f32) -> bool` (continue while it returns 0).
+pub(crate) fn progress_closure(progress: skb_progress_fn, user: *mut c_void) -> impl FnMut(f32) -> bool {
+    move |f| match progress {
+        // SAFETY: the caller of the exported function promised a valid callback and `user`.
+        Some(cb) => unsafe { cb(user, f) == 0 },
+        None => true,
+    }
+}
+
+/// Fits the body shape (SIR, paper §II-C) to an edge map for a known 3-D pose and camera.
+/// `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
+/// `skb_pose3d.joints` from `skb_estimate_pose`); `camera` maps them to `edges`' pixels; `edges`
+/// is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
+/// `skb_canny`); `opts` may be NULL for the defaults (gender automatic: both shape spaces are
+/// fitted and the better score kept). `progress` may be NULL; a non-zero return cancels
+/// (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
+/// caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
+/// weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
+/// options' skinning; read with `skb_mesh_copy_posed_vertices`); `*score` (may be NULL) receives
+/// the best sample's match score (higher is better). Errors: non-finite joints or camera
+/// (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
+/// without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with
+/// (`SKB_ERR_OUT_OF_RANGE`). Thread-safe (the context is shared read-only); runs on the rayon
+/// pool; the callback is called on the calling thread.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_shape(
+    ctx: *const skb_context,
+    joints: *const f64,
+    joints_len: usize,
+    camera: *const skb_camera,
+    edges: *const skb_image,
+    opts: *const skb_fit_options,
+    progress: skb_progress_fn,
+    user: *mut c_void,
+    score: *mut f64,
+    out: *mut *mut skb_mesh,
+) -> skb_status {
+    ffi_boundary! {
+        let ctx = try_status!(try_ref(ctx, "ctx"));
+        if joints_len != 3 * NUM_JOINTS {
+            return fail(&Error::OutOfRange { name: "joints_len", detail: format!("{joints_len}, expected {}", 3 * NUM_JOINTS) });
+        }
+        let j = try_status!(try_slice_of(joints, joints_len, "joints"));
+        let pose: Joints3 = std::array::from_fn(|i| [j[3 * i], j[3 * i + 1], j[3 * i + 2]]);
+        let cam = WeakPerspective::from(try_status!(try_ref(camera, "camera")));
+        let edge_map = try_core!(to_gray(&try_status!(view_of(edges))));
+        if out.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+        }
+        let (fit_opts, gender) = match opts.as_ref() {
+            Some(o) => (o.fit.clone(), o.gender),
+            None => (FitOptions::default(), None),
+        };
+        if edge_map.as_bytes().iter().all(|&e| e == 0) {
+            return fail(&Error::BlankImage { width: edge_map.width(), height: edge_map.height(), low: 0.0, high: 0.0 });
+        }
+        let genders = gender.map_or(Gender::ALL.to_vec(), |g| vec![g]);
+        let mut cb = progress_closure(progress, user);
+        let mut best: Option<(Gender, crate::fit::FitResult)> = None;
+        for (i, &g) in genders.iter().enumerate() {
+            let problem = FitProblem { model: &ctx.model, gender: g, pose: &pose, camera: &cam, edges: &edge_map };
+            let n = genders.len() as f32;
+            let r = try_core!(fit_shape(&problem, &fit_opts, &mut |f| cb((i as f32 + f) / n)));
+            if best.as_ref().is_none_or(|(_, b)| r.best_score > b.best_score) {
+                best = Some((g, r));
+            }
+        }
+        let Some((g, r)) = best else { return fail_with(skb_status::SKB_ERR_PANIC, "no gender fitted") };
+        let rest = try_core!(ctx.model.space(g).synthesize(&r.weights));
+        let ik = try_core!(solve(&rest.joints, &pose, &IkOptions { retarget: fit_opts.retarget }));
+        let vertices = try_core!(skin(&rest.vertices, ctx.model.skin_weights(), &ik, fit_opts.skinning));
+        if !score.is_null() {
+            *score = r.best_score;
+        }
+        let mesh = skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, weights: r.weights, posed: Some(Box::new(Posed { pose: ik, vertices })) };
+        try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
+        skb_status::SKB_OK
+    }
+}

@@ -1,0 +1,305 @@
+//! The main job from C: `skb_run_pipeline` (sketch + 2-D joints → fitted, posed, rigged body)
+//! with its owned result handle `skb_result`, and `skb_gray_image` (a decoded image file) so a
+//! host needs no image library of its own.
+
+use std::ffi::{c_char, c_void};
+use std::sync::Arc;
+
+use crate::body::BodyModel;
+use crate::error::Error;
+use crate::image::{load_image, to_gray, GrayImage};
+use crate::pipeline::{run_pipeline, GivenJoints, JointsSource, NoDetector, PipelineOptions, PipelineResult};
+use crate::pose::dict_io;
+use crate::skeleton::NUM_JOINTS;
+
+use super::body::{copy_skin_weights, out_slice, skb_context, skb_mesh, write_out};
+use super::error::fail_with;
+use super::fit::{progress_closure, skb_fit_options, skb_progress_fn};
+use super::image::{skb_image, view_of};
+use super::mesh_ops::{path_arg, skb_camera, Posed};
+use super::pose::{joints_in, skb_joints2d, skb_pose_dictionary, skb_pose_options};
+use super::ptr::try_ref;
+use super::status::skb_status;
+
+/// `skb_result_copy_joints3d`: the rest joints of the fitted shape.
+pub const SKB_JOINTS_REST: u32 = 0;
+/// `skb_result_copy_joints3d`: the posed joints of the fitted mesh.
+pub const SKB_JOINTS_POSED: u32 = 1;
+/// `skb_result_copy_joints3d`: the 3-D pose estimated from the 2-D joints (a 1.75 m person).
+pub const SKB_JOINTS_ESTIMATED: u32 = 2;
+
+/// A decoded image file, 8-bit gray (colour converted with OpenCV's weights). Create with
+/// `skb_gray_image_load`, view with `skb_gray_image_view`, free with `skb_gray_image_free`.
+/// Immutable: several threads may read it at once.
+pub struct skb_gray_image {
+    inner: GrayImage,
+}
+
+/// The result of `skb_run_pipeline`, owned by the caller (free with `skb_result_free`). It owns
+/// all its data (nothing refers to the inputs). Immutable: several threads may read it at once.
+pub struct skb_result {
+    model: Arc<BodyModel>,
+    inner: PipelineResult,
+}
+
+/// Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as gray into `*out` (caller owns it).
+/// Errors: `SKB_ERR_IO` (missing, unreadable), `SKB_ERR_DECODE` (not an image, truncated),
+/// `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_gray_image_load(path: *const c_char, out: *mut *mut skb_gray_image) -> skb_status {
+    ffi_boundary! {
+        let p = try_status!(path_arg(path, "path"));
+        if out.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+        }
+        let inner = try_core!(load_image(p));
+        *out = Box::into_raw(Box::new(skb_gray_image { inner }));
+        skb_status::SKB_OK
+    }
+}
+
+/// A borrowed 1-channel `skb_image` view of `img` into `*out`, valid while `img` lives.
+#[no_mangle]
+pub unsafe extern "C" fn skb_gray_image_view(img: *const skb_gray_image, out: *mut skb_image) -> skb_status {
+    ffi_boundary! {
+        let i = &try_status!(try_ref(img, "img")).inner;
+        let (w, h) = (i.width() as u32, i.height() as u32);
+        try_status!(write_out(out, skb_image { data: i.as_bytes().as_ptr(), width: w, height: h, stride: w, channels: 1 }, "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Frees an image from `skb_gray_image_load`. NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
+    if !img.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(img))));
+    }
+}
+
+/// Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
+/// edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL means "no
+/// joints" and fails with `SKB_ERR_NO_JOINTS` until a sketch-trained joint detector is built
+/// in), the 3-D pose and camera, the shape fit, and the fitted shape posed to the estimate.
+/// `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
+/// fit options' gender defaults to automatic, fitting both and keeping the better score) are
+/// only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
+/// cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
+/// `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
+/// untouched. Errors: `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BLANK_IMAGE`,
+/// `SKB_ERR_NO_JOINTS`, `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
+/// NaN), the pose solver's (`SKB_ERR_TOO_FEW_JOINTS`, `SKB_ERR_COINCIDENT_JOINTS`,
+/// `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
+/// callback is called on the calling thread.
+#[no_mangle]
+pub unsafe extern "C" fn skb_run_pipeline(
+    ctx: *const skb_context,
+    sketch: *const skb_image,
+    joints: *const skb_joints2d,
+    dict: *const skb_pose_dictionary,
+    pose_opts: *const skb_pose_options,
+    fit_opts: *const skb_fit_options,
+    progress: skb_progress_fn,
+    user: *mut c_void,
+    out: *mut *mut skb_result,
+) -> skb_status {
+    ffi_boundary! {
+        let ctx = try_status!(try_ref(ctx, "ctx"));
+        let gray = try_core!(to_gray(&try_status!(view_of(sketch))));
+        if out.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+        }
+        let source: Box<dyn JointsSource> = match joints.as_ref() {
+            Some(j) => Box::new(GivenJoints(joints_in(j))),
+            None => Box::new(NoDetector),
+        };
+        let embedded;
+        let d = match dict.as_ref() {
+            Some(d) => &d.inner,
+            None => {
+                embedded = try_core!(dict_io::embedded());
+                &embedded
+            }
+        };
+        let mut options = PipelineOptions::default();
+        if let Some(p) = pose_opts.as_ref() {
+            options.pose = p.inner;
+        }
+        if let Some(f) = fit_opts.as_ref() {
+            options.fit = f.fit.clone();
+            options.gender = f.gender;
+        }
+        let mut cb = progress_closure(progress, user);
+        let inner = try_core!(run_pipeline(&ctx.model, d, &gray, source.as_ref(), &options, &mut cb));
+        *out = Box::into_raw(Box::new(skb_result { model: Arc::clone(&ctx.model), inner }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Frees a result. NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_free(result: *mut skb_result) {
+    if !result.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(result))));
+    }
+}
+
+/// The chosen gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`, and whether it
+/// was chosen by score (1) or given (0) into `*by_score` (may be NULL).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_gender(result: *const skb_result, gender: *mut u32, by_score: *mut bool) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        try_status!(write_out(gender, r.gender as u32, "gender"));
+        if !by_score.is_null() {
+            *by_score = r.gender_by_score;
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// The best match score (higher is better) of the fit of `gender` into `*score`. Errors:
+/// `SKB_ERR_OUT_OF_RANGE` when that gender was not fitted (a gender was given).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32, score: *mut f64) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        let Some(g) = r.fits.iter().find(|g| g.gender as u32 == gender) else {
+            return super::error::fail(&Error::OutOfRange { name: "gender", detail: format!("{gender} was not fitted") });
+        };
+        try_status!(write_out(score, g.score, "score"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Vertex count (13380) and quad-face count (13378) into `*vertices` and `*faces` (either may
+/// be NULL).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_counts(result: *const skb_result, vertices: *mut usize, faces: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        if !vertices.is_null() {
+            *vertices = r.mesh.vertices.len();
+        }
+        if !faces.is_null() {
+            *faces = r.mesh.quads.len();
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the posed (`posed` non-zero) or rest vertices, x, y, z floats in metres, model frame,
+/// into `dst` of `dst_len` floats (≥ 3 × vertex count). On error nothing is written.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_copy_vertices(result: *const skb_result, posed: bool, dst: *mut f32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        let v = if posed { &r.posed_vertices } else { &r.mesh.vertices };
+        let out = try_status!(out_slice(dst, dst_len, 3 * v.len(), "dst"));
+        for (o, p) in out.chunks_exact_mut(3).zip(v) {
+            o.copy_from_slice(p);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside; a
+/// triangle repeats its third index) into `dst` of `dst_len` integers (≥ 4 × face count).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_copy_faces(result: *const skb_result, dst: *mut u32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        let out = try_status!(out_slice(dst, dst_len, 4 * r.mesh.quads.len(), "dst"));
+        for (o, q) in out.chunks_exact_mut(4).zip(&r.mesh.quads) {
+            o.copy_from_slice(q);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// The 2-D joints used (pixels, with visibility) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_joints2d(result: *const skb_result, out: *mut skb_joints2d) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        let j = skb_joints2d { xy: r.joints2d.xy, visible: r.joints2d.visible.map(u8::from), reserved: 0 };
+        try_status!(write_out(out, j, "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies 15 3-D joints (x, y, z doubles, metres, model frame) into `dst` (`dst_len` ≥ 45):
+/// `which` is `SKB_JOINTS_REST`, `SKB_JOINTS_POSED` or `SKB_JOINTS_ESTIMATED`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_copy_joints3d(result: *const skb_result, which: u32, dst: *mut f64, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        let j = match which {
+            SKB_JOINTS_REST => &r.mesh.joints,
+            SKB_JOINTS_POSED => &r.posed_joints,
+            SKB_JOINTS_ESTIMATED => &r.pose.joints,
+            _ => return super::error::fail(&Error::OutOfRange { name: "which", detail: format!("{which} (expected 0 rest, 1 posed, 2 estimated)") }),
+        };
+        let out = try_status!(out_slice(dst, dst_len, 3 * NUM_JOINTS, "dst"));
+        for (o, p) in out.chunks_exact_mut(3).zip(j) {
+            o.copy_from_slice(p);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// The estimated weak-perspective camera (model metres → sketch pixels) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_camera(result: *const skb_result, out: *mut skb_camera) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        let c = &r.pose.camera;
+        let cam = skb_camera { sx: c.sx, sy: c.sy, r: std::array::from_fn(|i| c.r[(i / 3, i % 3)]), t: c.t };
+        try_status!(write_out(out, cam, "out"));
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the skin weights as `skb_mesh_copy_skin_weights` does: for vertex v, slots
+/// `4v .. 4v+3` of `bones` (bone indices 0..13) and `weights` (summing to 1); both hold `len`
+/// elements (≥ 4 × vertex count).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_copy_skin_weights(result: *const skb_result, bones: *mut u32, weights: *mut f32, len: usize) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        copy_skin_weights(&r.mesh.weights, bones, weights, len)
+    }
+}
+
+/// The fitted PCA shape weights (metres): their number into `*count` (may be NULL) and, when
+/// `dst` is not NULL, the weights into `dst` (`dst_len` ≥ count).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_shape_weights(result: *const skb_result, dst: *mut f64, dst_len: usize, count: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        let n = r.weights.len();
+        if !dst.is_null() {
+            let out = try_status!(out_slice(dst, dst_len, n, "dst"));
+            out[..n].copy_from_slice(&r.weights);
+        }
+        if !count.is_null() {
+            *count = n;
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// A new `skb_mesh` of the result (the fitted rest shape, posed as in the result) into `*out`,
+/// for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_mesh(result: *const skb_result, out: *mut *mut skb_mesh) -> skb_status {
+    ffi_boundary! {
+        let res = try_status!(try_ref(result, "result"));
+        let r = &res.inner;
+        let rest = crate::body::RestShape { vertices: r.mesh.vertices.clone(), joints: r.mesh.joints };
+        let posed = Posed { pose: r.ik_pose.clone(), vertices: r.posed_vertices.clone() };
+        let mesh = skb_mesh { model: Arc::clone(&res.model), gender: r.gender, rest, weights: r.weights.clone(), posed: Some(Box::new(posed)) };
+        try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
+        skb_status::SKB_OK
+    }
+}

@@ -1,0 +1,87 @@
+//! Where the pipeline's 2-D joints come from. [`JointsSource`] is the plug-in point for a joint
+//! detector; until a detector trained on sketches is available the pipeline uses the caller's
+//! joints ([`GivenJoints`], the paper's user-correction path) and [`NoDetector`] fails with
+//! [`Error::NoJoints`] instead of guessing.
+
+use crate::error::{Error, Result};
+use crate::image::GrayImage;
+use crate::skeleton::{Joints2, JOINT_NAMES, NUM_JOINTS};
+
+/// A provider of the 15 canonical 2-D joints of a sketch. Implementations must be deterministic
+/// and shareable across threads.
+pub trait JointsSource: Sync {
+    /// Short name for reports ("given", a detector's name).
+    fn name(&self) -> &str;
+    /// The joints of `sketch` (gray, 0 ink … 255 paper), pixels; `edges` is its Canny edge map.
+    fn joints(&self, sketch: &GrayImage, edges: &GrayImage) -> Result<Joints2>;
+}
+
+/// Joints given by the caller (a joints file, a user's clicks).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GivenJoints(pub Joints2);
+
+impl JointsSource for GivenJoints {
+    fn name(&self) -> &str {
+        "given"
+    }
+    fn joints(&self, _sketch: &GrayImage, _edges: &GrayImage) -> Result<Joints2> {
+        Ok(self.0)
+    }
+}
+
+/// The source used when no joints are given: there is no sketch-trained detector yet, so it
+/// always fails with [`Error::NoJoints`] telling the caller to give joints.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NoDetector;
+
+impl JointsSource for NoDetector {
+    fn name(&self) -> &str {
+        "none"
+    }
+    fn joints(&self, _sketch: &GrayImage, _edges: &GrayImage) -> Result<Joints2> {
+        Err(Error::NoJoints(
+            "none were given and no joint detector trained on sketches is installed yet; pass a sketchbody-joints2d file (--joints)".into(),
+        ))
+    }
+}
+
+/// Checks that every visible joint is finite and inside the `width`×`height` image
+/// (0 ≤ x ≤ width, 0 ≤ y ≤ height). Errors: [`Error::NonFinite`], [`Error::JointOutsideImage`].
+pub fn check_in_image(j: &Joints2, width: usize, height: usize) -> Result<()> {
+    for k in 0..NUM_JOINTS {
+        if !j.visible[k] {
+            continue;
+        }
+        let [x, y] = j.xy[k];
+        if !x.is_finite() || !y.is_finite() {
+            return Err(Error::NonFinite { name: "2-D joint", value: if x.is_finite() { y } else { x } });
+        }
+        if !(0.0..=width as f64).contains(&x) || !(0.0..=height as f64).contains(&y) {
+            return Err(Error::JointOutsideImage { joint: JOINT_NAMES[k], x, y, width, height });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sources_and_the_image_check() {
+        let img = GrayImage::filled(100, 80, 255).unwrap();
+        let j = Joints2 { xy: [[50.0, 40.0]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
+        assert_eq!(GivenJoints(j).joints(&img, &img).unwrap(), j);
+        assert!(matches!(NoDetector.joints(&img, &img), Err(Error::NoJoints(_))));
+        check_in_image(&j, 100, 80).unwrap();
+        let mut out = j;
+        out.xy[3] = [50.0, 80.5];
+        let e = check_in_image(&out, 100, 80).unwrap_err();
+        assert!(matches!(e, Error::JointOutsideImage { joint: "r_elbow", .. }), "{e}");
+        out.visible[3] = false;
+        check_in_image(&out, 100, 80).unwrap();
+        let mut nan = j;
+        nan.xy[0] = [f64::NAN, 1.0];
+        assert!(matches!(check_in_image(&nan, 100, 80), Err(Error::NonFinite { .. })));
+    }
+}

@@ -1,0 +1,277 @@
+//! The main job end to end (paper Fig. 1): sketch → Canny edges → 2-D joints → 3-D pose and
+//! camera ([`crate::pose::estimate_pose`]) → shape fit ([`crate::fit::fit_shape`]) → a rigged
+//! rest mesh posed to the estimate. [`run_pipeline`] does it in memory; the CLI's `run` writes
+//! the files.
+//!
+//! - [`joints`]: the 2-D joints source (the caller's joints, or a detector plugged in later).
+//! - [`overlay`]: the overlay picture (sketch, joints, bones, fitted silhouette outline).
+//!
+//! Gender: when [`PipelineOptions::gender`] is `None` both shape spaces are fitted with the same
+//! options and the one whose best sample scores higher is chosen (both scores are reported);
+//! every match score is "higher is better" and measured in the same units for both genders.
+
+pub mod joints;
+pub mod overlay;
+
+use std::time::Instant;
+
+use crate::body::ik::{self, IkOptions, Pose};
+use crate::body::rig::RiggedMesh;
+use crate::body::skin::skin;
+use crate::body::{BodyModel, Gender};
+use crate::error::{Error, Result};
+use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult};
+use crate::image::{canny, CannyParams, GrayImage};
+use crate::pose::{estimate_pose, Dictionary, PoseEstimate, PoseOptions};
+use crate::skeleton::{Joints2, Joints3};
+
+pub use joints::{GivenJoints, JointsSource, NoDetector};
+
+/// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
+pub const MIN_SKETCH_SIDE: usize = 32;
+
+/// Options of [`run_pipeline`]. `Default` gives the library defaults of every stage and
+/// automatic gender.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PipelineOptions {
+    /// Edge detector settings (default: 50/150, aperture 3, L1).
+    pub canny: CannyParams,
+    /// 3-D pose solver options.
+    pub pose: PoseOptions,
+    /// Shape-fit options (samples, iterations, score, seed, skinning, ...).
+    pub fit: FitOptions,
+    /// The shape space to fit; `None` fits both and keeps the better-scoring one.
+    pub gender: Option<Gender>,
+    /// Skip the fit and use the gender's mean shape, posed the same way (the baseline of the
+    /// benchmark). Needs `gender`.
+    pub mean_shape: bool,
+    /// Keep the pose solver's camera (fitted to a 1.75 m person of the dictionary's proportions)
+    /// instead of refitting its scales and translation to each gender's mean skeleton (see
+    /// [`refit_camera`]). Default `false` (refit).
+    pub keep_pose_scale: bool,
+}
+
+/// The pose estimate with its camera refitted to a body's skeleton: the body's rest joints
+/// `rest` are posed to the estimate's bone directions by IK (its own bone lengths), rotated by
+/// the estimate's R, and `sx, tx` / `sy, ty` are the least-squares fit of their projections to
+/// the visible 2-D joints. The pose solver reports a 1.75 m person of its dictionary's
+/// proportions, and a single weak-perspective view cannot tell a small near figure from a large
+/// far one; without this the shape fit spends shape weights on the solver's arbitrary scale.
+/// Errors: IK's; [`Error::Degenerate`] when a scale comes out non-positive.
+pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> Result<PoseEstimate> {
+    let posed = ik::solve(rest, &pose.joints, &IkOptions { retarget: false })?.joints;
+    let r = pose.camera.r;
+    let fit_axis = |coord: &dyn Fn(&nalgebra::Vector3<f64>) -> f64, axis: usize| -> Result<(f64, f64)> {
+        let (mut n, mut sa, mut sb, mut saa, mut sab) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for (k, p) in posed.iter().enumerate() {
+            if !joints2d.visible[k] {
+                continue;
+            }
+            let a = coord(&(r * nalgebra::Vector3::from(*p)));
+            let b = joints2d.xy[k][axis];
+            n += 1.0;
+            sa += a;
+            sb += b;
+            saa += a * a;
+            sab += a * b;
+        }
+        let den = n * saa - sa * sa;
+        if n < 2.0 || den.abs() < 1e-12 {
+            return Err(Error::Degenerate("cannot refit the camera: the joints do not span the image".into()));
+        }
+        let scale = (n * sab - sa * sb) / den;
+        Ok((scale, (sb - scale * sa) / n))
+    };
+    let (sx, tx) = fit_axis(&|c| c.x, 0)?;
+    let (sy, ty) = fit_axis(&|c| -c.y, 1)?;
+    if !(sx > 0.0 && sy > 0.0) {
+        return Err(Error::Degenerate(format!("camera refit gave scales {sx}, {sy}")));
+    }
+    let mut out = pose.clone();
+    out.camera.sx = sx;
+    out.camera.sy = sy;
+    out.camera.t = [tx, ty];
+    Ok(out)
+}
+
+/// One gender's fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GenderFit {
+    /// The shape space fitted.
+    pub gender: Gender,
+    /// The SIR's result (`None` for the mean shape).
+    pub fit: Option<FitResult>,
+    /// Best sample's match score (higher is better); NaN for the mean shape.
+    pub score: f64,
+    /// Wall-clock seconds of this fit.
+    pub seconds: f64,
+}
+
+/// Wall-clock seconds of each stage.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timings {
+    /// Canny edges.
+    pub edges: f64,
+    /// 2-D joints.
+    pub joints: f64,
+    /// 3-D pose and camera.
+    pub pose: f64,
+    /// Every shape fit together.
+    pub fit: f64,
+    /// Posing the chosen shape (IK and skinning).
+    pub posing: f64,
+    /// The whole call.
+    pub total: f64,
+}
+
+/// Everything [`run_pipeline`] produces. Owns its data.
+#[derive(Clone, Debug)]
+pub struct PipelineResult {
+    /// The sketch's Canny edge map (255 edge, 0 not).
+    pub edges: GrayImage,
+    /// The 2-D joints used, pixels.
+    pub joints2d: Joints2,
+    /// Name of the joints source ([`JointsSource::name`]).
+    pub joints_source: String,
+    /// 3-D joints (metres of a 1.75 m person, model frame) and camera (pixels) used for the
+    /// chosen gender: the camera refitted to that gender's mean skeleton (unless `keep_pose_scale`).
+    pub pose: PoseEstimate,
+    /// The fits, in order: the given gender, or female then male.
+    pub fits: Vec<GenderFit>,
+    /// The chosen shape space.
+    pub gender: Gender,
+    /// `true` when the gender was chosen by score, `false` when the caller gave it.
+    pub gender_by_score: bool,
+    /// PCA weights of the chosen shape (Y* of the SIR; empty for the mean shape), metres.
+    pub weights: Vec<f64>,
+    /// Best match score of the chosen fit (NaN for the mean shape).
+    pub score: f64,
+    /// The rest mesh with its joints, UVs and skin weights.
+    pub mesh: RiggedMesh,
+    /// The IK pose taking `mesh.joints` to the estimated 3-D joints.
+    pub ik_pose: Pose,
+    /// The posed vertices (model frame, metres); project with `pose.camera`.
+    pub posed_vertices: Vec<[f32; 3]>,
+    /// Posed joints of the mesh (model frame, metres).
+    pub posed_joints: crate::skeleton::Joints3,
+    /// Stage timings.
+    pub timings: Timings,
+}
+
+/// Maps a stage's progress to the whole run's and forwards it; `false` from the caller cancels.
+struct Progress<'a> {
+    callback: &'a mut dyn FnMut(f32) -> bool,
+}
+
+impl Progress<'_> {
+    fn report(&mut self, fraction: f32) -> Result<()> {
+        if (self.callback)(fraction.clamp(0.0, 1.0)) {
+            Ok(())
+        } else {
+            Err(Error::Cancelled)
+        }
+    }
+}
+
+/// Runs the pipeline on a gray sketch (0 ink … 255 paper). `progress(fraction)` is called from
+/// the calling thread after each stage and each fit iteration with the fraction of the whole
+/// run done (0..=1, non-decreasing); returning `false` stops with [`Error::Cancelled`] within
+/// one fit iteration.
+///
+/// Errors: a side below [`MIN_SKETCH_SIDE`] ([`Error::ImageTooSmall`]); no edges
+/// ([`Error::BlankImage`]); the joints source's error ([`Error::NoJoints`] for
+/// [`NoDetector`]); a visible joint non-finite or outside the image
+/// ([`Error::NonFinite`], [`Error::JointOutsideImage`]); the pose solver's and the fit's
+/// errors; `mean_shape` without a gender ([`Error::OutOfRange`]).
+pub fn run_pipeline(
+    model: &BodyModel,
+    dict: &Dictionary,
+    sketch: &GrayImage,
+    source: &dyn JointsSource,
+    options: &PipelineOptions,
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<PipelineResult> {
+    let t0 = Instant::now();
+    let mut p = Progress { callback: progress };
+    let mut timings = Timings::default();
+    let (w, h) = (sketch.width(), sketch.height());
+    if w < MIN_SKETCH_SIDE || h < MIN_SKETCH_SIDE {
+        return Err(Error::ImageTooSmall { width: w, height: h, min: MIN_SKETCH_SIDE });
+    }
+    if options.mean_shape && options.gender.is_none() {
+        return Err(Error::OutOfRange { name: "gender", detail: "the mean-shape baseline needs a gender (nothing to choose by)".into() });
+    }
+    p.report(0.0)?;
+    let t = Instant::now();
+    let edges = canny(&sketch.view(), &options.canny)?;
+    if edges.as_bytes().iter().all(|&e| e == 0) {
+        let (a, b) = (options.canny.threshold1, options.canny.threshold2);
+        return Err(Error::BlankImage { width: w, height: h, low: a.min(b), high: a.max(b) });
+    }
+    timings.edges = t.elapsed().as_secs_f64();
+    p.report(0.02)?;
+
+    let t = Instant::now();
+    let joints2d = source.joints(sketch, &edges)?;
+    joints::check_in_image(&joints2d, w, h)?;
+    timings.joints = t.elapsed().as_secs_f64();
+    p.report(0.04)?;
+
+    let t = Instant::now();
+    let pose = estimate_pose(dict, &joints2d, &options.pose)?;
+    timings.pose = t.elapsed().as_secs_f64();
+    p.report(0.06)?;
+
+    let genders: Vec<Gender> = options.gender.map_or(Gender::ALL.to_vec(), |g| vec![g]);
+    let mut fits = Vec::with_capacity(genders.len());
+    let t = Instant::now();
+    let span = 0.9 / genders.len() as f32;
+    let mut poses = Vec::with_capacity(genders.len());
+    for (i, &gender) in genders.iter().enumerate() {
+        let tf = Instant::now();
+        let pose = if options.keep_pose_scale { pose.clone() } else { refit_camera(&pose, model.space(gender).mean_joints(), &joints2d)? };
+        poses.push(pose);
+        let pose = &poses[i];
+        if options.mean_shape {
+            fits.push(GenderFit { gender, fit: None, score: f64::NAN, seconds: 0.0 });
+            continue;
+        }
+        let problem = FitProblem { model, gender, pose: &pose.joints, camera: &pose.camera, edges: &edges };
+        let base = 0.06 + span * i as f32;
+        let mut cb = |f: f32| (p.callback)((base + span * f).clamp(0.0, 1.0));
+        let fit = fit_shape(&problem, &options.fit, &mut cb)?;
+        fits.push(GenderFit { gender, score: fit.best_score, fit: Some(fit), seconds: tf.elapsed().as_secs_f64() });
+    }
+    timings.fit = t.elapsed().as_secs_f64();
+    // Highest score wins; ties (and NaN mean-shape scores) keep the first.
+    let chosen = (1..fits.len()).fold(0, |best, k| if fits[k].score > fits[best].score { k } else { best });
+    let gender = fits[chosen].gender;
+    let weights = fits[chosen].fit.as_ref().map_or_else(Vec::new, |f| f.weights.clone());
+    let score = fits[chosen].score;
+    let pose = poses.swap_remove(chosen);
+
+    let t = Instant::now();
+    let mesh = RiggedMesh::from_model(model, gender, &weights)?;
+    let ik_pose = ik::solve(&mesh.joints, &pose.joints, &IkOptions { retarget: options.fit.retarget })?;
+    let posed_vertices = skin(&mesh.vertices, &mesh.weights, &ik_pose, options.fit.skinning)?;
+    let posed_joints = ik_pose.joints;
+    timings.posing = t.elapsed().as_secs_f64();
+    timings.total = t0.elapsed().as_secs_f64();
+    p.report(1.0)?;
+    Ok(PipelineResult {
+        edges,
+        joints2d,
+        joints_source: source.name().to_string(),
+        pose,
+        fits,
+        gender,
+        gender_by_score: options.gender.is_none(),
+        weights,
+        score,
+        mesh,
+        ik_pose,
+        posed_vertices,
+        posed_joints,
+        timings,
+    })
+}

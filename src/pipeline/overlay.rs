@@ -1,0 +1,132 @@
+//! The overlay picture of a run: the sketch (gray, lightened) with the fitted body's projected
+//! silhouette outline (green), the bones (the character's right side orange, left side blue,
+//! centre purple) and the 2-D joints (filled dots; hollow for joints marked missing).
+
+use crate::camera::WeakPerspective;
+use crate::error::Result;
+use crate::image::GrayImage;
+use crate::render::preview::RgbImage;
+use crate::render::raster::{Rasterizer, MAX_RASTER_SIDE};
+use crate::skeleton::{joint, Joints2, BONES, NUM_JOINTS};
+
+const OUTLINE: [u8; 3] = [20, 170, 60];
+const RIGHT: [u8; 3] = [235, 120, 20];
+const LEFT: [u8; 3] = [30, 110, 230];
+const CENTRE: [u8; 3] = [150, 60, 170];
+const JOINT_RIM: [u8; 3] = [20, 20, 20];
+
+fn side_colour(j: usize) -> [u8; 3] {
+    match j {
+        joint::R_SHOULDER | joint::R_ELBOW | joint::R_WRIST | joint::R_HIP | joint::R_KNEE | joint::R_ANKLE => RIGHT,
+        joint::L_SHOULDER | joint::L_ELBOW | joint::L_WRIST | joint::L_HIP | joint::L_KNEE | joint::L_ANKLE => LEFT,
+        _ => CENTRE,
+    }
+}
+
+fn put(img: &mut RgbImage, x: i64, y: i64, c: [u8; 3]) {
+    if x >= 0 && y >= 0 && (x as usize) < img.width && (y as usize) < img.height {
+        let o = (y as usize * img.width + x as usize) * 3;
+        img.data[o..o + 3].copy_from_slice(&c);
+    }
+}
+
+fn disc(img: &mut RgbImage, cx: f64, cy: f64, r: f64, c: [u8; 3]) {
+    let ri = r.ceil() as i64;
+    for dy in -ri..=ri {
+        for dx in -ri..=ri {
+            if (dx * dx + dy * dy) as f64 <= r * r {
+                put(img, cx.floor() as i64 + dx, cy.floor() as i64 + dy, c);
+            }
+        }
+    }
+}
+
+fn line(img: &mut RgbImage, a: [f64; 2], b: [f64; 2], half_width: f64, c: [u8; 3]) {
+    let steps = ((b[0] - a[0]).abs().max((b[1] - a[1]).abs()).ceil() as usize).clamp(1, 100_000);
+    for i in 0..=steps {
+        let t = i as f64 / steps as f64;
+        disc(img, a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), half_width, c);
+    }
+}
+
+/// Draws the overlay of `sketch` (see the module doc): `vertices`/`tris` is the posed mesh
+/// (metres, model frame) projected with `camera` (image pixels); `joints` are the 2-D joints.
+/// Images with a side above the rasteriser's 4096 px get the outline from a scaled raster.
+/// Errors: an invalid camera or mesh (as [`Rasterizer::rasterize`]); a mesh wholly outside the
+/// image draws no outline and is not an error.
+pub fn overlay(sketch: &GrayImage, joints: &Joints2, vertices: &[[f32; 3]], tris: &[[u32; 3]], camera: &WeakPerspective) -> Result<RgbImage> {
+    let (w, h) = (sketch.width(), sketch.height());
+    let data = sketch.as_bytes().iter().flat_map(|&g| {
+        let v = (128 + g as u16 / 2) as u8;
+        [v, v, v]
+    });
+    let mut img = RgbImage { width: w, height: h, data: data.collect() };
+    let f = (MAX_RASTER_SIDE as f64 / w.max(h) as f64).min(1.0);
+    let (rw, rh) = (((w as f64 * f).round() as usize).max(1), ((h as f64 * f).round() as usize).max(1));
+    let cam = WeakPerspective { sx: camera.sx * f, sy: camera.sy * f, r: camera.r, t: [camera.t[0] * f, camera.t[1] * f] };
+    let mut raster = Rasterizer::new();
+    match raster.rasterize(vertices, tris, &cam, rw, rh, false) {
+        Ok(_) => {
+            let m = raster.mask();
+            let inside = |x: usize, y: usize| m[y * rw + x] != 0;
+            for y in 0..rh {
+                for x in 0..rw {
+                    let edge = inside(x, y)
+                        && (x == 0 || y == 0 || x + 1 == rw || y + 1 == rh || !inside(x - 1, y) || !inside(x + 1, y) || !inside(x, y - 1) || !inside(x, y + 1));
+                    if edge {
+                        let (px, py) = (((x as f64 + 0.5) / f).floor() as i64, ((y as f64 + 0.5) / f).floor() as i64);
+                        disc(&mut img, px as f64, py as f64, 0.8 / f.max(0.25), OUTLINE);
+                    }
+                }
+            }
+        }
+        Err(crate::Error::MeshOutsideImage { .. }) => {}
+        Err(e) => return Err(e),
+    }
+    let scale = (w.min(h) as f64 / 512.0).max(0.5);
+    for &(a, b) in &BONES {
+        line(&mut img, joints.xy[a], joints.xy[b], 1.2 * scale, side_colour(b));
+    }
+    for k in 0..NUM_JOINTS {
+        let [x, y] = joints.xy[k];
+        disc(&mut img, x, y, 4.5 * scale, JOINT_RIM);
+        if joints.visible[k] {
+            disc(&mut img, x, y, 3.2 * scale, side_colour(k));
+        } else {
+            disc(&mut img, x, y, 3.2 * scale, [255, 255, 255]);
+        }
+    }
+    Ok(img)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::body::procedural::{capsule_humanoid, rest_joints};
+    use nalgebra::Matrix3;
+
+    #[test]
+    fn outline_bones_and_joints_are_drawn() {
+        let m = capsule_humanoid(&rest_joints(), 10, 8);
+        let cam = WeakPerspective { sx: 120.0, sy: 120.0, r: Matrix3::identity(), t: [128.0, 128.0] };
+        let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
+        for k in 0..NUM_JOINTS {
+            j.xy[k] = cam.project(&nalgebra::Vector3::from(m.joints[k]));
+        }
+        j.visible[joint::L_WRIST] = false;
+        let sketch = GrayImage::filled(256, 256, 255).unwrap();
+        let img = overlay(&sketch, &j, &m.vertices, &m.triangles(), &cam).unwrap();
+        let count = |c: [u8; 3]| img.data.chunks(3).filter(|p| *p == c).count();
+        assert!(count(OUTLINE) > 200, "outline {}", count(OUTLINE));
+        assert!(count(RIGHT) > 50 && count(LEFT) > 50 && count(CENTRE) > 10, "{} {} {}", count(RIGHT), count(LEFT), count(CENTRE));
+        let px = |x: f64, y: f64| &img.data[((y as usize) * 256 + x as usize) * 3..][..3];
+        let [hx, hy] = j.xy[joint::HEAD];
+        assert_eq!(px(hx, hy), CENTRE);
+        let [wx, wy] = j.xy[joint::L_WRIST];
+        assert_eq!(px(wx, wy), [255, 255, 255]);
+        // Paper is lightened: white stays white, black ink becomes mid-gray.
+        assert_eq!(px(2.0, 2.0), [255, 255, 255]);
+        let far = WeakPerspective { t: [1e4, 1e4], ..cam };
+        assert!(overlay(&sketch, &j, &m.vertices, &m.triangles(), &far).is_ok());
+    }
+}

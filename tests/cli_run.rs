@@ -1,0 +1,142 @@
+//! `sketchbody run` end to end on the example sketch: every output file, the gender decision,
+//! and one-line errors that leave no file behind (no joints, joints outside the image, blank and
+//! tiny sketches, an unwritable output folder, Ctrl-C).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use sketchbody::export::joints2d::load_joints2d;
+use sketchbody::image::{save_gray_png, GrayImage};
+
+const SKETCH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/sketch.png");
+const JOINTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/sketch_joints.json");
+/// Small fit settings: the tests check plumbing, not accuracy.
+const FAST: [&str; 6] = ["--samples", "24", "--iterations", "2", "--quiet", "--preview-size=128"];
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("skb-cli-run-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sketchbody")).arg("run").args(args).output().unwrap()
+}
+
+fn one_line_error(out: &Output, expect: &str) {
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains(expect), "expected {expect:?} in {err}");
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn run_writes_every_output() {
+    let dir = scratch("ok");
+    let out_dir = dir.join("out");
+    let o = out_dir.to_str().unwrap();
+    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o, "--gender", "f"].iter().chain(&FAST).copied().collect::<Vec<_>>());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        names(&out_dir),
+        ["body.glb", "body.obj", "body_rest.obj", "joints2d.json", "overlay.png", "pose3d.json", "preview.png", "report.md"]
+    );
+    let glb = std::fs::read(out_dir.join("body.glb")).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+    assert_eq!(load_joints2d(&out_dir.join("joints2d.json")).unwrap(), load_joints2d(Path::new(JOINTS)).unwrap());
+    let pose: serde_json::Value = serde_json::from_slice(&std::fs::read(out_dir.join("pose3d.json")).unwrap()).unwrap();
+    assert_eq!(pose["format"], "sketchbody-pose3d");
+    assert!(pose["camera"]["sx"].as_f64().unwrap() > 100.0);
+    let obj = std::fs::read_to_string(out_dir.join("body.obj")).unwrap();
+    assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 13380);
+    let overlay = image::open(out_dir.join("overlay.png")).unwrap();
+    assert_eq!((overlay.width(), overlay.height()), (512, 512));
+    let preview = image::open(out_dir.join("preview.png")).unwrap();
+    assert_eq!((preview.width(), preview.height()), (256, 128));
+    let report = std::fs::read_to_string(out_dir.join("report.md")).unwrap();
+    assert!(report.contains("gender: female (given)"), "{report}");
+    assert!(report.contains("samples 24"), "{report}");
+    // A second run into the existing folder replaces the files and leaves no staging folder.
+    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o, "--gender", "f"].iter().chain(&FAST).copied().collect::<Vec<_>>());
+    assert!(out.status.success());
+    assert_eq!(names(&out_dir).len(), 8);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn without_gender_both_are_fitted_and_reported() {
+    let dir = scratch("auto");
+    let o = dir.join("out");
+    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o.to_str().unwrap()].iter().chain(&FAST).copied().collect::<Vec<_>>());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report = std::fs::read_to_string(o.join("report.md")).unwrap();
+    assert!(report.contains("- female fit: best score -") && report.contains("- male fit: best score -"), "{report}");
+    assert!(report.contains("(chosen by score"), "{report}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("by score") && stdout.contains("female -") && stdout.contains("male -"), "{stdout}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_input_fails_in_one_line_and_leaves_nothing() {
+    let dir = scratch("bad");
+    let out_dir = dir.join("out");
+    let o = out_dir.to_str().unwrap();
+    // No joints and no detector: a specific error, no folder.
+    one_line_error(&run(&[SKETCH, "--out", o, "--quiet"]), "no 2-D joints");
+    assert!(!out_dir.exists());
+    // A joint outside the image.
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(JOINTS).unwrap()).unwrap();
+    doc["joints"]["l_wrist"] = serde_json::json!([600.0, 250.0]);
+    let outside = dir.join("outside.json");
+    std::fs::write(&outside, doc.to_string()).unwrap();
+    one_line_error(&run(&[SKETCH, "--joints", outside.to_str().unwrap(), "--out", o, "--quiet"]), "joint l_wrist at (600, 250) px lies outside the 512x512 image");
+    // Blank and tiny sketches.
+    let blank = dir.join("blank.png");
+    save_gray_png(&GrayImage::filled(256, 256, 240).unwrap(), &blank).unwrap();
+    one_line_error(&run(&[blank.to_str().unwrap(), "--joints", JOINTS, "--out", o, "--quiet"]), "has no edges");
+    let tiny = dir.join("tiny.png");
+    save_gray_png(&GrayImage::filled(16, 16, 0).unwrap(), &tiny).unwrap();
+    one_line_error(&run(&[tiny.to_str().unwrap(), "--joints", JOINTS, "--out", o, "--quiet"]), "16x16 is too small");
+    assert!(!out_dir.exists());
+    // An output path below a file cannot be created.
+    let file = dir.join("file.txt");
+    std::fs::write(&file, "x").unwrap();
+    let under = file.join("out");
+    one_line_error(&run(&[SKETCH, "--joints", JOINTS, "--out", under.to_str().unwrap(), "--quiet"]), "cannot write the output folder");
+    // A failure into an existing folder leaves its other files alone and adds nothing.
+    std::fs::create_dir_all(&out_dir).unwrap();
+    std::fs::write(out_dir.join("keep.txt"), "k").unwrap();
+    one_line_error(&run(&[blank.to_str().unwrap(), "--joints", JOINTS, "--out", o, "--quiet"]), "has no edges");
+    assert_eq!(names(&out_dir), ["keep.txt"]);
+    assert_eq!(names(&dir), ["blank.png", "file.txt", "out", "outside.json", "tiny.png"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn ctrl_c_cancels_promptly_and_leaves_nothing() {
+    let dir = scratch("cancel");
+    let out_dir = dir.join("out");
+    let child = Command::new(env!("CARGO_BIN_EXE_sketchbody"))
+        .args(["run", SKETCH, "--joints", JOINTS, "--out", out_dir.to_str().unwrap(), "--samples", "400", "--iterations", "50", "--quiet"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    // SAFETY: plain kill(2) on our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let t = std::time::Instant::now();
+    let out = child.wait_with_output().unwrap();
+    assert!(t.elapsed().as_secs_f64() < 20.0, "took {:?}", t.elapsed());
+    one_line_error(&out, "cancelled by the progress callback");
+    assert!(!out_dir.exists());
+    assert_eq!(names(&dir).len(), 0, "{:?}", names(&dir));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,139 @@
+//! `pipeline::run_pipeline` on the example sketch: gender choice, determinism across thread
+//! counts, prompt cancellation, and the specific errors of bad input.
+
+use std::path::Path;
+
+use sketchbody::body::{BodyModel, Gender};
+use sketchbody::export::joints2d::load_joints2d;
+use sketchbody::fit::FitOptions;
+use sketchbody::image::{load_image, GrayImage};
+use sketchbody::pipeline::{run_pipeline, GivenJoints, NoDetector, PipelineOptions};
+use sketchbody::pose::dict_io;
+use sketchbody::skeleton::{joint, Joints2};
+use sketchbody::Error;
+
+fn inputs() -> (BodyModel, sketchbody::pose::Dictionary, GrayImage, Joints2) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    (
+        BodyModel::embedded().unwrap(),
+        dict_io::embedded().unwrap(),
+        load_image(&root.join("assets/examples/sketch.png")).unwrap(),
+        load_joints2d(&root.join("assets/examples/sketch_joints.json")).unwrap(),
+    )
+}
+
+fn fast(gender: Option<Gender>) -> PipelineOptions {
+    PipelineOptions { fit: FitOptions { samples: 24, max_iterations: 3, ..FitOptions::default() }, gender, ..PipelineOptions::default() }
+}
+
+#[test]
+fn fits_both_genders_chooses_by_score_and_is_deterministic() {
+    let (model, dict, sketch, j) = inputs();
+    let mut fractions = Vec::new();
+    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &fast(None), &mut |f| {
+        fractions.push(f);
+        true
+    })
+    .unwrap();
+    assert_eq!(r.fits.len(), 2);
+    assert!(r.gender_by_score);
+    let best = if r.fits[0].score >= r.fits[1].score { &r.fits[0] } else { &r.fits[1] };
+    assert_eq!(r.gender, best.gender);
+    assert_eq!(r.score, best.score);
+    assert!(r.fits.iter().all(|g| g.score.is_finite() && g.score < 0.0));
+    assert_eq!(r.weights, best.fit.as_ref().unwrap().weights);
+    assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");
+    assert_eq!(*fractions.last().unwrap(), 1.0);
+    // The posed mesh's joints land near the estimated 3-D joints (IK without retargeting keeps
+    // the shape's bone lengths, so only directions match exactly; the pelvis is the root).
+    let d = (0..3).map(|k| (r.posed_joints[joint::PELVIS][k] - r.pose.joints[joint::PELVIS][k]).powi(2)).sum::<f64>().sqrt();
+    assert!(d < 1e-6, "pelvis off by {d}");
+    assert_eq!(r.posed_vertices.len(), 13380);
+    // Same seed on 1 and 2 threads: the same result.
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let r1 = one.install(|| run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &fast(None), &mut |_| true).unwrap());
+    assert_eq!(r1.weights, r.weights);
+    assert_eq!(r1.gender, r.gender);
+    assert_eq!(r1.posed_vertices, r.posed_vertices);
+}
+
+#[test]
+fn mean_shape_baseline_is_the_mean_posed() {
+    let (model, dict, sketch, j) = inputs();
+    let o = PipelineOptions { mean_shape: true, ..fast(Some(Gender::Male)) };
+    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &o, &mut |_| true).unwrap();
+    assert!(r.weights.is_empty() && r.score.is_nan() && r.gender == Gender::Male);
+    assert_eq!(r.mesh.vertices, model.space(Gender::Male).synthesize(&[]).unwrap().vertices);
+    let o = PipelineOptions { mean_shape: true, gender: None, ..fast(None) };
+    assert!(matches!(run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &o, &mut |_| true), Err(Error::OutOfRange { name: "gender", .. })));
+}
+
+#[test]
+fn cancel_returns_promptly() {
+    let (model, dict, sketch, j) = inputs();
+    let o = PipelineOptions { fit: FitOptions { samples: 200, max_iterations: 100, ..FitOptions::default() }, ..fast(None) };
+    let mut calls = 0;
+    let t = std::time::Instant::now();
+    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &o, &mut |f| {
+        calls += 1;
+        f <= 0.06
+    });
+    assert!(matches!(r, Err(Error::Cancelled)), "{r:?}");
+    // Stopped after the first fit iteration, not after 2 × 100.
+    assert!(calls <= 5, "{calls} progress calls");
+    assert!(t.elapsed().as_secs_f64() < 30.0);
+    // Cancel before any work.
+    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &o, &mut |_| false);
+    assert!(matches!(r, Err(Error::Cancelled)));
+}
+
+#[test]
+fn bad_input_gives_specific_errors() {
+    let (model, dict, sketch, j) = inputs();
+    let o = fast(Some(Gender::Female));
+    let go = |img: &GrayImage, joints: Joints2| run_pipeline(&model, &dict, img, &GivenJoints(joints), &o, &mut |_| true);
+    let blank = GrayImage::filled(300, 300, 230).unwrap();
+    assert!(matches!(go(&blank, j), Err(Error::BlankImage { width: 300, height: 300, .. })));
+    let tiny = GrayImage::filled(31, 200, 0).unwrap();
+    assert!(matches!(go(&tiny, j), Err(Error::ImageTooSmall { width: 31, height: 200, min: 32 })));
+    let mut outside = j;
+    outside.xy[joint::R_ANKLE] = [222.0, -3.0];
+    assert!(matches!(go(&sketch, outside), Err(Error::JointOutsideImage { joint: "r_ankle", .. })));
+    let mut nan = j;
+    nan.xy[joint::NECK] = [f64::NAN, 100.0];
+    assert!(matches!(go(&sketch, nan), Err(Error::NonFinite { .. })));
+    // A joint marked missing may lie anywhere (it is only a guess).
+    let mut hidden = outside;
+    hidden.visible[joint::R_ANKLE] = false;
+    assert!(go(&sketch, hidden).is_ok());
+    let e = run_pipeline(&model, &dict, &sketch, &NoDetector, &o, &mut |_| true).unwrap_err();
+    assert!(matches!(e, Error::NoJoints(_)) && e.to_string().contains("--joints"), "{e}");
+    let bad_fit = PipelineOptions { fit: FitOptions { temperature: f64::NAN, ..o.fit.clone() }, ..o.clone() };
+    assert!(matches!(run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad_fit, &mut |_| true), Err(Error::NonFinite { .. })));
+}
+
+#[test]
+fn camera_refit_recovers_the_scale_of_the_body_skeleton() {
+    use sketchbody::camera::WeakPerspective;
+    use sketchbody::pipeline::refit_camera;
+    use sketchbody::pose::PoseEstimate;
+    let model = BodyModel::embedded().unwrap();
+    let rest = *model.space(Gender::Male).mean_joints();
+    let truth = WeakPerspective { sx: 300.0, sy: 310.0, r: nalgebra::Matrix3::identity(), t: [250.0, 260.0] };
+    let mut j = Joints2 { xy: [[0.0; 2]; 15], visible: [true; 15] };
+    for k in 0..15 {
+        j.xy[k] = truth.project(&nalgebra::Vector3::from(rest[k]));
+    }
+    j.visible[joint::L_WRIST] = false;
+    j.xy[joint::L_WRIST] = [0.0, 0.0]; // a wrong guess, ignored
+    let wrong = WeakPerspective { sx: 200.0, sy: 180.0, t: [0.0, 0.0], ..truth };
+    let est = PoseEstimate { joints: rest, camera: wrong, bases: vec![], weights: vec![], rms: 0.0, length_excess: 0.0, base: rest, base_parts: None };
+    let fixed = refit_camera(&est, &rest, &j).unwrap();
+    assert!((fixed.camera.sx - 300.0).abs() < 1e-6 && (fixed.camera.sy - 310.0).abs() < 1e-6, "{:?}", fixed.camera);
+    assert!((fixed.camera.t[0] - 250.0).abs() < 1e-6 && (fixed.camera.t[1] - 260.0).abs() < 1e-6);
+    assert_eq!(fixed.joints, rest);
+    let mut few = j;
+    few.visible = [false; 15];
+    few.visible[0] = true;
+    assert!(matches!(refit_camera(&est, &rest, &few), Err(Error::Degenerate(_))));
+}
