@@ -78,7 +78,7 @@ fn cost(a: f64, b: f64, d: i64) -> f32 {
 /// (strictly, so earlier steps win ties). Written with bit masks so that it compiles to vector
 /// selects; run with AVX2 when the processor has it.
 #[inline]
-fn max_step(best: &mut [f32], arg: &mut [i32], vals: &[f32], c: f32, tag: i32) {
+pub(super) fn max_step(best: &mut [f32], arg: &mut [i32], vals: &[f32], c: f32, tag: i32) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx2") {
