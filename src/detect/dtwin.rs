@@ -30,25 +30,26 @@ pub fn radius(a: f64, b: f64, range: f64) -> Option<usize> {
     (r <= MAX_RADIUS as f64).then_some(r as usize)
 }
 
-/// `max − min` of `v` (NaN when it holds a NaN, infinite when it holds an infinity); eight
-/// lanes so that it vectorises.
+/// `max − min` of `v`, NaN when `v` holds a NaN or an infinity (then [`radius`] declines and the
+/// envelope kernel runs); eight lanes of plain arithmetic so that it vectorises.
 fn value_range(v: &[f32]) -> f64 {
-    let (mut lo, mut hi, mut nan) = ([f32::INFINITY; 8], [f32::NEG_INFINITY; 8], false);
+    let (mut lo, mut hi, mut bad) = ([f32::INFINITY; 8], [f32::NEG_INFINITY; 8], [0f32; 8]);
     let mut chunks = v.chunks_exact(8);
     for ch in &mut chunks {
         for k in 0..8 {
             let x = ch[k];
             lo[k] = if x < lo[k] { x } else { lo[k] };
             hi[k] = if x > hi[k] { x } else { hi[k] };
-            nan |= x.is_nan();
+            // x − x is 0 for finite x and NaN for NaN or ±∞.
+            bad[k] += x - x;
         }
     }
     for &x in chunks.remainder() {
         lo[0] = if x < lo[0] { x } else { lo[0] };
         hi[0] = if x > hi[0] { x } else { hi[0] };
-        nan |= x.is_nan();
+        bad[0] += x - x;
     }
-    if nan {
+    if bad.iter().any(|b| b.is_nan()) {
         return f64::NAN;
     }
     let lo = lo.iter().fold(f32::INFINITY, |a, &b| a.min(b));
@@ -257,6 +258,9 @@ mod tests {
         assert_eq!(radius(0.0, 0.0, 1.0), None);
         assert_eq!(radius(0.1, 0.0, f64::INFINITY), None);
         assert_eq!(radius(0.1, 0.0, f64::NAN), None);
+        assert_eq!(value_range(&[1.0, -2.5, 0.0, 3.0, 1.0, 1.0, 1.0, 1.0, 1.0, -4.0]), 7.0);
+        assert!(value_range(&[1.0, f32::NAN, 0.0]).is_nan());
+        assert!(value_range(&[0.0; 9].iter().chain(&[f32::NEG_INFINITY]).copied().collect::<Vec<_>>()).is_nan());
     }
 
     /// Random maps, weights and shifts covering both the windowed and the fallback lines: the
