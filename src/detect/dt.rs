@@ -47,7 +47,7 @@ fn dt1d(src: &[f32], a: f64, b: f64, offset: i64, dst: &mut [f32], arg: &mut [u1
 
 /// Scratch buffers of [`dt1d_fast`], reused across the lines of a transform.
 #[derive(Default)]
-struct Scratch {
+pub(super) struct Scratch {
     /// Envelope parabola vertices.
     v: Vec<u32>,
     /// Envelope boundaries (z[k] .. z[k+1] is where parabola k is the maximum).
@@ -62,9 +62,10 @@ struct Scratch {
 
 /// The same transform as [`dt1d`] with the per-vertex terms and the reciprocals of the
 /// intersection denominators precomputed (no division and no closure in the envelope loop) and
-/// buffers reused. This is the kernel [`distance_transform`] runs. (Filling the outputs one
+/// buffers reused. This is the kernel of [`distance_transform_envelope`] and the fallback of the
+/// windowed kernel. (Filling the outputs one
 /// envelope segment at a time was tried and was slower on real score maps: segments are short.)
-fn dt1d_fast(src: &[f32], a: f64, b: f64, offset: i64, dst: &mut [f32], arg: &mut [u16], s: &mut Scratch) {
+pub(super) fn dt1d_fast(src: &[f32], a: f64, b: f64, offset: i64, dst: &mut [f32], arg: &mut [u16], s: &mut Scratch) {
     let n = src.len();
     if s.recip.len() < n || s.recip_a != a {
         s.recip.clear();
@@ -124,9 +125,17 @@ pub struct Transformed {
 
 /// 2-D transform of the child score map `src` with deformation weights `w` = (dx², dx, dy², dy)
 /// (a cost subtracted from the score, dx = probe − child position), probing child position
-/// (offx + x, offy + y) for output (x, y) of a `rows` x `cols` grid. Optimised 1-D kernel;
-/// equal to [`distance_transform_reference`] up to float rounding.
+/// (offx + x, offy + y) for output (x, y) of a `rows` x `cols` grid. The exact pruned
+/// (windowed brute-force) kernel of [`super::dtwin`] where its window is small, the envelope
+/// kernel elsewhere; equal to [`distance_transform_reference`] up to float rounding (arg-max
+/// equal except at ties within rounding).
 pub fn distance_transform(src: &ScoreMap, w: [f64; 4], offx: i64, offy: i64, rows: usize, cols: usize) -> Transformed {
+    super::dtwin::transform(src, w, offx, offy, rows, cols)
+}
+
+/// [`distance_transform`] with the lower-envelope kernel on every line (precomputed terms, no
+/// pruning): the optimised kernel before the windowed one, kept for comparison.
+pub fn distance_transform_envelope(src: &ScoreMap, w: [f64; 4], offx: i64, offy: i64, rows: usize, cols: usize) -> Transformed {
     let mut s = Scratch::default();
     separable(src, rows, cols, |line, axis, dst, arg| {
         let (a, b, off) = if axis == 0 { (w[2], w[3], offy) } else { (w[0], w[1], offx) };

@@ -7,6 +7,7 @@
 
 pub mod conv;
 pub mod dt;
+pub mod dtwin;
 pub mod fastconv;
 pub mod format;
 pub mod hog;

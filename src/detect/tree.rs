@@ -6,6 +6,7 @@
 
 use super::conv::{responses, responses_reference, ScoreMap};
 use super::dt::{distance_transform, distance_transform_reference};
+use super::dtwin::max_step;
 use super::model::Model;
 use super::pyramid::Level;
 
@@ -133,20 +134,17 @@ pub fn detect_level_with(
             })
             .collect();
         let mut ik = Vec::with_capacity(part.bias.len());
+        let mut arg32 = Vec::new();
         for (l, brow) in part.bias.iter().enumerate() {
             let mut best = vec![f32::NEG_INFINITY; prows * pcols];
-            let mut arg = vec![0u8; prows * pcols];
+            arg32.clear();
+            arg32.resize(prows * pcols, 0);
             for (m, t) in dts.iter().enumerate() {
-                let b = model.bias[brow[m]] as f32;
-                let mu = m as u8;
-                // Branch-free selects (vectorised): the first mixture attaining the maximum wins.
-                for ((bv, a), &s) in best.iter_mut().zip(arg.iter_mut()).zip(&t.score.data) {
-                    let v = s + b;
-                    let gt = v > *bv;
-                    *bv = if gt { v } else { *bv };
-                    *a = if gt { mu } else { *a };
-                }
+                // best = max(best, s + bias) as vector selects (s − (−b) is exactly s + b); the
+                // first mixture attaining the maximum wins.
+                max_step(&mut best, &mut arg32, &t.score.data, -(model.bias[brow[m]] as f32), m as i32);
             }
+            let arg: Vec<u8> = arg32.iter().map(|&m| m as u8).collect();
             for (ps, v) in scores[par][l].data.iter_mut().zip(&best) {
                 *ps += v;
             }
