@@ -26,17 +26,32 @@ pub fn held_out_request(seed: u64, i: u64, size: usize, hair: Option<Hair>) -> S
     SketchRequest { style: Some(style), ..SketchRequest::random(s, size) }
 }
 
-/// PCK@alpha of each model's best detection on one rendered sketch (0 for a model that finds
-/// nothing); `alphas` in order. Errors: the renderer's and the detector's (except no figure).
-pub fn score_sketch(renderer: &SketchRenderer, req: &SketchRequest, models: &[&Model], options: &DetectOptions, alphas: &[f64]) -> Result<Vec<Vec<f64>>> {
+/// One model's result on one sketch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SketchScore {
+    /// PCK at each requested alpha (0 when the model finds nothing).
+    pub pck: Vec<f64>,
+    /// Wall time of the detection, s.
+    pub seconds: f64,
+}
+
+/// PCK@alpha of each model's best detection on one rendered sketch, `alphas` in order, and the
+/// detection time. Errors: the renderer's and the detector's (except no figure).
+pub fn score_sketch(renderer: &SketchRenderer, req: &SketchRequest, models: &[&Model], options: &DetectOptions, alphas: &[f64]) -> Result<Vec<SketchScore>> {
     let s = renderer.render(req)?;
     let view = ImageView::gray(&s.pixels, req.width, req.height)?;
     models
         .iter()
-        .map(|m| match detect(&view, m, options) {
-            Ok(d) => alphas.iter().map(|&a| pck(&s.truth.joints2d, &d.best().joints.xy, a)).collect(),
-            Err(Error::NoFigure { .. }) => Ok(vec![0.0; alphas.len()]),
-            Err(e) => Err(e),
+        .map(|m| {
+            let t0 = std::time::Instant::now();
+            let d = detect(&view, m, options);
+            let seconds = t0.elapsed().as_secs_f64();
+            let pck = match d {
+                Ok(d) => alphas.iter().map(|&a| pck(&s.truth.joints2d, &d.best().joints.xy, a)).collect::<Result<_>>()?,
+                Err(Error::NoFigure { .. }) => vec![0.0; alphas.len()],
+                Err(e) => return Err(e),
+            };
+            Ok(SketchScore { pck, seconds })
         })
         .collect()
 }
