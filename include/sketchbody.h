@@ -135,6 +135,16 @@
 #define SKB_VERSION_PATCH 0
 
 /**
+ * Lower bound on the quadratic deformation weights (the engine needs them > 0).
+ */
+#define DEF_LOWER_BOUND 0.01
+
+/**
+ * Number of parts.
+ */
+#define NUM_PARTS 26
+
+/**
  * Distances above this many raster pixels count as this much in [`MatchScore::Chamfer`].
  */
 #define CHAMFER_CAP 12.0
@@ -303,6 +313,7 @@ typedef uint32_t skb_status;
 #endif // __cplusplus
 
 /**
+<<<<<<< HEAD
  * Which figure sizes [`detect`] searches (which pyramid levels it scores).
  */
 typedef struct SearchScales SearchScales;
@@ -312,8 +323,23 @@ typedef struct SearchScales SearchScales;
  * Create with `skb_context_new`, release with `skb_context_free`. Immutable after creation, so
  * one context may be used from several threads at once. Meshes keep the model alive on their
  * own: a context may be freed before the meshes made from it.
+=======
+ * The library context: holds the body model (the embedded one for [`skb_context_new`]) and the
+ * embedded 2-D detector (decoded on first use by `skb_detect`). Create with `skb_context_new`,
+ * release with `skb_context_free`. Immutable after creation (the detector is initialised once,
+ * thread-safely), so one context may be used from several threads at once. Meshes keep the
+ * model alive on their own: a context may be freed before the meshes made from it.
+>>>>>>> train
  */
 typedef struct skb_context skb_context;
+
+/**
+ * Options of [`skb_detect`]: score threshold and the searched scales. Create with
+ * `skb_detect_options_new` (the model's threshold, every scale), release with
+ * `skb_detect_options_free`. Setters need exclusive use; a configured handle may be read by
+ * several threads at once.
+ */
+typedef struct skb_detect_options skb_detect_options;
 
 /**
  * A detector model (flexible mixture of parts). Create with `skb_detector_new_from_file`,
@@ -678,6 +704,52 @@ skb_status skb_detector_detect(const struct skb_detector *det,
                                double *confidence,
                                size_t confidence_len,
                                double *score);
+
+/**
+ * Creates options with the defaults. `*out` receives a handle the caller owns.
+ */
+skb_status skb_detect_options_new(struct skb_detect_options **out);
+
+/**
+ * Releases options. NULL is a no-op.
+ */
+void skb_detect_options_free(struct skb_detect_options *opts);
+
+/**
+ * Sets the score threshold (NaN restores the model's own). Infinite values are
+ * `SKB_ERR_NON_FINITE`.
+ */
+skb_status skb_detect_options_set_threshold(struct skb_detect_options *opts, double threshold);
+
+/**
+ * Sets the searched scales as the pyramid cell size in pixels of the (possibly downscaled)
+ * image: levels with cells smaller than `min_cell_px` (which find small figures) or larger
+ * than `max_cell_px` (large figures) are skipped. A figure is found at cells of about its
+ * standing height / 40. Defaults 0 and +infinity (every scale). Errors: `SKB_ERR_OUT_OF_RANGE`
+ * unless 0 ≤ min < max (max may be +infinity; NaN is rejected).
+ */
+skb_status skb_detect_options_set_scales(struct skb_detect_options *opts,
+                                         double min_cell_px,
+                                         double max_cell_px);
+
+/**
+ * Detects the best-scoring figure in `image` with the embedded detector of `ctx` and `opts`
+ * (NULL: defaults). Images whose longer side exceeds 1024 px are downscaled first (results are
+ * in input pixels). Writes the 15 canonical joints as (x, y) pairs in pixels (origin top-left,
+ * y down) to `joints_xy[0..30]`, their confidences in (0, 1) to `confidence[0..15]` and the
+ * score to `*score`. When no figure reaches the threshold it returns `SKB_ERR_NO_FIGURE` and
+ * writes only `*score` (the best score found, below the threshold). Other errors (nothing
+ * written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
+ * `SKB_ERR_NULL_POINTER`, image errors. Thread-safe.
+ */
+skb_status skb_detect(const struct skb_context *ctx,
+                      const struct skb_image *image,
+                      const struct skb_detect_options *opts,
+                      double *joints_xy,
+                      size_t joints_len,
+                      double *confidence,
+                      size_t confidence_len,
+                      double *score);
 
 /**
  * The message of the last failed sketchbody call on this thread ("" after a success).

@@ -77,3 +77,25 @@ fn detect_finds_the_example_sketch_and_rejects_tiny_images() {
     assert!(!dir.join("t.json").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
+    let dir = scratch("embedded");
+    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
+    let (out, overlay) = (dir.join("j.json"), dir.join("o.png"));
+    let res = cli().args(["detect", "--min-cell", "4"]).arg(&sketch).arg("--out").arg(&out).arg("--overlay").arg(&overlay).output().unwrap();
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(j["format"], "sketchbody-joints2d");
+    let y = |name: &str| j["joints"][name][1].as_f64().unwrap();
+    assert!(y("head") < y("neck") && y("neck") < y("pelvis") && y("pelvis") < y("l_knee") && y("l_knee") < y("l_ankle"));
+    assert!(j["confidence"]["head"].as_f64().is_some_and(|c| c > 0.0 && c < 1.0));
+    assert!(image::open(&overlay).unwrap().width() == 512);
+    // A blank page has no figure above an absurd threshold: one line naming the score.
+    let blank = dir.join("blank.png");
+    image::GrayImage::from_pixel(128, 128, image::Luma([255])).save(&blank).unwrap();
+    let err = one_line_failure(cli().args(["detect", "--threshold=1000"]).arg(&blank).arg("--out").arg(dir.join("b.json")));
+    assert!(err.contains("no figure") && err.contains("1000"), "{err}");
+    assert!(!dir.join("b.json").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

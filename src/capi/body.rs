@@ -24,12 +24,14 @@ pub const SKB_MAX_INFLUENCES: u32 = 4;
 const _: () = assert!(SKB_NUM_JOINTS as usize == NUM_JOINTS && SKB_NUM_BONES as usize == NUM_BONES);
 const _: () = assert!(SKB_MAX_INFLUENCES as usize == MAX_INFLUENCES);
 
-/// The library context: holds the body model (the embedded one for [`skb_context_new`]).
-/// Create with `skb_context_new`, release with `skb_context_free`. Immutable after creation, so
-/// one context may be used from several threads at once. Meshes keep the model alive on their
-/// own: a context may be freed before the meshes made from it.
+/// The library context: holds the body model (the embedded one for [`skb_context_new`]) and the
+/// embedded 2-D detector (decoded on first use by `skb_detect`). Create with `skb_context_new`,
+/// release with `skb_context_free`. Immutable after creation (the detector is initialised once,
+/// thread-safely), so one context may be used from several threads at once. Meshes keep the
+/// model alive on their own: a context may be freed before the meshes made from it.
 pub struct skb_context {
     pub(crate) model: Arc<BodyModel>,
+    pub(crate) detector: std::sync::OnceLock<Result<crate::detect::Model, String>>,
 }
 
 /// A body mesh: a shape of one gender in the rest pose (MakeHuman's A-pose), metres, model frame
@@ -86,7 +88,7 @@ pub unsafe extern "C" fn skb_context_new(out: *mut *mut skb_context) -> skb_stat
             return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
         }
         let model = try_core!(BodyModel::embedded());
-        *out = Box::into_raw(Box::new(skb_context { model: Arc::new(model) }));
+        *out = Box::into_raw(Box::new(skb_context { model: Arc::new(model), detector: std::sync::OnceLock::new() }));
         skb_status::SKB_OK
     }
 }

@@ -1,14 +1,16 @@
-//! `skb_detector`: a 2-D pose detector model loaded from a file, and detection with it.
-//! (The embedded default detector and `skb_detect` come with the trained sketch model.)
+//! `skb_detector`: a 2-D pose detector model loaded from a file, and detection with it;
+//! `skb_detect`: detection with the context's embedded detector (trained on synthetic concept
+//! sketches), configured by an `skb_detect_options` handle.
 
 use std::ffi::{c_char, CStr};
 use std::path::PathBuf;
 
-use crate::detect::{detect, DetectOptions, Model};
+use crate::detect::{detect, DetectOptions, Detection, Model, SearchScales};
 use crate::skeleton::NUM_JOINTS;
 
-use super::body::{out_slice, write_out};
-use super::error::fail_with;
+use super::body::{out_slice, skb_context};
+use super::error::{fail, fail_with};
+use crate::error::Error;
 use super::image::{skb_image, view_of};
 use super::ptr::try_ref;
 use super::status::skb_status;
@@ -46,8 +48,16 @@ pub unsafe extern "C" fn skb_detector_new_from_file(path: *const c_char, out: *m
 /// Releases a detector. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_free(det: *mut skb_detector) {
-    if !det.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(det))));
+    free_box(det)
+}
+
+/// Drops a handle made by `Box::into_raw` inside a panic boundary; NULL is a no-op.
+///
+/// # Safety
+/// `p` must be NULL or a pointer from `Box::into_raw` not freed before.
+unsafe fn free_box<T>(p: *mut T) {
+    if !p.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(p))));
     }
 }
 
@@ -76,23 +86,146 @@ pub unsafe extern "C" fn skb_detector_detect(
     ffi_boundary! {
         let det = try_status!(try_ref(det, "det"));
         let view = try_status!(view_of(image));
-        if joints_xy.is_null() || confidence.is_null() || score.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "joints_xy, confidence and score must not be NULL");
-        }
+        let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
         let threshold = if threshold.is_nan() { None } else { Some(threshold) };
         let opts = DetectOptions { threshold, min_cell_px, ..Default::default() };
         let d = try_core!(detect(&view, &det.model, &opts));
-        let best = d.best();
-        let xy = try_status!(out_slice(joints_xy, joints_len, 2 * NUM_JOINTS, "joints_xy"));
-        let cf = try_status!(out_slice(confidence, confidence_len, NUM_JOINTS, "confidence"));
-        for j in 0..NUM_JOINTS {
-            xy[2 * j] = best.joints.xy[j][0];
-            xy[2 * j + 1] = best.joints.xy[j][1];
-            cf[j] = best.confidence[j];
-        }
-        try_status!(write_out(score, best.score, "score"));
+        write_best(d.best(), xy, cf, score);
         skb_status::SKB_OK
     }
+}
+
+/// Options of [`skb_detect`]: score threshold and the searched scales. Create with
+/// `skb_detect_options_new` (the model's threshold, the sketch search range: figures from 1/4
+/// of the shorter image side to the longer side), release with
+/// `skb_detect_options_free`. Setters need exclusive use; a configured handle may be read by
+/// several threads at once.
+pub struct skb_detect_options {
+    inner: DetectOptions,
+}
+
+/// Creates options with the defaults. `*out` receives a handle the caller owns.
+#[no_mangle]
+pub unsafe extern "C" fn skb_detect_options_new(out: *mut *mut skb_detect_options) -> skb_status {
+    ffi_boundary! {
+        if out.is_null() {
+            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+        }
+        *out = Box::into_raw(Box::new(skb_detect_options { inner: DetectOptions::default() }));
+        skb_status::SKB_OK
+    }
+}
+
+/// Releases options. NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_detect_options_free(opts: *mut skb_detect_options) {
+    free_box(opts)
+}
+
+/// Sets the score threshold (NaN restores the model's own). Infinite values are
+/// `SKB_ERR_NON_FINITE`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_detect_options_set_threshold(opts: *mut skb_detect_options, threshold: f64) -> skb_status {
+    ffi_boundary! {
+        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
+        if threshold.is_infinite() {
+            return fail(&Error::NonFinite { name: "threshold", value: threshold });
+        }
+        o.inner.threshold = if threshold.is_nan() { None } else { Some(threshold) };
+        skb_status::SKB_OK
+    }
+}
+
+/// Sets the searched scales as the pyramid cell size in pixels of the (possibly downscaled)
+/// image: levels with cells smaller than `min_cell_px` (which find small figures) or larger
+/// than `max_cell_px` (large figures) are skipped. A figure is found at cells of about its
+/// standing height / 40. Setting scales replaces the default sketch search range (so 0 and
+/// +infinity search every scale). Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 ≤ min < max (max may
+/// be +infinity; NaN is rejected).
+#[no_mangle]
+pub unsafe extern "C" fn skb_detect_options_set_scales(opts: *mut skb_detect_options, min_cell_px: f64, max_cell_px: f64) -> skb_status {
+    ffi_boundary! {
+        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
+        if !(min_cell_px >= 0.0 && min_cell_px.is_finite() && max_cell_px > min_cell_px) {
+            return fail(&Error::OutOfRange { name: "scales", detail: format!("min {min_cell_px}, max {max_cell_px}: need 0 ≤ min < max") });
+        }
+        o.inner.min_cell_px = min_cell_px;
+        o.inner.max_cell_px = max_cell_px;
+        o.inner.search = SearchScales::All;
+        skb_status::SKB_OK
+    }
+}
+
+/// Detects the best-scoring figure in `image` with the embedded detector of `ctx` and `opts`
+/// (NULL: defaults). Images whose longer side exceeds 1024 px are downscaled first (results are
+/// in input pixels). Writes the 15 canonical joints as (x, y) pairs in pixels (origin top-left,
+/// y down) to `joints_xy[0..30]`, their confidences in (0, 1) to `confidence[0..15]` and the
+/// score to `*score`. When no figure reaches the threshold it returns `SKB_ERR_NO_FIGURE` and
+/// writes only `*score` (the best score found, below the threshold). Other errors (nothing
+/// written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
+/// `SKB_ERR_NULL_POINTER`, image errors. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_detect(
+    ctx: *const skb_context,
+    image: *const skb_image,
+    opts: *const skb_detect_options,
+    joints_xy: *mut f64,
+    joints_len: usize,
+    confidence: *mut f64,
+    confidence_len: usize,
+    score: *mut f64,
+) -> skb_status {
+    ffi_boundary! {
+        let ctx = try_status!(try_ref(ctx, "ctx"));
+        let view = try_status!(view_of(image));
+        let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
+        let defaults = DetectOptions::default();
+        let o = opts.as_ref().map_or(&defaults, |o| &o.inner);
+        let model = match ctx.detector.get_or_init(|| Model::embedded().map_err(|e| e.to_string())) {
+            Ok(m) => m,
+            Err(msg) => return fail(&Error::CorruptData(msg.clone())),
+        };
+        match detect(&view, model, o) {
+            Ok(d) => {
+                write_best(d.best(), xy, cf, score);
+                skb_status::SKB_OK
+            }
+            Err(e @ Error::NoFigure { score: s, .. }) => {
+                *score = s;
+                fail(&e)
+            }
+            Err(e) => fail(&e),
+        }
+    }
+}
+
+/// The checked output buffers of a detection: 30 joint coordinates, 15 confidences, the score.
+///
+/// # Safety
+/// Each pointer must be NULL or valid for writes of its length, with no other live reference.
+unsafe fn outputs<'a>(
+    joints_xy: *mut f64,
+    joints_len: usize,
+    confidence: *mut f64,
+    confidence_len: usize,
+    score: *mut f64,
+) -> Result<(&'a mut [f64], &'a mut [f64], &'a mut f64), skb_status> {
+    if joints_xy.is_null() || confidence.is_null() || score.is_null() {
+        return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, "joints_xy, confidence and score must not be NULL"));
+    }
+    let xy = out_slice(joints_xy, joints_len, 2 * NUM_JOINTS, "joints_xy")?;
+    let cf = out_slice(confidence, confidence_len, NUM_JOINTS, "confidence")?;
+    Ok((xy, cf, &mut *score))
+}
+
+/// Writes the joints, confidences and score of `best`.
+fn write_best(best: &Detection, xy: &mut [f64], cf: &mut [f64], score: &mut f64) {
+    for j in 0..NUM_JOINTS {
+        xy[2 * j] = best.joints.xy[j][0];
+        xy[2 * j + 1] = best.joints.xy[j][1];
+        cf[j] = best.confidence[j];
+    }
+    *score = best.score;
 }
 
 #[cfg(test)]
@@ -101,6 +234,51 @@ mod tests {
     use crate::detect::model::tests::tiny_model;
     use std::ffi::CString;
     use std::ptr::{null, null_mut};
+
+    #[test]
+    fn skb_detect_uses_the_embedded_detector() {
+        use crate::capi::{skb_context_free, skb_context_new};
+        use crate::render::sketch::{SketchRenderer, SketchRequest};
+        let r = SketchRenderer::new(std::sync::Arc::new(crate::body::BodyModel::embedded().unwrap()), None).unwrap();
+        let sk = r.render(&SketchRequest::random(11, 384)).unwrap();
+        unsafe {
+            let mut ctx = null_mut();
+            assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
+            let img = skb_image { data: sk.pixels.as_ptr(), width: 384, height: 384, stride: 384, channels: 1 };
+            let (mut xy, mut cf, mut s) = ([0f64; 30], [0f64; 15], 0f64);
+            assert_eq!(skb_detect(ctx, &img, null(), xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s), skb_status::SKB_OK);
+            let truth = &sk.truth.joints2d;
+            let est: Vec<[f64; 2]> = (0..15).map(|j| [xy[2 * j], xy[2 * j + 1]]).collect();
+            let pck = crate::eval::metrics::pck(truth, &est, 0.2).unwrap();
+            assert!(pck >= 0.8, "PCK@0.2 {pck}: {est:?} vs {truth:?}");
+            assert!(cf.iter().all(|&c| c > 0.0 && c < 1.0) && s.is_finite());
+
+            let mut o = null_mut();
+            assert_eq!(skb_detect_options_new(&mut o), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_threshold(o, 1e6), skb_status::SKB_OK);
+            let (mut xy2, mut s2) = ([-7f64; 30], 0f64);
+            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s2), skb_status::SKB_ERR_NO_FIGURE);
+            assert!((s2 - s).abs() < 1e-9, "no-figure score {s2} vs best {s}");
+            assert!(xy2.iter().all(|&v| v == -7.0));
+            assert_eq!(skb_detect_options_set_threshold(o, f64::INFINITY), skb_status::SKB_ERR_NON_FINITE);
+            assert_eq!(skb_detect_options_set_threshold(o, f64::NAN), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_scales(o, 5.0, 4.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_detect_options_set_scales(o, f64::NAN, 4.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+            // Only tiny cells: the figure (cells of about 8 px here) is not found at its scale.
+            assert_eq!(skb_detect_options_set_scales(o, 0.0, 2.5), skb_status::SKB_OK);
+            let mut s3 = 0f64;
+            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3), skb_status::SKB_OK);
+            assert!(s3 < s, "small-scale score {s3} vs {s}");
+            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 29, cf.as_mut_ptr(), 15, &mut s3), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
+            assert_eq!(skb_detect(null(), &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3), skb_status::SKB_ERR_NULL_POINTER);
+            assert_eq!(skb_detect_options_set_threshold(null_mut(), 0.0), skb_status::SKB_ERR_NULL_POINTER);
+            let small = skb_image { data: sk.pixels.as_ptr(), width: 20, height: 20, stride: 384, channels: 1 };
+            assert_eq!(skb_detect(ctx, &small, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3), skb_status::SKB_ERR_IMAGE_TOO_SMALL);
+            skb_detect_options_free(o);
+            skb_detect_options_free(null_mut());
+            skb_context_free(ctx);
+        }
+    }
 
     #[test]
     fn load_detect_and_errors() {

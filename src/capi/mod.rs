@@ -31,7 +31,10 @@ pub use body::{
     skb_mesh_face_count, skb_mesh_free, skb_mesh_gender, skb_mesh_joint_count, skb_mesh_new_from_shape, skb_mesh_shape_weight_count, skb_mesh_skin_weight_count,
     skb_mesh_vertex_count, SKB_GENDER_FEMALE, SKB_GENDER_MALE, SKB_MAX_INFLUENCES, SKB_NUM_BONES, SKB_NUM_JOINTS,
 };
-pub use detect::{skb_detector, skb_detector_detect, skb_detector_free, skb_detector_new_from_file};
+pub use detect::{
+    skb_detect, skb_detect_options, skb_detect_options_free, skb_detect_options_new, skb_detect_options_set_scales,
+    skb_detect_options_set_threshold, skb_detector, skb_detector_detect, skb_detector_free, skb_detector_new_from_file,
+};
 pub use error::skb_last_error_message;
 pub use fit::{
     skb_fit_options, skb_fit_options_free, skb_fit_options_new, skb_fit_options_set_dims, skb_fit_options_set_gender,

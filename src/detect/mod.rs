@@ -9,12 +9,14 @@ pub mod conv;
 pub mod dt;
 pub mod dtwin;
 pub mod fastconv;
+pub mod embedded;
 pub mod format;
 pub mod hog;
 pub mod joints;
 pub mod model;
 pub mod parse_eval;
 pub mod pyramid;
+pub mod train;
 pub mod tree;
 
 use rayon::prelude::*;

@@ -106,7 +106,7 @@ pub fn resize(im: &Planes, factor: f64) -> Planes {
 }
 
 /// Pads a map by `padx + 1` / `pady + 1` cells of zeros with the truncation feature set to 1.
-fn pad(f: &FeatureMap, padx: usize, pady: usize) -> FeatureMap {
+pub fn pad(f: &FeatureMap, padx: usize, pady: usize) -> FeatureMap {
     let (px, py) = (padx + 1, pady + 1);
     let (rows, cols) = (f.rows + 2 * py, f.cols + 2 * px);
     let mut data = vec![0f32; rows * cols * FEAT_DIM];

@@ -1,5 +1,6 @@
-//! `sketchbody detect SKETCH --model FILE --out JOINTS.json [--overlay X.png]`: 2-D pose of the
-//! best figure (canonical 15 joints with confidences, the PARSE joints, the other figures).
+//! `sketchbody detect SKETCH [--model FILE] --out JOINTS.json [--overlay X.png]`: 2-D pose of the
+//! best figure (canonical 15 joints with confidences, the PARSE joints, the other figures), with
+//! the embedded sketch-trained detector unless `--model` names another.
 
 use std::path::PathBuf;
 
@@ -15,9 +16,10 @@ use crate::CliError;
 pub struct Args {
     /// Input sketch or photo (PNG or JPEG).
     input: PathBuf,
-    /// Detector model: a binary `.skbd` model or the PARSE model JSON.
+    /// Detector model: a binary `.skbd` model or the PARSE model JSON (default: the embedded
+    /// detector trained on synthetic concept sketches).
     #[arg(long)]
-    model: PathBuf,
+    model: Option<PathBuf>,
     /// Output joints JSON: the `sketchbody-joints2d` format (input of `sketchbody pose`) plus the
     /// confidences, PARSE joints and other figures (pixels, origin top-left, y down).
     #[arg(long)]
@@ -41,6 +43,9 @@ pub struct Args {
     /// Search every pyramid level (small figures in photos) instead of the sketch range.
     #[arg(long, conflicts_with_all = ["min_figure", "max_figure"])]
     all_scales: bool,
+    /// Skip pyramid levels with cells larger than this many pixels (faster; misses large figures).
+    #[arg(long, default_value_t = f64::INFINITY)]
+    max_cell: f64,
     /// Longer-side cap in pixels; larger images are downscaled first.
     #[arg(long, default_value_t = sketchbody::detect::DEFAULT_MAX_DETECT_SIDE)]
     max_side: usize,
@@ -96,7 +101,10 @@ fn overlay(img: &RgbImage, d: &Detection) -> Vec<u8> {
 
 /// Runs the command.
 pub fn run(a: Args) -> Result<(), CliError> {
-    let model = Model::load_any(&a.model)?;
+    let model = match &a.model {
+        Some(p) => Model::load_any(p)?,
+        None => Model::embedded()?,
+    };
     let img = load_rgb_image(&a.input)?;
     let search = match (a.all_scales, sketchbody::detect::SKETCH_SEARCH) {
         (true, _) => SearchScales::All,
@@ -105,7 +113,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
         (false, s) => s,
     };
-    let opts = DetectOptions { threshold: a.threshold, min_cell_px: a.min_cell, max_side: a.max_side, search, ..Default::default() };
+    let opts = DetectOptions { threshold: a.threshold, min_cell_px: a.min_cell, max_cell_px: a.max_cell, max_side: a.max_side, search, ..Default::default() };
     let dets = detect(&img.view(), &model, &opts)?;
     let best = dets.best();
     let doc = json!({

@@ -13,10 +13,12 @@ mod learn_poses;
 mod pose;
 mod eval_parse;
 mod eval;
+mod eval_detector;
 mod make_dataset;
 mod render_sketch;
 mod run;
 mod run_dataset;
+mod train_detector;
 
 use std::process::ExitCode;
 
@@ -66,6 +68,10 @@ enum Command {
     RenderSketch(render_sketch::Args),
     /// Score a results folder against a sketch dataset: AED, MPJPE, PA-MPJPE, PCK (docs/dataset.md).
     Eval(eval::Args),
+    /// PCK@0.1/0.2 of detector models on held-out synthetic sketches.
+    EvalDetector(eval_detector::Args),
+    /// Train a detector on synthetic concept sketches and write it as .skbd.
+    TrainDetector(train_detector::Args),
     /// Render a dataset of N synthetic sketches in parallel (resumable; see docs/dataset.md).
     MakeDataset(make_dataset::Args),
 }
@@ -87,6 +93,8 @@ fn main() -> ExitCode {
         Command::RenderSketch(a) => render_sketch::run(a),
         Command::Eval(a) => eval::run(a),
         Command::MakeDataset(a) => make_dataset::run(a),
+        Command::TrainDetector(a) => train_detector::run(a),
+        Command::EvalDetector(a) => eval_detector::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -10,6 +10,7 @@
 //! visibility), `canvas` (strokes), `costume` (costume and hair), `paper` (hatching, paper,
 //! clutter), `style` ([`SketchStyle`]), `mocap` (pose clips), `truth` (ground truth and files).
 
+pub mod background;
 pub mod canvas;
 pub mod contours;
 pub mod costume;

@@ -1,0 +1,111 @@
+//! Training images: positives (synthetic sketches rescaled so the figure is at the model's
+//! canonical height, plus their mirror images with left/right swapped) with every part's cell
+//! position, and negative pages without a figure.
+
+use rayon::prelude::*;
+
+use crate::detect::hog::{hog, FeatureMap, Planes};
+use crate::detect::pyramid::{pad, resize};
+use crate::error::Result;
+use crate::render::sketch::background::render_background;
+use crate::render::sketch::truth::sample_seed;
+use crate::render::sketch::{Hair, SketchRenderer, SketchRequest};
+use crate::skeleton::NUM_JOINTS;
+
+use super::layout::{mirror_joints, part_points, NUM_PARTS};
+
+/// One positive: the padded HOG map at the canonical scale and each part's filter position.
+#[derive(Clone, Debug)]
+pub struct Positive {
+    /// Padded feature map (the engine's layout: cell x ↔ pixels from (x − pad)·sbin).
+    pub feat: FeatureMap,
+    /// Top-left cell (x, y) of each part's filter, inside the map.
+    pub cells: [(usize, usize); NUM_PARTS],
+    /// Part points, canonical-scale pixels (for mixture clustering).
+    pub points: [[f64; 2]; NUM_PARTS],
+}
+
+/// Geometry of the examples.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Geometry {
+    /// HOG cell size, px.
+    pub sbin: usize,
+    /// Filter side, cells.
+    pub side: usize,
+    /// Standing figure height at the canonical scale, px.
+    pub figure_px: f64,
+}
+
+impl Geometry {
+    /// Engine padding (cells) for this filter side.
+    pub fn pad(&self) -> usize {
+        self.side.saturating_sub(2)
+    }
+
+    /// The positive of an image already at the canonical scale.
+    pub fn at_scale(&self, im: &Planes, j: &[[f64; 2]; NUM_JOINTS]) -> Positive {
+        let p = self.pad();
+        let feat = pad(&hog(im, self.sbin), p, p);
+        let points = part_points(j);
+        let s = self.sbin as f64;
+        let half = self.side as f64 / 2.0;
+        let cell = |q: f64, n: usize| ((q / s - half).round() + p as f64).clamp(0.0, n.saturating_sub(self.side) as f64) as usize;
+        let cells = std::array::from_fn(|i| (cell(points[i][0], feat.cols), cell(points[i][1], feat.rows)));
+        Positive { feat, cells, points }
+    }
+
+    /// The positive and its mirror image from a gray image (values 0..=255) whose figure has canonical joints
+    /// `joints` (px) and standing height `height_px`; `None` when the figure is smaller than
+    /// canonical (it would need upsampling).
+    pub fn positive_pair(&self, gray: &Planes, joints: &[[f64; 2]; NUM_JOINTS], height_px: f64) -> Option<[Positive; 2]> {
+        let f = self.figure_px / height_px;
+        if !(f > 0.0 && f <= 1.0) {
+            return None;
+        }
+        let small = resize(gray, f);
+        let (fx, fy) = (small.width as f64 / gray.width as f64, small.height as f64 / gray.height as f64);
+        let j: [[f64; 2]; NUM_JOINTS] = std::array::from_fn(|k| [joints[k][0] * fx, joints[k][1] * fy]);
+        let flipped = mirror_planes(&small);
+        let jm = mirror_joints(&j, small.width as f64);
+        Some([self.at_scale(&small, &j), self.at_scale(&flipped, &jm)])
+    }
+}
+
+/// Horizontal mirror image.
+pub fn mirror_planes(im: &Planes) -> Planes {
+    let mut data = im.data.clone();
+    for row in data.chunks_exact_mut(im.width) {
+        row.reverse();
+    }
+    Planes { data, ..im.clone() }
+}
+
+/// Gray planes of 8-bit pixels.
+pub fn gray_planes(px: &[u8], width: usize, height: usize) -> Planes {
+    Planes { width, height, channels: 1, data: px.iter().map(|&v| v as f32).collect() }
+}
+
+/// Renders positives `0..n` of `seed` at `size`² (sample seeds as `make-dataset`), skipping
+/// figures with hair `held_out`; returns the positives (each with its mirror) and the number
+/// of sketches skipped. Parallel, order-preserving. Errors: the renderer's.
+pub fn render_positives(renderer: &SketchRenderer, geo: &Geometry, seed: u64, n: usize, size: usize, held_out: Option<Hair>) -> Result<(Vec<Positive>, usize)> {
+    let got: Vec<Option<[Positive; 2]>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let s = renderer.render(&SketchRequest::random(sample_seed(seed, i as u64), size))?;
+            if Some(s.truth.style.hair) == held_out {
+                return Ok(None);
+            }
+            let j: [[f64; 2]; NUM_JOINTS] = std::array::from_fn(|k| s.truth.joints2d[k]);
+            let height_px = s.truth.height_m * s.truth.camera.sx;
+            Ok(geo.positive_pair(&gray_planes(&s.pixels, size, size), &j, height_px))
+        })
+        .collect::<Result<_>>()?;
+    let skipped = got.iter().filter(|g| g.is_none()).count();
+    Ok((got.into_iter().flatten().flatten().collect(), skipped))
+}
+
+/// Negative pages `0..n` of `seed` at `size`² (gray, 8-bit).
+pub fn render_negatives(seed: u64, n: usize, size: usize) -> Result<Vec<Vec<u8>>> {
+    (0..n).into_par_iter().map(|i| render_background(sample_seed(seed ^ 0x4E45_47, i as u64), size, size)).collect()
+}
