@@ -135,6 +135,11 @@
 #define SKB_VERSION_PATCH 0
 
 /**
+ * Largest window radius (in cells) run as a brute force; wider windows use the envelope.
+ */
+#define MAX_RADIUS 20
+
+/**
  * Lower bound on the quadratic deformation weights (the engine needs them > 0).
  */
 #define DEF_LOWER_BOUND 0.01
@@ -313,29 +318,23 @@ typedef uint32_t skb_status;
 #endif // __cplusplus
 
 /**
-<<<<<<< HEAD
  * Which figure sizes [`detect`] searches (which pyramid levels it scores).
  */
 typedef struct SearchScales SearchScales;
 
 /**
- * The library context: holds the body model (the embedded one for [`skb_context_new`]).
- * Create with `skb_context_new`, release with `skb_context_free`. Immutable after creation, so
- * one context may be used from several threads at once. Meshes keep the model alive on their
- * own: a context may be freed before the meshes made from it.
-=======
  * The library context: holds the body model (the embedded one for [`skb_context_new`]) and the
  * embedded 2-D detector (decoded on first use by `skb_detect`). Create with `skb_context_new`,
  * release with `skb_context_free`. Immutable after creation (the detector is initialised once,
  * thread-safely), so one context may be used from several threads at once. Meshes keep the
  * model alive on their own: a context may be freed before the meshes made from it.
->>>>>>> train
  */
 typedef struct skb_context skb_context;
 
 /**
  * Options of [`skb_detect`]: score threshold and the searched scales. Create with
- * `skb_detect_options_new` (the model's threshold, every scale), release with
+ * `skb_detect_options_new` (the model's threshold, the sketch search range: figures from 1/4
+ * of the shorter image side to the longer side), release with
  * `skb_detect_options_free`. Setters need exclusive use; a configured handle may be read by
  * several threads at once.
  */
@@ -725,8 +724,9 @@ skb_status skb_detect_options_set_threshold(struct skb_detect_options *opts, dou
  * Sets the searched scales as the pyramid cell size in pixels of the (possibly downscaled)
  * image: levels with cells smaller than `min_cell_px` (which find small figures) or larger
  * than `max_cell_px` (large figures) are skipped. A figure is found at cells of about its
- * standing height / 40. Defaults 0 and +infinity (every scale). Errors: `SKB_ERR_OUT_OF_RANGE`
- * unless 0 ≤ min < max (max may be +infinity; NaN is rejected).
+ * standing height / 40. Setting scales replaces the default sketch search range (so 0 and
+ * +infinity search every scale). Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 ≤ min < max (max may
+ * be +infinity; NaN is rejected).
  */
 skb_status skb_detect_options_set_scales(struct skb_detect_options *opts,
                                          double min_cell_px,
