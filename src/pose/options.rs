@@ -74,12 +74,13 @@ pub struct PoseOptions {
 }
 
 impl Default for PoseOptions {
-    /// The library default: α = 0.8 as the paper (concept sketches face the viewer; α = 0 is
-    /// ~3.5 mm better on the ±30° yaw benchmark, docs/benchmarks.md), the rest chosen on a
-    /// validation split of training clips: κ = 0.05, up to 4 bases, 0.5 px, refined, prior 0.1 m, 12 exemplar starts
-    /// recomposed from 64 limb candidates, blended at τ = 30 px² per joint.
+    /// The library default, chosen on a validation split of training clips (docs/benchmarks.md):
+    /// κ = 0.05, α = 0 (with exemplar starts the paper's α = 0.8 measured 3.2 mm worse and
+    /// 0.5 ms slower per pose on the held-out clips; it stays an option), up to 4 bases,
+    /// 0.5 px, refined, prior 0.1 m, 12 exemplar starts recomposed from 64 limb candidates,
+    /// blended at τ = 30 px² per joint.
     fn default() -> Self {
-        PoseOptions { kappa: 0.05, alpha: 0.8, max_bases: 4, tolerance: 0.5, refine: true, prior: 0.1, starts: 12, limb_candidates: 64, blend: 30.0 }
+        PoseOptions { kappa: 0.05, alpha: 0.0, max_bases: 4, tolerance: 0.5, refine: true, prior: 0.1, starts: 12, limb_candidates: 64, blend: 30.0 }
     }
 }
 
