@@ -382,4 +382,29 @@ mod tests {
         let blank = GrayImage::filled(10, 10, 0).unwrap();
         assert!(matches!(SketchEvidence::new(&blank, 10, 10, &[]), Err(Error::OutOfRange { .. })));
     }
+
+    /// A square outline with a stroke across its middle: a mask shrunk onto the interior stroke
+    /// fools the one-sided chamfer but not the two-sided one.
+    #[test]
+    fn two_sided_chamfer_rejects_a_mask_shrunk_onto_interior_strokes() {
+        let n = 40;
+        let mut img = vec![0u8; n * n];
+        for i in 8..32 {
+            for (x, y) in [(i, 8), (i, 31), (8, i), (31, i), (i, 20)] {
+                img[y * n + x] = 255;
+            }
+        }
+        let ev = SketchEvidence::new(&GrayImage::from_vec(n, n, img).unwrap(), n, n, &[[20.0, 20.0]]).unwrap();
+        let mask_of = |x0: usize, x1: usize, y0: usize, y1: usize| -> Vec<u8> {
+            (0..n * n).map(|k| ((x0..=x1).contains(&(k % n)) && (y0..=y1).contains(&(k / n))) as u8).collect()
+        };
+        let full = mask_of(8, 31, 8, 31);
+        let shrunk = mask_of(8, 31, 8, 20); // top half: its boundary lies on strokes too
+        let one = |m: &[u8]| ev.score(m, MatchScore::Chamfer);
+        let two = |m: &[u8]| ev.score(m, MatchScore::TwoSidedChamfer);
+        assert!(one(&shrunk) >= one(&full) - 1e-9, "one-sided cannot tell them apart: {} vs {}", one(&shrunk), one(&full));
+        assert!(two(&full) > two(&shrunk) + 1.0, "two-sided: {} vs {}", two(&full), two(&shrunk));
+        assert_eq!(two(&full), one(&full), "a mask covering every stroke has no uncovered-edge cost");
+        assert_eq!(ev.score(&vec![0u8; n * n], MatchScore::TwoSidedChamfer), -2.0 * CHAMFER_CAP as f64);
+    }
 }
