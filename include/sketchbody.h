@@ -301,7 +301,8 @@ enum skb_status
    */
   SKB_ERR_IMAGE_TOO_SMALL = 22,
   /**
-   * No 2-D joints were given and no joint detector is available.
+   * Retired, no longer returned: before the embedded detector landed, `skb_run_pipeline`
+   * without joints failed with it; now the detector finds them.
    */
   SKB_ERR_NO_JOINTS = 23,
   /**
@@ -1134,16 +1135,17 @@ void skb_gray_image_free(struct skb_gray_image *img);
 
 /**
  * Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
- * edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL means "no
- * joints" and fails with `SKB_ERR_NO_JOINTS` until a sketch-trained joint detector is built
- * in), the 3-D pose and camera, the shape fit, and the fitted shape posed to the estimate.
+ * edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
+ * context's embedded detector finds them, as `skb_detect` with default options), the 3-D
+ * pose and camera, the shape fit, and the fitted shape posed to the estimate.
  * `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
  * fit options' gender defaults to automatic, fitting both and keeping the better score) are
  * only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
  * cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
  * `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
  * untouched. Errors: `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BLANK_IMAGE`,
- * `SKB_ERR_NO_JOINTS`, `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
+ * `SKB_ERR_NO_FIGURE` (NULL joints and the detector finds no figure),
+ * `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
  * NaN), the pose solver's (`SKB_ERR_TOO_FEW_JOINTS`, `SKB_ERR_COINCIDENT_JOINTS`,
  * `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
  * callback is called on the calling thread.

@@ -209,7 +209,7 @@ private:
 };
 
 /// Runs the main job (skb_run_pipeline) with the embedded pose dictionary and default pose
-/// options. `joints` may be nullptr (fails with SKB_ERR_NO_JOINTS until a detector is built in).
+/// options. `joints` may be nullptr: the embedded detector finds them (SKB_ERR_NO_FIGURE if none).
 inline Result run_pipeline(const Context &ctx, const skb_image &sketch, const skb_joints2d *joints,
                            const FitOptions *fit = nullptr, Progress progress = {}) {
     skb_result *raw = nullptr;

@@ -67,9 +67,6 @@ pub enum Error {
     /// A mesh to rasterise projects wholly outside the image.
     #[error("the projected mesh lies wholly outside the {width}x{height} image")]
     MeshOutsideImage { width: usize, height: usize },
-    /// The pipeline has no 2-D joints: none were given and no joint detector is installed.
-    #[error("no 2-D joints: {0}")]
-    NoJoints(String),
     /// A visible 2-D joint lies outside the image it belongs to.
     #[error("joint {joint} at ({x}, {y}) px lies outside the {width}x{height} image")]
     JointOutsideImage { joint: &'static str, x: f64, y: f64, width: usize, height: usize },

@@ -172,8 +172,13 @@ fn pipeline_errors_and_cancel() {
         let go = |img: &skb_image, jp: *const skb_joints2d, r: &mut *mut skb_result| {
             skb_run_pipeline(i.ctx, img, jp, ptr::null(), ptr::null(), i.opts, None, ptr::null_mut(), r)
         };
-        assert_eq!(go(&i.view, ptr::null(), &mut r), skb_status::SKB_ERR_NO_JOINTS);
-        assert!(last_error().contains("no 2-D joints"), "{}", last_error());
+        let mut page = vec![255u8; 200 * 200];
+        for k in 20..180 {
+            page[k * 200 + 100] = 0; // one stroke: edges, but no figure
+        }
+        let pv = skb_image { data: page.as_ptr(), width: 200, height: 200, stride: 200, channels: 1 };
+        assert_eq!(go(&pv, ptr::null(), &mut r), skb_status::SKB_ERR_NO_FIGURE);
+        assert!(r.is_null());
         let mut out = j;
         out.xy[7] = [-5.0, 10.0];
         assert_eq!(go(&i.view, &out, &mut r), skb_status::SKB_ERR_JOINT_OUTSIDE_IMAGE);
@@ -189,10 +194,9 @@ fn pipeline_errors_and_cancel() {
         assert_eq!(skb_fit_options_set_iterations(i.opts, 100), skb_status::SKB_OK);
         assert_eq!(skb_fit_options_set_samples(i.opts, 200), skb_status::SKB_OK);
         let mut calls = 0usize;
-        let t = std::time::Instant::now();
         let st = skb_run_pipeline(i.ctx, &i.view, &j, ptr::null(), ptr::null(), i.opts, Some(cancel_in_fit), &mut calls as *mut _ as *mut c_void, &mut r);
         assert_eq!(st, skb_status::SKB_ERR_CANCELLED);
-        assert!(calls <= 5 && t.elapsed().as_secs_f64() < 30.0, "{calls} calls, {:?}", t.elapsed());
+        assert!(calls <= 5, "{calls} progress calls: the cancel was not prompt");
         assert!(r.is_null());
         let path = CString::new("/nonexistent/sketch.png").unwrap();
         let mut img = ptr::null_mut();

@@ -266,6 +266,7 @@ mod tests {
             assert_eq!(skb_detect_options_set_scales(o, f64::NAN, 4.0), skb_status::SKB_ERR_OUT_OF_RANGE);
             // Only tiny cells: the figure (cells of about 8 px here) is not found at its scale.
             assert_eq!(skb_detect_options_set_scales(o, 0.0, 2.5), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_threshold(o, -1e9), skb_status::SKB_OK);
             let mut s3 = 0f64;
             assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3), skb_status::SKB_OK);
             assert!(s3 < s, "small-scale score {s3} vs {s}");

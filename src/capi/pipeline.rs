@@ -8,7 +8,8 @@ use std::sync::Arc;
 use crate::body::BodyModel;
 use crate::error::Error;
 use crate::image::{load_image, to_gray, GrayImage};
-use crate::pipeline::{run_pipeline, GivenJoints, JointsSource, NoDetector, PipelineOptions, PipelineResult};
+use crate::detect::{DetectOptions, Model};
+use crate::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use crate::pose::dict_io;
 use crate::skeleton::NUM_JOINTS;
 
@@ -78,16 +79,17 @@ pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
 }
 
 /// Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
-/// edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL means "no
-/// joints" and fails with `SKB_ERR_NO_JOINTS` until a sketch-trained joint detector is built
-/// in), the 3-D pose and camera, the shape fit, and the fitted shape posed to the estimate.
+/// edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
+/// context's embedded detector finds them, as `skb_detect` with default options), the 3-D
+/// pose and camera, the shape fit, and the fitted shape posed to the estimate.
 /// `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
 /// fit options' gender defaults to automatic, fitting both and keeping the better score) are
 /// only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
 /// cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
 /// `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
 /// untouched. Errors: `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BLANK_IMAGE`,
-/// `SKB_ERR_NO_JOINTS`, `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
+/// `SKB_ERR_NO_FIGURE` (NULL joints and the detector finds no figure),
+/// `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
 /// NaN), the pose solver's (`SKB_ERR_TOO_FEW_JOINTS`, `SKB_ERR_COINCIDENT_JOINTS`,
 /// `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
 /// callback is called on the calling thread.
@@ -109,9 +111,13 @@ pub unsafe extern "C" fn skb_run_pipeline(
         if out.is_null() {
             return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
         }
-        let source: Box<dyn JointsSource> = match joints.as_ref() {
+        let detect_options = DetectOptions::default();
+        let source: Box<dyn JointsSource + '_> = match joints.as_ref() {
             Some(j) => Box::new(GivenJoints(joints_in(j))),
-            None => Box::new(NoDetector),
+            None => match ctx.detector.get_or_init(|| Model::embedded().map_err(|e| e.to_string())) {
+                Ok(model) => Box::new(DetectedJoints { model, options: &detect_options }),
+                Err(msg) => return super::error::fail(&Error::CorruptData(msg.clone())),
+            },
         };
         let embedded;
         let d = match dict.as_ref() {

@@ -55,7 +55,8 @@ pub enum skb_status {
     SKB_ERR_NO_FIGURE = 21,
     /// The image is too small to search for a figure.
     SKB_ERR_IMAGE_TOO_SMALL = 22,
-    /// No 2-D joints were given and no joint detector is available.
+    /// Retired, no longer returned: before the embedded detector landed, `skb_run_pipeline`
+    /// without joints failed with it; now the detector finds them.
     SKB_ERR_NO_JOINTS = 23,
     /// A visible 2-D joint lies outside the image.
     SKB_ERR_JOINT_OUTSIDE_IMAGE = 24,
@@ -86,7 +87,6 @@ impl From<&Error> for skb_status {
             Error::MeshOutsideImage { .. } => SKB_ERR_MESH_OUTSIDE_IMAGE,
             Error::NoFigure { .. } => SKB_ERR_NO_FIGURE,
             Error::ImageTooSmall { .. } => SKB_ERR_IMAGE_TOO_SMALL,
-            Error::NoJoints(_) => SKB_ERR_NO_JOINTS,
             Error::JointOutsideImage { .. } => SKB_ERR_JOINT_OUTSIDE_IMAGE,
             Error::BlankImage { .. } => SKB_ERR_BLANK_IMAGE,
         }
@@ -121,7 +121,7 @@ pub extern "C" fn skb_status_str(status: u32) -> *const c_char {
         20 => b"the projected mesh lies wholly outside the image\0",
         21 => b"no figure found (best score below the threshold)\0",
         22 => b"image is too small to detect a figure\0",
-        23 => b"no 2-D joints given and no joint detector available\0",
+        23 => b"retired: no 2-D joints given and no joint detector available\0",
         24 => b"a 2-D joint lies outside the image\0",
         25 => b"the sketch has no edges (blank or too faint)\0",
         _ => b"unknown status\0",

@@ -1,8 +1,8 @@
 //! Where the pipeline's 2-D joints come from. [`JointsSource`] is the plug-in point for a joint
-//! detector; until a detector trained on sketches is available the pipeline uses the caller's
-//! joints ([`GivenJoints`], the paper's user-correction path) and [`NoDetector`] fails with
-//! [`Error::NoJoints`] instead of guessing.
+//! detector: the caller's joints ([`GivenJoints`], the paper's user-correction path) or a
+//! detector's ([`DetectedJoints`], by default the embedded model trained on concept sketches).
 
+use crate::detect::{detect, DetectOptions, Model};
 use crate::error::{Error, Result};
 use crate::image::GrayImage;
 use crate::skeleton::{Joints2, JOINT_NAMES, NUM_JOINTS};
@@ -29,19 +29,23 @@ impl JointsSource for GivenJoints {
     }
 }
 
-/// The source used when no joints are given: there is no sketch-trained detector yet, so it
-/// always fails with [`Error::NoJoints`] telling the caller to give joints.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct NoDetector;
+/// Joints from a 2-D pose detector ([`crate::detect`]; by default the embedded model trained on
+/// concept sketches, [`crate::detect::Model::embedded`]): the best figure's 15 joints. Errors
+/// as [`crate::detect::detect`], notably [`Error::NoFigure`] when nothing reaches the threshold.
+#[derive(Clone, Copy, Debug)]
+pub struct DetectedJoints<'a> {
+    /// The detector model (borrowed).
+    pub model: &'a Model,
+    /// Detection options (default: the model's threshold and the sketch search range).
+    pub options: &'a DetectOptions,
+}
 
-impl JointsSource for NoDetector {
+impl JointsSource for DetectedJoints<'_> {
     fn name(&self) -> &str {
-        "none"
+        "detector"
     }
-    fn joints(&self, _sketch: &GrayImage, _edges: &GrayImage) -> Result<Joints2> {
-        Err(Error::NoJoints(
-            "none were given and no joint detector trained on sketches is installed yet; pass a sketchbody-joints2d file (--joints)".into(),
-        ))
+    fn joints(&self, sketch: &GrayImage, _edges: &GrayImage) -> Result<Joints2> {
+        Ok(detect(&sketch.view(), self.model, self.options)?.best().joints)
     }
 }
 
@@ -72,7 +76,11 @@ mod tests {
         let img = GrayImage::filled(100, 80, 255).unwrap();
         let j = Joints2 { xy: [[50.0, 40.0]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
         assert_eq!(GivenJoints(j).joints(&img, &img).unwrap(), j);
-        assert!(matches!(NoDetector.joints(&img, &img), Err(Error::NoJoints(_))));
+        let model = Model::embedded().unwrap();
+        let options = DetectOptions { threshold: Some(1e3), ..DetectOptions::default() };
+        let blank = DetectedJoints { model: &model, options: &options };
+        assert_eq!(blank.name(), "detector");
+        assert!(matches!(blank.joints(&img, &img), Err(Error::NoFigure { .. })));
         check_in_image(&j, 100, 80).unwrap();
         let mut out = j;
         out.xy[3] = [50.0, 80.5];

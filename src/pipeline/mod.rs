@@ -3,7 +3,7 @@
 //! rest mesh posed to the estimate. [`run_pipeline`] does it in memory; the CLI's `run` writes
 //! the files.
 //!
-//! - [`joints`]: the 2-D joints source (the caller's joints, or a detector plugged in later).
+//! - [`joints`]: the 2-D joints source (the caller's joints, or the detector's).
 //! - [`overlay`]: the overlay picture (sketch, joints, bones, fitted silhouette outline).
 //!
 //! Gender: when [`PipelineOptions::gender`] is `None` both shape spaces are fitted with the same
@@ -25,7 +25,7 @@ use crate::image::{canny, CannyParams, GrayImage};
 use crate::pose::{estimate_pose, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::{Joints2, Joints3};
 
-pub use joints::{GivenJoints, JointsSource, NoDetector};
+pub use joints::{DetectedJoints, GivenJoints, JointsSource};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
 pub const MIN_SKETCH_SIDE: usize = 32;
@@ -179,8 +179,8 @@ impl Progress<'_> {
 /// one fit iteration.
 ///
 /// Errors: a side below [`MIN_SKETCH_SIDE`] ([`Error::ImageTooSmall`]); no edges
-/// ([`Error::BlankImage`]); the joints source's error ([`Error::NoJoints`] for
-/// [`NoDetector`]); a visible joint non-finite or outside the image
+/// ([`Error::BlankImage`]); the joints source's error ([`Error::NoFigure`] for
+/// [`DetectedJoints`] on a sketch without a figure); a visible joint non-finite or outside the image
 /// ([`Error::NonFinite`], [`Error::JointOutsideImage`]); the pose solver's and the fit's
 /// errors; `mean_shape` without a gender ([`Error::OutOfRange`]).
 pub fn run_pipeline(

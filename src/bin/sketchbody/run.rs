@@ -21,7 +21,8 @@ use sketchbody::export::pose3d::pose3d_json;
 use sketchbody::fsutil::{write_atomic, StagingDir};
 use sketchbody::image::load_image;
 use sketchbody::pipeline::overlay::overlay;
-use sketchbody::pipeline::{run_pipeline, GivenJoints, JointsSource, NoDetector, PipelineOptions, PipelineResult};
+use sketchbody::detect::{DetectOptions, Model};
+use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use sketchbody::pose::dict_io;
 use sketchbody::render::preview::{preview, save_rgb_png};
 
@@ -36,8 +37,8 @@ pub struct Args {
     /// Output folder (created when missing; existing files of the same names are replaced).
     #[arg(long)]
     out: PathBuf,
-    /// 2-D joints of the figure (sketchbody-joints2d JSON). Required until a joint detector
-    /// trained on sketches is available.
+    /// 2-D joints of the figure (sketchbody-joints2d JSON; the user-correction path). When
+    /// omitted, the embedded detector trained on concept sketches finds them.
     #[arg(long)]
     joints: Option<PathBuf>,
     /// Shape space: f or m; both are fitted and the better score is kept when omitted.
@@ -163,9 +164,14 @@ pub fn run(a: Args) -> Result<(), CliError> {
         ..PipelineOptions::default()
     };
     let sketch = load_image(&a.sketch)?;
-    let source: Box<dyn JointsSource> = match &a.joints {
+    let detector: Model;
+    let detect_options = DetectOptions::default();
+    let source: Box<dyn JointsSource + '_> = match &a.joints {
         Some(p) => Box::new(GivenJoints(load_joints2d(p)?)),
-        None => Box::new(NoDetector),
+        None => {
+            detector = Model::embedded()?;
+            Box::new(DetectedJoints { model: &detector, options: &detect_options })
+        }
     };
     // Fail on an unwritable output folder before the work.
     let staging = StagingDir::new(&a.out).map_err(|e| CliError(format!("cannot write the output folder: {e}")))?;
