@@ -243,7 +243,7 @@ pub unsafe extern "C" fn skb_fit_shape(
         let mut cb = progress_closure(progress, user);
         let mut best: Option<(Gender, crate::fit::FitResult)> = None;
         for (i, &g) in genders.iter().enumerate() {
-            let problem = FitProblem { model: &ctx.model, gender: g, pose: &pose, camera: &cam, edges: &edge_map };
+            let problem = FitProblem { model: &ctx.model, gender: g, pose: &pose, camera: &cam, edges: &edge_map, joints2d: None };
             let n = genders.len() as f32;
             let r = try_core!(fit_shape(&problem, &fit_opts, &mut |f| cb((i as f32 + f) / n)));
             if best.as_ref().is_none_or(|(_, b)| r.best_score > b.best_score) {
