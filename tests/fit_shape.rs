@@ -102,6 +102,8 @@ fn joint_term_penalises_off_joints_and_is_validated() {
     let on = fit_shape(&with_joints, &o(1.0), &mut |_| true).unwrap();
     let drop = off.best_score - on.best_score;
     assert!(drop > 15.0 && drop < 25.0, "penalty {drop} raster px");
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    assert_eq!(one_thread.install(|| fit_shape(&with_joints, &o(1.0), &mut |_| true)).unwrap(), on, "joint term deterministic on 1 thread");
     assert!(matches!(fit_shape(&base, &o(-0.1), &mut |_| true), Err(Error::OutOfRange { name: "joint weight", .. })));
     assert!(matches!(fit_shape(&base, &o(f64::NAN), &mut |_| true), Err(Error::NonFinite { name: "joint weight", .. })));
 }
