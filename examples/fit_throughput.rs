@@ -51,7 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         raster.rasterize(&truth.vertices, &model.triangles(), &cam, 512, 512, false)?;
         let drawing: Vec<u8> = raster.mask().iter().map(|&m| if m != 0 { 40 } else { 235 }).collect();
         let edges = canny(&GrayImage::from_vec(512, 512, drawing)?.view(), &CannyParams::default())?;
-        let problem = FitProblem { model: &model, gender, pose: &truth.joints, camera: &cam, edges: &edges };
+        let problem = FitProblem { model: &model, gender, pose: &truth.joints, camera: &cam, edges: &edges, joints2d: None };
         let options = FitOptions { seed: 100 + i as u64, ..FitOptions::default() };
         let (start, c0) = (std::time::Instant::now(), process_cpu());
         let result = pool.install(|| fit_shape(&problem, &options, &mut |_| true))?;

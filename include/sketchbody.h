@@ -350,8 +350,8 @@ typedef struct skb_detector skb_detector;
 
 /**
  * Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
- * (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 0.02, raster
- * side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
+ * (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
+ * weight 0.5 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
  * dimension, gender automatic). Every setter validates its value and leaves the options
  * unchanged on error. Not synchronised: do not change it while another thread uses it; reading
  * it from several calls at once is fine. Free with `skb_fit_options_free`.
@@ -794,6 +794,14 @@ skb_status skb_fit_options_set_score(struct skb_fit_options *opts, uint32_t scor
  * Sets the likelihood temperature of the non-paper scores (exp(score / temperature)), > 0.
  */
 skb_status skb_fit_options_set_temperature(struct skb_fit_options *opts, double temperature);
+
+/**
+ * Sets the weight of the 2-D joint term, ≥ 0 (score loses weight × the mean distance in raster
+ * pixels between each sample's projected rig joints and the 2-D joints; used by
+ * `skb_run_pipeline`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
+ * negative `SKB_ERR_OUT_OF_RANGE`.
+ */
+skb_status skb_fit_options_set_joint_weight(struct skb_fit_options *opts, double weight);
 
 /**
  * Sets the longest raster side of the fit, pixels, in 16..=4096.

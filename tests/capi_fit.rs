@@ -75,6 +75,10 @@ fn options_setters_validate() {
         assert_eq!(skb_fit_options_set_transition_scale(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
         assert_eq!(skb_fit_options_set_temperature(i.opts, -1.0), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert!(last_error().contains("temperature"), "{}", last_error());
+        assert_eq!(skb_fit_options_set_joint_weight(i.opts, -0.1), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(skb_fit_options_set_joint_weight(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
+        assert!(last_error().contains("joint weight"), "{}", last_error());
+        assert_eq!(skb_fit_options_set_joint_weight(i.opts, 0.0), skb_status::SKB_OK);
         assert_eq!(skb_fit_options_set_tolerance(i.opts, 0.0), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_raster_side(i.opts, 8), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_score(i.opts, 4), skb_status::SKB_ERR_OUT_OF_RANGE);

@@ -8,6 +8,7 @@ use sketchbody::camera::WeakPerspective;
 use sketchbody::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
 use sketchbody::image::{canny, CannyParams, GrayImage};
 use sketchbody::render::raster::Rasterizer;
+use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 use sketchbody::Error;
 
 fn aed(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
@@ -44,7 +45,7 @@ fn options() -> FitOptions {
 #[test]
 fn fit_beats_the_mean_shape_and_is_deterministic() {
     let c = case();
-    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges };
+    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges, joints2d: None };
     let space = c.model.space(Gender::Male);
     let mean_error = aed(&c.truth.vertices, &space.synthesize(&[]).unwrap().vertices);
     let mut calls = 0;
@@ -67,7 +68,7 @@ fn fit_beats_the_mean_shape_and_is_deterministic() {
 #[test]
 fn paper_score_and_cancellation() {
     let c = case();
-    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges };
+    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges, joints2d: None };
     let paper = fit_shape(&problem, &FitOptions { score: MatchScore::Paper, max_iterations: 2, ..options() }, &mut |_| true).unwrap();
     assert!(paper.best_score > 0.0 && paper.best_score < 0.5, "eq. 7 IoU of a filled mask with thin edges is small: {}", paper.best_score);
     let cancelled = fit_shape(&problem, &options(), &mut |_| false);
@@ -79,3 +80,30 @@ fn paper_score_and_cancellation() {
     assert!(fit_shape(&blank_problem, &options(), &mut |_| true).is_err());
 }
 
+
+#[test]
+fn joint_term_penalises_off_joints_and_is_validated() {
+    let c = case();
+    let truth_2d: Vec<[f64; 2]> = c.truth.joints.iter().map(|p| c.camera.project(&nalgebra::Vector3::from(*p))).collect();
+    // 2-D joints 40 image px (20 raster px at side 128) to the right of the body's own.
+    let mut shifted = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
+    for (k, q) in truth_2d.iter().enumerate() {
+        shifted.xy[k] = [q[0] + 40.0, q[1]];
+    }
+    let base = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges, joints2d: None };
+    let with_joints = FitProblem { joints2d: Some(&shifted), ..base };
+    let o = |w: f64| FitOptions { joint_weight: w, max_iterations: 2, ..options() };
+    let off = fit_shape(&base, &o(1.0), &mut |_| true).unwrap();
+    // No 2-D joints: the weight has no effect.
+    assert_eq!(fit_shape(&base, &o(0.0), &mut |_| true).unwrap(), off);
+    // Weight 0 with joints: no effect either.
+    assert_eq!(fit_shape(&with_joints, &o(0.0), &mut |_| true).unwrap(), off);
+    // Weight 1: every score loses about the 20 raster px of joint distance.
+    let on = fit_shape(&with_joints, &o(1.0), &mut |_| true).unwrap();
+    let drop = off.best_score - on.best_score;
+    assert!(drop > 15.0 && drop < 25.0, "penalty {drop} raster px");
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    assert_eq!(one_thread.install(|| fit_shape(&with_joints, &o(1.0), &mut |_| true)).unwrap(), on, "joint term deterministic on 1 thread");
+    assert!(matches!(fit_shape(&base, &o(-0.1), &mut |_| true), Err(Error::OutOfRange { name: "joint weight", .. })));
+    assert!(matches!(fit_shape(&base, &o(f64::NAN), &mut |_| true), Err(Error::NonFinite { name: "joint weight", .. })));
+}

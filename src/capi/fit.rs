@@ -43,8 +43,8 @@ pub const SKB_SKIN_DUAL_QUATERNION: u32 = 1;
 pub const SKB_GENDER_AUTO: u32 = 2;
 
 /// Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
-/// (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 0.02, raster
-/// side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
+/// (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
+/// weight 0.5 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
 /// dimension, gender automatic). Every setter validates its value and leaves the options
 /// unchanged on error. Not synchronised: do not change it while another thread uses it; reading
 /// it from several calls at once is fine. Free with `skb_fit_options_free`.
@@ -123,6 +123,15 @@ pub unsafe extern "C" fn skb_fit_options_set_score(opts: *mut skb_fit_options, s
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_temperature(opts: *mut skb_fit_options, temperature: f64) -> skb_status {
     ffi_boundary! { set_fit(opts, |o| { o.temperature = temperature; Ok(()) }) }
+}
+
+/// Sets the weight of the 2-D joint term, ≥ 0 (score loses weight × the mean distance in raster
+/// pixels between each sample's projected rig joints and the 2-D joints; used by
+/// `skb_run_pipeline`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
+/// negative `SKB_ERR_OUT_OF_RANGE`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_joint_weight(opts: *mut skb_fit_options, weight: f64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.joint_weight = weight; Ok(()) }) }
 }
 
 /// Sets the longest raster side of the fit, pixels, in 16..=4096.
@@ -243,7 +252,7 @@ pub unsafe extern "C" fn skb_fit_shape(
         let mut cb = progress_closure(progress, user);
         let mut best: Option<(Gender, crate::fit::FitResult)> = None;
         for (i, &g) in genders.iter().enumerate() {
-            let problem = FitProblem { model: &ctx.model, gender: g, pose: &pose, camera: &cam, edges: &edge_map };
+            let problem = FitProblem { model: &ctx.model, gender: g, pose: &pose, camera: &cam, edges: &edge_map, joints2d: None };
             let n = genders.len() as f32;
             let r = try_core!(fit_shape(&problem, &fit_opts, &mut |f| cb((i as f32 + f) / n)));
             if best.as_ref().is_none_or(|(_, b)| r.best_score > b.best_score) {

@@ -5,7 +5,7 @@
 use crate::detect::{detect, DetectOptions, Model};
 use crate::error::{Error, Result};
 use crate::image::GrayImage;
-use crate::skeleton::{Joints2, JOINT_NAMES, NUM_JOINTS};
+use crate::skeleton::{Joints2, BONES, JOINT_NAMES, NUM_JOINTS};
 
 /// A provider of the 15 canonical 2-D joints of a sketch. Implementations must be deterministic
 /// and shareable across threads.
@@ -30,8 +30,11 @@ impl JointsSource for GivenJoints {
 }
 
 /// Joints from a 2-D pose detector ([`crate::detect`]; by default the embedded model trained on
-/// concept sketches, [`crate::detect::Model::embedded`]): the best figure's 15 joints. Errors
-/// as [`crate::detect::detect`], notably [`Error::NoFigure`] when nothing reaches the threshold.
+/// concept sketches, [`crate::detect::Model::embedded`]): the best figure's 15 joints. A joint
+/// the detector put within [`COINCIDENT_PX`] of its parent joint (both parts in one cell, e.g. a
+/// wrist on a foreshortened elbow) is marked missing, so the pose solver drops it instead of
+/// rejecting coincident joints. Errors as [`crate::detect::detect`], notably
+/// [`Error::NoFigure`] when nothing reaches the threshold.
 #[derive(Clone, Copy, Debug)]
 pub struct DetectedJoints<'a> {
     /// The detector model (borrowed).
@@ -45,7 +48,23 @@ impl JointsSource for DetectedJoints<'_> {
         "detector"
     }
     fn joints(&self, sketch: &GrayImage, _edges: &GrayImage) -> Result<Joints2> {
-        Ok(detect(&sketch.view(), self.model, self.options)?.best().joints)
+        let mut j = detect(&sketch.view(), self.model, self.options)?.best().joints;
+        hide_coincident_children(&mut j);
+        Ok(j)
+    }
+}
+
+/// Detected joints closer than this to their parent joint, pixels, are marked missing.
+pub const COINCIDENT_PX: f64 = 0.5;
+
+/// Marks missing every visible child joint within [`COINCIDENT_PX`] of its visible parent
+/// (bones in [`BONES`] order, parent first).
+fn hide_coincident_children(j: &mut Joints2) {
+    for &(parent, child) in BONES.iter() {
+        let d = (j.xy[parent][0] - j.xy[child][0]).hypot(j.xy[parent][1] - j.xy[child][1]);
+        if j.visible[parent] && j.visible[child] && d < COINCIDENT_PX {
+            j.visible[child] = false;
+        }
     }
 }
 
@@ -81,6 +100,14 @@ mod tests {
         let blank = DetectedJoints { model: &model, options: &options };
         assert_eq!(blank.name(), "detector");
         assert!(matches!(blank.joints(&img, &img), Err(Error::NoFigure { .. })));
+        let mut wrist_on_elbow = j;
+        for k in 0..NUM_JOINTS {
+            wrist_on_elbow.xy[k] = [10.0 * k as f64, 5.0 * k as f64];
+        }
+        wrist_on_elbow.xy[7] = [wrist_on_elbow.xy[6][0] + 0.2, wrist_on_elbow.xy[6][1]];
+        hide_coincident_children(&mut wrist_on_elbow);
+        assert_eq!(wrist_on_elbow.visible.iter().filter(|&&v| !v).count(), 1);
+        assert!(!wrist_on_elbow.visible[7], "the wrist (child of the elbow) is the one dropped");
         check_in_image(&j, 100, 80).unwrap();
         let mut out = j;
         out.xy[3] = [50.0, 80.5];

@@ -236,7 +236,7 @@ pub fn run_pipeline(
             fits.push(GenderFit { gender, fit: None, score: f64::NAN, seconds: 0.0 });
             continue;
         }
-        let problem = FitProblem { model, gender, pose: &pose.joints, camera: &pose.camera, edges: &edges };
+        let problem = FitProblem { model, gender, pose: &pose.joints, camera: &pose.camera, edges: &edges, joints2d: Some(&joints2d) };
         let base = 0.06 + span * i as f32;
         let mut cb = |f: f32| (p.callback)((base + span * f).clamp(0.0, 1.0));
         let fit = fit_shape(&problem, &options.fit, &mut cb)?;

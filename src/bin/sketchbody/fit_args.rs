@@ -32,6 +32,9 @@ pub struct FitArgs {
     /// Convergence tolerance, standard deviations.
     #[arg(long, default_value_t = FitOptions::default().tolerance)]
     pub tolerance: f64,
+    /// Weight of the 2-D joint term (score loses this × mean projected-joint distance, raster px).
+    #[arg(long, default_value_t = FitOptions::default().joint_weight)]
+    pub joint_weight: f64,
     /// PCA dimensions searched (default: the shape space's 96%-energy dimension).
     #[arg(long)]
     pub dims: Option<usize>,
@@ -84,6 +87,7 @@ impl FitArgs {
             seed: self.seed,
             skinning: if self.dqs { SkinMethod::DualQuaternion } else { SkinMethod::Linear },
             retarget: self.retarget,
+            joint_weight: self.joint_weight,
         })
     }
 }
