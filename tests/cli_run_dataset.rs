@@ -51,6 +51,24 @@ fn results_are_scored_by_eval_and_deterministic() {
         assert_eq!(res["gender"], truth["gender"], "gender comes from the ground truth by default");
         assert_eq!(res["joints2d"], truth["joints2d"]);
     }
+    // Detected joints instead of the ground truth: results for every sample, near the truth.
+    let d = dir.join("det");
+    ok(&skb(&[&["run-dataset", s(&ds), "--out", s(&d), "--detect"][..], &fast].concat()));
+    let (mut close, mut total) = (0, 0);
+    for stem in ["000000", "000001", "000002"] {
+        let truth: serde_json::Value = serde_json::from_slice(&std::fs::read(ds.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let res: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let (t, r) = (truth["joints2d"].as_array().unwrap(), res["joints2d"].as_array().unwrap());
+        let ys: Vec<f64> = t.iter().map(|p| p[1].as_f64().unwrap()).collect();
+        let height = ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - ys.iter().cloned().fold(f64::INFINITY, f64::min);
+        for (p, q) in t.iter().zip(r) {
+            let dist = (p[0].as_f64().unwrap() - q[0].as_f64().unwrap()).hypot(p[1].as_f64().unwrap() - q[1].as_f64().unwrap());
+            total += 1;
+            close += (dist < 0.2 * height) as usize;
+        }
+        assert_ne!(res["joints2d"], truth["joints2d"], "{stem}: joints come from the detector");
+    }
+    assert!(close * 5 >= total * 4, "{close} of {total} detected joints within 0.2 figure heights");
     // Resuming skips finished samples.
     let again = skb(&[&["run-dataset", s(&ds), "--out", s(&a)][..], &fast].concat());
     ok(&again);

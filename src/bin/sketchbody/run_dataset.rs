@@ -19,7 +19,8 @@ use sketchbody::eval::score::dataset_samples;
 use sketchbody::export::obj::write_obj;
 use sketchbody::fsutil::write_atomic;
 use sketchbody::image::load_image;
-use sketchbody::pipeline::{run_pipeline, GivenJoints, PipelineOptions};
+use sketchbody::detect::{DetectOptions, Model};
+use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions};
 use sketchbody::pose::{dict_io, Dictionary};
 use sketchbody::render::sketch::truth::GroundTruth;
 use sketchbody::skeleton::{Joints2, NUM_JOINTS};
@@ -42,6 +43,10 @@ pub struct Args {
     /// The mean-shape baseline: the gender's mean shape posed the same way (no fit).
     #[arg(long)]
     mean_shape: bool,
+    /// Take the 2-D joints from the embedded detector instead of the ground truth (measures what
+    /// detection costs the fit).
+    #[arg(long)]
+    detect: bool,
     #[command(flatten)]
     fit: FitArgs,
     /// Only the first N samples (sorted by name).
@@ -74,6 +79,8 @@ struct Shared<'a> {
     dict: &'a Dictionary,
     base: PipelineOptions,
     mode: GenderMode,
+    /// The detector when the joints come from detection, with its options.
+    detector: Option<(Model, DetectOptions)>,
 }
 
 /// Runs one sample and writes its three files. Returns the pipeline's seconds.
@@ -88,7 +95,11 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         GenderMode::Fixed(g) => Some(g),
     };
     let opts = PipelineOptions { gender, ..s.base.clone() };
-    let r = run_pipeline(s.model, s.dict, &sketch, &GivenJoints(truth_joints(&truth)), &opts, &mut |_| !INTERRUPTED.load(Ordering::SeqCst))
+    let source: Box<dyn JointsSource + '_> = match &s.detector {
+        Some((model, options)) => Box::new(DetectedJoints { model, options }),
+        None => Box::new(GivenJoints(truth_joints(&truth))),
+    };
+    let r = run_pipeline(s.model, s.dict, &sketch, source.as_ref(), &opts, &mut |_| !INTERRUPTED.load(Ordering::SeqCst))
         .map_err(|e| CliError(format!("sample {stem}: {e}")))?;
     let rm = r.pose.camera.r;
     let scores: serde_json::Map<String, serde_json::Value> = r.fits.iter().map(|g| (g.gender.name().to_string(), json!(if g.score.is_finite() { Some(g.score) } else { None }))).collect();
@@ -134,7 +145,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     write_atomic(&a.out.join("run.json"), manifest.to_string().as_bytes())?;
     let model = BodyModel::embedded()?;
     let dict = dict_io::embedded()?;
-    let shared = Shared { model: &model, dict: &dict, base: PipelineOptions { fit, mean_shape: a.mean_shape, keep_pose_scale: a.fit.keep_pose_scale, ..PipelineOptions::default() }, mode };
+    let detector = if a.detect { Some((Model::embedded()?, DetectOptions::default())) } else { None };
+    let shared = Shared { model: &model, dict: &dict, base: PipelineOptions { fit, mean_shape: a.mean_shape, keep_pose_scale: a.fit.keep_pose_scale, ..PipelineOptions::default() }, mode, detector };
     let todo: Vec<&String> = stems.iter().filter(|s| !a.out.join(format!("{s}_posed.obj")).is_file()).collect();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build().map_err(|e| CliError(format!("thread pool: {e}")))?;
     catch_interrupt();
