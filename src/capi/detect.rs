@@ -181,9 +181,9 @@ pub unsafe extern "C" fn skb_detect(
         let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
         let defaults = DetectOptions::default();
         let o = opts.as_ref().map_or(&defaults, |o| &o.inner);
-        let model = match ctx.detector.get_or_init(|| Model::embedded().map_err(|e| e.to_string())) {
+        let model = match embedded_detector(ctx) {
             Ok(m) => m,
-            Err(msg) => return fail(&Error::CorruptData(msg.clone())),
+            Err(e) => return fail(&e),
         };
         match detect(&view, model, o) {
             Ok(d) => {
@@ -197,6 +197,11 @@ pub unsafe extern "C" fn skb_detect(
             Err(e) => fail(&e),
         }
     }
+}
+
+/// The context's embedded detector, decoded on first use (thread-safe, once per context).
+pub(crate) fn embedded_detector(ctx: &skb_context) -> Result<&Model, Error> {
+    ctx.detector.get_or_init(|| Model::embedded().map_err(|e| e.to_string())).as_ref().map_err(|msg| Error::CorruptData(msg.clone()))
 }
 
 /// The checked output buffers of a detection: 30 joint coordinates, 15 confidences, the score.

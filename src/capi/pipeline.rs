@@ -8,11 +8,12 @@ use std::sync::Arc;
 use crate::body::BodyModel;
 use crate::error::Error;
 use crate::image::{load_image, to_gray, GrayImage};
-use crate::detect::{DetectOptions, Model};
+use crate::detect::DetectOptions;
 use crate::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use crate::pose::dict_io;
 use crate::skeleton::NUM_JOINTS;
 
+use super::detect::embedded_detector;
 use super::body::{copy_skin_weights, out_slice, skb_context, skb_mesh, write_out};
 use super::error::fail_with;
 use super::fit::{progress_closure, skb_fit_options, skb_progress_fn};
@@ -114,10 +115,7 @@ pub unsafe extern "C" fn skb_run_pipeline(
         let detect_options = DetectOptions::default();
         let source: Box<dyn JointsSource + '_> = match joints.as_ref() {
             Some(j) => Box::new(GivenJoints(joints_in(j))),
-            None => match ctx.detector.get_or_init(|| Model::embedded().map_err(|e| e.to_string())) {
-                Ok(model) => Box::new(DetectedJoints { model, options: &detect_options }),
-                Err(msg) => return super::error::fail(&Error::CorruptData(msg.clone())),
-            },
+            None => Box::new(DetectedJoints { model: try_core!(embedded_detector(ctx)), options: &detect_options }),
         };
         let embedded;
         let d = match dict.as_ref() {
