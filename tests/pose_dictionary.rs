@@ -5,7 +5,8 @@ mod common;
 
 use nalgebra::{Rotation3, Vector3};
 use sketchbody::camera::WeakPerspective;
-use sketchbody::pose::learn::{learn_from_sources, LearnSpec};
+use sketchbody::body::BodyModel;
+use sketchbody::pose::learn::{body_model_skeletons, learn_from_sources, retarget_frames, LearnSpec};
 use sketchbody::pose::metrics::pa_mpjpe;
 use sketchbody::pose::motion::{normalize_pose, read_motion_csv};
 use sketchbody::pose::{dict_io, estimate_pose, PoseOptions};
@@ -14,7 +15,7 @@ use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 #[test]
 fn rebuilt_dictionary_matches_the_committed_asset() {
     let Some(data) = common::shared_data("pose dictionary rebuild") else { return };
-    let d = learn_from_sources(Some(&data.join("mocap/deepmimic")), &[], &LearnSpec::default()).unwrap();
+    let d = learn_from_sources(Some(&data.join("mocap/deepmimic")), &[], &LearnSpec::library_default().unwrap()).unwrap();
     let fresh = dict_io::to_bytes(&d);
     let committed = dict_io::embedded_bytes();
     assert!(
@@ -25,13 +26,16 @@ fn rebuilt_dictionary_matches_the_committed_asset() {
         committed.len()
     );
     assert!(d.provenance.contains("held_out: dance_b,jog,kick,long_long_walk3,long_long_walk3_mirror,long_stealthy_walk1"));
+    assert!(d.provenance.contains("retarget: female,male\n"));
 }
 
 #[test]
 fn solver_recovers_a_training_pose_and_drops_invisible_joints() {
     let Some(data) = common::shared_data("pose solver on a training frame") else { return };
     let dict = dict_io::embedded().unwrap();
-    let frames = read_motion_csv(&data.join("mocap/deepmimic/walk.csv")).unwrap();
+    // The dictionary is in the body rig's joint convention: retarget the frame the same way.
+    let skeletons = body_model_skeletons(&BodyModel::embedded().unwrap());
+    let frames = retarget_frames("walk", read_motion_csv(&data.join("mocap/deepmimic/walk.csv")).unwrap(), &skeletons).unwrap();
     let gt = normalize_pose(&frames[10]).unwrap();
     let r = *Rotation3::from_axis_angle(&Vector3::y_axis(), 0.2).matrix();
     let cam = WeakPerspective { sx: 290.0, sy: 290.0, r, t: [256.0, 300.0] };
