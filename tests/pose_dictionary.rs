@@ -56,3 +56,21 @@ fn solver_recovers_a_training_pose_and_drops_invisible_joints() {
     let est2 = estimate_pose(&dict, &hidden, &opts).unwrap();
     assert!(est2.rms < 3.0, "reprojection RMS with a hidden wrist {} px", est2.rms);
 }
+
+/// Pitch of a camera rotation r = Rz(roll)·Rx(pitch)·Ry(yaw), degrees.
+fn pitch_deg(r: &nalgebra::Matrix3<f64>) -> f64 {
+    r[(2, 1)].clamp(-1.0, 1.0).asin().to_degrees()
+}
+
+#[test]
+fn frontal_example_sketch_gets_a_level_camera() {
+    // The example sketch is drawn from the front; its estimated camera must not be pitched
+    // (the body would lean back in the side preview). Without the pull (α = 0) it is.
+    let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/sketch_joints.json"))).unwrap();
+    let dict = dict_io::embedded().unwrap();
+    let est = estimate_pose(&dict, &joints, &PoseOptions::default()).unwrap();
+    assert!(pitch_deg(&est.camera.r).abs() < 10.0, "default pitch {:.1} deg", pitch_deg(&est.camera.r));
+    assert_eq!(est.camera.sx, est.camera.sy, "equal scales by default");
+    let free = estimate_pose(&dict, &joints, &PoseOptions { alpha: 0.0, ..PoseOptions::default() }).unwrap();
+    assert!(pitch_deg(&free.camera.r).abs() > 15.0, "alpha 0 pitch {:.1} deg", pitch_deg(&free.camera.r));
+}

@@ -14,7 +14,7 @@ use sketchbody::body::BodyModel;
 use sketchbody::pose::learn::{body_model_skeletons, held_out_of, motion_files, retarget_frames, retarget_of};
 use sketchbody::pose::metrics::{mpjpe, pa_mpjpe};
 use sketchbody::pose::motion::{normalize_pose, read_motion_csv, REF_STATURE};
-use sketchbody::pose::options::{kappa_from_paper, PAPER_ALPHA, PAPER_KAPPA};
+use sketchbody::pose::options::{kappa_from_paper, RotationTarget, PAPER_ALPHA, PAPER_KAPPA};
 use sketchbody::pose::{dict_io, estimate_pose, Dictionary, PoseOptions};
 use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
 
@@ -47,6 +47,12 @@ pub struct Args {
     /// Override α of configuration (d).
     #[arg(long)]
     alpha: Option<f64>,
+    /// Override what α pulls toward in configuration (d) (level or identity).
+    #[arg(long)]
+    alpha_target: Option<String>,
+    /// Independent sx and sy in configuration (d).
+    #[arg(long)]
+    free_scales: bool,
     /// Override max bases of configuration (d).
     #[arg(long)]
     max_bases: Option<usize>,
@@ -164,6 +170,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let ours = PoseOptions {
         kappa: a.kappa.unwrap_or(def.kappa),
         alpha: a.alpha.unwrap_or(def.alpha),
+        alpha_target: a.alpha_target.as_deref().map(RotationTarget::parse).transpose()?.unwrap_or(def.alpha_target),
+        equal_scales: def.equal_scales && !a.free_scales,
         max_bases: a.max_bases.unwrap_or(def.max_bases),
         tolerance: a.tolerance.unwrap_or(def.tolerance),
         prior: a.prior.unwrap_or(def.prior),
@@ -178,10 +186,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let (clips, samples, convention) = load(&a, &dict)?;
     let paper_kappa = kappa_from_paper(PAPER_KAPPA, dict.sum_sq_lengths());
     // (a)–(c): the paper's pursuit from the mean pose (≤ 10 bases, 0.5 px), no prior, no
-    // exemplar starts — spelled out so that changes of the library default do not move them.
+    // exemplar starts, α toward the identity, independent sx and sy — spelled out so that changes of the library default do not move them.
     let paper = PoseOptions {
         kappa: paper_kappa,
         alpha: PAPER_ALPHA,
+        alpha_target: RotationTarget::Identity,
+        equal_scales: false,
         max_bases: 10,
         tolerance: 0.5,
         refine: true,
