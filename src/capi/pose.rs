@@ -86,8 +86,8 @@ pub struct skb_pose_dictionary {
 }
 
 /// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
-/// α = 0, 4 bases, 0.5 px, refinement on, prior 0.1 m, 12 exemplar starts, 64 limb
-/// candidates, blend 30 px²). Not synchronised: do not change it
+/// α = 0.8 toward the level target, sx = sy, 4 bases, 0.5 px, refinement on, prior 0.1 m,
+/// 12 exemplar starts, 64 limb candidates, blend 30 px²). Not synchronised: do not change it
 /// while another thread uses it. Free with `skb_pose_options_free`.
 pub struct skb_pose_options {
     pub(crate) inner: PoseOptions,
