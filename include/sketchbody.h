@@ -85,6 +85,16 @@
 #define SKB_POSE_MAX_BASES 32
 
 /**
+ * `skb_pose_options_set_alpha_target`: α pulls toward the identity (the paper's eq. 4).
+ */
+#define SKB_ALPHA_TARGET_IDENTITY 0
+
+/**
+ * `skb_pose_options_set_alpha_target`: α pulls the pitch toward 0 (yaw and roll kept; default).
+ */
+#define SKB_ALPHA_TARGET_LEVEL 1
+
+/**
  * `skb_mesh_pose` flag: scale bones along their length so the joints land on the targets.
  */
 #define SKB_POSE_RETARGET 1
@@ -381,8 +391,8 @@ typedef struct skb_pose_dictionary skb_pose_dictionary;
 
 /**
  * Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
- * α = 0, 4 bases, 0.5 px, refinement on, prior 0.1 m, 12 exemplar starts, 64 limb
- * candidates, blend 30 px²). Not synchronised: do not change it
+ * α = 0.8 toward the level target, sx = sy, 4 bases, 0.5 px, refinement on, prior 0.1 m,
+ * 12 exemplar starts, 64 limb candidates, blend 30 px²). Not synchronised: do not change it
  * while another thread uses it. Free with `skb_pose_options_free`.
  */
 typedef struct skb_pose_options skb_pose_options;
@@ -958,9 +968,23 @@ skb_status skb_pose_options_set_kappa(struct skb_pose_options *opts,
                                       double kappa);
 
 /**
- * Sets α of eq. (4), the pull of the camera rotation toward identity, in [0, 1].
+ * Sets α of eq. (4), the pull of the camera rotation toward its target
+ * (`skb_pose_options_set_alpha_target`), in [0, 1]. Default 0.8.
  */
 skb_status skb_pose_options_set_alpha(struct skb_pose_options *opts, double alpha);
+
+/**
+ * Sets what α pulls the camera rotation toward: `SKB_ALPHA_TARGET_LEVEL` (default: the
+ * fitted rotation with its pitch removed, yaw and roll kept) or `SKB_ALPHA_TARGET_IDENTITY`
+ * (the paper's eq. 4). Other values: `SKB_ERR_OUT_OF_RANGE`, options unchanged.
+ */
+skb_status skb_pose_options_set_alpha_target(struct skb_pose_options *opts, uint32_t target);
+
+/**
+ * Non-zero: one scale for both image axes (sx = sy, default); 0: independent sx and sy
+ * (eq. 1), in the camera fit and in the refinement.
+ */
+skb_status skb_pose_options_set_equal_scales(struct skb_pose_options *opts, bool equal);
 
 /**
  * Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).

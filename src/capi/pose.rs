@@ -8,6 +8,8 @@ use nalgebra::Matrix3;
 
 use crate::camera::WeakPerspective;
 use crate::pose::dictionary::POSE_DIM;
+use crate::error::Error;
+use crate::pose::options::RotationTarget;
 use crate::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::{Joints2, NUM_BONES};
 
@@ -19,6 +21,10 @@ use super::status::skb_status;
 pub const SKB_POSE_DIM: u32 = 45;
 /// Size of the basis arrays of `skb_pose3d` (the most bases a pose may use).
 pub const SKB_POSE_MAX_BASES: u32 = 32;
+/// `skb_pose_options_set_alpha_target`: α pulls toward the identity (the paper's eq. 4).
+pub const SKB_ALPHA_TARGET_IDENTITY: u32 = 0;
+/// `skb_pose_options_set_alpha_target`: α pulls the pitch toward 0 (yaw and roll kept; default).
+pub const SKB_ALPHA_TARGET_LEVEL: u32 = 1;
 
 const _: () = assert!(SKB_POSE_DIM as usize == POSE_DIM && SKB_POSE_MAX_BASES as usize == crate::pose::options::MAX_BASES);
 
@@ -80,8 +86,8 @@ pub struct skb_pose_dictionary {
 }
 
 /// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
-/// α = 0, 4 bases, 0.5 px, refinement on, prior 0.1 m, 12 exemplar starts, 64 limb
-/// candidates, blend 30 px²). Not synchronised: do not change it
+/// α = 0.8 toward the level target, sx = sy, 4 bases, 0.5 px, refinement on, prior 0.1 m,
+/// 12 exemplar starts, 64 limb candidates, blend 30 px²). Not synchronised: do not change it
 /// while another thread uses it. Free with `skb_pose_options_free`.
 pub struct skb_pose_options {
     pub(crate) inner: PoseOptions,
@@ -251,10 +257,38 @@ pub unsafe extern "C" fn skb_pose_options_set_kappa(opts: *mut skb_pose_options,
     ffi_boundary! { set_option(opts, |o| o.kappa = kappa) }
 }
 
-/// Sets α of eq. (4), the pull of the camera rotation toward identity, in [0, 1].
+/// Sets α of eq. (4), the pull of the camera rotation toward its target
+/// (`skb_pose_options_set_alpha_target`), in [0, 1]. Default 0.8.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_alpha(opts: *mut skb_pose_options, alpha: f64) -> skb_status {
     ffi_boundary! { set_option(opts, |o| o.alpha = alpha) }
+}
+
+/// Sets what α pulls the camera rotation toward: `SKB_ALPHA_TARGET_LEVEL` (default: the
+/// fitted rotation with its pitch removed, yaw and roll kept) or `SKB_ALPHA_TARGET_IDENTITY`
+/// (the paper's eq. 4). Other values: `SKB_ERR_OUT_OF_RANGE`, options unchanged.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_alpha_target(opts: *mut skb_pose_options, target: u32) -> skb_status {
+    ffi_boundary! {
+        let t = match target {
+            SKB_ALPHA_TARGET_IDENTITY => RotationTarget::Identity,
+            SKB_ALPHA_TARGET_LEVEL => RotationTarget::Level,
+            _ => {
+                if opts.is_null() {
+                    return null("opts");
+                }
+                return fail(&Error::OutOfRange { name: "alpha_target", detail: format!("{target} (expected 0 identity, 1 level)") });
+            }
+        };
+        set_option(opts, |o| o.alpha_target = t)
+    }
+}
+
+/// Non-zero: one scale for both image axes (sx = sy, default); 0: independent sx and sy
+/// (eq. 1), in the camera fit and in the refinement.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_equal_scales(opts: *mut skb_pose_options, equal: bool) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.equal_scales = equal) }
 }
 
 /// Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).
@@ -441,6 +475,12 @@ mod tests {
             assert_eq!(skb_pose_options_new(&mut o), skb_status::SKB_OK);
             assert_eq!(skb_pose_options_set_alpha(o, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
             assert_eq!(skb_pose_options_set_alpha(o, 2.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_pose_options_set_alpha_target(o, 2), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_pose_options_set_alpha_target(std::ptr::null_mut(), 2), skb_status::SKB_ERR_NULL_POINTER);
+            assert_eq!(skb_pose_options_set_alpha_target(o, SKB_ALPHA_TARGET_IDENTITY), skb_status::SKB_OK);
+            assert_eq!((*o).inner.alpha_target, RotationTarget::Identity);
+            assert_eq!(skb_pose_options_set_equal_scales(o, false), skb_status::SKB_OK);
+            assert!(!(*o).inner.equal_scales);
             assert_eq!(skb_pose_options_set_max_bases(o, 33), skb_status::SKB_ERR_OUT_OF_RANGE);
             assert_eq!(skb_pose_options_set_kappa(o, 0.02), skb_status::SKB_OK);
             assert_eq!(skb_pose_options_set_max_bases(o, 4), skb_status::SKB_OK);

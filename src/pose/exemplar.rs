@@ -19,7 +19,7 @@
 
 use nalgebra::{DVector, Matrix3, Matrix3x2, Vector3};
 
-use super::camera_fit::fit_camera;
+use super::camera_fit::{fit_camera, CameraPrior};
 use super::problem::Problem;
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
@@ -37,7 +37,7 @@ pub const LIMBS: [[usize; 3]; 4] = [[2, 3, 4], [5, 6, 7], [9, 10, 11], [12, 13, 
 pub struct Start {
     /// Exemplar column of the dictionary.
     pub index: usize,
-    /// Weak-perspective camera fitted to the exemplar (pull `alpha`).
+    /// Weak-perspective camera fitted to the exemplar (with the camera prior).
     pub camera: WeakPerspective,
     /// Σ squared reprojection error of the exemplar under `camera`, px².
     pub objective: f64,
@@ -81,7 +81,7 @@ pub fn affine_ranking(prob: &Problem) -> Vec<(usize, f64)> {
 /// The `count` best starts from an [`affine_ranking`] (see the module doc, step 2), best first;
 /// fewer when fewer exemplars admit a camera. Errors: `OutOfRange` when the ranking is empty
 /// (no exemplars), `Degenerate` when no shortlisted exemplar admits a camera.
-pub fn nearest(prob: &Problem, ranking: &[(usize, f64)], count: usize, alpha: f64) -> Result<Vec<Start>> {
+pub fn nearest(prob: &Problem, ranking: &[(usize, f64)], count: usize, prior: &CameraPrior) -> Result<Vec<Start>> {
     if ranking.is_empty() {
         return Err(Error::OutOfRange { name: "starts", detail: "the dictionary has no exemplars (rebuild it with --exemplar-spacing > 0)".into() });
     }
@@ -90,7 +90,7 @@ pub fn nearest(prob: &Problem, ranking: &[(usize, f64)], count: usize, alpha: f6
     for &(k, _) in ranking.iter().take((SHORTLIST_FACTOR * count).max(MIN_SHORTLIST)) {
         let e = ex.column(k);
         let x: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|p| Vector3::new(e[3 * p], e[3 * p + 1], e[3 * p + 2]));
-        if let Ok(camera) = fit_camera(&x, &prob.uv, &prob.vis, alpha) {
+        if let Ok(camera) = fit_camera(&x, &prob.uv, &prob.vis, prior) {
             starts.push(Start { index: k, camera, objective: prob.objective(&camera, &x) });
         }
     }
@@ -158,6 +158,8 @@ mod tests {
         j
     }
 
+    const NO_PRIOR: CameraPrior = CameraPrior { alpha: 0.0, target: crate::pose::options::RotationTarget::Identity, equal_scales: false };
+
     #[test]
     fn finds_the_exemplar_a_view_was_made_from_and_composes_limbs() {
         let d = Dictionary::learn(&synthetic_clips(), &LearnParams { exemplar_spacing: 0.002, ..LearnParams::default() }, "t".into()).unwrap();
@@ -169,7 +171,7 @@ mod tests {
         let ranking = affine_ranking(&prob);
         assert_eq!(ranking.len(), d.exemplars.ncols());
         assert!(ranking[0].1 < 1e-9, "{}", ranking[0].1);
-        let s = nearest(&prob, &ranking, 3, 0.0).unwrap();
+        let s = nearest(&prob, &ranking, 3, &NO_PRIOR).unwrap();
         assert_eq!(s.len(), 3);
         assert!(s[0].objective < 1e-12, "{}", s[0].objective);
         assert!(s[1].objective >= s[0].objective && s[2].objective >= s[1].objective);
@@ -194,6 +196,6 @@ mod tests {
         assert!((pose - mixed).norm() < 1e-12);
         let empty = Dictionary { exemplars: nalgebra::DMatrix::zeros(45, 0), ..d.clone() };
         let prob = Problem::new(&empty, &j, 0.0).unwrap();
-        assert!(matches!(nearest(&prob, &affine_ranking(&prob), 1, 0.0), Err(Error::OutOfRange { name: "starts", .. })));
+        assert!(matches!(nearest(&prob, &affine_ranking(&prob), 1, &NO_PRIOR), Err(Error::OutOfRange { name: "starts", .. })));
     }
 }

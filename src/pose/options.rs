@@ -41,13 +41,51 @@ pub fn kappa_from_paper(kappa_cmu: f64, sum_sq_lengths_m2: f64) -> f64 {
     kappa_cmu * CMU_UNIT_M * CMU_UNIT_M / sum_sq_lengths_m2
 }
 
+/// What α of eq. (4) pulls the pursuit's camera rotation toward.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RotationTarget {
+    /// The identity, as in the paper's eq. (4): a frontal, level view (pulls yaw, pitch and roll).
+    Identity,
+    /// The fitted rotation with its pitch removed: writing R = Rz(roll)·Rx(pitch)·Ry(yaw) (the
+    /// renderer's camera angles), the target is Rz(roll)·Ry(yaw). Only the pitch — the angle a
+    /// weak-perspective view of a nearly planar figure barely observes, and which otherwise tips
+    /// the body toward or away from the viewer — is pulled toward 0; the turn of the figure
+    /// (yaw) and the in-image tilt (roll) stay free.
+    Level,
+}
+
+impl RotationTarget {
+    /// The name used by the CLI and the pose JSON (`identity`, `level`).
+    pub fn name(self) -> &'static str {
+        match self {
+            RotationTarget::Identity => "identity",
+            RotationTarget::Level => "level",
+        }
+    }
+
+    /// Parses [`RotationTarget::name`]. Errors: [`Error::OutOfRange`] naming the value.
+    pub fn parse(s: &str) -> Result<RotationTarget> {
+        match s {
+            "identity" => Ok(RotationTarget::Identity),
+            "level" => Ok(RotationTarget::Level),
+            _ => Err(Error::OutOfRange { name: "alpha_target", detail: format!("{s:?} (expected identity or level)") }),
+        }
+    }
+}
+
 /// Options of [`super::estimate_pose`]. Plain data; validated by [`PoseOptions::validate`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PoseOptions {
     /// Relative limb-length tolerance κ ≥ 0 (0 = equality, Ramakrishna et al.), ≤ [`MAX_KAPPA`].
     pub kappa: f64,
-    /// Pull of the camera rotation toward identity in eq. (4), in [0, 1] (0 = none).
+    /// Pull of the camera rotation toward [`PoseOptions::alpha_target`] in eq. (4), in [0, 1]
+    /// (0 = none). Acts in the pursuit's camera steps (the refinement starts from them).
     pub alpha: f64,
+    /// What α pulls toward (the paper: [`RotationTarget::Identity`]).
+    pub alpha_target: RotationTarget,
+    /// One scale for both image axes (sx = sy, a camera with square pixels) in the camera fit
+    /// and the refinement; `false` = eq. (1)'s independent sx and sy.
+    pub equal_scales: bool,
     /// Most bases to choose, 0..=[`MAX_BASES`] (0 = the mean pose with a fitted camera).
     pub max_bases: usize,
     /// Stop adding bases once the reprojection RMS is at most this many pixels (≥ 0).
@@ -74,13 +112,24 @@ pub struct PoseOptions {
 }
 
 impl Default for PoseOptions {
-    /// The library default, chosen on a validation split of training clips (docs/benchmarks.md):
-    /// κ = 0.05, α = 0 (with exemplar starts the paper's α = 0.8 measured 3.2 mm worse and
-    /// 0.5 ms slower per pose on the held-out clips; it stays an option), up to 4 bases,
-    /// 0.5 px, refined, prior 0.1 m, 12 exemplar starts recomposed from 64 limb candidates,
-    /// blended at τ = 30 px² per joint.
+    /// The library default (docs/benchmarks.md, "3-D pose"): κ = 0.05, α = 0.8 (the paper's)
+    /// toward the level target (the pitch pulled to 0; the paper's identity target pulls the
+    /// yaw too and measured worse), equal scales, up to 4 bases, 0.5 px, refined, prior 0.1 m,
+    /// 12 exemplar starts recomposed from 64 limb candidates, blended at τ = 30 px² per joint.
     fn default() -> Self {
-        PoseOptions { kappa: 0.05, alpha: 0.0, max_bases: 4, tolerance: 0.5, refine: true, prior: 0.1, starts: 12, limb_candidates: 64, blend: 30.0 }
+        PoseOptions {
+            kappa: 0.05,
+            alpha: 0.8,
+            alpha_target: RotationTarget::Level,
+            equal_scales: true,
+            max_bases: 4,
+            tolerance: 0.5,
+            refine: true,
+            prior: 0.1,
+            starts: 12,
+            limb_candidates: 64,
+            blend: 30.0,
+        }
     }
 }
 
@@ -143,6 +192,9 @@ mod tests {
         for o in bad {
             assert!(o.validate().is_err(), "{o:?}");
         }
+        assert_eq!(RotationTarget::parse("level").unwrap(), RotationTarget::Level);
+        assert_eq!(RotationTarget::parse(RotationTarget::Identity.name()).unwrap(), RotationTarget::Identity);
+        assert!(matches!(RotationTarget::parse("frontal"), Err(Error::OutOfRange { name: "alpha_target", .. })));
         // CMU: 8 unit² on a skeleton with Σ l² = 436 unit² is 1.8 %.
         let k = kappa_from_paper(8.0, 436.0 * CMU_UNIT_M * CMU_UNIT_M);
         assert!((k - 8.0 / 436.0).abs() < 1e-12);

@@ -13,7 +13,7 @@
 
 use nalgebra::{DVector, Vector3};
 
-use super::camera_fit::fit_camera;
+use super::camera_fit::{fit_camera, CameraPrior};
 use super::dictionary::Dictionary;
 use super::options::PoseOptions;
 use super::problem::Problem;
@@ -73,20 +73,20 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
     opts.validate()?;
     let prob = Problem::new(dict, joints, opts.prior)?;
     if opts.starts == 0 || dict.exemplars.ncols() == 0 {
-        let cam = fit_camera(&prob.pose(&[], &[]), &prob.uv, &prob.vis, opts.alpha)?;
+        let cam = fit_camera(&prob.pose(&[], &[]), &prob.uv, &prob.vis, &CameraPrior::of(opts))?;
         return pursue(&prob, opts, cam, None);
     }
     let ranking = super::exemplar::affine_ranking(&prob);
     let candidates: Vec<usize> = ranking.iter().take(opts.limb_candidates).map(|r| r.0).collect();
     let mut hyps: Vec<(f64, PoseEstimate)> = Vec::new();
     let mut last_err = None;
-    for s in super::exemplar::nearest(&prob, &ranking, opts.starts, opts.alpha)? {
+    for s in super::exemplar::nearest(&prob, &ranking, opts.starts, &CameraPrior::of(opts))? {
         let (p, cam, parts) = if candidates.is_empty() {
             (prob.with_base(dict.exemplars.column(s.index).into_owned()), s.camera, [s.index; 5])
         } else {
             let (base, parts) = super::exemplar::compose(&prob, &s, &candidates);
             let p = prob.with_base(base);
-            match fit_camera(&p.pose(&[], &[]), &p.uv, &p.vis, opts.alpha) {
+            match fit_camera(&p.pose(&[], &[]), &p.uv, &p.vis, &CameraPrior::of(opts)) {
                 Ok(cam) => (p, cam, parts),
                 Err(e) => {
                     last_err = Some(e);
@@ -173,7 +173,7 @@ fn pursue(prob: &Problem, opts: &PoseOptions, mut cam: WeakPerspective, parts: O
             nw = sol.w;
             nfeasible = sol.feasible;
             let x = prob.pose(&nb, nw.as_slice());
-            ncam = match fit_camera(&x, &prob.uv, &prob.vis, opts.alpha) {
+            ncam = match fit_camera(&x, &prob.uv, &prob.vis, &CameraPrior::of(opts)) {
                 Ok(c) => c,
                 Err(_) => break,
             };

@@ -11,6 +11,9 @@
 //!   ∇g (a scalar quadratic);
 //! - a candidate is accepted when it lowers the objective (damping ÷3), else damping ×4.
 //!
+//! With [`PoseOptions::equal_scales`] one scale s = sx = sy is refined (a start with sx ≠ sy
+//! first takes their mean).
+//!
 //! Stops after 3 accepted steps in a row each lowering the objective by < 1e-12 relative, when
 //! the damping exceeds 1e16, or after 500 iterations. The rotation prior α plays no part here:
 //! it acts through the pursuit's starting point.
@@ -65,7 +68,9 @@ fn tangent_basis(n: &DVector<f64>) -> DMatrix<f64> {
     h.columns(1, k - 1).into_owned()
 }
 
-fn jacobian(prob: &Problem, cam: &WeakPerspective, bases: &[usize], w: &[f64]) -> DMatrix<f64> {
+/// Jacobian of the residuals; columns δ (3), sx, sy, tx, ty, Ω. With `equal` the scale column
+/// sx carries both axes' derivatives and the sy column is zero (its step is then 0).
+fn jacobian(prob: &Problem, cam: &WeakPerspective, bases: &[usize], w: &[f64], equal: bool) -> DMatrix<f64> {
     let x = prob.pose(bases, w);
     let m = 2 * prob.vis.len();
     let mut j = DMatrix::zeros(m + bases.len(), 7 + bases.len());
@@ -81,7 +86,7 @@ fn jacobian(prob: &Problem, cam: &WeakPerspective, bases: &[usize], w: &[f64]) -
         j[(rv, 0)] = cam.sy * y.z;
         j[(rv, 2)] = -cam.sy * y.x;
         j[(ru, 3)] = y.x;
-        j[(rv, 4)] = -y.y;
+        j[(rv, if equal { 3 } else { 4 })] = -y.y;
         j[(ru, 5)] = 1.0;
         j[(rv, 6)] = 1.0;
         for (k, &b) in bases.iter().enumerate() {
@@ -94,10 +99,11 @@ fn jacobian(prob: &Problem, cam: &WeakPerspective, bases: &[usize], w: &[f64]) -
     j
 }
 
-fn apply(cam: &WeakPerspective, d: &[f64]) -> Option<WeakPerspective> {
+fn apply(cam: &WeakPerspective, d: &[f64], equal: bool) -> Option<WeakPerspective> {
     let rot = Rotation3::new(Vector3::new(d[0], d[1], d[2]));
     let r: Matrix3<f64> = rot.matrix() * cam.r;
-    let c = WeakPerspective { sx: cam.sx + d[3], sy: cam.sy + d[4], r, t: [cam.t[0] + d[5], cam.t[1] + d[6]] };
+    let sy = if equal { cam.sx + d[3] } else { cam.sy + d[4] };
+    let c = WeakPerspective { sx: cam.sx + d[3], sy, r, t: [cam.t[0] + d[5], cam.t[1] + d[6]] };
     (c.sx > 0.0 && c.sy > 0.0 && d.iter().all(|v| v.is_finite())).then_some(c)
 }
 
@@ -117,7 +123,12 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
     let k = bases.len();
     let con: LengthConstraint = prob.constraint(&bases);
     let bound = opts.kappa * con.sum_sq;
+    let equal = opts.equal_scales;
     let mut cam = start.camera;
+    if equal {
+        let s = 0.5 * (cam.sx + cam.sy);
+        (cam.sx, cam.sy) = (s, s);
+    }
     let mut w = DVector::from_column_slice(&start.weights);
     let g0 = con.value(&w);
     if g0 > bound || g0 < -bound {
@@ -129,14 +140,14 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
     let mut lambda = 1e-3;
     let mut small = 0;
     for _ in 0..500 {
-        let j = jacobian(prob, &cam, &bases, w.as_slice());
+        let j = jacobian(prob, &cam, &bases, w.as_slice(), equal);
         let mut r = prob.residuals(&cam, &prob.pose(&bases, w.as_slice()));
         r.extend(prob.prior_residuals(&bases, w.as_slice()));
         let r = DVector::from_vec(r);
         let mut accepted = false;
         while !accepted && lambda <= 1e16 {
             let cand = lm_step(&j, &r, lambda).and_then(|d| {
-                let c = apply(&cam, d.as_slice())?;
+                let c = apply(&cam, d.as_slice(), equal)?;
                 let nw = &w + d.rows(7, k);
                 let g = con.value(&nw);
                 if g <= bound && g >= -bound {
@@ -153,7 +164,7 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
                 jr.columns_mut(0, 7).copy_from(&j.columns(0, 7));
                 jr.columns_mut(7, k - 1).copy_from(&(j.columns(7, k) * &t));
                 let dr = lm_step(&jr, &r, lambda)?;
-                let c = apply(&cam, dr.as_slice())?;
+                let c = apply(&cam, dr.as_slice(), equal)?;
                 let nw = &w + &t * dr.rows(7, k - 1);
                 let nw = con.retract(&nw, &n, target)?;
                 Some((c, nw))

@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use sketchbody::pose::dict_io;
-use sketchbody::pose::learn::{default_held_out, learn_from_sources, lying_clips, LearnSpec};
+use sketchbody::body::BodyModel;
+use sketchbody::pose::learn::{body_model_skeletons, default_held_out, learn_from_sources, lying_clips, LearnSpec};
 use sketchbody::pose::LearnParams;
 
 use crate::CliError;
@@ -39,6 +40,10 @@ pub struct Args {
     /// Do not add left/right mirrored poses.
     #[arg(long)]
     no_mirror: bool,
+    /// Learn in the clips' own joint convention instead of retargeting every frame onto the
+    /// body model's mean skeletons (the default; see docs/formats.md).
+    #[arg(long)]
+    source_skeleton: bool,
     /// Output dictionary file (.skbpd).
     #[arg(long)]
     out: PathBuf,
@@ -57,6 +62,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         held_out: a.holdout.unwrap_or_else(default_held_out),
         excluded,
         params: LearnParams { max_per_action: a.max_per_action, energy: a.energy, mirror: !a.no_mirror, exemplar_spacing: a.exemplar_spacing },
+        retarget: if a.source_skeleton { Vec::new() } else { body_model_skeletons(&BodyModel::embedded()?) },
     };
     let d = learn_from_sources(a.mocap.as_deref(), &a.bvh, &spec)?;
     dict_io::write(&d, &a.out)?;

@@ -3,6 +3,7 @@
 //! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
 
 mod bench_pose;
+mod bench_pose_dataset;
 mod body;
 mod build_model;
 mod convert_detector;

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::export::pose3d::pose3d_json;
 use sketchbody::fsutil::write_atomic;
+use sketchbody::pose::options::RotationTarget;
 use sketchbody::pose::{dict_io, estimate_pose, PoseOptions};
 
 use crate::CliError;
@@ -24,9 +25,15 @@ pub struct Args {
     /// Relative limb-length tolerance κ (0 = equality).
     #[arg(long, default_value_t = PoseOptions::default().kappa)]
     kappa: f64,
-    /// Pull of the camera rotation toward identity, α in [0, 1].
+    /// Pull of the camera rotation toward --alpha-target, α in [0, 1] (eq. 4).
     #[arg(long, default_value_t = PoseOptions::default().alpha)]
     alpha: f64,
+    /// What α pulls toward: level (the pitch to 0, default) or identity (the paper's eq. 4).
+    #[arg(long, default_value = PoseOptions::default().alpha_target.name())]
+    alpha_target: String,
+    /// Fit independent sx and sy (eq. 1) instead of one scale for both image axes.
+    #[arg(long)]
+    free_scales: bool,
     /// Most bases to choose (0..=32).
     #[arg(long, default_value_t = PoseOptions::default().max_bases)]
     max_bases: usize,
@@ -60,6 +67,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let opts = PoseOptions {
         kappa: a.kappa,
         alpha: a.alpha,
+        alpha_target: RotationTarget::parse(&a.alpha_target)?,
+        equal_scales: !a.free_scales,
         max_bases: a.max_bases,
         tolerance: a.tolerance,
         refine: !a.no_refine,
