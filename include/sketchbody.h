@@ -135,6 +135,13 @@
 #define SKB_VERSION_PATCH 0
 
 /**
+ * The documented default levels per octave for concept sketches ([`DetectOptions::default`]):
+ * half the models' 10 (every other level of their pyramid), about half the work, measured
+ * harmless on the held-out sketches (`docs/benchmarks.md`, "Detector (issue 7)").
+ */
+#define SKETCH_LEVELS_PER_OCTAVE 5
+
+/**
  * Largest window radius (in cells) run as a brute force; wider windows use the envelope.
  */
 #define MAX_RADIUS 20
@@ -334,8 +341,9 @@ typedef struct skb_context skb_context;
 
 /**
  * Options of [`skb_detect`]: score threshold and the searched scales. Create with
- * `skb_detect_options_new` (the model's threshold, the sketch search range: figures from 1/4
- * of the shorter image side to the longer side), release with
+ * `skb_detect_options_new` (the model's threshold, the sketch search range: figures from
+ * SKETCH_MIN_FIGURE of the shorter image side to the longer side, at 5 pyramid levels per
+ * octave), release with
  * `skb_detect_options_free`. Setters need exclusive use; a configured handle may be read by
  * several threads at once.
  */
@@ -689,11 +697,12 @@ void skb_detector_free(struct skb_detector *det);
  * (0 searches every scale; larger is faster but misses small figures). Images whose longer side
  * exceeds 1024 px are downscaled first (results are in input pixels). Writes the 15 canonical
  * joints as (x, y) pairs in pixels (origin top-left, y down) to `joints_xy[0..30]`, their
- * confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. Errors:
- * `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_NO_FIGURE` (nothing reaches the
- * threshold; the message gives the best score), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
- * `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Nothing is written on failure.
- * Thread-safe.
+ * confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. The other search
+ * settings are the defaults of `skb_detect_options_new`. When no figure reaches the threshold
+ * it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score found, below the
+ * threshold; −infinity when no pyramid level was searched). Other errors (nothing written):
+ * `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
+ * `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
  */
 skb_status skb_detector_detect(const struct skb_detector *det,
                                const struct skb_image *image,
@@ -732,6 +741,24 @@ skb_status skb_detect_options_set_threshold(struct skb_detect_options *opts, dou
 skb_status skb_detect_options_set_scales(struct skb_detect_options *opts,
                                          double min_cell_px,
                                          double max_cell_px);
+
+/**
+ * Sets the searched figure sizes as fractions of the image: figures from `min_fraction` × the
+ * shorter side to `max_fraction` × the longer side tall (the default range is
+ * SKETCH_MIN_FIGURE..1). Replaces any cell range set by `skb_detect_options_set_scales`.
+ * Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 < min < max, both finite (NaN is rejected).
+ */
+skb_status skb_detect_options_set_figure_range(struct skb_detect_options *opts,
+                                               double min_fraction,
+                                               double max_fraction);
+
+/**
+ * Sets the pyramid levels per octave: 1..=100, or 0 for the model's own (10 for the embedded
+ * detector and the PARSE family). The default, 5, scores every other level of 10: about half
+ * the work, coarser in scale. Errors: `SKB_ERR_OUT_OF_RANGE` above 100.
+ */
+skb_status skb_detect_options_set_levels_per_octave(struct skb_detect_options *opts,
+                                                    uint32_t levels);
 
 /**
  * Detects the best-scoring figure in `image` with the embedded detector of `ctx` and `opts`

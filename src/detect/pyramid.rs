@@ -126,8 +126,10 @@ pub fn pad(f: &FeatureMap, padx: usize, pady: usize) -> FeatureMap {
 /// Builds the pyramid of `im` for cells of `sbin` pixels, `interval` levels per octave and the
 /// given padding. The number of levels is `interval + max_scale` with
 /// max_scale = 1 + ⌊log(min side / (5 sbin)) / log 2^(1/interval)⌋ (at least 1).
-/// Levels in `skip_below` (cell size in pixels smaller than it) are left out.
-pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize, min_cell_px: f64) -> Result<Pyramid> {
+/// Only levels with cells of `min_cell_px` to `max_cell_px` pixels (inclusive) are computed and
+/// returned: the others' HOG is never built (the image is still halved through skipped levels
+/// when a coarser kept level needs it).
+pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize, min_cell_px: f64, max_cell_px: f64) -> Result<Pyramid> {
     let sc = 2f64.powf(1.0 / interval as f64);
     let min_side = im.width.min(im.height) as f64;
     let max_scale = (1.0 + ((min_side / (5.0 * sbin as f64)).ln() / sc.ln()).floor()).max(1.0) as usize;
@@ -158,7 +160,7 @@ pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize
     let per_base: Vec<Vec<(usize, Level)>> = (0..interval)
         .into_par_iter()
         .map(|i| {
-            let mine: Vec<&Job> = jobs.iter().filter(|j| j.base == i && j.cell_px >= min_cell_px).collect();
+            let mine: Vec<&Job> = jobs.iter().filter(|j| j.base == i && j.cell_px >= min_cell_px && j.cell_px <= max_cell_px).collect();
             let mut out = Vec::new();
             if mine.is_empty() {
                 return out;
@@ -203,7 +205,7 @@ mod tests {
     #[test]
     fn levels_scales_and_padding() {
         let im = Planes { width: 200, height: 150, channels: 1, data: vec![10.0; 200 * 150] };
-        let p = build(&im, 4, 10, 3, 3, 0.0).unwrap();
+        let p = build(&im, 4, 10, 3, 3, 0.0, f64::INFINITY).unwrap();
         // max_scale = 1 + floor(log(150/20)/log(2^0.1)) = 1 + 29 = 30 -> 40 levels.
         assert_eq!(p.levels.len(), 40);
         assert!((p.levels[0].cell_px - 2.0).abs() < 1e-12);
@@ -218,7 +220,19 @@ mod tests {
         assert_eq!(f.cell(4, 20)[31], 0.0);
         assert_eq!(f.cell(51, 20)[31], 0.0);
         assert_eq!(f.cell(52, 20)[31], 1.0);
-        let skipped = build(&im, 4, 10, 3, 3, 3.9).unwrap();
+        let skipped = build(&im, 4, 10, 3, 3, 3.9, f64::INFINITY).unwrap();
         assert_eq!(skipped.levels.len(), 30);
+        // Coarse levels are skipped too; the kept ones are the same maps as in the full pyramid.
+        let band = build(&im, 4, 10, 3, 3, 3.9, 8.0).unwrap();
+        assert_eq!(band.levels.len(), 11);
+        assert!((band.levels[0].cell_px - 4.0).abs() < 1e-12 && (band.levels[10].cell_px - 8.0).abs() < 1e-12);
+        assert_eq!(band.levels[10].feat.data, p.levels[20].feat.data);
+        // Five levels per octave are every other level of ten.
+        let five = build(&im, 4, 5, 3, 3, 0.0, f64::INFINITY).unwrap();
+        assert!(five.levels.len() >= 19, "{}", five.levels.len());
+        for (k, l) in five.levels.iter().enumerate() {
+            assert!((l.cell_px - p.levels[2 * k].cell_px).abs() < 1e-9, "level {k}");
+            assert_eq!(l.feat.data, p.levels[2 * k].feat.data, "level {k}");
+        }
     }
 }
