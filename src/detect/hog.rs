@@ -61,32 +61,30 @@ fn orientations() -> [(f64, f64); NORIENT] {
     u
 }
 
-/// Computes the HOG feature map of `im` with cells of `sbin` pixels. The cell grid has
-/// round(height / sbin) x round(width / sbin) cells; the map has two fewer per axis (empty when
-/// that is ≤ 0).
-pub fn hog(im: &Planes, sbin: usize) -> FeatureMap {
+/// Per-pixel gradients of an image as the HOG uses them: for every interior pixel (1 ≤ x ≤
+/// width − 2, 1 ≤ y ≤ height − 2) the orientation bin (0..18) and the magnitude of the central
+/// difference of the channel with the largest one. Independent of the cell size, so the two
+/// cell sizes of one pyramid image share it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gradients {
+    /// Image width, px.
+    pub width: usize,
+    /// Image height, px.
+    pub height: usize,
+    /// Orientation bin per pixel, row-major (border pixels 0).
+    orient: Vec<u8>,
+    /// Magnitude per pixel, row-major (border pixels 0).
+    mag: Vec<f64>,
+}
+
+/// The gradients of `im` (see [`Gradients`]).
+pub fn gradients(im: &Planes) -> Gradients {
     let (w, h) = (im.width, im.height);
-    let bh = (h as f64 / sbin as f64).round() as usize;
-    let bw = (w as f64 / sbin as f64).round() as usize;
-    let out_r = bh.saturating_sub(2);
-    let out_c = bw.saturating_sub(2);
-    if out_r == 0 || out_c == 0 || w < 3 || h < 3 {
-        return FeatureMap { rows: out_r, cols: out_c, data: vec![0.0; out_r * out_c * FEAT_DIM] };
-    }
-    // Orientation histograms, 18 per cell, layout (cell_y, cell_x, orientation).
-    let mut hist = vec![0f64; bh * bw * 18];
+    let mut orient = vec![0u8; w * h];
+    let mut mag = vec![0f64; w * h];
     let uv = orientations();
-    let vis_h = bh * sbin;
-    let vis_w = bw * sbin;
-    let sb = sbin as f64;
-    for y in 1..vis_h.saturating_sub(1) {
-        let sy = y.min(h - 2);
-        let yp = (y as f64 + 0.5) / sb - 0.5;
-        let iyp = yp.floor() as isize;
-        let vy0 = yp - iyp as f64;
-        let vy1 = 1.0 - vy0;
-        for x in 1..vis_w.saturating_sub(1) {
-            let sx = x.min(w - 2);
+    for sy in 1..h.saturating_sub(1) {
+        for sx in 1..w.saturating_sub(1) {
             let (mut dx, mut dy, mut v) = (0f64, 0f64, -1f64);
             for c in 0..im.channels {
                 let p = im.plane(c);
@@ -109,10 +107,52 @@ pub fn hog(im: &Planes, sbin: usize) -> FeatureMap {
                     best_o = o + NORIENT;
                 }
             }
-            let mag = v.sqrt();
+            orient[sy * w + sx] = best_o as u8;
+            mag[sy * w + sx] = v.sqrt();
+        }
+    }
+    Gradients { width: w, height: h, orient, mag }
+}
+
+/// Computes the HOG feature map of `im` with cells of `sbin` pixels. The cell grid has
+/// round(height / sbin) x round(width / sbin) cells; the map has two fewer per axis (empty when
+/// that is ≤ 0).
+pub fn hog(im: &Planes, sbin: usize) -> FeatureMap {
+    hog_from_gradients(&gradients(im), sbin)
+}
+
+/// [`hog`] from precomputed [`gradients`] of the image.
+pub fn hog_from_gradients(g: &Gradients, sbin: usize) -> FeatureMap {
+    let (w, h) = (g.width, g.height);
+    let bh = (h as f64 / sbin as f64).round() as usize;
+    let bw = (w as f64 / sbin as f64).round() as usize;
+    let out_r = bh.saturating_sub(2);
+    let out_c = bw.saturating_sub(2);
+    if out_r == 0 || out_c == 0 || w < 3 || h < 3 {
+        return FeatureMap { rows: out_r, cols: out_c, data: vec![0.0; out_r * out_c * FEAT_DIM] };
+    }
+    // Orientation histograms, 18 per cell, layout (cell_y, cell_x, orientation).
+    let mut hist = vec![0f64; bh * bw * 18];
+    let vis_h = bh * sbin;
+    let vis_w = bw * sbin;
+    let sb = sbin as f64;
+    // Per column: the left cell of its bilinear vote and the weight of the right one.
+    let cols: Vec<(isize, f64)> = (0..vis_w)
+        .map(|x| {
             let xp = (x as f64 + 0.5) / sb - 0.5;
             let ixp = xp.floor() as isize;
-            let vx0 = xp - ixp as f64;
+            (ixp, xp - ixp as f64)
+        })
+        .collect();
+    for y in 1..vis_h.saturating_sub(1) {
+        let sy = y.min(h - 2);
+        let yp = (y as f64 + 0.5) / sb - 0.5;
+        let iyp = yp.floor() as isize;
+        let vy0 = yp - iyp as f64;
+        let vy1 = 1.0 - vy0;
+        for (x, &(ixp, vx0)) in cols.iter().enumerate().take(vis_w.saturating_sub(1)).skip(1) {
+            let sx = x.min(w - 2);
+            let (best_o, mag) = (g.orient[sy * w + sx] as usize, g.mag[sy * w + sx]);
             let vx1 = 1.0 - vx0;
             let mut vote = |cx: isize, cy: isize, wgt: f64| {
                 if cx >= 0 && cy >= 0 && (cx as usize) < bw && (cy as usize) < bh {

@@ -6,7 +6,9 @@
 
 use rayon::prelude::*;
 
-use super::hog::{hog, FeatureMap, Planes};
+use super::hog::{gradients, hog_from_gradients, FeatureMap, Planes};
+#[cfg(test)]
+use super::hog::hog;
 use super::model::FEAT_DIM;
 use crate::error::Result;
 use crate::image::ImageView;
@@ -32,9 +34,13 @@ pub struct Pyramid {
 }
 
 /// Converts an 8-bit view (1, 3 or 4 channels; alpha ignored) to planes with values 0..=255.
+/// A colour image whose three channels are equal everywhere (a gray sketch stored as RGB) gives
+/// one plane: the HOG takes the channel of largest gradient, so one copy gives the same features
+/// at a third of the gradient and resizing work.
 pub fn planes_from_view(img: &ImageView<'_>) -> Planes {
     let (w, h, ch) = (img.width(), img.height(), img.channels());
-    let channels = if ch == 1 { 1 } else { 3 };
+    let gray = ch == 1 || (0..h).all(|y| img.row(y)[..w * ch].chunks_exact(ch).all(|p| p[0] == p[1] && p[1] == p[2]));
+    let channels = if gray { 1 } else { 3 };
     let mut data = vec![0f32; channels * w * h];
     for y in 0..h {
         let row = img.row(y);
@@ -171,8 +177,14 @@ pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize
                 if h > 0 {
                     scaled = resize(&scaled, 0.5);
                 }
-                for j in mine.iter().filter(|j| j.halvings == h) {
-                    let f = hog(&scaled, j.sbin);
+                let here: Vec<&&Job> = mine.iter().filter(|j| j.halvings == h).collect();
+                if here.is_empty() {
+                    continue;
+                }
+                // Both cell sizes of one image share its gradients.
+                let g = gradients(&scaled);
+                for j in here {
+                    let f = hog_from_gradients(&g, j.sbin);
                     out.push((j.level, Level { feat: pad(&f, padx, pady), cell_px: j.cell_px }));
                 }
             }
@@ -200,6 +212,23 @@ mod tests {
         let r = resize(&im, 1.0 / 1.5);
         let mean = |p: &Planes| p.data.iter().sum::<f32>() / p.data.len() as f32;
         assert!((mean(&r) - mean(&im)).abs() < 1e-3, "{} vs {}", mean(&r), mean(&im));
+    }
+
+    #[test]
+    fn gray_colour_images_give_one_plane_with_the_same_features() {
+        let (w, h) = (40, 36);
+        let gray: Vec<u8> = (0..w * h).map(|i| ((i * 37) % 251) as u8).collect();
+        let rgb: Vec<u8> = gray.iter().flat_map(|&v| [v, v, v]).collect();
+        let g = planes_from_view(&ImageView::gray(&gray, w, h).unwrap());
+        let c = planes_from_view(&ImageView::new(&rgb, w, h, 3, 3 * w).unwrap());
+        assert_eq!((g.channels, c.channels), (1, 1));
+        assert_eq!(g, c);
+        // Three planes kept, identical HOG: the gray plane is the largest gradient everywhere.
+        let three = Planes { channels: 3, data: [g.data.clone(), g.data.clone(), g.data.clone()].concat(), ..g.clone() };
+        assert_eq!(hog(&three, 4), hog(&g, 4));
+        let mut tinted = rgb.clone();
+        tinted[3 * 17 + 2] ^= 1;
+        assert_eq!(planes_from_view(&ImageView::new(&tinted, w, h, 3, 3 * w).unwrap()).channels, 3);
     }
 
     #[test]
