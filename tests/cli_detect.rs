@@ -97,5 +97,11 @@ fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
     let err = one_line_failure(cli().args(["detect", "--threshold=1000"]).arg(&blank).arg("--out").arg(dir.join("b.json")));
     assert!(err.contains("no figure") && err.contains("1000"), "{err}");
     assert!(!dir.join("b.json").exists());
+    // The score it names is the best one on that page (what a threshold below it returns).
+    let st = cli().args(["detect", "--threshold=-1e9"]).arg(&blank).arg("--out").arg(dir.join("b2.json")).status().unwrap();
+    assert!(st.success());
+    let b2: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("b2.json")).unwrap()).unwrap();
+    let best = b2["score"].as_f64().unwrap();
+    assert!(err.contains(&format!("best score {best:.3} is below the threshold 1000")), "{err} vs best {best}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -54,9 +54,18 @@ pub enum SearchScales {
     },
 }
 
+/// The smallest figure the sketch default searches, as a fraction of the shorter image side.
+/// Concept sketches draw one figure large on the page: the renderer's figures are 0.72–0.92 of
+/// the shorter side tall (margins 0.04–0.14 on every side), and on 300 held-out sketches both
+/// the embedded and the PARSE model found every correct figure at levels tuned to ≥ 0.41 of the
+/// side, inside this range (levels down to 0.5 / 1.25 = 0.4); PCK was the same as with the
+/// earlier 0.25 (`docs/benchmarks.md`, "Detector (issue 7)"). Smaller figures need
+/// [`SearchScales::FigureFraction`] with a smaller `min` or [`SearchScales::All`].
+pub const SKETCH_MIN_FIGURE: f64 = 0.5;
+
 /// The documented default search range for concept sketches: one figure filling much of the
-/// canvas, at least a quarter of the shorter side tall and at most the longer side.
-pub const SKETCH_SEARCH: SearchScales = SearchScales::FigureFraction { min: 0.25, max: 1.0 };
+/// canvas, at least [`SKETCH_MIN_FIGURE`] of the shorter side tall and at most the longer side.
+pub const SKETCH_SEARCH: SearchScales = SearchScales::FigureFraction { min: SKETCH_MIN_FIGURE, max: 1.0 };
 
 impl SearchScales {
     /// Pyramid cell range (px of the image searched, `width` x `height`) for `model`.
@@ -95,14 +104,16 @@ pub struct DetectOptions {
     pub search: SearchScales,
     /// Pyramid levels per octave (scale step 2^(−1/n)); `None` uses the model's own
     /// (`Model::interval`, 10 for the PARSE family). Fewer levels are proportionally faster and
-    /// coarser in scale; 5 gives every other level of 10 exactly. Range 1..=100.
+    /// coarser in scale; 5 gives every other level of 10 exactly. Range 1..=100. Default
+    /// [`SKETCH_LEVELS_PER_OCTAVE`].
     pub levels_per_octave: Option<usize>,
 }
 
 /// The documented default levels per octave for concept sketches ([`DetectOptions::default`]):
-/// half the models' 10 (every other level of their pyramid), about half the work, measured
-/// harmless on the held-out sketches (`docs/benchmarks.md`, "Detector (issue 7)").
-pub const SKETCH_LEVELS_PER_OCTAVE: usize = 5;
+/// 7 instead of the models' 10, 0.7 of the levels and of the work; on 300 held-out sketches
+/// PCK@0.1 / @0.2 of both the embedded and the PARSE model were as high as with 10, while 5
+/// cost the PARSE model 0.035 at PCK@0.1 (`docs/benchmarks.md`, "Detector (issue 7)").
+pub const SKETCH_LEVELS_PER_OCTAVE: usize = 7;
 
 impl Default for DetectOptions {
     fn default() -> Self {
@@ -290,7 +301,8 @@ mod tests {
     fn search_scales_select_the_documented_cell_range() {
         let m = model::tests::tiny_model(); // rest height 4 cells
         let (lo, hi) = SKETCH_SEARCH.cell_range(&m, 200, 100);
-        assert!((lo - 0.25 * 100.0 / 5.0).abs() < 1e-12, "{lo}");
+        assert_eq!(SKETCH_SEARCH, SearchScales::FigureFraction { min: 0.5, max: 1.0 });
+        assert!((lo - 0.5 * 100.0 / 5.0).abs() < 1e-12, "{lo}");
         assert!((hi - 200.0 / 3.0).abs() < 1e-12, "{hi}");
         assert_eq!(SearchScales::All.cell_range(&m, 200, 100), (0.0, f64::INFINITY));
         let data = vec![0u8; 64 * 64];

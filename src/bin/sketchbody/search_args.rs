@@ -13,8 +13,8 @@ pub struct SearchArgs {
     /// Skip pyramid levels with cells larger than this many pixels (faster; misses large figures).
     #[arg(long, default_value_t = f64::INFINITY)]
     pub max_cell: f64,
-    /// Smallest figure searched, as a fraction of the shorter image side (default: the sketch
-    /// search range of `DetectOptions`).
+    /// Smallest figure searched, as a fraction of the shorter image side (default 0.5, the
+    /// sketch search range of `DetectOptions`).
     #[arg(long)]
     pub min_figure: Option<f64>,
     /// Largest figure searched, as a fraction of the longer image side (default 1.0).
@@ -23,8 +23,8 @@ pub struct SearchArgs {
     /// Search every pyramid level (small figures in photos) instead of the sketch range.
     #[arg(long, conflicts_with_all = ["min_figure", "max_figure"])]
     pub all_scales: bool,
-    /// Pyramid levels per octave (the sketch default is 5; 0 = the model's own, 10 for the PARSE
-    /// family: finer in scale, about twice the work).
+    /// Pyramid levels per octave (0 = the model's own, 10 for the embedded and the PARSE model:
+    /// finer in scale, 1.4 times the work of the sketch default 7; 5 = every other level of 10).
     #[arg(long, default_value_t = SKETCH_LEVELS_PER_OCTAVE)]
     pub levels_per_octave: usize,
 }
