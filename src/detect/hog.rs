@@ -95,6 +95,11 @@ pub fn gradients(im: &Planes) -> Gradients {
                     (dx, dy, v) = (gx, gy, m);
                 }
             }
+            if v == 0.0 {
+                // Flat (most of a sketch's paper): every dot product below is 0, so orientation
+                // 0 and magnitude 0, as the arrays already hold.
+                continue;
+            }
             // Snap to one of 18 orientations.
             let (mut best_dot, mut best_o) = (0f64, 0usize);
             for (o, &(cu, su)) in uv.iter().enumerate() {
