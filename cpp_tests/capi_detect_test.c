@@ -1,7 +1,8 @@
 /* skb_detect from C (built -Wall -Wextra -Werror under ASan + UBSan): the context's embedded
  * detector finds the figure of a rendered sketch (strided buffer) close to its true joints, two
- * threads get the same answer, options set the threshold and the searched scales, "no figure"
- * returns SKB_ERR_NO_FIGURE with the best score, and every error path returns its specific
+ * threads get the same answer, options set the threshold, the searched scales, the figure range
+ * and the levels per octave, "no figure" returns SKB_ERR_NO_FIGURE with the best score (from
+ * skb_detect and skb_detector_detect), and every error path returns its specific
  * status with a message and leaves the joints untouched. */
 #include <math.h>
 #include <pthread.h>
@@ -87,6 +88,38 @@ int main(void) {
     CHECK(strstr(skb_last_error_message(), "no figure") != NULL);
     CHECK(memcmp(&xy[0], &sentinel, sizeof sentinel) == 0);
     printf("no figure ok: %s\n", skb_last_error_message());
+    /* The same no-figure report from a detector loaded by the caller: the embedded model's file. */
+    skb_detector *det = NULL;
+    CHECK(skb_detector_new_from_file(SKB_SOURCE_DIR "/assets/detector.skbd", &det) == SKB_OK);
+    double score2 = 0.0;
+    memset(xy, 0xAB, sizeof xy);
+    CHECK(skb_detector_detect(det, &g_img, a.score + 1.0, 0.0, xy, 30, conf, 15, &score2) == SKB_ERR_NO_FIGURE);
+    CHECK(fabs(score2 - a.score) < 1e-9);
+    CHECK(memcmp(&xy[0], &sentinel, sizeof sentinel) == 0);
+    CHECK(skb_detector_detect(det, &g_img, NAN, 0.0, xy, 30, conf, 15, &score2) == SKB_OK);
+    CHECK(fabs(score2 - a.score) < 1e-9);
+    skb_detector_free(det);
+    skb_detector_free(NULL);
+    printf("no figure from skb_detector_detect ok: score %.3f\n", a.score);
+    /* Ten levels per octave (the model's own) search a superset of the levels of five. */
+    CHECK(skb_detect_options_set_threshold(o, -1e9) == SKB_OK);
+    CHECK(skb_detect_options_set_levels_per_octave(o, 5) == SKB_OK);
+    double score5 = 0.0;
+    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score5) == SKB_OK);
+    CHECK(skb_detect_options_set_levels_per_octave(o, 0) == SKB_OK);
+    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_OK);
+    CHECK(score >= score5 && pck(truth, xy, 0.2) >= 0.8);
+    printf("levels per octave: best score %.3f with 5, %.3f with 10, %.3f with the default 7\n", score5, score, a.score);
+    CHECK(skb_detect_options_set_levels_per_octave(o, 101) == SKB_ERR_OUT_OF_RANGE);
+    CHECK(skb_detect_options_set_levels_per_octave(NULL, 5) == SKB_ERR_NULL_POINTER);
+    CHECK(skb_detect_options_set_levels_per_octave(o, 7) == SKB_OK);
+    /* Only figures of at most 0.3 of the side: the page-filling figure scores lower. */
+    CHECK(skb_detect_options_set_figure_range(o, 0.05, 0.3) == SKB_OK);
+    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_OK);
+    CHECK(score < a.score);
+    CHECK(skb_detect_options_set_figure_range(o, 0.5, 0.5) == SKB_ERR_OUT_OF_RANGE);
+    CHECK(skb_detect_options_set_figure_range(o, 0.0, 1.0) == SKB_ERR_OUT_OF_RANGE);
+    CHECK(skb_detect_options_set_figure_range(o, NAN, 1.0) == SKB_ERR_OUT_OF_RANGE);
     CHECK(skb_detect_options_set_threshold(o, NAN) == SKB_OK);
     CHECK(skb_detect_options_set_threshold(o, INFINITY) == SKB_ERR_NON_FINITE);
     CHECK(skb_detect_options_set_threshold(NULL, 0.0) == SKB_ERR_NULL_POINTER);

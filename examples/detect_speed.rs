@@ -2,10 +2,11 @@
 //! of `detect`, in one process, plus the best detection (score, part placements) so that runs of
 //! two engine versions can be compared.
 //!
-//! Usage: cargo run --release --example detect_speed -- MODEL IMAGE [RUNS] [default|all|fMIN|MIN_CELL]
-//! `default` uses the documented sketch search range (`DetectOptions::default()`), `all` every
-//! pyramid level, `fMIN` figures of at least MIN × the shorter side (e.g. `f0.5`), a number
-//! every level with cells of at least that many px.
+//! Usage: cargo run --release --example detect_speed -- MODEL IMAGE [RUNS] [default|all|fMIN|MIN_CELL] [LEVELS]
+//! `default` uses the documented sketch search (`DetectOptions::default()`), `all` every
+//! pyramid level, `fMIN` figures of at least MIN × the shorter side (e.g. `f0.25`), a number
+//! every level with cells of at least that many px. LEVELS: levels per octave (`model` = the
+//! model's own, 10; default: that of `DetectOptions::default()`).
 
 use sketchbody::detect::{conv, detect, prepare_image, pyramid, tree, DetectOptions, Model, SearchScales};
 use sketchbody::image::load_rgb_image;
@@ -13,21 +14,29 @@ use sketchbody::image::load_rgb_image;
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     if args.len() < 3 {
-        eprintln!("usage: detect_speed MODEL IMAGE [RUNS] [default|all|fMIN|MIN_CELL]");
+        eprintln!("usage: detect_speed MODEL IMAGE [RUNS] [default|all|fMIN|MIN_CELL] [LEVELS|model]");
         std::process::exit(2);
     }
     let model = Model::load_any(std::path::Path::new(&args[1])).expect("model");
     let img = load_rgb_image(std::path::Path::new(&args[2])).expect("image");
     let runs: usize = args.get(3).map_or(5, |s| s.parse().expect("RUNS"));
     let mode = args.get(4).map_or("default", String::as_str);
-    let opts = options(mode);
-    let (mut walls, mut cpus) = (Vec::new(), Vec::new());
+    let mut opts = options(mode);
+    match args.get(5).map(String::as_str) {
+        None => {}
+        Some("model") => opts.levels_per_octave = None,
+        Some(n) => opts.levels_per_octave = Some(n.parse().expect("LEVELS")),
+    }
+    let levels = opts.levels_per_octave.unwrap_or(model.interval);
+    let (mut walls, mut cpus, mut busiest) = (Vec::new(), Vec::new(), Vec::new());
     let mut last = None;
     for _ in 0..runs {
+        let w0 = worker_cpu();
         let (t0, c0) = (std::time::Instant::now(), process_cpu());
         let d = detect(&img.view(), &model, &opts);
         walls.push(t0.elapsed().as_secs_f64() * 1e3);
         cpus.push((process_cpu() - c0) * 1e3);
+        busiest.push(worker_cpu().iter().zip(&w0).map(|(a, b)| (a - b) * 1e3).fold(0.0, f64::max));
         last = Some(d);
     }
     let med = |v: &mut Vec<f64>| {
@@ -35,13 +44,16 @@ fn main() {
         v[v.len() / 2]
     };
     println!(
-        "detect {}x{} {mode}: median wall {:.1} ms, median CPU {:.1} ms (all threads) over {runs} runs, {} threads",
+        "detect {}x{} {mode}, {levels} levels per octave: median wall {:.1} ms, median CPU {:.1} ms (all threads) over {runs} runs, {} threads",
         img.width(),
         img.height(),
         med(&mut walls),
         med(&mut cpus),
         rayon::current_num_threads()
     );
+    // The work runs on the pool's threads (this thread only waits): the busiest one's CPU time
+    // is the wall time the detection needs on idle cores, whatever the machine's load.
+    println!("busiest pool thread: median CPU {:.1} ms per detect (the wall time on idle cores, ±rayon's idle spinning)", med(&mut busiest));
     match last.expect("runs ≥ 1") {
         Ok(d) => {
             let b = d.best();
@@ -62,7 +74,8 @@ fn compare_kernels(model: &Model, img: &sketchbody::image::RgbImage, opts: &Dete
     let (lo, hi) = opts.search.cell_range(model, planes.width, planes.height);
     let (lo, hi) = (lo.max(opts.min_cell_px), hi.min(opts.max_cell_px));
     let (padx, pady) = model.padding();
-    let pyr = pyramid::build(&planes, model.sbin, model.interval, padx, pady, lo).expect("pyramid");
+    let interval = opts.levels_per_octave.unwrap_or(model.interval);
+    let pyr = pyramid::build(&planes, model.sbin, interval, padx, pady, lo, hi).expect("pyramid");
     let levels: Vec<_> = pyr.levels.iter().filter(|l| l.cell_px <= hi).collect();
     let mut cpu = [0f64; 2];
     let mut best: [Vec<tree::Candidate>; 2] = [Vec::new(), Vec::new()];
@@ -132,6 +145,11 @@ fn options(mode: &str) -> DetectOptions {
         }
         c => DetectOptions { search: SearchScales::All, min_cell_px: c.parse().expect("MIN_CELL"), ..Default::default() },
     }
+}
+
+/// CPU time of each thread of the global rayon pool, seconds (read on every thread at once).
+fn worker_cpu() -> Vec<f64> {
+    rayon::broadcast(|_| thread_cpu())
 }
 
 /// CPU time of this process (all threads), seconds.

@@ -145,6 +145,25 @@
 #define SKB_VERSION_PATCH 0
 
 /**
+ * The smallest figure the sketch default searches, as a fraction of the shorter image side.
+ * Concept sketches draw one figure large on the page: the renderer's figures are 0.72–0.92 of
+ * the shorter side tall (margins 0.04–0.14 on every side), and on 300 held-out sketches both
+ * the embedded and the PARSE model found every correct figure at levels tuned to ≥ 0.41 of the
+ * side, inside this range (levels down to 0.5 / 1.25 = 0.4); PCK was the same as with the
+ * earlier 0.25 (`docs/benchmarks.md`, "Detector (issue 7)"). Smaller figures need
+ * [`SearchScales::FigureFraction`] with a smaller `min` or [`SearchScales::All`].
+ */
+#define SKETCH_MIN_FIGURE 0.5
+
+/**
+ * The documented default levels per octave for concept sketches ([`DetectOptions::default`]):
+ * 7 instead of the models' 10, 0.7 of the levels and of the work; on 300 held-out sketches
+ * PCK@0.1 / @0.2 of both the embedded and the PARSE model were as high as with 10, while 5
+ * cost the PARSE model 0.035 at PCK@0.1 (`docs/benchmarks.md`, "Detector (issue 7)").
+ */
+#define SKETCH_LEVELS_PER_OCTAVE 7
+
+/**
  * Largest window radius (in cells) run as a brute force; wider windows use the envelope.
  */
 #define MAX_RADIUS 20
@@ -344,8 +363,8 @@ typedef struct skb_context skb_context;
 
 /**
  * Options of [`skb_detect`]: score threshold and the searched scales. Create with
- * `skb_detect_options_new` (the model's threshold, the sketch search range: figures from 1/4
- * of the shorter image side to the longer side), release with
+ * `skb_detect_options_new` (the model's threshold, the sketch search range: figures from
+ * 1/2 of the shorter image side to the longer side, at 7 pyramid levels per octave), release with
  * `skb_detect_options_free`. Setters need exclusive use; a configured handle may be read by
  * several threads at once.
  */
@@ -699,11 +718,12 @@ void skb_detector_free(struct skb_detector *det);
  * (0 searches every scale; larger is faster but misses small figures). Images whose longer side
  * exceeds 1024 px are downscaled first (results are in input pixels). Writes the 15 canonical
  * joints as (x, y) pairs in pixels (origin top-left, y down) to `joints_xy[0..30]`, their
- * confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. Errors:
- * `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_NO_FIGURE` (nothing reaches the
- * threshold; the message gives the best score), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
- * `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Nothing is written on failure.
- * Thread-safe.
+ * confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. The other search
+ * settings are the defaults of `skb_detect_options_new`. When no figure reaches the threshold
+ * it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score found, below the
+ * threshold; −infinity when no pyramid level was searched). Other errors (nothing written):
+ * `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
+ * `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
  */
 skb_status skb_detector_detect(const struct skb_detector *det,
                                const struct skb_image *image,
@@ -742,6 +762,24 @@ skb_status skb_detect_options_set_threshold(struct skb_detect_options *opts, dou
 skb_status skb_detect_options_set_scales(struct skb_detect_options *opts,
                                          double min_cell_px,
                                          double max_cell_px);
+
+/**
+ * Sets the searched figure sizes as fractions of the image: figures from `min_fraction` × the
+ * shorter side to `max_fraction` × the longer side tall (the default range is 0.5..1). Replaces any cell range set by `skb_detect_options_set_scales`.
+ * Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 < min < max, both finite (NaN is rejected).
+ */
+skb_status skb_detect_options_set_figure_range(struct skb_detect_options *opts,
+                                               double min_fraction,
+                                               double max_fraction);
+
+/**
+ * Sets the pyramid levels per octave: 1..=100, or 0 for the model's own (10 for the embedded
+ * detector and the PARSE family). The default is 7 (0.7 of the work of 10, the same accuracy
+ * on held-out sketches); 5 scores exactly every other level of 10, about half the work,
+ * coarser in scale. Errors: `SKB_ERR_OUT_OF_RANGE` above 100.
+ */
+skb_status skb_detect_options_set_levels_per_octave(struct skb_detect_options *opts,
+                                                    uint32_t levels);
 
 /**
  * Detects the best-scoring figure in `image` with the embedded detector of `ctx` and `opts`

@@ -97,5 +97,40 @@ fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
     let err = one_line_failure(cli().args(["detect", "--threshold=1000"]).arg(&blank).arg("--out").arg(dir.join("b.json")));
     assert!(err.contains("no figure") && err.contains("1000"), "{err}");
     assert!(!dir.join("b.json").exists());
+    // The score it names is the best one on that page (what a threshold below it returns).
+    let st = cli().args(["detect", "--threshold=-1e9"]).arg(&blank).arg("--out").arg(dir.join("b2.json")).status().unwrap();
+    assert!(st.success());
+    let b2: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("b2.json")).unwrap()).unwrap();
+    let best = b2["score"].as_f64().unwrap();
+    assert!(err.contains(&format!("best score {best:.3} is below the threshold 1000")), "{err} vs best {best}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn levels_per_octave_and_figure_flags_reach_the_search() {
+    let dir = scratch("levels");
+    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
+    let score = |extra: &[&str], name: &str| {
+        let out = dir.join(name);
+        let res = cli().args(["detect", "--threshold=-1e9"]).args(extra).arg(&sketch).arg("--out").arg(&out).output().unwrap();
+        assert!(res.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&res.stderr));
+        let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+        j["score"].as_f64().unwrap()
+    };
+    // Ten levels per octave (the model's own, 0) score a superset of the levels of five.
+    let (s5, s10) = (score(&["--levels-per-octave", "5"], "a.json"), score(&["--levels-per-octave", "0"], "b.json"));
+    assert!(s10 >= s5, "{s10} vs {s5}");
+    // Figures of at most 0.3 of the side miss the page-filling figure.
+    let small = score(&["--min-figure", "0.05", "--max-figure", "0.3"], "c.json");
+    assert!(small < score(&[], "d.json"), "{small}");
+    let err = one_line_failure(cli().args(["detect", "--levels-per-octave", "101"]).arg(&sketch).arg("--out").arg(dir.join("e.json")));
+    assert!(err.contains("levels_per_octave") && err.contains("101"), "{err}");
+    assert!(!dir.join("e.json").exists());
+    // eval-detector takes the same flags and reports the figure sizes and the scales found.
+    let res = cli().args(["eval-detector", "--n", "2", "--size", "256", "--levels-per-octave", "5", "--min-figure", "0.4"]).output().unwrap();
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let text = String::from_utf8(res.stdout).unwrap();
+    assert!(text.contains("figures 0.4..1 of the side") && text.contains("5 levels per octave"), "{text}");
+    assert!(text.contains("drawn figure height / shorter side: min 0.") && text.contains("found at (cell × rest height / shorter side)"), "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

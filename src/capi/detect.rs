@@ -66,11 +66,12 @@ unsafe fn free_box<T>(p: *mut T) {
 /// (0 searches every scale; larger is faster but misses small figures). Images whose longer side
 /// exceeds 1024 px are downscaled first (results are in input pixels). Writes the 15 canonical
 /// joints as (x, y) pairs in pixels (origin top-left, y down) to `joints_xy[0..30]`, their
-/// confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. Errors:
-/// `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_NO_FIGURE` (nothing reaches the
-/// threshold; the message gives the best score), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
-/// `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Nothing is written on failure.
-/// Thread-safe.
+/// confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. The other search
+/// settings are the defaults of `skb_detect_options_new`. When no figure reaches the threshold
+/// it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score found, below the
+/// threshold; −infinity when no pyramid level was searched). Other errors (nothing written):
+/// `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
+/// `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_detect(
     det: *const skb_detector,
@@ -89,15 +90,13 @@ pub unsafe extern "C" fn skb_detector_detect(
         let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
         let threshold = if threshold.is_nan() { None } else { Some(threshold) };
         let opts = DetectOptions { threshold, min_cell_px, ..Default::default() };
-        let d = try_core!(detect(&view, &det.model, &opts));
-        write_best(d.best(), xy, cf, score);
-        skb_status::SKB_OK
+        detect_into(&view, &det.model, &opts, xy, cf, score)
     }
 }
 
 /// Options of [`skb_detect`]: score threshold and the searched scales. Create with
-/// `skb_detect_options_new` (the model's threshold, the sketch search range: figures from 1/4
-/// of the shorter image side to the longer side), release with
+/// `skb_detect_options_new` (the model's threshold, the sketch search range: figures from
+/// 1/2 of the shorter image side to the longer side, at 7 pyramid levels per octave), release with
 /// `skb_detect_options_free`. Setters need exclusive use; a configured handle may be read by
 /// several threads at once.
 pub struct skb_detect_options {
@@ -156,6 +155,39 @@ pub unsafe extern "C" fn skb_detect_options_set_scales(opts: *mut skb_detect_opt
     }
 }
 
+/// Sets the searched figure sizes as fractions of the image: figures from `min_fraction` × the
+/// shorter side to `max_fraction` × the longer side tall (the default range is 0.5..1). Replaces any cell range set by `skb_detect_options_set_scales`.
+/// Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 < min < max, both finite (NaN is rejected).
+#[no_mangle]
+pub unsafe extern "C" fn skb_detect_options_set_figure_range(opts: *mut skb_detect_options, min_fraction: f64, max_fraction: f64) -> skb_status {
+    ffi_boundary! {
+        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
+        if !(min_fraction > 0.0 && max_fraction > min_fraction && max_fraction.is_finite()) {
+            return fail(&Error::OutOfRange { name: "figure range", detail: format!("min {min_fraction}, max {max_fraction}: need 0 < min < max, finite") });
+        }
+        o.inner.search = SearchScales::FigureFraction { min: min_fraction, max: max_fraction };
+        o.inner.min_cell_px = 0.0;
+        o.inner.max_cell_px = f64::INFINITY;
+        skb_status::SKB_OK
+    }
+}
+
+/// Sets the pyramid levels per octave: 1..=100, or 0 for the model's own (10 for the embedded
+/// detector and the PARSE family). The default is 7 (0.7 of the work of 10, the same accuracy
+/// on held-out sketches); 5 scores exactly every other level of 10, about half the work,
+/// coarser in scale. Errors: `SKB_ERR_OUT_OF_RANGE` above 100.
+#[no_mangle]
+pub unsafe extern "C" fn skb_detect_options_set_levels_per_octave(opts: *mut skb_detect_options, levels: u32) -> skb_status {
+    ffi_boundary! {
+        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
+        if levels > 100 {
+            return fail(&Error::OutOfRange { name: "levels_per_octave", detail: format!("{levels} not in 0..=100") });
+        }
+        o.inner.levels_per_octave = (levels > 0).then_some(levels as usize);
+        skb_status::SKB_OK
+    }
+}
+
 /// Detects the best-scoring figure in `image` with the embedded detector of `ctx` and `opts`
 /// (NULL: defaults). Images whose longer side exceeds 1024 px are downscaled first (results are
 /// in input pixels). Writes the 15 canonical joints as (x, y) pairs in pixels (origin top-left,
@@ -185,17 +217,23 @@ pub unsafe extern "C" fn skb_detect(
             Ok(m) => m,
             Err(e) => return fail(&e),
         };
-        match detect(&view, model, o) {
-            Ok(d) => {
-                write_best(d.best(), xy, cf, score);
-                skb_status::SKB_OK
-            }
-            Err(e @ Error::NoFigure { score: s, .. }) => {
-                *score = s;
-                fail(&e)
-            }
-            Err(e) => fail(&e),
+        detect_into(&view, model, o, xy, cf, score)
+    }
+}
+
+/// Runs the detection and writes the best figure's joints, confidences and score; on "no
+/// figure" writes only the best score found and returns `SKB_ERR_NO_FIGURE`.
+fn detect_into(view: &crate::image::ImageView<'_>, model: &Model, o: &DetectOptions, xy: &mut [f64], cf: &mut [f64], score: &mut f64) -> skb_status {
+    match detect(view, model, o) {
+        Ok(d) => {
+            write_best(d.best(), xy, cf, score);
+            skb_status::SKB_OK
         }
+        Err(e @ Error::NoFigure { score: s, .. }) => {
+            *score = s;
+            fail(&e)
+        }
+        Err(e) => fail(&e),
     }
 }
 
@@ -269,6 +307,29 @@ mod tests {
             assert_eq!(skb_detect_options_set_threshold(o, f64::NAN), skb_status::SKB_OK);
             assert_eq!(skb_detect_options_set_scales(o, 5.0, 4.0), skb_status::SKB_ERR_OUT_OF_RANGE);
             assert_eq!(skb_detect_options_set_scales(o, f64::NAN, 4.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+            // The figure range and the levels per octave: ten levels per octave (the model's
+            // own) search a superset of the levels of five, so the best score can only rise.
+            assert_eq!(skb_detect_options_set_threshold(o, -1e9), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_levels_per_octave(o, 5), skb_status::SKB_OK);
+            assert_eq!(o.as_ref().unwrap().inner.levels_per_octave, Some(5));
+            let (mut s5, mut s10) = (0f64, 0f64);
+            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s5), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_levels_per_octave(o, 0), skb_status::SKB_OK);
+            assert_eq!(o.as_ref().unwrap().inner.levels_per_octave, None);
+            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s10), skb_status::SKB_OK);
+            assert!(s10 >= s5, "10 levels per octave {s10} vs 5: {s5}");
+            assert_eq!(skb_detect_options_set_levels_per_octave(o, 101), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_detect_options_set_levels_per_octave(o, 7), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_levels_per_octave(null_mut(), 5), skb_status::SKB_ERR_NULL_POINTER);
+            // Figures of at most 0.3 of the side: the figure (most of the page) is missed.
+            assert_eq!(skb_detect_options_set_figure_range(o, 0.05, 0.3), skb_status::SKB_OK);
+            let mut s4 = 0f64;
+            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s4), skb_status::SKB_OK);
+            assert!(s4 < s, "small-figure score {s4} vs {s}");
+            for (lo, hi) in [(0.0, 1.0), (0.5, 0.5), (0.2, f64::INFINITY), (f64::NAN, 1.0)] {
+                assert_eq!(skb_detect_options_set_figure_range(o, lo, hi), skb_status::SKB_ERR_OUT_OF_RANGE, "{lo}..{hi}");
+            }
+            assert_eq!(skb_detect_options_set_threshold(o, f64::NAN), skb_status::SKB_OK);
             // Only tiny cells: the figure (cells of about 8 px here) is not found at its scale.
             assert_eq!(skb_detect_options_set_scales(o, 0.0, 2.5), skb_status::SKB_OK);
             assert_eq!(skb_detect_options_set_threshold(o, -1e9), skb_status::SKB_OK);
@@ -315,7 +376,11 @@ mod tests {
             let st = skb_detector_detect(d, &img, -1e6, 0.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s);
             assert_eq!(st, skb_status::SKB_OK);
             assert!(s.is_finite() && cf.iter().all(|&c| c > 0.0 && c < 1.0));
-            assert_eq!(skb_detector_detect(d, &img, 1e6, 0.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s), skb_status::SKB_ERR_NO_FIGURE);
+            // No figure: only the best score is written (the one found at threshold −1e6).
+            let (mut xy2, mut s2) = ([-7f64; 30], 0f64);
+            assert_eq!(skb_detector_detect(d, &img, 1e6, 0.0, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s2), skb_status::SKB_ERR_NO_FIGURE);
+            assert_eq!(s2, s);
+            assert!(xy2.iter().all(|&v| v == -7.0));
             assert_eq!(
                 skb_detector_detect(d, &img, -1e6, 0.0, xy.as_mut_ptr(), 29, cf.as_mut_ptr(), 15, &mut s),
                 skb_status::SKB_ERR_BUFFER_TOO_SMALL

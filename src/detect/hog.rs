@@ -61,11 +61,85 @@ fn orientations() -> [(f64, f64); NORIENT] {
     u
 }
 
+/// Per-pixel gradients of an image as the HOG uses them: for every interior pixel (1 ≤ x ≤
+/// width − 2, 1 ≤ y ≤ height − 2) the orientation bin (0..18) and the magnitude of the central
+/// difference of the channel with the largest one. Independent of the cell size, so the two
+/// cell sizes of one pyramid image share it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gradients {
+    /// Image width, px.
+    pub width: usize,
+    /// Image height, px.
+    pub height: usize,
+    /// Orientation bin per pixel, row-major (border pixels 0).
+    orient: Vec<u8>,
+    /// Magnitude per pixel, row-major (border pixels 0).
+    mag: Vec<f64>,
+}
+
+/// The gradients of `im` (see [`Gradients`]). Computed a row at a time with branch-free
+/// selects (vectorisable); per pixel the same arithmetic and comparisons, in the same order, as
+/// the plain loop of `features.cc`: the first channel of largest squared magnitude, then the
+/// first orientation of largest |dot| (its contrast-sensitive bin when the dot is negative).
+pub fn gradients(im: &Planes) -> Gradients {
+    let (w, h) = (im.width, im.height);
+    let mut orient = vec![0u8; w * h];
+    let mut mag = vec![0f64; w * h];
+    if w < 3 || h < 3 {
+        return Gradients { width: w, height: h, orient, mag };
+    }
+    let uv = orientations();
+    let n = w - 2;
+    let (mut dx, mut dy, mut v) = (vec![0f64; n], vec![0f64; n], vec![0f64; n]);
+    let (mut best, mut bo) = (vec![0f64; n], vec![0u64; n]);
+    for sy in 1..h - 1 {
+        v.fill(-1.0);
+        for c in 0..im.channels {
+            let p = im.plane(c);
+            let (up, row, down) = (&p[(sy - 1) * w + 1..][..n], &p[sy * w..][..w], &p[(sy + 1) * w + 1..][..n]);
+            let (left, right) = (&row[..n], &row[2..]);
+            for ((((dx, dy), v), (&l, &r)), (&u, &d)) in dx.iter_mut().zip(dy.iter_mut()).zip(v.iter_mut()).zip(left.iter().zip(right)).zip(up.iter().zip(down)) {
+                let gx = (r - l) as f64;
+                let gy = (d - u) as f64;
+                let m = gx * gx + gy * gy;
+                let take = m > *v;
+                *dx = if take { gx } else { *dx };
+                *dy = if take { gy } else { *dy };
+                *v = if take { m } else { *v };
+            }
+        }
+        best.fill(0.0);
+        bo.fill(0);
+        for (o, &(cu, su)) in uv.iter().enumerate() {
+            let (o, o2) = (o as u64, (o + NORIENT) as u64);
+            for (((b, k), &x), &y) in best.iter_mut().zip(bo.iter_mut()).zip(&dx).zip(&dy) {
+                let dot = cu * x + su * y;
+                // |dot| > b picks dot's sign: positive -> o, negative -> o + 9 (the plain loop
+                // tests dot > b first, and both cannot hold since b ≥ 0).
+                let (gt, lt) = (dot > *b, -dot > *b);
+                *b = if gt | lt { dot.abs() } else { *b };
+                *k = if gt { o } else if lt { o2 } else { *k };
+            }
+        }
+        let (orow, mrow) = (&mut orient[sy * w + 1..][..n], &mut mag[sy * w + 1..][..n]);
+        for i in 0..n {
+            orow[i] = bo[i] as u8;
+            mrow[i] = v[i].sqrt();
+        }
+    }
+    Gradients { width: w, height: h, orient, mag }
+}
+
 /// Computes the HOG feature map of `im` with cells of `sbin` pixels. The cell grid has
 /// round(height / sbin) x round(width / sbin) cells; the map has two fewer per axis (empty when
 /// that is ≤ 0).
 pub fn hog(im: &Planes, sbin: usize) -> FeatureMap {
-    let (w, h) = (im.width, im.height);
+    hog_from_gradients(&gradients(im), sbin)
+}
+
+/// [`hog`] from precomputed [`gradients`] of the image.
+pub fn hog_from_gradients(g: &Gradients, sbin: usize) -> FeatureMap {
+    let (w, h) = (g.width, g.height);
     let bh = (h as f64 / sbin as f64).round() as usize;
     let bw = (w as f64 / sbin as f64).round() as usize;
     let out_r = bh.saturating_sub(2);
@@ -75,44 +149,26 @@ pub fn hog(im: &Planes, sbin: usize) -> FeatureMap {
     }
     // Orientation histograms, 18 per cell, layout (cell_y, cell_x, orientation).
     let mut hist = vec![0f64; bh * bw * 18];
-    let uv = orientations();
     let vis_h = bh * sbin;
     let vis_w = bw * sbin;
     let sb = sbin as f64;
+    // Per column: the left cell of its bilinear vote and the weight of the right one.
+    let cols: Vec<(isize, f64)> = (0..vis_w)
+        .map(|x| {
+            let xp = (x as f64 + 0.5) / sb - 0.5;
+            let ixp = xp.floor() as isize;
+            (ixp, xp - ixp as f64)
+        })
+        .collect();
     for y in 1..vis_h.saturating_sub(1) {
         let sy = y.min(h - 2);
         let yp = (y as f64 + 0.5) / sb - 0.5;
         let iyp = yp.floor() as isize;
         let vy0 = yp - iyp as f64;
         let vy1 = 1.0 - vy0;
-        for x in 1..vis_w.saturating_sub(1) {
+        for (x, &(ixp, vx0)) in cols.iter().enumerate().take(vis_w.saturating_sub(1)).skip(1) {
             let sx = x.min(w - 2);
-            let (mut dx, mut dy, mut v) = (0f64, 0f64, -1f64);
-            for c in 0..im.channels {
-                let p = im.plane(c);
-                let gx = (p[sy * w + sx + 1] - p[sy * w + sx - 1]) as f64;
-                let gy = (p[(sy + 1) * w + sx] - p[(sy - 1) * w + sx]) as f64;
-                let m = gx * gx + gy * gy;
-                if m > v {
-                    (dx, dy, v) = (gx, gy, m);
-                }
-            }
-            // Snap to one of 18 orientations.
-            let (mut best_dot, mut best_o) = (0f64, 0usize);
-            for (o, &(cu, su)) in uv.iter().enumerate() {
-                let dot = cu * dx + su * dy;
-                if dot > best_dot {
-                    best_dot = dot;
-                    best_o = o;
-                } else if -dot > best_dot {
-                    best_dot = -dot;
-                    best_o = o + NORIENT;
-                }
-            }
-            let mag = v.sqrt();
-            let xp = (x as f64 + 0.5) / sb - 0.5;
-            let ixp = xp.floor() as isize;
-            let vx0 = xp - ixp as f64;
+            let (best_o, mag) = (g.orient[sy * w + sx] as usize, g.mag[sy * w + sx]);
             let vx1 = 1.0 - vx0;
             let mut vote = |cx: isize, cy: isize, wgt: f64| {
                 if cx >= 0 && cy >= 0 && (cx as usize) < bw && (cy as usize) < bh {
@@ -175,6 +231,62 @@ mod tests {
             }
         }
         Planes { width: w, height: h, channels: 1, data }
+    }
+
+    /// The plain per-pixel loop of `features.cc` that [`gradients`] vectorises.
+    fn gradients_reference(im: &Planes) -> Gradients {
+        let (w, h) = (im.width, im.height);
+        let (mut orient, mut mag) = (vec![0u8; w * h], vec![0f64; w * h]);
+        let uv = orientations();
+        for sy in 1..h.saturating_sub(1) {
+            for sx in 1..w.saturating_sub(1) {
+                let (mut dx, mut dy, mut v) = (0f64, 0f64, -1f64);
+                for c in 0..im.channels {
+                    let p = im.plane(c);
+                    let gx = (p[sy * w + sx + 1] - p[sy * w + sx - 1]) as f64;
+                    let gy = (p[(sy + 1) * w + sx] - p[(sy - 1) * w + sx]) as f64;
+                    let m = gx * gx + gy * gy;
+                    if m > v {
+                        (dx, dy, v) = (gx, gy, m);
+                    }
+                }
+                let (mut best_dot, mut best_o) = (0f64, 0usize);
+                for (o, &(cu, su)) in uv.iter().enumerate() {
+                    let dot = cu * dx + su * dy;
+                    if dot > best_dot {
+                        best_dot = dot;
+                        best_o = o;
+                    } else if -dot > best_dot {
+                        best_dot = -dot;
+                        best_o = o + NORIENT;
+                    }
+                }
+                orient[sy * w + sx] = best_o as u8;
+                mag[sy * w + sx] = v.sqrt();
+            }
+        }
+        Gradients { width: w, height: h, orient, mag }
+    }
+
+    #[test]
+    fn vectorised_gradients_equal_the_plain_loop() {
+        // Colour noise with flat patches, ties between channels and exact axis-aligned gradients.
+        let (w, h) = (53, 37);
+        let mut data = vec![0f32; 3 * w * h];
+        for (i, d) in data.iter_mut().enumerate() {
+            let (x, y) = ((i % w) as u32, ((i / w) % h) as u32);
+            *d = if x < 10 && y < 10 { 128.0 } else if x % 7 == 0 { (y * 3) as f32 } else { ((i as u32).wrapping_mul(2_654_435_761) >> 24) as f32 };
+        }
+        let colour = Planes { width: w, height: h, channels: 3, data: data.clone() };
+        assert_eq!(gradients(&colour), gradients_reference(&colour));
+        let gray = Planes { width: w, height: h, channels: 1, data: data[..w * h].to_vec() };
+        assert_eq!(gradients(&gray), gradients_reference(&gray));
+        let g = gradients(&gray);
+        assert!(g.orient.iter().any(|&o| o >= 9) && g.orient.iter().any(|&o| (1..9).contains(&o)));
+        for (w, h) in [(2, 5), (3, 3), (5, 2)] {
+            let p = Planes { width: w, height: h, channels: 1, data: (0..w * h).map(|i| i as f32).collect() };
+            assert_eq!(gradients(&p), gradients_reference(&p), "{w}x{h}");
+        }
     }
 
     #[test]

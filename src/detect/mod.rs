@@ -54,9 +54,18 @@ pub enum SearchScales {
     },
 }
 
+/// The smallest figure the sketch default searches, as a fraction of the shorter image side.
+/// Concept sketches draw one figure large on the page: the renderer's figures are 0.72–0.92 of
+/// the shorter side tall (margins 0.04–0.14 on every side), and on 300 held-out sketches both
+/// the embedded and the PARSE model found every correct figure at levels tuned to ≥ 0.41 of the
+/// side, inside this range (levels down to 0.5 / 1.25 = 0.4); PCK was the same as with the
+/// earlier 0.25 (`docs/benchmarks.md`, "Detector (issue 7)"). Smaller figures need
+/// [`SearchScales::FigureFraction`] with a smaller `min` or [`SearchScales::All`].
+pub const SKETCH_MIN_FIGURE: f64 = 0.5;
+
 /// The documented default search range for concept sketches: one figure filling much of the
-/// canvas, at least a quarter of the shorter side tall and at most the longer side.
-pub const SKETCH_SEARCH: SearchScales = SearchScales::FigureFraction { min: 0.25, max: 1.0 };
+/// canvas, at least [`SKETCH_MIN_FIGURE`] of the shorter side tall and at most the longer side.
+pub const SKETCH_SEARCH: SearchScales = SearchScales::FigureFraction { min: SKETCH_MIN_FIGURE, max: 1.0 };
 
 impl SearchScales {
     /// Pyramid cell range (px of the image searched, `width` x `height`) for `model`.
@@ -73,7 +82,8 @@ impl SearchScales {
 }
 
 /// Detection options. `Default` gives the model's threshold, the sketch search range
-/// [`SKETCH_SEARCH`], NMS at 0.3 and up to 10 detections.
+/// [`SKETCH_SEARCH`] at [`SKETCH_LEVELS_PER_OCTAVE`] levels per octave, NMS at 0.3 and up to 10
+/// detections.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DetectOptions {
     /// Score threshold; `None` uses the model's own.
@@ -92,11 +102,31 @@ pub struct DetectOptions {
     /// Figure sizes searched; combined with `min_cell_px` / `max_cell_px` (a level is scored
     /// when it passes both).
     pub search: SearchScales,
+    /// Pyramid levels per octave (scale step 2^(−1/n)); `None` uses the model's own
+    /// (`Model::interval`, 10 for the PARSE family). Fewer levels are proportionally faster and
+    /// coarser in scale; 5 gives every other level of 10 exactly. Range 1..=100. Default
+    /// [`SKETCH_LEVELS_PER_OCTAVE`].
+    pub levels_per_octave: Option<usize>,
 }
+
+/// The documented default levels per octave for concept sketches ([`DetectOptions::default`]):
+/// 7 instead of the models' 10, 0.7 of the levels and of the work; on 300 held-out sketches
+/// PCK@0.1 / @0.2 of both the embedded and the PARSE model were as high as with 10, while 5
+/// cost the PARSE model 0.035 at PCK@0.1 (`docs/benchmarks.md`, "Detector (issue 7)").
+pub const SKETCH_LEVELS_PER_OCTAVE: usize = 7;
 
 impl Default for DetectOptions {
     fn default() -> Self {
-        Self { threshold: None, max_side: DEFAULT_MAX_DETECT_SIDE, min_cell_px: 0.0, max_cell_px: f64::INFINITY, nms_overlap: 0.3, max_detections: 10, search: SKETCH_SEARCH }
+        Self {
+            threshold: None,
+            max_side: DEFAULT_MAX_DETECT_SIDE,
+            min_cell_px: 0.0,
+            max_cell_px: f64::INFINITY,
+            nms_overlap: 0.3,
+            max_detections: 10,
+            search: SKETCH_SEARCH,
+            levels_per_octave: Some(SKETCH_LEVELS_PER_OCTAVE),
+        }
     }
 }
 
@@ -120,6 +150,11 @@ impl DetectOptions {
         }
         if self.max_detections == 0 {
             return range("max_detections", "must be ≥ 1".into());
+        }
+        if let Some(n) = self.levels_per_octave {
+            if !(1..=100).contains(&n) {
+                return range("levels_per_octave", format!("{n} not in 1..=100"));
+            }
         }
         if let SearchScales::FigureFraction { min, max } = self.search {
             if !(min > 0.0 && min < max && max.is_finite()) {
@@ -145,6 +180,9 @@ pub struct Detection {
     pub parts: Vec<PartBox>,
     /// Bounding box of the part boxes (x1, y1, x2, y2), px.
     pub bbox: [f64; 4],
+    /// Cell size of the pyramid level it was found at, input px (the figure is about
+    /// `Model::rest_height_cells` of these tall).
+    pub cell_px: f64,
 }
 
 /// The result of [`detect`]: the best figure first, then the others after NMS, by score.
@@ -182,11 +220,13 @@ pub fn prepare_image(image: &ImageView<'_>, max_side: usize) -> Result<(Planes, 
 }
 
 /// Candidates scoring at least `thresh` on `im` (working pixels) that `accept` admits, at most
-/// `per_level` per pyramid level, best first; levels with cells outside
-/// [min_cell_px, max_cell_px] are skipped.
+/// `per_level` per pyramid level, best first, over a pyramid of `interval` levels per octave;
+/// levels with cells outside [min_cell_px, max_cell_px] are neither built nor scored.
+#[allow(clippy::too_many_arguments)]
 pub fn candidates(
     im: &Planes,
     model: &Model,
+    interval: usize,
     thresh: f64,
     min_cell_px: f64,
     max_cell_px: f64,
@@ -194,13 +234,9 @@ pub fn candidates(
     accept: &(dyn Fn(&Candidate) -> bool + Sync),
 ) -> Result<Vec<Candidate>> {
     let (padx, pady) = model.padding();
-    let pyr = pyramid::build(im, model.sbin, model.interval, padx, pady, min_cell_px)?;
-    let mut all: Vec<Candidate> = pyr
-        .levels
-        .par_iter()
-        .filter(|l| l.cell_px <= max_cell_px)
-        .flat_map_iter(|l| tree::detect_level(model, l, padx, pady, thresh, per_level, accept))
-        .collect();
+    let pyr = pyramid::build(im, model.sbin, interval, padx, pady, min_cell_px, max_cell_px)?;
+    let mut all: Vec<Candidate> =
+        pyr.levels.par_iter().flat_map_iter(|l| tree::detect_level(model, l, padx, pady, thresh, per_level, accept)).collect();
     all.sort_by(|a, b| b.score.total_cmp(&a.score));
     Ok(all)
 }
@@ -216,7 +252,7 @@ pub fn to_detection(c: &Candidate, model: &Model, scale: f64) -> Detection {
     let scaled = Candidate { score: c.score, cell_px: c.cell_px * scale, parts };
     let (pxy, pconf) = joints::parse_joints(&scaled, &model.part_to_joint);
     let (j2, conf) = joints::parse_to_canonical(&pxy, &pconf);
-    Detection { score: c.score, joints: j2, confidence: conf, parse_joints: pxy, bbox: scaled.bbox(), parts: scaled.parts }
+    Detection { score: c.score, joints: j2, confidence: conf, parse_joints: pxy, bbox: scaled.bbox(), cell_px: scaled.cell_px, parts: scaled.parts }
 }
 
 /// Detects human figures in `image` (1, 3 or 4 channels; colour is used by the HOG) at the
@@ -232,7 +268,8 @@ pub fn detect(image: &ImageView<'_>, model: &Model, options: &DetectOptions) -> 
     let thresh = options.threshold.unwrap_or(model.thresh);
     let (lo, hi) = options.search.cell_range(model, planes.width, planes.height);
     let (lo, hi) = (lo.max(options.min_cell_px), hi.min(options.max_cell_px));
-    let cands = candidates(&planes, model, f64::NEG_INFINITY, lo, hi, 64, &|_| true)?;
+    let interval = options.levels_per_octave.unwrap_or(model.interval);
+    let cands = candidates(&planes, model, interval, f64::NEG_INFINITY, lo, hi, 64, &|_| true)?;
     let best_score = cands.first().map_or(f64::NEG_INFINITY, |c| c.score);
     let above: Vec<Candidate> = cands.into_iter().filter(|c| c.score >= thresh).collect();
     if above.is_empty() {
@@ -264,7 +301,8 @@ mod tests {
     fn search_scales_select_the_documented_cell_range() {
         let m = model::tests::tiny_model(); // rest height 4 cells
         let (lo, hi) = SKETCH_SEARCH.cell_range(&m, 200, 100);
-        assert!((lo - 0.25 * 100.0 / 5.0).abs() < 1e-12, "{lo}");
+        assert_eq!(SKETCH_SEARCH, SearchScales::FigureFraction { min: 0.5, max: 1.0 });
+        assert!((lo - 0.5 * 100.0 / 5.0).abs() < 1e-12, "{lo}");
         assert!((hi - 200.0 / 3.0).abs() < 1e-12, "{hi}");
         assert_eq!(SearchScales::All.cell_range(&m, 200, 100), (0.0, f64::INFINITY));
         let data = vec![0u8; 64 * 64];
@@ -289,10 +327,42 @@ mod tests {
         let sketch = detect(&v, &m, &o).unwrap();
         let (lo, hi) = SKETCH_SEARCH.cell_range(&m, 96, 80);
         let (planes, _) = prepare_image(&v, o.max_side).unwrap();
-        let all = candidates(&planes, &m, f64::NEG_INFINITY, 0.0, f64::INFINITY, 64, &|_| true).unwrap();
+        let all = candidates(&planes, &m, SKETCH_LEVELS_PER_OCTAVE, f64::NEG_INFINITY, 0.0, f64::INFINITY, 64, &|_| true).unwrap();
         let best_in = all.iter().find(|c| c.cell_px >= lo && c.cell_px <= hi).unwrap();
         assert_eq!(sketch.best().score, best_in.score);
         assert!(all.iter().any(|c| c.cell_px < lo), "the full search has finer levels");
+    }
+
+    /// Five levels per octave score exactly every other level of ten: the same best candidate
+    /// per level, and the overall best is the best of those levels.
+    #[test]
+    fn five_levels_per_octave_are_every_other_level_of_ten() {
+        let m = model::tests::tiny_model();
+        let data: Vec<u8> = (0..120 * 96).map(|i| if (i % 120) / 6 % 4 == 0 || (i / 120) / 9 % 5 == 0 { 20 } else { 230 }).collect();
+        let v = ImageView::gray(&data, 120, 96).unwrap();
+        let (planes, _) = prepare_image(&v, DEFAULT_MAX_DETECT_SIDE).unwrap();
+        let ten = candidates(&planes, &m, 10, f64::NEG_INFINITY, 0.0, f64::INFINITY, 1, &|_| true).unwrap();
+        let five = candidates(&planes, &m, 5, f64::NEG_INFINITY, 0.0, f64::INFINITY, 1, &|_| true).unwrap();
+        assert!(five.len() >= 10 && ten.len() >= 2 * five.len() - 1, "{} vs {}", five.len(), ten.len());
+        let mut cells: Vec<f64> = ten.iter().map(|c| c.cell_px).collect();
+        cells.sort_by(f64::total_cmp);
+        for c in &five {
+            let k = cells.iter().position(|&x| (x - c.cell_px).abs() < 1e-9).expect("a level of ten");
+            assert_eq!(k % 2, 0, "cell {} is level {k} of ten", c.cell_px);
+            let t = ten.iter().find(|t| (t.cell_px - c.cell_px).abs() < 1e-9).unwrap();
+            assert_eq!(t.score, c.score);
+            for (p, q) in t.parts.iter().zip(&c.parts) {
+                // Cell sizes agree to rounding (2^(2k/10) vs 2^(k/5)).
+                assert!((p.x1 - q.x1).abs() < 1e-9 && (p.y2 - q.y2).abs() < 1e-9 && p.mixture == q.mixture, "{p:?} vs {q:?}");
+            }
+        }
+        let o = |n| DetectOptions { threshold: Some(-1e6), search: SearchScales::All, levels_per_octave: Some(n), ..Default::default() };
+        assert_eq!(detect(&v, &m, &o(5)).unwrap().best().score, five[0].score);
+        assert_eq!(detect(&v, &m, &o(10)).unwrap().best().score, ten[0].score);
+        assert_eq!(detect(&v, &m, &o(10)).unwrap().best().cell_px, ten[0].cell_px);
+        for bad in [0, 101] {
+            assert!(matches!(detect(&v, &m, &o(bad)), Err(Error::OutOfRange { name: "levels_per_octave", .. })), "{bad}");
+        }
     }
 
     #[test]

@@ -112,7 +112,7 @@ pub fn evaluate_image(image: &ImageView<'_>, model: &Model, gt: &[[f64; 2]; NUM_
     let gtbox = tight_box(gt);
     // Per level only the best overlapping candidate can win.
     let accept = |c: &Candidate| best_overlap(std::slice::from_ref(c), gtbox, 0.3).is_some();
-    let cands = super::candidates(&planes, model, protocol_threshold(model), 0.0, f64::INFINITY, 1, &accept)?;
+    let cands = super::candidates(&planes, model, model.interval, protocol_threshold(model), 0.0, f64::INFINITY, 1, &accept)?;
     Ok(match cands.first() {
         Some(c) => (correct_joints(&predicted_joints(c, model), gt, alpha), Some(c.score)),
         None => ([false; NUM_PARSE_JOINTS], None),

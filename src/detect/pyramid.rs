@@ -6,7 +6,9 @@
 
 use rayon::prelude::*;
 
-use super::hog::{hog, FeatureMap, Planes};
+use super::hog::{gradients, hog_from_gradients, FeatureMap, Planes};
+#[cfg(test)]
+use super::hog::hog;
 use super::model::FEAT_DIM;
 use crate::error::Result;
 use crate::image::ImageView;
@@ -32,9 +34,13 @@ pub struct Pyramid {
 }
 
 /// Converts an 8-bit view (1, 3 or 4 channels; alpha ignored) to planes with values 0..=255.
+/// A colour image whose three channels are equal everywhere (a gray sketch stored as RGB) gives
+/// one plane: the HOG takes the channel of largest gradient, so one copy gives the same features
+/// at a third of the gradient and resizing work.
 pub fn planes_from_view(img: &ImageView<'_>) -> Planes {
     let (w, h, ch) = (img.width(), img.height(), img.channels());
-    let channels = if ch == 1 { 1 } else { 3 };
+    let gray = ch == 1 || (0..h).all(|y| img.row(y)[..w * ch].chunks_exact(ch).all(|p| p[0] == p[1] && p[1] == p[2]));
+    let channels = if gray { 1 } else { 3 };
     let mut data = vec![0f32; channels * w * h];
     for y in 0..h {
         let row = img.row(y);
@@ -126,8 +132,10 @@ pub fn pad(f: &FeatureMap, padx: usize, pady: usize) -> FeatureMap {
 /// Builds the pyramid of `im` for cells of `sbin` pixels, `interval` levels per octave and the
 /// given padding. The number of levels is `interval + max_scale` with
 /// max_scale = 1 + ⌊log(min side / (5 sbin)) / log 2^(1/interval)⌋ (at least 1).
-/// Levels in `skip_below` (cell size in pixels smaller than it) are left out.
-pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize, min_cell_px: f64) -> Result<Pyramid> {
+/// Only levels with cells of `min_cell_px` to `max_cell_px` pixels (inclusive) are computed and
+/// returned: the others' HOG is never built (the image is still halved through skipped levels
+/// when a coarser kept level needs it).
+pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize, min_cell_px: f64, max_cell_px: f64) -> Result<Pyramid> {
     let sc = 2f64.powf(1.0 / interval as f64);
     let min_side = im.width.min(im.height) as f64;
     let max_scale = (1.0 + ((min_side / (5.0 * sbin as f64)).ln() / sc.ln()).floor()).max(1.0) as usize;
@@ -158,7 +166,7 @@ pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize
     let per_base: Vec<Vec<(usize, Level)>> = (0..interval)
         .into_par_iter()
         .map(|i| {
-            let mine: Vec<&Job> = jobs.iter().filter(|j| j.base == i && j.cell_px >= min_cell_px).collect();
+            let mine: Vec<&Job> = jobs.iter().filter(|j| j.base == i && j.cell_px >= min_cell_px && j.cell_px <= max_cell_px).collect();
             let mut out = Vec::new();
             if mine.is_empty() {
                 return out;
@@ -169,8 +177,14 @@ pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize
                 if h > 0 {
                     scaled = resize(&scaled, 0.5);
                 }
-                for j in mine.iter().filter(|j| j.halvings == h) {
-                    let f = hog(&scaled, j.sbin);
+                let here: Vec<&&Job> = mine.iter().filter(|j| j.halvings == h).collect();
+                if here.is_empty() {
+                    continue;
+                }
+                // Both cell sizes of one image share its gradients.
+                let g = gradients(&scaled);
+                for j in here {
+                    let f = hog_from_gradients(&g, j.sbin);
                     out.push((j.level, Level { feat: pad(&f, padx, pady), cell_px: j.cell_px }));
                 }
             }
@@ -201,9 +215,26 @@ mod tests {
     }
 
     #[test]
+    fn gray_colour_images_give_one_plane_with_the_same_features() {
+        let (w, h) = (40, 36);
+        let gray: Vec<u8> = (0..w * h).map(|i| ((i * 37) % 251) as u8).collect();
+        let rgb: Vec<u8> = gray.iter().flat_map(|&v| [v, v, v]).collect();
+        let g = planes_from_view(&ImageView::gray(&gray, w, h).unwrap());
+        let c = planes_from_view(&ImageView::new(&rgb, w, h, 3, 3 * w).unwrap());
+        assert_eq!((g.channels, c.channels), (1, 1));
+        assert_eq!(g, c);
+        // Three planes kept, identical HOG: the gray plane is the largest gradient everywhere.
+        let three = Planes { channels: 3, data: [g.data.clone(), g.data.clone(), g.data.clone()].concat(), ..g.clone() };
+        assert_eq!(hog(&three, 4), hog(&g, 4));
+        let mut tinted = rgb.clone();
+        tinted[3 * 17 + 2] ^= 1;
+        assert_eq!(planes_from_view(&ImageView::new(&tinted, w, h, 3, 3 * w).unwrap()).channels, 3);
+    }
+
+    #[test]
     fn levels_scales_and_padding() {
         let im = Planes { width: 200, height: 150, channels: 1, data: vec![10.0; 200 * 150] };
-        let p = build(&im, 4, 10, 3, 3, 0.0).unwrap();
+        let p = build(&im, 4, 10, 3, 3, 0.0, f64::INFINITY).unwrap();
         // max_scale = 1 + floor(log(150/20)/log(2^0.1)) = 1 + 29 = 30 -> 40 levels.
         assert_eq!(p.levels.len(), 40);
         assert!((p.levels[0].cell_px - 2.0).abs() < 1e-12);
@@ -218,7 +249,19 @@ mod tests {
         assert_eq!(f.cell(4, 20)[31], 0.0);
         assert_eq!(f.cell(51, 20)[31], 0.0);
         assert_eq!(f.cell(52, 20)[31], 1.0);
-        let skipped = build(&im, 4, 10, 3, 3, 3.9).unwrap();
+        let skipped = build(&im, 4, 10, 3, 3, 3.9, f64::INFINITY).unwrap();
         assert_eq!(skipped.levels.len(), 30);
+        // Coarse levels are skipped too; the kept ones are the same maps as in the full pyramid.
+        let band = build(&im, 4, 10, 3, 3, 3.9, 8.0).unwrap();
+        assert_eq!(band.levels.len(), 11);
+        assert!((band.levels[0].cell_px - 4.0).abs() < 1e-12 && (band.levels[10].cell_px - 8.0).abs() < 1e-12);
+        assert_eq!(band.levels[10].feat.data, p.levels[20].feat.data);
+        // Five levels per octave are every other level of ten.
+        let five = build(&im, 4, 5, 3, 3, 0.0, f64::INFINITY).unwrap();
+        assert!(five.levels.len() >= 19, "{}", five.levels.len());
+        for (k, l) in five.levels.iter().enumerate() {
+            assert!((l.cell_px - p.levels[2 * k].cell_px).abs() < 1e-9, "level {k}");
+            assert_eq!(l.feat.data, p.levels[2 * k].feat.data, "level {k}");
+        }
     }
 }

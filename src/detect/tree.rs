@@ -9,6 +9,7 @@ use super::dt::{distance_transform, distance_transform_reference};
 use super::dtwin::max_step;
 use super::model::Model;
 use super::pyramid::Level;
+use rayon::prelude::*;
 
 /// One part's placement in a detection, in input-image pixels (continuous coordinates: the
 /// top-left corner of pixel (i, j) is (i, j)).
@@ -125,26 +126,32 @@ pub fn detect_level_with(
         let Some(par) = part.parent else { continue };
         let (prows, pcols) = (scores[par][0].rows, scores[par][0].cols);
         let own = std::mem::take(&mut scores[i]);
+        // The mixtures' transforms, and below the parent mixtures' maxima, are independent: they
+        // run in parallel, so that the finest level (most of the work) keeps both threads busy.
         let dts: Vec<_> = own
-            .iter()
-            .zip(&part.def)
+            .par_iter()
+            .zip(part.def.par_iter())
             .map(|(s, &d)| {
                 let def = &model.defs[d];
                 dt(s, def.w, def.anchor[0] as i64 - 1, def.anchor[1] as i64 - 1, prows, pcols)
             })
             .collect();
-        let mut ik = Vec::with_capacity(part.bias.len());
-        let mut arg32 = Vec::new();
-        for (l, brow) in part.bias.iter().enumerate() {
-            let mut best = vec![f32::NEG_INFINITY; prows * pcols];
-            arg32.clear();
-            arg32.resize(prows * pcols, 0);
-            for (m, t) in dts.iter().enumerate() {
-                // best = max(best, s + bias) as vector selects (s − (−b) is exactly s + b); the
-                // first mixture attaining the maximum wins.
-                max_step(&mut best, &mut arg32, &t.score.data, -(model.bias[brow[m]] as f32), m as i32);
-            }
-            let arg: Vec<u8> = arg32.iter().map(|&m| m as u8).collect();
+        let maxima: Vec<(Vec<f32>, Vec<u8>)> = part
+            .bias
+            .par_iter()
+            .map(|brow| {
+                let mut best = vec![f32::NEG_INFINITY; prows * pcols];
+                let mut arg32 = vec![0i32; prows * pcols];
+                for (m, t) in dts.iter().enumerate() {
+                    // best = max(best, s + bias) as vector selects (s − (−b) is exactly s + b); the
+                    // first mixture attaining the maximum wins.
+                    max_step(&mut best, &mut arg32, &t.score.data, -(model.bias[brow[m]] as f32), m as i32);
+                }
+                (best, arg32.iter().map(|&m| m as u8).collect())
+            })
+            .collect();
+        let mut ik = Vec::with_capacity(maxima.len());
+        for (l, (best, arg)) in maxima.into_iter().enumerate() {
             for (ps, v) in scores[par][l].data.iter_mut().zip(&best) {
                 *ps += v;
             }
@@ -326,7 +333,7 @@ mod tests {
             .collect();
         let im = super::super::hog::Planes { width: w, height: h, channels: 1, data };
         let (padx, pady) = model.padding();
-        let pyr = super::super::pyramid::build(&im, model.sbin, model.interval, padx, pady, 0.0).unwrap();
+        let pyr = super::super::pyramid::build(&im, model.sbin, model.interval, padx, pady, 0.0, f64::INFINITY).unwrap();
         assert!(pyr.levels.len() >= 8);
         let mut compared = 0;
         for level in &pyr.levels {

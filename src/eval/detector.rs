@@ -8,7 +8,8 @@ use crate::detect::{detect, DetectOptions, Model};
 use crate::error::{Error, Result};
 use crate::image::ImageView;
 use crate::render::sketch::truth::sample_seed;
-use crate::render::sketch::{Hair, SketchRenderer, SketchRequest, SketchStyle};
+use crate::render::sketch::{Hair, Sketch, SketchRenderer, SketchRequest, SketchStyle};
+use nalgebra::Vector3;
 
 use super::metrics::pck;
 
@@ -33,27 +34,59 @@ pub struct SketchScore {
     pub pck: Vec<f64>,
     /// Wall time of the detection, s.
     pub seconds: f64,
+    /// The scale the best detection was found at, as the figure height its pyramid level is
+    /// tuned to over the shorter image side: cell px × `Model::rest_height_cells` / shorter
+    /// side. `None` when the model finds nothing.
+    pub found_fraction: Option<f64>,
 }
 
-/// PCK@alpha of each model's best detection on one rendered sketch, `alphas` in order, and the
-/// detection time. Errors: the renderer's and the detector's (except no figure).
-pub fn score_sketch(renderer: &SketchRenderer, req: &SketchRequest, models: &[&Model], options: &DetectOptions, alphas: &[f64]) -> Result<Vec<SketchScore>> {
+/// The models' scores on one sketch, and the drawn figure's size.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SketchResult {
+    /// Height of the drawn figure (vertical extent of the projected posed mesh) over the shorter
+    /// image side.
+    pub figure_fraction: f64,
+    /// One score per model, in the order given.
+    pub scores: Vec<SketchScore>,
+}
+
+/// Vertical extent of the sketch's projected posed mesh over the shorter image side.
+/// Errors: the camera's (an invalid stored camera).
+pub fn figure_fraction(s: &Sketch) -> Result<f64> {
+    let cam = s.truth.camera.to_camera()?;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in &s.posed_vertices {
+        let y = cam.project(&Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64))[1];
+        (lo, hi) = (lo.min(y), hi.max(y));
+    }
+    Ok(((hi - lo) / s.truth.width.min(s.truth.height) as f64).max(0.0))
+}
+
+/// PCK@alpha of each model's best detection on one rendered sketch, `alphas` in order, the
+/// detection time and scale, and the drawn figure's size. Errors: the renderer's and the
+/// detector's (except no figure).
+pub fn score_sketch(renderer: &SketchRenderer, req: &SketchRequest, models: &[&Model], options: &DetectOptions, alphas: &[f64]) -> Result<SketchResult> {
     let s = renderer.render(req)?;
     let view = ImageView::gray(&s.pixels, req.width, req.height)?;
-    models
+    let short = req.width.min(req.height) as f64;
+    let scores = models
         .iter()
         .map(|m| {
             let t0 = std::time::Instant::now();
             let d = detect(&view, m, options);
             let seconds = t0.elapsed().as_secs_f64();
-            let pck = match d {
-                Ok(d) => alphas.iter().map(|&a| pck(&s.truth.joints2d, &d.best().joints.xy, a)).collect::<Result<_>>()?,
-                Err(Error::NoFigure { .. }) => vec![0.0; alphas.len()],
+            let (pck, found_fraction) = match d {
+                Ok(d) => (
+                    alphas.iter().map(|&a| pck(&s.truth.joints2d, &d.best().joints.xy, a)).collect::<Result<_>>()?,
+                    Some(d.best().cell_px * m.rest_height_cells() / short),
+                ),
+                Err(Error::NoFigure { .. }) => (vec![0.0; alphas.len()], None),
                 Err(e) => return Err(e),
             };
-            Ok(SketchScore { pck, seconds })
+            Ok(SketchScore { pck, seconds, found_fraction })
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok(SketchResult { figure_fraction: figure_fraction(&s)?, scores })
 }
 
 #[cfg(test)]
@@ -67,5 +100,24 @@ mod tests {
         assert_eq!(a, held_out_request(2, 5, 256, Some(Hair::Ponytail)));
         assert_ne!(a.seed, held_out_request(2, 6, 256, Some(Hair::Ponytail)).seed);
         assert_eq!((a.width, a.height), (256, 256));
+    }
+
+    /// The drawn figure fills the page up to the renderer's margin (0.04..0.14 of the shorter
+    /// side on every side) along its longer extent, so it is at most 1 − 2 · 0.04 tall; the
+    /// embedded detector finds it at a level tuned to a figure of about that size.
+    #[test]
+    fn figure_fraction_and_found_scale_of_a_rendered_sketch() {
+        let r = SketchRenderer::new(std::sync::Arc::new(crate::body::BodyModel::embedded().unwrap()), None).unwrap();
+        let req = held_out_request(2, 0, 256, Some(Hair::Ponytail));
+        let s = r.render(&req).unwrap();
+        let f = figure_fraction(&s).unwrap();
+        assert!(f > 0.3 && f <= 0.92 + 1e-9, "figure fraction {f}");
+        let m = Model::embedded().unwrap();
+        let res = score_sketch(&r, &req, &[&m], &DetectOptions { threshold: Some(-1e9), ..DetectOptions::default() }, &[0.2]).unwrap();
+        assert_eq!(res.figure_fraction, f);
+        let found = res.scores[0].found_fraction.unwrap();
+        assert!(found > 0.5 * f && found < 2.0 * f, "found at {found} for a figure of {f}");
+        let none = score_sketch(&r, &req, &[&m], &DetectOptions { threshold: Some(1e9), ..DetectOptions::default() }, &[0.2]).unwrap();
+        assert_eq!((none.scores[0].found_fraction, none.scores[0].pck.clone()), (None, vec![0.0]));
     }
 }

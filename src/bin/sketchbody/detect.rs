@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use serde_json::{json, Map, Value};
-use sketchbody::detect::{detect, DetectOptions, Detection, Model, SearchScales, PARSE_JOINT_NAMES};
+use sketchbody::detect::{detect, DetectOptions, Detection, Model, PARSE_JOINT_NAMES};
 use sketchbody::image::{load_rgb_image, RgbImage};
 use sketchbody::skeleton::{BONES, JOINT_NAMES};
 
@@ -30,22 +30,9 @@ pub struct Args {
     /// Score threshold (default: the model's); negative values as `--threshold=-2`.
     #[arg(long, allow_negative_numbers = true)]
     threshold: Option<f64>,
-    /// Skip pyramid levels with cells smaller than this many pixels (faster; misses small figures).
-    #[arg(long, default_value_t = 0.0)]
-    min_cell: f64,
-    /// Smallest figure searched, as a fraction of the shorter image side (default: the sketch
-    /// search range of `DetectOptions`, 0.25).
-    #[arg(long)]
-    min_figure: Option<f64>,
-    /// Largest figure searched, as a fraction of the longer image side (default 1.0).
-    #[arg(long)]
-    max_figure: Option<f64>,
-    /// Search every pyramid level (small figures in photos) instead of the sketch range.
-    #[arg(long, conflicts_with_all = ["min_figure", "max_figure"])]
-    all_scales: bool,
-    /// Skip pyramid levels with cells larger than this many pixels (faster; misses large figures).
-    #[arg(long, default_value_t = f64::INFINITY)]
-    max_cell: f64,
+    /// Scales searched.
+    #[command(flatten)]
+    search: crate::search_args::SearchArgs,
     /// Longer-side cap in pixels; larger images are downscaled first.
     #[arg(long, default_value_t = sketchbody::detect::DEFAULT_MAX_DETECT_SIDE)]
     max_side: usize,
@@ -106,14 +93,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         None => Model::embedded()?,
     };
     let img = load_rgb_image(&a.input)?;
-    let search = match (a.all_scales, sketchbody::detect::SKETCH_SEARCH) {
-        (true, _) => SearchScales::All,
-        (false, SearchScales::FigureFraction { min, max }) => {
-            SearchScales::FigureFraction { min: a.min_figure.unwrap_or(min), max: a.max_figure.unwrap_or(max) }
-        }
-        (false, s) => s,
-    };
-    let opts = DetectOptions { threshold: a.threshold, min_cell_px: a.min_cell, max_cell_px: a.max_cell, max_side: a.max_side, search, ..Default::default() };
+    let opts = DetectOptions { threshold: a.threshold, max_side: a.max_side, ..a.search.options() };
     let dets = detect(&img.view(), &model, &opts)?;
     let best = dets.best();
     let doc = json!({

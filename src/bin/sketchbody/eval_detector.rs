@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use sketchbody::detect::{DetectOptions, Model};
-use sketchbody::eval::detector::{held_out_request, score_sketch, SketchScore};
+use sketchbody::eval::detector::{held_out_request, score_sketch, SketchResult};
 
 use crate::render_sketch::{parse_size, renderer};
 use crate::train_detector::parse_hair;
@@ -34,12 +34,9 @@ pub struct Args {
     /// Hair style forced on every sketch (none, short, long, spiky, bun, ponytail; keep = random).
     #[arg(long, default_value = "ponytail")]
     hair: String,
-    /// Smallest pyramid cell searched, px (0 = all).
-    #[arg(long, default_value_t = 0.0)]
-    min_cell: f64,
-    /// Largest pyramid cell searched, px.
-    #[arg(long, default_value_t = f64::INFINITY)]
-    max_cell: f64,
+    /// Scales searched (default: the product's default search, as `sketchbody detect`).
+    #[command(flatten)]
+    search: crate::search_args::SearchArgs,
     /// Folder of mocap clips (default as in render-sketch).
     #[arg(long)]
     mocap: Option<PathBuf>,
@@ -62,23 +59,35 @@ pub fn run(a: Args) -> Result<(), CliError> {
         names.push(b.display().to_string());
     }
     let r = renderer(a.mocap.as_deref())?;
-    let options = DetectOptions { threshold: Some(-1e9), min_cell_px: a.min_cell, max_cell_px: a.max_cell, ..DetectOptions::default() };
+    let options = DetectOptions { threshold: Some(-1e9), ..a.search.options() };
     let alphas = [0.1, 0.2];
     let refs: Vec<&Model> = models.iter().collect();
     let t0 = Instant::now();
-    let per: Vec<Vec<SketchScore>> = (0..a.n as u64)
+    let per: Vec<SketchResult> = (0..a.n as u64)
         .into_par_iter()
         .map(|i| score_sketch(&r, &held_out_request(a.seed, i, w, hair), &refs, &options, &alphas))
         .collect::<Result<_, _>>()?;
     let el = t0.elapsed().as_secs_f64();
-    println!(
-        "held-out sketches: {} of seed {}, {w}x{w}, hair {}, cells {}..{} px; {:.1} s for all models",
-        a.n, a.seed, a.hair, a.min_cell, a.max_cell, el
-    );
+    println!("held-out sketches: {} of seed {}, {w}x{w}, hair {}, {}; {:.1} s for all models", a.n, a.seed, a.hair, a.search.describe(), el);
+    println!("drawn figure height / shorter side: {}", spread(per.iter().map(|p| p.figure_fraction).collect()));
     for (k, name) in names.iter().enumerate() {
-        let mean = |j: usize| per.iter().map(|s| s[k].pck[j]).sum::<f64>() / per.len() as f64;
-        let ms = 1e3 * per.iter().map(|s| s[k].seconds).sum::<f64>() / per.len() as f64;
+        let mean = |j: usize| per.iter().map(|s| s.scores[k].pck[j]).sum::<f64>() / per.len() as f64;
+        let ms = 1e3 * per.iter().map(|s| s.scores[k].seconds).sum::<f64>() / per.len() as f64;
         println!("{name}: PCK@0.1 {:.3}  PCK@0.2 {:.3}  mean detect {ms:.0} ms (wall, {} threads shared by the evaluation)", mean(0), mean(1), rayon::current_num_threads());
+        // The scale of the best detection where it is right (PCK@0.2 ≥ 0.8), as the figure
+        // height its level is tuned to over the shorter side: what the search range must cover.
+        let right: Vec<f64> = per.iter().filter(|s| s.scores[k].pck[1] >= 0.8).filter_map(|s| s.scores[k].found_fraction).collect();
+        println!("  found at (cell × rest height / shorter side) where PCK@0.2 ≥ 0.8 ({} sketches): {}", right.len(), spread(right));
     }
     Ok(())
+}
+
+/// "min a, 1% b, 5% c, median d, max e" of `v` (nearest-rank percentiles; "none" when empty).
+fn spread(mut v: Vec<f64>) -> String {
+    if v.is_empty() {
+        return "none".into();
+    }
+    v.sort_by(f64::total_cmp);
+    let q = |p: f64| v[((p * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1];
+    format!("min {:.3}, 1% {:.3}, 5% {:.3}, median {:.3}, max {:.3}", v[0], q(0.01), q(0.05), q(0.5), v[v.len() - 1])
 }

@@ -19,6 +19,7 @@ mod make_dataset;
 mod render_sketch;
 mod run;
 mod run_dataset;
+mod search_args;
 mod train_detector;
 
 use std::process::ExitCode;

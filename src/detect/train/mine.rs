@@ -29,8 +29,7 @@ pub struct SearchRange {
 /// The levels of `im` in `range` for `st`'s model geometry.
 pub fn levels(im: &Planes, st: &Structure, range: SearchRange) -> Result<Vec<Level>> {
     let p = st.side.saturating_sub(2);
-    let pyr = build(im, st.sbin, st.interval, p, p, range.min_cell_px)?;
-    Ok(pyr.levels.into_iter().filter(|l| l.cell_px <= range.max_cell_px).collect())
+    Ok(build(im, st.sbin, st.interval, p, p, range.min_cell_px, range.max_cell_px)?.levels)
 }
 
 /// A mined negative: its features, its engine score and its identity.
