@@ -70,6 +70,13 @@ pub struct FitOptions {
     /// (default 0.5, by the measurement under `temperature`: 0.0464 alone at temperature 0.02;
     /// 0 turns it off). Must be finite and ≥ 0.
     pub joint_weight: f64,
+    /// Give every sample its own camera: when [`FitProblem::joints2d`] is given, each sample's
+    /// camera scales and translation are refitted in closed form
+    /// ([`WeakPerspective::refit_scale`]) to its own posed rig joints vs the visible 2-D joints
+    /// before it is rasterised and scored, so the body's size comes from its shape (proportions
+    /// and the prior's correlations) rather than from [`FitProblem::camera`]'s scale (only its
+    /// rotation is used). Without 2-D joints the problem's camera is used. Default off.
+    pub sample_camera: bool,
 }
 
 impl Default for FitOptions {
@@ -87,6 +94,7 @@ impl Default for FitOptions {
             skinning: SkinMethod::Linear,
             retarget: false,
             joint_weight: 0.5,
+            sample_camera: false,
         }
     }
 }
@@ -201,10 +209,19 @@ impl Evaluator<'_> {
             Err(Error::NonFinite { .. }) => return Err(Error::NonFinite { name: "pose", value: f64::NAN }),
             Err(_) => return Ok(f64::NEG_INFINITY),
         };
+        let camera = if self.options.sample_camera && !self.joints_px.is_empty() {
+            match self.raster_camera.refit_scale(&pose.joints, &self.joints_px) {
+                Ok(c) => c,
+                Err(Error::Degenerate(_)) => return Ok(f64::NEG_INFINITY),
+                Err(e) => return Err(e),
+            }
+        } else {
+            self.raster_camera
+        };
         skin_into(&s.rest, self.proxy.skin_weights(), &pose, self.options.skinning, &mut s.posed)?;
         let (w, h) = (self.evidence.width(), self.evidence.height());
-        match s.raster.rasterize_mask(&s.posed, self.proxy.triangles(), &self.raster_camera, w, h, Facing::Front) {
-            Ok(_) => Ok(self.evidence.score_in(s.raster.mask(), s.raster.covered_bounds(), self.options.score) - self.joint_penalty(&pose.joints)),
+        match s.raster.rasterize_mask(&s.posed, self.proxy.triangles(), &camera, w, h, Facing::Front) {
+            Ok(_) => Ok(self.evidence.score_in(s.raster.mask(), s.raster.covered_bounds(), self.options.score) - self.joint_penalty(&pose.joints, &camera)),
             Err(Error::MeshOutsideImage { .. }) | Err(Error::OutOfRange { name: "projected vertex", .. }) => Ok(f64::NEG_INFINITY),
             Err(e) => Err(e),
         }
@@ -214,7 +231,7 @@ impl Evaluator<'_> {
 impl Evaluator<'_> {
     /// `joint_weight ×` mean raster-pixel distance between the projected posed joints and the
     /// visible 2-D joints (0 when the term is off).
-    fn joint_penalty(&self, posed: &Joints3) -> f64 {
+    fn joint_penalty(&self, posed: &Joints3, camera: &WeakPerspective) -> f64 {
         if self.joints_px.is_empty() || self.options.joint_weight == 0.0 {
             return 0.0;
         }
@@ -222,7 +239,7 @@ impl Evaluator<'_> {
             .joints_px
             .iter()
             .map(|&(k, q)| {
-                let p = self.raster_camera.project(&nalgebra::Vector3::from(posed[k]));
+                let p = camera.project(&nalgebra::Vector3::from(posed[k]));
                 ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt()
             })
             .sum();

@@ -60,38 +60,9 @@ pub struct PipelineOptions {
 /// Errors: IK's; [`Error::Degenerate`] when a scale comes out non-positive.
 pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> Result<PoseEstimate> {
     let posed = ik::solve(rest, &pose.joints, &IkOptions { retarget: false })?.joints;
-    let r = pose.camera.r;
-    let fit_axis = |coord: &dyn Fn(&nalgebra::Vector3<f64>) -> f64, axis: usize| -> Result<(f64, f64)> {
-        let (mut n, mut sa, mut sb, mut saa, mut sab) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for (k, p) in posed.iter().enumerate() {
-            if !joints2d.visible[k] {
-                continue;
-            }
-            let a = coord(&(r * nalgebra::Vector3::from(*p)));
-            let b = joints2d.xy[k][axis];
-            n += 1.0;
-            sa += a;
-            sb += b;
-            saa += a * a;
-            sab += a * b;
-        }
-        let den = n * saa - sa * sa;
-        if n < 2.0 || den.abs() < 1e-12 {
-            return Err(Error::Degenerate("cannot refit the camera: the joints do not span the image".into()));
-        }
-        let scale = (n * sab - sa * sb) / den;
-        Ok((scale, (sb - scale * sa) / n))
-    };
-    let (sx, tx) = fit_axis(&|c| c.x, 0)?;
-    let (sy, ty) = fit_axis(&|c| -c.y, 1)?;
-    if !(sx > 0.0 && sy > 0.0) {
-        return Err(Error::Degenerate(format!("camera refit gave scales {sx}, {sy}")));
-    }
-    let mut out = pose.clone();
-    out.camera.sx = sx;
-    out.camera.sy = sy;
-    out.camera.t = [tx, ty];
-    Ok(out)
+    let targets: Vec<(usize, [f64; 2])> = (0..posed.len()).filter(|&k| joints2d.visible[k]).map(|k| (k, joints2d.xy[k])).collect();
+    let camera = pose.camera.refit_scale(&posed, &targets)?;
+    Ok(PoseEstimate { camera, ..pose.clone() })
 }
 
 /// One gender's fit.
@@ -252,6 +223,8 @@ pub fn run_pipeline(
 
     let t = Instant::now();
     let mesh = RiggedMesh::from_model(model, gender, &weights)?;
+    // With per-sample cameras the chosen body's own skeleton sets the image scale.
+    let pose = if options.fit.sample_camera && !options.mean_shape { refit_camera(&pose, &mesh.joints, &joints2d)? } else { pose };
     let ik_pose = ik::solve(&mesh.joints, &pose.joints, &IkOptions { retarget: options.fit.retarget })?;
     let posed_vertices = skin(&mesh.vertices, &mesh.weights, &ik_pose, options.fit.skinning)?;
     let posed_joints = ik_pose.joints;

@@ -45,6 +45,10 @@ pub struct FitArgs {
     /// posed outputs; the rest mesh keeps the shape's bone lengths).
     #[arg(long)]
     pub retarget: bool,
+    /// Give every fit sample its own camera scale and translation, refitted to its own posed
+    /// joints vs the 2-D joints, so the size comes from the shape.
+    #[arg(long)]
+    pub sample_camera: bool,
     /// Keep the pose solver's camera instead of refitting its scales and translation to the
     /// gender's mean skeleton before the fit.
     #[arg(long)]
@@ -88,6 +92,7 @@ impl FitArgs {
             skinning: if self.dqs { SkinMethod::DualQuaternion } else { SkinMethod::Linear },
             retarget: self.retarget,
             joint_weight: self.joint_weight,
+            sample_camera: self.sample_camera,
         })
     }
 }
