@@ -23,6 +23,7 @@ use rayon::prelude::*;
 use super::score::{MatchScore, SketchEvidence};
 use super::transition::Transition;
 use crate::body::ik::{self, IkOptions};
+use crate::body::rig::{scale_to_height, y_extent};
 use crate::body::skin::{skin_into, SkinMethod};
 use crate::body::{BodyModel, FitProxy, Gender};
 use crate::camera::WeakPerspective;
@@ -77,6 +78,14 @@ pub struct FitOptions {
     /// and the prior's correlations) rather than from [`FitProblem::camera`]'s scale (only its
     /// rotation is used). Without 2-D joints the problem's camera is used. Default off.
     pub sample_camera: bool,
+    /// The character's known rest height, metres (`None`: unknown, the default). With a
+    /// problem camera (not [`sample_camera`](Self::sample_camera)) every sample's rest body is
+    /// scaled uniformly about its pelvis to this height before it is posed, so the fit searches
+    /// proportions at the known size (the proxy's height is corrected by the full/proxy height
+    /// ratio of the mean shape); with per-sample cameras a uniform scale does not change a
+    /// sample's image, so the fit is the same and only the caller's output is scaled
+    /// (`pipeline::run_pipeline` scales the fitted mesh to it). In 0.1..=10 m.
+    pub height: Option<f64>,
 }
 
 impl Default for FitOptions {
@@ -95,6 +104,7 @@ impl Default for FitOptions {
             retarget: false,
             joint_weight: 0.5,
             sample_camera: false,
+            height: None,
         }
     }
 }
@@ -165,6 +175,12 @@ impl FitOptions {
         if self.joint_weight < 0.0 {
             return Err(Error::OutOfRange { name: "joint weight", detail: format!("{} must be >= 0", self.joint_weight) });
         }
+        if let Some(h) = self.height {
+            ensure_finite("height", h)?;
+            if !(0.1..=10.0).contains(&h) {
+                return Err(Error::OutOfRange { name: "height", detail: format!("{h} m not in 0.1..=10") });
+            }
+        }
         if !(2..=100_000).contains(&self.samples) {
             return Err(Error::OutOfRange { name: "samples", detail: format!("{} not in 2..=100000", self.samples) });
         }
@@ -188,6 +204,8 @@ struct Evaluator<'a> {
     evidence: SketchEvidence,
     /// Visible 2-D joints in raster pixels (index, position), empty when the term is off.
     joints_px: Vec<(usize, [f64; 2])>,
+    /// Full-mesh / proxy height of the mean shape (for [`FitOptions::height`]).
+    height_correction: f64,
 }
 
 /// Per-thread scratch.
@@ -203,7 +221,10 @@ impl Evaluator<'_> {
     /// image scores −∞.
     fn score(&self, y: &[f64], s: &mut Scratch) -> Result<f64> {
         let space = self.problem.model.space(self.problem.gender);
-        let joints = self.proxy.space(self.problem.gender).synthesize_into(space, y, &mut s.rest)?;
+        let mut joints = self.proxy.space(self.problem.gender).synthesize_into(space, y, &mut s.rest)?;
+        if let (Some(h), false) = (self.options.height, self.options.sample_camera) {
+            scale_to_height(&mut s.rest, &mut joints, h / self.height_correction)?;
+        }
         let pose = match ik::solve(&joints, self.problem.pose, &IkOptions { retarget: self.options.retarget }) {
             Ok(p) => p,
             Err(Error::NonFinite { .. }) => return Err(Error::NonFinite { name: "pose", value: f64::NAN }),
@@ -286,6 +307,11 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
         raster_camera,
         evidence: SketchEvidence::new(problem.edges, rw, rh, &skeleton_px)?,
         joints_px: joints_in_raster(problem.joints2d, f)?,
+        height_correction: {
+            let mut proxy_mean = Vec::new();
+            problem.model.fit_proxy()?.space(problem.gender).synthesize_into(space, &[], &mut proxy_mean)?;
+            y_extent(space.mean()) / y_extent(&proxy_mean)
+        },
     };
 
     let stds: Vec<f64> = space.variances()[..dims].iter().map(|l| l.sqrt()).collect();

@@ -49,6 +49,10 @@ pub struct PipelineOptions {
     /// instead of refitting its scales and translation to each gender's mean skeleton (see
     /// [`refit_camera`]). Default `false` (refit).
     pub keep_pose_scale: bool,
+    /// Skip the pose solver and use this 3-D pose and camera (a diagnostic: the benchmark's
+    /// `--oracle-pose` passes the ground truth to show what the fit reaches when the pose is
+    /// right). Default `None` (estimate the pose).
+    pub given_pose: Option<PoseEstimate>,
 }
 
 /// The pose estimate with its camera refitted to a body's skeleton: the body's rest joints
@@ -63,6 +67,17 @@ pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> 
     let targets: Vec<(usize, [f64; 2])> = (0..posed.len()).filter(|&k| joints2d.visible[k]).map(|k| (k, joints2d.xy[k])).collect();
     let camera = pose.camera.refit_scale(&posed, &targets)?;
     Ok(PoseEstimate { camera, ..pose.clone() })
+}
+
+/// The gender's mean rest skeleton, scaled about its pelvis to `height` metres when given
+/// ([`crate::fit::FitOptions::height`]).
+fn mean_skeleton(model: &BodyModel, gender: Gender, height: Option<f64>) -> Result<Joints3> {
+    let space = model.space(gender);
+    let mut joints = *space.mean_joints();
+    if let Some(h) = height {
+        crate::body::rig::scale_to_height(&mut space.mean().to_vec(), &mut joints, h)?;
+    }
+    Ok(joints)
 }
 
 /// One gender's fit.
@@ -189,7 +204,10 @@ pub fn run_pipeline(
     p.report(0.04)?;
 
     let t = Instant::now();
-    let pose = estimate_pose(dict, &joints2d, &options.pose)?;
+    let pose = match &options.given_pose {
+        Some(given) => given.clone(),
+        None => estimate_pose(dict, &joints2d, &options.pose)?,
+    };
     timings.pose = t.elapsed().as_secs_f64();
     p.report(0.06)?;
 
@@ -200,7 +218,7 @@ pub fn run_pipeline(
     let mut poses = Vec::with_capacity(genders.len());
     for (i, &gender) in genders.iter().enumerate() {
         let tf = Instant::now();
-        let pose = if options.keep_pose_scale { pose.clone() } else { refit_camera(&pose, model.space(gender).mean_joints(), &joints2d)? };
+        let pose = if options.keep_pose_scale { pose.clone() } else { refit_camera(&pose, &mean_skeleton(model, gender, options.fit.height)?, &joints2d)? };
         poses.push(pose);
         let pose = &poses[i];
         if options.mean_shape {
@@ -222,7 +240,10 @@ pub fn run_pipeline(
     let pose = poses.swap_remove(chosen);
 
     let t = Instant::now();
-    let mesh = RiggedMesh::from_model(model, gender, &weights)?;
+    let mut mesh = RiggedMesh::from_model(model, gender, &weights)?;
+    if let Some(h) = options.fit.height {
+        mesh = mesh.scaled_to_height(h)?;
+    }
     // With per-sample cameras the chosen body's own skeleton sets the image scale.
     let pose = if options.fit.sample_camera && !options.mean_shape { refit_camera(&pose, &mesh.joints, &joints2d)? } else { pose };
     let ik_pose = ik::solve(&mesh.joints, &pose.joints, &IkOptions { retarget: options.fit.retarget })?;

@@ -49,6 +49,10 @@ pub struct FitArgs {
     /// joints vs the 2-D joints, so the size comes from the shape.
     #[arg(long)]
     pub sample_camera: bool,
+    /// The character's rest height in metres, when known (character sheets carry one): the
+    /// fitted mesh is scaled to it.
+    #[arg(long)]
+    pub height: Option<f64>,
     /// Keep the pose solver's camera instead of refitting its scales and translation to the
     /// gender's mean skeleton before the fit.
     #[arg(long)]
@@ -93,6 +97,7 @@ impl FitArgs {
             retarget: self.retarget,
             joint_weight: self.joint_weight,
             sample_camera: self.sample_camera,
+            height: self.height,
         })
     }
 }
