@@ -139,3 +139,32 @@ fn per_sample_cameras_ignore_the_problem_cameras_scale() {
     let o0 = FitOptions { joint_weight: 0.0, ..o.clone() };
     assert_eq!(fit_shape(&no_joints, &o0, &mut |_| true).unwrap(), fit_shape(&no_joints, &FitOptions { joint_weight: 0.0, ..options() }, &mut |_| true).unwrap());
 }
+
+#[test]
+fn bone_factors_find_long_legs() {
+    use sketchbody::render::sketch::scene::{apply_proportions, Proportions};
+    let c = case();
+    let props = Proportions { legs: 1.2, ..Proportions::default() };
+    let (v, j) = apply_proportions(&c.truth.vertices, &c.truth.joints, c.model.skin_weights(), &props).unwrap();
+    let camera = WeakPerspective { sx: 90.0, sy: 90.0, ..c.camera };
+    let mut raster = Rasterizer::new();
+    raster.rasterize(&v, &c.model.triangles(), &camera, 256, 256, false).unwrap();
+    let drawing: Vec<u8> = raster.mask().iter().map(|&m| if m != 0 { 40 } else { 235 }).collect();
+    let edges = canny(&GrayImage::from_vec(256, 256, drawing).unwrap().view(), &CannyParams::default()).unwrap();
+    let j2 = Joints2 { xy: std::array::from_fn(|k| camera.project(&nalgebra::Vector3::from(j[k]))), visible: [true; NUM_JOINTS] };
+    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &j, camera: &camera, edges: &edges, joints2d: Some(&j2) };
+    let o = FitOptions { sample_camera: true, proportion_sd: 0.2, temperature: 0.1, samples: 128, max_iterations: 8, ..options() };
+    let r = fit_shape(&problem, &o, &mut |_| true).unwrap();
+    let p = r.proportions.expect("factors searched");
+    // The long legs pull the leg factor up, more than any other (legs 1.047 when written; the
+    // PCA shape takes part of the length, and the prior pulls toward 1).
+    let others = [p.arms, p.shoulders, p.head, p.torso];
+    assert!(p.legs > 1.02 && others.iter().all(|&f| f < p.legs), "{p:?}");
+    let plain = fit_shape(&problem, &FitOptions { proportion_sd: 0.0, ..o.clone() }, &mut |_| true).unwrap();
+    assert!((p.arms - 1.0).abs() < 0.1 && (p.torso - 1.0).abs() < 0.1, "{p:?}");
+    assert_eq!(r.weights.len(), c.model.space(Gender::Male).default_dim());
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    assert_eq!(one_thread.install(|| fit_shape(&problem, &o, &mut |_| true)).unwrap(), r);
+    assert_eq!(plain.proportions, None);
+    assert!(matches!(fit_shape(&problem, &FitOptions { proportion_sd: 0.6, ..o.clone() }, &mut |_| true), Err(Error::OutOfRange { name: "proportion sd", .. })));
+}

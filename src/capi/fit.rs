@@ -279,6 +279,9 @@ pub unsafe extern "C" fn skb_fit_shape(
         }
         let Some((g, r)) = best else { return fail_with(skb_status::SKB_ERR_PANIC, "no gender fitted") };
         let mut rest = try_core!(ctx.model.space(g).synthesize(&r.weights));
+        if let Some(props) = &r.proportions {
+            try_core!(crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, ctx.model.skin_weights(), props));
+        }
         if let Some(h) = fit_opts.height {
             try_core!(crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h));
         }

@@ -20,6 +20,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
+use super::proportions::{apply_in_place, proportions_of, FactorPrior};
 use super::score::{MatchScore, SketchEvidence};
 use super::transition::Transition;
 use crate::body::ik::{self, IkOptions};
@@ -29,6 +30,7 @@ use crate::body::{BodyModel, FitProxy, Gender};
 use crate::camera::WeakPerspective;
 use crate::error::{ensure_finite, Error, Result};
 use crate::image::GrayImage;
+use crate::render::sketch::scene::Proportions;
 use crate::render::raster::{Facing, Rasterizer};
 use crate::skeleton::{Joints2, Joints3, BONES};
 
@@ -86,6 +88,10 @@ pub struct FitOptions {
     /// sample's image, so the fit is the same and only the caller's output is scaled
     /// (`pipeline::run_pipeline` scales the fitted mesh to it). In 0.1..=10 m.
     pub height: Option<f64>,
+    /// Search bone-length factors (legs, arms, shoulders, head, torso) with this prior standard
+    /// deviation of each log factor (see [`super::proportions`]); 0 (the default) searches PCA
+    /// weights only. Finite, in 0..=0.5.
+    pub proportion_sd: f64,
 }
 
 impl Default for FitOptions {
@@ -105,6 +111,7 @@ impl Default for FitOptions {
             joint_weight: 0.5,
             sample_camera: false,
             height: None,
+            proportion_sd: 0.0,
         }
     }
 }
@@ -137,7 +144,10 @@ pub struct IterationStats {
 pub struct FitResult {
     /// Y* = Σ w Y over the last iteration.
     pub weights: Vec<f64>,
-    /// The best-scoring sample seen.
+    /// Bone-length factors of Y* (`exp` of the weighted mean log factors); `None` unless
+    /// [`FitOptions::proportion_sd`] > 0.
+    pub proportions: Option<Proportions>,
+    /// The best-scoring sample seen (PCA weights).
     pub best_weights: Vec<f64>,
     pub best_score: f64,
     pub history: Vec<IterationStats>,
@@ -181,6 +191,10 @@ impl FitOptions {
                 return Err(Error::OutOfRange { name: "height", detail: format!("{h} m not in 0.1..=10") });
             }
         }
+        ensure_finite("proportion sd", self.proportion_sd)?;
+        if !(0.0..=0.5).contains(&self.proportion_sd) {
+            return Err(Error::OutOfRange { name: "proportion sd", detail: format!("{} not in 0..=0.5", self.proportion_sd) });
+        }
         if !(2..=100_000).contains(&self.samples) {
             return Err(Error::OutOfRange { name: "samples", detail: format!("{} not in 2..=100000", self.samples) });
         }
@@ -206,6 +220,8 @@ struct Evaluator<'a> {
     joints_px: Vec<(usize, [f64; 2])>,
     /// Full-mesh / proxy height of the mean shape (for [`FitOptions::height`]).
     height_correction: f64,
+    /// PCA dimensions searched; a sample's entries after them are its log bone factors.
+    dims: usize,
 }
 
 /// Per-thread scratch.
@@ -221,7 +237,14 @@ impl Evaluator<'_> {
     /// image scores −∞.
     fn score(&self, y: &[f64], s: &mut Scratch) -> Result<f64> {
         let space = self.problem.model.space(self.problem.gender);
-        let mut joints = self.proxy.space(self.problem.gender).synthesize_into(space, y, &mut s.rest)?;
+        let mut joints = self.proxy.space(self.problem.gender).synthesize_into(space, &y[..self.dims], &mut s.rest)?;
+        if y.len() > self.dims {
+            match apply_in_place(&mut s.rest, &mut joints, self.proxy.skin_weights(), &proportions_of(&y[self.dims..])) {
+                Ok(()) => {}
+                Err(Error::NonFinite { .. }) => return Err(Error::NonFinite { name: "shape", value: f64::NAN }),
+                Err(_) => return Ok(f64::NEG_INFINITY),
+            }
+        }
         if let (Some(h), false) = (self.options.height, self.options.sample_camera) {
             scale_to_height(&mut s.rest, &mut joints, h / self.height_correction)?;
         }
@@ -312,21 +335,43 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
             problem.model.fit_proxy()?.space(problem.gender).synthesize_into(space, &[], &mut proxy_mean)?;
             y_extent(space.mean()) / y_extent(&proxy_mean)
         },
+        dims,
     };
+    let factors = (options.proportion_sd > 0.0).then(|| FactorPrior::new(options.proportion_sd, options.transition_scale));
 
-    let stds: Vec<f64> = space.variances()[..dims].iter().map(|l| l.sqrt()).collect();
-    let mut population: Vec<Vec<f64>> = (0..options.samples).map(|i| prior.sample(&mut sample_rng(options.seed, 0, i))).collect();
+    let mut stds: Vec<f64> = space.variances()[..dims].iter().map(|l| l.sqrt()).collect();
+    if let Some(f) = &factors {
+        stds.extend([f.sd(); super::proportions::NUM_FACTORS]);
+    }
+    let state_dims = stds.len();
+    let mut population: Vec<Vec<f64>> = (0..options.samples)
+        .map(|i| {
+            let rng = &mut sample_rng(options.seed, 0, i);
+            let mut y = prior.sample(rng);
+            if let Some(f) = &factors {
+                f.extend_initial(&mut y, rng);
+            }
+            y
+        })
+        .collect();
     let mut history = Vec::new();
     let mut best = (f64::NEG_INFINITY, population[0].clone());
     let mut previous_mean: Option<Vec<f64>> = None;
-    let mut weighted_mean = vec![0.0; dims];
+    let mut weighted_mean = vec![0.0; state_dims];
     let mut evaluations = 0;
     for t in 0..options.max_iterations {
         if t > 0 {
             population = population
                 .par_iter()
                 .enumerate()
-                .map(|(i, y)| transition.sample(y, &mut sample_rng(options.seed, t, i)))
+                .map(|(i, y)| {
+                    let rng = &mut sample_rng(options.seed, t, i);
+                    let mut next = transition.sample(&y[..dims], rng);
+                    if let Some(f) = &factors {
+                        f.extend_successor(&y[dims..], &mut next, rng);
+                    }
+                    next
+                })
                 .collect();
         }
         let scores: Vec<f64> = population
@@ -340,7 +385,7 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
                 best = (s, y.clone());
             }
         }
-        weighted_mean = (0..dims).map(|k| population.iter().zip(&weights).map(|(y, w)| w * y[k]).sum()).collect();
+        weighted_mean = (0..state_dims).map(|k| population.iter().zip(&weights).map(|(y, w)| w * y[k]).sum()).collect();
         let finite: Vec<f64> = scores.iter().copied().filter(|s| s.is_finite()).collect();
         history.push(IterationStats {
             best_score: finite.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
@@ -359,7 +404,10 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
         previous_mean = Some(weighted_mean.clone());
         population = systematic_resample(&population, &weights, &mut sample_rng(options.seed, t, usize::MAX));
     }
-    Ok(FitResult { weights: weighted_mean, best_weights: best.1, best_score: best.0, history, evaluations })
+    let proportions = factors.map(|_| proportions_of(&weighted_mean[dims..]));
+    weighted_mean.truncate(dims);
+    best.1.truncate(dims);
+    Ok(FitResult { weights: weighted_mean, proportions, best_weights: best.1, best_score: best.0, history, evaluations })
 }
 
 /// The visible 2-D joints scaled to the raster (factor `f`); non-finite positions are an error.

@@ -241,6 +241,9 @@ pub fn run_pipeline(
 
     let t = Instant::now();
     let mut mesh = RiggedMesh::from_model(model, gender, &weights)?;
+    if let Some(props) = fits[chosen].fit.as_ref().and_then(|f| f.proportions.as_ref()) {
+        crate::fit::proportions::apply_in_place(&mut mesh.vertices, &mut mesh.joints, &mesh.weights, props)?;
+    }
     if let Some(h) = options.fit.height {
         mesh = mesh.scaled_to_height(h)?;
     }

@@ -53,6 +53,10 @@ pub struct FitArgs {
     /// fitted mesh is scaled to it.
     #[arg(long)]
     pub height: Option<f64>,
+    /// Also search bone-length factors (legs, arms, shoulders, head, torso) with this prior
+    /// standard deviation of each log factor (0 = off).
+    #[arg(long, default_value_t = FitOptions::default().proportion_sd)]
+    pub proportion_sd: f64,
     /// Keep the pose solver's camera instead of refitting its scales and translation to the
     /// gender's mean skeleton before the fit.
     #[arg(long)]
@@ -98,6 +102,7 @@ impl FitArgs {
             joint_weight: self.joint_weight,
             sample_camera: self.sample_camera,
             height: self.height,
+            proportion_sd: self.proportion_sd,
         })
     }
 }
