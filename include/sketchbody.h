@@ -150,6 +150,11 @@
 #define NUM_PARTS 26
 
 /**
+ * Number of factors (legs, arms, shoulders, head, torso).
+ */
+#define NUM_FACTORS 5
+
+/**
  * Distances above this many raster pixels count as this much in [`MatchScore::Chamfer`].
  */
 #define CHAMFER_CAP 12.0
@@ -350,9 +355,10 @@ typedef struct skb_detector skb_detector;
 
 /**
  * Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
- * (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
+ * (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 4.0, 2-D joint
  * weight 0.5 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
- * dimension, gender automatic, height unknown, no per-sample cameras). Every setter validates its value and leaves the options
+ * dimension, gender automatic, height unknown, per-sample cameras on, bone-length factors with
+ * prior sd 0.1). Every setter validates its value and leaves the options
  * unchanged on error. Not synchronised: do not change it while another thread uses it; reading
  * it from several calls at once is fine. Free with `skb_fit_options_free`.
  */
@@ -812,11 +818,18 @@ skb_status skb_fit_options_set_joint_weight(struct skb_fit_options *opts, double
 skb_status skb_fit_options_set_height(struct skb_fit_options *opts, double metres);
 
 /**
- * Turns per-sample cameras on (non-zero) or off (0, the default): each fit sample's camera
+ * Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
  * scales and translation are refitted to its own posed joints vs the 2-D joints, so the size
  * comes from the shape. Only `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it.
  */
 skb_status skb_fit_options_set_sample_camera(struct skb_fit_options *opts, int on);
+
+/**
+ * Sets the prior standard deviation of the fit's log bone-length factors (legs, arms,
+ * shoulders, head, torso), in 0..=0.5; 0 searches PCA weights only (default 0.1). NaN is
+ * `SKB_ERR_NON_FINITE`, values outside the range `SKB_ERR_OUT_OF_RANGE`.
+ */
+skb_status skb_fit_options_set_proportion_sd(struct skb_fit_options *opts, double sd);
 
 /**
  * Sets the longest raster side of the fit, pixels, in 16..=4096.

@@ -39,7 +39,8 @@ fn case() -> Case {
 }
 
 fn options() -> FitOptions {
-    FitOptions { samples: 64, max_iterations: 6, raster_max_side: 128, seed: 11, ..FitOptions::default() }
+    // The problem camera, PCA weights only, temperature 2 (the defaults before per-sample cameras).
+    FitOptions { samples: 64, max_iterations: 6, raster_max_side: 128, seed: 11, temperature: 2.0, sample_camera: false, proportion_sd: 0.0, ..FitOptions::default() }
 }
 
 #[test]

@@ -43,9 +43,10 @@ pub const SKB_SKIN_DUAL_QUATERNION: u32 = 1;
 pub const SKB_GENDER_AUTO: u32 = 2;
 
 /// Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
-/// (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
+/// (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 4.0, 2-D joint
 /// weight 0.5 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
-/// dimension, gender automatic, height unknown, no per-sample cameras). Every setter validates its value and leaves the options
+/// dimension, gender automatic, height unknown, per-sample cameras on, bone-length factors with
+/// prior sd 0.1). Every setter validates its value and leaves the options
 /// unchanged on error. Not synchronised: do not change it while another thread uses it; reading
 /// it from several calls at once is fine. Free with `skb_fit_options_free`.
 pub struct skb_fit_options {
@@ -143,12 +144,20 @@ pub unsafe extern "C" fn skb_fit_options_set_height(opts: *mut skb_fit_options, 
     ffi_boundary! { set_fit(opts, |o| { o.height = (metres != 0.0).then_some(metres); Ok(()) }) }
 }
 
-/// Turns per-sample cameras on (non-zero) or off (0, the default): each fit sample's camera
+/// Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
 /// scales and translation are refitted to its own posed joints vs the 2-D joints, so the size
 /// comes from the shape. Only `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_sample_camera(opts: *mut skb_fit_options, on: c_int) -> skb_status {
     ffi_boundary! { set_fit(opts, |o| { o.sample_camera = on != 0; Ok(()) }) }
+}
+
+/// Sets the prior standard deviation of the fit's log bone-length factors (legs, arms,
+/// shoulders, head, torso), in 0..=0.5; 0 searches PCA weights only (default 0.1). NaN is
+/// `SKB_ERR_NON_FINITE`, values outside the range `SKB_ERR_OUT_OF_RANGE`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_proportion_sd(opts: *mut skb_fit_options, sd: f64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.proportion_sd = sd; Ok(()) }) }
 }
 
 /// Sets the longest raster side of the fit, pixels, in 16..=4096.

@@ -46,8 +46,9 @@ pub struct FitArgs {
     #[arg(long)]
     pub retarget: bool,
     /// Give every fit sample its own camera scale and translation, refitted to its own posed
-    /// joints vs the 2-D joints, so the size comes from the shape.
-    #[arg(long)]
+    /// joints vs the 2-D joints, so the size comes from the shape (`--sample-camera false`: the
+    /// pipeline's camera for every sample).
+    #[arg(long, default_value_t = FitOptions::default().sample_camera, action = clap::ArgAction::Set)]
     pub sample_camera: bool,
     /// The character's rest height in metres, when known (character sheets carry one): the
     /// fitted mesh is scaled to it.
