@@ -58,7 +58,7 @@ pub fn y_extent(vertices: &[[f32; 3]]) -> f64 {
 /// finite or ≤ 0, or a flat or empty vertex set ([`Error::OutOfRange`]).
 pub fn scale_to_height(vertices: &mut [[f32; 3]], joints: &mut Joints3, height: f64) -> Result<()> {
     let now = y_extent(vertices);
-    if !(height.is_finite() && height > 0.0) || !(now.is_finite() && now > 1e-9) {
+    if !(height.is_finite() && height > 0.0 && now.is_finite() && now > 1e-9) {
         return Err(Error::OutOfRange { name: "height", detail: format!("cannot scale a body {now} m tall to {height} m") });
     }
     let k = height / now;
