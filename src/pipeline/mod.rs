@@ -120,7 +120,9 @@ pub struct PipelineResult {
     /// Name of the joints source ([`JointsSource::name`]).
     pub joints_source: String,
     /// 3-D joints (metres of a 1.75 m person, model frame) and camera (pixels) used for the
-    /// chosen gender: the camera refitted to that gender's mean skeleton (unless `keep_pose_scale`).
+    /// chosen gender: the camera refitted to that gender's mean skeleton (scaled to
+    /// `fit.height` when given; unless `keep_pose_scale`), and with `fit.sample_camera` then to
+    /// the chosen body's own skeleton.
     pub pose: PoseEstimate,
     /// The fits, in order: the given gender, or female then male.
     pub fits: Vec<GenderFit>,
