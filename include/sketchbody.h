@@ -179,6 +179,11 @@
 #define NUM_PARTS 26
 
 /**
+ * Number of factors (legs, arms, shoulders, head, torso).
+ */
+#define NUM_FACTORS 5
+
+/**
  * Distances above this many raster pixels count as this much in [`MatchScore::Chamfer`].
  */
 #define CHAMFER_CAP 12.0
@@ -379,9 +384,10 @@ typedef struct skb_detector skb_detector;
 
 /**
  * Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
- * (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
+ * (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 4.0, 2-D joint
  * weight 0.5 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
- * dimension, gender automatic). Every setter validates its value and leaves the options
+ * dimension, gender automatic, height unknown, per-sample cameras on, bone-length factors with
+ * prior sd 0.1). Every setter validates its value and leaves the options
  * unchanged on error. Not synchronised: do not change it while another thread uses it; reading
  * it from several calls at once is fine. Free with `skb_fit_options_free`.
  */
@@ -852,6 +858,28 @@ skb_status skb_fit_options_set_temperature(struct skb_fit_options *opts, double 
 skb_status skb_fit_options_set_joint_weight(struct skb_fit_options *opts, double weight);
 
 /**
+ * Sets the character's known rest height in metres (character sheets carry one), in
+ * 0.1..=10; 0 means unknown (the default). With a height the fitted rest mesh is scaled about
+ * its pelvis to it (and, without per-sample cameras, every fit sample too). NaN is
+ * `SKB_ERR_NON_FINITE`, other values outside the range (negative included) `SKB_ERR_OUT_OF_RANGE`.
+ */
+skb_status skb_fit_options_set_height(struct skb_fit_options *opts, double metres);
+
+/**
+ * Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
+ * scales and translation are refitted to its own posed joints vs the 2-D joints, so the size
+ * comes from the shape. Only `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it.
+ */
+skb_status skb_fit_options_set_sample_camera(struct skb_fit_options *opts, int on);
+
+/**
+ * Sets the prior standard deviation of the fit's log bone-length factors (legs, arms,
+ * shoulders, head, torso), in 0..=0.5; 0 searches PCA weights only (default 0.1). NaN is
+ * `SKB_ERR_NON_FINITE`, values outside the range `SKB_ERR_OUT_OF_RANGE`.
+ */
+skb_status skb_fit_options_set_proportion_sd(struct skb_fit_options *opts, double sd);
+
+/**
  * Sets the longest raster side of the fit, pixels, in 16..=4096.
  */
 skb_status skb_fit_options_set_raster_side(struct skb_fit_options *opts, uint32_t side);
@@ -893,7 +921,8 @@ skb_status skb_fit_options_set_gender(struct skb_fit_options *opts, uint32_t gen
  * (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
  * caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
  * weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
- * options' skinning; read with `skb_mesh_copy_posed_vertices`); `*score` (may be NULL) receives
+ * options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
+ * when one is set); `*score` (may be NULL) receives
  * the best sample's match score (higher is better). Errors: non-finite joints or camera
  * (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
  * without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with

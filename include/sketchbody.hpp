@@ -133,6 +133,10 @@ public:
     FitOptions &skinning(uint32_t v) { check(skb_fit_options_set_skinning(o_.get(), v)); return *this; }
     FitOptions &dims(uint32_t v) { check(skb_fit_options_set_dims(o_.get(), v)); return *this; }
     FitOptions &gender(uint32_t v) { check(skb_fit_options_set_gender(o_.get(), v)); return *this; }
+    /// The character's known rest height in metres (0 = unknown).
+    FitOptions &height(double metres) { check(skb_fit_options_set_height(o_.get(), metres)); return *this; }
+    FitOptions &sample_camera(bool on) { check(skb_fit_options_set_sample_camera(o_.get(), on ? 1 : 0)); return *this; }
+    FitOptions &proportion_sd(double v) { check(skb_fit_options_set_proportion_sd(o_.get(), v)); return *this; }
     const skb_fit_options *get() const noexcept { return o_.get(); }
 
 private:

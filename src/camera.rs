@@ -47,6 +47,46 @@ impl WeakPerspective {
         [self.sx * c.x + self.t[0], -self.sy * c.y + self.t[1]]
     }
 
+    /// The camera with its rotation kept and its scales and translation refitted in closed form
+    /// so that `points[k]` (metres, model frame) project onto `targets` (`(k, [u, v])`, pixels):
+    /// `sx, tx` minimise Σ (sx (R X_k)_x + tx − u_k)² and `sy, ty` minimise
+    /// Σ (−sy (R X_k)_y + ty − v_k)² (two independent 1-D least-squares lines). A single
+    /// weak-perspective view cannot tell a small near figure from a large far one, so this gives
+    /// any skeleton its own image scale. Errors: [`Error::Degenerate`] with fewer than two
+    /// targets, targets that do not span an axis, or a non-positive fitted scale;
+    /// [`Error::OutOfRange`] for a target index outside `points`.
+    pub fn refit_scale(&self, points: &[[f64; 3]], targets: &[(usize, [f64; 2])]) -> Result<WeakPerspective> {
+        // Per axis: n, Σa, Σb, Σa², Σab.
+        let mut acc = [[0.0f64; 5]; 2];
+        for &(k, q) in targets {
+            let p = points.get(k).ok_or_else(|| Error::OutOfRange { name: "camera refit target", detail: format!("joint {k} of {}", points.len()) })?;
+            let c = self.r * Vector3::from(*p);
+            for (axis, a) in [(0, c.x), (1, -c.y)] {
+                let b = q[axis];
+                let s = &mut acc[axis];
+                s[0] += 1.0;
+                s[1] += a;
+                s[2] += b;
+                s[3] += a * a;
+                s[4] += a * b;
+            }
+        }
+        let mut fitted = [(0.0, 0.0); 2];
+        for (axis, [n, sa, sb, saa, sab]) in acc.into_iter().enumerate() {
+            let den = n * saa - sa * sa;
+            if n < 2.0 || den.abs() < 1e-12 {
+                return Err(Error::Degenerate("cannot refit the camera: the joints do not span the image".into()));
+            }
+            let scale = (n * sab - sa * sb) / den;
+            fitted[axis] = (scale, (sb - scale * sa) / n);
+        }
+        let [(sx, tx), (sy, ty)] = fitted;
+        if !(sx > 0.0 && sy > 0.0) {
+            return Err(Error::Degenerate(format!("camera refit gave scales {sx}, {sy}")));
+        }
+        Ok(WeakPerspective { sx, sy, r: self.r, t: [tx, ty] })
+    }
+
     /// Depth of a point in the camera frame (larger = nearer the viewer).
     pub fn depth(&self, x: &Vector3<f64>) -> f64 {
         (self.r * x).z
@@ -66,5 +106,27 @@ mod tests {
         assert_eq!(cam.project(&Vector3::new(-0.5, 0.0, 0.0)), [206.0, 256.0]);
         let bad = WeakPerspective { sx: -1.0, ..cam };
         assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn refit_scale_recovers_a_camera_and_rejects_degenerate_targets() {
+        let r = nalgebra::Rotation3::from_euler_angles(0.1, 0.4, -0.05).into_inner();
+        let truth = WeakPerspective { sx: 120.0, sy: 130.0, r, t: [40.0, 300.0] };
+        let pts = [[0.0, 0.0, 0.0], [0.2, 1.1, 0.1], [-0.3, 0.5, 0.0], [0.1, -0.8, 0.2]];
+        let targets: Vec<(usize, [f64; 2])> = (0..4).map(|k| (k, truth.project(&Vector3::from(pts[k])))).collect();
+        let start = WeakPerspective { sx: 1.0, sy: 1.0, r, t: [0.0, 0.0] };
+        let c = start.refit_scale(&pts, &targets).unwrap();
+        assert!((c.sx - 120.0).abs() < 1e-9 && (c.sy - 130.0).abs() < 1e-9, "{c:?}");
+        assert!((c.t[0] - 40.0).abs() < 1e-9 && (c.t[1] - 300.0).abs() < 1e-9, "{c:?}");
+        // Twice the skeleton needs half the scale and keeps the image.
+        let big: Vec<[f64; 3]> = pts.iter().map(|p| [2.0 * p[0], 2.0 * p[1], 2.0 * p[2]]).collect();
+        assert!((start.refit_scale(&big, &targets).unwrap().sx - 60.0).abs() < 1e-9);
+        assert!(matches!(start.refit_scale(&pts, &targets[..1]), Err(Error::Degenerate(_))));
+        let same = [(0, [1.0, 1.0]), (0, [2.0, 2.0])];
+        assert!(matches!(start.refit_scale(&pts, &same), Err(Error::Degenerate(_))));
+        assert!(matches!(start.refit_scale(&pts, &[(9, [0.0, 0.0]), (1, [1.0, 1.0])]), Err(Error::OutOfRange { .. })));
+        // A mirrored target set gives a negative scale.
+        let mirrored: Vec<(usize, [f64; 2])> = targets.iter().map(|&(k, q)| (k, [-q[0], q[1]])).collect();
+        assert!(matches!(start.refit_scale(&pts, &mirrored), Err(Error::Degenerate(_))));
     }
 }

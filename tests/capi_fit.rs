@@ -79,6 +79,14 @@ fn options_setters_validate() {
         assert_eq!(skb_fit_options_set_joint_weight(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
         assert!(last_error().contains("joint weight"), "{}", last_error());
         assert_eq!(skb_fit_options_set_joint_weight(i.opts, 0.0), skb_status::SKB_OK);
+        assert_eq!(skb_fit_options_set_height(i.opts, -1.7), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(skb_fit_options_set_height(i.opts, 12.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(skb_fit_options_set_height(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
+        assert!(last_error().contains("height"), "{}", last_error());
+        assert_eq!(skb_fit_options_set_height(ptr::null_mut(), 1.7), skb_status::SKB_ERR_NULL_POINTER);
+        assert_eq!(skb_fit_options_set_proportion_sd(i.opts, 0.7), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(skb_fit_options_set_proportion_sd(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
+        assert!(last_error().contains("proportion sd"), "{}", last_error());
         assert_eq!(skb_fit_options_set_tolerance(i.opts, 0.0), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_raster_side(i.opts, 8), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_score(i.opts, 4), skb_status::SKB_ERR_OUT_OF_RANGE);
@@ -98,6 +106,12 @@ fn options_setters_validate() {
             skb_fit_options_set_tolerance(i.opts, 0.01),
             skb_fit_options_set_raster_side(i.opts, 128),
             skb_fit_options_set_gender(i.opts, SKB_GENDER_AUTO),
+            skb_fit_options_set_height(i.opts, 1.8),
+            skb_fit_options_set_height(i.opts, 0.0),
+            skb_fit_options_set_sample_camera(i.opts, 1),
+            skb_fit_options_set_sample_camera(i.opts, 0),
+            skb_fit_options_set_proportion_sd(i.opts, 0.0),
+            skb_fit_options_set_proportion_sd(i.opts, 0.1),
         ] {
             assert_eq!(ok, skb_status::SKB_OK);
         }

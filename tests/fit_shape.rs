@@ -39,7 +39,8 @@ fn case() -> Case {
 }
 
 fn options() -> FitOptions {
-    FitOptions { samples: 64, max_iterations: 6, raster_max_side: 128, seed: 11, ..FitOptions::default() }
+    // The problem camera, PCA weights only, temperature 2 (the defaults before per-sample cameras).
+    FitOptions { samples: 64, max_iterations: 6, raster_max_side: 128, seed: 11, temperature: 2.0, sample_camera: false, proportion_sd: 0.0, ..FitOptions::default() }
 }
 
 #[test]
@@ -106,4 +107,65 @@ fn joint_term_penalises_off_joints_and_is_validated() {
     assert_eq!(one_thread.install(|| fit_shape(&with_joints, &o(1.0), &mut |_| true)).unwrap(), on, "joint term deterministic on 1 thread");
     assert!(matches!(fit_shape(&base, &o(-0.1), &mut |_| true), Err(Error::OutOfRange { name: "joint weight", .. })));
     assert!(matches!(fit_shape(&base, &o(f64::NAN), &mut |_| true), Err(Error::NonFinite { name: "joint weight", .. })));
+}
+
+#[test]
+fn per_sample_cameras_ignore_the_problem_cameras_scale() {
+    let c = case();
+    let truth_2d = Joints2 { xy: std::array::from_fn(|k| c.camera.project(&nalgebra::Vector3::from(c.truth.joints[k]))), visible: [true; NUM_JOINTS] };
+    // A camera 20% too small and 15 px off: only its rotation is used with per-sample cameras.
+    let wrong = WeakPerspective { sx: 88.0, sy: 88.0, t: [143.0, 150.0], ..c.camera };
+    let right = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges, joints2d: Some(&truth_2d) };
+    let off = FitProblem { camera: &wrong, ..right };
+    let o = FitOptions { sample_camera: true, ..options() };
+    let fixed_wrong = fit_shape(&off, &options(), &mut |_| true).unwrap();
+    let free = fit_shape(&off, &o, &mut |_| true).unwrap();
+    let free_right = fit_shape(&right, &o, &mut |_| true).unwrap();
+    assert!(free.best_score > -1.5, "per-sample camera: best mean boundary distance {} raster px", -free.best_score);
+    assert!(free.best_score > fixed_wrong.best_score + 2.0, "per-sample {} vs wrong fixed camera {}", free.best_score, fixed_wrong.best_score);
+    // The chamfer score does not use the problem camera at all then: the same fit.
+    assert_eq!(free, free_right);
+    let space = c.model.space(Gender::Male);
+    let height = |v: &[[f32; 3]]| {
+        let (lo, hi) = v.iter().fold((f32::MAX, f32::MIN), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
+        (hi - lo) as f64
+    };
+    let (h_true, h_fit) = (height(&c.truth.vertices), height(&space.synthesize(&free.weights).unwrap().vertices));
+    // The size comes from the shape alone (1.785 m for 1.872 m when this was written).
+    assert!((h_fit / h_true - 1.0).abs() < 0.06, "height {h_fit:.3} m vs truth {h_true:.3} m");
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    assert_eq!(one_thread.install(|| fit_shape(&off, &o, &mut |_| true)).unwrap(), free, "deterministic on 1 thread");
+    // Without 2-D joints the problem's camera is used.
+    let no_joints = FitProblem { joints2d: None, ..off };
+    let o0 = FitOptions { joint_weight: 0.0, ..o.clone() };
+    assert_eq!(fit_shape(&no_joints, &o0, &mut |_| true).unwrap(), fit_shape(&no_joints, &FitOptions { joint_weight: 0.0, ..options() }, &mut |_| true).unwrap());
+}
+
+#[test]
+fn bone_factors_find_long_legs() {
+    use sketchbody::render::sketch::scene::{apply_proportions, Proportions};
+    let c = case();
+    let props = Proportions { legs: 1.2, ..Proportions::default() };
+    let (v, j) = apply_proportions(&c.truth.vertices, &c.truth.joints, c.model.skin_weights(), &props).unwrap();
+    let camera = WeakPerspective { sx: 90.0, sy: 90.0, ..c.camera };
+    let mut raster = Rasterizer::new();
+    raster.rasterize(&v, &c.model.triangles(), &camera, 256, 256, false).unwrap();
+    let drawing: Vec<u8> = raster.mask().iter().map(|&m| if m != 0 { 40 } else { 235 }).collect();
+    let edges = canny(&GrayImage::from_vec(256, 256, drawing).unwrap().view(), &CannyParams::default()).unwrap();
+    let j2 = Joints2 { xy: std::array::from_fn(|k| camera.project(&nalgebra::Vector3::from(j[k]))), visible: [true; NUM_JOINTS] };
+    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &j, camera: &camera, edges: &edges, joints2d: Some(&j2) };
+    let o = FitOptions { sample_camera: true, proportion_sd: 0.2, temperature: 0.1, samples: 128, max_iterations: 8, ..options() };
+    let r = fit_shape(&problem, &o, &mut |_| true).unwrap();
+    let p = r.proportions.expect("factors searched");
+    // The long legs pull the leg factor up, more than any other (legs 1.047 when written; the
+    // PCA shape takes part of the length, and the prior pulls toward 1).
+    let others = [p.arms, p.shoulders, p.head, p.torso];
+    assert!(p.legs > 1.02 && others.iter().all(|&f| f < p.legs), "{p:?}");
+    let plain = fit_shape(&problem, &FitOptions { proportion_sd: 0.0, ..o.clone() }, &mut |_| true).unwrap();
+    assert!((p.arms - 1.0).abs() < 0.1 && (p.torso - 1.0).abs() < 0.1, "{p:?}");
+    assert_eq!(r.weights.len(), c.model.space(Gender::Male).default_dim());
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    assert_eq!(one_thread.install(|| fit_shape(&problem, &o, &mut |_| true)).unwrap(), r);
+    assert_eq!(plain.proportions, None);
+    assert!(matches!(fit_shape(&problem, &FitOptions { proportion_sd: 0.6, ..o.clone() }, &mut |_| true), Err(Error::OutOfRange { name: "proportion sd", .. })));
 }

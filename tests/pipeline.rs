@@ -144,3 +144,36 @@ fn camera_refit_recovers_the_scale_of_the_body_skeleton() {
     few.visible[0] = true;
     assert!(matches!(refit_camera(&est, &rest, &few), Err(Error::Degenerate(_))));
 }
+
+#[test]
+fn known_height_per_sample_cameras_and_a_given_pose() {
+    let (model, dict, sketch, j) = inputs();
+    let base = fast(Some(Gender::Female));
+    let free = PipelineOptions { fit: FitOptions { sample_camera: true, ..base.fit.clone() }, ..base.clone() };
+    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &free, &mut |_| true).unwrap();
+    // A known height: the same fit (a uniform scale does not change a per-sample camera's image),
+    // the mesh scaled about its pelvis to exactly that height.
+    let tall = PipelineOptions { fit: FitOptions { height: Some(2.1), ..free.fit.clone() }, ..free.clone() };
+    let t = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &tall, &mut |_| true).unwrap();
+    assert_eq!(t.weights, r.weights);
+    assert!((t.mesh.height() - 2.1).abs() < 1e-5, "{}", t.mesh.height());
+    assert_eq!(t.mesh.joints[joint::PELVIS], r.mesh.joints[joint::PELVIS]);
+    // The output camera is refitted to the chosen body: a taller body, a smaller image scale.
+    let k = t.mesh.height() / r.mesh.height();
+    assert!((r.pose.camera.sx / t.pose.camera.sx - k).abs() < 1e-6 * k, "{} {} {k}", r.pose.camera.sx, t.pose.camera.sx);
+    // The mean-shape baseline takes the height too.
+    let mean = PipelineOptions { mean_shape: true, ..tall.clone() };
+    assert!((run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &mean, &mut |_| true).unwrap().mesh.height() - 2.1).abs() < 1e-5);
+    let bad = PipelineOptions { fit: FitOptions { height: Some(0.01), ..free.fit.clone() }, ..free.clone() };
+    assert!(matches!(run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad, &mut |_| true), Err(Error::OutOfRange { name: "height", .. })));
+    // A given pose replaces the solver's.
+    let mut given = r.pose.clone();
+    given.joints[joint::L_WRIST][2] += 0.2;
+    let g = PipelineOptions { given_pose: Some(given.clone()), ..base.clone() };
+    let rg = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &g, &mut |_| true).unwrap();
+    assert_eq!(rg.pose.joints, given.joints);
+    let mut nan = given;
+    nan.joints[3][0] = f64::NAN;
+    let g = PipelineOptions { given_pose: Some(nan), ..base };
+    assert!(matches!(run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &g, &mut |_| true), Err(Error::NonFinite { .. })));
+}

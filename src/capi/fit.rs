@@ -43,9 +43,10 @@ pub const SKB_SKIN_DUAL_QUATERNION: u32 = 1;
 pub const SKB_GENDER_AUTO: u32 = 2;
 
 /// Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
-/// (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
+/// (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 4.0, 2-D joint
 /// weight 0.5 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
-/// dimension, gender automatic). Every setter validates its value and leaves the options
+/// dimension, gender automatic, height unknown, per-sample cameras on, bone-length factors with
+/// prior sd 0.1). Every setter validates its value and leaves the options
 /// unchanged on error. Not synchronised: do not change it while another thread uses it; reading
 /// it from several calls at once is fine. Free with `skb_fit_options_free`.
 pub struct skb_fit_options {
@@ -134,6 +135,31 @@ pub unsafe extern "C" fn skb_fit_options_set_joint_weight(opts: *mut skb_fit_opt
     ffi_boundary! { set_fit(opts, |o| { o.joint_weight = weight; Ok(()) }) }
 }
 
+/// Sets the character's known rest height in metres (character sheets carry one), in
+/// 0.1..=10; 0 means unknown (the default). With a height the fitted rest mesh is scaled about
+/// its pelvis to it (and, without per-sample cameras, every fit sample too). NaN is
+/// `SKB_ERR_NON_FINITE`, other values outside the range (negative included) `SKB_ERR_OUT_OF_RANGE`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_height(opts: *mut skb_fit_options, metres: f64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.height = (metres != 0.0).then_some(metres); Ok(()) }) }
+}
+
+/// Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
+/// scales and translation are refitted to its own posed joints vs the 2-D joints, so the size
+/// comes from the shape. Only `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_sample_camera(opts: *mut skb_fit_options, on: c_int) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.sample_camera = on != 0; Ok(()) }) }
+}
+
+/// Sets the prior standard deviation of the fit's log bone-length factors (legs, arms,
+/// shoulders, head, torso), in 0..=0.5; 0 searches PCA weights only (default 0.1). NaN is
+/// `SKB_ERR_NON_FINITE`, values outside the range `SKB_ERR_OUT_OF_RANGE`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_proportion_sd(opts: *mut skb_fit_options, sd: f64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.proportion_sd = sd; Ok(()) }) }
+}
+
 /// Sets the longest raster side of the fit, pixels, in 16..=4096.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_raster_side(opts: *mut skb_fit_options, side: u32) -> skb_status {
@@ -210,7 +236,8 @@ pub(crate) fn progress_closure(progress: skb_progress_fn, user: *mut c_void) -> 
 /// (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
 /// caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
 /// weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
-/// options' skinning; read with `skb_mesh_copy_posed_vertices`); `*score` (may be NULL) receives
+/// options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
+/// when one is set); `*score` (may be NULL) receives
 /// the best sample's match score (higher is better). Errors: non-finite joints or camera
 /// (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
 /// without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with
@@ -260,7 +287,13 @@ pub unsafe extern "C" fn skb_fit_shape(
             }
         }
         let Some((g, r)) = best else { return fail_with(skb_status::SKB_ERR_PANIC, "no gender fitted") };
-        let rest = try_core!(ctx.model.space(g).synthesize(&r.weights));
+        let mut rest = try_core!(ctx.model.space(g).synthesize(&r.weights));
+        if let Some(props) = &r.proportions {
+            try_core!(crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, ctx.model.skin_weights(), props));
+        }
+        if let Some(h) = fit_opts.height {
+            try_core!(crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h));
+        }
         let ik = try_core!(solve(&rest.joints, &pose, &IkOptions { retarget: fit_opts.retarget }));
         let vertices = try_core!(skin(&rest.vertices, ctx.model.skin_weights(), &ik, fit_opts.skinning));
         if !score.is_null() {

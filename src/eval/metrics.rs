@@ -37,6 +37,37 @@ pub fn aed(reference: &[[f64; 3]], estimate: &[[f64; 3]], height: f64) -> Result
     Ok(r)
 }
 
+/// Height of a point set: its extent along +Y (the model frame's up axis), same units as the input.
+/// Errors: no points, non-finite values.
+pub fn height_of(points: &[[f64; 3]]) -> Result<f64> {
+    if points.is_empty() {
+        return Err(Error::OutOfRange { name: "mesh height", detail: "no vertices".into() });
+    }
+    let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
+    let h = hi - lo;
+    if !h.is_finite() {
+        return Err(Error::NonFinite { name: "mesh height", value: h });
+    }
+    Ok(h)
+}
+
+/// The estimate scaled uniformly about its feet to the reference height `height`: about the point
+/// (0, lowest Y, 0) by `height / height_of(estimate)`, then moved along Y so its lowest point is at
+/// the reference's lowest Y. A sketch does not fix the absolute size; this is the AED diagnostic
+/// of a fit whose size is known. Errors: [`height_of`]'s, a flat estimate (height ≤ 1e-12),
+/// non-positive reference height.
+pub fn scale_to_height(reference: &[[f64; 3]], estimate: &[[f64; 3]], height: f64) -> Result<Vec<[f64; 3]>> {
+    check_height(height)?;
+    let he = height_of(estimate)?;
+    if he <= 1e-12 {
+        return Err(Error::OutOfRange { name: "estimated mesh", detail: format!("height {he} cannot be scaled") });
+    }
+    let low = |p: &[[f64; 3]]| p.iter().map(|x| x[1]).fold(f64::INFINITY, f64::min);
+    let (le, lr) = (low(estimate), low(reference));
+    let k = height / he;
+    Ok(estimate.iter().map(|p| [p[0] * k, (p[1] - le) * k + lr, p[2] * k]).collect())
+}
+
 /// The points translated so that their centroid is at the origin.
 pub fn centred(p: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let c = p.iter().fold(Vector3::zeros(), |s, x| s + v(x)) / p.len().max(1) as f64;
@@ -157,6 +188,25 @@ mod tests {
         assert!((mpjpe(&a, &c, 0).unwrap() - 0.1).abs() < 1e-12);
         assert!(aed(&a, &b[..4], 1.0).is_err());
         assert!(aed(&a, &b, 0.0).is_err());
+    }
+
+    #[test]
+    fn height_scaled_aed_removes_the_size_error_only() {
+        // A box 2 m tall (y from -1 to 1) and the same box at half size, lifted by 3 m.
+        let a = vec![[1.0, -1.0, 0.0], [-1.0, -1.0, 0.0], [0.0, 1.0, 1.0], [0.0, 1.0, -1.0]];
+        let b: Vec<[f64; 3]> = a.iter().map(|p| [p[0] * 0.5, p[1] * 0.5 + 3.0, p[2] * 0.5]).collect();
+        assert_eq!(height_of(&a).unwrap(), 2.0);
+        assert_eq!(height_of(&b).unwrap(), 1.0);
+        let s = scale_to_height(&a, &b, 2.0).unwrap();
+        assert!(aed(&a, &s, 2.0).unwrap() < 1e-12, "{s:?}");
+        // A shape error survives: widen the first vertex by 0.2 m at half size -> 0.4 m at full
+        // size, one of four vertices, over a 2 m reference: 0.4 / 4 / 2 = 0.05.
+        let mut c = b.clone();
+        c[0][0] += 0.2;
+        assert!((aed(&a, &scale_to_height(&a, &c, 2.0).unwrap(), 2.0).unwrap() - 0.05).abs() < 1e-12);
+        assert!(scale_to_height(&a, &[[0.0, 1.0, 0.0], [1.0, 1.0, 0.0]], 2.0).is_err(), "flat");
+        assert!(scale_to_height(&a, &b, -1.0).is_err());
+        assert!(height_of(&[]).is_err());
     }
 
     #[test]

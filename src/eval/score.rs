@@ -8,6 +8,10 @@
 //!
 //! - AED rest: eq. (10) between the rest meshes, divided by the reference rest height, no
 //!   alignment (both are in the model frame).
+//! - AED rest at height (diagnostic): the same after scaling the estimate about its feet to the
+//!   reference height ([`scale_to_height`]); height ratio: estimate's rest height (Y extent) /
+//!   the reference height. A sketch alone does not fix the absolute size; these two columns
+//!   split the rest AED into its size and its shape part.
 //! - AED posed: eq. (10) between the posed meshes in the camera frame, each centred on its
 //!   centroid (a sketch does not fix the global position).
 //! - MPJPE: joints in the camera frame, the estimate scaled about its pelvis to the reference's
@@ -21,7 +25,7 @@ use std::path::Path;
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 
-use super::metrics::{aed, centred, mpjpe, pa_mpjpe, pck, scale_to_reference};
+use super::metrics::{aed, centred, height_of, mpjpe, pa_mpjpe, pck, scale_to_height, scale_to_reference};
 use crate::error::{Error, Result};
 use crate::render::sketch::truth::{parse_mesh, GroundTruth};
 use crate::skeleton::{joint, BONES, NUM_JOINTS};
@@ -55,6 +59,11 @@ pub struct SampleScore {
     pub sample: String,
     /// AED between rest meshes, fraction of the reference height.
     pub aed_rest: Option<f64>,
+    /// AED between rest meshes after scaling the estimate about its feet to the reference
+    /// height, fraction of the reference height (diagnostic).
+    pub aed_rest_at_height: Option<f64>,
+    /// Estimated rest height / reference height (diagnostic).
+    pub height_ratio: Option<f64>,
     /// AED between posed meshes, fraction of the reference height.
     pub aed_posed: Option<f64>,
     /// MPJPE, mm.
@@ -68,12 +77,15 @@ pub struct SampleScore {
 }
 
 /// Metric names in the order of [`SampleScore::values`].
-pub const METRICS: [&str; 6] = ["aed_rest", "aed_posed", "mpjpe_mm", "pa_mpjpe_mm", "pck@0.1", "pck@0.2"];
+pub const METRICS: [&str; 8] = ["aed_rest", "aed_rest_at_height", "height_ratio", "aed_posed", "mpjpe_mm", "pa_mpjpe_mm", "pck@0.1", "pck@0.2"];
+
+/// Decimals each metric is printed with, [`METRICS`] order.
+pub const METRIC_DECIMALS: [usize; 8] = [4, 4, 3, 4, 1, 1, 3, 3];
 
 impl SampleScore {
     /// The metrics in [`METRICS`] order.
-    pub fn values(&self) -> [Option<f64>; 6] {
-        [self.aed_rest, self.aed_posed, self.mpjpe_mm, self.pa_mpjpe_mm, self.pck10, self.pck20]
+    pub fn values(&self) -> [Option<f64>; 8] {
+        [self.aed_rest, self.aed_rest_at_height, self.height_ratio, self.aed_posed, self.mpjpe_mm, self.pa_mpjpe_mm, self.pck10, self.pck20]
     }
 }
 
@@ -83,7 +95,7 @@ pub struct Summary {
     /// Samples in the dataset.
     pub samples: usize,
     /// (mean, count) per metric, [`METRICS`] order; mean is NaN when count is 0.
-    pub metrics: [(f64, usize); 6],
+    pub metrics: [(f64, usize); 8],
 }
 
 impl Summary {
@@ -167,7 +179,10 @@ pub fn score_sample(stem: &str, truth: &GroundTruth, rest_ref: &[[f32; 3]], pose
     };
     let mut s = SampleScore { sample: stem.to_string(), ..Default::default() };
     if let Some(rest) = &est.rest {
-        s.aed_rest = Some(aed(&to_f64(rest_ref), rest, h)?);
+        let reference = to_f64(rest_ref);
+        s.aed_rest = Some(aed(&reference, rest, h)?);
+        s.aed_rest_at_height = Some(aed(&reference, &scale_to_height(&reference, rest, h)?, h)?);
+        s.height_ratio = Some(height_of(rest)? / h);
     }
     if let Some(posed) = &est.posed {
         let a = centred(&rotate(&r_gt, &to_f64(posed_ref)));

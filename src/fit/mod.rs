@@ -1,5 +1,6 @@
 //! Fitting the body shape to the sketch (paper §II-C): the SIR of eqs. 5–9 and match scores.
 
+pub mod proportions;
 mod score;
 mod sir;
 mod transition;

@@ -49,6 +49,10 @@ pub struct PipelineOptions {
     /// instead of refitting its scales and translation to each gender's mean skeleton (see
     /// [`refit_camera`]). Default `false` (refit).
     pub keep_pose_scale: bool,
+    /// Skip the pose solver and use this 3-D pose and camera (a diagnostic: the benchmark's
+    /// `--oracle-pose` passes the ground truth to show what the fit reaches when the pose is
+    /// right). Default `None` (estimate the pose).
+    pub given_pose: Option<PoseEstimate>,
 }
 
 /// The pose estimate with its camera refitted to a body's skeleton: the body's rest joints
@@ -60,38 +64,20 @@ pub struct PipelineOptions {
 /// Errors: IK's; [`Error::Degenerate`] when a scale comes out non-positive.
 pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> Result<PoseEstimate> {
     let posed = ik::solve(rest, &pose.joints, &IkOptions { retarget: false })?.joints;
-    let r = pose.camera.r;
-    let fit_axis = |coord: &dyn Fn(&nalgebra::Vector3<f64>) -> f64, axis: usize| -> Result<(f64, f64)> {
-        let (mut n, mut sa, mut sb, mut saa, mut sab) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for (k, p) in posed.iter().enumerate() {
-            if !joints2d.visible[k] {
-                continue;
-            }
-            let a = coord(&(r * nalgebra::Vector3::from(*p)));
-            let b = joints2d.xy[k][axis];
-            n += 1.0;
-            sa += a;
-            sb += b;
-            saa += a * a;
-            sab += a * b;
-        }
-        let den = n * saa - sa * sa;
-        if n < 2.0 || den.abs() < 1e-12 {
-            return Err(Error::Degenerate("cannot refit the camera: the joints do not span the image".into()));
-        }
-        let scale = (n * sab - sa * sb) / den;
-        Ok((scale, (sb - scale * sa) / n))
-    };
-    let (sx, tx) = fit_axis(&|c| c.x, 0)?;
-    let (sy, ty) = fit_axis(&|c| -c.y, 1)?;
-    if !(sx > 0.0 && sy > 0.0) {
-        return Err(Error::Degenerate(format!("camera refit gave scales {sx}, {sy}")));
+    let targets: Vec<(usize, [f64; 2])> = (0..posed.len()).filter(|&k| joints2d.visible[k]).map(|k| (k, joints2d.xy[k])).collect();
+    let camera = pose.camera.refit_scale(&posed, &targets)?;
+    Ok(PoseEstimate { camera, ..pose.clone() })
+}
+
+/// The gender's mean rest skeleton, scaled about its pelvis to `height` metres when given
+/// ([`crate::fit::FitOptions::height`]).
+fn mean_skeleton(model: &BodyModel, gender: Gender, height: Option<f64>) -> Result<Joints3> {
+    let space = model.space(gender);
+    let mut joints = *space.mean_joints();
+    if let Some(h) = height {
+        crate::body::rig::scale_to_height(&mut space.mean().to_vec(), &mut joints, h)?;
     }
-    let mut out = pose.clone();
-    out.camera.sx = sx;
-    out.camera.sy = sy;
-    out.camera.t = [tx, ty];
-    Ok(out)
+    Ok(joints)
 }
 
 /// One gender's fit.
@@ -134,7 +120,9 @@ pub struct PipelineResult {
     /// Name of the joints source ([`JointsSource::name`]).
     pub joints_source: String,
     /// 3-D joints (metres of a 1.75 m person, model frame) and camera (pixels) used for the
-    /// chosen gender: the camera refitted to that gender's mean skeleton (unless `keep_pose_scale`).
+    /// chosen gender: the camera refitted to that gender's mean skeleton (scaled to
+    /// `fit.height` when given; unless `keep_pose_scale`), and with `fit.sample_camera` then to
+    /// the chosen body's own skeleton.
     pub pose: PoseEstimate,
     /// The fits, in order: the given gender, or female then male.
     pub fits: Vec<GenderFit>,
@@ -218,7 +206,10 @@ pub fn run_pipeline(
     p.report(0.04)?;
 
     let t = Instant::now();
-    let pose = estimate_pose(dict, &joints2d, &options.pose)?;
+    let pose = match &options.given_pose {
+        Some(given) => given.clone(),
+        None => estimate_pose(dict, &joints2d, &options.pose)?,
+    };
     timings.pose = t.elapsed().as_secs_f64();
     p.report(0.06)?;
 
@@ -229,7 +220,7 @@ pub fn run_pipeline(
     let mut poses = Vec::with_capacity(genders.len());
     for (i, &gender) in genders.iter().enumerate() {
         let tf = Instant::now();
-        let pose = if options.keep_pose_scale { pose.clone() } else { refit_camera(&pose, model.space(gender).mean_joints(), &joints2d)? };
+        let pose = if options.keep_pose_scale { pose.clone() } else { refit_camera(&pose, &mean_skeleton(model, gender, options.fit.height)?, &joints2d)? };
         poses.push(pose);
         let pose = &poses[i];
         if options.mean_shape {
@@ -251,7 +242,15 @@ pub fn run_pipeline(
     let pose = poses.swap_remove(chosen);
 
     let t = Instant::now();
-    let mesh = RiggedMesh::from_model(model, gender, &weights)?;
+    let mut mesh = RiggedMesh::from_model(model, gender, &weights)?;
+    if let Some(props) = fits[chosen].fit.as_ref().and_then(|f| f.proportions.as_ref()) {
+        crate::fit::proportions::apply_in_place(&mut mesh.vertices, &mut mesh.joints, &mesh.weights, props)?;
+    }
+    if let Some(h) = options.fit.height {
+        mesh = mesh.scaled_to_height(h)?;
+    }
+    // With per-sample cameras the chosen body's own skeleton sets the image scale.
+    let pose = if options.fit.sample_camera && !options.mean_shape { refit_camera(&pose, &mesh.joints, &joints2d)? } else { pose };
     let ik_pose = ik::solve(&mesh.joints, &pose.joints, &IkOptions { retarget: options.fit.retarget })?;
     let posed_vertices = skin(&mesh.vertices, &mesh.weights, &ik_pose, options.fit.skinning)?;
     let posed_joints = ik_pose.joints;

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use sketchbody::eval::score::{Summary, METRICS};
+use sketchbody::eval::score::{Summary, METRICS, METRIC_DECIMALS};
 use sketchbody::eval::{score_dataset, SampleScore};
 use sketchbody::fsutil::write_atomic;
 
@@ -29,12 +29,8 @@ pub struct Args {
 fn fmt(v: f64, k: usize) -> String {
     if v.is_nan() {
         "-".into()
-    } else if k < 2 {
-        format!("{v:.4}")
-    } else if k < 4 {
-        format!("{v:.1}")
     } else {
-        format!("{v:.3}")
+        format!("{v:.*}", METRIC_DECIMALS[k])
     }
 }
 

@@ -45,6 +45,19 @@ pub struct FitArgs {
     /// posed outputs; the rest mesh keeps the shape's bone lengths).
     #[arg(long)]
     pub retarget: bool,
+    /// Give every fit sample its own camera scale and translation, refitted to its own posed
+    /// joints vs the 2-D joints, so the size comes from the shape (`--sample-camera false`: the
+    /// pipeline's camera for every sample).
+    #[arg(long, default_value_t = FitOptions::default().sample_camera, action = clap::ArgAction::Set)]
+    pub sample_camera: bool,
+    /// The character's rest height in metres, when known (character sheets carry one): the
+    /// fitted mesh is scaled to it.
+    #[arg(long)]
+    pub height: Option<f64>,
+    /// Also search bone-length factors (legs, arms, shoulders, head, torso) with this prior
+    /// standard deviation of each log factor (0 = off).
+    #[arg(long, default_value_t = FitOptions::default().proportion_sd)]
+    pub proportion_sd: f64,
     /// Keep the pose solver's camera instead of refitting its scales and translation to the
     /// gender's mean skeleton before the fit.
     #[arg(long)]
@@ -88,6 +101,9 @@ impl FitArgs {
             skinning: if self.dqs { SkinMethod::DualQuaternion } else { SkinMethod::Linear },
             retarget: self.retarget,
             joint_weight: self.joint_weight,
+            sample_camera: self.sample_camera,
+            height: self.height,
+            proportion_sd: self.proportion_sd,
         })
     }
 }

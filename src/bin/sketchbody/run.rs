@@ -123,7 +123,14 @@ fn report(a: &Args, opts: &PipelineOptions, r: &PipelineResult, size: (usize, us
         "- fit: score {}, samples {}, ≤ {} iterations, transition scale {}, temperature {}, raster side {} px, tolerance {}, dims {}, seed {}, skinning {:?}{}\n",
         score_name(f.score), f.samples, f.max_iterations, f.transition_scale, f.temperature, f.raster_max_side, f.tolerance,
         f.dims.map_or("default".into(), |d| d.to_string()), f.seed, f.skinning,
-        format!("{}{}{}", if f.retarget { ", retarget" } else { "" }, if opts.keep_pose_scale { ", solver camera kept" } else { ", camera refitted to the mean skeleton" }, if opts.mean_shape { " (mean shape: fit skipped)" } else { "" })
+        format!(
+            "{}{}{}{}{}",
+            if f.retarget { ", retarget" } else { "" },
+            if opts.keep_pose_scale { ", solver camera kept" } else { ", camera refitted to the mean skeleton" },
+            if f.sample_camera { ", per-sample cameras" } else { "" },
+            f.height.map_or(String::new(), |h| format!(", height {h} m")),
+            if opts.mean_shape { " (mean shape: fit skipped)" } else { "" }
+        )
     );
     let _ = writeln!(s, "## Results\n");
     let _ = writeln!(s, "- 3-D pose: {} bases, reprojection RMS {:.3} px, length excess {:+.4}", r.pose.bases.len(), r.pose.rms, r.pose.length_excess);

@@ -21,9 +21,9 @@ use sketchbody::fsutil::write_atomic;
 use sketchbody::image::load_image;
 use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions};
-use sketchbody::pose::{dict_io, Dictionary};
+use sketchbody::pose::{dict_io, Dictionary, PoseEstimate};
 use sketchbody::render::sketch::truth::GroundTruth;
-use sketchbody::skeleton::{Joints2, NUM_JOINTS};
+use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
 
 use crate::fit_args::{score_name, FitArgs};
 use crate::run::{catch_interrupt, parse_gender, INTERRUPTED};
@@ -47,6 +47,14 @@ pub struct Args {
     /// detection costs the fit).
     #[arg(long)]
     detect: bool,
+    /// Give the fit each sample's true rest height (`height_m` of the ground truth), as an
+    /// artist with a character sheet would: measures the fit when the size is known.
+    #[arg(long, conflicts_with = "height")]
+    true_height: bool,
+    /// Diagnostic only: skip the pose solver and use the ground-truth 3-D pose and camera of
+    /// each sample (shows what the fit reaches when the pose is right; not a pipeline result).
+    #[arg(long)]
+    oracle_pose: bool,
     #[command(flatten)]
     fit: FitArgs,
     /// Only the first N samples (sorted by name).
@@ -81,6 +89,16 @@ struct Shared<'a> {
     mode: GenderMode,
     /// The detector when the joints come from detection, with its options.
     detector: Option<(Model, DetectOptions)>,
+    /// `--true-height`.
+    true_height: bool,
+    /// `--oracle-pose`.
+    oracle_pose: bool,
+}
+
+/// The ground truth's 3-D pose and camera as a pose estimate (for `--oracle-pose`).
+fn truth_pose(t: &GroundTruth, stem: &str) -> Result<PoseEstimate, CliError> {
+    let joints: Joints3 = t.joints3d.as_slice().try_into().map_err(|_| CliError(format!("sample {stem}: joints3d must hold {NUM_JOINTS} joints")))?;
+    Ok(PoseEstimate { joints, camera: t.camera.to_camera()?, bases: Vec::new(), weights: Vec::new(), rms: 0.0, length_excess: 0.0, base: joints, base_parts: None })
 }
 
 /// Runs one sample and writes its three files. Returns the pipeline's seconds.
@@ -94,7 +112,13 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         GenderMode::Auto => None,
         GenderMode::Fixed(g) => Some(g),
     };
-    let opts = PipelineOptions { gender, ..s.base.clone() };
+    let mut opts = PipelineOptions { gender, ..s.base.clone() };
+    if s.true_height {
+        opts.fit.height = Some(truth.height_m);
+    }
+    if s.oracle_pose {
+        opts.given_pose = Some(truth_pose(&truth, stem)?);
+    }
     let source: Box<dyn JointsSource + '_> = match &s.detector {
         Some((model, options)) => Box::new(DetectedJoints { model, options }),
         None => Box::new(GivenJoints(truth_joints(&truth))),
@@ -140,13 +164,13 @@ pub fn run(a: Args) -> Result<(), CliError> {
         "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
         "gender": a.gender, "mean_shape": a.mean_shape, "score": score_name(fit.score), "seed": fit.seed,
         "fit_samples": fit.samples, "iterations": fit.max_iterations, "transition_scale": fit.transition_scale,
-        "temperature": fit.temperature, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
+        "temperature": fit.temperature, "joint_weight": fit.joint_weight, "sample_camera": fit.sample_camera, "height": fit.height, "true_height": a.true_height, "oracle_pose": a.oracle_pose, "keep_pose_scale": a.fit.keep_pose_scale, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
     });
     write_atomic(&a.out.join("run.json"), manifest.to_string().as_bytes())?;
     let model = BodyModel::embedded()?;
     let dict = dict_io::embedded()?;
     let detector = if a.detect { Some((Model::embedded()?, DetectOptions::default())) } else { None };
-    let shared = Shared { model: &model, dict: &dict, base: PipelineOptions { fit, mean_shape: a.mean_shape, keep_pose_scale: a.fit.keep_pose_scale, ..PipelineOptions::default() }, mode, detector };
+    let shared = Shared { model: &model, dict: &dict, base: PipelineOptions { fit, mean_shape: a.mean_shape, keep_pose_scale: a.fit.keep_pose_scale, ..PipelineOptions::default() }, mode, detector, true_height: a.true_height, oracle_pose: a.oracle_pose };
     let todo: Vec<&String> = stems.iter().filter(|s| !a.out.join(format!("{s}_posed.obj")).is_file()).collect();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build().map_err(|e| CliError(format!("thread pool: {e}")))?;
     catch_interrupt();
