@@ -5,9 +5,11 @@
 //! timing (its build time is printed). Times are wall clock; process CPU time is printed too,
 //! and "per CPU-second" is what each busy core delivers (robust on a shared machine).
 //! The fit gets the body's projected joints as its 2-D joints (the pipeline's joint term), and
-//! every body is fitted twice, on the old path (the problem's camera, PCA weights only,
-//! temperature 2) and with the defaults (per-sample cameras `FitOptions::sample_camera`, bone
-//! factors `FitOptions::proportion_sd`), so the two paths' rates are compared in one process.
+//! every body is fitted three times, on the old path (the problem's camera, PCA weights only,
+//! temperature 2), with the defaults but `FitOptions::estimate_proportions` off, and with the
+//! defaults (per-sample cameras `FitOptions::sample_camera`, bone factors
+//! `FitOptions::proportion_sd` centred on their closed-form estimate), so the paths' rates are
+//! compared in one process.
 //! Usage: cargo run --release --example fit_throughput [N=6] [THREADS=2] [SEED=3]
 
 use nalgebra::Matrix3;
@@ -72,7 +74,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (process_cpu() - c0) * 1e3
     );
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut totals = [Totals::default(), Totals::default()];
+    let mut totals = [Totals::default(), Totals::default(), Totals::default()];
     for i in 0..n {
         let gender = if i % 2 == 0 { Gender::Female } else { Gender::Male };
         let space = model.space(gender);
@@ -85,7 +87,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let joints2d = Joints2 { xy: std::array::from_fn(|k| cam.project(&nalgebra::Vector3::from(truth.joints[k]))), visible: [true; NUM_JOINTS] };
         let problem = FitProblem { model: &model, gender, pose: &truth.joints, camera: &cam, edges: &edges, joints2d: Some(&joints2d) };
         let old = FitOptions { sample_camera: false, proportion_sd: 0.0, temperature: 2.0, ..FitOptions::default() };
-        for (path, base) in [old, FitOptions::default()].into_iter().enumerate() {
+        let no_estimate = FitOptions { estimate_proportions: false, ..FitOptions::default() };
+        for (path, base) in [old, no_estimate, FitOptions::default()].into_iter().enumerate() {
             let sample_camera = base.sample_camera;
             let options = FitOptions { seed: 100 + i as u64, ..base };
             let (start, c0) = (std::time::Instant::now(), process_cpu());
@@ -107,7 +110,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let old = totals[0].print("old path (problem camera, PCA only, temperature 2)", threads);
-    let new = totals[1].print("defaults (per-sample cameras, bone factors)", threads);
+    let previous = totals[1].print("defaults without the proportion estimate", threads);
+    let new = totals[2].print("defaults (per-sample cameras, bone factors centred on their estimate)", threads);
     println!("defaults / old path, evaluations per CPU-second: {:.3}", new / old);
+    println!("defaults / without the proportion estimate, evaluations per CPU-second: {:.3}", new / previous);
     Ok(())
 }

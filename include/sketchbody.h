@@ -880,6 +880,15 @@ skb_status skb_fit_options_set_sample_camera(struct skb_fit_options *opts, int o
 skb_status skb_fit_options_set_proportion_sd(struct skb_fit_options *opts, double sd);
 
 /**
+ * Turns the closed-form proportion estimate on (non-zero, the default) or off (0): the bone
+ * factors' prior is centred on the factors estimated from the 2-D joints' bone lengths, the
+ * estimated pose and camera instead of 1 (needs 2-D joints and a proportion sd > 0: only
+ * `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it). Not thread-safe on one
+ * handle, like every setter.
+ */
+skb_status skb_fit_options_set_estimate_proportions(struct skb_fit_options *opts, int on);
+
+/**
  * Sets the longest raster side of the fit, pixels, in 16..=4096.
  */
 skb_status skb_fit_options_set_raster_side(struct skb_fit_options *opts, uint32_t side);

@@ -137,6 +137,8 @@ public:
     FitOptions &height(double metres) { check(skb_fit_options_set_height(o_.get(), metres)); return *this; }
     FitOptions &sample_camera(bool on) { check(skb_fit_options_set_sample_camera(o_.get(), on ? 1 : 0)); return *this; }
     FitOptions &proportion_sd(double v) { check(skb_fit_options_set_proportion_sd(o_.get(), v)); return *this; }
+    /// Centre the bone factors' prior on their estimate from the 2-D bone lengths (default on).
+    FitOptions &estimate_proportions(bool on) { check(skb_fit_options_set_estimate_proportions(o_.get(), on ? 1 : 0)); return *this; }
     const skb_fit_options *get() const noexcept { return o_.get(); }
 
 private:

@@ -93,6 +93,7 @@ fn options_setters_validate() {
         assert_eq!(skb_fit_options_set_skinning(i.opts, 2), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_gender(i.opts, 3), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_samples(ptr::null_mut(), 10), skb_status::SKB_ERR_NULL_POINTER);
+        assert_eq!(skb_fit_options_set_estimate_proportions(ptr::null_mut(), 1), skb_status::SKB_ERR_NULL_POINTER);
         for ok in [
             skb_fit_options_set_score(i.opts, SKB_SCORE_PAPER),
             skb_fit_options_set_score(i.opts, SKB_SCORE_TWO_SIDED_CHAMFER),
@@ -112,6 +113,8 @@ fn options_setters_validate() {
             skb_fit_options_set_sample_camera(i.opts, 0),
             skb_fit_options_set_proportion_sd(i.opts, 0.0),
             skb_fit_options_set_proportion_sd(i.opts, 0.1),
+            skb_fit_options_set_estimate_proportions(i.opts, 0),
+            skb_fit_options_set_estimate_proportions(i.opts, 1),
         ] {
             assert_eq!(ok, skb_status::SKB_OK);
         }

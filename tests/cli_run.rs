@@ -63,6 +63,8 @@ fn run_writes_every_output() {
     let report = std::fs::read_to_string(out_dir.join("report.md")).unwrap();
     assert!(report.contains("gender: female (given)"), "{report}");
     assert!(report.contains("samples 24"), "{report}");
+    assert!(report.contains("bone factors sd 0.1 centred on their 2-D estimate"), "{report}");
+    assert!(report.contains("- bone factors estimated from the 2-D joints: legs ") && report.contains("- bone factors fitted (applied to the mesh): legs "), "{report}");
     // A second run into the existing folder replaces the files and leaves no staging folder.
     let out = run(&[SKETCH, "--joints", JOINTS, "--out", o, "--gender", "f"].iter().chain(&FAST).copied().collect::<Vec<_>>());
     assert!(out.status.success());

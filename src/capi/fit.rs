@@ -160,6 +160,16 @@ pub unsafe extern "C" fn skb_fit_options_set_proportion_sd(opts: *mut skb_fit_op
     ffi_boundary! { set_fit(opts, |o| { o.proportion_sd = sd; Ok(()) }) }
 }
 
+/// Turns the closed-form proportion estimate on (non-zero, the default) or off (0): the bone
+/// factors' prior is centred on the factors estimated from the 2-D joints' bone lengths, the
+/// estimated pose and camera instead of 1 (needs 2-D joints and a proportion sd > 0: only
+/// `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it). Not thread-safe on one
+/// handle, like every setter.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_estimate_proportions(opts: *mut skb_fit_options, on: c_int) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.estimate_proportions = on != 0; Ok(()) }) }
+}
+
 /// Sets the longest raster side of the fit, pixels, in 16..=4096.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_raster_side(opts: *mut skb_fit_options, side: u32) -> skb_status {

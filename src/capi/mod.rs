@@ -39,7 +39,7 @@ pub use error::skb_last_error_message;
 pub use fit::{
     skb_fit_options, skb_fit_options_free, skb_fit_options_new, skb_fit_options_set_dims, skb_fit_options_set_gender,
     skb_fit_options_set_iterations, skb_fit_options_set_raster_side, skb_fit_options_set_samples, skb_fit_options_set_score,
-    skb_fit_options_set_height, skb_fit_options_set_joint_weight, skb_fit_options_set_proportion_sd, skb_fit_options_set_sample_camera, skb_fit_options_set_seed, skb_fit_options_set_skinning, skb_fit_options_set_temperature, skb_fit_options_set_tolerance,
+    skb_fit_options_set_estimate_proportions, skb_fit_options_set_height, skb_fit_options_set_joint_weight, skb_fit_options_set_proportion_sd, skb_fit_options_set_sample_camera, skb_fit_options_set_seed, skb_fit_options_set_skinning, skb_fit_options_set_temperature, skb_fit_options_set_tolerance,
     skb_fit_options_set_transition_scale, skb_fit_shape, skb_progress_fn, SKB_GENDER_AUTO, SKB_SCORE_CHAMFER, SKB_SCORE_FILLED_IOU,
     SKB_SCORE_PAPER, SKB_SCORE_TWO_SIDED_CHAMFER, SKB_SKIN_DUAL_QUATERNION, SKB_SKIN_LINEAR,
 };

@@ -1,10 +1,12 @@
 //! Fitting the body shape to the sketch (paper §II-C): the SIR of eqs. 5–9 and match scores.
 
+pub mod bone_estimate;
 pub mod proportions;
 mod score;
 mod sir;
 mod transition;
 
+pub use bone_estimate::{estimate_proportions, EstimateOptions, ProportionEstimate};
 pub use score::{distance_transform, MatchScore, SketchEvidence, CHAMFER_CAP};
 pub use sir::{fit_shape, FitOptions, FitProblem, FitResult, IterationStats};
 pub use transition::Transition;

@@ -20,6 +20,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
+use super::bone_estimate::{estimate_proportions, EstimateOptions};
 use super::proportions::{apply_in_place, proportions_of, FactorPrior};
 use super::score::{MatchScore, SketchEvidence};
 use super::transition::Transition;
@@ -98,6 +99,14 @@ pub struct FitOptions {
     /// temperature 4: rest AED 0.0427 vs 0.0456 without, 0.0442 at 0.05, 0.0428 at 0.15, 0.0435
     /// at 0.2). Finite, in 0..=0.5.
     pub proportion_sd: f64,
+    /// Centre the bone factors' prior on the closed-form estimate of
+    /// [`super::bone_estimate::estimate_proportions`] (bone lengths of the visible 2-D joints
+    /// against the gender's mean skeleton, given the problem pose's bone directions and
+    /// camera, default [`EstimateOptions`]) instead of 1. Needs [`FitProblem::joints2d`] and
+    /// `proportion_sd > 0`; when the estimate is degenerate (no usable bone) the prior stays at 1.
+    /// Default on (40 sketches `make-dataset 40 --seed 77`, estimated poses: rest AED 0.0366 vs
+    /// 0.0400 off, 0.0155 vs 0.0197 at the reference height; docs/benchmarks.md, issue 6).
+    pub estimate_proportions: bool,
 }
 
 impl Default for FitOptions {
@@ -118,6 +127,7 @@ impl Default for FitOptions {
             sample_camera: true,
             height: None,
             proportion_sd: 0.1,
+            estimate_proportions: true,
         }
     }
 }
@@ -153,6 +163,9 @@ pub struct FitResult {
     /// Bone-length factors of Y* (`exp` of the weighted mean log factors); `None` unless
     /// [`FitOptions::proportion_sd`] > 0.
     pub proportions: Option<Proportions>,
+    /// The closed-form estimate the factors' prior was centred on (`None` unless
+    /// [`FitOptions::estimate_proportions`] was used and the estimate was not degenerate).
+    pub proportion_estimate: Option<Proportions>,
     /// The best-scoring sample seen (PCA weights).
     pub best_weights: Vec<f64>,
     pub best_score: f64,
@@ -343,7 +356,18 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
         },
         dims,
     };
-    let factors = (options.proportion_sd > 0.0).then(|| FactorPrior::new(options.proportion_sd, options.transition_scale));
+    let estimate = match (options.estimate_proportions && options.proportion_sd > 0.0, problem.joints2d) {
+        (true, Some(j2)) => match estimate_proportions(space.mean_joints(), problem.pose, problem.camera, j2, &EstimateOptions::default()) {
+            Ok(e) => Some(e),
+            Err(Error::Degenerate(_)) => None,
+            Err(e) => return Err(e),
+        },
+        _ => None,
+    };
+    let factors = (options.proportion_sd > 0.0).then(|| {
+        let prior = FactorPrior::new(options.proportion_sd, options.transition_scale);
+        estimate.map_or(prior, |e| prior.centred(e.log_factors))
+    });
 
     let mut stds: Vec<f64> = space.variances()[..dims].iter().map(|l| l.sqrt()).collect();
     if let Some(f) = &factors {
@@ -413,7 +437,8 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
     let proportions = factors.map(|_| proportions_of(&weighted_mean[dims..]));
     weighted_mean.truncate(dims);
     best.1.truncate(dims);
-    Ok(FitResult { weights: weighted_mean, proportions, best_weights: best.1, best_score: best.0, history, evaluations })
+    let proportion_estimate = estimate.map(|e| e.proportions());
+    Ok(FitResult { weights: weighted_mean, proportions, proportion_estimate, best_weights: best.1, best_score: best.0, history, evaluations })
 }
 
 /// The visible 2-D joints scaled to the raster (factor `f`); non-finite positions are an error.

@@ -58,6 +58,10 @@ pub struct FitArgs {
     /// standard deviation of each log factor (0 = off).
     #[arg(long, default_value_t = FitOptions::default().proportion_sd)]
     pub proportion_sd: f64,
+    /// Centre the bone factors' prior on their closed-form estimate from the 2-D joints' bone
+    /// lengths, the estimated pose and camera (`--estimate-proportions true|false`).
+    #[arg(long, default_value_t = FitOptions::default().estimate_proportions, action = clap::ArgAction::Set)]
+    pub estimate_proportions: bool,
     /// Keep the pose solver's camera instead of refitting its scales and translation to the
     /// gender's mean skeleton before the fit.
     #[arg(long)]
@@ -104,6 +108,7 @@ impl FitArgs {
             sample_camera: self.sample_camera,
             height: self.height,
             proportion_sd: self.proportion_sd,
+            estimate_proportions: self.estimate_proportions,
         })
     }
 }

@@ -124,10 +124,14 @@ fn report(a: &Args, opts: &PipelineOptions, r: &PipelineResult, size: (usize, us
         score_name(f.score), f.samples, f.max_iterations, f.transition_scale, f.temperature, f.raster_max_side, f.tolerance,
         f.dims.map_or("default".into(), |d| d.to_string()), f.seed, f.skinning,
         format!(
-            "{}{}{}{}{}",
+            "{}{}{}{}{}{}",
             if f.retarget { ", retarget" } else { "" },
             if opts.keep_pose_scale { ", solver camera kept" } else { ", camera refitted to the mean skeleton" },
             if f.sample_camera { ", per-sample cameras" } else { "" },
+            match (f.proportion_sd > 0.0, f.estimate_proportions) {
+                (false, _) => String::new(),
+                (true, est) => format!(", bone factors sd {}{}", f.proportion_sd, if est { " centred on their 2-D estimate" } else { "" }),
+            },
             f.height.map_or(String::new(), |h| format!(", height {h} m")),
             if opts.mean_shape { " (mean shape: fit skipped)" } else { "" }
         )
@@ -142,6 +146,14 @@ fn report(a: &Args, opts: &PipelineOptions, r: &PipelineResult, size: (usize, us
     }
     let how = if r.gender_by_score { "chosen by score (higher is better)" } else { "given" };
     let _ = writeln!(s, "- gender: {} ({how})", r.gender.name());
+    let chosen = r.fits.iter().find(|g| g.gender == r.gender).and_then(|g| g.fit.as_ref());
+    let factors = |p: &sketchbody::render::sketch::scene::Proportions| format!("legs {:.3}, arms {:.3}, shoulders {:.3}, head {:.3}, torso {:.3}", p.legs, p.arms, p.shoulders, p.head, p.torso);
+    if let Some(e) = chosen.and_then(|f| f.proportion_estimate.as_ref()) {
+        let _ = writeln!(s, "- bone factors estimated from the 2-D joints: {}", factors(e));
+    }
+    if let Some(p) = chosen.and_then(|f| f.proportions.as_ref()) {
+        let _ = writeln!(s, "- bone factors fitted (applied to the mesh): {}", factors(p));
+    }
     let w: Vec<String> = r.weights.iter().map(|x| format!("{x:.4}")).collect();
     let _ = writeln!(s, "- shape weights (m): [{}]\n", w.join(", "));
     let t = &r.timings;

@@ -135,6 +135,8 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         "gender_by_score": r.gender_by_score,
         "scores": scores,
         "shape_weights": r.weights,
+        "proportions": r.fits.iter().find(|g| g.gender == r.gender).and_then(|g| g.fit.as_ref()).and_then(|f| f.proportions),
+        "proportion_estimate": r.fits.iter().find(|g| g.gender == r.gender).and_then(|g| g.fit.as_ref()).and_then(|f| f.proportion_estimate),
         "seconds": r.timings.total,
     });
     write_atomic(&out.join(format!("{stem}.json")), doc.to_string().as_bytes())?;
@@ -164,7 +166,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
         "gender": a.gender, "mean_shape": a.mean_shape, "score": score_name(fit.score), "seed": fit.seed,
         "fit_samples": fit.samples, "iterations": fit.max_iterations, "transition_scale": fit.transition_scale,
-        "temperature": fit.temperature, "joint_weight": fit.joint_weight, "sample_camera": fit.sample_camera, "height": fit.height, "true_height": a.true_height, "oracle_pose": a.oracle_pose, "keep_pose_scale": a.fit.keep_pose_scale, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
+        "temperature": fit.temperature, "joint_weight": fit.joint_weight, "sample_camera": fit.sample_camera, "proportion_sd": fit.proportion_sd, "estimate_proportions": fit.estimate_proportions, "height": fit.height, "true_height": a.true_height, "oracle_pose": a.oracle_pose, "keep_pose_scale": a.fit.keep_pose_scale, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
     });
     write_atomic(&a.out.join("run.json"), manifest.to_string().as_bytes())?;
     let model = BodyModel::embedded()?;
