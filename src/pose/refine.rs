@@ -107,15 +107,27 @@ fn apply(cam: &WeakPerspective, d: &[f64], equal: bool) -> Option<WeakPerspectiv
     (c.sx > 0.0 && c.sy > 0.0 && d.iter().all(|v| v.is_finite())).then_some(c)
 }
 
-/// Damped normal-equation solve (JᵀJ + λ·diag(JᵀJ) + tiny) δ = −Jᵀr.
-fn lm_step(j: &DMatrix<f64>, r: &DVector<f64>, lambda: f64) -> Option<DVector<f64>> {
-    let mut h = j.transpose() * j;
-    let g = j.transpose() * r;
-    let maxd = (0..h.nrows()).map(|i| h[(i, i)]).fold(0.0, f64::max);
-    for i in 0..h.nrows() {
-        h[(i, i)] += lambda * h[(i, i)] + 1e-15 * maxd + f64::MIN_POSITIVE;
+/// The normal equations JᵀJ and Jᵀr of one linearisation, formed once and reused by every
+/// damping retry of that iteration.
+struct Normal {
+    h: DMatrix<f64>,
+    g: DVector<f64>,
+}
+
+impl Normal {
+    fn new(j: &DMatrix<f64>, r: &DVector<f64>) -> Normal {
+        Normal { h: j.transpose() * j, g: j.transpose() * r }
     }
-    h.cholesky().map(|c| -c.solve(&g))
+
+    /// Damped solve (JᵀJ + λ·diag(JᵀJ) + tiny) δ = −Jᵀr.
+    fn step(&self, lambda: f64) -> Option<DVector<f64>> {
+        let mut h = self.h.clone();
+        let maxd = (0..h.nrows()).map(|i| h[(i, i)]).fold(0.0, f64::max);
+        for i in 0..h.nrows() {
+            h[(i, i)] += lambda * h[(i, i)] + 1e-15 * maxd + f64::MIN_POSITIVE;
+        }
+        h.cholesky().map(|c| -c.solve(&self.g))
+    }
 }
 
 pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEstimate) -> Result<PoseEstimate> {
@@ -144,9 +156,13 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
         let mut r = prob.residuals(&cam, &prob.pose(&bases, w.as_slice()));
         r.extend(prob.prior_residuals(&bases, w.as_slice()));
         let r = DVector::from_vec(r);
+        let full = Normal::new(&j, &r);
+        // The tangent-space system of this linearisation (built on first use): n = ∇g at w,
+        // T its orthonormal complement, and the normal equations of [J_camera, J_Ω T].
+        let mut tangent: Option<Option<(DVector<f64>, DMatrix<f64>, Normal)>> = None;
         let mut accepted = false;
         while !accepted && lambda <= 1e16 {
-            let cand = lm_step(&j, &r, lambda).and_then(|d| {
+            let cand = full.step(lambda).and_then(|d| {
                 let c = apply(&cam, d.as_slice(), equal)?;
                 let nw = &w + d.rows(7, k);
                 let g = con.value(&nw);
@@ -154,19 +170,25 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
                     return Some((c, nw));
                 }
                 let target = if g > bound { bound } else { -bound };
-                let n = con.gradient(&w);
-                if !(n.norm() > 0.0) {
-                    return None;
-                }
-                // With one weight the tangent space is empty: a camera-only step.
-                let t = tangent_basis(&n);
-                let mut jr = DMatrix::zeros(j.nrows(), 7 + k - 1);
-                jr.columns_mut(0, 7).copy_from(&j.columns(0, 7));
-                jr.columns_mut(7, k - 1).copy_from(&(j.columns(7, k) * &t));
-                let dr = lm_step(&jr, &r, lambda)?;
+                let (n, t, reduced) = tangent
+                    .get_or_insert_with(|| {
+                        let n = con.gradient(&w);
+                        if !(n.norm() > 0.0) {
+                            return None;
+                        }
+                        // With one weight the tangent space is empty: a camera-only step.
+                        let t = tangent_basis(&n);
+                        let mut jr = DMatrix::zeros(j.nrows(), 7 + k - 1);
+                        jr.columns_mut(0, 7).copy_from(&j.columns(0, 7));
+                        jr.columns_mut(7, k - 1).copy_from(&(j.columns(7, k) * &t));
+                        let reduced = Normal::new(&jr, &r);
+                        Some((n, t, reduced))
+                    })
+                    .as_ref()?;
+                let dr = reduced.step(lambda)?;
                 let c = apply(&cam, dr.as_slice(), equal)?;
-                let nw = &w + &t * dr.rows(7, k - 1);
-                let nw = con.retract(&nw, &n, target)?;
+                let nw = &w + t * dr.rows(7, k - 1);
+                let nw = con.retract(&nw, n, target)?;
                 Some((c, nw))
             });
             match cand {
