@@ -25,3 +25,19 @@ fn committed_header_matches_fresh_generation() {
         "include/sketchbody.h differs from a fresh cbindgen generation: run scripts/gen-header.sh and commit it"
     );
 }
+
+/// cbindgen exports every `pub const` of the crate; core constants must be listed in
+/// cbindgen.toml's `exclude` so that the C header only defines the C API's own `SKB_` names
+/// (plus its include guard) and never pollutes a plug-in's namespace.
+#[test]
+fn header_defines_only_skb_names() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let header = std::fs::read_to_string(root.join("include/sketchbody.h")).expect("read include/sketchbody.h");
+    let foreign: Vec<&str> = header
+        .lines()
+        .filter_map(|l| l.strip_prefix("#define "))
+        .filter_map(|rest| rest.split_whitespace().next())
+        .filter(|name| !name.starts_with("SKB_") && *name != "SKETCHBODY_H")
+        .collect();
+    assert!(foreign.is_empty(), "the C header defines non-SKB_ names {foreign:?}: add them to cbindgen.toml's exclude list");
+}
