@@ -8,7 +8,7 @@ use crate::error::Error;
 use crate::skeleton::{NUM_BONES, NUM_JOINTS};
 
 use super::error::{fail, fail_with};
-use super::ptr::try_ref;
+use super::ptr::{free_box, try_ref};
 use super::status::skb_status;
 
 /// Female shape space (value of the `gender` arguments).
@@ -96,9 +96,7 @@ pub unsafe extern "C" fn skb_context_new(out: *mut *mut skb_context) -> skb_stat
 /// Releases a context from `skb_context_new`. NULL is a no-op. Meshes made from it stay valid.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_free(ctx: *mut skb_context) {
-    if !ctx.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(ctx))));
-    }
+    free_box(ctx)
 }
 
 /// Number of principal components of `gender`'s shape space (the most weights
@@ -168,9 +166,7 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
 /// Releases a mesh. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_free(mesh: *mut skb_mesh) {
-    if !mesh.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(mesh))));
-    }
+    free_box(mesh)
 }
 
 /// The mesh's gender (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) into `*out`.

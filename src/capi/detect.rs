@@ -12,7 +12,7 @@ use super::body::{out_slice, skb_context};
 use super::error::{fail, fail_with};
 use crate::error::Error;
 use super::image::{skb_image, view_of};
-use super::ptr::try_ref;
+use super::ptr::{free_box, try_ref};
 use super::status::skb_status;
 
 /// A detector model (flexible mixture of parts). Create with `skb_detector_new_from_file`,
@@ -51,15 +51,6 @@ pub unsafe extern "C" fn skb_detector_free(det: *mut skb_detector) {
     free_box(det)
 }
 
-/// Drops a handle made by `Box::into_raw` inside a panic boundary; NULL is a no-op.
-///
-/// # Safety
-/// `p` must be NULL or a pointer from `Box::into_raw` not freed before.
-unsafe fn free_box<T>(p: *mut T) {
-    if !p.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(p))));
-    }
-}
 
 /// Detects the best-scoring figure in `image` with `det`. `threshold`: score threshold (NaN uses
 /// the model's own); `min_cell_px`: skip pyramid levels with cells smaller than this many pixels

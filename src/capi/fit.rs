@@ -17,7 +17,7 @@ use super::body::{skb_context, skb_mesh, write_out};
 use super::error::{fail, fail_with};
 use super::image::{skb_image, view_of};
 use super::mesh_ops::{skb_camera, Posed};
-use super::ptr::{try_ref, try_slice_of};
+use super::ptr::{free_box, try_ref, try_slice_of};
 use super::status::skb_status;
 
 /// Progress callback: called from the calling thread with the fraction of the work done
@@ -69,9 +69,7 @@ pub unsafe extern "C" fn skb_fit_options_new(out: *mut *mut skb_fit_options) -> 
 /// Frees fit options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_free(opts: *mut skb_fit_options) {
-    if !opts.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(opts))));
-    }
+    free_box(opts)
 }
 
 /// Applies `set` to a copy, validates it and stores it only if valid.

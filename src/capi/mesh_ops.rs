@@ -19,7 +19,7 @@ use crate::skeleton::{Joints3, NUM_JOINTS};
 
 use super::body::{out_slice, skb_mesh};
 use super::error::{fail, fail_with};
-use super::ptr::{try_ref, try_slice_mut, try_slice_of};
+use super::ptr::{free_box, try_ref, try_slice_mut, try_slice_of};
 use super::status::skb_status;
 
 /// Mutably borrows `*p`, or fails naming `name` when `p` is NULL.
@@ -78,9 +78,7 @@ pub unsafe extern "C" fn skb_rasterizer_new(out: *mut *mut skb_rasterizer) -> sk
 /// Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rasterizer_free(r: *mut skb_rasterizer) {
-    if !r.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(r))));
-    }
+    free_box(r)
 }
 
 /// Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`

@@ -20,7 +20,7 @@ use super::fit::{progress_closure, skb_fit_options, skb_progress_fn};
 use super::image::{skb_image, view_of};
 use super::mesh_ops::{path_arg, skb_camera, Posed};
 use super::pose::{joints_in, skb_joints2d, skb_pose_dictionary, skb_pose_options};
-use super::ptr::try_ref;
+use super::ptr::{free_box, try_ref};
 use super::status::skb_status;
 
 /// `skb_result_copy_joints3d`: the rest joints of the fitted shape.
@@ -74,9 +74,7 @@ pub unsafe extern "C" fn skb_gray_image_view(img: *const skb_gray_image, out: *m
 /// Frees an image from `skb_gray_image_load`. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
-    if !img.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(img))));
-    }
+    free_box(img)
 }
 
 /// Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
@@ -143,9 +141,7 @@ pub unsafe extern "C" fn skb_run_pipeline(
 /// Frees a result. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_free(result: *mut skb_result) {
-    if !result.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(result))));
-    }
+    free_box(result)
 }
 
 /// The chosen gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`, and whether it

@@ -14,7 +14,7 @@ use crate::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate,
 use crate::skeleton::{Joints2, NUM_BONES};
 
 use super::error::{fail, fail_with};
-use super::ptr::try_ref;
+use super::ptr::{free_box, try_ref};
 use super::status::skb_status;
 
 /// Length of a pose vector (x, y, z of each joint in canonical order).
@@ -139,9 +139,7 @@ pub unsafe extern "C" fn skb_pose_dictionary_load(path: *const c_char, out: *mut
 /// Frees a dictionary. NULL is a no-op. Do not use it afterwards.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_free(dict: *mut skb_pose_dictionary) {
-    if !dict.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(dict))));
-    }
+    free_box(dict)
 }
 
 /// Writes the number of basis poses K to `*out`. Thread-safe.
@@ -235,9 +233,7 @@ pub unsafe extern "C" fn skb_pose_options_new(out: *mut *mut skb_pose_options) -
 /// Frees options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_free(opts: *mut skb_pose_options) {
-    if !opts.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(opts))));
-    }
+    free_box(opts)
 }
 
 /// Applies `set` to a copy of the options, validates the copy and stores it only if valid.

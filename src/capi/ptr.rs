@@ -33,6 +33,17 @@ pub(crate) unsafe fn try_slice_mut<'a>(p: *mut u8, len: usize, name: &str) -> Re
     Ok(std::slice::from_raw_parts_mut(p, len))
 }
 
+/// Frees a handle made by `Box::into_raw`: NULL is a no-op, and a panic in the value's `Drop`
+/// is contained (a `_free` function never unwinds into C).
+///
+/// # Safety
+/// `p` must be NULL or a pointer from `Box::into_raw` not freed before.
+pub(crate) unsafe fn free_box<T>(p: *mut T) {
+    if !p.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(p))));
+    }
+}
+
 fn null(name: &str) -> skb_status {
     fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL"))
 }

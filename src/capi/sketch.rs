@@ -11,7 +11,7 @@ use crate::skeleton::NUM_JOINTS;
 
 use super::body::skb_context;
 use super::error::{fail, fail_with};
-use super::ptr::{try_ref, try_slice_mut, try_slice_of};
+use super::ptr::{free_box, try_ref, try_slice_mut, try_slice_of};
 use super::status::skb_status;
 
 /// Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
@@ -43,9 +43,7 @@ pub unsafe extern "C" fn skb_sketch_options_new(out: *mut *mut skb_sketch_option
 /// Releases options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_free(opts: *mut skb_sketch_options) {
-    if !opts.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(opts))));
-    }
+    free_box(opts)
 }
 
 /// Sets the style: `SKB_SKETCH_STYLE_RANDOM` or `SKB_SKETCH_STYLE_CLEAN`; anything else is
