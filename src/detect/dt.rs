@@ -32,13 +32,20 @@ fn dt1d(src: &[f32], a: f64, b: f64, offset: i64, dst: &mut [f32], arg: &mut [u1
         z[k] = s;
         z[k + 1] = f64::INFINITY;
     }
+    read_envelope(src, a, b, offset, |k| v[k], z, dst, arg);
+}
+
+/// Evaluates an upper envelope at the probes `offset + i`: parabola k (vertex `vertex(k)`) is
+/// the maximum on z[k] .. z[k+1]; writes each probe's value to `dst` and its vertex to `arg`.
+#[allow(clippy::too_many_arguments)]
+fn read_envelope(src: &[f32], a: f64, b: f64, offset: i64, vertex: impl Fn(usize) -> usize, z: &[f64], dst: &mut [f32], arg: &mut [u16]) {
     let mut k = 0;
     for (i, (d, g)) in dst.iter_mut().zip(arg.iter_mut()).enumerate() {
         let q = (offset + i as i64) as f64;
         while z[k + 1] < q {
             k += 1;
         }
-        let p = v[k];
+        let p = vertex(k);
         let dq = q - p as f64;
         *d = (src[p] as f64 - a * dq * dq - b * dq) as f32;
         *g = p as u16;
@@ -99,17 +106,7 @@ pub(super) fn dt1d_fast(src: &[f32], a: f64, b: f64, offset: i64, dst: &mut [f32
         }
     }
     z[k + 1] = f64::INFINITY;
-    let mut k = 0;
-    for (i, (d, g)) in dst.iter_mut().zip(arg.iter_mut()).enumerate() {
-        let q = (offset + i as i64) as f64;
-        while z[k + 1] < q {
-            k += 1;
-        }
-        let p = v[k] as usize;
-        let dq = q - p as f64;
-        *d = (src[p] as f64 - a * dq * dq - b * dq) as f32;
-        *g = p as u16;
-    }
+    read_envelope(src, a, b, offset, |k| v[k] as usize, z, dst, arg);
 }
 
 /// Result of a 2-D transform: best scores and the child positions attaining them.
