@@ -55,7 +55,7 @@ pub use pose::{
     skb_pose_dictionary_bone_lengths, skb_pose_dictionary_free, skb_pose_dictionary_load, skb_pose_dictionary_mean,
     skb_pose_dictionary_new_default, skb_pose_dictionary_num_bases, skb_pose_options, skb_pose_options_free,
     skb_pose_options_new, skb_pose_options_set_alpha, skb_pose_options_set_kappa, skb_pose_options_set_max_bases,
-    skb_pose_options_set_blend, skb_pose_options_set_limb_candidates, skb_pose_options_set_prior, skb_pose_options_set_refine,
+    skb_pose_options_set_blend, skb_pose_options_set_joint_noise, skb_pose_options_set_limb_candidates, skb_pose_options_set_prior, skb_pose_options_set_refine,
     skb_pose_options_set_starts, skb_pose_options_set_tolerance, skb_pose_refine,
     SKB_POSE_DIM, SKB_POSE_MAX_BASES,
 };

@@ -87,7 +87,8 @@ pub struct skb_pose_dictionary {
 
 /// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
 /// α = 0.8 toward the level target, sx = sy, 4 bases, 0.5 px, refinement on, prior 0.1 m,
-/// 12 exemplar starts, 64 limb candidates, blend 30 px²). Not synchronised: do not change it
+/// 16 exemplar starts, 64 limb candidates, blend 30 px², free-joint refinement at 0.014 m).
+/// Not synchronised: do not change it
 /// while another thread uses it. Free with `skb_pose_options_free`.
 pub struct skb_pose_options {
     pub(crate) inner: PoseOptions,
@@ -333,6 +334,17 @@ pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options,
     ffi_boundary! { set_option(opts, |o| o.blend = tau_px2) }
 }
 
+/// Sets the free-joint refinement's expected 2-D joint error, metres at the figure's scale (a
+/// 1.75 m person) in [0, 1]; 0 turns it off. After the dictionary fit every joint may then
+/// leave the dictionary's span to follow the 2-D joints, bone lengths kept (default 0.014 m,
+/// 4 px on a 500-px figure; raise it for rough joints such as detections). With it on the
+/// returned joints are no longer base + Σ basis · weight of the dictionary's own base pose;
+/// `skb_pose_refine` still continues from them (see `skb_pose_refine`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_joint_noise(opts: *mut skb_pose_options, noise_m: f64) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.joint_noise = noise_m) }
+}
+
 pub(crate) fn joints_in(j: &skb_joints2d) -> Joints2 {
     Joints2 { xy: j.xy, visible: std::array::from_fn(|k| j.visible[k] != 0) }
 }
@@ -364,12 +376,13 @@ fn prior_weight(d: &Dictionary, j: &Joints2, o: &PoseOptions) -> f64 {
 }
 
 /// Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
-/// refinement if enabled; by default from 12 exemplar starts whose results are blended, see
-/// `skb_pose_options_set_starts`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
+/// refinement if enabled; by default from 16 exemplar starts whose results are blended, see
+/// `skb_pose_options_set_starts`, and last the free-joint refinement, see
+/// `skb_pose_options_set_joint_noise`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
 /// joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
 /// (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
 /// beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
-/// distinct `out`); about 1.6 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
+/// distinct `out`); about 1.3 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
 #[no_mangle]
 pub unsafe extern "C" fn skb_estimate_pose(
     dict: *const skb_pose_dictionary,
@@ -484,12 +497,20 @@ mod tests {
             assert_eq!(skb_pose_options_set_limb_candidates(o, 5000), skb_status::SKB_ERR_OUT_OF_RANGE);
             assert_eq!(skb_pose_options_set_blend(o, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
             assert_eq!(skb_pose_options_set_blend(o, -1.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(skb_pose_options_set_joint_noise(o, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
+            assert_eq!(skb_pose_options_set_joint_noise(o, 1.5), skb_status::SKB_ERR_OUT_OF_RANGE);
             let j = figure();
-            // From an exemplar start (the default): refining the result must not undo the fit,
-            // which holds only if the base pose is recovered as joints − Σ basis · weight.
+            // The free-joint refinement (on by default) follows the 2-D joints more closely.
             let mut p: skb_pose3d = std::mem::zeroed();
             assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
+            let free_rms = p.rms_px;
+            assert_eq!(skb_pose_options_set_joint_noise(o, 0.0), skb_status::SKB_OK);
+            assert_eq!((*o).inner.joint_noise, 0.0);
+            // From an exemplar start (the default): refining the result must not undo the fit,
+            // which holds only if the base pose is recovered as joints − Σ basis · weight.
+            assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
             assert!(p.num_bases > 0);
+            assert!(free_rms < p.rms_px, "free joints {free_rms} px, dictionary pose {} px", p.rms_px);
             let mut q: skb_pose3d = std::mem::zeroed();
             assert_eq!(skb_pose_refine(d, &j, o, &p, &mut q), skb_status::SKB_OK);
             assert!(q.rms_px <= p.rms_px + 1e-9, "{} > {}", q.rms_px, p.rms_px);

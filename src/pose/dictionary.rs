@@ -87,6 +87,8 @@ pub struct Dictionary {
     pub exemplars: DMatrix<f64>,
     /// Free text: how the dictionary was made (clips, held-out clips, parameters).
     pub provenance: String,
+    /// Derived from `exemplars` on first use by the nearest-neighbour starts.
+    pub(crate) frame_cache: super::exemplar::FrameCache,
 }
 
 /// Writes a pose as a 45-vector.
@@ -271,7 +273,7 @@ impl Dictionary {
             }
         }
         let bases = DMatrix::from_columns(&cols);
-        let dict = Dictionary { mean, bases, sigma: DVector::from_vec(sigma), bone_lengths, actions, exemplars, provenance };
+        let dict = Dictionary { mean, bases, sigma: DVector::from_vec(sigma), bone_lengths, actions, exemplars, provenance, frame_cache: Default::default() };
         dict.validate()?;
         Ok(dict)
     }
@@ -282,7 +284,7 @@ pub(crate) const TREE_ORDER: [usize; NUM_JOINTS] = [8, 1, 9, 12, 0, 2, 5, 10, 13
 
 /// `pose` with every bone set to `lengths[b]` along its own direction (a zero-length bone
 /// keeps its offset), rebuilt from the pelvis outward.
-fn with_bone_lengths(pose: &DVector<f64>, lengths: &[f64; NUM_BONES]) -> DVector<f64> {
+pub(crate) fn with_bone_lengths(pose: &DVector<f64>, lengths: &[f64; NUM_BONES]) -> DVector<f64> {
     let mut out = pose.clone();
     for &c in TREE_ORDER.iter().skip(1) {
         let Some(b) = BONES.iter().position(|&(_, ch)| ch == c) else { continue };

@@ -17,7 +17,9 @@
 //!    the candidates to exemplars that explain the whole figure keeps the limb depths
 //!    plausible (every limb's 2-D projection also fits its depth mirror).
 
-use nalgebra::{DVector, Matrix3, Matrix3x2, Vector3};
+use std::sync::OnceLock;
+
+use nalgebra::{DVector, Matrix3, Matrix3x2, SMatrix, Vector3};
 
 use super::camera_fit::{fit_camera, CameraPrior};
 use super::problem::Problem;
@@ -62,20 +64,96 @@ fn affine_residual(e: &[f64], vis: &[usize], w: &[[f64; 2]], ww: f64) -> Option<
     Some((ww - (xw.transpose() * chol.solve(&xw)).trace()).max(0.0))
 }
 
-/// Every usable exemplar of `prob.dict` with its affine-camera residual (px²), best first
-/// (ties by index). Empty when the dictionary has no exemplars.
-pub fn affine_ranking(prob: &Problem) -> Vec<(usize, f64)> {
+/// An orthonormal basis Q (15 × 3, row-major per joint) of the centred exemplar's column
+/// space with all joints visible: X̄ (X̄ᵀX̄)⁻¹ X̄ᵀ = Q Qᵀ, so the affine residual is
+/// `‖W‖² − ‖QᵀW‖²`. `None` when the exemplar is degenerate.
+type Frame = Option<[f64; 3 * NUM_JOINTS]>;
+
+fn frame(e: &[f64]) -> Frame {
+    let mut xt = SMatrix::<f64, 3, NUM_JOINTS>::zeros();
+    for a in 0..3 {
+        let m = (0..NUM_JOINTS).map(|p| e[3 * p + a]).sum::<f64>() / NUM_JOINTS as f64;
+        for p in 0..NUM_JOINTS {
+            xt[(a, p)] = e[3 * p + a] - m;
+        }
+    }
+    let chol = (xt * xt.transpose()).cholesky()?;
+    let qt = chol.l().solve_lower_triangular(&xt)?;
+    Some(std::array::from_fn(|i| qt[(i % 3, i / 3)]))
+}
+
+/// The dictionary's exemplar frames ([`frame`]), computed on first use. A clone starts empty
+/// (so a dictionary rebuilt from another with `..d.clone()` never sees stale frames) and
+/// equality ignores it: it is derived from [`super::Dictionary::exemplars`] alone.
+#[derive(Default)]
+pub struct FrameCache(OnceLock<Vec<Frame>>);
+
+impl Clone for FrameCache {
+    fn clone(&self) -> Self {
+        FrameCache::default()
+    }
+}
+
+impl PartialEq for FrameCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for FrameCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("FrameCache")
+    }
+}
+
+fn frames<'a>(prob: &Problem<'a>) -> &'a [Frame] {
+    let ex = &prob.dict.exemplars;
+    prob.dict.frame_cache.0.get_or_init(|| (0..ex.ncols()).map(|k| frame(ex.column(k).as_slice())).collect())
+}
+
+/// The `keep` best usable exemplars of `prob.dict` with their affine-camera residuals (px²),
+/// best first (ties by index); all of them when `keep` is larger. Empty when the dictionary
+/// has no exemplars.
+pub fn affine_ranking(prob: &Problem, keep: usize) -> Vec<(usize, f64)> {
     let ex = &prob.dict.exemplars;
     let n = prob.vis.len() as f64;
     let cu = prob.vis.iter().map(|&p| prob.uv[p][0]).sum::<f64>() / n;
     let cv = prob.vis.iter().map(|&p| prob.uv[p][1]).sum::<f64>() / n;
     let w: Vec<[f64; 2]> = prob.vis.iter().map(|&p| [prob.uv[p][0] - cu, prob.uv[p][1] - cv]).collect();
     let ww: f64 = w.iter().map(|q| q[0] * q[0] + q[1] * q[1]).sum();
-    let mut scored: Vec<(usize, f64)> = (0..ex.ncols())
-        .filter_map(|k| affine_residual(ex.column(k).as_slice(), &prob.vis, &w, ww).map(|r| (k, r)))
-        .collect();
-    scored.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+    let mut scored: Vec<(usize, f64)> = if prob.vis.len() == NUM_JOINTS {
+        frames(prob)
+            .iter()
+            .enumerate()
+            .filter_map(|(k, f)| {
+                let q = f.as_ref()?;
+                let mut proj = 0.0;
+                for a in 0..3 {
+                    let (mut pu, mut pv) = (0.0, 0.0);
+                    for (p, wp) in w.iter().enumerate() {
+                        pu += q[3 * p + a] * wp[0];
+                        pv += q[3 * p + a] * wp[1];
+                    }
+                    proj += pu * pu + pv * pv;
+                }
+                Some((k, (ww - proj).max(0.0)))
+            })
+            .collect()
+    } else {
+        (0..ex.ncols()).filter_map(|k| affine_residual(ex.column(k).as_slice(), &prob.vis, &w, ww).map(|r| (k, r))).collect()
+    };
+    let order = |a: &(usize, f64), b: &(usize, f64)| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0));
+    if keep < scored.len() {
+        scored.select_nth_unstable_by(keep, order);
+        scored.truncate(keep);
+    }
+    scored.sort_unstable_by(order);
     scored
+}
+
+/// How many exemplars of the [`affine_ranking`] [`nearest`] refits for `count` starts.
+pub fn shortlist_len(count: usize) -> usize {
+    (SHORTLIST_FACTOR * count).max(MIN_SHORTLIST)
 }
 
 /// The `count` best starts from an [`affine_ranking`] (see the module doc, step 2), best first;
@@ -87,7 +165,7 @@ pub fn nearest(prob: &Problem, ranking: &[(usize, f64)], count: usize, prior: &C
     }
     let ex = &prob.dict.exemplars;
     let mut starts: Vec<Start> = Vec::new();
-    for &(k, _) in ranking.iter().take((SHORTLIST_FACTOR * count).max(MIN_SHORTLIST)) {
+    for &(k, _) in ranking.iter().take(shortlist_len(count)) {
         let e = ex.column(k);
         let x: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|p| Vector3::new(e[3 * p], e[3 * p + 1], e[3 * p + 2]));
         if let Ok(camera) = fit_camera(&x, &prob.uv, &prob.vis, prior) {
@@ -168,7 +246,7 @@ mod tests {
         let k = 7;
         let j = view(d.exemplars.column(k).as_slice(), &cam);
         let prob = Problem::new(&d, &j, 0.0).unwrap();
-        let ranking = affine_ranking(&prob);
+        let ranking = affine_ranking(&prob, usize::MAX);
         assert_eq!(ranking.len(), d.exemplars.ncols());
         assert!(ranking[0].1 < 1e-9, "{}", ranking[0].1);
         let s = nearest(&prob, &ranking, 3, &NO_PRIOR).unwrap();
@@ -196,6 +274,6 @@ mod tests {
         assert!((pose - mixed).norm() < 1e-12);
         let empty = Dictionary { exemplars: nalgebra::DMatrix::zeros(45, 0), ..d.clone() };
         let prob = Problem::new(&empty, &j, 0.0).unwrap();
-        assert!(matches!(nearest(&prob, &affine_ranking(&prob), 1, &NO_PRIOR), Err(Error::OutOfRange { name: "starts", .. })));
+        assert!(matches!(nearest(&prob, &affine_ranking(&prob, usize::MAX), 1, &NO_PRIOR), Err(Error::OutOfRange { name: "starts", .. })));
     }
 }

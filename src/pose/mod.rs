@@ -14,6 +14,7 @@
 //! - [`camera_fit`]: the camera step (SVD of M, eq. 4 blend, projection onto SO(3)).
 //! - [`pursuit`]: the matching pursuit driver ([`estimate_pose`]).
 //! - [`refine`]: the joint Levenberg–Marquardt refinement with the constraint kept exactly.
+//! - [`joint_fit`]: the free-joint refinement (joints leave the dictionary's span, bone lengths kept).
 //! - [`metrics`]: MPJPE and PA-MPJPE.
 //!
 //! Units: 3-D joints are metres of a 1.75 m person (every pose is normalised to that stature,
@@ -25,6 +26,7 @@ pub mod camera_fit;
 pub mod dict_io;
 pub mod dictionary;
 pub mod exemplar;
+pub mod joint_fit;
 pub mod learn;
 pub mod metrics;
 pub mod motion;

@@ -1,5 +1,7 @@
 //! A validated 2-D input and the model of eqs. (1)–(3) over a chosen basis subset.
 
+use std::sync::Arc;
+
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::dictionary::Dictionary;
@@ -28,6 +30,9 @@ pub struct Problem<'a> {
     /// The pose the bases are added to (45 values, metres): the dictionary's mean μ, or an
     /// start composed from exemplars (see [`Problem::with_base`] and [`super::exemplar`]).
     pub base: DVector<f64>,
+    /// Per basis b, `C_b = Σ_visible p B_bp B_bpᵀ` as (xx, xy, xz, yy, yz, zz), m²: the squared
+    /// norm of the basis's projection under camera rows P (2 × 3, no translation) is ⟨PᵀP, C_b⟩.
+    pub basis_gram: Arc<Vec<[f64; 6]>>,
 }
 
 impl<'a> Problem<'a> {
@@ -93,7 +98,21 @@ impl<'a> Problem<'a> {
         }
         let spread3: f64 = vis.iter().map(|&k| (dict.mean[3 * k] - mx3).powi(2) + (dict.mean[3 * k + 1] - my3).powi(2)).sum();
         let s_bar = if spread3 > 0.0 { (tr / spread3).sqrt() } else { 0.0 };
-        Ok(Problem { dict, uv: j.xy, vis, prior_w: s_bar * prior_m, base: dict.mean.clone() })
+        let basis_gram = dict
+            .bases
+            .column_iter()
+            .map(|col| {
+                let mut c = [0.0; 6];
+                for &p in &vis {
+                    let (x, y, z) = (col[3 * p], col[3 * p + 1], col[3 * p + 2]);
+                    for (ci, v) in c.iter_mut().zip([x * x, x * y, x * z, y * y, y * z, z * z]) {
+                        *ci += v;
+                    }
+                }
+                c
+            })
+            .collect();
+        Ok(Problem { dict, uv: j.xy, vis, prior_w: s_bar * prior_m, base: dict.mean.clone(), basis_gram: Arc::new(basis_gram) })
     }
 
     /// The same problem with the bases added to `base` (45 values, metres).

@@ -9,7 +9,8 @@
 //! reached, or a step that lowers the objective (reprojection plus the optional weight prior)
 //! by less than 0.2 % (that step is undone) — except that
 //! steps are always kept while the current state violates the constraint. Then, if enabled, the
-//! joint refinement [`super::refine::refine_pose`].
+//! joint refinement [`super::refine::refine_pose`], and last the free-joint refinement
+//! [`super::joint_fit`] (off when [`PoseOptions::joint_noise`] = 0).
 
 use nalgebra::{DVector, Vector3};
 
@@ -68,15 +69,16 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
 /// limb when [`PoseOptions::limb_candidates`] > 0) instead of from μ; the results are blended
 /// by their objectives (reprojection plus weight prior; [`super::blend`], temperature
 /// [`PoseOptions::blend`]; 0 = the one with the lowest objective) and, if refinement is on, a
-/// blend of several is refined once more from its own base pose.
+/// blend of several is refined once more from its own base pose. Last, with
+/// [`PoseOptions::joint_noise`] > 0, the free-joint refinement ([`super::joint_fit`]).
 pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
     opts.validate()?;
     let prob = Problem::new(dict, joints, opts.prior)?;
     if opts.starts == 0 || dict.exemplars.ncols() == 0 {
         let cam = fit_camera(&prob.pose(&[], &[]), &prob.uv, &prob.vis, &CameraPrior::of(opts))?;
-        return pursue(&prob, opts, cam, None);
+        return Ok(with_joint_fit(&prob, opts, pursue(&prob, opts, cam, None)?));
     }
-    let ranking = super::exemplar::affine_ranking(&prob);
+    let ranking = super::exemplar::affine_ranking(&prob, super::exemplar::shortlist_len(opts.starts).max(opts.limb_candidates));
     let candidates: Vec<usize> = ranking.iter().take(opts.limb_candidates).map(|r| r.0).collect();
     let mut hyps: Vec<(f64, PoseEstimate)> = Vec::new();
     let mut last_err = None;
@@ -101,15 +103,25 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
             Err(e) => last_err = Some(e),
         }
     }
-    match (super::blend::blend(&prob, &hyps, opts.blend), last_err) {
+    let est = match (super::blend::blend(&prob, &hyps, opts.blend), last_err) {
         // A blend of several results is refined once more from its own base pose (the average
         // fits the 2-D joints less well than each result; the 3-D error is unchanged).
         (Some(est), _) if opts.refine && hyps.len() > 1 && opts.blend > 0.0 && !est.bases.is_empty() => {
-            super::refine::refine_problem(&prob.with_base(super::dictionary::pose_to_vec(&est.base)), opts, &est)
+            super::refine::refine_problem(&prob.with_base(super::dictionary::pose_to_vec(&est.base)), opts, &est)?
         }
-        (Some(est), _) => Ok(est),
-        (None, Some(e)) => Err(e),
-        (None, None) => Err(crate::error::Error::Degenerate("no exemplar start admitted a camera".into())),
+        (Some(est), _) => est,
+        (None, Some(e)) => return Err(e),
+        (None, None) => return Err(crate::error::Error::Degenerate("no exemplar start admitted a camera".into())),
+    };
+    Ok(with_joint_fit(&prob, opts, est))
+}
+
+/// The free-joint refinement of `est` when [`PoseOptions::joint_noise`] > 0.
+fn with_joint_fit(prob: &Problem, opts: &PoseOptions, est: PoseEstimate) -> PoseEstimate {
+    if opts.joint_noise > 0.0 {
+        super::joint_fit::fit_joints(prob, &est, opts.joint_noise)
+    } else {
+        est
     }
 }
 
@@ -127,26 +139,36 @@ fn pursue(prob: &Problem, opts: &PoseOptions, mut cam: WeakPerspective, parts: O
     while bases.len() < max_bases && (rms > opts.tolerance || !feasible) {
         let x = prob.pose(&bases, &w);
         let r = prob.residuals(&cam, &x);
+        // With the camera's image rows pu, pv (no translation), basis b's projection a has
+        // aᵀr = B_bᵀ z, z_p = pu r_u,p + pv r_v,p, and ‖a‖² = ⟨pu puᵀ + pv pvᵀ, C_b⟩.
+        let (pu, pv) = (cam.r.row(0).transpose() * cam.sx, cam.r.row(1).transpose() * -cam.sy);
+        let mut z = [0.0; 3 * NUM_JOINTS];
+        for (i, &p) in prob.vis.iter().enumerate() {
+            let zp = pu * r[2 * i] + pv * r[2 * i + 1];
+            z[3 * p..3 * p + 3].copy_from_slice(zp.as_slice());
+        }
+        let m = pu * pu.transpose() + pv * pv.transpose();
+        let mw = [m[(0, 0)], 2.0 * m[(0, 1)], 2.0 * m[(0, 2)], m[(1, 1)], 2.0 * m[(1, 2)], m[(2, 2)]];
         let mut scored: Vec<(usize, f64)> = Vec::with_capacity(dict.num_bases());
-        for b in 0..dict.num_bases() {
+        for (b, (col, c)) in dict.bases.column_iter().zip(prob.basis_gram.iter()).enumerate() {
             if bases.contains(&b) {
                 continue;
             }
-            let col = dict.bases.column(b);
-            let (mut dot, mut norm2) = (0.0, 0.0);
-            for (i, &p) in prob.vis.iter().enumerate() {
-                let y = cam.r * Vector3::new(col[3 * p], col[3 * p + 1], col[3 * p + 2]);
-                let (au, av) = (cam.sx * y.x, -cam.sy * y.y);
-                dot += au * r[2 * i] + av * r[2 * i + 1];
-                norm2 += au * au + av * av;
-            }
+            let dot: f64 = col.as_slice().iter().zip(&z).map(|(x, y)| x * y).sum();
+            let norm2: f64 = mw.iter().zip(c).map(|(x, y)| x * y).sum();
             if norm2 > 0.0 {
                 scored.push((b, dot.abs() / norm2.sqrt()));
             }
         }
         // The CANDIDATES most correlated with the residual are tried with the constrained weight
-        // solve for the current camera; the one leaving the smallest objective is added.
-        scored.sort_by(|a, b| b.1.total_cmp(&a.1));
+        // solve for the current camera; the one leaving the smallest objective is added (ties
+        // by column, so the choice does not depend on the selection algorithm).
+        let order = |a: &(usize, f64), b: &(usize, f64)| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0));
+        if CANDIDATES < scored.len() {
+            scored.select_nth_unstable_by(CANDIDATES, order);
+            scored.truncate(CANDIDATES);
+        }
+        scored.sort_unstable_by(order);
         let mut best: Option<(usize, f64)> = None;
         for &(b, _) in scored.iter().take(CANDIDATES) {
             let mut nb = bases.clone();

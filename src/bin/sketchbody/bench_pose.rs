@@ -71,6 +71,9 @@ pub struct Args {
     /// Override the blend temperature (px² per joint) of configuration (d).
     #[arg(long)]
     blend: Option<f64>,
+    /// Override the free-joint refinement's 2-D joint noise (m; 0 = off) of configuration (d).
+    #[arg(long)]
+    joint_noise: Option<f64>,
     /// Run configuration (d) only.
     #[arg(long)]
     only_default: bool,
@@ -178,6 +181,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         starts: a.starts.unwrap_or(def.starts),
         limb_candidates: a.limb_candidates.unwrap_or(def.limb_candidates),
         blend: a.blend.unwrap_or(def.blend),
+        joint_noise: a.joint_noise.unwrap_or(def.joint_noise),
         ..def
     };
     if let Some(ds) = &a.dataset {
@@ -199,6 +203,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         starts: 0,
         limb_candidates: 0,
         blend: 0.0,
+        joint_noise: 0.0,
     };
     let configs = [
         ("(a) mean pose, camera fitted", PoseOptions { max_bases: 0, alpha: 0.0, refine: false, ..paper }),

@@ -52,6 +52,9 @@ pub struct Args {
     /// Blend temperature of the exemplar starts' hypotheses, px² per joint (0 = the best one).
     #[arg(long, default_value_t = PoseOptions::default().blend)]
     blend: f64,
+    /// Free-joint refinement: expected 2-D joint error, metres at the figure's scale (0 = off).
+    #[arg(long, default_value_t = PoseOptions::default().joint_noise)]
+    joint_noise: f64,
     /// Skip the final Levenberg–Marquardt refinement.
     #[arg(long)]
     no_refine: bool,
@@ -76,6 +79,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         starts: a.starts,
         limb_candidates: a.limb_candidates,
         blend: a.blend,
+        joint_noise: a.joint_noise,
     };
     let est = estimate_pose(&dict, &joints, &opts)?;
     let doc = pose3d_json(&est, &dict, &opts);
