@@ -16,7 +16,7 @@
 // Pass: on every problem f_ours <= f_ceres * (1 + 1e-6) + 1e-9 and our bound holds (1e-9 rel).
 // Both objectives are evaluated here by the same function. Two passes: prior 0 from the mean
 // pose with up to 10 bases (eq. 3 exactly, library kappa default) and the library defaults
-// (16 blended exemplar starts, up to 4 bases, prior 0.1 m, alpha 0.8 toward the level target;
+// (12 blended exemplar starts, up to 4 bases, prior 0.1 m, alpha 0.8 toward the level target;
 // but independent sx and sy in both passes, as Ceres has them, and the free-joint refinement off,
 // as it is a step after eq. 3 that leaves the basis span). The model's base pose (mean or exemplar start) is the start's joints minus its bases,
 // as skb_pose_refine takes it.

@@ -87,7 +87,7 @@ pub struct skb_pose_dictionary {
 
 /// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
 /// α = 0.8 toward the level target, sx = sy, 4 bases, 0.5 px, refinement on, prior 0.1 m,
-/// 16 exemplar starts, 64 limb candidates, blend 30 px², free-joint refinement at 0.014 m).
+/// 12 exemplar starts, 64 limb candidates, blend 30 px², free-joint refinement at 0.014 m).
 /// Not synchronised: do not change it
 /// while another thread uses it. Free with `skb_pose_options_free`.
 pub struct skb_pose_options {
@@ -376,13 +376,13 @@ fn prior_weight(d: &Dictionary, j: &Joints2, o: &PoseOptions) -> f64 {
 }
 
 /// Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
-/// refinement if enabled; by default from 16 exemplar starts whose results are blended, see
+/// refinement if enabled; by default from 12 exemplar starts whose results are blended, see
 /// `skb_pose_options_set_starts`, and last the free-joint refinement, see
 /// `skb_pose_options_set_joint_noise`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
 /// joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
 /// (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
 /// beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
-/// distinct `out`); about 1.3 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
+/// distinct `out`); about 1.2 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
 #[no_mangle]
 pub unsafe extern "C" fn skb_estimate_pose(
     dict: *const skb_pose_dictionary,

@@ -120,7 +120,7 @@ impl Default for PoseOptions {
     /// The library default (docs/benchmarks.md, "3-D pose"): κ = 0.05, α = 0.8 (the paper's)
     /// toward the level target (the pitch pulled to 0; the paper's identity target pulls the
     /// yaw too and measured worse), equal scales, up to 4 bases, 0.5 px, refined, prior 0.1 m,
-    /// 16 exemplar starts recomposed from 64 limb candidates, blended at τ = 30 px² per joint,
+    /// 12 exemplar starts recomposed from 64 limb candidates, blended at τ = 30 px² per joint,
     /// then the free-joint refinement at 0.014 m (4 px on a 500-px figure).
     fn default() -> Self {
         PoseOptions {
@@ -132,7 +132,7 @@ impl Default for PoseOptions {
             tolerance: 0.5,
             refine: true,
             prior: 0.1,
-            starts: 16,
+            starts: 12,
             limb_candidates: 64,
             blend: 30.0,
             joint_noise: 0.014,
