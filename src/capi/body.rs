@@ -8,7 +8,7 @@ use crate::error::Error;
 use crate::skeleton::{NUM_BONES, NUM_JOINTS};
 
 use super::error::{fail, fail_with};
-use super::ptr::{free_box, try_ref};
+use super::ptr::{free_box, give, out_slot, try_ref};
 use super::status::skb_status;
 
 /// Female shape space (value of the `gender` arguments).
@@ -84,12 +84,9 @@ pub(crate) unsafe fn write_out<T>(out: *mut T, value: T, name: &str) -> Result<(
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_new(out: *mut *mut skb_context) -> skb_status {
     ffi_boundary! {
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
+        let out = try_status!(out_slot(out));
         let model = try_core!(BodyModel::embedded());
-        *out = Box::into_raw(Box::new(skb_context { model: Arc::new(model), detector: std::sync::OnceLock::new() }));
-        skb_status::SKB_OK
+        give(out, skb_context { model: Arc::new(model), detector: std::sync::OnceLock::new() })
     }
 }
 
@@ -139,9 +136,7 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
 ) -> skb_status {
     ffi_boundary! {
         let ctx = try_status!(try_ref(ctx, "ctx"));
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
+        let out = try_status!(out_slot(out));
         let g = try_core!(Gender::from_index(gender));
         let space = ctx.model.space(g);
         if n > space.num_components() {
@@ -158,8 +153,7 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
             std::slice::from_raw_parts(weights, n).iter().map(|&x| x as f64).collect()
         };
         let rest = try_core!(space.synthesize(&w));
-        *out = Box::into_raw(Box::new(skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, weights: w, posed: None }));
-        skb_status::SKB_OK
+        give(out, skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, weights: w, posed: None })
     }
 }
 

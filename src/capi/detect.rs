@@ -12,7 +12,7 @@ use super::body::{out_slice, skb_context};
 use super::error::{fail, fail_with};
 use crate::error::Error;
 use super::image::{skb_image, view_of};
-use super::ptr::{free_box, try_ref};
+use super::ptr::{free_box, give, out_slot, try_ref};
 use super::status::skb_status;
 
 /// A detector model (flexible mixture of parts). Create with `skb_detector_new_from_file`,
@@ -33,15 +33,12 @@ pub unsafe extern "C" fn skb_detector_new_from_file(path: *const c_char, out: *m
         if path.is_null() {
             return fail_with(skb_status::SKB_ERR_NULL_POINTER, "path is NULL");
         }
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
+        let out = try_status!(out_slot(out));
         let Ok(p) = CStr::from_ptr(path).to_str() else {
             return fail_with(skb_status::SKB_ERR_INVALID_ARGUMENT, "path is not UTF-8");
         };
         let model = try_core!(Model::load_any(&PathBuf::from(p)));
-        *out = Box::into_raw(Box::new(skb_detector { model }));
-        skb_status::SKB_OK
+        give(out, skb_detector { model })
     }
 }
 
@@ -98,11 +95,8 @@ pub struct skb_detect_options {
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_new(out: *mut *mut skb_detect_options) -> skb_status {
     ffi_boundary! {
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
-        *out = Box::into_raw(Box::new(skb_detect_options { inner: DetectOptions::default() }));
-        skb_status::SKB_OK
+        let out = try_status!(out_slot(out));
+        give(out, skb_detect_options { inner: DetectOptions::default() })
     }
 }
 

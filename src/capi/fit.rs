@@ -17,7 +17,7 @@ use super::body::{skb_context, skb_mesh, write_out};
 use super::error::{fail, fail_with};
 use super::image::{skb_image, view_of};
 use super::mesh_ops::{skb_camera, Posed};
-use super::ptr::{free_box, try_ref, try_slice_of};
+use super::ptr::{free_box, give, out_slot, try_ref, try_slice_of};
 use super::status::skb_status;
 
 /// Progress callback: called from the calling thread with the fraction of the work done
@@ -58,11 +58,8 @@ pub struct skb_fit_options {
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_new(out: *mut *mut skb_fit_options) -> skb_status {
     ffi_boundary! {
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
-        *out = Box::into_raw(Box::new(skb_fit_options { fit: FitOptions::default(), gender: None }));
-        skb_status::SKB_OK
+        let out = try_status!(out_slot(out));
+        give(out, skb_fit_options { fit: FitOptions::default(), gender: None })
     }
 }
 

@@ -19,7 +19,7 @@ use crate::skeleton::{Joints3, NUM_JOINTS};
 
 use super::body::{out_slice, skb_mesh};
 use super::error::{fail, fail_with};
-use super::ptr::{free_box, try_ref, try_slice_mut, try_slice_of};
+use super::ptr::{free_box, give, out_slot, try_ref, try_slice_mut, try_slice_of};
 use super::status::skb_status;
 
 /// Mutably borrows `*p`, or fails naming `name` when `p` is NULL.
@@ -67,11 +67,8 @@ pub struct skb_rasterizer {
 #[no_mangle]
 pub unsafe extern "C" fn skb_rasterizer_new(out: *mut *mut skb_rasterizer) -> skb_status {
     ffi_boundary! {
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
-        *out = Box::into_raw(Box::new(skb_rasterizer { inner: Rasterizer::new() }));
-        skb_status::SKB_OK
+        let out = try_status!(out_slot(out));
+        give(out, skb_rasterizer { inner: Rasterizer::new() })
     }
 }
 

@@ -15,12 +15,11 @@ use crate::skeleton::NUM_JOINTS;
 
 use super::detect::embedded_detector;
 use super::body::{copy_skin_weights, out_slice, skb_context, skb_mesh, write_out};
-use super::error::fail_with;
 use super::fit::{progress_closure, skb_fit_options, skb_progress_fn};
 use super::image::{skb_image, view_of};
 use super::mesh_ops::{path_arg, skb_camera, Posed};
 use super::pose::{joints_in, skb_joints2d, skb_pose_dictionary, skb_pose_options};
-use super::ptr::{free_box, try_ref};
+use super::ptr::{free_box, give, out_slot, try_ref};
 use super::status::skb_status;
 
 /// `skb_result_copy_joints3d`: the rest joints of the fitted shape.
@@ -51,12 +50,9 @@ pub struct skb_result {
 pub unsafe extern "C" fn skb_gray_image_load(path: *const c_char, out: *mut *mut skb_gray_image) -> skb_status {
     ffi_boundary! {
         let p = try_status!(path_arg(path, "path"));
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
+        let out = try_status!(out_slot(out));
         let inner = try_core!(load_image(p));
-        *out = Box::into_raw(Box::new(skb_gray_image { inner }));
-        skb_status::SKB_OK
+        give(out, skb_gray_image { inner })
     }
 }
 
@@ -107,9 +103,7 @@ pub unsafe extern "C" fn skb_run_pipeline(
     ffi_boundary! {
         let ctx = try_status!(try_ref(ctx, "ctx"));
         let gray = try_core!(to_gray(&try_status!(view_of(sketch))));
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
+        let out = try_status!(out_slot(out));
         let detect_options = DetectOptions::default();
         let source: Box<dyn JointsSource + '_> = match joints.as_ref() {
             Some(j) => Box::new(GivenJoints(joints_in(j))),
@@ -133,8 +127,7 @@ pub unsafe extern "C" fn skb_run_pipeline(
         }
         let mut cb = progress_closure(progress, user);
         let inner = try_core!(run_pipeline(&ctx.model, d, &gray, source.as_ref(), &options, &mut cb));
-        *out = Box::into_raw(Box::new(skb_result { model: Arc::clone(&ctx.model), inner }));
-        skb_status::SKB_OK
+        give(out, skb_result { model: Arc::clone(&ctx.model), inner })
     }
 }
 

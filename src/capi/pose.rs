@@ -14,7 +14,7 @@ use crate::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate,
 use crate::skeleton::{Joints2, NUM_BONES};
 
 use super::error::{fail, fail_with};
-use super::ptr::{free_box, try_ref};
+use super::ptr::{free_box, give, out_slot, try_ref};
 use super::status::skb_status;
 
 /// Length of a pose vector (x, y, z of each joint in canonical order).
@@ -107,12 +107,9 @@ fn out_of_range(name: &'static str, detail: String) -> skb_status {
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_new_default(out: *mut *mut skb_pose_dictionary) -> skb_status {
     ffi_boundary! {
-        if out.is_null() {
-            return null("out");
-        }
+        let out = try_status!(out_slot(out));
         let inner = try_core!(dict_io::embedded());
-        *out = Box::into_raw(Box::new(skb_pose_dictionary { inner }));
-        skb_status::SKB_OK
+        give(out, skb_pose_dictionary { inner })
     }
 }
 
@@ -125,15 +122,12 @@ pub unsafe extern "C" fn skb_pose_dictionary_load(path: *const c_char, out: *mut
         if path.is_null() {
             return null("path");
         }
-        if out.is_null() {
-            return null("out");
-        }
+        let out = try_status!(out_slot(out));
         let Ok(p) = CStr::from_ptr(path).to_str() else {
             return fail_with(skb_status::SKB_ERR_INVALID_ARGUMENT, "path is not UTF-8");
         };
         let inner = try_core!(dict_io::read(Path::new(p)));
-        *out = Box::into_raw(Box::new(skb_pose_dictionary { inner }));
-        skb_status::SKB_OK
+        give(out, skb_pose_dictionary { inner })
     }
 }
 
@@ -223,11 +217,8 @@ pub unsafe extern "C" fn skb_pose_dictionary_bone_lengths(dict: *const skb_pose_
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_new(out: *mut *mut skb_pose_options) -> skb_status {
     ffi_boundary! {
-        if out.is_null() {
-            return null("out");
-        }
-        *out = Box::into_raw(Box::new(skb_pose_options { inner: PoseOptions::default() }));
-        skb_status::SKB_OK
+        let out = try_status!(out_slot(out));
+        give(out, skb_pose_options { inner: PoseOptions::default() })
     }
 }
 

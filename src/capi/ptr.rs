@@ -44,6 +44,21 @@ pub(crate) unsafe fn free_box<T>(p: *mut T) {
     }
 }
 
+/// The caller's handle slot `*out` of a constructor, or fails with `out is NULL`.
+///
+/// # Safety
+/// `out` must be NULL or valid for writes of one pointer for `'a`.
+pub(crate) unsafe fn out_slot<'a, T>(out: *mut *mut T) -> Result<&'a mut *mut T, skb_status> {
+    out.as_mut().ok_or_else(|| null("out"))
+}
+
+/// Stores `value` in `slot` as a new handle the caller owns (released with the type's `_free`,
+/// see [`free_box`]) and returns `SKB_OK`.
+pub(crate) fn give<T>(slot: &mut *mut T, value: T) -> skb_status {
+    *slot = Box::into_raw(Box::new(value));
+    skb_status::SKB_OK
+}
+
 fn null(name: &str) -> skb_status {
     fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL"))
 }

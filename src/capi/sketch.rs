@@ -11,7 +11,7 @@ use crate::skeleton::NUM_JOINTS;
 
 use super::body::skb_context;
 use super::error::{fail, fail_with};
-use super::ptr::{free_box, try_ref, try_slice_mut, try_slice_of};
+use super::ptr::{free_box, give, out_slot, try_ref, try_slice_mut, try_slice_of};
 use super::status::skb_status;
 
 /// Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
@@ -32,11 +32,8 @@ pub struct skb_sketch_options {
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_new(out: *mut *mut skb_sketch_options) -> skb_status {
     ffi_boundary! {
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
-        *out = Box::into_raw(Box::new(skb_sketch_options { style: SKB_SKETCH_STYLE_RANDOM, camera: None }));
-        skb_status::SKB_OK
+        let out = try_status!(out_slot(out));
+        give(out, skb_sketch_options { style: SKB_SKETCH_STYLE_RANDOM, camera: None })
     }
 }
 
