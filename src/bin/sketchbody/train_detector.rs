@@ -42,6 +42,9 @@ pub struct Args {
     /// use every style.
     #[arg(long, default_value = "ponytail")]
     hold_out_hair: String,
+    /// Fraction of the positives drawn as capsule mannequins around the same joints (0..=1).
+    #[arg(long, default_value_t = 0.0)]
+    mannequins: f64,
     /// Smallest and largest cell searched when mining negatives, px.
     #[arg(long, default_value_t = 4.0)]
     min_cell: f64,
@@ -84,6 +87,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         c: a.c,
         image_size: a.size,
         held_out_hair: parse_hair(&a.hold_out_hair)?,
+        mannequins: a.mannequins,
         search: SearchRange { min_cell_px: a.min_cell, max_cell_px: a.max_cell },
         ..TrainOptions::default()
     };

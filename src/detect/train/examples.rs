@@ -8,6 +8,7 @@ use crate::detect::hog::{hog, FeatureMap, Planes};
 use crate::detect::pyramid::{pad, resize};
 use crate::error::Result;
 use crate::render::sketch::background::render_background;
+use crate::render::sketch::mannequin::render_mannequin;
 use crate::render::sketch::truth::sample_seed;
 use crate::render::sketch::{Hair, SketchRenderer, SketchRequest};
 use crate::skeleton::NUM_JOINTS;
@@ -85,10 +86,15 @@ pub fn gray_planes(px: &[u8], width: usize, height: usize) -> Planes {
     Planes { width, height, channels: 1, data: px.iter().map(|&v| v as f32).collect() }
 }
 
+/// Seed tag of the mannequin choice and drawing of a positive.
+const MANNEQUIN_STREAM: u64 = 0x4D41_4E4E;
+
 /// Renders positives `0..n` of `seed` at `size`² (sample seeds as `make-dataset`), skipping
-/// figures with hair `held_out`; returns the positives (each with its mirror) and the number
-/// of sketches skipped. Parallel, order-preserving. Errors: the renderer's.
-pub fn render_positives(renderer: &SketchRenderer, geo: &Geometry, seed: u64, n: usize, size: usize, held_out: Option<Hair>) -> Result<(Vec<Positive>, usize)> {
+/// figures with hair `held_out`; a fraction `mannequins` of them (chosen per index from its
+/// own stream) is redrawn as a capsule mannequin around the same 2-D joints. Returns the
+/// positives (each with its mirror) and the number of sketches skipped. Parallel,
+/// order-preserving. Errors: the renderer's.
+pub fn render_positives(renderer: &SketchRenderer, geo: &Geometry, seed: u64, n: usize, size: usize, held_out: Option<Hair>, mannequins: f64) -> Result<(Vec<Positive>, usize)> {
     let got: Vec<Option<[Positive; 2]>> = (0..n)
         .into_par_iter()
         .map(|i| {
@@ -98,7 +104,13 @@ pub fn render_positives(renderer: &SketchRenderer, geo: &Geometry, seed: u64, n:
             }
             let j: [[f64; 2]; NUM_JOINTS] = std::array::from_fn(|k| s.truth.joints2d[k]);
             let height_px = s.truth.height_m * s.truth.camera.sx;
-            Ok(geo.positive_pair(&gray_planes(&s.pixels, size, size), &j, height_px))
+            let draw = sample_seed(seed ^ MANNEQUIN_STREAM, i as u64);
+            let pixels = if ((draw >> 11) as f64 / (1u64 << 53) as f64) < mannequins {
+                render_mannequin(&j, height_px, size, size, draw)
+            } else {
+                s.pixels
+            };
+            Ok(geo.positive_pair(&gray_planes(&pixels, size, size), &j, height_px))
         })
         .collect::<Result<_>>()?;
     let skipped = got.iter().filter(|g| g.is_none()).count();

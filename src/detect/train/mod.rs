@@ -40,6 +40,9 @@ pub struct TrainOptions {
     pub image_size: usize,
     /// Hair style never used in training (held out for evaluation); `None` uses all.
     pub held_out_hair: Option<Hair>,
+    /// Fraction of the positives, in [0, 1], drawn as capsule mannequins around the same 2-D
+    /// joints instead of the body's contours ([`crate::render::sketch::mannequin`]).
+    pub mannequins: f64,
     /// SVM C.
     pub c: f64,
     /// HOG cell, px.
@@ -72,6 +75,7 @@ impl Default for TrainOptions {
             rounds: 3,
             image_size: 512,
             held_out_hair: Some(Hair::Ponytail),
+            mannequins: 0.0,
             c: 0.01,
             sbin: 4,
             filter_side: 5,
@@ -97,6 +101,9 @@ impl TrainOptions {
         }
         if !(64..=4096).contains(&self.image_size) {
             return bad("image_size", format!("{} not in 64..=4096", self.image_size));
+        }
+        if !(0.0..=1.0).contains(&self.mannequins) {
+            return bad("mannequins", format!("{} not in [0, 1]", self.mannequins));
         }
         if !(self.c.is_finite() && self.c > 0.0) {
             return bad("c", format!("{} must be finite and > 0", self.c));
@@ -164,7 +171,7 @@ pub fn train(renderer: &SketchRenderer, o: &TrainOptions, progress: &mut dyn FnM
     let t0 = std::time::Instant::now();
     let el = || t0.elapsed().as_secs_f64();
     let geo = Geometry { sbin: o.sbin, side: o.filter_side, figure_px: o.figure_px };
-    let (pos, skipped) = render_positives(renderer, &geo, o.seed, o.positives, o.image_size, o.held_out_hair)?;
+    let (pos, skipped) = render_positives(renderer, &geo, o.seed, o.positives, o.image_size, o.held_out_hair, o.mannequins)?;
     if pos.is_empty() {
         return Err(Error::Degenerate("no usable training positive".into()));
     }

@@ -14,6 +14,7 @@ pub mod background;
 pub mod canvas;
 pub mod contours;
 pub mod costume;
+pub mod mannequin;
 pub mod mocap;
 pub mod paper;
 pub mod scene;
