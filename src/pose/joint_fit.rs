@@ -21,6 +21,7 @@ use nalgebra::{SMatrix, SVector, Vector3};
 use super::dictionary::{pose_to_vec, vec_to_pose, with_bone_lengths};
 use super::problem::Problem;
 use super::pursuit::PoseEstimate;
+use crate::camera::WeakPerspective;
 use crate::skeleton::{BONES, NUM_BONES, NUM_JOINTS};
 
 /// Spread of a joint about the dictionary estimate, metres.
@@ -35,10 +36,8 @@ type Joints = [Vector3<f64>; NUM_JOINTS];
 /// The weighted least-squares problem of the module doc in the camera frame.
 struct JointProblem<'p> {
     prob: &'p Problem<'p>,
-    /// Camera scales and translation (pixels per metre, pixels).
-    sx: f64,
-    sy: f64,
-    t: [f64; 2],
+    /// The estimate's camera (its scales and translation apply to camera-frame joints).
+    cam: &'p WeakPerspective,
     y0: Joints,
     len: [f64; NUM_BONES],
     /// 1/σ² of the image, prior and bone-length terms.
@@ -49,7 +48,8 @@ struct JointProblem<'p> {
 
 impl JointProblem<'_> {
     fn image_residual(&self, y: &Vector3<f64>, j: usize) -> [f64; 2] {
-        [self.sx * y.x + self.t[0] - self.prob.uv[j][0], -self.sy * y.y + self.t[1] - self.prob.uv[j][1]]
+        let c = self.cam;
+        [c.sx * y.x + c.t[0] - self.prob.uv[j][0], -c.sy * y.y + c.t[1] - self.prob.uv[j][1]]
     }
 
     fn cost(&self, y: &Joints) -> f64 {
@@ -65,10 +65,11 @@ impl JointProblem<'_> {
         let mut g = SVector::<f64, 45>::zeros();
         for &j in &self.prob.vis {
             let r = self.image_residual(&y[j], j);
-            h[(3 * j, 3 * j)] += self.wp * self.sx * self.sx;
-            h[(3 * j + 1, 3 * j + 1)] += self.wp * self.sy * self.sy;
-            g[3 * j] += self.wp * self.sx * r[0];
-            g[3 * j + 1] -= self.wp * self.sy * r[1];
+            let (sx, sy) = (self.cam.sx, self.cam.sy);
+            h[(3 * j, 3 * j)] += self.wp * sx * sx;
+            h[(3 * j + 1, 3 * j + 1)] += self.wp * sy * sy;
+            g[3 * j] += self.wp * sx * r[0];
+            g[3 * j + 1] -= self.wp * sy * r[1];
         }
         for j in 0..NUM_JOINTS {
             for a in 0..3 {
@@ -109,9 +110,7 @@ pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64) -> PoseEstim
     let sigma_px = noise_m * 0.5 * (cam.sx + cam.sy);
     let jp = JointProblem {
         prob,
-        sx: cam.sx,
-        sy: cam.sy,
-        t: cam.t,
+        cam,
         y0,
         len: std::array::from_fn(|b| (y0[BONES[b].1] - y0[BONES[b].0]).norm()),
         wp: 1.0 / (sigma_px * sigma_px),
@@ -166,7 +165,6 @@ pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64) -> PoseEstim
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::WeakPerspective;
     use crate::pose::dictionary::{tests::synthetic_clips, Dictionary, LearnParams};
     use crate::pose::pursuit::finish;
     use crate::skeleton::Joints2;
