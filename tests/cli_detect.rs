@@ -127,10 +127,15 @@ fn levels_per_octave_and_figure_flags_reach_the_search() {
     assert!(err.contains("levels_per_octave") && err.contains("101"), "{err}");
     assert!(!dir.join("e.json").exists());
     // eval-detector takes the same flags and reports the figure sizes and the scales found.
-    let res = cli().args(["eval-detector", "--n", "2", "--size", "256", "--levels-per-octave", "5", "--min-figure", "0.4"]).output().unwrap();
+    let res = cli().args(["eval-detector", "--n", "2", "--size", "256", "--levels-per-octave", "5", "--min-figure", "0.4", "--by-style"]).output().unwrap();
     assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
     let text = String::from_utf8(res.stdout).unwrap();
     assert!(text.contains("figures 0.4..1 of the side") && text.contains("5 levels per octave"), "{text}");
     assert!(text.contains("drawn figure height / shorter side: min 0.") && text.contains("found at (cell × rest height / shorter side)"), "{text}");
+    // --by-style: one row per rendering choice; "all" holds both sketches with the overall PCK.
+    let pck10 = text.split("PCK@0.1 ").nth(1).and_then(|t| t.split_whitespace().next()).unwrap().to_string();
+    let all = text.lines().find(|l| l.trim_start().starts_with("all ")).unwrap_or_else(|| panic!("{text}"));
+    assert!(all.split_whitespace().nth(1) == Some("2") && all.contains(&format!("{pck10} / ")), "{all} vs {pck10}");
+    assert!(text.contains("|yaw| >= 20 deg") && text.contains("cape"), "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::detect::{detect, DetectOptions, Model};
 use crate::error::{Error, Result};
 use crate::image::ImageView;
-use crate::render::sketch::truth::sample_seed;
+use crate::render::sketch::truth::{sample_seed, GroundTruth};
 use crate::render::sketch::{Hair, Sketch, SketchRenderer, SketchRequest, SketchStyle};
 use nalgebra::Vector3;
 
@@ -48,6 +48,70 @@ pub struct SketchResult {
     pub figure_fraction: f64,
     /// One score per model, in the order given.
     pub scores: Vec<SketchScore>,
+    /// The sketch's ground truth (style, camera angles, pose source), for [`style_breakdown`].
+    pub truth: GroundTruth,
+}
+
+/// A named subset of the held-out sketches: a predicate on the ground truth.
+pub struct StyleGroup {
+    /// Short label, e.g. "hatching".
+    pub name: &'static str,
+    /// Whether a sketch belongs to the group.
+    pub member: fn(&GroundTruth) -> bool,
+}
+
+fn costume(t: &GroundTruth) -> bool {
+    let c = &t.style.costume;
+    c.belt || c.boots || c.gloves || c.collar || c.armour || c.cape
+}
+
+fn custom_proportions(t: &GroundTruth) -> bool {
+    t.style.proportions != crate::render::sketch::scene::Proportions::default()
+}
+
+/// The groups [`style_breakdown`] reports: every rendering choice that could make a figure
+/// harder to find (and the complements of the two most common).
+pub const STYLE_GROUPS: [StyleGroup; 13] = [
+    StyleGroup { name: "all", member: |_| true },
+    StyleGroup { name: "hatching", member: |t| t.style.hatching > 0.0 },
+    StyleGroup { name: "no hatching", member: |t| t.style.hatching == 0.0 },
+    StyleGroup { name: "creases", member: |t| t.style.crease_deg < 180.0 },
+    StyleGroup { name: "costume piece", member: costume },
+    StyleGroup { name: "cape", member: |t| t.style.costume.cape },
+    StyleGroup { name: "stray strokes >= 5", member: |t| t.style.stray_strokes >= 5 },
+    StyleGroup { name: "scribbles >= 2", member: |t| t.style.scribbles >= 2 },
+    StyleGroup { name: "custom proportions", member: custom_proportions },
+    StyleGroup { name: "wobble >= 1 px", member: |t| t.style.wobble >= 1.0 },
+    StyleGroup { name: "strokes < 80 px", member: |t| t.style.stroke_length < 80.0 },
+    StyleGroup { name: "|yaw| >= 20 deg", member: |t| t.camera.angles.yaw_deg.abs() >= 20.0 },
+    StyleGroup { name: "|yaw| < 20 deg", member: |t| t.camera.angles.yaw_deg.abs() < 20.0 },
+];
+
+/// One row of [`style_breakdown`]: a group's size and each model's mean PCK at each alpha.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroupRow {
+    /// The group's label.
+    pub name: &'static str,
+    /// Sketches in the group.
+    pub n: usize,
+    /// `mean_pck[model][alpha]`; NaN for an empty group.
+    pub mean_pck: Vec<Vec<f64>>,
+}
+
+/// Mean PCK of every model per [`STYLE_GROUPS`] group of `results` (all results must hold the
+/// same number of models and alphas): which rendering choices cost which model.
+pub fn style_breakdown(results: &[SketchResult]) -> Vec<GroupRow> {
+    let models = results.first().map_or(0, |r| r.scores.len());
+    let alphas = results.first().and_then(|r| r.scores.first()).map_or(0, |s| s.pck.len());
+    STYLE_GROUPS
+        .iter()
+        .map(|g| {
+            let members: Vec<&SketchResult> = results.iter().filter(|r| (g.member)(&r.truth)).collect();
+            let n = members.len();
+            let mean_pck = (0..models).map(|m| (0..alphas).map(|a| members.iter().map(|r| r.scores[m].pck[a]).sum::<f64>() / n as f64).collect()).collect();
+            GroupRow { name: g.name, n, mean_pck }
+        })
+        .collect()
 }
 
 /// Vertical extent of the sketch's projected posed mesh over the shorter image side.
@@ -86,7 +150,7 @@ pub fn score_sketch(renderer: &SketchRenderer, req: &SketchRequest, models: &[&M
             Ok(SketchScore { pck, seconds, found_fraction })
         })
         .collect::<Result<_>>()?;
-    Ok(SketchResult { figure_fraction: figure_fraction(&s)?, scores })
+    Ok(SketchResult { figure_fraction: figure_fraction(&s)?, scores, truth: s.truth })
 }
 
 #[cfg(test)]
@@ -119,5 +183,27 @@ mod tests {
         assert!(found > 0.5 * f && found < 2.0 * f, "found at {found} for a figure of {f}");
         let none = score_sketch(&r, &req, &[&m], &DetectOptions { threshold: Some(1e9), ..DetectOptions::default() }, &[0.2]).unwrap();
         assert_eq!((none.scores[0].found_fraction, none.scores[0].pck.clone()), (None, vec![0.0]));
+        assert_eq!(res.truth, s.truth);
+    }
+
+    /// Groups average exactly their members' PCK; complements partition the set.
+    #[test]
+    fn style_breakdown_averages_each_group() {
+        let r = SketchRenderer::new(std::sync::Arc::new(crate::body::BodyModel::embedded().unwrap()), None).unwrap();
+        let mut results = Vec::new();
+        for (i, hatching) in [(0u64, 0.0), (1, 0.3), (2, 0.4)] {
+            let mut req = held_out_request(2, i, 64, Some(Hair::Ponytail));
+            req.style.as_mut().unwrap().hatching = hatching;
+            let truth = r.render(&req).unwrap().truth;
+            let p = [0.5, 0.25, 1.0][i as usize];
+            results.push(SketchResult { figure_fraction: 0.8, scores: vec![SketchScore { pck: vec![p, 1.0], seconds: 0.0, found_fraction: None }], truth });
+        }
+        let rows = style_breakdown(&results);
+        let row = |name: &str| rows.iter().find(|g| g.name == name).unwrap().clone();
+        assert_eq!((row("all").n, row("all").mean_pck[0][0]), (3, 1.75 / 3.0));
+        assert_eq!((row("hatching").n, row("hatching").mean_pck[0][0]), (2, 0.625));
+        assert_eq!((row("no hatching").n, row("no hatching").mean_pck[0].clone()), (1, vec![0.5, 1.0]));
+        assert_eq!(row("|yaw| >= 20 deg").n + row("|yaw| < 20 deg").n, 3);
+        assert!(style_breakdown(&[]).iter().all(|g| g.n == 0 && g.mean_pck.is_empty()));
     }
 }

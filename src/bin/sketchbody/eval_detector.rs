@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use sketchbody::detect::{DetectOptions, Model};
-use sketchbody::eval::detector::{held_out_request, score_sketch, SketchResult};
+use sketchbody::eval::detector::{held_out_request, score_sketch, style_breakdown, SketchResult};
 
 use crate::render_sketch::{parse_size, renderer};
 use crate::train_detector::parse_hair;
@@ -40,6 +40,10 @@ pub struct Args {
     /// Folder of mocap clips (default as in render-sketch).
     #[arg(long)]
     mocap: Option<PathBuf>,
+    /// Also print PCK per rendering choice (hatching, costume, clutter, camera yaw, ...) for
+    /// every model, and the first model's margin over each baseline.
+    #[arg(long)]
+    by_style: bool,
 }
 
 /// Runs the command.
@@ -79,7 +83,26 @@ pub fn run(a: Args) -> Result<(), CliError> {
         let right: Vec<f64> = per.iter().filter(|s| s.scores[k].pck[1] >= 0.8).filter_map(|s| s.scores[k].found_fraction).collect();
         println!("  found at (cell × rest height / shorter side) where PCK@0.2 ≥ 0.8 ({} sketches): {}", right.len(), spread(right));
     }
+    if a.by_style {
+        print_breakdown(&per, &names);
+    }
     Ok(())
+}
+
+/// The `--by-style` table: one row per style group, PCK@0.1 / @0.2 of each model, and the
+/// first model's margin over the others at both alphas.
+fn print_breakdown(per: &[SketchResult], names: &[String]) {
+    println!("PCK@0.1 / PCK@0.2 by rendering choice (models in the order above: {}):", names.join(", "));
+    for g in style_breakdown(per) {
+        if g.n == 0 {
+            println!("  {:<20} {:>4}", g.name, 0);
+            continue;
+        }
+        let cells: Vec<String> = g.mean_pck.iter().map(|p| format!("{:.3} / {:.3}", p[0], p[1])).collect();
+        let margins: Vec<String> = g.mean_pck[1..].iter().map(|p| format!("{:+.3} / {:+.3}", g.mean_pck[0][0] - p[0], g.mean_pck[0][1] - p[1])).collect();
+        let margin = if margins.is_empty() { String::new() } else { format!("   margin {}", margins.join(", ")) };
+        println!("  {:<20} {:>4}   {}{margin}", g.name, g.n, cells.join("   "));
+    }
 }
 
 /// "min a, 1% b, 5% c, median d, max e" of `v` (nearest-rank percentiles; "none" when empty).
