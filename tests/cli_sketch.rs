@@ -95,7 +95,7 @@ fn make_dataset_is_thread_independent_resumable_and_scores_itself_perfectly() {
     let r = cli(&["eval", s(&a), s(&res)]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let text = String::from_utf8_lossy(&r.stdout);
-    assert!(text.contains("| aed_rest | 0.0000 | 4 |"), "{text}");
+    assert!(text.contains("| aed_rest | 0.0000 | 4 |") && text.contains("| aed_rest_centred | 0.0000 | 4 |"), "{text}");
     assert!(text.contains("| aed_rest_at_height | 0.0000 | 4 |") && text.contains("| height_ratio | 1.000 | 4 |"), "{text}");
     assert!(text.contains("| aed_posed | 0.0000 | 2 |"), "{text}");
     assert!(text.contains("| mpjpe_mm | 0.0 | 4 |") && text.contains("| pck@0.1 | 1.000 | 4 |"), "{text}");

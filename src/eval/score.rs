@@ -8,6 +8,10 @@
 //!
 //! - AED rest: eq. (10) between the rest meshes, divided by the reference rest height, no
 //!   alignment (both are in the model frame).
+//! - AED rest centred (diagnostic): the same with each mesh centred on its centroid. The rest
+//!   mesh's place in the model frame follows from how the shape is built (a taller PCA body
+//!   grows about the model origin, longer legs about the pelvis), which an image does not show;
+//!   this column drops that translation, as the posed AED does.
 //! - AED rest at height (diagnostic): the same after scaling the estimate about its feet to the
 //!   reference height ([`scale_to_height`]); height ratio: estimate's rest height (Y extent) /
 //!   the reference height. A sketch alone does not fix the absolute size; these two columns
@@ -59,6 +63,9 @@ pub struct SampleScore {
     pub sample: String,
     /// AED between rest meshes, fraction of the reference height.
     pub aed_rest: Option<f64>,
+    /// AED between rest meshes each centred on its centroid, fraction of the reference height
+    /// (diagnostic).
+    pub aed_rest_centred: Option<f64>,
     /// AED between rest meshes after scaling the estimate about its feet to the reference
     /// height, fraction of the reference height (diagnostic).
     pub aed_rest_at_height: Option<f64>,
@@ -77,15 +84,15 @@ pub struct SampleScore {
 }
 
 /// Metric names in the order of [`SampleScore::values`].
-pub const METRICS: [&str; 8] = ["aed_rest", "aed_rest_at_height", "height_ratio", "aed_posed", "mpjpe_mm", "pa_mpjpe_mm", "pck@0.1", "pck@0.2"];
+pub const METRICS: [&str; 9] = ["aed_rest", "aed_rest_centred", "aed_rest_at_height", "height_ratio", "aed_posed", "mpjpe_mm", "pa_mpjpe_mm", "pck@0.1", "pck@0.2"];
 
 /// Decimals each metric is printed with, [`METRICS`] order.
-pub const METRIC_DECIMALS: [usize; 8] = [4, 4, 3, 4, 1, 1, 3, 3];
+pub const METRIC_DECIMALS: [usize; 9] = [4, 4, 4, 3, 4, 1, 1, 3, 3];
 
 impl SampleScore {
     /// The metrics in [`METRICS`] order.
-    pub fn values(&self) -> [Option<f64>; 8] {
-        [self.aed_rest, self.aed_rest_at_height, self.height_ratio, self.aed_posed, self.mpjpe_mm, self.pa_mpjpe_mm, self.pck10, self.pck20]
+    pub fn values(&self) -> [Option<f64>; 9] {
+        [self.aed_rest, self.aed_rest_centred, self.aed_rest_at_height, self.height_ratio, self.aed_posed, self.mpjpe_mm, self.pa_mpjpe_mm, self.pck10, self.pck20]
     }
 }
 
@@ -95,7 +102,7 @@ pub struct Summary {
     /// Samples in the dataset.
     pub samples: usize,
     /// (mean, count) per metric, [`METRICS`] order; mean is NaN when count is 0.
-    pub metrics: [(f64, usize); 8],
+    pub metrics: [(f64, usize); 9],
 }
 
 impl Summary {
@@ -181,6 +188,7 @@ pub fn score_sample(stem: &str, truth: &GroundTruth, rest_ref: &[[f32; 3]], pose
     if let Some(rest) = &est.rest {
         let reference = to_f64(rest_ref);
         s.aed_rest = Some(aed(&reference, rest, h)?);
+        s.aed_rest_centred = Some(aed(&centred(&reference), &centred(rest), h)?);
         s.aed_rest_at_height = Some(aed(&reference, &scale_to_height(&reference, rest, h)?, h)?);
         s.height_ratio = Some(height_of(rest)? / h);
     }
@@ -233,4 +241,29 @@ pub fn score_dataset(dataset: &Path, results: &Path) -> Result<(Vec<SampleScore>
         out.push(score_sample(stem, &truth, &rest, &posed, &est)?);
     }
     Ok((out, stems.len()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::sketch::{SketchRenderer, SketchRequest};
+
+    /// A rest estimate that is the reference moved by 5 cm along Y and 2 cm along X: the
+    /// unaligned AED is the shift over the height, the centred one 0, the at-height one 0
+    /// after its feet are moved onto the reference's, apart from the X part.
+    #[test]
+    fn rest_aeds_split_the_translation_from_the_shape() {
+        let r = SketchRenderer::new(std::sync::Arc::new(crate::body::BodyModel::embedded().unwrap()), None).unwrap();
+        let s = r.render(&SketchRequest::random(3, 64)).unwrap();
+        let h = s.truth.height_m;
+        let rest: Vec<[f64; 3]> = s.rest_vertices.iter().map(|v| [v[0] as f64 + 0.02, v[1] as f64 + 0.05, v[2] as f64]).collect();
+        let est = Estimate { rest: Some(rest), ..Estimate::default() };
+        let sc = score_sample("x", &s.truth, &s.rest_vertices, &s.posed_vertices, &est).unwrap();
+        let shift = (0.02f64.hypot(0.05)) / h;
+        assert!((sc.aed_rest.unwrap() - shift).abs() < 1e-6, "{:?} vs {shift}", sc.aed_rest);
+        assert!(sc.aed_rest_centred.unwrap() < 1e-6, "{:?}", sc.aed_rest_centred);
+        assert!((sc.aed_rest_at_height.unwrap() - 0.02 / h).abs() < 1e-6, "{:?}", sc.aed_rest_at_height);
+        assert!((sc.height_ratio.unwrap() - 1.0).abs() < 1e-6);
+        assert_eq!((sc.aed_posed, sc.mpjpe_mm, sc.pck10), (None, None, None));
+    }
 }
