@@ -52,12 +52,12 @@ pub struct FitOptions {
     /// 0.0381 for the mean shape).
     pub score: MatchScore,
     /// For the non-paper scores, sample likelihood = exp(score / temperature) (for the chamfer
-    /// score the unit is raster pixels of mean boundary distance). Default 4.0 (with
-    /// per-sample cameras and bone factors, 40 sketches `make-dataset 40 --seed 77`: rest AED
-    /// 0.0427 vs 0.0450 at 2.0 and 0.0433 at 8; docs/benchmarks.md, issue 6). Formerly 2.0, chosen by
-    /// measurement on the pipeline with estimated poses (40 sketches, `make-dataset 40 --seed 77`,
-    /// with `joint_weight` 0.5): AED/height 0.0447 vs 0.0515 at the former 0.02 and 0.0451 for
-    /// the mean shape; a sharp likelihood overfits silhouettes that compensate pose error.
+    /// score the unit is raster pixels of mean boundary distance). Default 2.0, chosen with
+    /// `joint_weight` 1.0 on the 300 tuning sketches of `make-dataset 300 --seed 78` (the
+    /// held-out clips, other bodies than the benchmark's): rest AED 0.0414 with ground-truth
+    /// joints and 0.0492 with detected ones, vs 0.0429 and 0.0495 for the former 4.0 and 0.5
+    /// (docs/benchmarks.md, "Shape fit"). A much sharper likelihood (0.02) overfits silhouettes
+    /// that compensate pose error.
     pub temperature: f64,
     /// Longest raster side in pixels; the sketch is scored at this resolution (default 256).
     pub raster_max_side: usize,
@@ -73,8 +73,8 @@ pub struct FitOptions {
     /// Weight of the 2-D joint term (used when [`FitProblem::joints2d`] is given): the score
     /// of a sample loses `joint_weight ×` the mean distance, in raster pixels, between its own
     /// posed rig joints projected by the camera and the visible estimated 2-D joints
-    /// (default 0.5, by the measurement under `temperature`: 0.0464 alone at temperature 0.02;
-    /// 0 turns it off). Must be finite and ≥ 0.
+    /// (default 1.0, by the measurement under `temperature`; 0 turns it off). Must be finite
+    /// and ≥ 0.
     pub joint_weight: f64,
     /// Give every sample its own camera: when [`FitProblem::joints2d`] is given, each sample's
     /// camera scales and translation are refitted in closed form
@@ -97,7 +97,8 @@ pub struct FitOptions {
     /// deviation of each log factor (see [`super::proportions`]); 0 searches PCA weights only.
     /// Default 0.1 (chosen on `make-dataset 40 --seed 77` with per-sample cameras and
     /// temperature 4: rest AED 0.0427 vs 0.0456 without, 0.0442 at 0.05, 0.0428 at 0.15, 0.0435
-    /// at 0.2). Finite, in 0..=0.5.
+    /// at 0.2; on `make-dataset 300 --seed 78`, 0.07 and 0.15 were within 0.0002 of it).
+    /// Finite, in 0..=0.5.
     pub proportion_sd: f64,
     /// Centre the bone factors' prior on the closed-form estimate of
     /// [`super::bone_estimate::estimate_proportions`] (bone lengths of the visible 2-D joints
@@ -117,13 +118,13 @@ impl Default for FitOptions {
             dims: None,
             transition_scale: 0.3,
             score: MatchScore::Chamfer,
-            temperature: 4.0,
+            temperature: 2.0,
             raster_max_side: 256,
             tolerance: 0.02,
             seed: 1,
             skinning: SkinMethod::Linear,
             retarget: false,
-            joint_weight: 0.5,
+            joint_weight: 1.0,
             sample_camera: true,
             height: None,
             proportion_sd: 0.1,
