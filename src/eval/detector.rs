@@ -98,12 +98,16 @@ pub struct GroupRow {
     pub mean_pck: Vec<Vec<f64>>,
 }
 
-/// Mean PCK of every model per [`STYLE_GROUPS`] group of `results` (all results must hold the
-/// same number of models and alphas): which rendering choices cost which model.
-pub fn style_breakdown(results: &[SketchResult]) -> Vec<GroupRow> {
+/// Mean PCK of every model per [`STYLE_GROUPS`] group of `results`: which rendering choices
+/// cost which model. Errors: results with different numbers of models or alphas
+/// ([`Error::OutOfRange`]).
+pub fn style_breakdown(results: &[SketchResult]) -> Result<Vec<GroupRow>> {
     let models = results.first().map_or(0, |r| r.scores.len());
     let alphas = results.first().and_then(|r| r.scores.first()).map_or(0, |s| s.pck.len());
-    STYLE_GROUPS
+    if let Some(i) = results.iter().position(|r| r.scores.len() != models || r.scores.iter().any(|s| s.pck.len() != alphas)) {
+        return Err(Error::OutOfRange { name: "sketch results", detail: format!("result {i} does not hold {models} models of {alphas} alphas like the first") });
+    }
+    Ok(STYLE_GROUPS
         .iter()
         .map(|g| {
             let members: Vec<&SketchResult> = results.iter().filter(|r| (g.member)(&r.truth)).collect();
@@ -111,7 +115,7 @@ pub fn style_breakdown(results: &[SketchResult]) -> Vec<GroupRow> {
             let mean_pck = (0..models).map(|m| (0..alphas).map(|a| members.iter().map(|r| r.scores[m].pck[a]).sum::<f64>() / n as f64).collect()).collect();
             GroupRow { name: g.name, n, mean_pck }
         })
-        .collect()
+        .collect())
 }
 
 /// Vertical extent of the sketch's projected posed mesh over the shorter image side.
@@ -198,12 +202,14 @@ mod tests {
             let p = [0.5, 0.25, 1.0][i as usize];
             results.push(SketchResult { figure_fraction: 0.8, scores: vec![SketchScore { pck: vec![p, 1.0], seconds: 0.0, found_fraction: None }], truth });
         }
-        let rows = style_breakdown(&results);
+        let rows = style_breakdown(&results).unwrap();
         let row = |name: &str| rows.iter().find(|g| g.name == name).unwrap().clone();
         assert_eq!((row("all").n, row("all").mean_pck[0][0]), (3, 1.75 / 3.0));
         assert_eq!((row("hatching").n, row("hatching").mean_pck[0][0]), (2, 0.625));
         assert_eq!((row("no hatching").n, row("no hatching").mean_pck[0].clone()), (1, vec![0.5, 1.0]));
         assert_eq!(row("|yaw| >= 20 deg").n + row("|yaw| < 20 deg").n, 3);
-        assert!(style_breakdown(&[]).iter().all(|g| g.n == 0 && g.mean_pck.is_empty()));
+        assert!(style_breakdown(&[]).unwrap().iter().all(|g| g.n == 0 && g.mean_pck.is_empty()));
+        results[1].scores[0].pck.pop();
+        assert!(matches!(style_breakdown(&results), Err(Error::OutOfRange { .. })));
     }
 }

@@ -84,16 +84,16 @@ pub fn run(a: Args) -> Result<(), CliError> {
         println!("  found at (cell × rest height / shorter side) where PCK@0.2 ≥ 0.8 ({} sketches): {}", right.len(), spread(right));
     }
     if a.by_style {
-        print_breakdown(&per, &names);
+        print_breakdown(&per, &names)?;
     }
     Ok(())
 }
 
 /// The `--by-style` table: one row per style group, PCK@0.1 / @0.2 of each model, and the
 /// first model's margin over the others at both alphas.
-fn print_breakdown(per: &[SketchResult], names: &[String]) {
+fn print_breakdown(per: &[SketchResult], names: &[String]) -> Result<(), CliError> {
     println!("PCK@0.1 / PCK@0.2 by rendering choice (models in the order above: {}):", names.join(", "));
-    for g in style_breakdown(per) {
+    for g in style_breakdown(per)? {
         if g.n == 0 {
             println!("  {:<20} {:>4}", g.name, 0);
             continue;
@@ -103,6 +103,7 @@ fn print_breakdown(per: &[SketchResult], names: &[String]) {
         let margin = if margins.is_empty() { String::new() } else { format!("   margin {}", margins.join(", ")) };
         println!("  {:<20} {:>4}   {}{margin}", g.name, g.n, cells.join("   "));
     }
+    Ok(())
 }
 
 /// "min a, 1% b, 5% c, median d, max e" of `v` (nearest-rank percentiles; "none" when empty).
