@@ -53,7 +53,10 @@ fn main() {
     );
     // The work runs on the pool's threads (this thread only waits): the busiest one's CPU time
     // is the wall time the detection needs on idle cores, whatever the machine's load.
-    println!("busiest pool thread: median CPU {:.1} ms per detect (the wall time on idle cores, ±rayon's idle spinning)", med(&mut busiest));
+    println!(
+        "busiest pool thread: median CPU {:.1} ms per detect (the wall time on idle cores, ±rayon's idle spinning)",
+        med(&mut busiest)
+    );
     match last.expect("runs ≥ 1") {
         Ok(d) => {
             let b = d.best();
@@ -96,7 +99,11 @@ fn compare_kernels(model: &Model, img: &sketchbody::image::RgbImage, opts: &Dete
         for (i, reference) in [false, true].into_iter().enumerate() {
             let c0 = thread_cpu();
             for l in &levels {
-                let r = if reference { conv::responses_reference(&l.feat, &model.filters) } else { conv::responses(&l.feat, &model.filters) };
+                let r = if reference {
+                    conv::responses_reference(&l.feat, &model.filters)
+                } else {
+                    conv::responses(&l.feat, &model.filters)
+                };
                 std::hint::black_box(r);
             }
             conv[i] = (thread_cpu() - c0) * 1e3;
@@ -116,7 +123,11 @@ fn compare_kernels(model: &Model, img: &sketchbody::image::RgbImage, opts: &Dete
             (a.score - b.score).abs() <= 1e-4 * b.score.abs().max(1.0)
                 && a.parts.iter().zip(&b.parts).all(|(p, q)| (p.x1, p.y1, p.mixture) == (q.x1, q.y1, q.mixture))
         });
-    let max_rel = best[0].iter().zip(&best[1]).map(|(a, b)| (a.score - b.score).abs() / b.score.abs().max(1.0)).fold(0.0, f64::max);
+    let max_rel = best[0]
+        .iter()
+        .zip(&best[1])
+        .map(|(a, b)| (a.score - b.score).abs() / b.score.abs().max(1.0))
+        .fold(0.0, f64::max);
     println!(
         "one thread, {} levels (cells {:.2}..{:.2} px), DP incl. filter responses: optimised {:.0} ms, reference {:.0} ms CPU ({:.2}x); best per level identical: {same} (max relative score difference {max_rel:.1e})",
         levels.len(),
@@ -140,10 +151,13 @@ fn options(mode: &str) -> DetectOptions {
     match mode {
         "default" => DetectOptions::default(),
         "all" => DetectOptions { search: SearchScales::All, ..Default::default() },
-        f if f.starts_with('f') => {
-            DetectOptions { search: SearchScales::FigureFraction { min: f[1..].parse().expect("fMIN"), max: 1.0 }, ..Default::default() }
+        f if f.starts_with('f') => DetectOptions {
+            search: SearchScales::FigureFraction { min: f[1..].parse().expect("fMIN"), max: 1.0 },
+            ..Default::default()
+        },
+        c => {
+            DetectOptions { search: SearchScales::All, min_cell_px: c.parse().expect("MIN_CELL"), ..Default::default() }
         }
-        c => DetectOptions { search: SearchScales::All, min_cell_px: c.parse().expect("MIN_CELL"), ..Default::default() },
     }
 }
 

@@ -16,7 +16,8 @@ fn aed(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
         let ys = a.iter().map(|v| v[1] as f64);
         ys.clone().fold(f64::MIN, f64::max) - ys.fold(f64::MAX, f64::min)
     };
-    let sum: f64 = a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (p[c] as f64 - q[c] as f64).powi(2)).sum::<f64>().sqrt()).sum();
+    let sum: f64 =
+        a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (p[c] as f64 - q[c] as f64).powi(2)).sum::<f64>().sqrt()).sum();
     sum / a.len() as f64 / height
 }
 
@@ -43,7 +44,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         totals[0] += aed(&truth.vertices, &mean.vertices);
         print!("sample {i} ({gender:?}): mean shape AED {:.4}", aed(&truth.vertices, &mean.vertices));
         for (k, &score) in scores.iter().enumerate() {
-            let problem = FitProblem { model: &model, gender, pose: &truth.joints, camera: &cam, edges: &edges, joints2d: None };
+            let problem =
+                FitProblem { model: &model, gender, pose: &truth.joints, camera: &cam, edges: &edges, joints2d: None };
             let options = FitOptions { score, seed: 100 + i as u64, ..FitOptions::default() };
             let start = std::time::Instant::now();
             let result = fit_shape(&problem, &options, &mut |_| true)?;
@@ -63,6 +65,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         totals[2] / n as f64,
         totals[3] / n as f64
     );
-    println!("{evals} sample evaluations in {seconds:.2} s: {:.0} per second ({} threads)", evals as f64 / seconds, rayon::current_num_threads());
+    println!(
+        "{evals} sample evaluations in {seconds:.2} s: {:.0} per second ({} threads)",
+        evals as f64 / seconds,
+        rayon::current_num_threads()
+    );
     Ok(())
 }

@@ -84,8 +84,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         raster.rasterize(&truth.vertices, &model.triangles(), &cam, 512, 512, false)?;
         let drawing: Vec<u8> = raster.mask().iter().map(|&m| if m != 0 { 40 } else { 235 }).collect();
         let edges = canny(&GrayImage::from_vec(512, 512, drawing)?.view(), &CannyParams::default())?;
-        let joints2d = Joints2 { xy: std::array::from_fn(|k| cam.project(&nalgebra::Vector3::from(truth.joints[k]))), visible: [true; NUM_JOINTS] };
-        let problem = FitProblem { model: &model, gender, pose: &truth.joints, camera: &cam, edges: &edges, joints2d: Some(&joints2d) };
+        let joints2d = Joints2 {
+            xy: std::array::from_fn(|k| cam.project(&nalgebra::Vector3::from(truth.joints[k]))),
+            visible: [true; NUM_JOINTS],
+        };
+        let problem = FitProblem {
+            model: &model,
+            gender,
+            pose: &truth.joints,
+            camera: &cam,
+            edges: &edges,
+            joints2d: Some(&joints2d),
+        };
         let old = FitOptions { sample_camera: false, proportion_sd: 0.0, temperature: 2.0, ..FitOptions::default() };
         let no_estimate = FitOptions { estimate_proportions: false, ..FitOptions::default() };
         for (path, base) in [old, no_estimate, FitOptions::default()].into_iter().enumerate() {

@@ -57,6 +57,9 @@ fn measure(name: &str, rest: &Joints3, n: usize, seed: u64) {
     let dt = t0.elapsed().as_secs_f64();
     println!("IK over {n} random poses (seed {seed}), {name} rig:");
     println!("  bone direction error: mean {:.2e} deg, max {:.2e} deg (goal <= 0.1 deg)", sum / count as f64, max);
-    println!("  retargeted (bone lengths x U[0.85, 1.15]): max joint position error {:.2e} mm (goal <= 1 mm)", max_pos * 1e3);
+    println!(
+        "  retargeted (bone lengths x U[0.85, 1.15]): max joint position error {:.2e} mm (goal <= 1 mm)",
+        max_pos * 1e3
+    );
     println!("  {:.1} us per solve", dt / (2 * n) as f64 * 1e6);
 }

@@ -38,7 +38,8 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
 
 /// Signed distance to the figure: negative inside.
 fn figure_distance(p: [f64; 2]) -> f64 {
-    let head = ((p[0] - JOINTS[0][0]).powi(2) / 26.0f64.powi(2) + (p[1] - JOINTS[0][1]).powi(2) / 33.0f64.powi(2)).sqrt();
+    let head =
+        ((p[0] - JOINTS[0][0]).powi(2) / 26.0f64.powi(2) + (p[1] - JOINTS[0][1]).powi(2) / 33.0f64.powi(2)).sqrt();
     let mut d = (head - 1.0) * 28.0;
     for (b, &(i, j)) in BONES.iter().enumerate().skip(1) {
         d = d.min(segment_distance(p, JOINTS[i], JOINTS[j]) - RADII[b]);

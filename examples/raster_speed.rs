@@ -18,7 +18,12 @@ fn main() {
     let sizes = if sizes.is_empty() { vec![256, 512] } else { sizes };
     for size in sizes {
         let s = size as f64 * 0.8 / 1.7;
-        let cam = WeakPerspective { sx: s, sy: s, r: Matrix3::identity(), t: [size as f64 / 2.0, size as f64 / 2.0 + 0.85 * s] };
+        let cam = WeakPerspective {
+            sx: s,
+            sy: s,
+            r: Matrix3::identity(),
+            t: [size as f64 / 2.0, size as f64 / 2.0 + 0.85 * s],
+        };
         for (depth, facing) in [(false, Facing::Both), (true, Facing::Both), (false, Facing::Front)] {
             let (cpu, st) = time(|| draw(&mut r, &mesh.vertices, &tris, &cam, size, depth, facing));
             println!("raster {size}² capsules {} tris, depth {depth}, {facing:?} faces: {:.3} ms thread CPU per call ({} px covered, {} triangles scanned)", tris.len(), cpu * 1e3, st.covered, st.triangles_scanned);
@@ -44,7 +49,15 @@ fn main() {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn draw(r: &mut Rasterizer, v: &[[f32; 3]], t: &[[u32; 3]], cam: &WeakPerspective, size: usize, depth: bool, facing: Facing) -> RasterStats {
+fn draw(
+    r: &mut Rasterizer,
+    v: &[[f32; 3]],
+    t: &[[u32; 3]],
+    cam: &WeakPerspective,
+    size: usize,
+    depth: bool,
+    facing: Facing,
+) -> RasterStats {
     if depth {
         r.rasterize(v, t, cam, size, size, true).expect("raster")
     } else {

@@ -29,7 +29,10 @@ impl WeakPerspective {
         ensure_finite("camera tx", self.t[0])?;
         ensure_finite("camera ty", self.t[1])?;
         if self.sx <= 0.0 || self.sy <= 0.0 {
-            return Err(Error::OutOfRange { name: "camera scale", detail: format!("sx = {}, sy = {} must be > 0", self.sx, self.sy) });
+            return Err(Error::OutOfRange {
+                name: "camera scale",
+                detail: format!("sx = {}, sy = {} must be > 0", self.sx, self.sy),
+            });
         }
         if self.r.iter().any(|v| !v.is_finite()) {
             return Err(Error::NonFinite { name: "camera rotation", value: f64::NAN });
@@ -59,7 +62,10 @@ impl WeakPerspective {
         // Per axis: n, Σa, Σb, Σa², Σab.
         let mut acc = [[0.0f64; 5]; 2];
         for &(k, q) in targets {
-            let p = points.get(k).ok_or_else(|| Error::OutOfRange { name: "camera refit target", detail: format!("joint {k} of {}", points.len()) })?;
+            let p = points.get(k).ok_or_else(|| Error::OutOfRange {
+                name: "camera refit target",
+                detail: format!("joint {k} of {}", points.len()),
+            })?;
             let c = self.r * Vector3::from(*p);
             for (axis, a) in [(0, c.x), (1, -c.y)] {
                 let b = q[axis];

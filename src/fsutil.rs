@@ -10,9 +10,9 @@ use crate::error::{Error, Result};
 /// over `path`. On failure the temporary file is removed and `path` is untouched.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let io_err = |source| Error::Io { path: path.to_path_buf(), source };
-    let file_name = path.file_name().ok_or_else(|| {
-        io_err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "output path has no file name"))
-    })?;
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| io_err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "output path has no file name")))?;
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(file_name);
     tmp_name.push(format!(".tmp{}", std::process::id()));
@@ -57,11 +57,16 @@ impl StagingDir {
         let dest_existed = dest.exists();
         let tmp = if dest_existed {
             if !dest.is_dir() {
-                return Err(io(dest, std::io::Error::new(std::io::ErrorKind::AlreadyExists, "exists and is not a folder")));
+                return Err(io(
+                    dest,
+                    std::io::Error::new(std::io::ErrorKind::AlreadyExists, "exists and is not a folder"),
+                ));
             }
             dest.join(tag)
         } else {
-            let name = dest.file_name().ok_or_else(|| io(dest, std::io::Error::new(std::io::ErrorKind::InvalidInput, "output folder has no name")))?;
+            let name = dest.file_name().ok_or_else(|| {
+                io(dest, std::io::Error::new(std::io::ErrorKind::InvalidInput, "output folder has no name"))
+            })?;
             let parent = dest.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
             std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
             let mut t = std::ffi::OsString::from(&tag);
@@ -92,8 +97,10 @@ impl StagingDir {
             self.committed = true;
             return Ok(());
         }
-        let mut names: Vec<std::ffi::OsString> =
-            std::fs::read_dir(&self.tmp).map_err(|e| io(&self.tmp, e))?.filter_map(|e| e.ok().map(|e| e.file_name())).collect();
+        let mut names: Vec<std::ffi::OsString> = std::fs::read_dir(&self.tmp)
+            .map_err(|e| io(&self.tmp, e))?
+            .filter_map(|e| e.ok().map(|e| e.file_name()))
+            .collect();
         names.sort();
         let mut moved = Vec::new();
         for name in names {

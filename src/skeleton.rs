@@ -28,8 +28,21 @@ pub mod joint {
 
 /// Joint names in canonical order (also the JSON keys of the joint files).
 pub const JOINT_NAMES: [&str; NUM_JOINTS] = [
-    "head", "neck", "r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist", "pelvis", "r_hip",
-    "r_knee", "r_ankle", "l_hip", "l_knee", "l_ankle",
+    "head",
+    "neck",
+    "r_shoulder",
+    "r_elbow",
+    "r_wrist",
+    "l_shoulder",
+    "l_elbow",
+    "l_wrist",
+    "pelvis",
+    "r_hip",
+    "r_knee",
+    "r_ankle",
+    "l_hip",
+    "l_knee",
+    "l_ankle",
 ];
 
 /// The 14 bones as (parent joint, child joint), in DESIGN.md's order. Bone `b` ends at joint

@@ -34,7 +34,10 @@ fn mesh_from_shape_reports_counts_and_copies_data() {
     assert!(k >= 10 && (1..=k).contains(&d), "components {k}, default dim {d}");
     let weights = [0.3f32, -0.2, 0.1];
     let mut mesh = ptr::null_mut();
-    assert_eq!(unsafe { skb_mesh_new_from_shape(ctx.0, SKB_GENDER_MALE, weights.as_ptr(), 3, &mut mesh) }, skb_status::SKB_OK);
+    assert_eq!(
+        unsafe { skb_mesh_new_from_shape(ctx.0, SKB_GENDER_MALE, weights.as_ptr(), 3, &mut mesh) },
+        skb_status::SKB_OK
+    );
     drop(ctx); // meshes outlive their context
     let (mut nv, mut nf, mut nj, mut ns, mut g) = (0usize, 0usize, 0usize, 0usize, 9u32);
     unsafe {
@@ -60,7 +63,10 @@ fn mesh_from_shape_reports_counts_and_copies_data() {
     }
     // Same as the Rust API.
     let model = sketchbody::body::BodyModel::embedded().unwrap();
-    let rest = model.space(sketchbody::body::Gender::Male).synthesize(&[0.3f32 as f64, -0.2f32 as f64, 0.1f32 as f64]).unwrap();
+    let rest = model
+        .space(sketchbody::body::Gender::Male)
+        .synthesize(&[0.3f32 as f64, -0.2f32 as f64, 0.1f32 as f64])
+        .unwrap();
     assert_eq!(&verts[..3], &rest.vertices[0]);
     assert_eq!(&joints[42..45], &rest.joints[14]);
     assert_eq!(&faces[..4], &model.faces()[0]);
@@ -79,12 +85,18 @@ fn bad_arguments_give_specific_statuses_and_write_nothing() {
     let mut mesh = ptr::null_mut();
     unsafe {
         assert_eq!(skb_context_new(ptr::null_mut()), skb_status::SKB_ERR_NULL_POINTER);
-        assert_eq!(skb_mesh_new_from_shape(ptr::null(), 0, ptr::null(), 0, &mut mesh), skb_status::SKB_ERR_NULL_POINTER);
+        assert_eq!(
+            skb_mesh_new_from_shape(ptr::null(), 0, ptr::null(), 0, &mut mesh),
+            skb_status::SKB_ERR_NULL_POINTER
+        );
         assert_eq!(skb_mesh_new_from_shape(ctx.0, 2, ptr::null(), 0, &mut mesh), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert!(last_error().contains("gender"), "{}", last_error());
         assert_eq!(skb_mesh_new_from_shape(ctx.0, 0, ptr::null(), 1, &mut mesh), skb_status::SKB_ERR_NULL_POINTER);
         let too_many = [0f32; 1000];
-        assert_eq!(skb_mesh_new_from_shape(ctx.0, 0, too_many.as_ptr(), 1000, &mut mesh), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(
+            skb_mesh_new_from_shape(ctx.0, 0, too_many.as_ptr(), 1000, &mut mesh),
+            skb_status::SKB_ERR_OUT_OF_RANGE
+        );
         let nan = [0.0f32, f32::NAN];
         assert_eq!(skb_mesh_new_from_shape(ctx.0, 0, nan.as_ptr(), 2, &mut mesh), skb_status::SKB_ERR_NON_FINITE);
         assert!(mesh.is_null(), "no mesh on failure");

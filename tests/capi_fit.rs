@@ -128,14 +128,27 @@ fn pipeline_result_accessors() {
     let mut calls: Vec<f32> = Vec::new();
     let mut r = ptr::null_mut();
     unsafe {
-        let st = skb_run_pipeline(i.ctx, &i.view, &j, ptr::null(), ptr::null(), i.opts, Some(count_calls), &mut calls as *mut _ as *mut c_void, &mut r);
+        let st = skb_run_pipeline(
+            i.ctx,
+            &i.view,
+            &j,
+            ptr::null(),
+            ptr::null(),
+            i.opts,
+            Some(count_calls),
+            &mut calls as *mut _ as *mut c_void,
+            &mut r,
+        );
         assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
         assert!(calls.windows(2).all(|w| w[0] <= w[1]) && *calls.last().unwrap() == 1.0, "{calls:?}");
         let (mut nv, mut nf) = (0usize, 0usize);
         assert_eq!(skb_result_counts(r, &mut nv, &mut nf), skb_status::SKB_OK);
         assert_eq!((nv, nf), (13380, 13378));
         let mut v = vec![0.0f32; 3 * nv];
-        assert_eq!(skb_result_copy_vertices(r, true, v.as_mut_ptr(), v.len() - 1), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
+        assert_eq!(
+            skb_result_copy_vertices(r, true, v.as_mut_ptr(), v.len() - 1),
+            skb_status::SKB_ERR_BUFFER_TOO_SMALL
+        );
         assert_eq!(skb_result_copy_vertices(r, true, v.as_mut_ptr(), v.len()), skb_status::SKB_OK);
         assert!(v.iter().all(|x| x.is_finite()));
         let mut f = vec![0u32; 4 * nf];
@@ -153,7 +166,10 @@ fn pipeline_result_accessors() {
         assert_eq!(skb_result_camera(r, &mut cam), skb_status::SKB_OK);
         assert!(cam.sx > 100.0 && cam.sy > 100.0);
         let (mut bones, mut weights) = (vec![0u32; 4 * nv], vec![0.0f32; 4 * nv]);
-        assert_eq!(skb_result_copy_skin_weights(r, bones.as_mut_ptr(), weights.as_mut_ptr(), bones.len()), skb_status::SKB_OK);
+        assert_eq!(
+            skb_result_copy_skin_weights(r, bones.as_mut_ptr(), weights.as_mut_ptr(), bones.len()),
+            skb_status::SKB_OK
+        );
         assert!(weights.chunks(4).all(|w| (w.iter().sum::<f32>() - 1.0).abs() < 1e-4) && bones.iter().all(|&b| b < 14));
         let (mut g, mut by_score) = (9u32, false);
         assert_eq!(skb_result_gender(r, &mut g, &mut by_score), skb_status::SKB_OK);
@@ -215,7 +231,17 @@ fn pipeline_errors_and_cancel() {
         assert_eq!(skb_fit_options_set_iterations(i.opts, 100), skb_status::SKB_OK);
         assert_eq!(skb_fit_options_set_samples(i.opts, 200), skb_status::SKB_OK);
         let mut calls = 0usize;
-        let st = skb_run_pipeline(i.ctx, &i.view, &j, ptr::null(), ptr::null(), i.opts, Some(cancel_in_fit), &mut calls as *mut _ as *mut c_void, &mut r);
+        let st = skb_run_pipeline(
+            i.ctx,
+            &i.view,
+            &j,
+            ptr::null(),
+            ptr::null(),
+            i.opts,
+            Some(cancel_in_fit),
+            &mut calls as *mut _ as *mut c_void,
+            &mut r,
+        );
         assert_eq!(st, skb_status::SKB_ERR_CANCELLED);
         assert!(calls <= 5, "{calls} progress calls: the cancel was not prompt");
         assert!(r.is_null());
@@ -243,7 +269,8 @@ fn fit_shape_from_c() {
         let flat: Vec<f64> = pose.joints.iter().flatten().copied().collect();
         assert_eq!(skb_fit_options_set_gender(i.opts, SKB_GENDER_MALE), skb_status::SKB_OK);
         let (mut mesh, mut score) = (ptr::null_mut(), 0.0);
-        let st = skb_fit_shape(i.ctx, flat.as_ptr(), 45, &cam, &ev, i.opts, None, ptr::null_mut(), &mut score, &mut mesh);
+        let st =
+            skb_fit_shape(i.ctx, flat.as_ptr(), 45, &cam, &ev, i.opts, None, ptr::null_mut(), &mut score, &mut mesh);
         assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
         assert!(score.is_finite() && score < 0.0);
         let mut g = 9;
@@ -260,20 +287,57 @@ fn fit_shape_from_c() {
         let mut m2 = ptr::null_mut();
         let mut nan = flat.clone();
         nan[0] = f64::NAN;
-        assert_eq!(skb_fit_shape(i.ctx, nan.as_ptr(), 45, &cam, &ev, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2), skb_status::SKB_ERR_NON_FINITE);
-        assert_eq!(skb_fit_shape(i.ctx, flat.as_ptr(), 44, &cam, &ev, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(
+            skb_fit_shape(i.ctx, nan.as_ptr(), 45, &cam, &ev, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2),
+            skb_status::SKB_ERR_NON_FINITE
+        );
+        assert_eq!(
+            skb_fit_shape(i.ctx, flat.as_ptr(), 44, &cam, &ev, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2),
+            skb_status::SKB_ERR_OUT_OF_RANGE
+        );
         let bad_cam = skb_camera { sx: -1.0, ..cam };
-        assert_eq!(skb_fit_shape(i.ctx, flat.as_ptr(), 45, &bad_cam, &ev, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(
+            skb_fit_shape(
+                i.ctx,
+                flat.as_ptr(),
+                45,
+                &bad_cam,
+                &ev,
+                i.opts,
+                None,
+                ptr::null_mut(),
+                ptr::null_mut(),
+                &mut m2
+            ),
+            skb_status::SKB_ERR_OUT_OF_RANGE
+        );
         let zero = vec![0u8; w * h];
         let zv = skb_image { data: zero.as_ptr(), ..ev };
-        assert_eq!(skb_fit_shape(i.ctx, flat.as_ptr(), 45, &cam, &zv, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2), skb_status::SKB_ERR_BLANK_IMAGE);
+        assert_eq!(
+            skb_fit_shape(i.ctx, flat.as_ptr(), 45, &cam, &zv, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2),
+            skb_status::SKB_ERR_BLANK_IMAGE
+        );
         let mut calls = 0usize;
         assert_eq!(skb_fit_options_set_iterations(i.opts, 100), skb_status::SKB_OK);
         unsafe extern "C" fn stop(user: *mut c_void, _f: f32) -> c_int {
             *(user as *mut usize) += 1;
             1
         }
-        assert_eq!(skb_fit_shape(i.ctx, flat.as_ptr(), 45, &cam, &ev, i.opts, Some(stop), &mut calls as *mut _ as *mut c_void, ptr::null_mut(), &mut m2), skb_status::SKB_ERR_CANCELLED);
+        assert_eq!(
+            skb_fit_shape(
+                i.ctx,
+                flat.as_ptr(),
+                45,
+                &cam,
+                &ev,
+                i.opts,
+                Some(stop),
+                &mut calls as *mut _ as *mut c_void,
+                ptr::null_mut(),
+                &mut m2
+            ),
+            skb_status::SKB_ERR_CANCELLED
+        );
         assert_eq!(calls, 1, "cancelled at the first iteration");
         assert!(m2.is_null());
     }

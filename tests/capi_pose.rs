@@ -13,7 +13,12 @@ fn last_error() -> String {
 }
 
 fn camera(size: f64) -> skb_camera {
-    skb_camera { sx: size / 2.2, sy: size / 2.2, r: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], t: [size / 2.0, size / 2.0] }
+    skb_camera {
+        sx: size / 2.2,
+        sy: size / 2.2,
+        r: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        t: [size / 2.0, size / 2.0],
+    }
 }
 
 #[test]
@@ -49,14 +54,36 @@ fn mesh_poses_rasterises_and_exports() {
     let mut nf = 0usize;
     unsafe { skb_mesh_face_count(mesh, &mut nf) };
     let mut tris = vec![0u32; 6 * nf];
-    assert_eq!(unsafe { skb_mesh_copy_triangles(mesh, tris.as_mut_ptr(), tris.len()) }, skb_status::SKB_OK, "{}", last_error());
+    assert_eq!(
+        unsafe { skb_mesh_copy_triangles(mesh, tris.as_mut_ptr(), tris.len()) },
+        skb_status::SKB_OK,
+        "{}",
+        last_error()
+    );
     let cam = camera(128.0);
     let (mut a, mut b) = (vec![0u8; 128 * 128], vec![0u8; 130 * 128]);
     unsafe {
-        assert_eq!(skb_mesh_rasterize(mesh, ptr::null_mut(), &cam, 128, 128, a.as_mut_ptr(), 128, a.len()), skb_status::SKB_OK, "{}", last_error());
+        assert_eq!(
+            skb_mesh_rasterize(mesh, ptr::null_mut(), &cam, 128, 128, a.as_mut_ptr(), 128, a.len()),
+            skb_status::SKB_OK,
+            "{}",
+            last_error()
+        );
         let mut r = ptr::null_mut();
         assert_eq!(skb_rasterizer_new(&mut r), skb_status::SKB_OK);
-        let st = skb_rasterize_triangles(r, verts.as_ptr(), nv, tris.as_ptr(), tris.len() / 3, &cam, 128, 128, b.as_mut_ptr(), 130, b.len());
+        let st = skb_rasterize_triangles(
+            r,
+            verts.as_ptr(),
+            nv,
+            tris.as_ptr(),
+            tris.len() / 3,
+            &cam,
+            128,
+            128,
+            b.as_mut_ptr(),
+            130,
+            b.len(),
+        );
         assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
         skb_rasterizer_free(r);
         skb_rasterizer_free(ptr::null_mut());
@@ -98,13 +125,43 @@ fn mesh_poses_rasterises_and_exports() {
         skb_mesh_copy_posed_vertices(mesh, verts.as_mut_ptr(), verts.len());
         assert_eq!(before, verts);
         let far = skb_camera { t: [5000.0, 5000.0], ..cam };
-        assert_eq!(skb_mesh_rasterize(mesh, ptr::null_mut(), &far, 128, 128, a.as_mut_ptr(), 128, a.len()), skb_status::SKB_ERR_MESH_OUTSIDE_IMAGE);
-        assert_eq!(skb_mesh_rasterize(mesh, ptr::null_mut(), &cam, 128, 128, a.as_mut_ptr(), 127, a.len()), skb_status::SKB_ERR_BAD_STRIDE);
-        assert_eq!(skb_mesh_rasterize(mesh, ptr::null_mut(), &cam, 128, 128, a.as_mut_ptr(), 128, 100), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
-        assert_eq!(skb_mesh_rasterize(mesh, ptr::null_mut(), &cam, 5000, 128, a.as_mut_ptr(), 5000, a.len()), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(
+            skb_mesh_rasterize(mesh, ptr::null_mut(), &far, 128, 128, a.as_mut_ptr(), 128, a.len()),
+            skb_status::SKB_ERR_MESH_OUTSIDE_IMAGE
+        );
+        assert_eq!(
+            skb_mesh_rasterize(mesh, ptr::null_mut(), &cam, 128, 128, a.as_mut_ptr(), 127, a.len()),
+            skb_status::SKB_ERR_BAD_STRIDE
+        );
+        assert_eq!(
+            skb_mesh_rasterize(mesh, ptr::null_mut(), &cam, 128, 128, a.as_mut_ptr(), 128, 100),
+            skb_status::SKB_ERR_BUFFER_TOO_SMALL
+        );
+        assert_eq!(
+            skb_mesh_rasterize(mesh, ptr::null_mut(), &cam, 5000, 128, a.as_mut_ptr(), 5000, a.len()),
+            skb_status::SKB_ERR_OUT_OF_RANGE
+        );
         let bad_cam = skb_camera { sx: -1.0, ..cam };
-        assert_eq!(skb_mesh_rasterize(mesh, ptr::null_mut(), &bad_cam, 128, 128, a.as_mut_ptr(), 128, a.len()), skb_status::SKB_ERR_OUT_OF_RANGE);
-        assert_eq!(skb_rasterize_triangles(ptr::null_mut(), verts.as_ptr(), nv, [0u32, 1, 99_999_999].as_ptr(), 1, &cam, 8, 8, a.as_mut_ptr(), 8, 64), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(
+            skb_mesh_rasterize(mesh, ptr::null_mut(), &bad_cam, 128, 128, a.as_mut_ptr(), 128, a.len()),
+            skb_status::SKB_ERR_OUT_OF_RANGE
+        );
+        assert_eq!(
+            skb_rasterize_triangles(
+                ptr::null_mut(),
+                verts.as_ptr(),
+                nv,
+                [0u32, 1, 99_999_999].as_ptr(),
+                1,
+                &cam,
+                8,
+                8,
+                a.as_mut_ptr(),
+                8,
+                64
+            ),
+            skb_status::SKB_ERR_OUT_OF_RANGE
+        );
         skb_mesh_free(mesh);
     }
 }

@@ -31,7 +31,21 @@ fn body_command_writes_posed_glb_obj_and_preview() {
     write_joints3_json(&pose, &random_pose(&mesh.joints, &mut rng, 0.1)).unwrap();
     let (glb, obj, png) = (d.join("b.glb"), d.join("b.obj"), d.join("b.png"));
     let s = |p: &Path| p.to_str().unwrap().to_owned();
-    let (ok, err) = run(&["--gender", "m", "--weights", "0.05,-0.02", "--pose", &s(&pose), "--retarget", "--out", &s(&glb), "--preview", &s(&png), "--preview-size", "128"]);
+    let (ok, err) = run(&[
+        "--gender",
+        "m",
+        "--weights",
+        "0.05,-0.02",
+        "--pose",
+        &s(&pose),
+        "--retarget",
+        "--out",
+        &s(&glb),
+        "--preview",
+        &s(&png),
+        "--preview-size",
+        "128",
+    ]);
     assert!(ok, "{err}");
     let (ok, err) = run(&["--gender", "female", "--dqs", "--pose", &s(&pose), "--out", &s(&obj)]);
     assert!(ok, "{err}");

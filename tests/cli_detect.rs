@@ -64,7 +64,9 @@ fn detect_finds_the_example_sketch_and_rejects_tiny_images() {
     let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
     assert_eq!(j["format"], "sketchbody-joints2d");
     let y = |name: &str| j["joints"][name][1].as_f64().unwrap();
-    assert!(y("head") < y("neck") && y("neck") < y("pelvis") && y("pelvis") < y("l_knee") && y("l_knee") < y("l_ankle"));
+    assert!(
+        y("head") < y("neck") && y("neck") < y("pelvis") && y("pelvis") < y("l_knee") && y("l_knee") < y("l_ankle")
+    );
     // The example figure faces the viewer: its right side is on the image's left.
     let x = |name: &str| j["joints"][name][0].as_f64().unwrap();
     assert!(x("r_wrist") < x("l_wrist") && x("r_ankle") < x("l_ankle"));
@@ -72,7 +74,8 @@ fn detect_finds_the_example_sketch_and_rejects_tiny_images() {
     // A 20x20 image is rejected with the specific error.
     let tiny = dir.join("tiny.png");
     image::GrayImage::new(20, 20).save(&tiny).unwrap();
-    let err = one_line_failure(cli().arg("detect").arg(&tiny).arg("--model").arg(&skbd).arg("--out").arg(dir.join("t.json")));
+    let err =
+        one_line_failure(cli().arg("detect").arg(&tiny).arg("--model").arg(&skbd).arg("--out").arg(dir.join("t.json")));
     assert!(err.contains("too small"), "{err}");
     assert!(!dir.join("t.json").exists());
     std::fs::remove_dir_all(&dir).unwrap();
@@ -83,22 +86,34 @@ fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
     let dir = scratch("embedded");
     let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
     let (out, overlay) = (dir.join("j.json"), dir.join("o.png"));
-    let res = cli().args(["detect", "--min-cell", "4"]).arg(&sketch).arg("--out").arg(&out).arg("--overlay").arg(&overlay).output().unwrap();
+    let res = cli()
+        .args(["detect", "--min-cell", "4"])
+        .arg(&sketch)
+        .arg("--out")
+        .arg(&out)
+        .arg("--overlay")
+        .arg(&overlay)
+        .output()
+        .unwrap();
     assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
     let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
     assert_eq!(j["format"], "sketchbody-joints2d");
     let y = |name: &str| j["joints"][name][1].as_f64().unwrap();
-    assert!(y("head") < y("neck") && y("neck") < y("pelvis") && y("pelvis") < y("l_knee") && y("l_knee") < y("l_ankle"));
+    assert!(
+        y("head") < y("neck") && y("neck") < y("pelvis") && y("pelvis") < y("l_knee") && y("l_knee") < y("l_ankle")
+    );
     assert!(j["confidence"]["head"].as_f64().is_some_and(|c| c > 0.0 && c < 1.0));
     assert!(image::open(&overlay).unwrap().width() == 512);
     // A blank page has no figure above an absurd threshold: one line naming the score.
     let blank = dir.join("blank.png");
     image::GrayImage::from_pixel(128, 128, image::Luma([255])).save(&blank).unwrap();
-    let err = one_line_failure(cli().args(["detect", "--threshold=1000"]).arg(&blank).arg("--out").arg(dir.join("b.json")));
+    let err =
+        one_line_failure(cli().args(["detect", "--threshold=1000"]).arg(&blank).arg("--out").arg(dir.join("b.json")));
     assert!(err.contains("no figure") && err.contains("1000"), "{err}");
     assert!(!dir.join("b.json").exists());
     // The score it names is the best one on that page (what a threshold below it returns).
-    let st = cli().args(["detect", "--threshold=-1e9"]).arg(&blank).arg("--out").arg(dir.join("b2.json")).status().unwrap();
+    let st =
+        cli().args(["detect", "--threshold=-1e9"]).arg(&blank).arg("--out").arg(dir.join("b2.json")).status().unwrap();
     assert!(st.success());
     let b2: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("b2.json")).unwrap()).unwrap();
     let best = b2["score"].as_f64().unwrap();
@@ -112,7 +127,14 @@ fn levels_per_octave_and_figure_flags_reach_the_search() {
     let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
     let score = |extra: &[&str], name: &str| {
         let out = dir.join(name);
-        let res = cli().args(["detect", "--threshold=-1e9"]).args(extra).arg(&sketch).arg("--out").arg(&out).output().unwrap();
+        let res = cli()
+            .args(["detect", "--threshold=-1e9"])
+            .args(extra)
+            .arg(&sketch)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
         assert!(res.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&res.stderr));
         let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
         j["score"].as_f64().unwrap()
@@ -123,15 +145,35 @@ fn levels_per_octave_and_figure_flags_reach_the_search() {
     // Figures of at most 0.3 of the side miss the page-filling figure.
     let small = score(&["--min-figure", "0.05", "--max-figure", "0.3"], "c.json");
     assert!(small < score(&[], "d.json"), "{small}");
-    let err = one_line_failure(cli().args(["detect", "--levels-per-octave", "101"]).arg(&sketch).arg("--out").arg(dir.join("e.json")));
+    let err = one_line_failure(
+        cli().args(["detect", "--levels-per-octave", "101"]).arg(&sketch).arg("--out").arg(dir.join("e.json")),
+    );
     assert!(err.contains("levels_per_octave") && err.contains("101"), "{err}");
     assert!(!dir.join("e.json").exists());
     // eval-detector takes the same flags and reports the figure sizes and the scales found.
-    let res = cli().args(["eval-detector", "--n", "2", "--size", "256", "--levels-per-octave", "5", "--min-figure", "0.4", "--by-style"]).output().unwrap();
+    let res = cli()
+        .args([
+            "eval-detector",
+            "--n",
+            "2",
+            "--size",
+            "256",
+            "--levels-per-octave",
+            "5",
+            "--min-figure",
+            "0.4",
+            "--by-style",
+        ])
+        .output()
+        .unwrap();
     assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
     let text = String::from_utf8(res.stdout).unwrap();
     assert!(text.contains("figures 0.4..1 of the side") && text.contains("5 levels per octave"), "{text}");
-    assert!(text.contains("drawn figure height / shorter side: min 0.") && text.contains("found at (cell × rest height / shorter side)"), "{text}");
+    assert!(
+        text.contains("drawn figure height / shorter side: min 0.")
+            && text.contains("found at (cell × rest height / shorter side)"),
+        "{text}"
+    );
     // --by-style: one row per rendering choice; "all" holds both sketches with the overall PCK.
     let pck10 = text.split("PCK@0.1 ").nth(1).and_then(|t| t.split_whitespace().next()).unwrap().to_string();
     let all = text.lines().find(|l| l.trim_start().starts_with("all ")).unwrap_or_else(|| panic!("{text}"));

@@ -75,6 +75,10 @@ fn edges_reports_bad_files_in_one_line() {
     let err = fails(&[good.as_os_str(), out.as_os_str(), "--aperture".as_ref(), "4".as_ref()]);
     assert!(err.contains("aperture"), "{err}");
     assert!(!out.exists(), "no output may be left after failures");
-    let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains(".tmp")).collect();
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
+        .collect();
     assert!(leftovers.is_empty());
 }

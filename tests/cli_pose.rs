@@ -17,7 +17,10 @@ fn joints_doc() -> serde_json::Value {
     let d = dict_io::embedded().unwrap();
     let mut joints = serde_json::Map::new();
     for (k, name) in JOINT_NAMES.iter().enumerate() {
-        joints.insert(name.to_string(), serde_json::json!([256.0 + 280.0 * d.mean[3 * k], 300.0 - 280.0 * d.mean[3 * k + 1]]));
+        joints.insert(
+            name.to_string(),
+            serde_json::json!([256.0 + 280.0 * d.mean[3 * k], 300.0 - 280.0 * d.mean[3 * k + 1]]),
+        );
     }
     serde_json::json!({"format": "sketchbody-joints2d", "version": 1, "joints": joints, "missing": ["l_wrist"]})
 }
@@ -25,7 +28,14 @@ fn joints_doc() -> serde_json::Value {
 fn run_with(input: &serde_json::Value, dir: &std::path::Path, extra: &[&str]) -> std::process::Output {
     let (inp, out) = (dir.join("in.json"), dir.join("out.json"));
     std::fs::write(&inp, serde_json::to_vec(input).unwrap()).unwrap();
-    Command::new(env!("CARGO_BIN_EXE_sketchbody")).arg("pose").arg(&inp).arg("--out").arg(&out).args(extra).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_sketchbody"))
+        .arg("pose")
+        .arg(&inp)
+        .arg("--out")
+        .arg(&out)
+        .args(extra)
+        .output()
+        .unwrap()
 }
 
 fn run(input: &serde_json::Value, dir: &std::path::Path) -> std::process::Output {

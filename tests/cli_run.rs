@@ -32,7 +32,8 @@ fn one_line_error(out: &Output, expect: &str) {
 }
 
 fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     v.sort();
     v
 }
@@ -42,11 +43,24 @@ fn run_writes_every_output() {
     let dir = scratch("ok");
     let out_dir = dir.join("out");
     let o = out_dir.to_str().unwrap();
-    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o, "--gender", "f"].iter().chain(&FAST).copied().collect::<Vec<_>>());
+    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o, "--gender", "f"]
+        .iter()
+        .chain(&FAST)
+        .copied()
+        .collect::<Vec<_>>());
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(
         names(&out_dir),
-        ["body.glb", "body.obj", "body_rest.obj", "joints2d.json", "overlay.png", "pose3d.json", "preview.png", "report.md"]
+        [
+            "body.glb",
+            "body.obj",
+            "body_rest.obj",
+            "joints2d.json",
+            "overlay.png",
+            "pose3d.json",
+            "preview.png",
+            "report.md"
+        ]
     );
     let glb = std::fs::read(out_dir.join("body.glb")).unwrap();
     assert_eq!(&glb[..4], b"glTF");
@@ -64,9 +78,17 @@ fn run_writes_every_output() {
     assert!(report.contains("gender: female (given)"), "{report}");
     assert!(report.contains("samples 24"), "{report}");
     assert!(report.contains("bone factors sd 0.1 centred on their 2-D estimate"), "{report}");
-    assert!(report.contains("- bone factors estimated from the 2-D joints: legs ") && report.contains("- bone factors fitted (applied to the mesh): legs "), "{report}");
+    assert!(
+        report.contains("- bone factors estimated from the 2-D joints: legs ")
+            && report.contains("- bone factors fitted (applied to the mesh): legs "),
+        "{report}"
+    );
     // A second run into the existing folder replaces the files and leaves no staging folder.
-    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o, "--gender", "f"].iter().chain(&FAST).copied().collect::<Vec<_>>());
+    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o, "--gender", "f"]
+        .iter()
+        .chain(&FAST)
+        .copied()
+        .collect::<Vec<_>>());
     assert!(out.status.success());
     assert_eq!(names(&out_dir).len(), 8);
     std::fs::remove_dir_all(&dir).unwrap();
@@ -76,7 +98,11 @@ fn run_writes_every_output() {
 fn without_gender_both_are_fitted_and_reported() {
     let dir = scratch("auto");
     let o = dir.join("out");
-    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o.to_str().unwrap()].iter().chain(&FAST).copied().collect::<Vec<_>>());
+    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o.to_str().unwrap()]
+        .iter()
+        .chain(&FAST)
+        .copied()
+        .collect::<Vec<_>>());
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report = std::fs::read_to_string(o.join("report.md")).unwrap();
     assert!(report.contains("- female fit: best score -") && report.contains("- male fit: best score -"), "{report}");
@@ -105,7 +131,10 @@ fn bad_input_fails_in_one_line_and_leaves_nothing() {
     doc["joints"]["l_wrist"] = serde_json::json!([600.0, 250.0]);
     let outside = dir.join("outside.json");
     std::fs::write(&outside, doc.to_string()).unwrap();
-    one_line_error(&run(&[SKETCH, "--joints", outside.to_str().unwrap(), "--out", o, "--quiet"]), "joint l_wrist at (600, 250) px lies outside the 512x512 image");
+    one_line_error(
+        &run(&[SKETCH, "--joints", outside.to_str().unwrap(), "--out", o, "--quiet"]),
+        "joint l_wrist at (600, 250) px lies outside the 512x512 image",
+    );
     // Blank and tiny sketches.
     let blank = dir.join("blank.png");
     save_gray_png(&GrayImage::filled(256, 256, 240).unwrap(), &blank).unwrap();
@@ -118,7 +147,10 @@ fn bad_input_fails_in_one_line_and_leaves_nothing() {
     let file = dir.join("file.txt");
     std::fs::write(&file, "x").unwrap();
     let under = file.join("out");
-    one_line_error(&run(&[SKETCH, "--joints", JOINTS, "--out", under.to_str().unwrap(), "--quiet"]), "cannot write the output folder");
+    one_line_error(
+        &run(&[SKETCH, "--joints", JOINTS, "--out", under.to_str().unwrap(), "--quiet"]),
+        "cannot write the output folder",
+    );
     // A failure into an existing folder leaves its other files alone and adds nothing.
     std::fs::create_dir_all(&out_dir).unwrap();
     std::fs::write(out_dir.join("keep.txt"), "k").unwrap();
@@ -133,7 +165,19 @@ fn ctrl_c_cancels_promptly_and_leaves_nothing() {
     let dir = scratch("cancel");
     let out_dir = dir.join("out");
     let child = Command::new(env!("CARGO_BIN_EXE_sketchbody"))
-        .args(["run", SKETCH, "--joints", JOINTS, "--out", out_dir.to_str().unwrap(), "--samples", "400", "--iterations", "50", "--quiet"])
+        .args([
+            "run",
+            SKETCH,
+            "--joints",
+            JOINTS,
+            "--out",
+            out_dir.to_str().unwrap(),
+            "--samples",
+            "400",
+            "--iterations",
+            "50",
+            "--quiet",
+        ])
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();

@@ -46,8 +46,10 @@ fn results_are_scored_by_eval_and_deterministic() {
                 assert_eq!(ja, jb, "{f} differs between 1 and 2 threads");
             }
         }
-        let truth: serde_json::Value = serde_json::from_slice(&std::fs::read(ds.join(format!("{stem}.json"))).unwrap()).unwrap();
-        let res: serde_json::Value = serde_json::from_slice(&std::fs::read(a.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let truth: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(ds.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let res: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(a.join(format!("{stem}.json"))).unwrap()).unwrap();
         assert_eq!(res["gender"], truth["gender"], "gender comes from the ground truth by default");
         assert_eq!(res["joints2d"], truth["joints2d"]);
     }
@@ -56,13 +58,17 @@ fn results_are_scored_by_eval_and_deterministic() {
     ok(&skb(&[&["run-dataset", s(&ds), "--out", s(&d), "--detect"][..], &fast].concat()));
     let (mut close, mut total) = (0, 0);
     for stem in ["000000", "000001", "000002"] {
-        let truth: serde_json::Value = serde_json::from_slice(&std::fs::read(ds.join(format!("{stem}.json"))).unwrap()).unwrap();
-        let res: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let truth: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(ds.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let res: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(d.join(format!("{stem}.json"))).unwrap()).unwrap();
         let (t, r) = (truth["joints2d"].as_array().unwrap(), res["joints2d"].as_array().unwrap());
         let ys: Vec<f64> = t.iter().map(|p| p[1].as_f64().unwrap()).collect();
-        let height = ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - ys.iter().cloned().fold(f64::INFINITY, f64::min);
+        let height =
+            ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - ys.iter().cloned().fold(f64::INFINITY, f64::min);
         for (p, q) in t.iter().zip(r) {
-            let dist = (p[0].as_f64().unwrap() - q[0].as_f64().unwrap()).hypot(p[1].as_f64().unwrap() - q[1].as_f64().unwrap());
+            let dist = (p[0].as_f64().unwrap() - q[0].as_f64().unwrap())
+                .hypot(p[1].as_f64().unwrap() - q[1].as_f64().unwrap());
             total += 1;
             close += (dist < 0.2 * height) as usize;
         }
@@ -72,7 +78,11 @@ fn results_are_scored_by_eval_and_deterministic() {
     // Resuming skips finished samples.
     let again = skb(&[&["run-dataset", s(&ds), "--out", s(&a)][..], &fast].concat());
     ok(&again);
-    assert!(String::from_utf8_lossy(&again.stdout).contains("0 samples run, 3 already done"), "{}", String::from_utf8_lossy(&again.stdout));
+    assert!(
+        String::from_utf8_lossy(&again.stdout).contains("0 samples run, 3 already done"),
+        "{}",
+        String::from_utf8_lossy(&again.stdout)
+    );
     ok(&skb(&["run-dataset", s(&ds), "--out", s(&m), "--mean-shape"]));
     let e = skb(&["eval", s(&ds), s(&m), "--compare", s(&a)]);
     ok(&e);
@@ -91,8 +101,14 @@ fn errors_are_one_line() {
     std::fs::create_dir_all(&empty).unwrap();
     for (args, expect) in [
         (vec!["run-dataset", s(&empty), "--out", s(&dir.join("r"))], "no samples"),
-        (vec!["run-dataset", s(&empty), "--out", s(&dir.join("r")), "--gender", "auto", "--mean-shape"], "--mean-shape needs"),
-        (vec!["run-dataset", s(&empty), "--out", s(&dir.join("r")), "--score", "best"], "expected paper, filled, chamfer or chamfer2"),
+        (
+            vec!["run-dataset", s(&empty), "--out", s(&dir.join("r")), "--gender", "auto", "--mean-shape"],
+            "--mean-shape needs",
+        ),
+        (
+            vec!["run-dataset", s(&empty), "--out", s(&dir.join("r")), "--score", "best"],
+            "expected paper, filled, chamfer or chamfer2",
+        ),
     ] {
         let o = skb(&args);
         assert_eq!(o.status.code(), Some(1), "{o:?}");

@@ -63,7 +63,9 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 #[test]
 fn make_dataset_is_thread_independent_resumable_and_scores_itself_perfectly() {
     let (a, b) = (scratch("ds1"), scratch("ds2"));
-    let run = |dir: &Path, threads: &str| cli(&["make-dataset", "4", "--seed", "9", "--out", s(dir), "--size", "96", "--threads", threads]);
+    let run = |dir: &Path, threads: &str| {
+        cli(&["make-dataset", "4", "--seed", "9", "--out", s(dir), "--size", "96", "--threads", threads])
+    };
     assert!(run(&a, "1").status.success());
     assert!(run(&b, "2").status.success());
     let fa = files(&a);
@@ -82,10 +84,14 @@ fn make_dataset_is_thread_independent_resumable_and_scores_itself_perfectly() {
     let res = scratch("res");
     for i in 0..4 {
         let stem = format!("{i:06}");
-        let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(a.join(format!("{stem}.json"))).unwrap()).unwrap();
-        let est = serde_json::json!({"joints2d": t["joints2d"], "joints3d": t["joints3d"], "camera_r": t["camera"]["r"]});
+        let t: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(a.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let est =
+            serde_json::json!({"joints2d": t["joints2d"], "joints3d": t["joints3d"], "camera_r": t["camera"]["r"]});
         std::fs::write(res.join(format!("{stem}.json")), est.to_string()).unwrap();
-        let (rest, posed) = sketchbody::render::sketch::truth::parse_mesh(&std::fs::read(a.join(format!("{stem}.mesh"))).unwrap(), "t").unwrap();
+        let (rest, posed) =
+            sketchbody::render::sketch::truth::parse_mesh(&std::fs::read(a.join(format!("{stem}.mesh"))).unwrap(), "t")
+                .unwrap();
         let faces = sketchbody::body::BodyModel::embedded().unwrap().faces().to_vec();
         sketchbody::export::obj::write_obj(&res.join(format!("{stem}_rest.obj")), &rest, &faces, None).unwrap();
         if i < 2 {
@@ -96,7 +102,10 @@ fn make_dataset_is_thread_independent_resumable_and_scores_itself_perfectly() {
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let text = String::from_utf8_lossy(&r.stdout);
     assert!(text.contains("| aed_rest | 0.0000 | 4 |") && text.contains("| aed_rest_centred | 0.0000 | 4 |"), "{text}");
-    assert!(text.contains("| aed_rest_at_height | 0.0000 | 4 |") && text.contains("| height_ratio | 1.000 | 4 |"), "{text}");
+    assert!(
+        text.contains("| aed_rest_at_height | 0.0000 | 4 |") && text.contains("| height_ratio | 1.000 | 4 |"),
+        "{text}"
+    );
     assert!(text.contains("| aed_posed | 0.0000 | 2 |"), "{text}");
     assert!(text.contains("| mpjpe_mm | 0.0 | 4 |") && text.contains("| pck@0.1 | 1.000 | 4 |"), "{text}");
     let csv = std::fs::read_to_string(res.join("eval.csv")).unwrap();
@@ -105,10 +114,12 @@ fn make_dataset_is_thread_independent_resumable_and_scores_itself_perfectly() {
     let other = scratch("other");
     for i in 0..4 {
         let stem = format!("{i:06}");
-        let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(a.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let t: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(a.join(format!("{stem}.json"))).unwrap()).unwrap();
         let j: Vec<[f64; 2]> = serde_json::from_value(t["joints2d"].clone()).unwrap();
         let shifted: Vec<[f64; 2]> = j.iter().map(|p| [p[0] + 30.0, p[1]]).collect();
-        std::fs::write(other.join(format!("{stem}.json")), serde_json::json!({"joints2d": shifted}).to_string()).unwrap();
+        std::fs::write(other.join(format!("{stem}.json")), serde_json::json!({"joints2d": shifted}).to_string())
+            .unwrap();
     }
     let r = cli(&["eval", s(&a), s(&res), "--compare", s(&other)]);
     let text = String::from_utf8_lossy(&r.stdout);

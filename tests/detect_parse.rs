@@ -48,7 +48,9 @@ fn detect_api_returns_the_figure_in_image_pixels() {
     assert!(n >= 11, "only {n}/14 joints within 0.2 of the box; score {}", best.score);
     // Canonical joints: head above neck above pelvis above the ankles.
     let y = |j: usize| best.joints.xy[j][1];
-    assert!(y(joint::HEAD) < y(joint::NECK) && y(joint::NECK) < y(joint::PELVIS) && y(joint::PELVIS) < y(joint::R_ANKLE));
+    assert!(
+        y(joint::HEAD) < y(joint::NECK) && y(joint::NECK) < y(joint::PELVIS) && y(joint::PELVIS) < y(joint::R_ANKLE)
+    );
     assert!(best.confidence.iter().all(|&c| c > 0.0 && c < 1.0));
     assert!(d.all.windows(2).all(|w| w[0].score >= w[1].score));
     // A blank image of the same size holds no figure above the model's threshold.

@@ -33,7 +33,13 @@ fn proxy_is_a_deterministic_closed_subset_and_synthesises_like_the_model() {
     assert_eq!(proxy.skin_weights(), &kept.iter().map(|&i| model.skin_weights()[i as usize]).collect::<Vec<_>>()[..]);
     for g in Gender::ALL {
         let space = model.space(g);
-        let w: Vec<f64> = space.variances().iter().take(6).enumerate().map(|(k, v)| v.sqrt() * [1.5, -1.0, 0.7, -2.0, 1.0, 0.3][k]).collect();
+        let w: Vec<f64> = space
+            .variances()
+            .iter()
+            .take(6)
+            .enumerate()
+            .map(|(k, v)| v.sqrt() * [1.5, -1.0, 0.7, -2.0, 1.0, 0.3][k])
+            .collect();
         let full = space.synthesize(&w).unwrap();
         let mut out = Vec::new();
         let joints = proxy.space(g).synthesize_into(space, &w, &mut out).unwrap();
@@ -63,11 +69,17 @@ fn proxy_silhouette_agrees_with_the_full_mesh() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let (mut full_ras, mut proxy_ras) = (Rasterizer::new(), Rasterizer::new());
     let (mut posed, mut proxy_posed, mut proxy_rest) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut differ_total, mut area_total, mut within1, mut worst_fraction, mut worst_dist) = (0usize, 0usize, 0usize, 0.0f64, 0.0f32);
+    let (mut differ_total, mut area_total, mut within1, mut worst_fraction, mut worst_dist) =
+        (0usize, 0usize, 0usize, 0.0f64, 0.0f32);
     for case in 0..24 {
         let g = Gender::ALL[case % 2];
         let space = model.space(g);
-        let w: Vec<f64> = space.variances().iter().take(space.default_dim()).map(|v| v.sqrt() * rng.random_range(-2.0..2.0)).collect();
+        let w: Vec<f64> = space
+            .variances()
+            .iter()
+            .take(space.default_dim())
+            .map(|v| v.sqrt() * rng.random_range(-2.0..2.0))
+            .collect();
         let rest = space.synthesize(&w).unwrap();
         let target = random_pose(&rest.joints, &mut rng, 0.0);
         let pose = solve(&rest.joints, &target, &IkOptions::default()).unwrap();
@@ -75,7 +87,12 @@ fn proxy_silhouette_agrees_with_the_full_mesh() {
         let joints = proxy.space(g).synthesize_into(space, &w, &mut proxy_rest).unwrap();
         let proxy_pose = solve(&joints, &target, &IkOptions::default()).unwrap();
         skin_into(&proxy_rest, proxy.skin_weights(), &proxy_pose, SkinMethod::Linear, &mut proxy_posed).unwrap();
-        let r: Matrix3<f64> = *Rotation3::from_euler_angles(rng.random_range(-0.3..0.3), rng.random_range(-0.6..0.6), rng.random_range(-0.2..0.2)).matrix();
+        let r: Matrix3<f64> = *Rotation3::from_euler_angles(
+            rng.random_range(-0.3..0.3),
+            rng.random_range(-0.6..0.6),
+            rng.random_range(-0.2..0.2),
+        )
+        .matrix();
         let s = rng.random_range(80.0..130.0);
         let cam = WeakPerspective { sx: s, sy: s, r, t: [128.0, 128.0 + 0.1 * s] };
         full_ras.rasterize(&posed, &tris, &cam, 256, 256, false).unwrap();
@@ -96,7 +113,11 @@ fn proxy_silhouette_agrees_with_the_full_mesh() {
         let max_d = differ.iter().map(|&i| dist[i]).fold(0.0, f32::max);
         let fraction = differ.len() as f64 / area as f64;
         assert!(area > 1000, "case {case}: {area} px");
-        assert!(fraction < 0.025 && max_d <= 2.0, "case {case} ({g:?}): {} of {area} px differ, max {max_d} px from the boundary", differ.len());
+        assert!(
+            fraction < 0.025 && max_d <= 2.0,
+            "case {case} ({g:?}): {} of {area} px differ, max {max_d} px from the boundary",
+            differ.len()
+        );
         differ_total += differ.len();
         area_total += area;
         within1 += differ.iter().filter(|&&i| dist[i] <= 1.0).count();

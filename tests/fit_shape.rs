@@ -12,7 +12,8 @@ use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 use sketchbody::Error;
 
 fn aed(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
-    let sum: f64 = a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (p[c] as f64 - q[c] as f64).powi(2)).sum::<f64>().sqrt()).sum();
+    let sum: f64 =
+        a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (p[c] as f64 - q[c] as f64).powi(2)).sum::<f64>().sqrt()).sum();
     sum / a.len() as f64
 }
 
@@ -40,13 +41,29 @@ fn case() -> Case {
 
 fn options() -> FitOptions {
     // The problem camera, PCA weights only, temperature 2 (the defaults before per-sample cameras).
-    FitOptions { samples: 64, max_iterations: 6, raster_max_side: 128, seed: 11, temperature: 2.0, sample_camera: false, proportion_sd: 0.0, ..FitOptions::default() }
+    FitOptions {
+        samples: 64,
+        max_iterations: 6,
+        raster_max_side: 128,
+        seed: 11,
+        temperature: 2.0,
+        sample_camera: false,
+        proportion_sd: 0.0,
+        ..FitOptions::default()
+    }
 }
 
 #[test]
 fn fit_beats_the_mean_shape_and_is_deterministic() {
     let c = case();
-    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges, joints2d: None };
+    let problem = FitProblem {
+        model: &c.model,
+        gender: Gender::Male,
+        pose: &c.truth.joints,
+        camera: &c.camera,
+        edges: &c.edges,
+        joints2d: None,
+    };
     let space = c.model.space(Gender::Male);
     let mean_error = aed(&c.truth.vertices, &space.synthesize(&[]).unwrap().vertices);
     let mut calls = 0;
@@ -69,9 +86,22 @@ fn fit_beats_the_mean_shape_and_is_deterministic() {
 #[test]
 fn paper_score_and_cancellation() {
     let c = case();
-    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges, joints2d: None };
-    let paper = fit_shape(&problem, &FitOptions { score: MatchScore::Paper, max_iterations: 2, ..options() }, &mut |_| true).unwrap();
-    assert!(paper.best_score > 0.0 && paper.best_score < 0.5, "eq. 7 IoU of a filled mask with thin edges is small: {}", paper.best_score);
+    let problem = FitProblem {
+        model: &c.model,
+        gender: Gender::Male,
+        pose: &c.truth.joints,
+        camera: &c.camera,
+        edges: &c.edges,
+        joints2d: None,
+    };
+    let paper =
+        fit_shape(&problem, &FitOptions { score: MatchScore::Paper, max_iterations: 2, ..options() }, &mut |_| true)
+            .unwrap();
+    assert!(
+        paper.best_score > 0.0 && paper.best_score < 0.5,
+        "eq. 7 IoU of a filled mask with thin edges is small: {}",
+        paper.best_score
+    );
     let cancelled = fit_shape(&problem, &options(), &mut |_| false);
     assert!(matches!(cancelled, Err(Error::Cancelled)));
     let bad = FitOptions { samples: 1, ..options() };
@@ -81,17 +111,24 @@ fn paper_score_and_cancellation() {
     assert!(fit_shape(&blank_problem, &options(), &mut |_| true).is_err());
 }
 
-
 #[test]
 fn joint_term_penalises_off_joints_and_is_validated() {
     let c = case();
-    let truth_2d: Vec<[f64; 2]> = c.truth.joints.iter().map(|p| c.camera.project(&nalgebra::Vector3::from(*p))).collect();
+    let truth_2d: Vec<[f64; 2]> =
+        c.truth.joints.iter().map(|p| c.camera.project(&nalgebra::Vector3::from(*p))).collect();
     // 2-D joints 40 image px (20 raster px at side 128) to the right of the body's own.
     let mut shifted = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
     for (k, q) in truth_2d.iter().enumerate() {
         shifted.xy[k] = [q[0] + 40.0, q[1]];
     }
-    let base = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges, joints2d: None };
+    let base = FitProblem {
+        model: &c.model,
+        gender: Gender::Male,
+        pose: &c.truth.joints,
+        camera: &c.camera,
+        edges: &c.edges,
+        joints2d: None,
+    };
     let with_joints = FitProblem { joints2d: Some(&shifted), ..base };
     let o = |w: f64| FitOptions { joint_weight: w, max_iterations: 2, ..options() };
     let off = fit_shape(&base, &o(1.0), &mut |_| true).unwrap();
@@ -104,25 +141,47 @@ fn joint_term_penalises_off_joints_and_is_validated() {
     let drop = off.best_score - on.best_score;
     assert!(drop > 15.0 && drop < 25.0, "penalty {drop} raster px");
     let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    assert_eq!(one_thread.install(|| fit_shape(&with_joints, &o(1.0), &mut |_| true)).unwrap(), on, "joint term deterministic on 1 thread");
+    assert_eq!(
+        one_thread.install(|| fit_shape(&with_joints, &o(1.0), &mut |_| true)).unwrap(),
+        on,
+        "joint term deterministic on 1 thread"
+    );
     assert!(matches!(fit_shape(&base, &o(-0.1), &mut |_| true), Err(Error::OutOfRange { name: "joint weight", .. })));
-    assert!(matches!(fit_shape(&base, &o(f64::NAN), &mut |_| true), Err(Error::NonFinite { name: "joint weight", .. })));
+    assert!(matches!(
+        fit_shape(&base, &o(f64::NAN), &mut |_| true),
+        Err(Error::NonFinite { name: "joint weight", .. })
+    ));
 }
 
 #[test]
 fn per_sample_cameras_ignore_the_problem_cameras_scale() {
     let c = case();
-    let truth_2d = Joints2 { xy: std::array::from_fn(|k| c.camera.project(&nalgebra::Vector3::from(c.truth.joints[k]))), visible: [true; NUM_JOINTS] };
+    let truth_2d = Joints2 {
+        xy: std::array::from_fn(|k| c.camera.project(&nalgebra::Vector3::from(c.truth.joints[k]))),
+        visible: [true; NUM_JOINTS],
+    };
     // A camera 20% too small and 15 px off: only its rotation is used with per-sample cameras.
     let wrong = WeakPerspective { sx: 88.0, sy: 88.0, t: [143.0, 150.0], ..c.camera };
-    let right = FitProblem { model: &c.model, gender: Gender::Male, pose: &c.truth.joints, camera: &c.camera, edges: &c.edges, joints2d: Some(&truth_2d) };
+    let right = FitProblem {
+        model: &c.model,
+        gender: Gender::Male,
+        pose: &c.truth.joints,
+        camera: &c.camera,
+        edges: &c.edges,
+        joints2d: Some(&truth_2d),
+    };
     let off = FitProblem { camera: &wrong, ..right };
     let o = FitOptions { sample_camera: true, ..options() };
     let fixed_wrong = fit_shape(&off, &options(), &mut |_| true).unwrap();
     let free = fit_shape(&off, &o, &mut |_| true).unwrap();
     let free_right = fit_shape(&right, &o, &mut |_| true).unwrap();
     assert!(free.best_score > -1.5, "per-sample camera: best mean boundary distance {} raster px", -free.best_score);
-    assert!(free.best_score > fixed_wrong.best_score + 2.0, "per-sample {} vs wrong fixed camera {}", free.best_score, fixed_wrong.best_score);
+    assert!(
+        free.best_score > fixed_wrong.best_score + 2.0,
+        "per-sample {} vs wrong fixed camera {}",
+        free.best_score,
+        fixed_wrong.best_score
+    );
     // The chamfer score does not use the problem camera at all then: the same fit.
     assert_eq!(free, free_right);
     let space = c.model.space(Gender::Male);
@@ -138,7 +197,10 @@ fn per_sample_cameras_ignore_the_problem_cameras_scale() {
     // Without 2-D joints the problem's camera is used.
     let no_joints = FitProblem { joints2d: None, ..off };
     let o0 = FitOptions { joint_weight: 0.0, ..o.clone() };
-    assert_eq!(fit_shape(&no_joints, &o0, &mut |_| true).unwrap(), fit_shape(&no_joints, &FitOptions { joint_weight: 0.0, ..options() }, &mut |_| true).unwrap());
+    assert_eq!(
+        fit_shape(&no_joints, &o0, &mut |_| true).unwrap(),
+        fit_shape(&no_joints, &FitOptions { joint_weight: 0.0, ..options() }, &mut |_| true).unwrap()
+    );
 }
 
 #[test]
@@ -152,9 +214,26 @@ fn bone_factors_find_long_legs() {
     raster.rasterize(&v, &c.model.triangles(), &camera, 256, 256, false).unwrap();
     let drawing: Vec<u8> = raster.mask().iter().map(|&m| if m != 0 { 40 } else { 235 }).collect();
     let edges = canny(&GrayImage::from_vec(256, 256, drawing).unwrap().view(), &CannyParams::default()).unwrap();
-    let j2 = Joints2 { xy: std::array::from_fn(|k| camera.project(&nalgebra::Vector3::from(j[k]))), visible: [true; NUM_JOINTS] };
-    let problem = FitProblem { model: &c.model, gender: Gender::Male, pose: &j, camera: &camera, edges: &edges, joints2d: Some(&j2) };
-    let o = FitOptions { sample_camera: true, proportion_sd: 0.2, temperature: 0.1, samples: 128, max_iterations: 8, ..options() };
+    let j2 = Joints2 {
+        xy: std::array::from_fn(|k| camera.project(&nalgebra::Vector3::from(j[k]))),
+        visible: [true; NUM_JOINTS],
+    };
+    let problem = FitProblem {
+        model: &c.model,
+        gender: Gender::Male,
+        pose: &j,
+        camera: &camera,
+        edges: &edges,
+        joints2d: Some(&j2),
+    };
+    let o = FitOptions {
+        sample_camera: true,
+        proportion_sd: 0.2,
+        temperature: 0.1,
+        samples: 128,
+        max_iterations: 8,
+        ..options()
+    };
     let r = fit_shape(&problem, &o, &mut |_| true).unwrap();
     let p = r.proportions.expect("factors searched");
     // The long legs pull the leg factor up, more than any other (with the prior at 1 legs
@@ -178,5 +257,8 @@ fn bone_factors_find_long_legs() {
     assert_eq!(at_one.proportion_estimate, None);
     let p1 = at_one.proportions.expect("factors searched");
     assert!((p.legs - 1.2).abs() < (p1.legs - 1.2).abs(), "{p:?} vs {p1:?}");
-    assert!(matches!(fit_shape(&problem, &FitOptions { proportion_sd: 0.6, ..o.clone() }, &mut |_| true), Err(Error::OutOfRange { name: "proportion sd", .. })));
+    assert!(matches!(
+        fit_shape(&problem, &FitOptions { proportion_sd: 0.6, ..o.clone() }, &mut |_| true),
+        Err(Error::OutOfRange { name: "proportion sd", .. })
+    ));
 }

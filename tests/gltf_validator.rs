@@ -56,11 +56,13 @@ fn exported_glb_files_have_no_validator_errors() {
     let rest = rest_joints();
     let mut mesh = capsule_humanoid(&rest, 12, 10);
     // Per-corner UVs: a grid over each capsule, with seams (several UVs per vertex).
-    let coords: Vec<[f32; 2]> = (0..mesh.quads.len()).flat_map(|f| {
-        let u = (f % 10) as f32 / 10.0;
-        let v = (f / 10 % 12) as f32 / 12.0;
-        [[u, v], [u + 0.1, v], [u + 0.1, v + 1.0 / 12.0], [u, v + 1.0 / 12.0]]
-    }).collect();
+    let coords: Vec<[f32; 2]> = (0..mesh.quads.len())
+        .flat_map(|f| {
+            let u = (f % 10) as f32 / 10.0;
+            let v = (f / 10 % 12) as f32 / 12.0;
+            [[u, v], [u + 0.1, v], [u + 0.1, v + 1.0 / 12.0], [u, v + 1.0 / 12.0]]
+        })
+        .collect();
     let quads = (0..mesh.quads.len() as u32).map(|f| [4 * f, 4 * f + 1, 4 * f + 2, 4 * f + 3]).collect();
     mesh.uvs = Some(FaceUvs { coords, quads });
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);

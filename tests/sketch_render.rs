@@ -77,5 +77,6 @@ fn a_wrist_behind_the_back_is_hidden_and_bad_input_is_rejected() {
     assert!(bad(SketchRequest { shape_weights: Some(vec![0.0; 999]), ..req.clone() }).contains("weight"));
     let style = SketchStyle { margin: 0.9, ..Default::default() };
     assert!(bad(SketchRequest { style: Some(style), ..req.clone() }).contains("style.margin"));
-    assert!(bad(SketchRequest { camera: Some(CameraAngles { yaw_deg: 200.0, ..Default::default() }), ..req }).contains("yaw"));
+    assert!(bad(SketchRequest { camera: Some(CameraAngles { yaw_deg: 200.0, ..Default::default() }), ..req })
+        .contains("yaw"));
 }

@@ -33,7 +33,12 @@ fn plane_quadric(n: [f64; 3], d: f64, weight: f64) -> Quadric {
 
 fn quadric_error(q: &Quadric, p: [f64; 3]) -> f64 {
     let [x, y, z] = p;
-    q[0] * x * x + 2.0 * q[1] * x * y + 2.0 * q[2] * x * z + 2.0 * q[3] * x + q[4] * y * y + 2.0 * q[5] * y * z
+    q[0] * x * x
+        + 2.0 * q[1] * x * y
+        + 2.0 * q[2] * x * z
+        + 2.0 * q[3] * x
+        + q[4] * y * y
+        + 2.0 * q[5] * y * z
         + 2.0 * q[6] * y
         + q[7] * z * z
         + 2.0 * q[8] * z
@@ -197,7 +202,10 @@ pub fn decimate(positions: &[[f32; 3]], triangles: &[[u32; 3]], target_vertices:
         return Err(Error::OutOfRange { name: "decimation target", detail: "0 vertices".into() });
     }
     if let Some(t) = triangles.iter().position(|t| t.iter().any(|&i| i as usize >= n)) {
-        return Err(Error::OutOfRange { name: "triangle index", detail: format!("triangle {t} indexes a vertex >= {n}") });
+        return Err(Error::OutOfRange {
+            name: "triangle index",
+            detail: format!("triangle {t} indexes a vertex >= {n}"),
+        });
     }
     if let Some(&c) = positions.iter().flatten().find(|c| !c.is_finite()) {
         return Err(Error::NonFinite { name: "mesh vertex", value: c as f64 });
@@ -260,7 +268,8 @@ pub fn decimate(positions: &[[f32; 3]], triangles: &[[u32; 3]], target_vertices:
     for (k, &i) in kept.iter().enumerate() {
         local[i as usize] = k as u32;
     }
-    let triangles = s.tris.iter().zip(&s.alive_tri).filter(|(_, &a)| a).map(|(t, _)| t.map(|i| local[i as usize])).collect();
+    let triangles =
+        s.tris.iter().zip(&s.alive_tri).filter(|(_, &a)| a).map(|(t, _)| t.map(|i| local[i as usize])).collect();
     Ok(Decimated { kept, triangles })
 }
 

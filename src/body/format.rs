@@ -38,7 +38,12 @@ impl Sizes {
         let (v, f, t) = (self.vertices as usize, self.faces as usize, self.uvs as usize);
         let (k, d, c) = (self.components as usize, self.gmm_dims as usize, self.gmm_components as usize);
         let shared = f.checked_mul(32)? + t * 8 + v * MAX_INFLUENCES * 5;
-        let per_gender = 4 + k * 8 + v * 12 + NUM_JOINTS * 12 + k.checked_mul(v * 12 + NUM_JOINTS * 12)? + c * (4 + d * 4 + d * d * 4);
+        let per_gender = 4
+            + k * 8
+            + v * 12
+            + NUM_JOINTS * 12
+            + k.checked_mul(v * 12 + NUM_JOINTS * 12)?
+            + c * (4 + d * 4 + d * d * 4);
         HEADER_LEN.checked_add(shared)?.checked_add(per_gender.checked_mul(2)?)?.checked_add(4)
     }
 }
@@ -116,14 +121,19 @@ impl BodyModel {
             return Err(corrupt("bad magic: not a .skbm file (expected it to start with \"SKBMODEL\")".into()));
         }
         if bytes.len() < HEADER_LEN {
-            return Err(corrupt(format!("truncated: {} bytes, shorter than the {HEADER_LEN}-byte header", bytes.len())));
+            return Err(corrupt(format!(
+                "truncated: {} bytes, shorter than the {HEADER_LEN}-byte header",
+                bytes.len()
+            )));
         }
-        let h = |i: usize| u32::from_le_bytes([bytes[8 + 4 * i], bytes[9 + 4 * i], bytes[10 + 4 * i], bytes[11 + 4 * i]]);
+        let h =
+            |i: usize| u32::from_le_bytes([bytes[8 + 4 * i], bytes[9 + 4 * i], bytes[10 + 4 * i], bytes[11 + 4 * i]]);
         let version = h(0);
         if version != SKBM_VERSION {
             return Err(corrupt(format!("unsupported version {version} (this library reads version {SKBM_VERSION})")));
         }
-        let sizes = Sizes { vertices: h(1), faces: h(2), uvs: h(3), components: h(6), gmm_dims: h(7), gmm_components: h(8) };
+        let sizes =
+            Sizes { vertices: h(1), faces: h(2), uvs: h(3), components: h(6), gmm_dims: h(7), gmm_components: h(8) };
         if h(4) as usize != NUM_JOINTS || h(5) as usize != NUM_BONES || h(9) as usize != MAX_INFLUENCES {
             return Err(corrupt(format!(
                 "header says {} joints, {} bones, {} influences; expected {NUM_JOINTS}, {NUM_BONES}, {MAX_INFLUENCES}",
@@ -150,9 +160,13 @@ impl BodyModel {
             return Err(corrupt(format!("truncated: {} bytes, the header implies {expected}", bytes.len())));
         }
         if bytes.len() > expected {
-            return Err(corrupt(format!("{} trailing bytes after the {expected} the header implies", bytes.len() - expected)));
+            return Err(corrupt(format!(
+                "{} trailing bytes after the {expected} the header implies",
+                bytes.len() - expected
+            )));
         }
-        let stored = u32::from_le_bytes([bytes[expected - 4], bytes[expected - 3], bytes[expected - 2], bytes[expected - 1]]);
+        let stored =
+            u32::from_le_bytes([bytes[expected - 4], bytes[expected - 3], bytes[expected - 2], bytes[expected - 1]]);
         let actual = crc32fast::hash(&bytes[..expected - 4]);
         if stored != actual {
             return Err(corrupt(format!("checksum mismatch: stored CRC-32 {stored:08x}, computed {actual:08x}")));
@@ -185,7 +199,8 @@ impl Reader<'_> {
     }
 
     fn f32s(&mut self, n: usize, what: &str) -> Result<Vec<f32>> {
-        let v: Vec<f32> = self.take(4 * n).chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let v: Vec<f32> =
+            self.take(4 * n).chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         match v.iter().position(|x| !x.is_finite()) {
             Some(i) => Err(Error::CorruptData(format!("{what} value {i} is not finite"))),
             None => Ok(v),
@@ -220,7 +235,8 @@ impl Reader<'_> {
     }
 
     fn space(&mut self, s: &Sizes) -> Result<ShapeSpace> {
-        let (nv, k, d, c) = (s.vertices as usize, s.components as usize, s.gmm_dims as usize, s.gmm_components as usize);
+        let (nv, k, d, c) =
+            (s.vertices as usize, s.components as usize, s.gmm_dims as usize, s.gmm_components as usize);
         let default_dim = self.u32s(1)[0] as usize;
         let widen = |v: Vec<f32>| v.into_iter().map(|x| x as f64).collect::<Vec<f64>>();
         let cumulative_energy = widen(self.f32s(k, "energy")?);
@@ -230,7 +246,8 @@ impl Reader<'_> {
         let basis = self.f32s(3 * nv * k, "basis")?;
         let joint_basis = (0..k).map(|_| self.joints("joint basis")).collect::<Result<Vec<_>>>()?;
         let gmm_weights = widen(self.f32s(c, "GMM weight")?);
-        let means = (0..c).map(|_| Ok(DVector::from_vec(widen(self.f32s(d, "GMM mean")?)))).collect::<Result<Vec<_>>>()?;
+        let means =
+            (0..c).map(|_| Ok(DVector::from_vec(widen(self.f32s(d, "GMM mean")?)))).collect::<Result<Vec<_>>>()?;
         let covs = (0..c)
             .map(|_| Ok(DMatrix::from_row_slice(d, d, &widen(self.f32s(d * d, "GMM covariance")?))))
             .collect::<Result<Vec<_>>>()?;
@@ -246,7 +263,8 @@ pub(crate) mod tests {
     /// A tiny valid model: 4 vertices, 1 quad, 2 components, a 1-component 1-D GMM.
     pub(crate) fn tiny_model() -> BodyModel {
         let w = VertexWeights { bones: [7, 0, 0, 0], weights: [1.0, 0.0, 0.0, 0.0] };
-        let gmm = Gmm::new(vec![1.0], vec![DVector::from_vec(vec![0.0])], vec![DMatrix::from_element(1, 1, 0.01)]).unwrap();
+        let gmm =
+            Gmm::new(vec![1.0], vec![DVector::from_vec(vec![0.0])], vec![DMatrix::from_element(1, 1, 0.01)]).unwrap();
         let space = ShapeSpace {
             mean: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
             mean_joints: [[0.5; 3]; NUM_JOINTS],

@@ -22,7 +22,9 @@ impl Gender {
         match index {
             0 => Ok(Gender::Female),
             1 => Ok(Gender::Male),
-            _ => Err(Error::OutOfRange { name: "gender", detail: format!("{index} (expected 0 = female or 1 = male)") }),
+            _ => {
+                Err(Error::OutOfRange { name: "gender", detail: format!("{index} (expected 0 = female or 1 = male)") })
+            }
         }
     }
 

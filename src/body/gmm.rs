@@ -135,7 +135,10 @@ impl Gmm {
     /// weights, leading sub-vectors of the means and leading blocks of the covariances.
     pub fn marginal(&self, dims: usize) -> Result<Gmm> {
         if dims == 0 || dims > self.dims() {
-            return Err(Error::OutOfRange { name: "GMM marginal dimensions", detail: format!("{dims} not in 1..={}", self.dims()) });
+            return Err(Error::OutOfRange {
+                name: "GMM marginal dimensions",
+                detail: format!("{dims} not in 1..={}", self.dims()),
+            });
         }
         let means = self.means.iter().map(|m| m.rows(0, dims).into_owned()).collect();
         let covs = self.covariances.iter().map(|s| s.view((0, 0), (dims, dims)).into_owned()).collect();
@@ -157,7 +160,8 @@ mod tests {
 
     #[test]
     fn log_pdf_matches_closed_form_for_one_component() {
-        let g = Gmm::new(vec![1.0], vec![DVector::from_vec(vec![1.0])], vec![DMatrix::from_element(1, 1, 4.0)]).unwrap();
+        let g =
+            Gmm::new(vec![1.0], vec![DVector::from_vec(vec![1.0])], vec![DMatrix::from_element(1, 1, 4.0)]).unwrap();
         let expected = -0.5 * (2.0 * std::f64::consts::PI * 4.0).ln() - 0.5 * (2.0f64 * 2.0) / 4.0;
         let got = g.log_pdf(&[3.0]).unwrap();
         assert!((got - expected).abs() < 1e-12, "got {got}, expected {expected} (eps 1e-12)");

@@ -61,7 +61,13 @@ pub struct Pose {
 impl Pose {
     /// The rest pose itself (identity rotations, unit stretch).
     pub fn rest(rest: &Joints3) -> Pose {
-        Pose { rest: *rest, joints: *rest, rotations: [UnitQuaternion::identity(); NUM_BONES], stretch: [1.0; NUM_BONES], root: UnitQuaternion::identity() }
+        Pose {
+            rest: *rest,
+            joints: *rest,
+            rotations: [UnitQuaternion::identity(); NUM_BONES],
+            stretch: [1.0; NUM_BONES],
+            root: UnitQuaternion::identity(),
+        }
     }
 
     /// The affine map of bone `b`: posed = `m * rest + t` (rotation times stretch, and offset).
@@ -167,7 +173,8 @@ fn rest_hinge(rest: &Joints3, up: usize, low: usize, is_leg: bool) -> Vector3<f6
     if anatomical.norm() < 1e-6 {
         anatomical = u.cross(&Vector3::x());
     }
-    let h = if n.norm() > 1e-9 { n.normalize() * bent } else { Vector3::zeros() } + anatomical.normalize() * (1.0 - bent);
+    let h =
+        if n.norm() > 1e-9 { n.normalize() * bent } else { Vector3::zeros() } + anatomical.normalize() * (1.0 - bent);
     let h = h - u * u.dot(&h);
     if h.norm() > 1e-9 {
         h.normalize()

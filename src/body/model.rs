@@ -108,7 +108,11 @@ impl ShapeSpace {
         if weights.len() > self.num_components() {
             return Err(Error::OutOfRange {
                 name: "shape weight count",
-                detail: format!("got {} weights, the shape space has {} components", weights.len(), self.num_components()),
+                detail: format!(
+                    "got {} weights, the shape space has {} components",
+                    weights.len(),
+                    self.num_components()
+                ),
             });
         }
         for &w in weights {
@@ -151,14 +155,14 @@ impl ShapeSpace {
             });
         }
         if dims > self.num_components() {
-            return Err(Error::OutOfRange { name: "projection dimensions", detail: format!("{dims} > {}", self.num_components()) });
+            return Err(Error::OutOfRange {
+                name: "projection dimensions",
+                detail: format!("{dims} > {}", self.num_components()),
+            });
         }
         let n = 3 * self.mean.len();
-        let centred: Vec<f64> = vertices
-            .iter()
-            .zip(&self.mean)
-            .flat_map(|(v, m)| (0..3).map(move |c| v[c] as f64 - m[c] as f64))
-            .collect();
+        let centred: Vec<f64> =
+            vertices.iter().zip(&self.mean).flat_map(|(v, m)| (0..3).map(move |c| v[c] as f64 - m[c] as f64)).collect();
         Ok((0..dims)
             .map(|k| centred.iter().zip(&self.basis[k * n..(k + 1) * n]).map(|(a, &b)| a * b as f64).sum())
             .collect())
@@ -251,7 +255,10 @@ impl BodyModel {
                 || w.weights.iter().any(|x| !(0.0..=1.0).contains(x))
                 || (sum - 1.0).abs() > 1e-4
             {
-                return bad(format!("skin weights of vertex {v} are invalid (bones {:?}, weights {:?})", w.bones, w.weights));
+                return bad(format!(
+                    "skin weights of vertex {v} are invalid (bones {:?}, weights {:?})",
+                    w.bones, w.weights
+                ));
             }
         }
         Ok(())

@@ -17,21 +17,21 @@ pub fn rest_joints() -> Joints3 {
     let (ua, fa) = (0.29, 0.26);
     let (sh, sy) = (0.19, 1.42);
     [
-        [0.0, 1.60, 0.01],                                   // head
-        [0.0, 1.45, -0.02],                                  // neck
-        [-sh, sy, -0.03],                                    // r_shoulder
-        [-sh - ua * c, sy - ua * s, -0.03],                  // r_elbow
-        [-sh - (ua + fa) * c, sy - (ua + fa) * s, -0.03],    // r_wrist
-        [sh, sy, -0.03],                                     // l_shoulder
-        [sh + ua * c, sy - ua * s, -0.03],                   // l_elbow
-        [sh + (ua + fa) * c, sy - (ua + fa) * s, -0.03],     // l_wrist
-        [0.0, 0.98, 0.0],                                    // pelvis
-        [-0.09, 0.92, 0.0],                                  // r_hip
-        [-0.10, 0.50, 0.01],                                 // r_knee
-        [-0.11, 0.08, -0.02],                                // r_ankle
-        [0.09, 0.92, 0.0],                                   // l_hip
-        [0.10, 0.50, 0.01],                                  // l_knee
-        [0.11, 0.08, -0.02],                                 // l_ankle
+        [0.0, 1.60, 0.01],                                // head
+        [0.0, 1.45, -0.02],                               // neck
+        [-sh, sy, -0.03],                                 // r_shoulder
+        [-sh - ua * c, sy - ua * s, -0.03],               // r_elbow
+        [-sh - (ua + fa) * c, sy - (ua + fa) * s, -0.03], // r_wrist
+        [sh, sy, -0.03],                                  // l_shoulder
+        [sh + ua * c, sy - ua * s, -0.03],                // l_elbow
+        [sh + (ua + fa) * c, sy - (ua + fa) * s, -0.03],  // l_wrist
+        [0.0, 0.98, 0.0],                                 // pelvis
+        [-0.09, 0.92, 0.0],                               // r_hip
+        [-0.10, 0.50, 0.01],                              // r_knee
+        [-0.11, 0.08, -0.02],                             // r_ankle
+        [0.09, 0.92, 0.0],                                // l_hip
+        [0.10, 0.50, 0.01],                               // l_knee
+        [0.11, 0.08, -0.02],                              // l_ankle
     ]
 }
 
@@ -80,7 +80,8 @@ fn random_axis<R: Rng>(rng: &mut R) -> Unit<Vector3<f64>> {
 }
 
 /// Capsule radius of each bone, metres.
-const RADIUS: [f64; NUM_BONES] = [0.10, 0.06, 0.05, 0.04, 0.06, 0.05, 0.04, 0.13, 0.08, 0.075, 0.055, 0.08, 0.075, 0.055];
+const RADIUS: [f64; NUM_BONES] =
+    [0.10, 0.06, 0.05, 0.04, 0.06, 0.05, 0.04, 0.13, 0.08, 0.075, 0.055, 0.08, 0.075, 0.055];
 
 /// A capsule humanoid on `joints`: one capsule per bone with `rings` quads along it and `segs`
 /// around (caps included), skin weights falling to 0 at 4 cm beyond the nearest bone's surface

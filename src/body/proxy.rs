@@ -32,7 +32,11 @@ impl ProxySpace {
     fn new(space: &ShapeSpace, kept: &[u32]) -> Self {
         let n = space.num_vertices();
         let basis = (0..space.num_components())
-            .flat_map(|k| kept.iter().flat_map(move |&i| space.basis[k * 3 * n + 3 * i as usize..k * 3 * n + 3 * i as usize + 3].iter().copied()))
+            .flat_map(|k| {
+                kept.iter().flat_map(move |&i| {
+                    space.basis[k * 3 * n + 3 * i as usize..k * 3 * n + 3 * i as usize + 3].iter().copied()
+                })
+            })
             .collect();
         Self {
             mean: kept.iter().map(|&i| space.mean[i as usize]).collect(),
@@ -91,11 +95,15 @@ impl FitProxy {
     /// Errors: a target of 0.
     pub fn new(model: &BodyModel, target_vertices: usize) -> Result<Self> {
         let (f, m) = (model.space(Gender::Female).mean(), model.space(Gender::Male).mean());
-        let average: Vec<[f32; 3]> = f.iter().zip(m).map(|(a, b)| std::array::from_fn(|c| 0.5 * (a[c] + b[c]))).collect();
+        let average: Vec<[f32; 3]> =
+            f.iter().zip(m).map(|(a, b)| std::array::from_fn(|c| 0.5 * (a[c] + b[c]))).collect();
         let d = decimate(&average, &model.triangles(), target_vertices)?;
         Ok(Self {
             skin: d.kept.iter().map(|&i| model.skin[i as usize]).collect(),
-            spaces: [ProxySpace::new(model.space(Gender::Female), &d.kept), ProxySpace::new(model.space(Gender::Male), &d.kept)],
+            spaces: [
+                ProxySpace::new(model.space(Gender::Female), &d.kept),
+                ProxySpace::new(model.space(Gender::Male), &d.kept),
+            ],
             kept: d.kept,
             triangles: d.triangles,
         })

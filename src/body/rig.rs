@@ -59,7 +59,10 @@ pub fn y_extent(vertices: &[[f32; 3]]) -> f64 {
 pub fn scale_to_height(vertices: &mut [[f32; 3]], joints: &mut Joints3, height: f64) -> Result<()> {
     let now = y_extent(vertices);
     if !(height.is_finite() && height > 0.0 && now.is_finite() && now > 1e-9) {
-        return Err(Error::OutOfRange { name: "height", detail: format!("cannot scale a body {now} m tall to {height} m") });
+        return Err(Error::OutOfRange {
+            name: "height",
+            detail: format!("cannot scale a body {now} m tall to {height} m"),
+        });
     }
     let k = height / now;
     let o = joints[crate::skeleton::joint::PELVIS];

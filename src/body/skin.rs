@@ -110,7 +110,10 @@ fn dqs_vertex(bones: &[BoneXf; NUM_BONES], p: [f32; 3], w: &VertexWeights) -> [f
     if n < 1e-12 {
         return x;
     }
-    let (r, d) = (Quaternion::new(real[0], real[1], real[2], real[3]) / n, Quaternion::new(dual[0], dual[1], dual[2], dual[3]) / n);
+    let (r, d) = (
+        Quaternion::new(real[0], real[1], real[2], real[3]) / n,
+        Quaternion::new(dual[0], dual[1], dual[2], dual[3]) / n,
+    );
     // Rotate by r and translate by 2 * d * conj(r).
     let rotated = UnitQuaternion::new_unchecked(r) * Vector3::new(x[0], x[1], x[2]);
     let t = (d * r.conjugate()) * 2.0;

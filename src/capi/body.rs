@@ -54,7 +54,12 @@ pub struct skb_mesh {
 ///
 /// # Safety
 /// `p` must be NULL or valid for writes of `len` elements of `T`, with no other live reference.
-pub(crate) unsafe fn out_slice<'a, T>(p: *mut T, len: usize, needed: usize, name: &str) -> Result<&'a mut [T], skb_status> {
+pub(crate) unsafe fn out_slice<'a, T>(
+    p: *mut T,
+    len: usize,
+    needed: usize,
+    name: &str,
+) -> Result<&'a mut [T], skb_status> {
     if p.is_null() {
         return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")));
     }
@@ -99,7 +104,11 @@ pub unsafe extern "C" fn skb_context_free(ctx: *mut skb_context) {
 /// Number of principal components of `gender`'s shape space (the most weights
 /// `skb_mesh_new_from_shape` accepts) into `*out`. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_context_num_components(ctx: *const skb_context, gender: u32, out: *mut usize) -> skb_status {
+pub unsafe extern "C" fn skb_context_num_components(
+    ctx: *const skb_context,
+    gender: u32,
+    out: *mut usize,
+) -> skb_status {
     ffi_boundary! {
         let ctx = try_status!(try_ref(ctx, "ctx"));
         let g = try_core!(Gender::from_index(gender));
@@ -276,7 +285,12 @@ pub unsafe extern "C" fn skb_mesh_copy_joints(mesh: *const skb_mesh, dst: *mut f
 /// Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count). On error
 /// nothing is written.
 #[no_mangle]
-pub unsafe extern "C" fn skb_mesh_copy_skin_weights(mesh: *const skb_mesh, bones: *mut u32, weights: *mut f32, len: usize) -> skb_status {
+pub unsafe extern "C" fn skb_mesh_copy_skin_weights(
+    mesh: *const skb_mesh,
+    bones: *mut u32,
+    weights: *mut f32,
+    len: usize,
+) -> skb_status {
     ffi_boundary! {
         let m = try_status!(try_ref(mesh, "mesh"));
         copy_skin_weights(m.model.skin_weights(), bones, weights, len)
@@ -288,7 +302,12 @@ pub unsafe extern "C" fn skb_mesh_copy_skin_weights(mesh: *const skb_mesh, bones
 ///
 /// # Safety
 /// `bones` and `weights` must be NULL or valid for writes of `len` elements.
-pub(crate) unsafe fn copy_skin_weights(skin: &[crate::body::VertexWeights], bones: *mut u32, weights: *mut f32, len: usize) -> skb_status {
+pub(crate) unsafe fn copy_skin_weights(
+    skin: &[crate::body::VertexWeights],
+    bones: *mut u32,
+    weights: *mut f32,
+    len: usize,
+) -> skb_status {
     let needed = MAX_INFLUENCES * skin.len();
     let b = try_status!(out_slice(bones, len, needed, "bones"));
     let w = try_status!(out_slice(weights, len, needed, "weights"));
@@ -315,7 +334,11 @@ pub unsafe extern "C" fn skb_mesh_shape_weight_count(mesh: *const skb_mesh, out:
 /// Copies the mesh's PCA shape weights (metres; `skb_mesh_shape_weight_count` of them) into
 /// `dst`, which holds `dst_len` doubles. On error nothing is written.
 #[no_mangle]
-pub unsafe extern "C" fn skb_mesh_copy_shape_weights(mesh: *const skb_mesh, dst: *mut f64, dst_len: usize) -> skb_status {
+pub unsafe extern "C" fn skb_mesh_copy_shape_weights(
+    mesh: *const skb_mesh,
+    dst: *mut f64,
+    dst_len: usize,
+) -> skb_status {
     ffi_boundary! {
         let m = try_status!(try_ref(mesh, "mesh"));
         let out = try_status!(out_slice(dst, dst_len, m.weights.len(), "dst"));

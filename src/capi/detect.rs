@@ -10,10 +10,10 @@ use crate::skeleton::NUM_JOINTS;
 
 use super::body::{out_slice, skb_context};
 use super::error::{fail, fail_with};
-use crate::error::Error;
 use super::image::{skb_image, view_of};
 use super::ptr::{free_box, give, out_slot, try_ref};
 use super::status::skb_status;
+use crate::error::Error;
 
 /// A detector model (flexible mixture of parts). Create with `skb_detector_new_from_file`,
 /// release with `skb_detector_free`. Immutable: one detector may be used from several threads at
@@ -47,7 +47,6 @@ pub unsafe extern "C" fn skb_detector_new_from_file(path: *const c_char, out: *m
 pub unsafe extern "C" fn skb_detector_free(det: *mut skb_detector) {
     free_box(det)
 }
-
 
 /// Detects the best-scoring figure in `image` with `det`. `threshold`: score threshold (NaN uses
 /// the model's own); `min_cell_px`: skip pyramid levels with cells smaller than this many pixels
@@ -127,7 +126,11 @@ pub unsafe extern "C" fn skb_detect_options_set_threshold(opts: *mut skb_detect_
 /// +infinity search every scale). Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 ≤ min < max (max may
 /// be +infinity; NaN is rejected).
 #[no_mangle]
-pub unsafe extern "C" fn skb_detect_options_set_scales(opts: *mut skb_detect_options, min_cell_px: f64, max_cell_px: f64) -> skb_status {
+pub unsafe extern "C" fn skb_detect_options_set_scales(
+    opts: *mut skb_detect_options,
+    min_cell_px: f64,
+    max_cell_px: f64,
+) -> skb_status {
     ffi_boundary! {
         let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
         if !(min_cell_px >= 0.0 && min_cell_px.is_finite() && max_cell_px > min_cell_px) {
@@ -144,7 +147,11 @@ pub unsafe extern "C" fn skb_detect_options_set_scales(opts: *mut skb_detect_opt
 /// shorter side to `max_fraction` × the longer side tall (the default range is 0.5..1). Replaces any cell range set by `skb_detect_options_set_scales`.
 /// Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 < min < max, both finite (NaN is rejected).
 #[no_mangle]
-pub unsafe extern "C" fn skb_detect_options_set_figure_range(opts: *mut skb_detect_options, min_fraction: f64, max_fraction: f64) -> skb_status {
+pub unsafe extern "C" fn skb_detect_options_set_figure_range(
+    opts: *mut skb_detect_options,
+    min_fraction: f64,
+    max_fraction: f64,
+) -> skb_status {
     ffi_boundary! {
         let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
         if !(min_fraction > 0.0 && max_fraction > min_fraction && max_fraction.is_finite()) {
@@ -162,7 +169,10 @@ pub unsafe extern "C" fn skb_detect_options_set_figure_range(opts: *mut skb_dete
 /// on held-out sketches); 5 scores exactly every other level of 10, about half the work,
 /// coarser in scale. Errors: `SKB_ERR_OUT_OF_RANGE` above 100.
 #[no_mangle]
-pub unsafe extern "C" fn skb_detect_options_set_levels_per_octave(opts: *mut skb_detect_options, levels: u32) -> skb_status {
+pub unsafe extern "C" fn skb_detect_options_set_levels_per_octave(
+    opts: *mut skb_detect_options,
+    levels: u32,
+) -> skb_status {
     ffi_boundary! {
         let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
         if levels > 100 {
@@ -208,7 +218,14 @@ pub unsafe extern "C" fn skb_detect(
 
 /// Runs the detection and writes the best figure's joints, confidences and score; on "no
 /// figure" writes only the best score found and returns `SKB_ERR_NO_FIGURE`.
-fn detect_into(view: &crate::image::ImageView<'_>, model: &Model, o: &DetectOptions, xy: &mut [f64], cf: &mut [f64], score: &mut f64) -> skb_status {
+fn detect_into(
+    view: &crate::image::ImageView<'_>,
+    model: &Model,
+    o: &DetectOptions,
+    xy: &mut [f64],
+    cf: &mut [f64],
+    score: &mut f64,
+) -> skb_status {
     match detect(view, model, o) {
         Ok(d) => {
             write_best(d.best(), xy, cf, score);
@@ -224,7 +241,10 @@ fn detect_into(view: &crate::image::ImageView<'_>, model: &Model, o: &DetectOpti
 
 /// The context's embedded detector, decoded on first use (thread-safe, once per context).
 pub(crate) fn embedded_detector(ctx: &skb_context) -> Result<&Model, Error> {
-    ctx.detector.get_or_init(|| Model::embedded().map_err(|e| e.to_string())).as_ref().map_err(|msg| Error::CorruptData(msg.clone()))
+    ctx.detector
+        .get_or_init(|| Model::embedded().map_err(|e| e.to_string()))
+        .as_ref()
+        .map_err(|msg| Error::CorruptData(msg.clone()))
 }
 
 /// The checked output buffers of a detection: 30 joint coordinates, 15 confidences, the score.
@@ -274,7 +294,10 @@ mod tests {
             assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
             let img = skb_image { data: sk.pixels.as_ptr(), width: 384, height: 384, stride: 384, channels: 1 };
             let (mut xy, mut cf, mut s) = ([0f64; 30], [0f64; 15], 0f64);
-            assert_eq!(skb_detect(ctx, &img, null(), xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s), skb_status::SKB_OK);
+            assert_eq!(
+                skb_detect(ctx, &img, null(), xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s),
+                skb_status::SKB_OK
+            );
             let truth = &sk.truth.joints2d;
             let est: Vec<[f64; 2]> = (0..15).map(|j| [xy[2 * j], xy[2 * j + 1]]).collect();
             let pck = crate::eval::metrics::pck(truth, &est, 0.2).unwrap();
@@ -285,7 +308,10 @@ mod tests {
             assert_eq!(skb_detect_options_new(&mut o), skb_status::SKB_OK);
             assert_eq!(skb_detect_options_set_threshold(o, 1e6), skb_status::SKB_OK);
             let (mut xy2, mut s2) = ([-7f64; 30], 0f64);
-            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s2), skb_status::SKB_ERR_NO_FIGURE);
+            assert_eq!(
+                skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s2),
+                skb_status::SKB_ERR_NO_FIGURE
+            );
             assert!((s2 - s).abs() < 1e-9, "no-figure score {s2} vs best {s}");
             assert!(xy2.iter().all(|&v| v == -7.0));
             assert_eq!(skb_detect_options_set_threshold(o, f64::INFINITY), skb_status::SKB_ERR_NON_FINITE);
@@ -298,10 +324,16 @@ mod tests {
             assert_eq!(skb_detect_options_set_levels_per_octave(o, 5), skb_status::SKB_OK);
             assert_eq!(o.as_ref().unwrap().inner.levels_per_octave, Some(5));
             let (mut s5, mut s10) = (0f64, 0f64);
-            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s5), skb_status::SKB_OK);
+            assert_eq!(
+                skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s5),
+                skb_status::SKB_OK
+            );
             assert_eq!(skb_detect_options_set_levels_per_octave(o, 0), skb_status::SKB_OK);
             assert_eq!(o.as_ref().unwrap().inner.levels_per_octave, None);
-            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s10), skb_status::SKB_OK);
+            assert_eq!(
+                skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s10),
+                skb_status::SKB_OK
+            );
             assert!(s10 >= s5, "10 levels per octave {s10} vs 5: {s5}");
             assert_eq!(skb_detect_options_set_levels_per_octave(o, 101), skb_status::SKB_ERR_OUT_OF_RANGE);
             assert_eq!(skb_detect_options_set_levels_per_octave(o, 7), skb_status::SKB_OK);
@@ -309,23 +341,42 @@ mod tests {
             // Figures of at most 0.3 of the side: the figure (most of the page) is missed.
             assert_eq!(skb_detect_options_set_figure_range(o, 0.05, 0.3), skb_status::SKB_OK);
             let mut s4 = 0f64;
-            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s4), skb_status::SKB_OK);
+            assert_eq!(
+                skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s4),
+                skb_status::SKB_OK
+            );
             assert!(s4 < s, "small-figure score {s4} vs {s}");
             for (lo, hi) in [(0.0, 1.0), (0.5, 0.5), (0.2, f64::INFINITY), (f64::NAN, 1.0)] {
-                assert_eq!(skb_detect_options_set_figure_range(o, lo, hi), skb_status::SKB_ERR_OUT_OF_RANGE, "{lo}..{hi}");
+                assert_eq!(
+                    skb_detect_options_set_figure_range(o, lo, hi),
+                    skb_status::SKB_ERR_OUT_OF_RANGE,
+                    "{lo}..{hi}"
+                );
             }
             assert_eq!(skb_detect_options_set_threshold(o, f64::NAN), skb_status::SKB_OK);
             // Only tiny cells: the figure (cells of about 8 px here) is not found at its scale.
             assert_eq!(skb_detect_options_set_scales(o, 0.0, 2.5), skb_status::SKB_OK);
             assert_eq!(skb_detect_options_set_threshold(o, -1e9), skb_status::SKB_OK);
             let mut s3 = 0f64;
-            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3), skb_status::SKB_OK);
+            assert_eq!(
+                skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3),
+                skb_status::SKB_OK
+            );
             assert!(s3 < s, "small-scale score {s3} vs {s}");
-            assert_eq!(skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 29, cf.as_mut_ptr(), 15, &mut s3), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
-            assert_eq!(skb_detect(null(), &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3), skb_status::SKB_ERR_NULL_POINTER);
+            assert_eq!(
+                skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 29, cf.as_mut_ptr(), 15, &mut s3),
+                skb_status::SKB_ERR_BUFFER_TOO_SMALL
+            );
+            assert_eq!(
+                skb_detect(null(), &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3),
+                skb_status::SKB_ERR_NULL_POINTER
+            );
             assert_eq!(skb_detect_options_set_threshold(null_mut(), 0.0), skb_status::SKB_ERR_NULL_POINTER);
             let small = skb_image { data: sk.pixels.as_ptr(), width: 20, height: 20, stride: 384, channels: 1 };
-            assert_eq!(skb_detect(ctx, &small, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3), skb_status::SKB_ERR_IMAGE_TOO_SMALL);
+            assert_eq!(
+                skb_detect(ctx, &small, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3),
+                skb_status::SKB_ERR_IMAGE_TOO_SMALL
+            );
             skb_detect_options_free(o);
             skb_detect_options_free(null_mut());
             skb_context_free(ctx);
@@ -363,7 +414,10 @@ mod tests {
             assert!(s.is_finite() && cf.iter().all(|&c| c > 0.0 && c < 1.0));
             // No figure: only the best score is written (the one found at threshold −1e6).
             let (mut xy2, mut s2) = ([-7f64; 30], 0f64);
-            assert_eq!(skb_detector_detect(d, &img, 1e6, 0.0, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s2), skb_status::SKB_ERR_NO_FIGURE);
+            assert_eq!(
+                skb_detector_detect(d, &img, 1e6, 0.0, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s2),
+                skb_status::SKB_ERR_NO_FIGURE
+            );
             assert_eq!(s2, s);
             assert!(xy2.iter().all(|&v| v == -7.0));
             assert_eq!(
@@ -374,13 +428,19 @@ mod tests {
                 skb_detector_detect(d, &img, -1e6, -1.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s),
                 skb_status::SKB_ERR_OUT_OF_RANGE
             );
-            assert_eq!(skb_detector_detect(d, &img, -1e6, 0.0, null_mut(), 30, cf.as_mut_ptr(), 15, &mut s), skb_status::SKB_ERR_NULL_POINTER);
+            assert_eq!(
+                skb_detector_detect(d, &img, -1e6, 0.0, null_mut(), 30, cf.as_mut_ptr(), 15, &mut s),
+                skb_status::SKB_ERR_NULL_POINTER
+            );
             let small = skb_image { data: px.as_ptr(), width: 20, height: 20, stride: 20, channels: 1 };
             assert_eq!(
                 skb_detector_detect(d, &small, -1e6, 0.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s),
                 skb_status::SKB_ERR_IMAGE_TOO_SMALL
             );
-            assert_eq!(skb_detector_detect(null(), &img, -1e6, 0.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s), skb_status::SKB_ERR_NULL_POINTER);
+            assert_eq!(
+                skb_detector_detect(null(), &img, -1e6, 0.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s),
+                skb_status::SKB_ERR_NULL_POINTER
+            );
             skb_detector_free(d);
             skb_detector_free(null_mut());
         }

@@ -147,7 +147,9 @@ pub(crate) unsafe fn path_arg<'a>(p: *const c_char, name: &str) -> Result<&'a Pa
     if p.is_null() {
         return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")));
     }
-    let s = CStr::from_ptr(p).to_str().map_err(|_| fail_with(skb_status::SKB_ERR_INVALID_ARGUMENT, &format!("{name} is not UTF-8")))?;
+    let s = CStr::from_ptr(p)
+        .to_str()
+        .map_err(|_| fail_with(skb_status::SKB_ERR_INVALID_ARGUMENT, &format!("{name} is not UTF-8")))?;
     Ok(Path::new(s))
 }
 
@@ -159,7 +161,12 @@ pub(crate) unsafe fn path_arg<'a>(p: *const c_char, name: &str) -> Result<&'a Pa
 /// (`SKB_ERR_DEGENERATE_BONE`), unknown flags or a wrong length (`SKB_ERR_OUT_OF_RANGE`); on
 /// error the mesh is unchanged. Needs exclusive use of `mesh`; skinning runs on the rayon pool.
 #[no_mangle]
-pub unsafe extern "C" fn skb_mesh_pose(mesh: *mut skb_mesh, joints: *const f64, joints_len: usize, flags: u32) -> skb_status {
+pub unsafe extern "C" fn skb_mesh_pose(
+    mesh: *mut skb_mesh,
+    joints: *const f64,
+    joints_len: usize,
+    flags: u32,
+) -> skb_status {
     ffi_boundary! {
         let m = try_status!(try_mut(mesh, "mesh"));
         if joints_len != 3 * NUM_JOINTS {
@@ -182,7 +189,11 @@ pub unsafe extern "C" fn skb_mesh_pose(mesh: *mut skb_mesh, joints: *const f64, 
 /// (metres) into `dst` of `dst_len` floats (at least 3 × vertex count). On error nothing is
 /// written. Only reads `mesh`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_mesh_copy_posed_vertices(mesh: *const skb_mesh, dst: *mut f32, dst_len: usize) -> skb_status {
+pub unsafe extern "C" fn skb_mesh_copy_posed_vertices(
+    mesh: *const skb_mesh,
+    dst: *mut f32,
+    dst_len: usize,
+) -> skb_status {
     ffi_boundary! {
         let m = try_status!(try_ref(mesh, "mesh"));
         let v = posed_vertices(m);
@@ -197,7 +208,11 @@ pub unsafe extern "C" fn skb_mesh_copy_posed_vertices(mesh: *const skb_mesh, dst
 /// Copies the posed joints (15 × x, y, z doubles, metres; the rest joints before any
 /// `skb_mesh_pose`) into `dst` of `dst_len` doubles (at least 45). Only reads `mesh`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_mesh_copy_posed_joints(mesh: *const skb_mesh, dst: *mut f64, dst_len: usize) -> skb_status {
+pub unsafe extern "C" fn skb_mesh_copy_posed_joints(
+    mesh: *const skb_mesh,
+    dst: *mut f64,
+    dst_len: usize,
+) -> skb_status {
     ffi_boundary! {
         let m = try_status!(try_ref(mesh, "mesh"));
         let j = m.posed.as_ref().map_or(&m.rest.joints, |p| &p.pose.joints);

@@ -6,15 +6,15 @@ use std::ffi::{c_char, c_void};
 use std::sync::Arc;
 
 use crate::body::BodyModel;
+use crate::detect::DetectOptions;
 use crate::error::Error;
 use crate::image::{load_image, to_gray, GrayImage};
-use crate::detect::DetectOptions;
 use crate::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use crate::pose::dict_io;
 use crate::skeleton::NUM_JOINTS;
 
-use super::detect::embedded_detector;
 use super::body::{copy_skin_weights, out_slice, skb_context, skb_mesh, write_out};
+use super::detect::embedded_detector;
 use super::fit::{progress_closure, skb_fit_options, skb_progress_fn};
 use super::image::{skb_image, view_of};
 use super::mesh_ops::{path_arg, skb_camera, Posed};
@@ -140,7 +140,11 @@ pub unsafe extern "C" fn skb_result_free(result: *mut skb_result) {
 /// The chosen gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`, and whether it
 /// was chosen by score (1) or given (0) into `*by_score` (may be NULL).
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_gender(result: *const skb_result, gender: *mut u32, by_score: *mut bool) -> skb_status {
+pub unsafe extern "C" fn skb_result_gender(
+    result: *const skb_result,
+    gender: *mut u32,
+    by_score: *mut bool,
+) -> skb_status {
     ffi_boundary! {
         let r = &try_status!(try_ref(result, "result")).inner;
         try_status!(write_out(gender, r.gender as u32, "gender"));
@@ -168,7 +172,11 @@ pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32
 /// Vertex count (13380) and quad-face count (13378) into `*vertices` and `*faces` (either may
 /// be NULL).
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_counts(result: *const skb_result, vertices: *mut usize, faces: *mut usize) -> skb_status {
+pub unsafe extern "C" fn skb_result_counts(
+    result: *const skb_result,
+    vertices: *mut usize,
+    faces: *mut usize,
+) -> skb_status {
     ffi_boundary! {
         let r = &try_status!(try_ref(result, "result")).inner;
         if !vertices.is_null() {
@@ -184,7 +192,12 @@ pub unsafe extern "C" fn skb_result_counts(result: *const skb_result, vertices: 
 /// Copies the posed (`posed` non-zero) or rest vertices, x, y, z floats in metres, model frame,
 /// into `dst` of `dst_len` floats (≥ 3 × vertex count). On error nothing is written.
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_copy_vertices(result: *const skb_result, posed: bool, dst: *mut f32, dst_len: usize) -> skb_status {
+pub unsafe extern "C" fn skb_result_copy_vertices(
+    result: *const skb_result,
+    posed: bool,
+    dst: *mut f32,
+    dst_len: usize,
+) -> skb_status {
     ffi_boundary! {
         let r = &try_status!(try_ref(result, "result")).inner;
         let v = if posed { &r.posed_vertices } else { &r.mesh.vertices };
@@ -224,7 +237,12 @@ pub unsafe extern "C" fn skb_result_joints2d(result: *const skb_result, out: *mu
 /// Copies 15 3-D joints (x, y, z doubles, metres, model frame) into `dst` (`dst_len` ≥ 45):
 /// `which` is `SKB_JOINTS_REST`, `SKB_JOINTS_POSED` or `SKB_JOINTS_ESTIMATED`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_copy_joints3d(result: *const skb_result, which: u32, dst: *mut f64, dst_len: usize) -> skb_status {
+pub unsafe extern "C" fn skb_result_copy_joints3d(
+    result: *const skb_result,
+    which: u32,
+    dst: *mut f64,
+    dst_len: usize,
+) -> skb_status {
     ffi_boundary! {
         let r = &try_status!(try_ref(result, "result")).inner;
         let j = match which {
@@ -257,7 +275,12 @@ pub unsafe extern "C" fn skb_result_camera(result: *const skb_result, out: *mut 
 /// `4v .. 4v+3` of `bones` (bone indices 0..13) and `weights` (summing to 1); both hold `len`
 /// elements (≥ 4 × vertex count).
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_copy_skin_weights(result: *const skb_result, bones: *mut u32, weights: *mut f32, len: usize) -> skb_status {
+pub unsafe extern "C" fn skb_result_copy_skin_weights(
+    result: *const skb_result,
+    bones: *mut u32,
+    weights: *mut f32,
+    len: usize,
+) -> skb_status {
     ffi_boundary! {
         let r = &try_status!(try_ref(result, "result")).inner;
         copy_skin_weights(&r.mesh.weights, bones, weights, len)
@@ -267,7 +290,12 @@ pub unsafe extern "C" fn skb_result_copy_skin_weights(result: *const skb_result,
 /// The fitted PCA shape weights (metres): their number into `*count` (may be NULL) and, when
 /// `dst` is not NULL, the weights into `dst` (`dst_len` ≥ count).
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_shape_weights(result: *const skb_result, dst: *mut f64, dst_len: usize, count: *mut usize) -> skb_status {
+pub unsafe extern "C" fn skb_result_shape_weights(
+    result: *const skb_result,
+    dst: *mut f64,
+    dst_len: usize,
+    count: *mut usize,
+) -> skb_status {
     ffi_boundary! {
         let r = &try_status!(try_ref(result, "result")).inner;
         let n = r.weights.len();

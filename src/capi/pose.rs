@@ -7,8 +7,8 @@ use std::path::Path;
 use nalgebra::Matrix3;
 
 use crate::camera::WeakPerspective;
-use crate::pose::dictionary::POSE_DIM;
 use crate::error::Error;
+use crate::pose::dictionary::POSE_DIM;
 use crate::pose::options::RotationTarget;
 use crate::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::{Joints2, NUM_BONES};
@@ -26,7 +26,8 @@ pub const SKB_ALPHA_TARGET_IDENTITY: u32 = 0;
 /// `skb_pose_options_set_alpha_target`: α pulls the pitch toward 0 (yaw and roll kept; default).
 pub const SKB_ALPHA_TARGET_LEVEL: u32 = 1;
 
-const _: () = assert!(SKB_POSE_DIM as usize == POSE_DIM && SKB_POSE_MAX_BASES as usize == crate::pose::options::MAX_BASES);
+const _: () =
+    assert!(SKB_POSE_DIM as usize == POSE_DIM && SKB_POSE_MAX_BASES as usize == crate::pose::options::MAX_BASES);
 
 /// 15 image joints in canonical order (head, neck, r_shoulder, r_elbow, r_wrist, l_shoulder,
 /// l_elbow, l_wrist, pelvis, r_hip, r_knee, r_ankle, l_hip, l_knee, l_ankle): pixels, origin at
@@ -117,7 +118,10 @@ pub unsafe extern "C" fn skb_pose_dictionary_new_default(out: *mut *mut skb_pose
 /// `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
 /// `*out` owns the dictionary. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_dictionary_load(path: *const c_char, out: *mut *mut skb_pose_dictionary) -> skb_status {
+pub unsafe extern "C" fn skb_pose_dictionary_load(
+    path: *const c_char,
+    out: *mut *mut skb_pose_dictionary,
+) -> skb_status {
     ffi_boundary! {
         if path.is_null() {
             return null("path");
@@ -152,7 +156,11 @@ pub unsafe extern "C" fn skb_pose_dictionary_num_bases(dict: *const skb_pose_dic
 
 /// Copies the mean pose μ (45 values, metres) into `out` (`len` ≥ 45). Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_dictionary_mean(dict: *const skb_pose_dictionary, out: *mut f64, len: usize) -> skb_status {
+pub unsafe extern "C" fn skb_pose_dictionary_mean(
+    dict: *const skb_pose_dictionary,
+    out: *mut f64,
+    len: usize,
+) -> skb_status {
     ffi_boundary! {
         let d = try_status!(try_ref(dict, "dict"));
         if out.is_null() {
@@ -199,7 +207,11 @@ pub unsafe extern "C" fn skb_pose_dictionary_basis(
 /// Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
 /// (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_dictionary_bone_lengths(dict: *const skb_pose_dictionary, out: *mut f64, len: usize) -> skb_status {
+pub unsafe extern "C" fn skb_pose_dictionary_bone_lengths(
+    dict: *const skb_pose_dictionary,
+    out: *mut f64,
+    len: usize,
+) -> skb_status {
     ffi_boundary! {
         let d = try_status!(try_ref(dict, "dict"));
         if out.is_null() {
@@ -534,8 +546,14 @@ mod tests {
             let mut sigma = 0.0;
             assert_eq!(skb_pose_dictionary_basis(d, 0, v.as_mut_ptr(), 45, &mut sigma), skb_status::SKB_OK);
             assert!(sigma > 0.0);
-            assert_eq!(skb_pose_dictionary_basis(d, 0, v.as_mut_ptr(), 44, &mut sigma), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
-            assert_eq!(skb_pose_dictionary_basis(d, 100000, v.as_mut_ptr(), 45, &mut sigma), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!(
+                skb_pose_dictionary_basis(d, 0, v.as_mut_ptr(), 44, &mut sigma),
+                skb_status::SKB_ERR_BUFFER_TOO_SMALL
+            );
+            assert_eq!(
+                skb_pose_dictionary_basis(d, 100000, v.as_mut_ptr(), 45, &mut sigma),
+                skb_status::SKB_ERR_OUT_OF_RANGE
+            );
             let path = c"/nonexistent/x.skbpd";
             let mut d2 = std::ptr::null_mut();
             assert_eq!(skb_pose_dictionary_load(path.as_ptr(), &mut d2), skb_status::SKB_ERR_IO);

@@ -60,7 +60,12 @@ pub unsafe extern "C" fn skb_sketch_options_set_style(opts: *mut skb_sketch_opti
 /// Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; each within ±90°)
 /// instead of random near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
 #[no_mangle]
-pub unsafe extern "C" fn skb_sketch_options_set_camera(opts: *mut skb_sketch_options, yaw_deg: f64, pitch_deg: f64, roll_deg: f64) -> skb_status {
+pub unsafe extern "C" fn skb_sketch_options_set_camera(
+    opts: *mut skb_sketch_options,
+    yaw_deg: f64,
+    pitch_deg: f64,
+    roll_deg: f64,
+) -> skb_status {
     ffi_boundary! {
         let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
         let a = CameraAngles { yaw_deg, pitch_deg, roll_deg };
@@ -174,25 +179,102 @@ mod tests {
             let mut px = vec![7u8; stride * h as usize];
             let mut j2 = [0.0f64; 30];
             let mut vis = [9u8; 15];
-            let st = skb_render_sketch(ctx, 1, std::ptr::null(), 0, std::ptr::null(), 5, w, h, opts, px.as_mut_ptr(), stride, px.len(), j2.as_mut_ptr(), vis.as_mut_ptr());
+            let st = skb_render_sketch(
+                ctx,
+                1,
+                std::ptr::null(),
+                0,
+                std::ptr::null(),
+                5,
+                w,
+                h,
+                opts,
+                px.as_mut_ptr(),
+                stride,
+                px.len(),
+                j2.as_mut_ptr(),
+                vis.as_mut_ptr(),
+            );
             assert_eq!(st, skb_status::SKB_OK);
             assert!(px.chunks(stride).all(|r| r[96..].iter().all(|&p| p == 7)), "padding untouched");
             assert!(px.iter().any(|&p| p < 100), "some ink");
             assert!(j2.chunks(2).all(|p| p[0] > 0.0 && p[0] < 96.0 && p[1] > 0.0 && p[1] < 128.0));
             assert!(vis.iter().all(|&v| v <= 1) && vis.iter().filter(|&&v| v == 1).count() >= 8);
             let (pp, full) = (px.as_mut_ptr(), px.len());
-            let bad = |g: u32, w: u32, len: usize| skb_render_sketch(ctx, g, std::ptr::null(), 0, std::ptr::null(), 5, w, h, opts, pp, stride, len, std::ptr::null_mut(), std::ptr::null_mut());
+            let bad = |g: u32, w: u32, len: usize| {
+                skb_render_sketch(
+                    ctx,
+                    g,
+                    std::ptr::null(),
+                    0,
+                    std::ptr::null(),
+                    5,
+                    w,
+                    h,
+                    opts,
+                    pp,
+                    stride,
+                    len,
+                    std::ptr::null_mut(),
+                    std::ptr::null_mut(),
+                )
+            };
             assert_eq!(bad(2, 96, full), skb_status::SKB_ERR_OUT_OF_RANGE);
             assert_eq!(bad(0, 0, full), skb_status::SKB_ERR_EMPTY_IMAGE);
             assert_eq!(bad(0, 96, 10), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
             assert_eq!(bad(0, 101, full), skb_status::SKB_ERR_BAD_STRIDE);
             let nan_joints = [f64::NAN; 45];
-            let st = skb_render_sketch(ctx, 0, std::ptr::null(), 0, nan_joints.as_ptr(), 5, w, h, opts, px.as_mut_ptr(), stride, px.len(), std::ptr::null_mut(), std::ptr::null_mut());
+            let st = skb_render_sketch(
+                ctx,
+                0,
+                std::ptr::null(),
+                0,
+                nan_joints.as_ptr(),
+                5,
+                w,
+                h,
+                opts,
+                px.as_mut_ptr(),
+                stride,
+                px.len(),
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+            );
             assert_eq!(st, skb_status::SKB_ERR_NON_FINITE);
             let many = [0.0f32; 1000];
-            let st = skb_render_sketch(ctx, 0, many.as_ptr(), 1000, std::ptr::null(), 5, w, h, opts, px.as_mut_ptr(), stride, px.len(), std::ptr::null_mut(), std::ptr::null_mut());
+            let st = skb_render_sketch(
+                ctx,
+                0,
+                many.as_ptr(),
+                1000,
+                std::ptr::null(),
+                5,
+                w,
+                h,
+                opts,
+                px.as_mut_ptr(),
+                stride,
+                px.len(),
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+            );
             assert_eq!(st, skb_status::SKB_ERR_OUT_OF_RANGE);
-            let st = skb_render_sketch(std::ptr::null(), 0, std::ptr::null(), 0, std::ptr::null(), 5, w, h, opts, px.as_mut_ptr(), stride, px.len(), std::ptr::null_mut(), std::ptr::null_mut());
+            let st = skb_render_sketch(
+                std::ptr::null(),
+                0,
+                std::ptr::null(),
+                0,
+                std::ptr::null(),
+                5,
+                w,
+                h,
+                opts,
+                px.as_mut_ptr(),
+                stride,
+                px.len(),
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+            );
             assert_eq!(st, skb_status::SKB_ERR_NULL_POINTER);
             skb_sketch_options_free(opts);
             skb_sketch_options_free(std::ptr::null_mut());

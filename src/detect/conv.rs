@@ -128,7 +128,11 @@ mod tests {
             cols: 7,
             data: (0..6 * 7 * FEAT_DIM).map(|i| ((i * 37 % 101) as f32 - 50.0) / 50.0).collect(),
         };
-        let f = Filter { rows: 3, cols: 2, w: (0..3 * 2 * FEAT_DIM).map(|i| ((i * 13 % 29) as f32 - 14.0) / 7.0).collect() };
+        let f = Filter {
+            rows: 3,
+            cols: 2,
+            w: (0..3 * 2 * FEAT_DIM).map(|i| ((i * 13 % 29) as f32 - 14.0) / 7.0).collect(),
+        };
         let r = response(&feat, &f).unwrap();
         assert_eq!((r.rows, r.cols), (4, 6));
         for y in 0..4 {
@@ -164,10 +168,18 @@ mod tests {
         let sizes = [(5, 5), (5, 5), (3, 2), (5, 5), (1, 1), (2, 4), (5, 5), (9, 3)];
         let filters: Vec<Filter> = sizes
             .iter()
-            .map(|&(rows, cols)| Filter { rows, cols, w: (0..rows * cols * FEAT_DIM).map(|_| rng.random_range(-1.0..1.0)).collect() })
+            .map(|&(rows, cols)| Filter {
+                rows,
+                cols,
+                w: (0..rows * cols * FEAT_DIM).map(|_| rng.random_range(-1.0..1.0)).collect(),
+            })
             .collect();
         for &(rows, cols) in &[(5usize, 5usize), (6, 40), (37, 23), (120, 9), (8, 70)] {
-            let feat = FeatureMap { rows, cols, data: (0..rows * cols * FEAT_DIM).map(|_| rng.random_range(0.0..0.4)).collect() };
+            let feat = FeatureMap {
+                rows,
+                cols,
+                data: (0..rows * cols * FEAT_DIM).map(|_| rng.random_range(0.0..0.4)).collect(),
+            };
             let fast = responses(&feat, &filters);
             for (k, f) in filters.iter().enumerate() {
                 let want = response(&feat, f);
@@ -176,7 +188,10 @@ mod tests {
                     (Some(a), Some(b)) => {
                         assert_eq!((a.rows, a.cols), (b.rows, b.cols), "filter {k} on {rows}x{cols}");
                         for (i, (x, y)) in a.data.iter().zip(&b.data).enumerate() {
-                            assert!((x - y).abs() <= 1e-4 * (1.0 + y.abs()), "filter {k} on {rows}x{cols} at {i}: {x} vs {y}");
+                            assert!(
+                                (x - y).abs() <= 1e-4 * (1.0 + y.abs()),
+                                "filter {k} on {rows}x{cols} at {i}: {x} vs {y}"
+                            );
                         }
                     }
                     _ => panic!("filter {k} on {rows}x{cols}: fits in one path only"),

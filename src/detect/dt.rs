@@ -8,7 +8,16 @@ use super::conv::ScoreMap;
 
 /// 1-D transform of `src` into `len_out` outputs probing `offset + i`; writes the maxima to
 /// `dst` and the maximising source indices to `arg`.
-fn dt1d(src: &[f32], a: f64, b: f64, offset: i64, dst: &mut [f32], arg: &mut [u16], v: &mut Vec<usize>, z: &mut Vec<f64>) {
+fn dt1d(
+    src: &[f32],
+    a: f64,
+    b: f64,
+    offset: i64,
+    dst: &mut [f32],
+    arg: &mut [u16],
+    v: &mut Vec<usize>,
+    z: &mut Vec<f64>,
+) {
     let n = src.len();
     v.clear();
     v.resize(n, 0);
@@ -38,7 +47,16 @@ fn dt1d(src: &[f32], a: f64, b: f64, offset: i64, dst: &mut [f32], arg: &mut [u1
 /// Evaluates an upper envelope at the probes `offset + i`: parabola k (vertex `vertex(k)`) is
 /// the maximum on z[k] .. z[k+1]; writes each probe's value to `dst` and its vertex to `arg`.
 #[allow(clippy::too_many_arguments)]
-fn read_envelope(src: &[f32], a: f64, b: f64, offset: i64, vertex: impl Fn(usize) -> usize, z: &[f64], dst: &mut [f32], arg: &mut [u16]) {
+fn read_envelope(
+    src: &[f32],
+    a: f64,
+    b: f64,
+    offset: i64,
+    vertex: impl Fn(usize) -> usize,
+    z: &[f64],
+    dst: &mut [f32],
+    arg: &mut [u16],
+) {
     let mut k = 0;
     for (i, (d, g)) in dst.iter_mut().zip(arg.iter_mut()).enumerate() {
         let q = (offset + i as i64) as f64;
@@ -132,7 +150,14 @@ pub fn distance_transform(src: &ScoreMap, w: [f64; 4], offx: i64, offy: i64, row
 
 /// [`distance_transform`] with the lower-envelope kernel on every line (precomputed terms, no
 /// pruning): the optimised kernel before the windowed one, kept for comparison.
-pub fn distance_transform_envelope(src: &ScoreMap, w: [f64; 4], offx: i64, offy: i64, rows: usize, cols: usize) -> Transformed {
+pub fn distance_transform_envelope(
+    src: &ScoreMap,
+    w: [f64; 4],
+    offx: i64,
+    offy: i64,
+    rows: usize,
+    cols: usize,
+) -> Transformed {
     let mut s = Scratch::default();
     separable(src, rows, cols, |line, axis, dst, arg| {
         let (a, b, off) = if axis == 0 { (w[2], w[3], offy) } else { (w[0], w[1], offx) };
@@ -141,7 +166,14 @@ pub fn distance_transform_envelope(src: &ScoreMap, w: [f64; 4], offx: i64, offy:
 }
 
 /// The plain reference of [`distance_transform`] (the textbook 1-D envelope per line).
-pub fn distance_transform_reference(src: &ScoreMap, w: [f64; 4], offx: i64, offy: i64, rows: usize, cols: usize) -> Transformed {
+pub fn distance_transform_reference(
+    src: &ScoreMap,
+    w: [f64; 4],
+    offx: i64,
+    offy: i64,
+    rows: usize,
+    cols: usize,
+) -> Transformed {
     let (mut v, mut z) = (Vec::new(), Vec::new());
     separable(src, rows, cols, |line, axis, dst, arg| {
         let (a, b, off) = if axis == 0 { (w[2], w[3], offy) } else { (w[0], w[1], offx) };
@@ -152,7 +184,12 @@ pub fn distance_transform_reference(src: &ScoreMap, w: [f64; 4], offx: i64, offy
 /// The 2-D driver: `line_dt(line, axis, dst, arg)` transforms one source line (axis 0: a column,
 /// along y; axis 1: a row of the pass-1 result, along x), first along y for every source
 /// column, then along x for every output row.
-fn separable(src: &ScoreMap, rows: usize, cols: usize, mut line_dt: impl FnMut(&[f32], usize, &mut [f32], &mut [u16])) -> Transformed {
+fn separable(
+    src: &ScoreMap,
+    rows: usize,
+    cols: usize,
+    mut line_dt: impl FnMut(&[f32], usize, &mut [f32], &mut [u16]),
+) -> Transformed {
     let (sr, sc) = (src.rows, src.cols);
     // Pass 1 along y for every source column: tmp is (rows out) x (sc), stored column-major.
     let mut col = vec![0f32; sr];
@@ -189,7 +226,11 @@ mod tests {
     #[test]
     fn matches_brute_force() {
         let (sr, sc) = (9, 11);
-        let src = ScoreMap { rows: sr, cols: sc, data: (0..sr * sc).map(|i| ((i * 7919 % 97) as f32 - 48.0) / 10.0).collect() };
+        let src = ScoreMap {
+            rows: sr,
+            cols: sc,
+            data: (0..sr * sc).map(|i| ((i * 7919 % 97) as f32 - 48.0) / 10.0).collect(),
+        };
         for &(w, offx, offy, rows, cols) in &[
             ([0.3, 0.1, 0.5, -0.2], 0i64, 0i64, 9usize, 11usize),
             ([0.01, -0.05, 0.02, 0.04], -3, 4, 7, 13),
@@ -211,7 +252,11 @@ mod tests {
                     assert!((got - best).abs() < 1e-4, "w {w:?} ({x},{y}): {got} vs {best}");
                     let (cx, cy) = (t.ix[y * cols + x] as f64, t.iy[y * cols + x] as f64);
                     let (dx, dy) = (qx - cx, qy - cy);
-                    let at = src.at(cx as usize, cy as usize) as f64 - w[0] * dx * dx - w[1] * dx - w[2] * dy * dy - w[3] * dy;
+                    let at = src.at(cx as usize, cy as usize) as f64
+                        - w[0] * dx * dx
+                        - w[1] * dx
+                        - w[2] * dy * dy
+                        - w[3] * dy;
                     assert!((at - best).abs() < 1e-4, "argmax at ({x},{y})");
                 }
             }
@@ -226,8 +271,14 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         for trial in 0..40 {
             let (sr, sc) = (rng.random_range(1..60usize), rng.random_range(1..60usize));
-            let src = ScoreMap { rows: sr, cols: sc, data: (0..sr * sc).map(|_| rng.random_range(-3.0f32..1.0)).collect() };
-            let w = [rng.random_range(0.005..0.5), rng.random_range(-0.1..0.1), rng.random_range(0.005..0.5), rng.random_range(-0.1..0.1)];
+            let src =
+                ScoreMap { rows: sr, cols: sc, data: (0..sr * sc).map(|_| rng.random_range(-3.0f32..1.0)).collect() };
+            let w = [
+                rng.random_range(0.005..0.5),
+                rng.random_range(-0.1..0.1),
+                rng.random_range(0.005..0.5),
+                rng.random_range(-0.1..0.1),
+            ];
             let (offx, offy) = (rng.random_range(-8i64..8), rng.random_range(-8i64..8));
             let (rows, cols) = (rng.random_range(1..60usize), rng.random_range(1..60usize));
             let f = distance_transform(&src, w, offx, offy, rows, cols);
@@ -240,9 +291,16 @@ mod tests {
                     let (qx, qy) = ((offx + (i % cols) as i64) as f64, (offy + (i / cols) as i64) as f64);
                     let at = |cx: u16, cy: u16| {
                         let (dx, dy) = (qx - cx as f64, qy - cy as f64);
-                        src.at(cx as usize, cy as usize) as f64 - w[0] * dx * dx - w[1] * dx - w[2] * dy * dy - w[3] * dy
+                        src.at(cx as usize, cy as usize) as f64
+                            - w[0] * dx * dx
+                            - w[1] * dx
+                            - w[2] * dy * dy
+                            - w[3] * dy
                     };
-                    assert!((at(f.ix[i], f.iy[i]) - at(r.ix[i], r.iy[i])).abs() < 1e-9, "trial {trial} at {i}: arg-max differs");
+                    assert!(
+                        (at(f.ix[i], f.iy[i]) - at(r.ix[i], r.iy[i])).abs() < 1e-9,
+                        "trial {trial} at {i}: arg-max differs"
+                    );
                 }
             }
         }

@@ -173,13 +173,27 @@ pub fn transform(src: &ScoreMap, w: [f64; 4], offx: i64, offy: i64, rows: usize,
 /// Pass along y over whole rows: output row y probes source row q = `off` + y; for q inside the
 /// map only source rows within `r` of q can win, outside it those of [`outside_window`].
 #[allow(clippy::too_many_arguments)]
-fn pass_y_window(src: &ScoreMap, a: f64, b: f64, range: f64, off: i64, r: usize, tmp: &mut [f32], tmp_iy: &mut [u16], buf: &mut Buffers) {
+fn pass_y_window(
+    src: &ScoreMap,
+    a: f64,
+    b: f64,
+    range: f64,
+    off: i64,
+    r: usize,
+    tmp: &mut [f32],
+    tmp_iy: &mut [u16],
+    buf: &mut Buffers,
+) {
     let (sr, sc) = (src.rows as i64, src.cols);
     let rows = tmp.len() / sc.max(1);
     buf.arg.resize(sc, 0);
     for y in 0..rows {
         let q = off + y as i64;
-        let (lo, hi) = if (0..sr).contains(&q) { ((q - r as i64).max(0), (q + r as i64).min(sr - 1)) } else { outside_window(a, b, range, q, sr) };
+        let (lo, hi) = if (0..sr).contains(&q) {
+            ((q - r as i64).max(0), (q + r as i64).min(sr - 1))
+        } else {
+            outside_window(a, b, range, q, sr)
+        };
         let best = &mut tmp[y * sc..(y + 1) * sc];
         best.fill(f32::NEG_INFINITY);
         let arg = &mut buf.arg[..sc];
@@ -199,7 +213,17 @@ fn pass_y_window(src: &ScoreMap, a: f64, b: f64, range: f64, off: i64, r: usize,
 /// One line along x: output i probes q = `off` + i; candidates p = q + e for |e| ≤ `r`, as
 /// shifted reads of a copy of the line padded with −∞; probes outside the line scan their [`outside_window`].
 #[allow(clippy::too_many_arguments)]
-fn line_window(line: &[f32], a: f64, b: f64, range: f64, off: i64, r: usize, dst: &mut [f32], arg: &mut [u16], buf: &mut Buffers) {
+fn line_window(
+    line: &[f32],
+    a: f64,
+    b: f64,
+    range: f64,
+    off: i64,
+    r: usize,
+    dst: &mut [f32],
+    arg: &mut [u16],
+    buf: &mut Buffers,
+) {
     let (n, m, ri) = (line.len() as i64, dst.len(), r as i64);
     // ext[p + pad] = line[p], −∞ elsewhere; every read base + i + e stays inside.
     let pad = ri + (-off).max(0);
@@ -278,7 +302,11 @@ mod tests {
             let data = (0..sr * sc)
                 .map(|_| {
                     let v: f32 = rng.random_range(-span..0.5);
-                    if exact { (v * 4.0).round() / 4.0 } else { v }
+                    if exact {
+                        (v * 4.0).round() / 4.0
+                    } else {
+                        v
+                    }
                 })
                 .collect();
             let src = ScoreMap { rows: sr, cols: sc, data };
@@ -290,7 +318,8 @@ mod tests {
                 }
             };
             let (ax, ay) = (wgt(), wgt());
-            let mut lin = || if exact { [0.0, 0.125, -0.25][rng.random_range(0..3usize)] } else { rng.random_range(-0.06..0.06) };
+            let mut lin =
+                || if exact { [0.0, 0.125, -0.25][rng.random_range(0..3usize)] } else { rng.random_range(-0.06..0.06) };
             let w = [ax, lin(), ay, lin()];
             let (offx, offy) = (rng.random_range(-6i64..6), rng.random_range(-6i64..6));
             let (rows, cols) = (rng.random_range(1..50usize), rng.random_range(1..50usize));
@@ -310,9 +339,16 @@ mod tests {
                     let (qx, qy) = ((offx + (i % cols) as i64) as f64, (offy + (i / cols) as i64) as f64);
                     let at = |cx: u16, cy: u16| {
                         let (dx, dy) = (qx - cx as f64, qy - cy as f64);
-                        src.at(cx as usize, cy as usize) as f64 - w[0] * dx * dx - w[1] * dx - w[2] * dy * dy - w[3] * dy
+                        src.at(cx as usize, cy as usize) as f64
+                            - w[0] * dx * dx
+                            - w[1] * dx
+                            - w[2] * dy * dy
+                            - w[3] * dy
                     };
-                    assert!((at(f.ix[i], f.iy[i]) - at(r.ix[i], r.iy[i])).abs() < 1e-5, "trial {trial} at {i}: arg-max differs");
+                    assert!(
+                        (at(f.ix[i], f.iy[i]) - at(r.ix[i], r.iy[i])).abs() < 1e-5,
+                        "trial {trial} at {i}: arg-max differs"
+                    );
                 }
             }
         }

@@ -78,7 +78,11 @@ fn group_responses(feat: &FeatureMap, group: &[&Filter]) -> Vec<ScoreMap> {
                         c[(p, g)] = (0..fr)
                             .map(|dy| {
                                 let at = ((y0 + dy) * feat.cols) * FEAT_DIM + p * FEAT_DIM;
-                                feat.data[at..at + span].iter().zip(&f.w[dy * span..(dy + 1) * span]).map(|(a, b)| a * b).sum::<f32>()
+                                feat.data[at..at + span]
+                                    .iter()
+                                    .zip(&f.w[dy * span..(dy + 1) * span])
+                                    .map(|(a, b)| a * b)
+                                    .sum::<f32>()
                             })
                             .sum();
                     }
@@ -89,8 +93,20 @@ fn group_responses(feat: &FeatureMap, group: &[&Filter]) -> Vec<ScoreMap> {
                 let start = (y0 + dy) * feat.cols * FEAT_DIM;
                 // Windows: row p at start + 32 p, `span` values (in bounds: the last window of the
                 // last band ends at the end of row y1 − 1 + dy ≤ feat.rows − 1).
-                let a = DMatrixView::from_slice_with_strides_generic(&feat.data[start..], Dyn(m), Dyn(span), Dyn(FEAT_DIM), Dyn(1));
-                let w = DMatrixView::from_slice_with_strides_generic(&weights[dy * span..], Dyn(span), Dyn(n), Dyn(1), Dyn(len));
+                let a = DMatrixView::from_slice_with_strides_generic(
+                    &feat.data[start..],
+                    Dyn(m),
+                    Dyn(span),
+                    Dyn(FEAT_DIM),
+                    Dyn(1),
+                );
+                let w = DMatrixView::from_slice_with_strides_generic(
+                    &weights[dy * span..],
+                    Dyn(span),
+                    Dyn(n),
+                    Dyn(1),
+                    Dyn(len),
+                );
                 c.gemm(1.0, &a, &w, 1.0);
             }
             c

@@ -55,7 +55,10 @@ impl<'a> Reader<'a> {
     fn count(&mut self, what: &str, min_item: usize) -> Result<usize> {
         let n = self.u32(what)? as usize;
         if n.saturating_mul(min_item) > self.b.len() - self.pos {
-            return Err(corrupt(format!("detector model: {what} = {n} exceeds the remaining {} bytes", self.b.len() - self.pos)));
+            return Err(corrupt(format!(
+                "detector model: {what} = {n} exceeds the remaining {} bytes",
+                self.b.len() - self.pos
+            )));
         }
         Ok(n)
     }
@@ -149,7 +152,10 @@ impl Model {
         for _ in 0..nf {
             let rows = r.u32("filter rows")? as usize;
             let cols = r.u32("filter cols")? as usize;
-            let n = rows.checked_mul(cols).and_then(|v| v.checked_mul(FEAT_DIM)).ok_or_else(|| corrupt("filter size overflows"))?;
+            let n = rows
+                .checked_mul(cols)
+                .and_then(|v| v.checked_mul(FEAT_DIM))
+                .ok_or_else(|| corrupt("filter size overflows"))?;
             let raw = r.take(n.checked_mul(4).ok_or_else(|| corrupt("filter size overflows"))?, "filter weights")?;
             let w = raw.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
             filters.push(Filter { rows, cols, w });

@@ -98,7 +98,9 @@ pub fn gradients(im: &Planes) -> Gradients {
             let p = im.plane(c);
             let (up, row, down) = (&p[(sy - 1) * w + 1..][..n], &p[sy * w..][..w], &p[(sy + 1) * w + 1..][..n]);
             let (left, right) = (&row[..n], &row[2..]);
-            for ((((dx, dy), v), (&l, &r)), (&u, &d)) in dx.iter_mut().zip(dy.iter_mut()).zip(v.iter_mut()).zip(left.iter().zip(right)).zip(up.iter().zip(down)) {
+            for ((((dx, dy), v), (&l, &r)), (&u, &d)) in
+                dx.iter_mut().zip(dy.iter_mut()).zip(v.iter_mut()).zip(left.iter().zip(right)).zip(up.iter().zip(down))
+            {
                 let gx = (r - l) as f64;
                 let gy = (d - u) as f64;
                 let m = gx * gx + gy * gy;
@@ -118,7 +120,13 @@ pub fn gradients(im: &Planes) -> Gradients {
                 // tests dot > b first, and both cannot hold since b ≥ 0).
                 let (gt, lt) = (dot > *b, -dot > *b);
                 *b = if gt | lt { dot.abs() } else { *b };
-                *k = if gt { o } else if lt { o2 } else { *k };
+                *k = if gt {
+                    o
+                } else if lt {
+                    o2
+                } else {
+                    *k
+                };
             }
         }
         let (orow, mrow) = (&mut orient[sy * w + 1..][..n], &mut mag[sy * w + 1..][..n]);
@@ -182,12 +190,11 @@ pub fn hog_from_gradients(g: &Gradients, sbin: usize) -> FeatureMap {
         }
     }
     // Energy of each cell: sum over the 9 unsigned orientations of (h_o + h_{o+9})².
-    let norm: Vec<f64> = hist
-        .chunks_exact(18)
-        .map(|c| (0..NORIENT).map(|o| (c[o] + c[o + NORIENT]).powi(2)).sum())
-        .collect();
+    let norm: Vec<f64> =
+        hist.chunks_exact(18).map(|c| (0..NORIENT).map(|o| (c[o] + c[o + NORIENT]).powi(2)).sum()).collect();
     let nb = |cx: usize, cy: usize| norm[cy * bw + cx];
-    let block = |cx: usize, cy: usize| 1.0 / (nb(cx, cy) + nb(cx + 1, cy) + nb(cx, cy + 1) + nb(cx + 1, cy + 1) + EPS).sqrt();
+    let block =
+        |cx: usize, cy: usize| 1.0 / (nb(cx, cy) + nb(cx + 1, cy) + nb(cx, cy + 1) + nb(cx + 1, cy + 1) + EPS).sqrt();
     let mut data = vec![0f32; out_r * out_c * FEAT_DIM];
     for y in 0..out_r {
         for x in 0..out_c {
@@ -275,7 +282,13 @@ mod tests {
         let mut data = vec![0f32; 3 * w * h];
         for (i, d) in data.iter_mut().enumerate() {
             let (x, y) = ((i % w) as u32, ((i / w) % h) as u32);
-            *d = if x < 10 && y < 10 { 128.0 } else if x % 7 == 0 { (y * 3) as f32 } else { ((i as u32).wrapping_mul(2_654_435_761) >> 24) as f32 };
+            *d = if x < 10 && y < 10 {
+                128.0
+            } else if x % 7 == 0 {
+                (y * 3) as f32
+            } else {
+                ((i as u32).wrapping_mul(2_654_435_761) >> 24) as f32
+            };
         }
         let colour = Planes { width: w, height: h, channels: 3, data: data.clone() };
         assert_eq!(gradients(&colour), gradients_reference(&colour));

@@ -36,7 +36,10 @@ mod pj {
 }
 
 /// The 14 PARSE joints of a candidate, px (continuous image coordinates), with confidences.
-pub fn parse_joints(c: &Candidate, part_to_joint: &[usize; NUM_PARSE_JOINTS]) -> ([[f64; 2]; NUM_PARSE_JOINTS], [f64; NUM_PARSE_JOINTS]) {
+pub fn parse_joints(
+    c: &Candidate,
+    part_to_joint: &[usize; NUM_PARSE_JOINTS],
+) -> ([[f64; 2]; NUM_PARSE_JOINTS], [f64; NUM_PARSE_JOINTS]) {
     let mut xy = [[0.0; 2]; NUM_PARSE_JOINTS];
     let mut conf = [0.0; NUM_PARSE_JOINTS];
     for (j, &p) in part_to_joint.iter().enumerate() {
@@ -49,8 +52,12 @@ pub fn parse_joints(c: &Candidate, part_to_joint: &[usize; NUM_PARSE_JOINTS]) ->
 }
 
 /// Converts PARSE joints (and confidences) to the canonical 15 (see the module notes).
-pub fn parse_to_canonical(xy: &[[f64; 2]; NUM_PARSE_JOINTS], conf: &[f64; NUM_PARSE_JOINTS]) -> (Joints2, [f64; NUM_JOINTS]) {
-    let mid = |a: usize, b: usize| ([(xy[a][0] + xy[b][0]) / 2.0, (xy[a][1] + xy[b][1]) / 2.0], (conf[a] + conf[b]) / 2.0);
+pub fn parse_to_canonical(
+    xy: &[[f64; 2]; NUM_PARSE_JOINTS],
+    conf: &[f64; NUM_PARSE_JOINTS],
+) -> (Joints2, [f64; NUM_JOINTS]) {
+    let mid =
+        |a: usize, b: usize| ([(xy[a][0] + xy[b][0]) / 2.0, (xy[a][1] + xy[b][1]) / 2.0], (conf[a] + conf[b]) / 2.0);
     let one = |a: usize| (xy[a], conf[a]);
     let table = [
         (joint::HEAD, mid(pj::HTOP, pj::HBOT)),

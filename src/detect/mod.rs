@@ -8,8 +8,8 @@
 pub mod conv;
 pub mod dt;
 pub mod dtwin;
-pub mod fastconv;
 pub mod embedded;
+pub mod fastconv;
 pub mod format;
 pub mod hog;
 pub mod joints;
@@ -235,8 +235,11 @@ pub fn candidates(
 ) -> Result<Vec<Candidate>> {
     let (padx, pady) = model.padding();
     let pyr = pyramid::build(im, model.sbin, interval, padx, pady, min_cell_px, max_cell_px)?;
-    let mut all: Vec<Candidate> =
-        pyr.levels.par_iter().flat_map_iter(|l| tree::detect_level(model, l, padx, pady, thresh, per_level, accept)).collect();
+    let mut all: Vec<Candidate> = pyr
+        .levels
+        .par_iter()
+        .flat_map_iter(|l| tree::detect_level(model, l, padx, pady, thresh, per_level, accept))
+        .collect();
     all.sort_by(|a, b| b.score.total_cmp(&a.score));
     Ok(all)
 }
@@ -252,7 +255,15 @@ pub fn to_detection(c: &Candidate, model: &Model, scale: f64) -> Detection {
     let scaled = Candidate { score: c.score, cell_px: c.cell_px * scale, parts };
     let (pxy, pconf) = joints::parse_joints(&scaled, &model.part_to_joint);
     let (j2, conf) = joints::parse_to_canonical(&pxy, &pconf);
-    Detection { score: c.score, joints: j2, confidence: conf, parse_joints: pxy, bbox: scaled.bbox(), cell_px: scaled.cell_px, parts: scaled.parts }
+    Detection {
+        score: c.score,
+        joints: j2,
+        confidence: conf,
+        parse_joints: pxy,
+        bbox: scaled.bbox(),
+        cell_px: scaled.cell_px,
+        parts: scaled.parts,
+    }
 }
 
 /// Detects human figures in `image` (1, 3 or 4 channels; colour is used by the HOG) at the
@@ -288,7 +299,10 @@ mod tests {
         let m = model::tests::tiny_model();
         let data = vec![0u8; 31 * 100];
         let v = ImageView::gray(&data, 100, 31).unwrap();
-        assert!(matches!(detect(&v, &m, &DetectOptions::default()), Err(Error::ImageTooSmall { width: 100, height: 31, .. })));
+        assert!(matches!(
+            detect(&v, &m, &DetectOptions::default()),
+            Err(Error::ImageTooSmall { width: 100, height: 31, .. })
+        ));
         let data = vec![0u8; 64 * 64];
         let v = ImageView::gray(&data, 64, 64).unwrap();
         let o = DetectOptions { nms_overlap: 2.0, ..Default::default() };
@@ -312,7 +326,11 @@ mod tests {
             assert!(matches!(detect(&v, &m, &o), Err(Error::OutOfRange { name: "search", .. })), "{min}..{max}");
         }
         // A range holding no pyramid level finds nothing, with score −∞.
-        let o = DetectOptions { search: SearchScales::FigureFraction { min: 50.0, max: 60.0 }, threshold: Some(-1e6), ..Default::default() };
+        let o = DetectOptions {
+            search: SearchScales::FigureFraction { min: 50.0, max: 60.0 },
+            threshold: Some(-1e6),
+            ..Default::default()
+        };
         assert!(matches!(detect(&v, &m, &o), Err(Error::NoFigure { score, .. }) if score == f64::NEG_INFINITY));
     }
 
@@ -327,7 +345,9 @@ mod tests {
         let sketch = detect(&v, &m, &o).unwrap();
         let (lo, hi) = SKETCH_SEARCH.cell_range(&m, 96, 80);
         let (planes, _) = prepare_image(&v, o.max_side).unwrap();
-        let all = candidates(&planes, &m, SKETCH_LEVELS_PER_OCTAVE, f64::NEG_INFINITY, 0.0, f64::INFINITY, 64, &|_| true).unwrap();
+        let all =
+            candidates(&planes, &m, SKETCH_LEVELS_PER_OCTAVE, f64::NEG_INFINITY, 0.0, f64::INFINITY, 64, &|_| true)
+                .unwrap();
         let best_in = all.iter().find(|c| c.cell_px >= lo && c.cell_px <= hi).unwrap();
         assert_eq!(sketch.best().score, best_in.score);
         assert!(all.iter().any(|c| c.cell_px < lo), "the full search has finer levels");
@@ -338,7 +358,8 @@ mod tests {
     #[test]
     fn five_levels_per_octave_are_every_other_level_of_ten() {
         let m = model::tests::tiny_model();
-        let data: Vec<u8> = (0..120 * 96).map(|i| if (i % 120) / 6 % 4 == 0 || (i / 120) / 9 % 5 == 0 { 20 } else { 230 }).collect();
+        let data: Vec<u8> =
+            (0..120 * 96).map(|i| if (i % 120) / 6 % 4 == 0 || (i / 120) / 9 % 5 == 0 { 20 } else { 230 }).collect();
         let v = ImageView::gray(&data, 120, 96).unwrap();
         let (planes, _) = prepare_image(&v, DEFAULT_MAX_DETECT_SIDE).unwrap();
         let ten = candidates(&planes, &m, 10, f64::NEG_INFINITY, 0.0, f64::INFINITY, 1, &|_| true).unwrap();
@@ -353,15 +374,26 @@ mod tests {
             assert_eq!(t.score, c.score);
             for (p, q) in t.parts.iter().zip(&c.parts) {
                 // Cell sizes agree to rounding (2^(2k/10) vs 2^(k/5)).
-                assert!((p.x1 - q.x1).abs() < 1e-9 && (p.y2 - q.y2).abs() < 1e-9 && p.mixture == q.mixture, "{p:?} vs {q:?}");
+                assert!(
+                    (p.x1 - q.x1).abs() < 1e-9 && (p.y2 - q.y2).abs() < 1e-9 && p.mixture == q.mixture,
+                    "{p:?} vs {q:?}"
+                );
             }
         }
-        let o = |n| DetectOptions { threshold: Some(-1e6), search: SearchScales::All, levels_per_octave: Some(n), ..Default::default() };
+        let o = |n| DetectOptions {
+            threshold: Some(-1e6),
+            search: SearchScales::All,
+            levels_per_octave: Some(n),
+            ..Default::default()
+        };
         assert_eq!(detect(&v, &m, &o(5)).unwrap().best().score, five[0].score);
         assert_eq!(detect(&v, &m, &o(10)).unwrap().best().score, ten[0].score);
         assert_eq!(detect(&v, &m, &o(10)).unwrap().best().cell_px, ten[0].cell_px);
         for bad in [0, 101] {
-            assert!(matches!(detect(&v, &m, &o(bad)), Err(Error::OutOfRange { name: "levels_per_octave", .. })), "{bad}");
+            assert!(
+                matches!(detect(&v, &m, &o(bad)), Err(Error::OutOfRange { name: "levels_per_octave", .. })),
+                "{bad}"
+            );
         }
     }
 

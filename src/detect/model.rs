@@ -112,7 +112,11 @@ impl Model {
                 return Err(corrupt(format!("filter {k} has size {}x{} cells", f.rows, f.cols)));
             }
             if f.w.len() != f.rows * f.cols * FEAT_DIM {
-                return Err(corrupt(format!("filter {k} has {} weights, expected {}", f.w.len(), f.rows * f.cols * FEAT_DIM)));
+                return Err(corrupt(format!(
+                    "filter {k} has {} weights, expected {}",
+                    f.w.len(),
+                    f.rows * f.cols * FEAT_DIM
+                )));
             }
             if f.w.iter().any(|v| !v.is_finite()) {
                 return Err(corrupt(format!("filter {k} has a non-finite weight")));
@@ -271,7 +275,10 @@ mod json {
             let mut defs = Vec::with_capacity(self.defs.len());
             for (k, d) in self.defs.into_iter().enumerate() {
                 if d.anchor_1based[2] != 0 {
-                    return Err(corrupt(format!("deformation {k}: pyramid offset ds = {} is not supported", d.anchor_1based[2])));
+                    return Err(corrupt(format!(
+                        "deformation {k}: pyramid offset ds = {} is not supported",
+                        d.anchor_1based[2]
+                    )));
                 }
                 defs.push(Deformation { w: d.w, anchor: [d.anchor_1based[0], d.anchor_1based[1]] });
             }
@@ -306,7 +313,11 @@ pub(crate) mod tests {
 
     /// A tiny valid model: a root and one child with 2 mixtures each, 2x2 filters.
     pub(crate) fn tiny_model() -> Model {
-        let f = |s: f32| Filter { rows: 2, cols: 2, w: (0..2 * 2 * FEAT_DIM).map(|i| s * ((i % 7) as f32 - 3.0) / 10.0).collect() };
+        let f = |s: f32| Filter {
+            rows: 2,
+            cols: 2,
+            w: (0..2 * 2 * FEAT_DIM).map(|i| s * ((i % 7) as f32 - 3.0) / 10.0).collect(),
+        };
         let parts = vec![
             Part { parent: None, filter: vec![0, 1], def: vec![], bias: vec![vec![0]] },
             Part { parent: Some(0), filter: vec![2, 3], def: vec![0, 1], bias: vec![vec![1, 2], vec![3, 4]] },
@@ -315,8 +326,17 @@ pub(crate) mod tests {
             Deformation { w: [0.1, 0.0, 0.1, 0.0], anchor: [1, 3] },
             Deformation { w: [0.05, 0.01, 0.2, -0.01], anchor: [2, 3] },
         ];
-        Model::new(4, 5, -1.0, vec![f(1.0), f(-1.0), f(0.5), f(2.0)], defs, vec![0.0, 0.1, -0.2, 0.3, 0.0], parts, [0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1])
-            .unwrap()
+        Model::new(
+            4,
+            5,
+            -1.0,
+            vec![f(1.0), f(-1.0), f(0.5), f(2.0)],
+            defs,
+            vec![0.0, 0.1, -0.2, 0.3, 0.0],
+            parts,
+            [0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1],
+        )
+        .unwrap()
     }
 
     #[test]

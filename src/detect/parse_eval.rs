@@ -40,7 +40,8 @@ pub fn read_labels(path: &Path) -> Result<Vec<Labelled>> {
         let mut joints = [[0.0; 2]; NUM_PARSE_JOINTS];
         for j in 0..NUM_PARSE_JOINTS {
             for a in 0..2 {
-                let v: f64 = f[1 + 2 * j + a].parse().map_err(|_| bad(i + 2, &format!("bad number {:?}", f[1 + 2 * j + a])))?;
+                let v: f64 =
+                    f[1 + 2 * j + a].parse().map_err(|_| bad(i + 2, &format!("bad number {:?}", f[1 + 2 * j + a])))?;
                 if !v.is_finite() {
                     return Err(bad(i + 2, "non-finite coordinate"));
                 }
@@ -65,10 +66,14 @@ pub fn tight_box(p: &[[f64; 2]]) -> [f64; 4] {
 pub fn best_overlap<'a>(cands: &'a [Candidate], gt: [f64; 4], overlap: f64) -> Option<&'a Candidate> {
     let garea = (gt[2] - gt[0] + 1.0) * (gt[3] - gt[1] + 1.0);
     cands.iter().find(|c| {
-        let centres: Vec<[f64; 2]> = c.parts.iter().map(|p| {
-            let q = p.centre();
-            [q[0] - 0.5, q[1] - 0.5]
-        }).collect();
+        let centres: Vec<[f64; 2]> = c
+            .parts
+            .iter()
+            .map(|p| {
+                let q = p.centre();
+                [q[0] - 0.5, q[1] - 0.5]
+            })
+            .collect();
         let b = tight_box(&centres);
         let w = (b[2].min(gt[2]) - b[0].max(gt[0]) + 1.0).max(0.0);
         let h = (b[3].min(gt[3]) - b[1].max(gt[1]) + 1.0).max(0.0);
@@ -78,7 +83,11 @@ pub fn best_overlap<'a>(cands: &'a [Candidate], gt: [f64; 4], overlap: f64) -> O
 
 /// Which joints are within `alpha` · max(h, w) of the ground-truth box (`pred` in pixel-index
 /// coordinates like `gt`).
-pub fn correct_joints(pred: &[[f64; 2]; NUM_PARSE_JOINTS], gt: &[[f64; 2]; NUM_PARSE_JOINTS], alpha: f64) -> [bool; NUM_PARSE_JOINTS] {
+pub fn correct_joints(
+    pred: &[[f64; 2]; NUM_PARSE_JOINTS],
+    gt: &[[f64; 2]; NUM_PARSE_JOINTS],
+    alpha: f64,
+) -> [bool; NUM_PARSE_JOINTS] {
     let b = tight_box(gt);
     let thr = alpha * (b[2] - b[0]).max(b[3] - b[1]);
     let mut ok = [false; NUM_PARSE_JOINTS];
@@ -107,12 +116,18 @@ pub fn protocol_threshold(model: &Model) -> f64 {
 /// Runs the protocol on one image: all candidates above [`protocol_threshold`], the best one
 /// overlapping the ground-truth box, and which joints it gets right at `alpha` (all wrong when no
 /// candidate overlaps). Also returns the chosen candidate's score.
-pub fn evaluate_image(image: &ImageView<'_>, model: &Model, gt: &[[f64; 2]; NUM_PARSE_JOINTS], alpha: f64) -> Result<([bool; NUM_PARSE_JOINTS], Option<f64>)> {
+pub fn evaluate_image(
+    image: &ImageView<'_>,
+    model: &Model,
+    gt: &[[f64; 2]; NUM_PARSE_JOINTS],
+    alpha: f64,
+) -> Result<([bool; NUM_PARSE_JOINTS], Option<f64>)> {
     let planes = super::pyramid::planes_from_view(image);
     let gtbox = tight_box(gt);
     // Per level only the best overlapping candidate can win.
     let accept = |c: &Candidate| best_overlap(std::slice::from_ref(c), gtbox, 0.3).is_some();
-    let cands = super::candidates(&planes, model, model.interval, protocol_threshold(model), 0.0, f64::INFINITY, 1, &accept)?;
+    let cands =
+        super::candidates(&planes, model, model.interval, protocol_threshold(model), 0.0, f64::INFINITY, 1, &accept)?;
     Ok(match cands.first() {
         Some(c) => (correct_joints(&predicted_joints(c, model), gt, alpha), Some(c.score)),
         None => ([false; NUM_PARSE_JOINTS], None),
@@ -120,8 +135,15 @@ pub fn evaluate_image(image: &ImageView<'_>, model: &Model, gt: &[[f64; 2]; NUM_
 }
 
 /// Joint groups of the PCK table: name and the (left, right) PARSE joints averaged.
-pub const PCK_GROUPS: [(&str, [usize; 2]); 7] =
-    [("head", [12, 13]), ("shoulder", [8, 9]), ("elbow", [7, 10]), ("wrist", [6, 11]), ("hip", [2, 3]), ("knee", [1, 4]), ("ankle", [0, 5])];
+pub const PCK_GROUPS: [(&str, [usize; 2]); 7] = [
+    ("head", [12, 13]),
+    ("shoulder", [8, 9]),
+    ("elbow", [7, 10]),
+    ("wrist", [6, 11]),
+    ("hip", [2, 3]),
+    ("knee", [1, 4]),
+    ("ankle", [0, 5]),
+];
 
 #[cfg(test)]
 mod tests {

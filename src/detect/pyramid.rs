@@ -6,9 +6,9 @@
 
 use rayon::prelude::*;
 
-use super::hog::{gradients, hog_from_gradients, FeatureMap, Planes};
 #[cfg(test)]
 use super::hog::hog;
+use super::hog::{gradients, hog_from_gradients, FeatureMap, Planes};
 use super::model::FEAT_DIM;
 use crate::error::Result;
 use crate::image::ImageView;
@@ -135,7 +135,15 @@ pub fn pad(f: &FeatureMap, padx: usize, pady: usize) -> FeatureMap {
 /// Only levels with cells of `min_cell_px` to `max_cell_px` pixels (inclusive) are computed and
 /// returned: the others' HOG is never built (the image is still halved through skipped levels
 /// when a coarser kept level needs it).
-pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize, min_cell_px: f64, max_cell_px: f64) -> Result<Pyramid> {
+pub fn build(
+    im: &Planes,
+    sbin: usize,
+    interval: usize,
+    padx: usize,
+    pady: usize,
+    min_cell_px: f64,
+    max_cell_px: f64,
+) -> Result<Pyramid> {
     let sc = 2f64.powf(1.0 / interval as f64);
     let min_side = im.width.min(im.height) as f64;
     let max_scale = (1.0 + ((min_side / (5.0 * sbin as f64)).ln() / sc.ln()).floor()).max(1.0) as usize;
@@ -157,7 +165,13 @@ pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize
         let mut h = 0;
         while j1 <= max_scale {
             h += 1;
-            jobs.push(Job { base: i, halvings: h, sbin, level: j1 + interval - 1, cell_px: sbin as f64 * s * 2f64.powi(h as i32) });
+            jobs.push(Job {
+                base: i,
+                halvings: h,
+                sbin,
+                level: j1 + interval - 1,
+                cell_px: sbin as f64 * s * 2f64.powi(h as i32),
+            });
             j1 += interval;
         }
     }
@@ -166,7 +180,8 @@ pub fn build(im: &Planes, sbin: usize, interval: usize, padx: usize, pady: usize
     let per_base: Vec<Vec<(usize, Level)>> = (0..interval)
         .into_par_iter()
         .map(|i| {
-            let mine: Vec<&Job> = jobs.iter().filter(|j| j.base == i && j.cell_px >= min_cell_px && j.cell_px <= max_cell_px).collect();
+            let mine: Vec<&Job> =
+                jobs.iter().filter(|j| j.base == i && j.cell_px >= min_cell_px && j.cell_px <= max_cell_px).collect();
             let mut out = Vec::new();
             if mine.is_empty() {
                 return out;
@@ -224,7 +239,8 @@ mod tests {
         assert_eq!((g.channels, c.channels), (1, 1));
         assert_eq!(g, c);
         // Three planes kept, identical HOG: the gray plane is the largest gradient everywhere.
-        let three = Planes { channels: 3, data: [g.data.clone(), g.data.clone(), g.data.clone()].concat(), ..g.clone() };
+        let three =
+            Planes { channels: 3, data: [g.data.clone(), g.data.clone(), g.data.clone()].concat(), ..g.clone() };
         assert_eq!(hog(&three, 4), hog(&g, 4));
         let mut tinted = rgb.clone();
         tinted[3 * 17 + 2] ^= 1;

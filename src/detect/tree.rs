@@ -105,7 +105,11 @@ pub fn detect_level_with(
     kernels: Kernels,
 ) -> Vec<Candidate> {
     let reference = kernels == Kernels::Reference;
-    let resp = if reference { responses_reference(&level.feat, &model.filters) } else { responses(&level.feat, &model.filters) };
+    let resp = if reference {
+        responses_reference(&level.feat, &model.filters)
+    } else {
+        responses(&level.feat, &model.filters)
+    };
     let dt = if reference { distance_transform_reference } else { distance_transform };
     let np = model.parts.len();
     // Per part, per mixture: score maps (start as the filter responses).
@@ -244,7 +248,11 @@ mod tests {
     fn dp_equals_exhaustive_search_and_backtrack_is_consistent() {
         let model = tiny_model();
         let (rows, cols) = (9, 10);
-        let feat = FeatureMap { rows, cols, data: (0..rows * cols * FEAT_DIM).map(|i| ((i * 31 % 53) as f32 - 26.0) / 13.0).collect() };
+        let feat = FeatureMap {
+            rows,
+            cols,
+            data: (0..rows * cols * FEAT_DIM).map(|i| ((i * 31 % 53) as f32 - 26.0) / 13.0).collect(),
+        };
         let level = Level { feat: feat.clone(), cell_px: 4.0 };
         let c = detect_level(&model, &level, 0, 0, f64::NEG_INFINITY, 1, &|_| true);
         assert_eq!(c.len(), 1);
@@ -297,10 +305,17 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let (np, k) = (4, 6);
-        let filters = (0..np * k).map(|_| Filter { rows: 5, cols: 5, w: (0..25 * FEAT_DIM).map(|_| rng.random_range(-0.3..0.3)).collect() }).collect();
+        let filters = (0..np * k)
+            .map(|_| Filter { rows: 5, cols: 5, w: (0..25 * FEAT_DIM).map(|_| rng.random_range(-0.3..0.3)).collect() })
+            .collect();
         let defs = (0..np * k)
             .map(|_| Deformation {
-                w: [rng.random_range(0.01..0.1), rng.random_range(-0.05..0.05), rng.random_range(0.01..0.1), rng.random_range(-0.05..0.05)],
+                w: [
+                    rng.random_range(0.01..0.1),
+                    rng.random_range(-0.05..0.05),
+                    rng.random_range(0.01..0.1),
+                    rng.random_range(-0.05..0.05),
+                ],
                 anchor: [rng.random_range(-3..5), rng.random_range(-3..5)],
             })
             .collect();
@@ -311,7 +326,11 @@ mod tests {
                 parent: parents[i],
                 filter: (0..k).map(|m| i * k + m).collect(),
                 def: if i == 0 { vec![] } else { (0..k).map(|m| i * k + m).collect() },
-                bias: if i == 0 { vec![vec![0]] } else { (0..k).map(|l| (0..k).map(|m| 1 + (i * k + l) * k + m).collect()).collect() },
+                bias: if i == 0 {
+                    vec![vec![0]]
+                } else {
+                    (0..k).map(|l| (0..k).map(|m| 1 + (i * k + l) * k + m).collect()).collect()
+                },
             })
             .collect();
         Model::new(4, 5, -1.0, filters, defs, bias, parts, [0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1]).unwrap()
@@ -328,20 +347,32 @@ mod tests {
                 let (x, y) = ((i % w) as f32, (i / w) as f32);
                 let ring = ((x - 60.0).hypot(y - 40.0) - 18.0).abs() < 2.0;
                 let bar = (x - 60.0).abs() < 2.0 && y > 58.0 && y < 100.0;
-                if ring || bar { 20.0 } else { 230.0 + ((i * 7919) % 13) as f32 }
+                if ring || bar {
+                    20.0
+                } else {
+                    230.0 + ((i * 7919) % 13) as f32
+                }
             })
             .collect();
         let im = super::super::hog::Planes { width: w, height: h, channels: 1, data };
         let (padx, pady) = model.padding();
-        let pyr = super::super::pyramid::build(&im, model.sbin, model.interval, padx, pady, 0.0, f64::INFINITY).unwrap();
+        let pyr =
+            super::super::pyramid::build(&im, model.sbin, model.interval, padx, pady, 0.0, f64::INFINITY).unwrap();
         assert!(pyr.levels.len() >= 8);
         let mut compared = 0;
         for level in &pyr.levels {
             let fast = detect_level(&model, level, padx, pady, f64::NEG_INFINITY, 5, &|_| true);
-            let slow = detect_level_with(&model, level, (padx, pady), f64::NEG_INFINITY, 5, &|_| true, Kernels::Reference);
+            let slow =
+                detect_level_with(&model, level, (padx, pady), f64::NEG_INFINITY, 5, &|_| true, Kernels::Reference);
             assert_eq!(fast.len(), slow.len(), "level {}", level.cell_px);
             for (a, b) in fast.iter().zip(&slow) {
-                assert!((a.score - b.score).abs() <= 1e-4 * b.score.abs().max(1.0), "level {}: {} vs {}", level.cell_px, a.score, b.score);
+                assert!(
+                    (a.score - b.score).abs() <= 1e-4 * b.score.abs().max(1.0),
+                    "level {}: {} vs {}",
+                    level.cell_px,
+                    a.score,
+                    b.score
+                );
                 for (p, q) in a.parts.iter().zip(&b.parts) {
                     assert_eq!((p.x1, p.y1, p.mixture), (q.x1, q.y1, q.mixture), "level {}", level.cell_px);
                 }

@@ -104,15 +104,24 @@ pub struct GroupRow {
 pub fn style_breakdown(results: &[SketchResult]) -> Result<Vec<GroupRow>> {
     let models = results.first().map_or(0, |r| r.scores.len());
     let alphas = results.first().and_then(|r| r.scores.first()).map_or(0, |s| s.pck.len());
-    if let Some(i) = results.iter().position(|r| r.scores.len() != models || r.scores.iter().any(|s| s.pck.len() != alphas)) {
-        return Err(Error::OutOfRange { name: "sketch results", detail: format!("result {i} does not hold {models} models of {alphas} alphas like the first") });
+    if let Some(i) =
+        results.iter().position(|r| r.scores.len() != models || r.scores.iter().any(|s| s.pck.len() != alphas))
+    {
+        return Err(Error::OutOfRange {
+            name: "sketch results",
+            detail: format!("result {i} does not hold {models} models of {alphas} alphas like the first"),
+        });
     }
     Ok(STYLE_GROUPS
         .iter()
         .map(|g| {
             let members: Vec<&SketchResult> = results.iter().filter(|r| (g.member)(&r.truth)).collect();
             let n = members.len();
-            let mean_pck = (0..models).map(|m| (0..alphas).map(|a| members.iter().map(|r| r.scores[m].pck[a]).sum::<f64>() / n as f64).collect()).collect();
+            let mean_pck = (0..models)
+                .map(|m| {
+                    (0..alphas).map(|a| members.iter().map(|r| r.scores[m].pck[a]).sum::<f64>() / n as f64).collect()
+                })
+                .collect();
             GroupRow { name: g.name, n, mean_pck }
         })
         .collect())
@@ -133,7 +142,13 @@ pub fn figure_fraction(s: &Sketch) -> Result<f64> {
 /// PCK@alpha of each model's best detection on one rendered sketch, `alphas` in order, the
 /// detection time and scale, and the drawn figure's size. Errors: the renderer's and the
 /// detector's (except no figure).
-pub fn score_sketch(renderer: &SketchRenderer, req: &SketchRequest, models: &[&Model], options: &DetectOptions, alphas: &[f64]) -> Result<SketchResult> {
+pub fn score_sketch(
+    renderer: &SketchRenderer,
+    req: &SketchRequest,
+    models: &[&Model],
+    options: &DetectOptions,
+    alphas: &[f64],
+) -> Result<SketchResult> {
     let s = renderer.render(req)?;
     let view = ImageView::gray(&s.pixels, req.width, req.height)?;
     let short = req.width.min(req.height) as f64;
@@ -181,11 +196,15 @@ mod tests {
         let f = figure_fraction(&s).unwrap();
         assert!(f > 0.3 && f <= 0.92 + 1e-9, "figure fraction {f}");
         let m = Model::embedded().unwrap();
-        let res = score_sketch(&r, &req, &[&m], &DetectOptions { threshold: Some(-1e9), ..DetectOptions::default() }, &[0.2]).unwrap();
+        let res =
+            score_sketch(&r, &req, &[&m], &DetectOptions { threshold: Some(-1e9), ..DetectOptions::default() }, &[0.2])
+                .unwrap();
         assert_eq!(res.figure_fraction, f);
         let found = res.scores[0].found_fraction.unwrap();
         assert!(found > 0.5 * f && found < 2.0 * f, "found at {found} for a figure of {f}");
-        let none = score_sketch(&r, &req, &[&m], &DetectOptions { threshold: Some(1e9), ..DetectOptions::default() }, &[0.2]).unwrap();
+        let none =
+            score_sketch(&r, &req, &[&m], &DetectOptions { threshold: Some(1e9), ..DetectOptions::default() }, &[0.2])
+                .unwrap();
         assert_eq!((none.scores[0].found_fraction, none.scores[0].pck.clone()), (None, vec![0.0]));
         assert_eq!(res.truth, s.truth);
     }
@@ -200,7 +219,11 @@ mod tests {
             req.style.as_mut().unwrap().hatching = hatching;
             let truth = r.render(&req).unwrap().truth;
             let p = [0.5, 0.25, 1.0][i as usize];
-            results.push(SketchResult { figure_fraction: 0.8, scores: vec![SketchScore { pck: vec![p, 1.0], seconds: 0.0, found_fraction: None }], truth });
+            results.push(SketchResult {
+                figure_fraction: 0.8,
+                scores: vec![SketchScore { pck: vec![p, 1.0], seconds: 0.0, found_fraction: None }],
+                truth,
+            });
         }
         let rows = style_breakdown(&results).unwrap();
         let row = |name: &str| rows.iter().find(|g| g.name == name).unwrap().clone();

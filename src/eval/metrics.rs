@@ -7,7 +7,10 @@ use crate::error::{Error, Result};
 
 fn check_pair<T>(name: &'static str, a: &[T], b: &[T]) -> Result<()> {
     if a.is_empty() || a.len() != b.len() {
-        return Err(Error::OutOfRange { name, detail: format!("{} reference vs {} estimated points (need equal, non-zero)", a.len(), b.len()) });
+        return Err(Error::OutOfRange {
+            name,
+            detail: format!("{} reference vs {} estimated points (need equal, non-zero)", a.len(), b.len()),
+        });
     }
     Ok(())
 }
@@ -104,7 +107,10 @@ pub fn procrustes_align(reference: &[[f64; 3]], estimate: &[[f64; 3]]) -> Result
         var_e += y.norm_squared();
     }
     if !(var_e.is_finite() && var_e > 1e-18) || cov.iter().any(|c| !c.is_finite()) {
-        return Err(Error::OutOfRange { name: "Procrustes points", detail: "the estimate is degenerate (all points coincide) or not finite".into() });
+        return Err(Error::OutOfRange {
+            name: "Procrustes points",
+            detail: "the estimate is degenerate (all points coincide) or not finite".into(),
+        });
     }
     let svd = cov.svd(true, true);
     let (u, vt) = match (svd.u, svd.v_t) {
@@ -144,20 +150,35 @@ pub fn pck(reference: &[[f64; 2]], estimate: &[[f64; 2]], alpha: f64) -> Result<
     check_pair("PCK joints", reference, estimate)?;
     let thr = alpha * pck_normaliser(reference);
     if !(thr.is_finite() && thr > 0.0) {
-        return Err(Error::OutOfRange { name: "PCK threshold", detail: format!("{thr} (alpha {alpha}, joints all at one point?)") });
+        return Err(Error::OutOfRange {
+            name: "PCK threshold",
+            detail: format!("{thr} (alpha {alpha}, joints all at one point?)"),
+        });
     }
-    let hit = reference.iter().zip(estimate).filter(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt() <= thr).count();
+    let hit = reference
+        .iter()
+        .zip(estimate)
+        .filter(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt() <= thr)
+        .count();
     Ok(hit as f64 / reference.len() as f64)
 }
 
 /// Scales `estimate` about its joint `root` so that its total bone length equals the
 /// reference's (`bones` as joint pairs): a sketch fixes the size only up to a factor.
-pub fn scale_to_reference(reference: &[[f64; 3]], estimate: &[[f64; 3]], bones: &[(usize, usize)], root: usize) -> Result<Vec<[f64; 3]>> {
+pub fn scale_to_reference(
+    reference: &[[f64; 3]],
+    estimate: &[[f64; 3]],
+    bones: &[(usize, usize)],
+    root: usize,
+) -> Result<Vec<[f64; 3]>> {
     check_pair("joints", reference, estimate)?;
     let total = |p: &[[f64; 3]]| bones.iter().map(|&(a, b)| (v(&p[a]) - v(&p[b])).norm()).sum::<f64>();
     let (lr, le) = (total(reference), total(estimate));
     if !(le.is_finite() && le > 1e-12 && lr.is_finite()) || root >= estimate.len() {
-        return Err(Error::OutOfRange { name: "estimated joints", detail: format!("total bone length {le} cannot be scaled") });
+        return Err(Error::OutOfRange {
+            name: "estimated joints",
+            detail: format!("total bone length {le} cannot be scaled"),
+        });
     }
     let k = lr / le;
     let o = v(&estimate[root]);
@@ -213,7 +234,8 @@ mod tests {
     fn procrustes_removes_rotation_scale_and_translation() {
         let a = pts();
         let r = Rotation3::from_euler_angles(0.3, -0.7, 1.1);
-        let b: Vec<[f64; 3]> = a.iter().map(|p| (r * Vector3::from(*p) * 2.5 + Vector3::new(1.0, -2.0, 0.5)).into()).collect();
+        let b: Vec<[f64; 3]> =
+            a.iter().map(|p| (r * Vector3::from(*p) * 2.5 + Vector3::new(1.0, -2.0, 0.5)).into()).collect();
         assert!(mpjpe(&a, &b, 0).unwrap() > 0.5);
         let e = pa_mpjpe(&a, &b).unwrap();
         assert!(e < 1e-9, "PA-MPJPE after a similarity transform: {e}");
@@ -222,7 +244,9 @@ mod tests {
         assert!(pa_mpjpe(&a, &m).unwrap() > 0.05);
         assert!(pa_mpjpe(&a, &vec![[1.0, 1.0, 1.0]; 5]).is_err());
         let s = scale_to_reference(&a, &b, &[(0, 1), (0, 2)], 0).unwrap();
-        let len = |p: &[[f64; 3]]| (Vector3::from(p[1]) - Vector3::from(p[0])).norm() + (Vector3::from(p[2]) - Vector3::from(p[0])).norm();
+        let len = |p: &[[f64; 3]]| {
+            (Vector3::from(p[1]) - Vector3::from(p[0])).norm() + (Vector3::from(p[2]) - Vector3::from(p[0])).norm()
+        };
         assert!((len(&s) - len(&a)).abs() < 1e-9);
     }
 

@@ -84,7 +84,17 @@ pub struct SampleScore {
 }
 
 /// Metric names in the order of [`SampleScore::values`].
-pub const METRICS: [&str; 9] = ["aed_rest", "aed_rest_centred", "aed_rest_at_height", "height_ratio", "aed_posed", "mpjpe_mm", "pa_mpjpe_mm", "pck@0.1", "pck@0.2"];
+pub const METRICS: [&str; 9] = [
+    "aed_rest",
+    "aed_rest_centred",
+    "aed_rest_at_height",
+    "height_ratio",
+    "aed_posed",
+    "mpjpe_mm",
+    "pa_mpjpe_mm",
+    "pck@0.1",
+    "pck@0.2",
+];
 
 /// Decimals each metric is printed with, [`METRICS`] order.
 pub const METRIC_DECIMALS: [usize; 9] = [4, 4, 4, 3, 4, 1, 1, 3, 3];
@@ -92,7 +102,17 @@ pub const METRIC_DECIMALS: [usize; 9] = [4, 4, 4, 3, 4, 1, 1, 3, 3];
 impl SampleScore {
     /// The metrics in [`METRICS`] order.
     pub fn values(&self) -> [Option<f64>; 9] {
-        [self.aed_rest, self.aed_rest_centred, self.aed_rest_at_height, self.height_ratio, self.aed_posed, self.mpjpe_mm, self.pa_mpjpe_mm, self.pck10, self.pck20]
+        [
+            self.aed_rest,
+            self.aed_rest_centred,
+            self.aed_rest_at_height,
+            self.height_ratio,
+            self.aed_posed,
+            self.mpjpe_mm,
+            self.pa_mpjpe_mm,
+            self.pck10,
+            self.pck20,
+        ]
     }
 }
 
@@ -126,9 +146,17 @@ pub fn read_obj_vertices(path: &Path) -> Result<Vec<[f64; 3]>> {
         if it.next() != Some("v") {
             continue;
         }
-        let c: Vec<f64> = it.take(3).map(|x| x.parse::<f64>()).collect::<std::result::Result<_, _>>().map_err(|e| Error::CorruptData(format!("{}: line {}: {e}", path.display(), i + 1)))?;
+        let c: Vec<f64> = it
+            .take(3)
+            .map(|x| x.parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|e| Error::CorruptData(format!("{}: line {}: {e}", path.display(), i + 1)))?;
         if c.len() != 3 || c.iter().any(|x| !x.is_finite()) {
-            return Err(Error::CorruptData(format!("{}: line {}: a vertex needs 3 finite numbers", path.display(), i + 1)));
+            return Err(Error::CorruptData(format!(
+                "{}: line {}: a vertex needs 3 finite numbers",
+                path.display(),
+                i + 1
+            )));
         }
         out.push([c[0], c[1], c[2]]);
     }
@@ -145,8 +173,11 @@ pub fn load_estimate(dir: &Path, stem: &str) -> Result<Option<Estimate>> {
     let mut e = Estimate::default();
     if json.is_file() {
         let text = std::fs::read_to_string(&json).map_err(|source| Error::Io { path: json.clone(), source })?;
-        let j: EstimateJson = serde_json::from_str(&text).map_err(|err| Error::CorruptData(format!("{}: {err}", json.display())))?;
-        for (name, n) in [("joints2d", j.joints2d.as_ref().map(|v| v.len())), ("joints3d", j.joints3d.as_ref().map(|v| v.len()))] {
+        let j: EstimateJson =
+            serde_json::from_str(&text).map_err(|err| Error::CorruptData(format!("{}: {err}", json.display())))?;
+        for (name, n) in
+            [("joints2d", j.joints2d.as_ref().map(|v| v.len())), ("joints3d", j.joints3d.as_ref().map(|v| v.len()))]
+        {
             if n.is_some_and(|n| n != NUM_JOINTS) {
                 return Err(Error::CorruptData(format!("{}: {name} must hold 15 joints", json.display())));
             }
@@ -171,7 +202,13 @@ fn to_f64(v: &[[f32; 3]]) -> Vec<[f64; 3]> {
 }
 
 /// Scores one estimate against its ground truth and reference meshes (see the module doc).
-pub fn score_sample(stem: &str, truth: &GroundTruth, rest_ref: &[[f32; 3]], posed_ref: &[[f32; 3]], est: &Estimate) -> Result<SampleScore> {
+pub fn score_sample(
+    stem: &str,
+    truth: &GroundTruth,
+    rest_ref: &[[f32; 3]],
+    posed_ref: &[[f32; 3]],
+    est: &Estimate,
+) -> Result<SampleScore> {
     let h = truth.height_m;
     let r_gt = truth.camera.to_camera()?.r;
     let r_est = match est.camera_r {
@@ -226,7 +263,10 @@ pub fn dataset_samples(dataset: &Path) -> Result<Vec<String>> {
 /// and the number of dataset samples. Errors: unreadable folders or files, damaged ground truth.
 pub fn score_dataset(dataset: &Path, results: &Path) -> Result<(Vec<SampleScore>, usize)> {
     if !results.is_dir() {
-        return Err(Error::Io { path: results.to_path_buf(), source: std::io::Error::new(std::io::ErrorKind::NotFound, "results folder not found") });
+        return Err(Error::Io {
+            path: results.to_path_buf(),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "results folder not found"),
+        });
     }
     let stems = dataset_samples(dataset)?;
     let mut out = Vec::new();
@@ -256,7 +296,8 @@ mod tests {
         let r = SketchRenderer::new(std::sync::Arc::new(crate::body::BodyModel::embedded().unwrap()), None).unwrap();
         let s = r.render(&SketchRequest::random(3, 64)).unwrap();
         let h = s.truth.height_m;
-        let rest: Vec<[f64; 3]> = s.rest_vertices.iter().map(|v| [v[0] as f64 + 0.02, v[1] as f64 + 0.05, v[2] as f64]).collect();
+        let rest: Vec<[f64; 3]> =
+            s.rest_vertices.iter().map(|v| [v[0] as f64 + 0.02, v[1] as f64 + 0.05, v[2] as f64]).collect();
         let est = Estimate { rest: Some(rest), ..Estimate::default() };
         let sc = score_sample("x", &s.truth, &s.rest_vertices, &s.posed_vertices, &est).unwrap();
         let shift = (0.02f64.hypot(0.05)) / h;

@@ -70,7 +70,13 @@ fn vec_json(v: &Vector3<f64>) -> Value {
 
 /// Nodes of one skeleton (15 joints, then the skinned mesh node) with global rotations `rot`
 /// per joint and positions `pos`; node indices start at `base`.
-fn skeleton_nodes(base: usize, pos: &Joints3, rot: &[UnitQuaternion<f64>; NUM_JOINTS], skin: usize, tag: &str) -> Vec<Value> {
+fn skeleton_nodes(
+    base: usize,
+    pos: &Joints3,
+    rot: &[UnitQuaternion<f64>; NUM_JOINTS],
+    skin: usize,
+    tag: &str,
+) -> Vec<Value> {
     let mut nodes = Vec::with_capacity(NUM_JOINTS + 1);
     for j in 0..NUM_JOINTS {
         let (t, r) = match PARENT[j] {
@@ -123,7 +129,8 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
                 (source.len() - 1) as u32
             })
         };
-        let c: Vec<u32> = if q[3] == q[2] { (0..3).map(&mut corner).collect() } else { (0..4).map(&mut corner).collect() };
+        let c: Vec<u32> =
+            if q[3] == q[2] { (0..3).map(&mut corner).collect() } else { (0..4).map(&mut corner).collect() };
         tris.extend_from_slice(&[c[0], c[1], c[2]]);
         if c.len() == 4 {
             tris.extend_from_slice(&[c[0], c[2], c[3]]);
@@ -141,17 +148,27 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
         }
     }
     let mut attributes = serde_json::Map::new();
-    let a = bin.add(&f32_bytes(pos.iter().flatten().copied()), Some(ARRAY_BUFFER),
-        json!({"componentType": FLOAT, "count": n, "type": "VEC3", "min": lo, "max": hi}));
+    let a = bin.add(
+        &f32_bytes(pos.iter().flatten().copied()),
+        Some(ARRAY_BUFFER),
+        json!({"componentType": FLOAT, "count": n, "type": "VEC3", "min": lo, "max": hi}),
+    );
     attributes.insert("POSITION".into(), json!(a));
-    let a = bin.add(&f32_bytes(source.iter().flat_map(|&(v, _)| normals[v as usize])), Some(ARRAY_BUFFER),
-        json!({"componentType": FLOAT, "count": n, "type": "VEC3"}));
+    let a = bin.add(
+        &f32_bytes(source.iter().flat_map(|&(v, _)| normals[v as usize])),
+        Some(ARRAY_BUFFER),
+        json!({"componentType": FLOAT, "count": n, "type": "VEC3"}),
+    );
     attributes.insert("NORMAL".into(), json!(a));
     if let Some(uv) = &mesh.uvs {
-        let a = bin.add(&f32_bytes(source.iter().flat_map(|&(_, t)| {
-            let c = uv.coords[t as usize];
-            [c[0], 1.0 - c[1]]
-        })), Some(ARRAY_BUFFER), json!({"componentType": FLOAT, "count": n, "type": "VEC2"}));
+        let a = bin.add(
+            &f32_bytes(source.iter().flat_map(|&(_, t)| {
+                let c = uv.coords[t as usize];
+                [c[0], 1.0 - c[1]]
+            })),
+            Some(ARRAY_BUFFER),
+            json!({"componentType": FLOAT, "count": n, "type": "VEC2"}),
+        );
         attributes.insert("TEXCOORD_0".into(), json!(a));
     }
     // Skin: bone b drives joint node BONES[b].1; merge duplicates, renormalise.
@@ -173,12 +190,18 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
             weights.push(s.1 / sum);
         }
     }
-    let a = bin.add(&joints_bytes, Some(ARRAY_BUFFER), json!({"componentType": UNSIGNED_BYTE, "count": n, "type": "VEC4"}));
+    let a =
+        bin.add(&joints_bytes, Some(ARRAY_BUFFER), json!({"componentType": UNSIGNED_BYTE, "count": n, "type": "VEC4"}));
     attributes.insert("JOINTS_0".into(), json!(a));
-    let a = bin.add(&f32_bytes(weights), Some(ARRAY_BUFFER), json!({"componentType": FLOAT, "count": n, "type": "VEC4"}));
+    let a =
+        bin.add(&f32_bytes(weights), Some(ARRAY_BUFFER), json!({"componentType": FLOAT, "count": n, "type": "VEC4"}));
     attributes.insert("WEIGHTS_0".into(), json!(a));
     let idx: Vec<u8> = tris.iter().flat_map(|i| i.to_le_bytes()).collect();
-    let indices = bin.add(&idx, Some(ELEMENT_ARRAY_BUFFER), json!({"componentType": UNSIGNED_INT, "count": tris.len(), "type": "SCALAR"}));
+    let indices = bin.add(
+        &idx,
+        Some(ELEMENT_ARRAY_BUFFER),
+        json!({"componentType": UNSIGNED_INT, "count": tris.len(), "type": "SCALAR"}),
+    );
     // Inverse bind matrices: translation by -J_rest (column-major 4x4).
     let ibm = f32_bytes(mesh.joints.iter().flat_map(|j| {
         let t = j.map(|c| -(c as f32));
@@ -190,9 +213,7 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
     let rest_rot = [UnitQuaternion::identity(); NUM_JOINTS];
     let mut nodes = skeleton_nodes(0, &pose.joints, &posed_rot, 0, "posed");
     nodes.extend(skeleton_nodes(NUM_JOINTS + 1, &mesh.joints, &rest_rot, 1, "rest"));
-    let skin = |base: usize, name: &str| {
-        json!({"name": name, "inverseBindMatrices": ibm, "skeleton": base + PELVIS, "joints": (base..base + NUM_JOINTS).collect::<Vec<_>>()})
-    };
+    let skin = |base: usize, name: &str| json!({"name": name, "inverseBindMatrices": ibm, "skeleton": base + PELVIS, "joints": (base..base + NUM_JOINTS).collect::<Vec<_>>()});
     let doc = json!({
         "asset": {"version": "2.0", "generator": format!("sketchbody {}", crate::VERSION)},
         "scene": 0,
@@ -217,7 +238,8 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
         data.push(0);
     }
     let total = 12 + 8 + text.len() + 8 + data.len();
-    let total32 = u32::try_from(total).map_err(|_| Error::OutOfRange { name: "glb size", detail: format!("{total} bytes exceeds 4 GiB") })?;
+    let total32 = u32::try_from(total)
+        .map_err(|_| Error::OutOfRange { name: "glb size", detail: format!("{total} bytes exceeds 4 GiB") })?;
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());

@@ -18,15 +18,26 @@ pub fn parse_joints3_json(text: &str) -> Result<Joints3> {
             return Err(Error::CorruptData(format!("joints JSON: units {u} (expected \"m\")")));
         }
     }
-    let joints = doc.get("joints").and_then(Value::as_object).ok_or_else(|| Error::CorruptData("joints JSON: no \"joints\" object".into()))?;
+    let joints = doc
+        .get("joints")
+        .and_then(Value::as_object)
+        .ok_or_else(|| Error::CorruptData("joints JSON: no \"joints\" object".into()))?;
     let mut out = [[0.0; 3]; NUM_JOINTS];
     for (j, name) in JOINT_NAMES.iter().enumerate() {
-        let v = joints.get(*name).and_then(Value::as_array).ok_or_else(|| Error::CorruptData(format!("joints JSON: joint {name:?} missing")))?;
+        let v = joints
+            .get(*name)
+            .and_then(Value::as_array)
+            .ok_or_else(|| Error::CorruptData(format!("joints JSON: joint {name:?} missing")))?;
         if v.len() != 3 {
-            return Err(Error::CorruptData(format!("joints JSON: joint {name:?} has {} coordinates, expected 3", v.len())));
+            return Err(Error::CorruptData(format!(
+                "joints JSON: joint {name:?} has {} coordinates, expected 3",
+                v.len()
+            )));
         }
         for (k, c) in v.iter().enumerate() {
-            out[j][k] = c.as_f64().ok_or_else(|| Error::CorruptData(format!("joints JSON: joint {name:?} coordinate {k} is not a number")))?;
+            out[j][k] = c.as_f64().ok_or_else(|| {
+                Error::CorruptData(format!("joints JSON: joint {name:?} coordinate {k} is not a number"))
+            })?;
         }
     }
     Ok(out)
@@ -50,7 +61,8 @@ pub fn write_joints3_json(path: &Path, joints: &Joints3) -> Result<()> {
         }
         map.insert((*name).into(), json!(joints[j]));
     }
-    let text = serde_json::to_string_pretty(&json!({"units": "m", "joints": map})).map_err(|e| Error::CorruptData(e.to_string()))?;
+    let text = serde_json::to_string_pretty(&json!({"units": "m", "joints": map}))
+        .map_err(|e| Error::CorruptData(e.to_string()))?;
     write_atomic(path, text.as_bytes())
 }
 
@@ -69,7 +81,8 @@ mod tests {
         assert_eq!(load_joints3_json(&p).unwrap(), j);
         assert!(matches!(load_joints3_json(&dir.join("none.json")), Err(Error::Io { .. })));
         std::fs::remove_dir_all(&dir).unwrap();
-        for bad in ["{", "{\"joints\": {}}", "{\"units\": \"cm\", \"joints\": {}}", "{\"joints\": {\"head\": [1, 2]}}"] {
+        for bad in ["{", "{\"joints\": {}}", "{\"units\": \"cm\", \"joints\": {}}", "{\"joints\": {\"head\": [1, 2]}}"]
+        {
             assert!(matches!(parse_joints3_json(bad), Err(Error::CorruptData(_))), "{bad}");
         }
     }

@@ -38,11 +38,17 @@ pub fn parse_joints2d(v: &Value) -> Result<Joints2> {
         seen[k] = true;
     }
     if let Some(missing) = seen.iter().position(|s| !s) {
-        return Err(bad(format!("joint {} is missing (all 15 are needed; mark unknown ones in \"missing\")", JOINT_NAMES[missing])));
+        return Err(bad(format!(
+            "joint {} is missing (all 15 are needed; mark unknown ones in \"missing\")",
+            JOINT_NAMES[missing]
+        )));
     }
     if let Some(list) = v.get("missing") {
         for name in list.as_array().ok_or_else(|| bad("\"missing\" must be a list of joint names"))? {
-            let k = name.as_str().and_then(joint_index).ok_or_else(|| bad(format!("unknown joint {name} in \"missing\"")))?;
+            let k = name
+                .as_str()
+                .and_then(joint_index)
+                .ok_or_else(|| bad(format!("unknown joint {name} in \"missing\"")))?;
             j.visible[k] = false;
         }
     }
@@ -52,7 +58,8 @@ pub fn parse_joints2d(v: &Value) -> Result<Joints2> {
 /// Reads a `sketchbody-joints2d` file; errors name the file.
 pub fn load_joints2d(path: &Path) -> Result<Joints2> {
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
-    let v: Value = serde_json::from_str(&text).map_err(|e| Error::CorruptData(format!("{}: not JSON: {e}", path.display())))?;
+    let v: Value =
+        serde_json::from_str(&text).map_err(|e| Error::CorruptData(format!("{}: not JSON: {e}", path.display())))?;
     parse_joints2d(&v).map_err(|e| match e {
         Error::CorruptData(m) => Error::CorruptData(format!("{}: {m}", path.display())),
         other => other,
@@ -86,7 +93,8 @@ mod tests {
 
     #[test]
     fn round_trips_and_names_bad_input() {
-        let mut j = Joints2 { xy: std::array::from_fn(|k| [10.0 + k as f64, 20.5 * k as f64]), visible: [true; NUM_JOINTS] };
+        let mut j =
+            Joints2 { xy: std::array::from_fn(|k| [10.0 + k as f64, 20.5 * k as f64]), visible: [true; NUM_JOINTS] };
         j.visible[4] = false;
         let v = joints2d_json(&j).unwrap();
         assert_eq!(v["missing"], json!(["r_wrist"]));

@@ -4,5 +4,5 @@
 pub mod gltf;
 pub mod joints;
 pub mod joints2d;
-pub mod pose3d;
 pub mod obj;
+pub mod pose3d;

@@ -18,7 +18,10 @@ pub fn obj_string(vertices: &[[f32; 3]], quads: &[[u32; 4]], uvs: Option<&FaceUv
     if let Some(uv) = uvs {
         let m = uv.coords.len();
         if uv.quads.len() != quads.len() || uv.quads.iter().any(|q| q.iter().any(|&i| i as usize >= m)) {
-            return Err(Error::OutOfRange { name: "UV faces", detail: format!("{} UV faces for {} faces, {m} UVs", uv.quads.len(), quads.len()) });
+            return Err(Error::OutOfRange {
+                name: "UV faces",
+                detail: format!("{} UV faces for {} faces, {m} UVs", uv.quads.len(), quads.len()),
+            });
         }
     }
     let normals = vertex_normals(vertices, quads);
@@ -67,7 +70,10 @@ mod tests {
     fn quads_uvs_and_normals_are_written_and_bad_indices_rejected() {
         let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [2.0, 0.0, 0.0]];
         let quads = [[0, 1, 2, 3], [1, 4, 2, 2]];
-        let uvs = FaceUvs { coords: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], quads: vec![[0, 1, 2, 3], [1, 0, 2, 2]] };
+        let uvs = FaceUvs {
+            coords: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            quads: vec![[0, 1, 2, 3], [1, 0, 2, 2]],
+        };
         let s = obj_string(&v, &quads, Some(&uvs)).unwrap();
         assert!(s.contains("\nf 1/1/1 2/2/2 3/3/3 4/4/4\n"), "{s}");
         assert!(s.contains("\nf 2/2/2 5/1/5 3/3/3\n"), "{s}");

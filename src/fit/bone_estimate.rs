@@ -32,7 +32,22 @@ use crate::skeleton::{joint, Joints2, Joints3, BONES, NUM_BONES};
 
 /// Group of each canonical bone in [`Proportions`] order (0 legs, 1 arms, 2 shoulders, 3 head,
 /// 4 torso); `None` for the pelvis→hip bones, which the renderer never scales (the reference).
-pub const BONE_GROUP: [Option<usize>; NUM_BONES] = [Some(3), Some(2), Some(1), Some(1), Some(2), Some(1), Some(1), Some(4), None, Some(0), Some(0), None, Some(0), Some(0)];
+pub const BONE_GROUP: [Option<usize>; NUM_BONES] = [
+    Some(3),
+    Some(2),
+    Some(1),
+    Some(1),
+    Some(2),
+    Some(1),
+    Some(1),
+    Some(4),
+    None,
+    Some(0),
+    Some(0),
+    None,
+    Some(0),
+    Some(0),
+];
 
 /// Options of [`estimate_proportions`], with documented defaults.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,13 +97,19 @@ impl EstimateOptions {
         ensure_finite("proportion ridge", self.ridge)?;
         ensure_finite("proportion max log", self.max_log)?;
         if !(0.0..1.0).contains(&self.min_foreshortening) {
-            return Err(Error::OutOfRange { name: "min foreshortening", detail: format!("{} not in 0..1", self.min_foreshortening) });
+            return Err(Error::OutOfRange {
+                name: "min foreshortening",
+                detail: format!("{} not in 0..1", self.min_foreshortening),
+            });
         }
         if self.ridge < 0.0 {
             return Err(Error::OutOfRange { name: "proportion ridge", detail: format!("{} must be >= 0", self.ridge) });
         }
         if !(0.0..=0.69).contains(&self.max_log) {
-            return Err(Error::OutOfRange { name: "proportion max log", detail: format!("{} not in 0..=0.69", self.max_log) });
+            return Err(Error::OutOfRange {
+                name: "proportion max log",
+                detail: format!("{} not in 0..=0.69", self.max_log),
+            });
         }
         Ok(())
     }
@@ -106,7 +127,13 @@ fn v3(j: &Joints3, k: usize) -> Vector3<f64> {
 /// Errors: non-finite or zero-length bones of `rest` or `pose` ([`Error::NonFinite`],
 /// [`Error::DegenerateBone`]); invalid options or camera; [`Error::Degenerate`] when no bone is
 /// usable, or with `ridge = 0` when the hips are not usable (the scale is then unidentifiable).
-pub fn estimate_proportions(rest: &Joints3, pose: &Joints3, camera: &WeakPerspective, joints2d: &Joints2, options: &EstimateOptions) -> Result<ProportionEstimate> {
+pub fn estimate_proportions(
+    rest: &Joints3,
+    pose: &Joints3,
+    camera: &WeakPerspective,
+    joints2d: &Joints2,
+    options: &EstimateOptions,
+) -> Result<ProportionEstimate> {
     options.validate()?;
     camera.validate()?;
     crate::body::ik::check_joints("rest joint", rest)?;
@@ -151,16 +178,23 @@ pub fn estimate_proportions(rest: &Joints3, pose: &Joints3, camera: &WeakPerspec
         used += 1;
     }
     if used == 0 {
-        return Err(Error::Degenerate("proportion estimate: no bone with both joints visible and within the foreshortening limit".into()));
+        return Err(Error::Degenerate(
+            "proportion estimate: no bone with both joints visible and within the foreshortening limit".into(),
+        ));
     }
     if options.ridge == 0.0 && hips == 0 {
-        return Err(Error::Degenerate("proportion estimate: with ridge 0 the pelvis->hip bones (the reference) must be usable".into()));
+        return Err(Error::Degenerate(
+            "proportion estimate: with ridge 0 the pelvis->hip bones (the reference) must be usable".into(),
+        ));
     }
     for g in 0..5 {
         // Unobserved groups are pinned to 0 so the system stays regular.
         normal[(1 + g, 1 + g)] += if observed[g] { options.ridge } else { 1.0 };
     }
-    let x = normal.lu().solve(&rhs).ok_or_else(|| Error::Degenerate("proportion estimate: singular normal equations".into()))?;
+    let x = normal
+        .lu()
+        .solve(&rhs)
+        .ok_or_else(|| Error::Degenerate("proportion estimate: singular normal equations".into()))?;
     let mut log_factors = [0.0; 5];
     for g in 0..5 {
         log_factors[g] = if observed[g] { x[1 + g].clamp(-options.max_log, options.max_log) } else { 0.0 };
@@ -255,11 +289,20 @@ mod tests {
         let e = estimate_proportions(&rest, &truth, &camera, &j2, &EstimateOptions::default()).unwrap();
         assert!(e.log_factors.iter().all(|z| z.abs() < 1e-6), "{:?}", e.log_factors);
         j2.visible = [false; NUM_JOINTS];
-        assert!(matches!(estimate_proportions(&rest, &truth, &camera, &j2, &EstimateOptions::default()), Err(Error::Degenerate(_))));
+        assert!(matches!(
+            estimate_proportions(&rest, &truth, &camera, &j2, &EstimateOptions::default()),
+            Err(Error::Degenerate(_))
+        ));
         let mut j2 = project(&camera, &truth);
         j2.xy[3][0] = f64::NAN;
-        assert!(matches!(estimate_proportions(&rest, &truth, &camera, &j2, &EstimateOptions::default()), Err(Error::NonFinite { .. })));
+        assert!(matches!(
+            estimate_proportions(&rest, &truth, &camera, &j2, &EstimateOptions::default()),
+            Err(Error::NonFinite { .. })
+        ));
         let bad = EstimateOptions { min_foreshortening: 1.5, ..EstimateOptions::default() };
-        assert!(matches!(estimate_proportions(&rest, &truth, &camera, &project(&camera, &truth), &bad), Err(Error::OutOfRange { .. })));
+        assert!(matches!(
+            estimate_proportions(&rest, &truth, &camera, &project(&camera, &truth), &bad),
+            Err(Error::OutOfRange { .. })
+        ));
     }
 }

@@ -83,7 +83,12 @@ pub fn proportions_of(z: &[f64]) -> Proportions {
 }
 
 /// Applies proportions to rest vertices (in place) and joints, as the renderer does.
-pub fn apply_in_place(vertices: &mut Vec<[f32; 3]>, joints: &mut Joints3, weights: &[VertexWeights], props: &Proportions) -> Result<()> {
+pub fn apply_in_place(
+    vertices: &mut Vec<[f32; 3]>,
+    joints: &mut Joints3,
+    weights: &[VertexWeights],
+    props: &Proportions,
+) -> Result<()> {
     let (v, j) = apply_proportions(vertices, joints, weights, props)?;
     *vertices = v;
     *joints = j;

@@ -59,7 +59,10 @@ impl SketchEvidence {
         }
         let edge_count = edges.iter().filter(|&&e| e != 0).count();
         if edge_count == 0 {
-            return Err(Error::OutOfRange { name: "sketch", detail: "the edge map has no edges: blank or too faint".into() });
+            return Err(Error::OutOfRange {
+                name: "sketch",
+                detail: "the edge map has no edges: blank or too faint".into(),
+            });
         }
         let distance = distance_transform(&edges, width, height);
         let figure = filled_figure(&edges, width, height, skeleton_px);
@@ -106,7 +109,8 @@ impl SketchEvidence {
             return CHAMFER_CAP as f64;
         }
         let d = distance_transform(mask, self.width, self.height);
-        let sum: f64 = self.edges.iter().zip(&d).filter(|(&e, _)| e != 0).map(|(_, &x)| x.min(CHAMFER_CAP) as f64).sum();
+        let sum: f64 =
+            self.edges.iter().zip(&d).filter(|(&e, _)| e != 0).map(|(_, &x)| x.min(CHAMFER_CAP) as f64).sum();
         sum / self.edge_count as f64
     }
 
@@ -402,7 +406,12 @@ mod tests {
         let shrunk = mask_of(8, 31, 8, 20); // top half: its boundary lies on strokes too
         let one = |m: &[u8]| ev.score(m, MatchScore::Chamfer);
         let two = |m: &[u8]| ev.score(m, MatchScore::TwoSidedChamfer);
-        assert!(one(&shrunk) >= one(&full) - 1e-9, "one-sided cannot tell them apart: {} vs {}", one(&shrunk), one(&full));
+        assert!(
+            one(&shrunk) >= one(&full) - 1e-9,
+            "one-sided cannot tell them apart: {} vs {}",
+            one(&shrunk),
+            one(&full)
+        );
         assert!(two(&full) > two(&shrunk) + 1.0, "two-sided: {} vs {}", two(&full), two(&shrunk));
         assert_eq!(two(&full), one(&full), "a mask covering every stroke has no uncovered-edge cost");
         assert_eq!(ev.score(&vec![0u8; n * n], MatchScore::TwoSidedChamfer), -2.0 * CHAMFER_CAP as f64);

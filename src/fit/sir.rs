@@ -31,8 +31,8 @@ use crate::body::{BodyModel, FitProxy, Gender};
 use crate::camera::WeakPerspective;
 use crate::error::{ensure_finite, Error, Result};
 use crate::image::GrayImage;
-use crate::render::sketch::scene::Proportions;
 use crate::render::raster::{Facing, Rasterizer};
+use crate::render::sketch::scene::Proportions;
 use crate::skeleton::{Joints2, Joints3, BONES};
 
 /// Options of [`fit_shape`], with documented defaults ([`FitOptions::default`]).
@@ -203,7 +203,10 @@ impl FitOptions {
         positive("tolerance", self.tolerance)?;
         ensure_finite("joint weight", self.joint_weight)?;
         if self.joint_weight < 0.0 {
-            return Err(Error::OutOfRange { name: "joint weight", detail: format!("{} must be >= 0", self.joint_weight) });
+            return Err(Error::OutOfRange {
+                name: "joint weight",
+                detail: format!("{} must be >= 0", self.joint_weight),
+            });
         }
         if let Some(h) = self.height {
             ensure_finite("height", h)?;
@@ -213,16 +216,25 @@ impl FitOptions {
         }
         ensure_finite("proportion sd", self.proportion_sd)?;
         if !(0.0..=0.5).contains(&self.proportion_sd) {
-            return Err(Error::OutOfRange { name: "proportion sd", detail: format!("{} not in 0..=0.5", self.proportion_sd) });
+            return Err(Error::OutOfRange {
+                name: "proportion sd",
+                detail: format!("{} not in 0..=0.5", self.proportion_sd),
+            });
         }
         if !(2..=100_000).contains(&self.samples) {
             return Err(Error::OutOfRange { name: "samples", detail: format!("{} not in 2..=100000", self.samples) });
         }
         if !(1..=1000).contains(&self.max_iterations) {
-            return Err(Error::OutOfRange { name: "iterations", detail: format!("{} not in 1..=1000", self.max_iterations) });
+            return Err(Error::OutOfRange {
+                name: "iterations",
+                detail: format!("{} not in 1..=1000", self.max_iterations),
+            });
         }
         if !(16..=4096).contains(&self.raster_max_side) {
-            return Err(Error::OutOfRange { name: "raster size", detail: format!("{} not in 16..=4096", self.raster_max_side) });
+            return Err(Error::OutOfRange {
+                name: "raster size",
+                detail: format!("{} not in 16..=4096", self.raster_max_side),
+            });
         }
         Ok(())
     }
@@ -259,7 +271,8 @@ impl Evaluator<'_> {
         let space = self.problem.model.space(self.problem.gender);
         let mut joints = self.proxy.space(self.problem.gender).synthesize_into(space, &y[..self.dims], &mut s.rest)?;
         if y.len() > self.dims {
-            match apply_in_place(&mut s.rest, &mut joints, self.proxy.skin_weights(), &proportions_of(&y[self.dims..])) {
+            match apply_in_place(&mut s.rest, &mut joints, self.proxy.skin_weights(), &proportions_of(&y[self.dims..]))
+            {
                 Ok(()) => {}
                 Err(Error::NonFinite { .. }) => return Err(Error::NonFinite { name: "shape", value: f64::NAN }),
                 Err(_) => return Ok(f64::NEG_INFINITY),
@@ -285,8 +298,11 @@ impl Evaluator<'_> {
         skin_into(&s.rest, self.proxy.skin_weights(), &pose, self.options.skinning, &mut s.posed)?;
         let (w, h) = (self.evidence.width(), self.evidence.height());
         match s.raster.rasterize_mask(&s.posed, self.proxy.triangles(), &camera, w, h, Facing::Front) {
-            Ok(_) => Ok(self.evidence.score_in(s.raster.mask(), s.raster.covered_bounds(), self.options.score) - self.joint_penalty(&pose.joints, &camera)),
-            Err(Error::MeshOutsideImage { .. }) | Err(Error::OutOfRange { name: "projected vertex", .. }) => Ok(f64::NEG_INFINITY),
+            Ok(_) => Ok(self.evidence.score_in(s.raster.mask(), s.raster.covered_bounds(), self.options.score)
+                - self.joint_penalty(&pose.joints, &camera)),
+            Err(Error::MeshOutsideImage { .. }) | Err(Error::OutOfRange { name: "projected vertex", .. }) => {
+                Ok(f64::NEG_INFINITY)
+            }
             Err(e) => Err(e),
         }
     }
@@ -313,7 +329,11 @@ impl Evaluator<'_> {
 
 /// Fits the shape (see the module documentation). `progress(fraction)` is called after every
 /// iteration from the calling thread; returning `false` cancels with [`Error::Cancelled`].
-pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut dyn FnMut(f32) -> bool) -> Result<FitResult> {
+pub fn fit_shape(
+    problem: &FitProblem<'_>,
+    options: &FitOptions,
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<FitResult> {
     options.validate()?;
     problem.camera.validate()?;
     crate::body::ik::check_joints("pose", problem.pose)?;
@@ -321,7 +341,10 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
     let dims = options.dims.unwrap_or(space.default_dim());
     let prior_full = space.gmm();
     if dims == 0 || dims > prior_full.dims() {
-        return Err(Error::OutOfRange { name: "fit dimensions", detail: format!("{dims} not in 1..={}", prior_full.dims()) });
+        return Err(Error::OutOfRange {
+            name: "fit dimensions",
+            detail: format!("{dims} not in 1..={}", prior_full.dims()),
+        });
     }
     let prior = prior_full.marginal(dims)?;
     let sigma: Vec<f64> = space.variances()[..dims].iter().map(|l| options.transition_scale.powi(2) * l).collect();
@@ -338,7 +361,11 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
             let (pa, pb) = (problem.pose[a], problem.pose[b]);
             (0..=8).map(move |i| {
                 let t = i as f64 / 8.0;
-                nalgebra::Vector3::new(pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1]), pa[2] + t * (pb[2] - pa[2]))
+                nalgebra::Vector3::new(
+                    pa[0] + t * (pb[0] - pa[0]),
+                    pa[1] + t * (pb[1] - pa[1]),
+                    pa[2] + t * (pb[2] - pa[2]),
+                )
             })
         })
         .map(|p| raster_camera.project(&p))
@@ -358,7 +385,13 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
         dims,
     };
     let estimate = match (options.estimate_proportions && options.proportion_sd > 0.0, problem.joints2d) {
-        (true, Some(j2)) => match estimate_proportions(space.mean_joints(), problem.pose, problem.camera, j2, &EstimateOptions::default()) {
+        (true, Some(j2)) => match estimate_proportions(
+            space.mean_joints(),
+            problem.pose,
+            problem.camera,
+            j2,
+            &EstimateOptions::default(),
+        ) {
             Ok(e) => Some(e),
             Err(Error::Degenerate(_)) => None,
             Err(e) => return Err(e),
@@ -405,10 +438,8 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
                 })
                 .collect();
         }
-        let scores: Vec<f64> = population
-            .par_iter()
-            .map_init(Scratch::default, |s, y| evaluator.score(y, s))
-            .collect::<Result<_>>()?;
+        let scores: Vec<f64> =
+            population.par_iter().map_init(Scratch::default, |s, y| evaluator.score(y, s)).collect::<Result<_>>()?;
         evaluations += scores.len();
         let weights = importance_weights(&scores, options)?;
         for (y, &s) in population.iter().zip(&scores) {
@@ -426,9 +457,9 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
         if !progress((t + 1) as f32 / options.max_iterations as f32) {
             return Err(Error::Cancelled);
         }
-        let converged = previous_mean
-            .as_ref()
-            .is_some_and(|p| p.iter().zip(&weighted_mean).zip(&stds).all(|((a, b), s)| (a - b).abs() < options.tolerance * s));
+        let converged = previous_mean.as_ref().is_some_and(|p| {
+            p.iter().zip(&weighted_mean).zip(&stds).all(|((a, b), s)| (a - b).abs() < options.tolerance * s)
+        });
         if converged || t + 1 == options.max_iterations {
             break;
         }
@@ -439,7 +470,15 @@ pub fn fit_shape(problem: &FitProblem<'_>, options: &FitOptions, progress: &mut 
     weighted_mean.truncate(dims);
     best.1.truncate(dims);
     let proportion_estimate = estimate.map(|e| e.proportions());
-    Ok(FitResult { weights: weighted_mean, proportions, proportion_estimate, best_weights: best.1, best_score: best.0, history, evaluations })
+    Ok(FitResult {
+        weights: weighted_mean,
+        proportions,
+        proportion_estimate,
+        best_weights: best.1,
+        best_score: best.0,
+        history,
+        evaluations,
+    })
 }
 
 /// The visible 2-D joints scaled to the raster (factor `f`); non-finite positions are an error.
@@ -461,7 +500,10 @@ fn joints_in_raster(joints: Option<&Joints2>, f: f64) -> Result<Vec<(usize, [f64
 fn importance_weights(scores: &[f64], options: &FitOptions) -> Result<Vec<f64>> {
     let max = scores.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     if !max.is_finite() {
-        return Err(Error::OutOfRange { name: "fit", detail: "no sample projects into the image: check the camera and pose".into() });
+        return Err(Error::OutOfRange {
+            name: "fit",
+            detail: "no sample projects into the image: check the camera and pose".into(),
+        });
     }
     let raw: Vec<f64> = match options.score {
         MatchScore::Paper => scores.iter().map(|&s| if s.is_finite() { s.max(0.0) } else { 0.0 }).collect(),

@@ -42,7 +42,10 @@ impl Transition {
     pub fn new(prior: &Gmm, sigma_diag: &[f64]) -> Result<Transition> {
         let d = prior.dims();
         if sigma_diag.len() != d || sigma_diag.iter().any(|&s| !(s > 0.0 && s.is_finite())) {
-            return Err(Error::OutOfRange { name: "transition covariance", detail: format!("need {d} positive entries") });
+            return Err(Error::OutOfRange {
+                name: "transition covariance",
+                detail: format!("need {d} positive entries"),
+            });
         }
         let sigma = DMatrix::from_diagonal(&DVector::from_column_slice(sigma_diag));
         let sigma_inv = DMatrix::from_diagonal(&DVector::from_iterator(d, sigma_diag.iter().map(|s| 1.0 / s)));
@@ -50,7 +53,8 @@ impl Transition {
         for ((&pi, mu), c) in prior.weights().iter().zip(prior.means()).zip(prior.covariances()) {
             let chol_sum = cholesky(&sigma + c, "Σ + C_k")?;
             let log_det: f64 = chol_sum.diagonal().iter().map(|v| 2.0 * v.ln()).sum();
-            let c_inv = c.clone().try_inverse().ok_or_else(|| Error::CorruptData("GMM covariance is singular".into()))?;
+            let c_inv =
+                c.clone().try_inverse().ok_or_else(|| Error::CorruptData("GMM covariance is singular".into()))?;
             let post = (&sigma_inv + &c_inv)
                 .try_inverse()
                 .ok_or_else(|| Error::CorruptData("transition product covariance is singular".into()))?;
@@ -107,7 +111,8 @@ mod tests {
     /// One 1-D component: the product of N(y; a, s) and N(y; m, c) is N((a c + m s)/(s + c), s c/(s + c)).
     #[test]
     fn one_dimensional_product_has_the_closed_form_moments() {
-        let prior = Gmm::new(vec![1.0], vec![DVector::from_vec(vec![2.0])], vec![DMatrix::from_element(1, 1, 4.0)]).unwrap();
+        let prior =
+            Gmm::new(vec![1.0], vec![DVector::from_vec(vec![2.0])], vec![DMatrix::from_element(1, 1, 4.0)]).unwrap();
         let t = Transition::new(&prior, &[1.0]).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let n = 40000;

@@ -143,11 +143,8 @@ fn edge_map(gray: &ImageView<'_>, aperture: usize, l2: bool, t: &IntThresholds) 
     // With one worker (or a small image) stay on the calling thread: handing work to the pool
     // would only add two thread wake-ups per call.
     let parallel = rayon::current_num_threads() > 1 && h > BAND_ROWS && w * h >= 1 << 16;
-    let strong: Vec<Vec<u32>> = if parallel {
-        bands.into_par_iter().map(process).collect()
-    } else {
-        bands.into_iter().map(process).collect()
-    };
+    let strong: Vec<Vec<u32>> =
+        if parallel { bands.into_par_iter().map(process).collect() } else { bands.into_iter().map(process).collect() };
     hysteresis(&mut map, mw, strong);
     map
 }
@@ -158,7 +155,16 @@ fn hysteresis(map: &mut [u8], mw: usize, strong: Vec<Vec<u32>>) {
     for band in &strong {
         stack.extend_from_slice(band);
     }
-    let offsets = [1isize, -1, mw as isize - 1, mw as isize, mw as isize + 1, -(mw as isize) - 1, -(mw as isize), -(mw as isize) + 1];
+    let offsets = [
+        1isize,
+        -1,
+        mw as isize - 1,
+        mw as isize,
+        mw as isize + 1,
+        -(mw as isize) - 1,
+        -(mw as isize),
+        -(mw as isize) + 1,
+    ];
     while let Some(i) = stack.pop() {
         for &o in &offsets {
             let n = (i as isize + o) as usize;
@@ -279,7 +285,13 @@ impl<'a, 'g> Band<'a, 'g> {
         let h = self.gray.height() as isize;
         let src = self.gray.row(ly.clamp(0, h - 1) as usize);
         let slot = ly.rem_euclid(self.aperture as isize) as usize;
-        horizontal_pass(src, smooth_kernel(self.aperture), deriv_kernel(self.aperture), &mut self.hs[slot], &mut self.hd[slot]);
+        horizontal_pass(
+            src,
+            smooth_kernel(self.aperture),
+            deriv_kernel(self.aperture),
+            &mut self.hs[slot],
+            &mut self.hd[slot],
+        );
     }
 
     /// Gradient of image row `gy` for apertures 5 and 7 (7: scaled by 1/16, rounded half-even).
@@ -326,7 +338,8 @@ impl<'a, 'g> Band<'a, 'g> {
         // Gradient row g lives in ring slot (g + 3) mod 3 (see `run`).
         let slot = |g: isize| (g + 3) as usize % 3;
         let w = self.gray.width();
-        let (prev, cur, next) = (&self.mag[slot(y - 1)][..w + 2], &self.mag[slot(y)][..w + 2], &self.mag[slot(y + 1)][..w + 2]);
+        let (prev, cur, next) =
+            (&self.mag[slot(y - 1)][..w + 2], &self.mag[slot(y)][..w + 2], &self.mag[slot(y + 1)][..w + 2]);
         let (dx, dy) = (&self.dx[slot(y)][..w], &self.dy[slot(y)][..w]);
         let out = &mut map_row[1..w + 1];
         let (low, high) = (self.t.low, self.t.high);
@@ -393,8 +406,20 @@ fn nms_span(rows: &NmsRows<'_>, dx: &[i16], dy: &[i16], low: i32, high: i32, out
         let anti = (xs ^ ys) < 0;
         let diag_before = if anti { ur[i] } else { ul[i] };
         let diag_after = if anti { dl[i] } else { dr[i] };
-        let before = if horizontal { l[i] } else if vertical { u[i] } else { diag_before };
-        let after = if horizontal { r[i] } else if vertical { d[i] } else { diag_after };
+        let before = if horizontal {
+            l[i]
+        } else if vertical {
+            u[i]
+        } else {
+            diag_before
+        };
+        let after = if horizontal {
+            r[i]
+        } else if vertical {
+            d[i]
+        } else {
+            diag_after
+        };
         let axis = horizontal | vertical;
         let beats_after = (mv > after) | (axis & (mv == after));
         let candidate = (mv > low) & (mv > before) & beats_after;

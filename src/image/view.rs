@@ -33,13 +33,7 @@ pub(crate) fn needed_bytes(width: usize, height: usize, channels: usize, stride:
 impl<'a> ImageView<'a> {
     /// Validates geometry and wraps `data`. Errors: empty or oversized images, channel counts
     /// other than 1/3/4, strides shorter than a row, buffers too short for the geometry.
-    pub fn new(
-        data: &'a [u8],
-        width: usize,
-        height: usize,
-        channels: usize,
-        stride: usize,
-    ) -> Result<Self> {
+    pub fn new(data: &'a [u8], width: usize, height: usize, channels: usize, stride: usize) -> Result<Self> {
         let needed = Self::required_len(width, height, channels, stride)?;
         if data.len() < needed {
             return Err(Error::BufferTooSmall { len: data.len(), needed });

@@ -64,7 +64,8 @@ pub struct PipelineOptions {
 /// Errors: IK's; [`Error::Degenerate`] when a scale comes out non-positive.
 pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> Result<PoseEstimate> {
     let posed = ik::solve(rest, &pose.joints, &IkOptions { retarget: false })?.joints;
-    let targets: Vec<(usize, [f64; 2])> = (0..posed.len()).filter(|&k| joints2d.visible[k]).map(|k| (k, joints2d.xy[k])).collect();
+    let targets: Vec<(usize, [f64; 2])> =
+        (0..posed.len()).filter(|&k| joints2d.visible[k]).map(|k| (k, joints2d.xy[k])).collect();
     let camera = pose.camera.refit_scale(&posed, &targets)?;
     Ok(PoseEstimate { camera, ..pose.clone() })
 }
@@ -187,7 +188,10 @@ pub fn run_pipeline(
         return Err(Error::ImageTooSmall { width: w, height: h, min: MIN_SKETCH_SIDE });
     }
     if options.mean_shape && options.gender.is_none() {
-        return Err(Error::OutOfRange { name: "gender", detail: "the mean-shape baseline needs a gender (nothing to choose by)".into() });
+        return Err(Error::OutOfRange {
+            name: "gender",
+            detail: "the mean-shape baseline needs a gender (nothing to choose by)".into(),
+        });
     }
     p.report(0.0)?;
     let t = Instant::now();
@@ -220,14 +224,25 @@ pub fn run_pipeline(
     let mut poses = Vec::with_capacity(genders.len());
     for (i, &gender) in genders.iter().enumerate() {
         let tf = Instant::now();
-        let pose = if options.keep_pose_scale { pose.clone() } else { refit_camera(&pose, &mean_skeleton(model, gender, options.fit.height)?, &joints2d)? };
+        let pose = if options.keep_pose_scale {
+            pose.clone()
+        } else {
+            refit_camera(&pose, &mean_skeleton(model, gender, options.fit.height)?, &joints2d)?
+        };
         poses.push(pose);
         let pose = &poses[i];
         if options.mean_shape {
             fits.push(GenderFit { gender, fit: None, score: f64::NAN, seconds: 0.0 });
             continue;
         }
-        let problem = FitProblem { model, gender, pose: &pose.joints, camera: &pose.camera, edges: &edges, joints2d: Some(&joints2d) };
+        let problem = FitProblem {
+            model,
+            gender,
+            pose: &pose.joints,
+            camera: &pose.camera,
+            edges: &edges,
+            joints2d: Some(&joints2d),
+        };
         let base = 0.06 + span * i as f32;
         let mut cb = |f: f32| (p.callback)((base + span * f).clamp(0.0, 1.0));
         let fit = fit_shape(&problem, &options.fit, &mut cb)?;
@@ -250,7 +265,11 @@ pub fn run_pipeline(
         mesh = mesh.scaled_to_height(h)?;
     }
     // With per-sample cameras the chosen body's own skeleton sets the image scale.
-    let pose = if options.fit.sample_camera && !options.mean_shape { refit_camera(&pose, &mesh.joints, &joints2d)? } else { pose };
+    let pose = if options.fit.sample_camera && !options.mean_shape {
+        refit_camera(&pose, &mesh.joints, &joints2d)?
+    } else {
+        pose
+    };
     let ik_pose = ik::solve(&mesh.joints, &pose.joints, &IkOptions { retarget: options.fit.retarget })?;
     let posed_vertices = skin(&mesh.vertices, &mesh.weights, &ik_pose, options.fit.skinning)?;
     let posed_joints = ik_pose.joints;

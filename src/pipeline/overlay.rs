@@ -54,7 +54,13 @@ fn line(img: &mut RgbImage, a: [f64; 2], b: [f64; 2], half_width: f64, c: [u8; 3
 /// Images with a side above the rasteriser's 4096 px get the outline from a scaled raster.
 /// Errors: an invalid camera or mesh (as [`Rasterizer::rasterize`]); a mesh wholly outside the
 /// image draws no outline and is not an error.
-pub fn overlay(sketch: &GrayImage, joints: &Joints2, vertices: &[[f32; 3]], tris: &[[u32; 3]], camera: &WeakPerspective) -> Result<RgbImage> {
+pub fn overlay(
+    sketch: &GrayImage,
+    joints: &Joints2,
+    vertices: &[[f32; 3]],
+    tris: &[[u32; 3]],
+    camera: &WeakPerspective,
+) -> Result<RgbImage> {
     let (w, h) = (sketch.width(), sketch.height());
     let data = sketch.as_bytes().iter().flat_map(|&g| {
         let v = (128 + g as u16 / 2) as u8;
@@ -63,7 +69,8 @@ pub fn overlay(sketch: &GrayImage, joints: &Joints2, vertices: &[[f32; 3]], tris
     let mut img = RgbImage { width: w, height: h, data: data.collect() };
     let f = (MAX_RASTER_SIDE as f64 / w.max(h) as f64).min(1.0);
     let (rw, rh) = (((w as f64 * f).round() as usize).max(1), ((h as f64 * f).round() as usize).max(1));
-    let cam = WeakPerspective { sx: camera.sx * f, sy: camera.sy * f, r: camera.r, t: [camera.t[0] * f, camera.t[1] * f] };
+    let cam =
+        WeakPerspective { sx: camera.sx * f, sy: camera.sy * f, r: camera.r, t: [camera.t[0] * f, camera.t[1] * f] };
     let mut raster = Rasterizer::new();
     match raster.rasterize(vertices, tris, &cam, rw, rh, false) {
         Ok(_) => {
@@ -72,7 +79,14 @@ pub fn overlay(sketch: &GrayImage, joints: &Joints2, vertices: &[[f32; 3]], tris
             for y in 0..rh {
                 for x in 0..rw {
                     let edge = inside(x, y)
-                        && (x == 0 || y == 0 || x + 1 == rw || y + 1 == rh || !inside(x - 1, y) || !inside(x + 1, y) || !inside(x, y - 1) || !inside(x, y + 1));
+                        && (x == 0
+                            || y == 0
+                            || x + 1 == rw
+                            || y + 1 == rh
+                            || !inside(x - 1, y)
+                            || !inside(x + 1, y)
+                            || !inside(x, y - 1)
+                            || !inside(x, y + 1));
                     if edge {
                         let (px, py) = (((x as f64 + 0.5) / f).floor() as i64, ((y as f64 + 0.5) / f).floor() as i64);
                         disc(&mut img, px as f64, py as f64, 0.8 / f.max(0.25), OUTLINE);
@@ -118,7 +132,13 @@ mod tests {
         let img = overlay(&sketch, &j, &m.vertices, &m.triangles(), &cam).unwrap();
         let count = |c: [u8; 3]| img.data.chunks(3).filter(|p| *p == c).count();
         assert!(count(OUTLINE) > 200, "outline {}", count(OUTLINE));
-        assert!(count(RIGHT) > 50 && count(LEFT) > 50 && count(CENTRE) > 10, "{} {} {}", count(RIGHT), count(LEFT), count(CENTRE));
+        assert!(
+            count(RIGHT) > 50 && count(LEFT) > 50 && count(CENTRE) > 10,
+            "{} {} {}",
+            count(RIGHT),
+            count(LEFT),
+            count(CENTRE)
+        );
         let px = |x: f64, y: f64| &img.data[((y as usize) * 256 + x as usize) * 3..][..3];
         let [hx, hy] = j.xy[joint::HEAD];
         assert_eq!(px(hx, hy), CENTRE);

@@ -80,7 +80,12 @@ mod tests {
 
     #[test]
     fn keeps_the_best_bone_lengths_and_the_joint_model() {
-        let d = Dictionary::learn(&synthetic_clips(), &LearnParams { exemplar_spacing: 0.002, ..LearnParams::default() }, "t".into()).unwrap();
+        let d = Dictionary::learn(
+            &synthetic_clips(),
+            &LearnParams { exemplar_spacing: 0.002, ..LearnParams::default() },
+            "t".into(),
+        )
+        .unwrap();
         let cam = WeakPerspective { sx: 250.0, sy: 250.0, r: Matrix3::identity(), t: [200.0, 300.0] };
         let e0 = d.exemplars.column(3);
         let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };

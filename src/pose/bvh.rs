@@ -62,24 +62,17 @@ pub struct Bvh {
 fn aliases(j: usize) -> Vec<String> {
     let side = |names: &[&str]| -> Vec<String> {
         let (long, short) = if JOINT_NAMES[j].starts_with("r_") { ("right", "r") } else { ("left", "l") };
-        names
-            .iter()
-            .map(|n| n.replace("SIDE", long).replace("S", short))
-            .collect()
+        names.iter().map(|n| n.replace("SIDE", long).replace("S", short)).collect()
     };
     match JOINT_NAMES[j] {
         "pelvis" => vec!["hips".into(), "root".into(), "pelvis".into(), "hip".into()],
         "neck" => vec!["neck".into(), "lowerneck".into(), "neck1".into()],
         "head" => vec!["head".into()],
         "r_shoulder" | "l_shoulder" => side(&["SIDEarm", "Shumerus", "SIDEupperarm", "Suparm"]),
-        "r_elbow" | "l_elbow" => {
-            side(&["SIDEforearm", "Sradius", "SIDElowerarm", "SIDEelbow", "Sforearm", "Selbow"])
-        }
+        "r_elbow" | "l_elbow" => side(&["SIDEforearm", "Sradius", "SIDElowerarm", "SIDEelbow", "Sforearm", "Selbow"]),
         "r_wrist" | "l_wrist" => side(&["SIDEhand", "Swrist", "SIDEwrist", "Shand"]),
         "r_hip" | "l_hip" => side(&["SIDEupleg", "Sfemur", "SIDEthigh", "SIDEupperleg", "Sthigh", "SIDEhip"]),
-        "r_knee" | "l_knee" => {
-            side(&["SIDEleg", "Stibia", "SIDEshin", "SIDElowerleg", "SIDEknee", "Sshin", "Sknee"])
-        }
+        "r_knee" | "l_knee" => side(&["SIDEleg", "Stibia", "SIDEshin", "SIDElowerleg", "SIDEknee", "Sshin", "Sknee"]),
         _ => side(&["SIDEfoot", "Sfoot", "SIDEankle", "Sankle"]),
     }
 }
@@ -247,16 +240,13 @@ impl Bvh {
         let names: Vec<String> = self.nodes.iter().map(|n| normalize_name(&n.name)).collect();
         let mut map = [0usize; NUM_JOINTS];
         for (j, m) in map.iter_mut().enumerate() {
-            *m = aliases(j)
-                .iter()
-                .find_map(|a| names.iter().position(|n| n == a))
-                .ok_or_else(|| {
-                    Error::CorruptData(format!(
-                        "BVH rig has no joint for canonical {} (looked for {:?})",
-                        JOINT_NAMES[j],
-                        aliases(j)
-                    ))
-                })?;
+            *m = aliases(j).iter().find_map(|a| names.iter().position(|n| n == a)).ok_or_else(|| {
+                Error::CorruptData(format!(
+                    "BVH rig has no joint for canonical {} (looked for {:?})",
+                    JOINT_NAMES[j],
+                    aliases(j)
+                ))
+            })?;
         }
         Ok(map)
     }
@@ -291,15 +281,32 @@ pub(crate) mod tests {
         };
         let end = "End Site\n{\nOFFSET 0 10 0\n}\n";
         let arm = |s: &str, x: f64| {
-            leaf(&format!("mixamorig:{s}Shoulder"), &format!("{x} 0 0"),
-                &leaf(&format!("mixamorig:{s}Arm"), &format!("{x} 0 0"),
-                    &leaf(&format!("mixamorig:{s}ForeArm"), "0 -28 0", &leaf(&format!("mixamorig:{s}Hand"), "0 -25 0", end))))
+            leaf(
+                &format!("mixamorig:{s}Shoulder"),
+                &format!("{x} 0 0"),
+                &leaf(
+                    &format!("mixamorig:{s}Arm"),
+                    &format!("{x} 0 0"),
+                    &leaf(
+                        &format!("mixamorig:{s}ForeArm"),
+                        "0 -28 0",
+                        &leaf(&format!("mixamorig:{s}Hand"), "0 -25 0", end),
+                    ),
+                ),
+            )
         };
         let leg = |s: &str, x: f64| {
-            leaf(&format!("mixamorig:{s}UpLeg"), &format!("{x} -5 0"),
-                &leaf(&format!("mixamorig:{s}Leg"), "0 -42 0", &leaf(&format!("mixamorig:{s}Foot"), "0 -40 0", end)))
+            leaf(
+                &format!("mixamorig:{s}UpLeg"),
+                &format!("{x} -5 0"),
+                &leaf(&format!("mixamorig:{s}Leg"), "0 -42 0", &leaf(&format!("mixamorig:{s}Foot"), "0 -40 0", end)),
+            )
         };
-        let neck = leaf("mixamorig:Neck", "0 50 0", &format!("{}{}{}", leaf("mixamorig:Head", "0 10 0", end), arm("Right", -8.0), arm("Left", 8.0)));
+        let neck = leaf(
+            "mixamorig:Neck",
+            "0 50 0",
+            &format!("{}{}{}", leaf("mixamorig:Head", "0 10 0", end), arm("Right", -8.0), arm("Left", 8.0)),
+        );
         let mut s = format!(
             "HIERARCHY\nROOT mixamorig:Hips\n{{\nOFFSET 0 100 0\nCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n{neck}{}{}}}\nMOTION\nFrames: {}\nFrame Time: 0.0333\n",
             leg("Right", -10.0), leg("Left", 10.0), frames.len()
@@ -327,7 +334,10 @@ pub(crate) mod tests {
         assert_eq!(f[0][11], [-10.0, 13.0, 0.0]);
         // Frame 1: translated by (1, 2, 3) and turned 90° about +Y: local +X goes to -Z.
         let r_sh = f[1][2];
-        assert!((r_sh[0] - 1.0).abs() < 1e-9 && (r_sh[1] - 152.0).abs() < 1e-9 && (r_sh[2] - 19.0).abs() < 1e-9, "{r_sh:?}");
+        assert!(
+            (r_sh[0] - 1.0).abs() < 1e-9 && (r_sh[1] - 152.0).abs() < 1e-9 && (r_sh[2] - 19.0).abs() < 1e-9,
+            "{r_sh:?}"
+        );
     }
 
     #[test]
@@ -336,7 +346,10 @@ pub(crate) mod tests {
         assert_eq!(normalize_name("Bip01 R_Thigh"), "rthigh");
         assert_eq!(normalize_name("Right_Fore-Arm"), "rightforearm");
         let text = mixamo_bvh(&[[0.0; 6]]);
-        assert!(Bvh::parse(&text.replace("mixamorig:LeftFoot", "mixamorig:LeftToe"), "t").unwrap().canonical_frames().is_err());
+        assert!(Bvh::parse(&text.replace("mixamorig:LeftFoot", "mixamorig:LeftToe"), "t")
+            .unwrap()
+            .canonical_frames()
+            .is_err());
         assert!(Bvh::parse(&text[..text.len() - 10], "t").is_err());
         assert!(Bvh::parse("HIERARCHY\nROOT a\n{\nOFFSET 0 0 nan\n}", "t").is_err());
         assert!(Bvh::parse("nonsense", "t").is_err());

@@ -41,11 +41,17 @@ impl CameraPrior {
 pub fn level_of(r: &Matrix3<f64>) -> Matrix3<f64> {
     let yaw = (-r[(2, 0)]).atan2(r[(2, 2)]);
     let roll = (-r[(0, 1)]).atan2(r[(1, 1)]);
-    (Rotation3::from_axis_angle(&Vector3::z_axis(), roll) * Rotation3::from_axis_angle(&Vector3::y_axis(), yaw)).into_inner()
+    (Rotation3::from_axis_angle(&Vector3::z_axis(), roll) * Rotation3::from_axis_angle(&Vector3::y_axis(), yaw))
+        .into_inner()
 }
 
 /// Fits the camera to visible joints `vis` of `x3` (metres) and `uv` (pixels) with `prior`.
-pub fn fit_camera(x3: &[Vector3<f64>; NUM_JOINTS], uv: &[[f64; 2]; NUM_JOINTS], vis: &[usize], prior: &CameraPrior) -> Result<WeakPerspective> {
+pub fn fit_camera(
+    x3: &[Vector3<f64>; NUM_JOINTS],
+    uv: &[[f64; 2]; NUM_JOINTS],
+    vis: &[usize],
+    prior: &CameraPrior,
+) -> Result<WeakPerspective> {
     let n = vis.len() as f64;
     let c3 = vis.iter().fold(Vector3::zeros(), |a, &p| a + x3[p]) / n;
     let cu = vis.iter().map(|&p| uv[p][0]).sum::<f64>() / n;
@@ -58,7 +64,8 @@ pub fn fit_camera(x3: &[Vector3<f64>; NUM_JOINTS], uv: &[[f64; 2]; NUM_JOINTS], 
         s += d * d.transpose();
         wx += w * d.transpose();
     }
-    let sinv = s.pseudo_inverse(1e-12 * s.norm().max(f64::MIN_POSITIVE)).map_err(|e| Error::Degenerate(e.to_string()))?;
+    let sinv =
+        s.pseudo_inverse(1e-12 * s.norm().max(f64::MIN_POSITIVE)).map_err(|e| Error::Degenerate(e.to_string()))?;
     let m = wx * sinv;
     let svd = m.svd(true, true);
     let (u, vt) = match (svd.u, svd.v_t) {
@@ -117,7 +124,9 @@ mod tests {
     use nalgebra::Rotation3;
 
     fn figure() -> [Vector3<f64>; NUM_JOINTS] {
-        std::array::from_fn(|j| Vector3::new((j as f64 * 0.37).sin() * 0.4, j as f64 * 0.1 - 0.7, (j as f64 * 1.3).cos() * 0.2))
+        std::array::from_fn(|j| {
+            Vector3::new((j as f64 * 0.37).sin() * 0.4, j as f64 * 0.1 - 0.7, (j as f64 * 1.3).cos() * 0.2)
+        })
     }
 
     #[test]
@@ -136,7 +145,8 @@ mod tests {
         assert!((pulled.r - Matrix3::identity()).norm() < (r - Matrix3::identity()).norm());
         assert!((pulled.r.determinant() - 1.0).abs() < 1e-12);
         // One scale for both axes: between the two true ones.
-        let eq = fit_camera(&x, &uv, &vis, &CameraPrior { equal_scales: true, ..free(0.0, RotationTarget::Identity) }).unwrap();
+        let eq = fit_camera(&x, &uv, &vis, &CameraPrior { equal_scales: true, ..free(0.0, RotationTarget::Identity) })
+            .unwrap();
         assert_eq!(eq.sx, eq.sy);
         assert!(eq.sx > 280.0 && eq.sx < 300.0, "{}", eq.sx);
     }
@@ -145,7 +155,10 @@ mod tests {
     fn level_target_removes_only_the_pitch() {
         let (yaw, pitch, roll) = (0.4f64, -0.3f64, 0.07f64);
         let rot = |y: f64, p: f64, r: f64| {
-            (Rotation3::from_axis_angle(&Vector3::z_axis(), r) * Rotation3::from_axis_angle(&Vector3::x_axis(), p) * Rotation3::from_axis_angle(&Vector3::y_axis(), y)).into_inner()
+            (Rotation3::from_axis_angle(&Vector3::z_axis(), r)
+                * Rotation3::from_axis_angle(&Vector3::x_axis(), p)
+                * Rotation3::from_axis_angle(&Vector3::y_axis(), y))
+            .into_inner()
         };
         assert!((level_of(&rot(yaw, pitch, roll)) - rot(yaw, 0.0, roll)).norm() < 1e-12);
         // Pulled fully toward the level target, a pitched camera comes out level with its yaw kept.
@@ -153,7 +166,9 @@ mod tests {
         let truth = WeakPerspective { sx: 300.0, sy: 300.0, r: rot(yaw, pitch, roll), t: [250.0, 260.0] };
         let uv: [[f64; 2]; NUM_JOINTS] = std::array::from_fn(|j| truth.project(&x[j]));
         let vis: Vec<usize> = (0..NUM_JOINTS).collect();
-        let cam = fit_camera(&x, &uv, &vis, &CameraPrior { alpha: 1.0, target: RotationTarget::Level, equal_scales: true }).unwrap();
+        let cam =
+            fit_camera(&x, &uv, &vis, &CameraPrior { alpha: 1.0, target: RotationTarget::Level, equal_scales: true })
+                .unwrap();
         assert!((cam.r - rot(yaw, 0.0, roll)).norm() < 1e-9, "{}", cam.r);
     }
 }

@@ -136,7 +136,16 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Dictionary> {
     if r.pos != body.len() {
         return Err(corrupt("trailing bytes before the checksum"));
     }
-    let d = Dictionary { mean, bases, sigma, bone_lengths, actions, exemplars, provenance, frame_cache: Default::default() };
+    let d = Dictionary {
+        mean,
+        bases,
+        sigma,
+        bone_lengths,
+        actions,
+        exemplars,
+        provenance,
+        frame_cache: Default::default(),
+    };
     d.validate()?;
     Ok(d)
 }

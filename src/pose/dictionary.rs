@@ -148,7 +148,14 @@ impl Dictionary {
         if self.sigma.len() != self.bases.ncols() {
             return bad("wrong number of basis spreads".into());
         }
-        if self.mean.iter().chain(self.bases.iter()).chain(self.bone_lengths.iter()).chain(self.sigma.iter()).any(|v| !v.is_finite()) {
+        if self
+            .mean
+            .iter()
+            .chain(self.bases.iter())
+            .chain(self.bone_lengths.iter())
+            .chain(self.sigma.iter())
+            .any(|v| !v.is_finite())
+        {
             return bad("non-finite value".into());
         }
         if self.sigma.iter().any(|&s| s <= 0.0) {
@@ -178,7 +185,10 @@ impl Dictionary {
     /// Learns a dictionary from clips `(clip name, frames in any rigid placement and scale)`
     /// (see the module doc). `provenance` is stored as given.
     pub fn learn(clips: &[(String, Vec<Joints3>)], params: &LearnParams, provenance: String) -> Result<Dictionary> {
-        if params.max_per_action == 0 || !(params.energy > 0.0 && params.energy <= 1.0) || !(params.exemplar_spacing >= 0.0 && params.exemplar_spacing.is_finite()) {
+        if params.max_per_action == 0
+            || !(params.energy > 0.0 && params.energy <= 1.0)
+            || !(params.exemplar_spacing >= 0.0 && params.exemplar_spacing.is_finite())
+        {
             return Err(Error::OutOfRange {
                 name: "learn parameters",
                 detail: format!(
@@ -234,9 +244,13 @@ impl Dictionary {
             }
         }
         if exemplars.len() > MAX_EXEMPLARS {
-            return Err(Error::OutOfRange { name: "exemplar_spacing", detail: format!("{} exemplars exceed {MAX_EXEMPLARS}", exemplars.len()) });
+            return Err(Error::OutOfRange {
+                name: "exemplar_spacing",
+                detail: format!("{} exemplars exceed {MAX_EXEMPLARS}", exemplars.len()),
+            });
         }
-        let exemplars = if exemplars.is_empty() { DMatrix::zeros(POSE_DIM, 0) } else { DMatrix::from_columns(&exemplars) };
+        let exemplars =
+            if exemplars.is_empty() { DMatrix::zeros(POSE_DIM, 0) } else { DMatrix::from_columns(&exemplars) };
         let mut sigma: Vec<f64> = Vec::new();
         let mut actions = Vec::new();
         for ((name, poses), m) in groups.iter().zip(&means) {
@@ -273,7 +287,16 @@ impl Dictionary {
             }
         }
         let bases = DMatrix::from_columns(&cols);
-        let dict = Dictionary { mean, bases, sigma: DVector::from_vec(sigma), bone_lengths, actions, exemplars, provenance, frame_cache: Default::default() };
+        let dict = Dictionary {
+            mean,
+            bases,
+            sigma: DVector::from_vec(sigma),
+            bone_lengths,
+            actions,
+            exemplars,
+            provenance,
+            frame_cache: Default::default(),
+        };
         dict.validate()?;
         Ok(dict)
     }
@@ -289,7 +312,11 @@ pub(crate) fn with_bone_lengths(pose: &DVector<f64>, lengths: &[f64; NUM_BONES])
     for &c in TREE_ORDER.iter().skip(1) {
         let Some(b) = BONES.iter().position(|&(_, ch)| ch == c) else { continue };
         let p = BONES[b].0;
-        let d = nalgebra::Vector3::new(pose[3 * c] - pose[3 * p], pose[3 * c + 1] - pose[3 * p + 1], pose[3 * c + 2] - pose[3 * p + 2]);
+        let d = nalgebra::Vector3::new(
+            pose[3 * c] - pose[3 * p],
+            pose[3 * c + 1] - pose[3 * p + 1],
+            pose[3 * c + 2] - pose[3 * p + 2],
+        );
         let n = d.norm();
         let step = if n > 0.0 { d * (lengths[b] / n) } else { d };
         for k in 0..3 {
@@ -316,9 +343,21 @@ pub(crate) mod tests {
     /// A small synthetic dictionary source: two "actions" of a swinging-arm figure.
     pub(crate) fn synthetic_clips() -> Vec<(String, Vec<Joints3>)> {
         let base: Joints3 = [
-            [0.0, 1.6, 0.0], [0.0, 1.45, 0.0], [-0.18, 1.45, 0.0], [-0.2, 1.17, 0.0], [-0.22, 0.92, 0.05],
-            [0.18, 1.45, 0.0], [0.2, 1.17, 0.0], [0.22, 0.92, 0.05], [0.0, 0.95, 0.0], [-0.1, 0.9, 0.0],
-            [-0.1, 0.5, 0.02], [-0.1, 0.08, 0.0], [0.1, 0.9, 0.0], [0.1, 0.5, 0.02], [0.1, 0.08, 0.0],
+            [0.0, 1.6, 0.0],
+            [0.0, 1.45, 0.0],
+            [-0.18, 1.45, 0.0],
+            [-0.2, 1.17, 0.0],
+            [-0.22, 0.92, 0.05],
+            [0.18, 1.45, 0.0],
+            [0.2, 1.17, 0.0],
+            [0.22, 0.92, 0.05],
+            [0.0, 0.95, 0.0],
+            [-0.1, 0.9, 0.0],
+            [-0.1, 0.5, 0.02],
+            [-0.1, 0.08, 0.0],
+            [0.1, 0.9, 0.0],
+            [0.1, 0.5, 0.02],
+            [0.1, 0.08, 0.0],
         ];
         let clip = |phase: f64, amp: f64| -> Vec<Joints3> {
             (0..40)
@@ -355,7 +394,10 @@ pub(crate) mod tests {
             }
         }
         let fine = LearnParams { exemplar_spacing: 0.003, ..LearnParams::default() };
-        assert!(Dictionary::learn(&synthetic_clips(), &fine, "test".into()).unwrap().exemplars.ncols() > d.exemplars.ncols());
+        assert!(
+            Dictionary::learn(&synthetic_clips(), &fine, "test".into()).unwrap().exemplars.ncols()
+                > d.exemplars.ncols()
+        );
         let none = LearnParams { exemplar_spacing: 0.0, ..LearnParams::default() };
         assert_eq!(Dictionary::learn(&synthetic_clips(), &none, "test".into()).unwrap().exemplars.ncols(), 0);
         let bad = LearnParams { energy: 0.0, ..LearnParams::default() };

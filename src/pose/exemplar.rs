@@ -140,7 +140,9 @@ pub fn affine_ranking(prob: &Problem, keep: usize) -> Vec<(usize, f64)> {
             })
             .collect()
     } else {
-        (0..ex.ncols()).filter_map(|k| affine_residual(ex.column(k).as_slice(), &prob.vis, &w, ww).map(|r| (k, r))).collect()
+        (0..ex.ncols())
+            .filter_map(|k| affine_residual(ex.column(k).as_slice(), &prob.vis, &w, ww).map(|r| (k, r)))
+            .collect()
     };
     let order = |a: &(usize, f64), b: &(usize, f64)| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0));
     if keep < scored.len() {
@@ -161,7 +163,10 @@ pub fn shortlist_len(count: usize) -> usize {
 /// (no exemplars), `Degenerate` when no shortlisted exemplar admits a camera.
 pub fn nearest(prob: &Problem, ranking: &[(usize, f64)], count: usize, prior: &CameraPrior) -> Result<Vec<Start>> {
     if ranking.is_empty() {
-        return Err(Error::OutOfRange { name: "starts", detail: "the dictionary has no exemplars (rebuild it with --exemplar-spacing > 0)".into() });
+        return Err(Error::OutOfRange {
+            name: "starts",
+            detail: "the dictionary has no exemplars (rebuild it with --exemplar-spacing > 0)".into(),
+        });
     }
     let ex = &prob.dict.exemplars;
     let mut starts: Vec<Start> = Vec::new();
@@ -236,11 +241,17 @@ mod tests {
         j
     }
 
-    const NO_PRIOR: CameraPrior = CameraPrior { alpha: 0.0, target: crate::pose::options::RotationTarget::Identity, equal_scales: false };
+    const NO_PRIOR: CameraPrior =
+        CameraPrior { alpha: 0.0, target: crate::pose::options::RotationTarget::Identity, equal_scales: false };
 
     #[test]
     fn finds_the_exemplar_a_view_was_made_from_and_composes_limbs() {
-        let d = Dictionary::learn(&synthetic_clips(), &LearnParams { exemplar_spacing: 0.002, ..LearnParams::default() }, "t".into()).unwrap();
+        let d = Dictionary::learn(
+            &synthetic_clips(),
+            &LearnParams { exemplar_spacing: 0.002, ..LearnParams::default() },
+            "t".into(),
+        )
+        .unwrap();
         let r = *Rotation3::from_euler_angles(0.05, 0.4, 0.0).matrix();
         let cam = WeakPerspective { sx: 250.0, sy: 250.0, r, t: [200.0, 300.0] };
         let k = 7;
@@ -255,7 +266,8 @@ mod tests {
         assert!(s[1].objective >= s[0].objective && s[2].objective >= s[1].objective);
         // The best start reproduces the view, so composing keeps every limb of it.
         let (pose, parts) = compose(&prob, &s[0], &(0..d.exemplars.ncols()).collect::<Vec<_>>());
-        let x: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|p| Vector3::new(pose[3 * p], pose[3 * p + 1], pose[3 * p + 2]));
+        let x: [Vector3<f64>; NUM_JOINTS] =
+            std::array::from_fn(|p| Vector3::new(pose[3 * p], pose[3 * p + 1], pose[3 * p + 2]));
         assert!(prob.objective(&s[0].camera, &x) < 1e-12);
         assert_eq!(parts[0], s[0].index);
         // A figure whose right arm comes from another exemplar: composition takes that arm.
@@ -274,6 +286,9 @@ mod tests {
         assert!((pose - mixed).norm() < 1e-12);
         let empty = Dictionary { exemplars: nalgebra::DMatrix::zeros(45, 0), ..d.clone() };
         let prob = Problem::new(&empty, &j, 0.0).unwrap();
-        assert!(matches!(nearest(&prob, &affine_ranking(&prob, usize::MAX), 1, &NO_PRIOR), Err(Error::OutOfRange { name: "starts", .. })));
+        assert!(matches!(
+            nearest(&prob, &affine_ranking(&prob, usize::MAX), 1, &NO_PRIOR),
+            Err(Error::OutOfRange { name: "starts", .. })
+        ));
     }
 }

@@ -53,7 +53,8 @@ impl JointProblem<'_> {
     }
 
     fn cost(&self, y: &Joints) -> f64 {
-        let image: f64 = self.prob.vis.iter().map(|&j| self.image_residual(&y[j], j).iter().map(|r| r * r).sum::<f64>()).sum();
+        let image: f64 =
+            self.prob.vis.iter().map(|&j| self.image_residual(&y[j], j).iter().map(|r| r * r).sum::<f64>()).sum();
         let prior: f64 = y.iter().zip(&self.y0).map(|(a, b)| (a - b).norm_squared()).sum();
         let bones: f64 = BONES.iter().zip(&self.len).map(|(&(p, c), l)| ((y[c] - y[p]).norm() - l).powi(2)).sum();
         self.wp * image + self.wd * prior + self.wl * bones
@@ -130,7 +131,8 @@ pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64) -> PoseEstim
             }
             let step = hd.cholesky().map(|c| -c.solve(&g));
             if let Some(step) = step.filter(|s| s.iter().all(|v| v.is_finite())) {
-                let cand: Joints = std::array::from_fn(|j| y[j] + Vector3::new(step[3 * j], step[3 * j + 1], step[3 * j + 2]));
+                let cand: Joints =
+                    std::array::from_fn(|j| y[j] + Vector3::new(step[3 * j], step[3 * j + 1], step[3 * j + 2]));
                 let fc = jp.cost(&cand);
                 if fc < f {
                     let converged = f - fc <= 1e-6 * f;
@@ -159,7 +161,12 @@ pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64) -> PoseEstim
     for (&b, &w) in est.bases.iter().zip(&est.weights) {
         base.axpy(-w, &prob.dict.bases.column(b), 1.0);
     }
-    PoseEstimate { joints: vec_to_pose(x.as_slice()), rms: prob.rms(cam, &xs), base: vec_to_pose(base.as_slice()), ..est.clone() }
+    PoseEstimate {
+        joints: vec_to_pose(x.as_slice()),
+        rms: prob.rms(cam, &xs),
+        base: vec_to_pose(base.as_slice()),
+        ..est.clone()
+    }
 }
 
 #[cfg(test)]

@@ -62,7 +62,12 @@ impl Default for LearnSpec {
     /// [`default_held_out`], nothing else excluded, [`LearnParams::default`], no retargeting
     /// (the clips' own joint convention).
     fn default() -> Self {
-        LearnSpec { held_out: default_held_out(), excluded: Vec::new(), params: LearnParams::default(), retarget: Vec::new() }
+        LearnSpec {
+            held_out: default_held_out(),
+            excluded: Vec::new(),
+            params: LearnParams::default(),
+            retarget: Vec::new(),
+        }
     }
 }
 
@@ -198,7 +203,12 @@ mod tests {
         let (a, b) = (dir.join("swing.bvh"), dir.join("heldout.bvh"));
         std::fs::write(&a, lines.join("\n")).unwrap();
         std::fs::write(&b, lines.join("\n")).unwrap();
-        let spec = LearnSpec { held_out: vec!["heldout".into()], excluded: vec![], params: LearnParams::default(), retarget: vec![] };
+        let spec = LearnSpec {
+            held_out: vec!["heldout".into()],
+            excluded: vec![],
+            params: LearnParams::default(),
+            retarget: vec![],
+        };
         let d = learn_from_sources(None, &[a.clone(), b.clone()], &spec).unwrap();
         assert_eq!(d.actions.len(), 1);
         assert_eq!(d.actions[0].name, "swing");
@@ -212,7 +222,8 @@ mod tests {
     #[test]
     fn retargeting_takes_each_skeletons_lengths_alternately_and_is_recorded() {
         use crate::skeleton::{joint, BONES};
-        let dist = |a: &[f64; 3], b: &[f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+        let dist =
+            |a: &[f64; 3], b: &[f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
         let model = BodyModel::embedded().unwrap();
         let skel = body_model_skeletons(&model);
         assert_eq!(skel.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(), ["female", "male"]);
@@ -222,7 +233,8 @@ mod tests {
                 let mut x = *model.space(Gender::Male).mean_joints();
                 x[joint::R_SHOULDER][1] = x[joint::NECK][1];
                 x[joint::L_SHOULDER][1] = x[joint::NECK][1];
-                x[joint::R_WRIST] = [x[joint::R_ELBOW][0] - 0.3, x[joint::R_ELBOW][1] + 0.1 * f as f64, x[joint::R_ELBOW][2] + 0.2];
+                x[joint::R_WRIST] =
+                    [x[joint::R_ELBOW][0] - 0.3, x[joint::R_ELBOW][1] + 0.1 * f as f64, x[joint::R_ELBOW][2] + 0.2];
                 x
             })
             .collect();
@@ -235,7 +247,9 @@ mod tests {
             // A limb bone keeps the source's direction.
             let (s, e) = (frames[i][joint::R_ELBOW], frames[i][joint::R_WRIST]);
             let ds: Vec<f64> = (0..3).map(|k| (e[k] - s[k]) / dist(&s, &e)).collect();
-            let de: Vec<f64> = (0..3).map(|k| (x[joint::R_WRIST][k] - x[joint::R_ELBOW][k]) / dist(&x[joint::R_ELBOW], &x[joint::R_WRIST])).collect();
+            let de: Vec<f64> = (0..3)
+                .map(|k| (x[joint::R_WRIST][k] - x[joint::R_ELBOW][k]) / dist(&x[joint::R_ELBOW], &x[joint::R_WRIST]))
+                .collect();
             assert!(ds.iter().zip(&de).all(|(a, b)| (a - b).abs() < 1e-9), "frame {i}");
         }
         assert_eq!(retarget_frames("t", frames.clone(), &[]).unwrap(), frames);
@@ -246,17 +260,25 @@ mod tests {
         // The provenance names the skeletons; without retargeting there is no such line.
         let dir = std::env::temp_dir().join(format!("skb-learn-rt-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let header: Vec<String> = crate::skeleton::JOINT_NAMES.iter().flat_map(|n| ["x", "y", "z"].map(|a| format!("{n}_{a}"))).collect();
-        let rows: Vec<String> = frames.iter().map(|x| x.iter().flatten().map(|v| v.to_string()).collect::<Vec<_>>().join(",")).collect();
+        let header: Vec<String> =
+            crate::skeleton::JOINT_NAMES.iter().flat_map(|n| ["x", "y", "z"].map(|a| format!("{n}_{a}"))).collect();
+        let rows: Vec<String> =
+            frames.iter().map(|x| x.iter().flatten().map(|v| v.to_string()).collect::<Vec<_>>().join(",")).collect();
         std::fs::write(dir.join("bend.csv"), format!("{}\n{}\n", header.join(","), rows.join("\n"))).unwrap();
         let spec = LearnSpec { retarget: skel, held_out: vec![], ..LearnSpec::default() };
         let d = learn_from_sources(Some(&dir), &[], &spec).unwrap();
         assert_eq!(retarget_of(&d), vec!["female".to_string(), "male".to_string()]);
-        let plain = learn_from_sources(Some(&dir), &[], &LearnSpec { held_out: vec![], ..LearnSpec::default() }).unwrap();
+        let plain =
+            learn_from_sources(Some(&dir), &[], &LearnSpec { held_out: vec![], ..LearnSpec::default() }).unwrap();
         assert!(retarget_of(&plain).is_empty());
         // Learned bone lengths are the skeletons' (normalised), not the source's long arms.
         let b = 3; // r_elbow -> r_wrist
-        assert!((d.bone_lengths[b] - plain.bone_lengths[b]).abs() > 0.02, "{} vs {}", d.bone_lengths[b], plain.bone_lengths[b]);
+        assert!(
+            (d.bone_lengths[b] - plain.bone_lengths[b]).abs() > 0.02,
+            "{} vs {}",
+            d.bone_lengths[b],
+            plain.bone_lengths[b]
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

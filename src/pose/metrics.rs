@@ -33,7 +33,8 @@ pub fn pa_mpjpe(est: &Joints3, gt: &Joints3) -> f64 {
     let d = (u * vt).determinant().signum();
     let s_mat = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d));
     let r = u * s_mat * vt;
-    let scale = if var_e > 0.0 { (svd.singular_values.component_mul(&Vector3::new(1.0, 1.0, d))).sum() / var_e } else { 1.0 };
+    let scale =
+        if var_e > 0.0 { (svd.singular_values.component_mul(&Vector3::new(1.0, 1.0, d))).sum() / var_e } else { 1.0 };
     (0..NUM_JOINTS).map(|j| (scale * r * (v(&est[j]) - ce) - (v(&gt[j]) - cg)).norm()).sum::<f64>() / n
 }
 

@@ -78,8 +78,7 @@ pub fn parse_motion_csv(text: &str, what: &str) -> Result<Vec<Joints3>> {
     let mut lines = text.lines().filter(|l| !l.trim().is_empty());
     let header = lines.next().ok_or_else(|| Error::CorruptData(format!("{what}: empty motion table")))?;
     let cols: Vec<&str> = header.split(',').map(str::trim).collect();
-    let expected: Vec<String> =
-        JOINT_NAMES.iter().flat_map(|n| ["x", "y", "z"].map(|a| format!("{n}_{a}"))).collect();
+    let expected: Vec<String> = JOINT_NAMES.iter().flat_map(|n| ["x", "y", "z"].map(|a| format!("{n}_{a}"))).collect();
     if cols != expected {
         return Err(Error::CorruptData(format!("{what}: header is not the 45 canonical joint columns")));
     }

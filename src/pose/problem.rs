@@ -52,15 +52,21 @@ impl<'a> Problem<'a> {
                 });
             }
             if p[0].abs() > MAX_COORD || p[1].abs() > MAX_COORD {
-                return Err(Error::OutOfRange { name: "joint position", detail: format!("{} = ({}, {}) exceeds ±{MAX_COORD} px", JOINT_NAMES[k], p[0], p[1]) });
+                return Err(Error::OutOfRange {
+                    name: "joint position",
+                    detail: format!("{} = ({}, {}) exceeds ±{MAX_COORD} px", JOINT_NAMES[k], p[0], p[1]),
+                });
             }
         }
         let vis: Vec<usize> = (0..NUM_JOINTS).filter(|&k| j.visible[k]).collect();
         if vis.len() < MIN_VISIBLE {
-            return Err(Error::TooFewJoints { detail: format!("{} visible, at least {MIN_VISIBLE} needed", vis.len()) });
+            return Err(Error::TooFewJoints {
+                detail: format!("{} visible, at least {MIN_VISIBLE} needed", vis.len()),
+            });
         }
         let n = vis.len() as f64;
-        let (mx, my) = (vis.iter().map(|&k| j.xy[k][0]).sum::<f64>() / n, vis.iter().map(|&k| j.xy[k][1]).sum::<f64>() / n);
+        let (mx, my) =
+            (vis.iter().map(|&k| j.xy[k][0]).sum::<f64>() / n, vis.iter().map(|&k| j.xy[k][1]).sum::<f64>() / n);
         let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
         let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
         for &k in &vis {
@@ -75,7 +81,9 @@ impl<'a> Problem<'a> {
         }
         let extent = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
         if extent < MIN_EXTENT {
-            return Err(Error::Degenerate(format!("visible joints span {extent:.3} px (at least {MIN_EXTENT} needed)")));
+            return Err(Error::Degenerate(format!(
+                "visible joints span {extent:.3} px (at least {MIN_EXTENT} needed)"
+            )));
         }
         let tr = sxx + syy;
         let disc = ((sxx - syy).powi(2) + 4.0 * sxy * sxy).sqrt();
@@ -87,7 +95,12 @@ impl<'a> Problem<'a> {
             if j.visible[a] && j.visible[b] {
                 let d = (j.xy[a][0] - j.xy[b][0]).hypot(j.xy[a][1] - j.xy[b][1]);
                 if d <= 1e-6 * extent {
-                    return Err(Error::CoincidentJoints { a: JOINT_NAMES[a], b: JOINT_NAMES[b], x: j.xy[a][0], y: j.xy[a][1] });
+                    return Err(Error::CoincidentJoints {
+                        a: JOINT_NAMES[a],
+                        b: JOINT_NAMES[b],
+                        x: j.xy[a][0],
+                        y: j.xy[a][1],
+                    });
                 }
             }
         }
@@ -96,7 +109,8 @@ impl<'a> Problem<'a> {
             mx3 += dict.mean[3 * k] / n;
             my3 += dict.mean[3 * k + 1] / n;
         }
-        let spread3: f64 = vis.iter().map(|&k| (dict.mean[3 * k] - mx3).powi(2) + (dict.mean[3 * k + 1] - my3).powi(2)).sum();
+        let spread3: f64 =
+            vis.iter().map(|&k| (dict.mean[3 * k] - mx3).powi(2) + (dict.mean[3 * k + 1] - my3).powi(2)).sum();
         let s_bar = if spread3 > 0.0 { (tr / spread3).sqrt() } else { 0.0 };
         let basis_gram = dict
             .bases
@@ -112,7 +126,14 @@ impl<'a> Problem<'a> {
                 c
             })
             .collect();
-        Ok(Problem { dict, uv: j.xy, vis, prior_w: s_bar * prior_m, base: dict.mean.clone(), basis_gram: Arc::new(basis_gram) })
+        Ok(Problem {
+            dict,
+            uv: j.xy,
+            vis,
+            prior_w: s_bar * prior_m,
+            base: dict.mean.clone(),
+            basis_gram: Arc::new(basis_gram),
+        })
     }
 
     /// The same problem with the bases added to `base` (45 values, metres).

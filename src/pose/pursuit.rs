@@ -59,7 +59,16 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
     let x = prob.pose(&bases, &weights);
     let con = prob.constraint(&bases);
     let excess = con.value(&DVector::from_column_slice(&weights)) / con.sum_sq;
-    PoseEstimate { joints: to_joints(&x), rms: prob.rms(&cam, &x), camera: cam, bases, weights, length_excess: excess, base: crate::pose::dictionary::vec_to_pose(prob.base.as_slice()), base_parts: None }
+    PoseEstimate {
+        joints: to_joints(&x),
+        rms: prob.rms(&cam, &x),
+        camera: cam,
+        bases,
+        weights,
+        length_excess: excess,
+        base: crate::pose::dictionary::vec_to_pose(prob.base.as_slice()),
+        base_parts: None,
+    }
 }
 
 /// Estimates the 3-D pose and camera from 2-D joints (see the module doc). Invisible joints
@@ -78,7 +87,8 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
         let cam = fit_camera(&prob.pose(&[], &[]), &prob.uv, &prob.vis, &CameraPrior::of(opts))?;
         return Ok(with_joint_fit(&prob, opts, pursue(&prob, opts, cam, None)?));
     }
-    let ranking = super::exemplar::affine_ranking(&prob, super::exemplar::shortlist_len(opts.starts).max(opts.limb_candidates));
+    let ranking =
+        super::exemplar::affine_ranking(&prob, super::exemplar::shortlist_len(opts.starts).max(opts.limb_candidates));
     let candidates: Vec<usize> = ranking.iter().take(opts.limb_candidates).map(|r| r.0).collect();
     let mut hyps: Vec<(f64, PoseEstimate)> = Vec::new();
     let mut last_err = None;
@@ -126,7 +136,12 @@ fn with_joint_fit(prob: &Problem, opts: &PoseOptions, est: PoseEstimate) -> Pose
 }
 
 /// The pursuit (and refinement, if enabled) from the base pose of `prob` with camera `cam`.
-fn pursue(prob: &Problem, opts: &PoseOptions, mut cam: WeakPerspective, parts: Option<[usize; 5]>) -> Result<PoseEstimate> {
+fn pursue(
+    prob: &Problem,
+    opts: &PoseOptions,
+    mut cam: WeakPerspective,
+    parts: Option<[usize; 5]>,
+) -> Result<PoseEstimate> {
     let dict = prob.dict;
     let bound = opts.kappa * dict.sum_sq_lengths();
     let mean = prob.pose(&[], &[]);

@@ -54,8 +54,11 @@ pub fn solve(a: &DMatrix<f64>, r: &DVector<f64>, con: &LengthConstraint, lo: f64
     let z_of = |mu: f64| -> DVector<f64> {
         DVector::from_iterator(k, (0..k).map(|i| (beta[i] - mu * gamma[i]) / (1.0 + mu * lam[i])))
     };
-    let g_of = |z: &DVector<f64>| -> f64 { (0..k).map(|i| lam[i] * z[i] * z[i] + 2.0 * gamma[i] * z[i]).sum::<f64>() + c0 };
-    let back = |z: &DVector<f64>| -> DVector<f64> { l.transpose().solve_upper_triangular(&(&v * z)).unwrap_or_else(|| DVector::zeros(k)) };
+    let g_of =
+        |z: &DVector<f64>| -> f64 { (0..k).map(|i| lam[i] * z[i] * z[i] + 2.0 * gamma[i] * z[i]).sum::<f64>() + c0 };
+    let back = |z: &DVector<f64>| -> DVector<f64> {
+        l.transpose().solve_upper_triangular(&(&v * z)).unwrap_or_else(|| DVector::zeros(k))
+    };
 
     let z0 = z_of(0.0);
     let g0 = g_of(&z0);
@@ -96,7 +99,13 @@ pub fn solve(a: &DMatrix<f64>, r: &DVector<f64>, con: &LengthConstraint, lo: f64
     let top = (0..k).fold(0, |b, i| if lam[i] > lam[b] { i } else { b });
     let mut z = DVector::from_iterator(
         k,
-        (0..k).map(|i| if (lam[i] - lmax).abs() <= 1e-12 * lmax { 0.0 } else { (beta[i] - lower * gamma[i]) / (1.0 + lower * lam[i]) }),
+        (0..k).map(|i| {
+            if (lam[i] - lmax).abs() <= 1e-12 * lmax {
+                0.0
+            } else {
+                (beta[i] - lower * gamma[i]) / (1.0 + lower * lam[i])
+            }
+        }),
     );
     let rest = g_of(&z);
     // g(z + t e_top) = rest + lmax t² + 2 (lmax z_top + γ_top) t, with z_top = 0.

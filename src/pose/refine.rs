@@ -34,17 +34,28 @@ use crate::skeleton::Joints2;
 /// re-solved for the start camera). Errors as [`super::estimate_pose`], plus `OutOfRange` for a
 /// basis index ≥ K, a weight count ≠ basis count or more than 32 bases, `NonFinite` for a
 /// non-finite weight or base-pose value, and camera errors.
-pub fn refine_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions, start: &PoseEstimate) -> Result<PoseEstimate> {
+pub fn refine_pose(
+    dict: &Dictionary,
+    joints: &Joints2,
+    opts: &PoseOptions,
+    start: &PoseEstimate,
+) -> Result<PoseEstimate> {
     opts.validate()?;
     let prob = Problem::new(dict, joints, opts.prior)?;
     start.camera.validate()?;
     let k = start.bases.len();
     if k != start.weights.len() || k > super::options::MAX_BASES || k == 0 {
-        return Err(Error::OutOfRange { name: "start bases", detail: format!("{k} bases with {} weights (1..=32, equal counts)", start.weights.len()) });
+        return Err(Error::OutOfRange {
+            name: "start bases",
+            detail: format!("{k} bases with {} weights (1..=32, equal counts)", start.weights.len()),
+        });
     }
     for (i, &b) in start.bases.iter().enumerate() {
         if b >= dict.num_bases() || start.bases[..i].contains(&b) {
-            return Err(Error::OutOfRange { name: "start bases", detail: format!("index {b} is repeated or not below {}", dict.num_bases()) });
+            return Err(Error::OutOfRange {
+                name: "start bases",
+                detail: format!("index {b} is repeated or not below {}", dict.num_bases()),
+            });
         }
         crate::error::ensure_finite("start weight", start.weights[i])?;
     }

@@ -27,7 +27,8 @@ const BASE: [f32; 3] = [205.0, 180.0, 165.0];
 /// camera, orthographic along −Z of the camera), fitted into a `size`×`size` tile with a 5%
 /// margin, written into `img` at column offset `x0`.
 fn draw_view(img: &mut RgbImage, x0: usize, size: usize, vertices: &[[f32; 3]], tris: &[[u32; 3]], r: &Matrix3<f64>) {
-    let cam: Vec<Vector3<f64>> = vertices.iter().map(|v| r * Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)).collect();
+    let cam: Vec<Vector3<f64>> =
+        vertices.iter().map(|v| r * Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)).collect();
     let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
     for p in &cam {
         lo = lo.inf(p);
@@ -75,7 +76,10 @@ pub fn preview(vertices: &[[f32; 3]], tris: &[[u32; 3]], size: usize) -> Result<
     }
     let n = vertices.len();
     if let Some(t) = tris.iter().position(|t| t.iter().any(|&i| i as usize >= n)) {
-        return Err(Error::OutOfRange { name: "triangle index", detail: format!("triangle {t} indexes a vertex >= {n}") });
+        return Err(Error::OutOfRange {
+            name: "triangle index",
+            detail: format!("triangle {t} indexes a vertex >= {n}"),
+        });
     }
     if let Some(v) = vertices.iter().flatten().find(|c| !c.is_finite()) {
         return Err(Error::NonFinite { name: "mesh vertex", value: *v as f64 });
@@ -92,8 +96,14 @@ pub fn preview(vertices: &[[f32; 3]], tris: &[[u32; 3]], size: usize) -> Result<
 pub fn save_rgb_png(img: &RgbImage, path: &Path) -> Result<()> {
     let mut bytes = Vec::new();
     let enc = image::codecs::png::PngEncoder::new(&mut bytes);
-    image::ImageEncoder::write_image(enc, &img.data, img.width as u32, img.height as u32, image::ExtendedColorType::Rgb8)
-        .map_err(|e| Error::Io { path: path.to_path_buf(), source: std::io::Error::other(e.to_string()) })?;
+    image::ImageEncoder::write_image(
+        enc,
+        &img.data,
+        img.width as u32,
+        img.height as u32,
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| Error::Io { path: path.to_path_buf(), source: std::io::Error::other(e.to_string()) })?;
     write_atomic(path, &bytes)
 }
 
@@ -107,7 +117,9 @@ mod tests {
         let m = capsule_humanoid(&rest_joints(), 10, 8);
         let img = preview(&m.vertices, &m.triangles(), 128).unwrap();
         assert_eq!(img.data.len(), 256 * 128 * 3);
-        let covered = |x0: usize| (0..128 * 128).filter(|&k| img.data[((k / 128) * 256 + x0 + k % 128) * 3..][..3] != BACKGROUND).count();
+        let covered = |x0: usize| {
+            (0..128 * 128).filter(|&k| img.data[((k / 128) * 256 + x0 + k % 128) * 3..][..3] != BACKGROUND).count()
+        };
         let (front, side) = (covered(0), covered(128));
         // The A-pose is wider from the front than from the side.
         assert!(front > side && side > 500, "front {front}, side {side}");

@@ -125,7 +125,18 @@ pub(crate) fn setup(p: [[i64; 2]; 3], z: [f32; 3], w: usize, h: usize, with_dept
     let verts = [a, b, c];
     let (e, dx, dy) = edge_functions(verts, i0, j0);
     if !with_depth {
-        return Some(Setup { i0: i0 as usize, i1: i1 as usize, j0: j0 as usize, j1: j1 as usize, e, dx, dy, z0: 0.0, zx: 0.0, zy: 0.0 });
+        return Some(Setup {
+            i0: i0 as usize,
+            i1: i1 as usize,
+            j0: j0 as usize,
+            j1: j1 as usize,
+            e,
+            dx,
+            dy,
+            z0: 0.0,
+            zx: 0.0,
+            zy: 0.0,
+        });
     }
     // Barycentric weight of vertex k is the edge opposite it: a <- e[1] (b->c), b <- e[2], c <- e[0].
     let inv = 1.0 / area as f64;
@@ -139,7 +150,18 @@ pub(crate) fn setup(p: [[i64; 2]; 3], z: [f32; 3], w: usize, h: usize, with_dept
     let z0 = wa * za + wb * zb + wc * zc;
     let zx = (dx[1] as f64 * za + dx[2] as f64 * zb + dx[0] as f64 * zc) * inv;
     let zy = (dy[1] as f64 * za + dy[2] as f64 * zb + dy[0] as f64 * zc) * inv;
-    Some(Setup { i0: i0 as usize, i1: i1 as usize, j0: j0 as usize, j1: j1 as usize, e, dx, dy, z0: z0 as f32, zx: zx as f32, zy: zy as f32 })
+    Some(Setup {
+        i0: i0 as usize,
+        i1: i1 as usize,
+        j0: j0 as usize,
+        j1: j1 as usize,
+        e,
+        dx,
+        dy,
+        z0: z0 as f32,
+        zx: zx as f32,
+        zy: zy as f32,
+    })
 }
 
 /// The covered pixels of one row: offsets `k` from `i0` (0 <= k < n) where every biased edge
@@ -267,7 +289,11 @@ impl Rasterizer {
                 }
                 return Err(Error::OutOfRange {
                     name: "projected vertex",
-                    detail: format!("vertex {i} projects to ({}, {}) px, beyond the ±{GUARD_BAND} px guard band", u / k, w / k),
+                    detail: format!(
+                        "vertex {i} projects to ({}, {}) px, beyond the ±{GUARD_BAND} px guard band",
+                        u / k,
+                        w / k
+                    ),
                 });
             }
             let (fu, fw) = (round_i64(u), round_i64(w));
@@ -418,7 +444,8 @@ mod tests {
 
     #[test]
     fn depth_keeps_the_nearest_surface_and_errors_are_specific() {
-        let v = [[-1.0, 1.0, 0.2], [1.0, 1.0, 0.2], [0.0, -1.0, 0.2], [-1.0, 1.0, 0.5], [1.0, 1.0, 0.5], [0.0, -1.0, 0.5]];
+        let v =
+            [[-1.0, 1.0, 0.2], [1.0, 1.0, 0.2], [0.0, -1.0, 0.2], [-1.0, 1.0, 0.5], [1.0, 1.0, 0.5], [0.0, -1.0, 0.5]];
         let c = cam(10.0, 16.0, 16.0);
         let mut r = Rasterizer::new();
         r.rasterize(&v, &[[0, 1, 2], [3, 4, 5]], &c, 32, 32, true).unwrap();

@@ -9,8 +9,8 @@ use std::time::Instant;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
-use sketchbody::camera::WeakPerspective;
 use sketchbody::body::BodyModel;
+use sketchbody::camera::WeakPerspective;
 use sketchbody::pose::learn::{body_model_skeletons, held_out_of, motion_files, retarget_frames, retarget_of};
 use sketchbody::pose::metrics::{mpjpe, pa_mpjpe};
 use sketchbody::pose::motion::{normalize_pose, read_motion_csv, REF_STATURE};
@@ -111,7 +111,11 @@ fn load(a: &Args, dict: &Dictionary) -> Result<(Vec<String>, Vec<Sample>, &'stat
         return Err(CliError("bench-pose: no clips (the dictionary records none held out; give --clips)".into()));
     }
     let files = motion_files(&a.mocap)?;
-    let skeletons = if a.source_skeleton || retarget_of(dict).is_empty() { Vec::new() } else { body_model_skeletons(&BodyModel::embedded()?) };
+    let skeletons = if a.source_skeleton || retarget_of(dict).is_empty() {
+        Vec::new()
+    } else {
+        body_model_skeletons(&BodyModel::embedded()?)
+    };
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
     let normal = Normal::new(0.0, 1.0).map_err(|e| CliError(e.to_string()))?;
     let scale = 500.0 / REF_STATURE;
@@ -121,19 +125,26 @@ fn load(a: &Args, dict: &Dictionary) -> Result<(Vec<String>, Vec<Sample>, &'stat
             .iter()
             .find(|f| f.file_stem().is_some_and(|s| s.to_string_lossy() == name.as_str()))
             .ok_or_else(|| CliError(format!("bench-pose: clip {name} not found in {}", a.mocap.display())))?;
-        let frames: Vec<Joints3> = retarget_frames(name, read_motion_csv(f)?, &skeletons)?.iter().filter_map(normalize_pose).collect();
+        let frames: Vec<Joints3> =
+            retarget_frames(name, read_motion_csv(f)?, &skeletons)?.iter().filter_map(normalize_pose).collect();
         let n = a.frames.min(frames.len()).max(1);
         for i in 0..n {
             let gt = frames[i * frames.len() / n];
             let yaw = rng.random_range(-30.0f64..=30.0).to_radians();
             let pitch = rng.random_range(-10.0f64..=10.0).to_radians();
-            let r: Matrix3<f64> = *(Rotation3::from_axis_angle(&Vector3::x_axis(), pitch) * Rotation3::from_axis_angle(&Vector3::y_axis(), yaw)).matrix();
+            let r: Matrix3<f64> = *(Rotation3::from_axis_angle(&Vector3::x_axis(), pitch)
+                * Rotation3::from_axis_angle(&Vector3::y_axis(), yaw))
+            .matrix();
             let cam = WeakPerspective { sx: scale, sy: scale, r, t: [256.0, 300.0] };
             let noise = std::array::from_fn(|_| [normal.sample(&mut rng), normal.sample(&mut rng)]);
             samples.push(Sample { gt, cam, noise });
         }
     }
-    Ok((clips, samples, if skeletons.is_empty() { "the clips' own" } else { "body model (female/male mean, alternating frames)" }))
+    Ok((
+        clips,
+        samples,
+        if skeletons.is_empty() { "the clips' own" } else { "body model (female/male mean, alternating frames)" },
+    ))
 }
 
 /// Camera rotation errors in degrees: the geodesic angle of `r_est · r_gtᵀ`, and the tilt — the
@@ -211,11 +222,34 @@ pub fn run(a: Args) -> Result<(), CliError> {
         ("(c) paper: kappa=8 CMU, alpha=0.8", PoseOptions { kappa: paper_kappa, alpha: PAPER_ALPHA, ..paper }),
         ("(d) default", ours),
     ];
-    println!("bench-pose: {} bases in {} actions, {} exemplars; clips {}; {} poses; seed {}", dict.num_bases(), dict.actions.len(), dict.exemplars.ncols(), clips.join(","), samples.len(), a.seed);
+    println!(
+        "bench-pose: {} bases in {} actions, {} exemplars; clips {}; {} poses; seed {}",
+        dict.num_bases(),
+        dict.actions.len(),
+        dict.exemplars.ncols(),
+        clips.join(","),
+        samples.len(),
+        a.seed
+    );
     println!("ground-truth joint convention: {convention} skeleton");
     println!("cameras yaw U(-30,30) deg, pitch U(-10,10) deg, figure 500 px tall; errors in mm for a 1.75 m person");
     println!("paper kappa=8 (CMU units^2) -> relative kappa {paper_kappa:.5}; default {:?}", ours);
-    println!("{:<36} {:>6} {:>10} {:>10} {:>8} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8}", "config", "sigma", "MPJPE", "PA-MPJPE", "failed", "ms/pose", "cpu ms", "bases", "rms px", "rot deg", "rot p95", "tilt", "tilt p95");
+    println!(
+        "{:<36} {:>6} {:>10} {:>10} {:>8} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>6} {:>8}",
+        "config",
+        "sigma",
+        "MPJPE",
+        "PA-MPJPE",
+        "failed",
+        "ms/pose",
+        "cpu ms",
+        "bases",
+        "rms px",
+        "rot deg",
+        "rot p95",
+        "tilt",
+        "tilt p95"
+    );
     let skip = if a.only_default { 3 } else { 0 };
     for (name, opts) in configs.iter().skip(skip) {
         for &sigma in &a.sigma {

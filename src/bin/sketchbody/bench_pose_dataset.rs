@@ -29,7 +29,8 @@ use sketchbody::skeleton::{joint, Joints2, Joints3, BONES, NUM_JOINTS};
 use crate::bench_pose::{mean_p95, rotation_errors};
 use crate::CliError;
 
-const ROWS: [&str; 5] = ["solver", "+ IK mean skeleton", "+ IK true skeleton", "truth on mean skeleton", "mocap source"];
+const ROWS: [&str; 5] =
+    ["solver", "+ IK mean skeleton", "+ IK true skeleton", "truth on mean skeleton", "mocap source"];
 
 /// Sums of one row over a group of samples.
 #[derive(Default, Clone)]
@@ -60,7 +61,12 @@ fn joints3(v: &[[f64; 3]], what: &str) -> Result<Joints3, CliError> {
 }
 
 /// Camera-frame errors (mm of the reference body) of `est` seen by `r_est` against the truth.
-fn errors(truth: &GroundTruth, r_gt: &Matrix3<f64>, est: &Joints3, r_est: &Matrix3<f64>) -> Result<(f64, f64), CliError> {
+fn errors(
+    truth: &GroundTruth,
+    r_gt: &Matrix3<f64>,
+    est: &Joints3,
+    r_est: &Matrix3<f64>,
+) -> Result<(f64, f64), CliError> {
     let a = rot(r_gt, &truth.joints3d);
     let b = scale_to_reference(&a, &rot(r_est, est), &BONES, joint::PELVIS)?;
     Ok((1000.0 * mpjpe(&a, &b, joint::PELVIS)?, 1000.0 * pa_mpjpe(&a, &b)?))
@@ -74,12 +80,19 @@ fn mocap_source(mocap: &Path, src: &str, cache: &mut Vec<(String, Vec<Joints3>)>
     if !cache.iter().any(|(c, _)| c == clip) {
         cache.push((clip.to_string(), read_motion_csv(&mocap.join(format!("{clip}.csv")))?));
     }
-    let frames = &cache.iter().find(|(c, _)| c == clip).map(|(_, f)| f).ok_or_else(|| CliError("unreachable".into()))?;
+    let frames =
+        &cache.iter().find(|(c, _)| c == clip).map(|(_, f)| f).ok_or_else(|| CliError("unreachable".into()))?;
     Ok(frames.get(frame).and_then(normalize_pose))
 }
 
 /// Runs the dataset mode of bench-pose with the solver options `opts`.
-pub fn run(dataset: &Path, mocap: &Path, dict: &Dictionary, opts: &PoseOptions, first: Option<usize>) -> Result<(), CliError> {
+pub fn run(
+    dataset: &Path,
+    mocap: &Path,
+    dict: &Dictionary,
+    opts: &PoseOptions,
+    first: Option<usize>,
+) -> Result<(), CliError> {
     let model = BodyModel::embedded()?;
     let mut stems = dataset_samples(dataset)?;
     stems.truncate(first.unwrap_or(usize::MAX));
@@ -143,7 +156,10 @@ pub fn run(dataset: &Path, mocap: &Path, dict: &Dictionary, opts: &PoseOptions, 
     );
     println!("options {opts:?}");
     println!("errors in mm of the reference body (eval's metrics); rotation: geodesic angle of R_est R_gt^T, tilt: angle between R_est y and R_gt y (deg)");
-    println!("{:<14} {:<24} {:>5} {:>8} {:>9} {:>9} {:>8} {:>9} {:>8}", "group", "row", "n", "MPJPE", "PA-MPJPE", "rot mean", "rot p95", "tilt mean", "tilt p95");
+    println!(
+        "{:<14} {:<24} {:>5} {:>8} {:>9} {:>9} {:>8} {:>9} {:>8}",
+        "group", "row", "n", "MPJPE", "PA-MPJPE", "rot mean", "rot p95", "tilt mean", "tilt p95"
+    );
     for (g, name) in ["all", "standard", "non-standard"].iter().enumerate() {
         for (k, row) in ROWS.iter().enumerate() {
             let a = &acc[g][k];
@@ -152,7 +168,18 @@ pub fn run(dataset: &Path, mocap: &Path, dict: &Dictionary, opts: &PoseOptions, 
             }
             let d = a.n as f64;
             let ((rm, rp), (tm, tp)) = (mean_p95(&mut a.rot.clone()), mean_p95(&mut a.tilt.clone()));
-            println!("{:<14} {:<24} {:>5} {:>8.1} {:>9.1} {:>9.1} {:>8.1} {:>9.1} {:>8.1}", name, row, a.n, a.mpjpe / d, a.pa / d, rm, rp, tm, tp);
+            println!(
+                "{:<14} {:<24} {:>5} {:>8.1} {:>9.1} {:>9.1} {:>8.1} {:>9.1} {:>8.1}",
+                name,
+                row,
+                a.n,
+                a.mpjpe / d,
+                a.pa / d,
+                rm,
+                rp,
+                tm,
+                tp
+            );
         }
     }
     Ok(())

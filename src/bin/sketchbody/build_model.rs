@@ -42,9 +42,18 @@ pub fn run(a: Args) -> Result<(), CliError> {
         data.num_macro_targets(),
         t0.elapsed().as_secs_f64()
     );
-    let opts = BuildOptions { samples_per_gender: a.samples_per_gender, seed: a.seed, components: a.components, ..BuildOptions::default() };
+    let opts = BuildOptions {
+        samples_per_gender: a.samples_per_gender,
+        seed: a.seed,
+        components: a.components,
+        ..BuildOptions::default()
+    };
     let (model, report) = build_model(&data, &opts)?;
-    println!("rig check: {} cmu_mb ends within {:.3} mm of their default positions", report.rig_check.1, report.rig_check.0 * 1000.0);
+    println!(
+        "rig check: {} cmu_mb ends within {:.3} mm of their default positions",
+        report.rig_check.1,
+        report.rig_check.0 * 1000.0
+    );
     for (g, r) in Gender::ALL.iter().zip(&report.genders) {
         let energy: Vec<String> = r.cumulative_energy.iter().map(|e| format!("{:.1}", e * 100.0)).collect();
         println!("{}: cumulative energy % = {}", g.name(), energy.join(" "));
@@ -68,7 +77,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
             let d = model.space(g).default_dim();
             let dims = [d, 10.min(model.space(g).num_components()), model.space(g).num_components()];
             let aed = heldout_aed(&data, &model, g, a.heldout, a.seed, &dims)?;
-            let parts: Vec<String> = dims.iter().zip(&aed).map(|(d, e)| format!("{d} comps {:.5} ({:.2} mm at 1.7 m)", e, e * 1700.0)).collect();
+            let parts: Vec<String> = dims
+                .iter()
+                .zip(&aed)
+                .map(|(d, e)| format!("{d} comps {:.5} ({:.2} mm at 1.7 m)", e, e * 1700.0))
+                .collect();
             println!("held-out {} x {}: AED/height = {}", a.heldout, g.name(), parts.join(", "));
         }
     }

@@ -31,6 +31,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
         m.thresh = t;
     }
     m.save(&a.output)?;
-    println!("{} parts, {} filters, threshold {} written to {}", m.parts.len(), m.filters.len(), m.thresh, a.output.display());
+    println!(
+        "{} parts, {} filters, threshold {} written to {}",
+        m.parts.len(),
+        m.filters.len(),
+        m.thresh,
+        a.output.display()
+    );
     Ok(())
 }

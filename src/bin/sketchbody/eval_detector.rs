@@ -72,16 +72,33 @@ pub fn run(a: Args) -> Result<(), CliError> {
         .map(|i| score_sketch(&r, &held_out_request(a.seed, i, w, hair), &refs, &options, &alphas))
         .collect::<Result<_, _>>()?;
     let el = t0.elapsed().as_secs_f64();
-    println!("held-out sketches: {} of seed {}, {w}x{w}, hair {}, {}; {:.1} s for all models", a.n, a.seed, a.hair, a.search.describe(), el);
+    println!(
+        "held-out sketches: {} of seed {}, {w}x{w}, hair {}, {}; {:.1} s for all models",
+        a.n,
+        a.seed,
+        a.hair,
+        a.search.describe(),
+        el
+    );
     println!("drawn figure height / shorter side: {}", spread(per.iter().map(|p| p.figure_fraction).collect()));
     for (k, name) in names.iter().enumerate() {
         let mean = |j: usize| per.iter().map(|s| s.scores[k].pck[j]).sum::<f64>() / per.len() as f64;
         let ms = 1e3 * per.iter().map(|s| s.scores[k].seconds).sum::<f64>() / per.len() as f64;
-        println!("{name}: PCK@0.1 {:.3}  PCK@0.2 {:.3}  mean detect {ms:.0} ms (wall, {} threads shared by the evaluation)", mean(0), mean(1), rayon::current_num_threads());
+        println!(
+            "{name}: PCK@0.1 {:.3}  PCK@0.2 {:.3}  mean detect {ms:.0} ms (wall, {} threads shared by the evaluation)",
+            mean(0),
+            mean(1),
+            rayon::current_num_threads()
+        );
         // The scale of the best detection where it is right (PCK@0.2 ≥ 0.8), as the figure
         // height its level is tuned to over the shorter side: what the search range must cover.
-        let right: Vec<f64> = per.iter().filter(|s| s.scores[k].pck[1] >= 0.8).filter_map(|s| s.scores[k].found_fraction).collect();
-        println!("  found at (cell × rest height / shorter side) where PCK@0.2 ≥ 0.8 ({} sketches): {}", right.len(), spread(right));
+        let right: Vec<f64> =
+            per.iter().filter(|s| s.scores[k].pck[1] >= 0.8).filter_map(|s| s.scores[k].found_fraction).collect();
+        println!(
+            "  found at (cell × rest height / shorter side) where PCK@0.2 ≥ 0.8 ({} sketches): {}",
+            right.len(),
+            spread(right)
+        );
     }
     if a.by_style {
         print_breakdown(&per, &names)?;
@@ -99,7 +116,10 @@ fn print_breakdown(per: &[SketchResult], names: &[String]) -> Result<(), CliErro
             continue;
         }
         let cells: Vec<String> = g.mean_pck.iter().map(|p| format!("{:.3} / {:.3}", p[0], p[1])).collect();
-        let margins: Vec<String> = g.mean_pck[1..].iter().map(|p| format!("{:+.3} / {:+.3}", g.mean_pck[0][0] - p[0], g.mean_pck[0][1] - p[1])).collect();
+        let margins: Vec<String> = g.mean_pck[1..]
+            .iter()
+            .map(|p| format!("{:+.3} / {:+.3}", g.mean_pck[0][0] - p[0], g.mean_pck[0][1] - p[1]))
+            .collect();
         let margin = if margins.is_empty() { String::new() } else { format!("   margin {}", margins.join(", ")) };
         println!("  {:<20} {:>4}   {}{margin}", g.name, g.n, cells.join("   "));
     }

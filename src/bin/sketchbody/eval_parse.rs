@@ -63,16 +63,34 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
         if a.verbose {
             let n = ok.iter().filter(|&&b| b).count();
-            println!("{} {}x{} {:.0} ms score {} correct {n}/14", l.image, img.width(), img.height(), dt, score.map_or("none".into(), |s| format!("{s:.3}")));
+            println!(
+                "{} {}x{} {:.0} ms score {} correct {n}/14",
+                l.image,
+                img.width(),
+                img.height(),
+                dt,
+                score.map_or("none".into(), |s| format!("{s:.3}"))
+            );
         }
     }
     let n = wanted.len() as f64;
     let pck = |j: usize| 100.0 * hits[j] as f64 / n;
-    println!("PARSE PCK@{} with the ground-truth box: {} images (im{:04}..im{:04}), model {}", a.alpha, wanted.len(), a.first, a.last, a.model.display());
-    println!("per joint: {}", (0..NUM_PARSE_JOINTS).map(|j| format!("{} {:.1}", PARSE_JOINT_NAMES[j], pck(j))).collect::<Vec<_>>().join(", "));
+    println!(
+        "PARSE PCK@{} with the ground-truth box: {} images (im{:04}..im{:04}), model {}",
+        a.alpha,
+        wanted.len(),
+        a.first,
+        a.last,
+        a.model.display()
+    );
+    println!(
+        "per joint: {}",
+        (0..NUM_PARSE_JOINTS).map(|j| format!("{} {:.1}", PARSE_JOINT_NAMES[j], pck(j))).collect::<Vec<_>>().join(", ")
+    );
     let header: Vec<String> = PCK_GROUPS.iter().map(|(g, _)| format!("{g:>8}")).collect();
     println!("{} {:>8}", header.join(" "), "mean");
-    let vals: Vec<String> = PCK_GROUPS.iter().map(|(_, [l, r])| format!("{:>8.1}", (pck(*l) + pck(*r)) / 2.0)).collect();
+    let vals: Vec<String> =
+        PCK_GROUPS.iter().map(|(_, [l, r])| format!("{:>8.1}", (pck(*l) + pck(*r)) / 2.0)).collect();
     let mean = (0..NUM_PARSE_JOINTS).map(pck).sum::<f64>() / NUM_PARSE_JOINTS as f64;
     println!("{} {:>8.1}", vals.join(" "), mean);
     times.sort_by(f64::total_cmp);

@@ -2,8 +2,8 @@
 
 use std::path::PathBuf;
 
-use sketchbody::pose::dict_io;
 use sketchbody::body::BodyModel;
+use sketchbody::pose::dict_io;
 use sketchbody::pose::learn::{body_model_skeletons, default_held_out, learn_from_sources, lying_clips, LearnSpec};
 use sketchbody::pose::LearnParams;
 
@@ -61,11 +61,22 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let spec = LearnSpec {
         held_out: a.holdout.unwrap_or_else(default_held_out),
         excluded,
-        params: LearnParams { max_per_action: a.max_per_action, energy: a.energy, mirror: !a.no_mirror, exemplar_spacing: a.exemplar_spacing },
+        params: LearnParams {
+            max_per_action: a.max_per_action,
+            energy: a.energy,
+            mirror: !a.no_mirror,
+            exemplar_spacing: a.exemplar_spacing,
+        },
         retarget: if a.source_skeleton { Vec::new() } else { body_model_skeletons(&BodyModel::embedded()?) },
     };
     let d = learn_from_sources(a.mocap.as_deref(), &a.bvh, &spec)?;
     dict_io::write(&d, &a.out)?;
-    println!("{}: {} bases in {} actions, {} exemplars", a.out.display(), d.num_bases(), d.actions.len(), d.exemplars.ncols());
+    println!(
+        "{}: {} bases in {} actions, {} exemplars",
+        a.out.display(),
+        d.num_bases(),
+        d.actions.len(),
+        d.exemplars.ncols()
+    );
     Ok(())
 }

@@ -59,7 +59,10 @@ fn contact_sheet(dir: &std::path::Path, n: usize, out: &std::path::Path) -> Resu
         let (iw, src) = (im.width(), im.as_bytes());
         for y in 0..im.height() / 2 {
             for x in 0..iw / 2 {
-                let s: u32 = [(0, 0), (1, 0), (0, 1), (1, 1)].iter().map(|&(a, b)| src[(2 * y + b) * iw + 2 * x + a] as u32).sum();
+                let s: u32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                    .iter()
+                    .map(|&(a, b)| src[(2 * y + b) * iw + 2 * x + a] as u32)
+                    .sum();
                 px[(oy + y) * w + ox + x] = ((s + 2) / 4) as u8;
             }
         }
@@ -80,7 +83,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if a.n == 0 || a.n > 10_000_000 {
         return Err(CliError(format!("N = {}: expected 1..=10000000 samples", a.n)));
     }
-    std::fs::create_dir_all(&a.out).map_err(|e| CliError(format!("{}: cannot create the output folder: {e}", a.out.display())))?;
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| CliError(format!("{}: cannot create the output folder: {e}", a.out.display())))?;
     // The manifest doubles as the check that the folder is writable.
     let manifest = serde_json::json!({
         "format": "sketchbody-dataset-1", "samples": a.n, "seed": a.seed, "width": width, "height": height,

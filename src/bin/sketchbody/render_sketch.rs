@@ -59,7 +59,8 @@ pub fn load_mocap(dir: Option<&Path>) -> Result<Option<MocapLibrary>, CliError> 
     if let Some(d) = dir {
         return Ok(Some(MocapLibrary::load_dir(d)?));
     }
-    let base = std::env::var_os("SKB_SHARED_DATA").map(PathBuf::from).unwrap_or_else(|| PathBuf::from("../shared/data"));
+    let base =
+        std::env::var_os("SKB_SHARED_DATA").map(PathBuf::from).unwrap_or_else(|| PathBuf::from("../shared/data"));
     let d = base.join("mocap/deepmimic");
     if d.is_dir() {
         return Ok(Some(MocapLibrary::load_dir(&d)?));
@@ -89,11 +90,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     }
     let stem = a.out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let r = renderer(a.mocap.as_deref())?;
-    let req = SketchRequest {
-        gender,
-        style: a.clean.then(SketchStyle::default),
-        ..SketchRequest::random(a.seed, width)
-    };
+    let req =
+        SketchRequest { gender, style: a.clean.then(SketchStyle::default), ..SketchRequest::random(a.seed, width) };
     let req = SketchRequest { width, height, ..req };
     let t0 = std::time::Instant::now();
     let s = r.render(&req)?;
@@ -104,6 +102,14 @@ pub fn run(a: Args) -> Result<(), CliError> {
         sketchbody::export::obj::write_obj(&dir.join(format!("{stem}_rest.obj")), &s.rest_vertices, faces, None)?;
         sketchbody::export::obj::write_obj(&dir.join(format!("{stem}_posed.obj")), &s.posed_vertices, faces, None)?;
     }
-    println!("{}: {} {}x{} pose {} in {:.0} ms", a.out.display(), s.truth.gender, width, height, s.truth.pose_source, dt * 1000.0);
+    println!(
+        "{}: {} {}x{} pose {} in {:.0} ms",
+        a.out.display(),
+        s.truth.gender,
+        width,
+        height,
+        s.truth.pose_source,
+        dt * 1000.0
+    );
     Ok(())
 }

@@ -14,6 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use sketchbody::body::{BodyModel, Gender};
+use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::export::gltf::write_glb;
 use sketchbody::export::joints2d::{load_joints2d, write_joints2d};
 use sketchbody::export::obj::write_obj;
@@ -21,7 +22,6 @@ use sketchbody::export::pose3d::pose3d_json;
 use sketchbody::fsutil::{write_atomic, StagingDir};
 use sketchbody::image::load_image;
 use sketchbody::pipeline::overlay::overlay;
-use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use sketchbody::pose::dict_io;
 use sketchbody::render::preview::{preview, save_rgb_png};
@@ -106,7 +106,14 @@ impl Bar {
     }
 }
 
-fn report(a: &Args, opts: &PipelineOptions, r: &PipelineResult, size: (usize, usize), load_s: f64, write_s: f64) -> String {
+fn report(
+    a: &Args,
+    opts: &PipelineOptions,
+    r: &PipelineResult,
+    size: (usize, usize),
+    load_s: f64,
+    write_s: f64,
+) -> String {
     let mut s = String::new();
     let f = &opts.fit;
     let _ = writeln!(s, "# sketchbody run\n");
@@ -115,9 +122,17 @@ fn report(a: &Args, opts: &PipelineOptions, r: &PipelineResult, size: (usize, us
     let _ = writeln!(s, "- 2-D joints: {joints} (source: {})", r.joints_source);
     let _ = writeln!(s, "- library: sketchbody {}\n", sketchbody::VERSION);
     let _ = writeln!(s, "## Options\n");
-    let _ = writeln!(s, "- Canny: thresholds {}/{}, aperture {}", opts.canny.threshold1, opts.canny.threshold2, opts.canny.aperture);
+    let _ = writeln!(
+        s,
+        "- Canny: thresholds {}/{}, aperture {}",
+        opts.canny.threshold1, opts.canny.threshold2, opts.canny.aperture
+    );
     let p = &opts.pose;
-    let _ = writeln!(s, "- pose: κ {}, α {}, ≤ {} bases, tolerance {} px, refine {}, prior {} m", p.kappa, p.alpha, p.max_bases, p.tolerance, p.refine, p.prior);
+    let _ = writeln!(
+        s,
+        "- pose: κ {}, α {}, ≤ {} bases, tolerance {} px, refine {}, prior {} m",
+        p.kappa, p.alpha, p.max_bases, p.tolerance, p.refine, p.prior
+    );
     let _ = writeln!(
         s,
         "- fit: score {}, samples {}, ≤ {} iterations, transition scale {}, temperature {}, raster side {} px, tolerance {}, dims {}, seed {}, skinning {:?}{}\n",
@@ -137,17 +152,38 @@ fn report(a: &Args, opts: &PipelineOptions, r: &PipelineResult, size: (usize, us
         )
     );
     let _ = writeln!(s, "## Results\n");
-    let _ = writeln!(s, "- 3-D pose: {} bases, reprojection RMS {:.3} px, length excess {:+.4}", r.pose.bases.len(), r.pose.rms, r.pose.length_excess);
-    let _ = writeln!(s, "- camera: sx {:.2}, sy {:.2} px/m, t ({:.1}, {:.1}) px", r.pose.camera.sx, r.pose.camera.sy, r.pose.camera.t[0], r.pose.camera.t[1]);
+    let _ = writeln!(
+        s,
+        "- 3-D pose: {} bases, reprojection RMS {:.3} px, length excess {:+.4}",
+        r.pose.bases.len(),
+        r.pose.rms,
+        r.pose.length_excess
+    );
+    let _ = writeln!(
+        s,
+        "- camera: sx {:.2}, sy {:.2} px/m, t ({:.1}, {:.1}) px",
+        r.pose.camera.sx, r.pose.camera.sy, r.pose.camera.t[0], r.pose.camera.t[1]
+    );
     for g in &r.fits {
         let it = g.fit.as_ref().map_or(0, |f| f.history.len());
         let ev = g.fit.as_ref().map_or(0, |f| f.evaluations);
-        let _ = writeln!(s, "- {} fit: best score {:.5}, {it} iterations, {ev} sample evaluations, {:.2} s", g.gender.name(), g.score, g.seconds);
+        let _ = writeln!(
+            s,
+            "- {} fit: best score {:.5}, {it} iterations, {ev} sample evaluations, {:.2} s",
+            g.gender.name(),
+            g.score,
+            g.seconds
+        );
     }
     let how = if r.gender_by_score { "chosen by score (higher is better)" } else { "given" };
     let _ = writeln!(s, "- gender: {} ({how})", r.gender.name());
     let chosen = r.fits.iter().find(|g| g.gender == r.gender).and_then(|g| g.fit.as_ref());
-    let factors = |p: &sketchbody::render::sketch::scene::Proportions| format!("legs {:.3}, arms {:.3}, shoulders {:.3}, head {:.3}, torso {:.3}", p.legs, p.arms, p.shoulders, p.head, p.torso);
+    let factors = |p: &sketchbody::render::sketch::scene::Proportions| {
+        format!(
+            "legs {:.3}, arms {:.3}, shoulders {:.3}, head {:.3}, torso {:.3}",
+            p.legs, p.arms, p.shoulders, p.head, p.torso
+        )
+    };
     if let Some(e) = chosen.and_then(|f| f.proportion_estimate.as_ref()) {
         let _ = writeln!(s, "- bone factors estimated from the 2-D joints: {}", factors(e));
     }
@@ -213,7 +249,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     write_obj(&staging.path("body.obj"), &r.posed_vertices, &r.mesh.quads, r.mesh.uvs.as_ref())?;
     write_obj(&staging.path("body_rest.obj"), &r.mesh.vertices, &r.mesh.quads, r.mesh.uvs.as_ref())?;
     write_joints2d(&staging.path("joints2d.json"), &r.joints2d)?;
-    let mut pose_bytes = serde_json::to_vec_pretty(&pose3d_json(&r.pose, &dict, &opts.pose)).map_err(|e| CliError(e.to_string()))?;
+    let mut pose_bytes =
+        serde_json::to_vec_pretty(&pose3d_json(&r.pose, &dict, &opts.pose)).map_err(|e| CliError(e.to_string()))?;
     pose_bytes.push(b'\n');
     write_atomic(&staging.path("pose3d.json"), &pose_bytes)?;
     save_rgb_png(&over, &staging.path("overlay.png"))?;

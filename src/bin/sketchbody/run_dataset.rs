@@ -15,11 +15,11 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde_json::json;
 use sketchbody::body::{BodyModel, Gender};
+use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::eval::score::dataset_samples;
 use sketchbody::export::obj::write_obj;
 use sketchbody::fsutil::write_atomic;
 use sketchbody::image::load_image;
-use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions};
 use sketchbody::pose::{dict_io, Dictionary, PoseEstimate};
 use sketchbody::render::sketch::truth::GroundTruth;
@@ -97,8 +97,21 @@ struct Shared<'a> {
 
 /// The ground truth's 3-D pose and camera as a pose estimate (for `--oracle-pose`).
 fn truth_pose(t: &GroundTruth, stem: &str) -> Result<PoseEstimate, CliError> {
-    let joints: Joints3 = t.joints3d.as_slice().try_into().map_err(|_| CliError(format!("sample {stem}: joints3d must hold {NUM_JOINTS} joints")))?;
-    Ok(PoseEstimate { joints, camera: t.camera.to_camera()?, bases: Vec::new(), weights: Vec::new(), rms: 0.0, length_excess: 0.0, base: joints, base_parts: None })
+    let joints: Joints3 = t
+        .joints3d
+        .as_slice()
+        .try_into()
+        .map_err(|_| CliError(format!("sample {stem}: joints3d must hold {NUM_JOINTS} joints")))?;
+    Ok(PoseEstimate {
+        joints,
+        camera: t.camera.to_camera()?,
+        bases: Vec::new(),
+        weights: Vec::new(),
+        rms: 0.0,
+        length_excess: 0.0,
+        base: joints,
+        base_parts: None,
+    })
 }
 
 /// Runs one sample and writes its three files. Returns the pipeline's seconds.
@@ -123,10 +136,15 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         Some((model, options)) => Box::new(DetectedJoints { model, options }),
         None => Box::new(GivenJoints(truth_joints(&truth))),
     };
-    let r = run_pipeline(s.model, s.dict, &sketch, source.as_ref(), &opts, &mut |_| !INTERRUPTED.load(Ordering::SeqCst))
-        .map_err(|e| CliError(format!("sample {stem}: {e}")))?;
+    let r =
+        run_pipeline(s.model, s.dict, &sketch, source.as_ref(), &opts, &mut |_| !INTERRUPTED.load(Ordering::SeqCst))
+            .map_err(|e| CliError(format!("sample {stem}: {e}")))?;
     let rm = r.pose.camera.r;
-    let scores: serde_json::Map<String, serde_json::Value> = r.fits.iter().map(|g| (g.gender.name().to_string(), json!(if g.score.is_finite() { Some(g.score) } else { None }))).collect();
+    let scores: serde_json::Map<String, serde_json::Value> = r
+        .fits
+        .iter()
+        .map(|g| (g.gender.name().to_string(), json!(if g.score.is_finite() { Some(g.score) } else { None })))
+        .collect();
     let doc = json!({
         "joints2d": r.joints2d.xy,
         "joints3d": r.posed_joints,
@@ -161,7 +179,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         return Err(CliError(format!("{}: no samples (STEM.json + STEM.mesh) found", a.dataset.display())));
     }
     stems.truncate(a.first.unwrap_or(usize::MAX));
-    std::fs::create_dir_all(&a.out).map_err(|e| CliError(format!("{}: cannot create the results folder: {e}", a.out.display())))?;
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| CliError(format!("{}: cannot create the results folder: {e}", a.out.display())))?;
     let manifest = json!({
         "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
         "gender": a.gender, "mean_shape": a.mean_shape, "score": score_name(fit.score), "seed": fit.seed,
@@ -172,9 +191,25 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let model = BodyModel::embedded()?;
     let dict = dict_io::embedded()?;
     let detector = if a.detect { Some((Model::embedded()?, DetectOptions::default())) } else { None };
-    let shared = Shared { model: &model, dict: &dict, base: PipelineOptions { fit, mean_shape: a.mean_shape, keep_pose_scale: a.fit.keep_pose_scale, ..PipelineOptions::default() }, mode, detector, true_height: a.true_height, oracle_pose: a.oracle_pose };
+    let shared = Shared {
+        model: &model,
+        dict: &dict,
+        base: PipelineOptions {
+            fit,
+            mean_shape: a.mean_shape,
+            keep_pose_scale: a.fit.keep_pose_scale,
+            ..PipelineOptions::default()
+        },
+        mode,
+        detector,
+        true_height: a.true_height,
+        oracle_pose: a.oracle_pose,
+    };
     let todo: Vec<&String> = stems.iter().filter(|s| !a.out.join(format!("{s}_posed.obj")).is_file()).collect();
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build().map_err(|e| CliError(format!("thread pool: {e}")))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| CliError(format!("thread pool: {e}")))?;
     catch_interrupt();
     let done = AtomicUsize::new(0);
     let failures = Mutex::new(Vec::new());
@@ -200,7 +235,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
         eprintln!("sketchbody: {f}");
     }
     if INTERRUPTED.load(Ordering::SeqCst) {
-        return Err(CliError(format!("interrupted after {} of {} samples (rerun to resume)", done.load(Ordering::Relaxed), todo.len())));
+        return Err(CliError(format!(
+            "interrupted after {} of {} samples (rerun to resume)",
+            done.load(Ordering::Relaxed),
+            todo.len()
+        )));
     }
     let mut secs = seconds.into_inner().unwrap_or_else(|p| p.into_inner());
     secs.sort_by(f64::total_cmp);

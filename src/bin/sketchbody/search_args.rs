@@ -34,13 +34,20 @@ impl SearchArgs {
     pub fn options(&self) -> DetectOptions {
         let search = match (self.all_scales, SKETCH_SEARCH) {
             (true, _) => SearchScales::All,
-            (false, SearchScales::FigureFraction { min, max }) => {
-                SearchScales::FigureFraction { min: self.min_figure.unwrap_or(min), max: self.max_figure.unwrap_or(max) }
-            }
+            (false, SearchScales::FigureFraction { min, max }) => SearchScales::FigureFraction {
+                min: self.min_figure.unwrap_or(min),
+                max: self.max_figure.unwrap_or(max),
+            },
             (false, s) => s,
         };
         let levels_per_octave = (self.levels_per_octave > 0).then_some(self.levels_per_octave);
-        DetectOptions { min_cell_px: self.min_cell, max_cell_px: self.max_cell, search, levels_per_octave, ..DetectOptions::default() }
+        DetectOptions {
+            min_cell_px: self.min_cell,
+            max_cell_px: self.max_cell,
+            search,
+            levels_per_octave,
+            ..DetectOptions::default()
+        }
     }
 
     /// One-line description of the search, for reports.
@@ -50,7 +57,9 @@ impl SearchArgs {
             SearchScales::All => "all scales".to_string(),
             SearchScales::FigureFraction { min, max } => format!("figures {min}..{max} of the side"),
         };
-        let levels = o.levels_per_octave.map_or("the model's levels per octave".to_string(), |n| format!("{n} levels per octave"));
+        let levels = o
+            .levels_per_octave
+            .map_or("the model's levels per octave".to_string(), |n| format!("{n} levels per octave"));
         format!("{search}, cells {}..{} px, {levels}", self.min_cell, self.max_cell)
     }
 }

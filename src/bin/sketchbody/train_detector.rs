@@ -69,7 +69,11 @@ pub fn parse_hair(s: &str) -> Result<Option<Hair>, CliError> {
         "spiky" => Hair::Spiky,
         "bun" => Hair::Bun,
         "ponytail" => Hair::Ponytail,
-        _ => return Err(CliError(format!("--hold-out-hair {s:?}: expected none, short, long, spiky, bun, ponytail or keep"))),
+        _ => {
+            return Err(CliError(format!(
+                "--hold-out-hair {s:?}: expected none, short, long, spiky, bun, ponytail or keep"
+            )))
+        }
     }))
 }
 
@@ -92,7 +96,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
         ..TrainOptions::default()
     };
     let r = renderer(a.mocap.as_deref())?;
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build().map_err(|e| CliError(format!("thread pool: {e}")))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| CliError(format!("thread pool: {e}")))?;
     let t0 = std::time::Instant::now();
     let t = pool.install(|| train(&r, &o, &mut |line| eprintln!("{line}")))?;
     t.model.save(&a.out)?;

@@ -53,11 +53,12 @@ fn kmeans(x: &[DVector<f64>], k: usize, rng: &mut ChaCha8Rng) -> Vec<usize> {
         let next = if total > 0.0 {
             let target = rng.random::<f64>() * total;
             let mut acc = 0.0;
-            d2.iter().position(|d| {
-                acc += d;
-                acc > target
-            })
-            .unwrap_or(n - 1)
+            d2.iter()
+                .position(|d| {
+                    acc += d;
+                    acc > target
+                })
+                .unwrap_or(n - 1)
         } else {
             rng.random_range(0..n)
         };
@@ -67,7 +68,9 @@ fn kmeans(x: &[DVector<f64>], k: usize, rng: &mut ChaCha8Rng) -> Vec<usize> {
         }
     }
     let nearest = |p: &DVector<f64>, centres: &[DVector<f64>]| {
-        (0..centres.len()).min_by(|&a, &b| dist2(p, &centres[a]).total_cmp(&dist2(p, &centres[b])).then(a.cmp(&b))).unwrap_or(0)
+        (0..centres.len())
+            .min_by(|&a, &b| dist2(p, &centres[a]).total_cmp(&dist2(p, &centres[b])).then(a.cmp(&b)))
+            .unwrap_or(0)
     };
     let mut assign: Vec<usize> = x.iter().map(|p| nearest(p, &centres)).collect();
     for _ in 0..50 {
@@ -114,7 +117,8 @@ pub fn fit_gmm(data: &[Vec<f64>], opts: &EmOptions, rng: &mut ChaCha8Rng) -> Res
     let (_, global) = moments(&x, &ones, n as f64, &DMatrix::zeros(d, d));
     let reg = DMatrix::from_diagonal(&(global.diagonal() * opts.regularisation));
     let assign = kmeans(&x, k, rng);
-    let mut resp: Vec<Vec<f64>> = (0..k).map(|c| assign.iter().map(|&a| if a == c { 1.0 } else { 0.0 }).collect()).collect();
+    let mut resp: Vec<Vec<f64>> =
+        (0..k).map(|c| assign.iter().map(|&a| if a == c { 1.0 } else { 0.0 }).collect()).collect();
     let mut prev = f64::NEG_INFINITY;
     let mut iterations = 0;
     loop {
@@ -170,8 +174,12 @@ mod tests {
     fn separates_two_clusters_reproducibly() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let noise = Normal::new(0.0, 0.1).unwrap();
-        let data: Vec<Vec<f64>> =
-            (0..200).map(|i| { let c = if i % 4 == 0 { 5.0 } else { -1.0 }; vec![c + noise.sample(&mut rng), noise.sample(&mut rng)] }).collect();
+        let data: Vec<Vec<f64>> = (0..200)
+            .map(|i| {
+                let c = if i % 4 == 0 { 5.0 } else { -1.0 };
+                vec![c + noise.sample(&mut rng), noise.sample(&mut rng)]
+            })
+            .collect();
         let opts = EmOptions { components: 2, ..EmOptions::default() };
         let fit = fit_gmm(&data, &opts, &mut ChaCha8Rng::seed_from_u64(9)).unwrap();
         let again = fit_gmm(&data, &opts, &mut ChaCha8Rng::seed_from_u64(9)).unwrap();

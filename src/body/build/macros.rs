@@ -121,11 +121,13 @@ pub fn local_categories(target_json: &serde_json::Value) -> Result<Vec<Category>
             .and_then(|c| c.as_array())
             .ok_or_else(|| bad(format!("no categories for group {group}")))?;
         for cat in cats {
-            let name = cat.get("name").and_then(|n| n.as_str()).ok_or_else(|| bad(format!("unnamed category in {group}")))?;
+            let name =
+                cat.get("name").and_then(|n| n.as_str()).ok_or_else(|| bad(format!("unnamed category in {group}")))?;
             let opp = cat.get("opposites").ok_or_else(|| bad(format!("{name}: no opposites")))?;
             let get = |key: &str| -> Result<String> {
                 let t = opp.get(key).and_then(|t| t.as_str()).filter(|t| !t.is_empty());
-                t.map(|t| format!("targets/{group}/{t}.target.gz")).ok_or_else(|| bad(format!("{name}: no {key} target")))
+                t.map(|t| format!("targets/{group}/{t}.target.gz"))
+                    .ok_or_else(|| bad(format!("{name}: no {key} target")))
             };
             let sided = cat.get("has_left_and_right").and_then(|b| b.as_bool()).unwrap_or(false);
             let sliders = if sided {
@@ -155,12 +157,18 @@ mod tests {
         p.age = 0.75;
         assert_eq!((p.factor("old").unwrap(), p.factor("young").unwrap()), (0.5, 0.5));
         p.age = 0.1875;
-        assert_eq!((p.factor("baby").unwrap(), p.factor("child").unwrap(), p.factor("young").unwrap()), (0.0, 1.0, 0.0));
+        assert_eq!(
+            (p.factor("baby").unwrap(), p.factor("child").unwrap(), p.factor("young").unwrap()),
+            (0.0, 1.0, 0.0)
+        );
         p.age = 0.3;
         let (c, y) = (p.factor("child").unwrap(), p.factor("young").unwrap());
         assert!((c + y - 1.0).abs() < 1e-12 && (y - 0.36).abs() < 1e-12, "child {c} young {y}");
         p.muscle = 0.75;
-        assert_eq!((p.factor("minmuscle").unwrap(), p.factor("averagemuscle").unwrap(), p.factor("maxmuscle").unwrap()), (0.0, 0.5, 0.5));
+        assert_eq!(
+            (p.factor("minmuscle").unwrap(), p.factor("averagemuscle").unwrap(), p.factor("maxmuscle").unwrap()),
+            (0.0, 0.5, 0.5)
+        );
         p.height = 0.2;
         assert!((p.factor("minheight").unwrap() - 0.6).abs() < 1e-12);
         assert_eq!(p.factor("maxheight").unwrap(), 0.0);
@@ -178,6 +186,9 @@ mod tests {
         let cats = local_categories(&json).unwrap();
         assert_eq!(cats.len(), 2);
         assert_eq!(cats[0].sliders[1].incr, "targets/arms/r-a-incr.target.gz");
-        assert_eq!(cats[1].sliders, vec![Slider { decr: "targets/hip/h-in.target.gz".into(), incr: "targets/hip/h-out.target.gz".into() }]);
+        assert_eq!(
+            cats[1].sliders,
+            vec![Slider { decr: "targets/hip/h-in.target.gz".into(), incr: "targets/hip/h-out.target.gz".into() }]
+        );
     }
 }

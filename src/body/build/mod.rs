@@ -98,7 +98,8 @@ impl MakeHumanData {
     pub fn load(wheel_path: &Path) -> Result<MakeHumanData> {
         let mut wheel = Wheel::open(wheel_path)?;
         let obj = wheel::parse_base_obj(&wheel.read_text("3dobjs/base.obj")?)?;
-        let groups = rig::vertex_groups(&wheel.read_json("mesh_metadata/basemesh_vertex_groups.json")?, obj.vertices.len())?;
+        let groups =
+            rig::vertex_groups(&wheel.read_json("mesh_metadata/basemesh_vertex_groups.json")?, obj.vertices.len())?;
         let body = groups.get("body").ok_or_else(|| Error::CorruptData("no vertex group body".into()))?;
         let num_body = body.len();
         if body.iter().enumerate().any(|(i, &v)| i != v) {
@@ -126,7 +127,10 @@ impl MakeHumanData {
             }
             face_uvs.push(out);
         }
-        let skin = rig::map_skin_weights(&wheel.read_json(&format!("rigs/standard/weights.{}.json", rig::SKIN_RIG))?, num_body)?;
+        let skin = rig::map_skin_weights(
+            &wheel.read_json(&format!("rigs/standard/weights.{}.json", rig::SKIN_RIG))?,
+            num_body,
+        )?;
         let rig = wheel.read_json(&format!("rigs/standard/rig.{}.json", rig::SKIN_RIG))?;
         let regressor = rig::joint_regressor(&groups)?;
         let targets = TargetSet::load(&mut wheel, obj.vertices)?;
@@ -156,7 +160,13 @@ impl MakeHumanData {
 
     /// `n` humans of `gender` drawn with ChaCha8 (`seed`, `stream`): their parameters, body
     /// vertices (metres) and joints.
-    pub fn sample(&self, gender: Gender, n: usize, seed: u64, stream: u64) -> Result<Vec<(HumanParams, Vec<[f64; 3]>, Joints3)>> {
+    pub fn sample(
+        &self,
+        gender: Gender,
+        n: usize,
+        seed: u64,
+        stream: u64,
+    ) -> Result<Vec<(HumanParams, Vec<[f64; 3]>, Joints3)>> {
         let sampler = Sampler::new(&self.targets.categories)?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(stream);
@@ -190,7 +200,12 @@ pub fn body_height(vertices: &[[f64; 3]]) -> f64 {
 /// the same `.skbm` bytes) whatever the number of threads.
 pub fn build_model(data: &MakeHumanData, opts: &BuildOptions) -> Result<(BodyModel, BuildReport)> {
     let n = opts.samples_per_gender;
-    if opts.components == 0 || n <= opts.components || n < opts.em.components || opts.gmm_dims == 0 || opts.gmm_dims > opts.components {
+    if opts.components == 0
+        || n <= opts.components
+        || n < opts.em.components
+        || opts.gmm_dims == 0
+        || opts.gmm_dims > opts.components
+    {
         return Err(Error::OutOfRange {
             name: "build options",
             detail: format!(
@@ -224,7 +239,8 @@ pub fn build_model(data: &MakeHumanData, opts: &BuildOptions) -> Result<(BodyMod
                 acc / total
             })
             .collect();
-        let default_dim = cumulative_energy.iter().position(|&e| e >= DEFAULT_ENERGY).map_or(opts.components, |i| i + 1);
+        let default_dim =
+            cumulative_energy.iter().position(|&e| e >= DEFAULT_ENERGY).map_or(opts.components, |i| i + 1);
         let gmm_data: Vec<Vec<f64>> = p.weights.iter().map(|w| w[..opts.gmm_dims].to_vec()).collect();
         let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
         rng.set_stream(4 + gender.index() as u64);
@@ -281,7 +297,14 @@ pub fn build_model(data: &MakeHumanData, opts: &BuildOptions) -> Result<(BodyMod
 /// disjoint from the training draws) projected onto the first `dims` components of `model`; the
 /// mean over humans of AED / height (AED = mean vertex distance, paper eq. 10; height = the
 /// reference body's y extent), for each entry of `dims`.
-pub fn heldout_aed(data: &MakeHumanData, model: &BodyModel, gender: Gender, n: usize, seed: u64, dims: &[usize]) -> Result<Vec<f64>> {
+pub fn heldout_aed(
+    data: &MakeHumanData,
+    model: &BodyModel,
+    gender: Gender,
+    n: usize,
+    seed: u64,
+    dims: &[usize],
+) -> Result<Vec<f64>> {
     let space = model.space(gender);
     let humans = data.sample(gender, n, seed, 2 + gender.index() as u64)?;
     let mut sums = vec![0.0; dims.len()];

@@ -38,20 +38,28 @@ fn centre(rows: &[Vec<f64>]) -> (Vec<f64>, Vec<Vec<f64>>) {
 pub fn pca(samples: &[Vec<f64>], side: &[Vec<f64>], k: usize) -> Result<Pca> {
     let n = samples.len();
     if n < 2 || k == 0 || k >= n || side.len() != n {
-        return Err(Error::OutOfRange { name: "PCA sizes", detail: format!("{n} samples, {} side rows, {k} components (need 0 < k < n)", side.len()) });
+        return Err(Error::OutOfRange {
+            name: "PCA sizes",
+            detail: format!("{n} samples, {} side rows, {k} components (need 0 < k < n)", side.len()),
+        });
     }
     let (mean, x) = centre(samples);
     let (side_mean, xs) = centre(side);
     // Upper triangle only (row i holds j = i..n); every dot product runs in index order.
-    let gram_rows: Vec<Vec<f64>> =
-        (0..n).into_par_iter().map(|i| (i..n).map(|j| x[i].iter().zip(&x[j]).map(|(a, b)| a * b).sum()).collect()).collect();
+    let gram_rows: Vec<Vec<f64>> = (0..n)
+        .into_par_iter()
+        .map(|i| (i..n).map(|j| x[i].iter().zip(&x[j]).map(|(a, b)| a * b).sum()).collect())
+        .collect();
     let gram = DMatrix::from_fn(n, n, |i, j| if i <= j { gram_rows[i][j - i] } else { gram_rows[j][i - j] });
     let eig = SymmetricEigen::new(gram);
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]).then(a.cmp(&b)));
     let eigenvalues: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i].max(0.0)).collect();
     if eigenvalues[k - 1] <= 0.0 {
-        return Err(Error::OutOfRange { name: "PCA components", detail: format!("only {} non-zero components", eigenvalues.iter().filter(|&&l| l > 0.0).count()) });
+        return Err(Error::OutOfRange {
+            name: "PCA components",
+            detail: format!("only {} non-zero components", eigenvalues.iter().filter(|&&l| l > 0.0).count()),
+        });
     }
     // Σ_i u_i · row_i / s, accumulated over the rows in order.
     let combine = |rows: &[Vec<f64>], u: &[f64], s: f64| -> Vec<f64> {

@@ -127,7 +127,11 @@ pub fn joints_of(reg: &JointRegressor, vertices_dm: &[[f64; 3]]) -> Joints3 {
 }
 
 /// Locates one rig end (`CUBE`, `MEAN` or `VERTEX` strategy) on `vertices_dm`, decimetres.
-fn rig_end(end: &serde_json::Value, groups: &BTreeMap<String, Vec<usize>>, vertices_dm: &[[f64; 3]]) -> Result<[f64; 3]> {
+fn rig_end(
+    end: &serde_json::Value,
+    groups: &BTreeMap<String, Vec<usize>>,
+    vertices_dm: &[[f64; 3]],
+) -> Result<[f64; 3]> {
     let bad = |m: &str| Error::CorruptData(format!("rig end {end}: {m}"));
     let idx: Vec<usize> = match end.get("strategy").and_then(|s| s.as_str()) {
         Some("CUBE") => {
@@ -141,7 +145,9 @@ fn rig_end(end: &serde_json::Value, groups: &BTreeMap<String, Vec<usize>>, verti
             .iter()
             .map(|v| v.as_u64().map(|i| i as usize).ok_or_else(|| bad("bad vertex index")))
             .collect::<Result<_>>()?,
-        Some("VERTEX") => vec![end.get("vertex_index").and_then(|v| v.as_u64()).ok_or_else(|| bad("no vertex_index"))? as usize],
+        Some("VERTEX") => {
+            vec![end.get("vertex_index").and_then(|v| v.as_u64()).ok_or_else(|| bad("no vertex_index"))? as usize]
+        }
         _ => return Err(bad("unknown strategy")),
     };
     if idx.is_empty() || idx.iter().any(|&i| i >= vertices_dm.len()) {
@@ -159,7 +165,11 @@ fn rig_end(end: &serde_json::Value, groups: &BTreeMap<String, Vec<usize>>, verti
 /// Largest distance, metres, between the rig's stored `default_position`s (Blender metres, Z up:
 /// (x, −z, y)·0.1 of OBJ coordinates) and the same ends located on `vertices_dm`, over every
 /// bone head and tail of `rig`; and how many ends were compared.
-pub fn rig_default_error(rig: &serde_json::Value, groups: &BTreeMap<String, Vec<usize>>, vertices_dm: &[[f64; 3]]) -> Result<(f64, usize)> {
+pub fn rig_default_error(
+    rig: &serde_json::Value,
+    groups: &BTreeMap<String, Vec<usize>>,
+    vertices_dm: &[[f64; 3]],
+) -> Result<(f64, usize)> {
     let bones = rig.as_object().ok_or_else(|| Error::CorruptData("rig JSON is not an object".into()))?;
     let (mut worst, mut count) = (0.0f64, 0);
     for (name, bone) in bones {

@@ -71,7 +71,13 @@ impl<'a> Sampler<'a> {
         let u: f64 = rng.random();
         let mut acc = 0.0;
         let mut build = Build::Slim;
-        for (p, b) in BUILD_PROBABILITIES.iter().zip([Build::Average, Build::LongLegged, Build::BroadShouldered, Build::Heavy, Build::Slim]) {
+        for (p, b) in BUILD_PROBABILITIES.iter().zip([
+            Build::Average,
+            Build::LongLegged,
+            Build::BroadShouldered,
+            Build::Heavy,
+            Build::Slim,
+        ]) {
             acc += p;
             if u < acc {
                 build = b;

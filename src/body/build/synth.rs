@@ -10,7 +10,8 @@ use super::sample::HumanParams;
 use super::wheel::{parse_target, Target, Wheel};
 
 /// Folders of the macro targets.
-const MACRO_DIRS: [&str; 3] = ["targets/macrodetails/", "targets/macrodetails/height/", "targets/macrodetails/proportions/"];
+const MACRO_DIRS: [&str; 3] =
+    ["targets/macrodetails/", "targets/macrodetails/height/", "targets/macrodetails/proportions/"];
 
 /// The base mesh and every target the model uses.
 pub struct TargetSet {
@@ -38,16 +39,18 @@ impl TargetSet {
         let categories = local_categories(&wheel.read_json("targets/target.json")?)?;
         let local_paths: Vec<String> =
             categories.iter().flat_map(|c| c.sliders.iter().flat_map(|s| [s.decr.clone(), s.incr.clone()])).collect();
-        let raw: Vec<(String, Vec<u8>)> = macro_paths
-            .iter()
-            .chain(&local_paths)
-            .map(|p| Ok((p.clone(), wheel.read(p)?)))
-            .collect::<Result<_>>()?;
+        let raw: Vec<(String, Vec<u8>)> =
+            macro_paths.iter().chain(&local_paths).map(|p| Ok((p.clone(), wheel.read(p)?))).collect::<Result<_>>()?;
         let mut parsed: Vec<Target> = raw.par_iter().map(|(p, gz)| parse_target(p, gz, n)).collect::<Result<_>>()?;
         let mut local_iter = parsed.split_off(macro_paths.len()).into_iter();
         let local_targets = categories
             .iter()
-            .map(|c| c.sliders.iter().map(|_| (local_iter.next().unwrap_or_default(), local_iter.next().unwrap_or_default())).collect())
+            .map(|c| {
+                c.sliders
+                    .iter()
+                    .map(|_| (local_iter.next().unwrap_or_default(), local_iter.next().unwrap_or_default()))
+                    .collect()
+            })
             .collect();
         let macro_stems = macro_paths
             .iter()

@@ -52,12 +52,14 @@ impl Wheel {
 
     /// The data file `name` as UTF-8 text.
     pub fn read_text(&mut self, name: &str) -> Result<String> {
-        String::from_utf8(self.read(name)?).map_err(|_| Error::CorruptData(format!("{DATA_PREFIX}{name} is not UTF-8 text")))
+        String::from_utf8(self.read(name)?)
+            .map_err(|_| Error::CorruptData(format!("{DATA_PREFIX}{name} is not UTF-8 text")))
     }
 
     /// The data file `name` parsed as JSON.
     pub fn read_json(&mut self, name: &str) -> Result<serde_json::Value> {
-        serde_json::from_slice(&self.read(name)?).map_err(|e| Error::CorruptData(format!("{DATA_PREFIX}{name}: bad JSON: {e}")))
+        serde_json::from_slice(&self.read(name)?)
+            .map_err(|e| Error::CorruptData(format!("{DATA_PREFIX}{name}: bad JSON: {e}")))
     }
 
     /// Names (relative to [`DATA_PREFIX`], sorted) of the files directly in folder `dir`
@@ -125,7 +127,8 @@ pub struct BaseMesh {
 
 /// Parses `3dobjs/base.obj` (quads only; `v`, `vt`, `g`, `f v/vt ...`).
 pub fn parse_base_obj(text: &str) -> Result<BaseMesh> {
-    let mut mesh = BaseMesh { vertices: Vec::new(), uvs: Vec::new(), body_faces: Vec::new(), body_face_uvs: Vec::new() };
+    let mut mesh =
+        BaseMesh { vertices: Vec::new(), uvs: Vec::new(), body_faces: Vec::new(), body_face_uvs: Vec::new() };
     let mut group = String::new();
     for (ln, line) in text.lines().enumerate() {
         let bad = || Error::CorruptData(format!("base.obj:{}: cannot parse {line:?}", ln + 1));

@@ -16,7 +16,8 @@ pub fn kmeans(points: &[[f64; 2]], k: usize, seed: u64) -> Vec<usize> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut centres = vec![points[rng.random_range(0..points.len())]];
     while centres.len() < k {
-        let dist: Vec<f64> = points.iter().map(|&p| centres.iter().map(|&c| d2(p, c)).fold(f64::INFINITY, f64::min)).collect();
+        let dist: Vec<f64> =
+            points.iter().map(|&p| centres.iter().map(|&c| d2(p, c)).fold(f64::INFINITY, f64::min)).collect();
         let total: f64 = dist.iter().sum();
         if total <= 0.0 {
             centres.push(centres[0]);
@@ -33,7 +34,9 @@ pub fn kmeans(points: &[[f64; 2]], k: usize, seed: u64) -> Vec<usize> {
         }
         centres.push(points[pick]);
     }
-    let nearest = |p: [f64; 2], cs: &[[f64; 2]]| (0..cs.len()).min_by(|&a, &b| d2(p, cs[a]).total_cmp(&d2(p, cs[b]))).unwrap_or(0);
+    let nearest = |p: [f64; 2], cs: &[[f64; 2]]| {
+        (0..cs.len()).min_by(|&a, &b| d2(p, cs[a]).total_cmp(&d2(p, cs[b]))).unwrap_or(0)
+    };
     let mut labels: Vec<usize> = points.iter().map(|&p| nearest(p, &centres)).collect();
     for _ in 0..50 {
         let mut sum = vec![[0.0; 2]; k];

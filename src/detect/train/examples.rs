@@ -50,7 +50,9 @@ impl Geometry {
         let points = part_points(j);
         let s = self.sbin as f64;
         let half = self.side as f64 / 2.0;
-        let cell = |q: f64, n: usize| ((q / s - half).round() + p as f64).clamp(0.0, n.saturating_sub(self.side) as f64) as usize;
+        let cell = |q: f64, n: usize| {
+            ((q / s - half).round() + p as f64).clamp(0.0, n.saturating_sub(self.side) as f64) as usize
+        };
         let cells = std::array::from_fn(|i| (cell(points[i][0], feat.cols), cell(points[i][1], feat.rows)));
         Positive { feat, cells, points }
     }
@@ -58,7 +60,12 @@ impl Geometry {
     /// The positive and its mirror image from a gray image (values 0..=255) whose figure has canonical joints
     /// `joints` (px) and standing height `height_px`; `None` when the figure is smaller than
     /// canonical (it would need upsampling).
-    pub fn positive_pair(&self, gray: &Planes, joints: &[[f64; 2]; NUM_JOINTS], height_px: f64) -> Option<[Positive; 2]> {
+    pub fn positive_pair(
+        &self,
+        gray: &Planes,
+        joints: &[[f64; 2]; NUM_JOINTS],
+        height_px: f64,
+    ) -> Option<[Positive; 2]> {
         let f = self.figure_px / height_px;
         if !(f > 0.0 && f <= 1.0) {
             return None;
@@ -94,7 +101,15 @@ const MANNEQUIN_STREAM: u64 = 0x4D41_4E4E;
 /// own stream) is redrawn as a capsule mannequin around the same 2-D joints. Returns the
 /// positives (each with its mirror) and the number of sketches skipped. Parallel,
 /// order-preserving. Errors: the renderer's.
-pub fn render_positives(renderer: &SketchRenderer, geo: &Geometry, seed: u64, n: usize, size: usize, held_out: Option<Hair>, mannequins: f64) -> Result<(Vec<Positive>, usize)> {
+pub fn render_positives(
+    renderer: &SketchRenderer,
+    geo: &Geometry,
+    seed: u64,
+    n: usize,
+    size: usize,
+    held_out: Option<Hair>,
+    mannequins: f64,
+) -> Result<(Vec<Positive>, usize)> {
     let got: Vec<Option<[Positive; 2]>> = (0..n)
         .into_par_iter()
         .map(|i| {

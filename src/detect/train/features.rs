@@ -138,7 +138,11 @@ impl Structure {
     pub fn to_model(&self, w: &[f64], thresh: f64) -> Result<Model> {
         let (k, fl) = (self.k, self.filter_len());
         let filters = (0..NUM_PARTS * k)
-            .map(|f| Filter { rows: self.side, cols: self.side, w: w[f * fl..(f + 1) * fl].iter().map(|&v| v as f32).collect() })
+            .map(|f| Filter {
+                rows: self.side,
+                cols: self.side,
+                w: w[f * fl..(f + 1) * fl].iter().map(|&v| v as f32).collect(),
+            })
             .collect();
         let defs = (1..NUM_PARTS)
             .flat_map(|i| (0..k).map(move |m| (i, m)))

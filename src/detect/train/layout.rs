@@ -50,7 +50,15 @@ pub const PARENT: [Option<usize>; NUM_PARTS] = [
 pub const PART_TO_JOINT: [usize; NUM_PARSE_JOINTS] = [13, 11, 9, 21, 23, 25, 6, 4, 2, 14, 16, 18, 1, 0];
 
 /// One side's chain of points: (shoulder, elbow, wrist, hip, knee, ankle) joints.
-fn side_points(j: &[[f64; 2]; NUM_JOINTS], sho: usize, elb: usize, wri: usize, hip: usize, kne: usize, ank: usize) -> [[f64; 2]; 12] {
+fn side_points(
+    j: &[[f64; 2]; NUM_JOINTS],
+    sho: usize,
+    elb: usize,
+    wri: usize,
+    hip: usize,
+    kne: usize,
+    ank: usize,
+) -> [[f64; 2]; 12] {
     let lerp = |a: usize, b: usize, t: f64| [j[a][0] + (j[b][0] - j[a][0]) * t, j[a][1] + (j[b][1] - j[a][1]) * t];
     [
         j[sho],
@@ -107,7 +115,8 @@ mod tests {
         for k in 0..NUM_JOINTS {
             if k == joint::PELVIS {
                 // The detector's pelvis is the hips' midpoint.
-                let m = [(j[joint::R_HIP][0] + j[joint::L_HIP][0]) / 2.0, (j[joint::R_HIP][1] + j[joint::L_HIP][1]) / 2.0];
+                let m =
+                    [(j[joint::R_HIP][0] + j[joint::L_HIP][0]) / 2.0, (j[joint::R_HIP][1] + j[joint::L_HIP][1]) / 2.0];
                 assert!((back.xy[k][0] - m[0]).abs() < 1e-9 && (back.xy[k][1] - m[1]).abs() < 1e-9);
                 continue;
             }

@@ -53,13 +53,28 @@ fn key(image: usize, level: usize, p: &Placement) -> u64 {
 pub fn placement_of(c: &Candidate, pad: usize) -> Placement {
     c.parts
         .iter()
-        .map(|b| (((b.x1 / c.cell_px).round() as i64 + pad as i64).max(0) as usize, ((b.y1 / c.cell_px).round() as i64 + pad as i64).max(0) as usize, b.mixture))
+        .map(|b| {
+            (
+                ((b.x1 / c.cell_px).round() as i64 + pad as i64).max(0) as usize,
+                ((b.y1 / c.cell_px).round() as i64 + pad as i64).max(0) as usize,
+                b.mixture,
+            )
+        })
         .collect()
 }
 
 /// Hard negatives of one image: on every level, the best configurations scoring at least
 /// `thresh` (at most `per_level`), then the best `per_image` of them.
-pub fn mine_image(im: &Planes, image: usize, model: &Model, st: &Structure, range: SearchRange, thresh: f64, per_level: usize, per_image: usize) -> Result<Vec<Mined>> {
+pub fn mine_image(
+    im: &Planes,
+    image: usize,
+    model: &Model,
+    st: &Structure,
+    range: SearchRange,
+    thresh: f64,
+    per_level: usize,
+    per_image: usize,
+) -> Result<Vec<Mined>> {
     let lv = levels(im, st, range)?;
     let pad = st.side.saturating_sub(2);
     let mut out: Vec<Mined> = lv
@@ -78,15 +93,32 @@ pub fn mine_image(im: &Planes, image: usize, model: &Model, st: &Structure, rang
 }
 
 /// Hard negatives of every image (in parallel, order-preserving).
-pub fn mine(images: &[Planes], model: &Model, st: &Structure, range: SearchRange, thresh: f64, per_level: usize, per_image: usize) -> Result<Vec<Mined>> {
-    let per: Vec<Vec<Mined>> =
-        images.par_iter().enumerate().map(|(i, im)| mine_image(im, i, model, st, range, thresh, per_level, per_image)).collect::<Result<_>>()?;
+pub fn mine(
+    images: &[Planes],
+    model: &Model,
+    st: &Structure,
+    range: SearchRange,
+    thresh: f64,
+    per_level: usize,
+    per_image: usize,
+) -> Result<Vec<Mined>> {
+    let per: Vec<Vec<Mined>> = images
+        .par_iter()
+        .enumerate()
+        .map(|(i, im)| mine_image(im, i, model, st, range, thresh, per_level, per_image))
+        .collect::<Result<_>>()?;
     Ok(per.into_iter().flatten().collect())
 }
 
 /// `count` random configurations per image: a random level in range, root position and
 /// mixtures, every part at its anchor, clamped to the map. Deterministic from `seed`.
-pub fn random_negatives(images: &[Planes], st: &Structure, range: SearchRange, count: usize, seed: u64) -> Result<Vec<(SparseVec, u64)>> {
+pub fn random_negatives(
+    images: &[Planes],
+    st: &Structure,
+    range: SearchRange,
+    count: usize,
+    seed: u64,
+) -> Result<Vec<(SparseVec, u64)>> {
     let per: Vec<Vec<(SparseVec, u64)>> = images
         .par_iter()
         .enumerate()
@@ -105,7 +137,11 @@ pub fn random_negatives(images: &[Planes], st: &Structure, range: SearchRange, c
                 }
                 let (mx, my) = ((f.cols - st.side) as i64, (f.rows - st.side) as i64);
                 let mut p: Placement = Vec::with_capacity(NUM_PARTS);
-                p.push((rng.random_range(0..=mx) as usize, rng.random_range(0..=my) as usize, rng.random_range(0..st.k)));
+                p.push((
+                    rng.random_range(0..=mx) as usize,
+                    rng.random_range(0..=my) as usize,
+                    rng.random_range(0..st.k),
+                ));
                 for i in 1..NUM_PARTS {
                     let (px, py, _) = p[PARENT[i].unwrap_or(0)];
                     let m = rng.random_range(0..st.k);

@@ -108,8 +108,15 @@ impl TrainOptions {
         if !(self.c.is_finite() && self.c > 0.0) {
             return bad("c", format!("{} must be finite and > 0", self.c));
         }
-        if !(self.figure_px >= 16.0 && self.figure_px.is_finite()) || self.sbin < 2 || self.sbin % 2 != 0 || !(3..=16).contains(&self.filter_side) {
-            return bad("geometry", format!("figure {} px, sbin {}, filter {}", self.figure_px, self.sbin, self.filter_side));
+        if !(self.figure_px >= 16.0 && self.figure_px.is_finite())
+            || self.sbin < 2
+            || self.sbin % 2 != 0
+            || !(3..=16).contains(&self.filter_side)
+        {
+            return bad(
+                "geometry",
+                format!("figure {} px, sbin {}, filter {}", self.figure_px, self.sbin, self.filter_side),
+            );
         }
         if !(self.search.min_cell_px >= 0.0 && self.search.max_cell_px > self.search.min_cell_px) {
             return bad("search", format!("{:?}", self.search));
@@ -140,7 +147,8 @@ fn mixtures(pos: &[Positive], k: usize, seed: u64) -> (Vec<[usize; NUM_PARTS]>, 
     let mut anchors = vec![vec![[0i32; 2]; k]; NUM_PARTS];
     for i in 1..NUM_PARTS {
         let par = PARENT[i].unwrap_or(0);
-        let off: Vec<[f64; 2]> = pos.iter().map(|p| [p.points[i][0] - p.points[par][0], p.points[i][1] - p.points[par][1]]).collect();
+        let off: Vec<[f64; 2]> =
+            pos.iter().map(|p| [p.points[i][0] - p.points[par][0], p.points[i][1] - p.points[par][1]]).collect();
         let l = cluster::kmeans(&off, k, seed ^ (i as u64) << 8);
         for m in 0..k {
             let mut s = [0.0; 2];
@@ -171,11 +179,16 @@ pub fn train(renderer: &SketchRenderer, o: &TrainOptions, progress: &mut dyn FnM
     let t0 = std::time::Instant::now();
     let el = || t0.elapsed().as_secs_f64();
     let geo = Geometry { sbin: o.sbin, side: o.filter_side, figure_px: o.figure_px };
-    let (pos, skipped) = render_positives(renderer, &geo, o.seed, o.positives, o.image_size, o.held_out_hair, o.mannequins)?;
+    let (pos, skipped) =
+        render_positives(renderer, &geo, o.seed, o.positives, o.image_size, o.held_out_hair, o.mannequins)?;
     if pos.is_empty() {
         return Err(Error::Degenerate("no usable training positive".into()));
     }
-    progress(&format!("[{:7.1} s] positives: {} examples (mirrors included), {skipped} sketches skipped", el(), pos.len()));
+    progress(&format!(
+        "[{:7.1} s] positives: {} examples (mirrors included), {skipped} sketches skipped",
+        el(),
+        pos.len()
+    ));
     let (labels, anchors) = mixtures(&pos, o.mixtures, o.seed);
     let st = Structure { sbin: o.sbin, interval: o.interval, k: o.mixtures, side: o.filter_side, anchors };
     let mut qp = Qp::new(st.dim(), &st.bounded(), DEF_LOWER_BOUND, o.c);
@@ -192,9 +205,22 @@ pub fn train(renderer: &SketchRenderer, o: &TrainOptions, progress: &mut dyn FnM
     for (x, key) in rand {
         qp.examples.push(Example::new(x, -1.0, key | 1 << 63));
     }
-    progress(&format!("[{:7.1} s] {} negative pages, {} random negatives; dim {}", el(), negs.len(), qp.examples.len() - pos_x.len(), st.dim()));
+    progress(&format!(
+        "[{:7.1} s] {} negative pages, {} random negatives; dim {}",
+        el(),
+        negs.len(),
+        qp.examples.len() - pos_x.len(),
+        st.dim()
+    ));
     let s = qp.solve(o.max_passes, 1e-3, o.seed);
-    progress(&format!("[{:7.1} s] round 0: {} passes, violation {:.2e}, objective {:.4}, {} support vectors", el(), s.passes, s.violation, s.primal, s.support));
+    progress(&format!(
+        "[{:7.1} s] round 0: {} passes, violation {:.2e}, objective {:.4}, {} support vectors",
+        el(),
+        s.passes,
+        s.violation,
+        s.primal,
+        s.support
+    ));
     for round in 1..=o.rounds {
         let model = st.to_model(&qp.w, -1.0)?;
         let mined = mine::mine(&negs, &model, &st, o.search, -1.0, 5, o.mined_per_image)?;

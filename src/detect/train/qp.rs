@@ -78,7 +78,13 @@ impl Qp {
             return 0.0;
         }
         let g = e.y * e.x.dot(&self.w) - 1.0;
-        let pg = if e.alpha <= 0.0 { g.min(0.0) } else if e.alpha >= self.c { g.max(0.0) } else { g };
+        let pg = if e.alpha <= 0.0 {
+            g.min(0.0)
+        } else if e.alpha >= self.c {
+            g.max(0.0)
+        } else {
+            g
+        };
         if pg.abs() < 1e-12 {
             return 0.0;
         }
@@ -114,7 +120,12 @@ impl Qp {
             }
             passes += 1;
         }
-        SolveStats { passes, violation, primal: self.primal(), support: self.examples.iter().filter(|e| e.alpha > 0.0).count() }
+        SolveStats {
+            passes,
+            violation,
+            primal: self.primal(),
+            support: self.examples.iter().filter(|e| e.alpha > 0.0).count(),
+        }
     }
 
     /// ½‖w‖² + C Σ hinge over the cache.
@@ -131,10 +142,16 @@ impl Qp {
         self.examples.retain(|e| e.y > 0.0 || e.alpha > 0.0 || e.x.dot(w) >= -1.0 - slack);
         let negs = self.examples.iter().filter(|e| e.y < 0.0).count();
         if negs > max_negatives {
-            let mut free: Vec<(f64, usize)> =
-                self.examples.iter().enumerate().filter(|(_, e)| e.y < 0.0 && e.alpha <= 0.0).map(|(i, e)| (e.x.dot(w), i)).collect();
+            let mut free: Vec<(f64, usize)> = self
+                .examples
+                .iter()
+                .enumerate()
+                .filter(|(_, e)| e.y < 0.0 && e.alpha <= 0.0)
+                .map(|(i, e)| (e.x.dot(w), i))
+                .collect();
             free.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let drop: std::collections::HashSet<usize> = free.iter().take(negs - max_negatives).map(|&(_, i)| i).collect();
+            let drop: std::collections::HashSet<usize> =
+                free.iter().take(negs - max_negatives).map(|&(_, i)| i).collect();
             let mut k = 0;
             self.examples.retain(|_| {
                 k += 1;

@@ -62,7 +62,14 @@ fn hi(v: i64) -> i64 {
 /// `tris` (indices into `fixed`, vertices snapped to 1/SUB px, already range-checked). Returns
 /// how many triangles were scanned (bounding box met a pixel centre, non-degenerate, and
 /// facing as asked).
-pub(super) fn draw_mask(fixed: &[[i32; 2]], tris: &[[u32; 3]], w: usize, h: usize, facing: Facing, mask: &mut [u8]) -> usize {
+pub(super) fn draw_mask(
+    fixed: &[[i32; 2]],
+    tris: &[[u32; 3]],
+    w: usize,
+    h: usize,
+    facing: Facing,
+    mask: &mut [u8],
+) -> usize {
     let (last_i, last_j) = (w as i64 - 1, h as i64 - 1);
     let mut scanned = 0;
     for t in tris {
@@ -110,7 +117,8 @@ pub(super) fn draw_mask(fixed: &[[i32; 2]], tris: &[[u32; 3]], w: usize, h: usiz
             // Always test NARROW centres a row (fixed trip count, no branches; centres right
             // of the box test as outside and leave the mask unchanged).
             for _ in j0..=j1 {
-                let row: &mut [u8; NARROW as usize] = (&mut mask[base..base + NARROW as usize]).try_into().expect("NARROW bytes");
+                let row: &mut [u8; NARROW as usize] =
+                    (&mut mask[base..base + NARROW as usize]).try_into().expect("NARROW bytes");
                 for (k, px) in row.iter_mut().enumerate() {
                     let k = k as i64;
                     let v = (e[0] + k * dx[0]) | (e[1] + k * dx[1]) | (e[2] + k * dx[2]);
@@ -191,7 +199,8 @@ mod tests {
     #[test]
     fn front_faces_of_a_closed_mesh_draw_the_same_silhouette() {
         // Unit cube, faces counter-clockwise seen from outside.
-        let v: Vec<[f32; 3]> = (0..8).map(|i| [(i & 1) as f32 - 0.5, ((i >> 1) & 1) as f32 - 0.5, ((i >> 2) & 1) as f32 - 0.5]).collect();
+        let v: Vec<[f32; 3]> =
+            (0..8).map(|i| [(i & 1) as f32 - 0.5, ((i >> 1) & 1) as f32 - 0.5, ((i >> 2) & 1) as f32 - 0.5]).collect();
         let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
         let tris: Vec<[u32; 3]> = quads.iter().flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]]).collect();
         let r: Matrix3<f64> = *Rotation3::from_euler_angles(0.4, 0.7, 0.1).matrix();

@@ -99,7 +99,13 @@ pub fn render_background(seed: u64, width: usize, height: usize) -> Result<Vec<u
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM);
     let style = SketchStyle::random(&mut rng);
     let unit = width.min(height) as f64 / DEFAULT_SIZE as f64;
-    let pen = Pen { width: style.stroke_width * unit, ink: style.ink, wobble: style.wobble * unit, jitter: style.pressure_jitter, taper: 0.15 };
+    let pen = Pen {
+        width: style.stroke_width * unit,
+        ink: style.ink,
+        wobble: style.wobble * unit,
+        jitter: style.pressure_jitter,
+        taper: 0.15,
+    };
     let mut canvas = Canvas::new(width, height);
     for _ in 0..rng.random_range(0..9) {
         shape(&mut canvas, &pen, unit, &mut rng);

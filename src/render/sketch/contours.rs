@@ -32,7 +32,10 @@ impl EdgeTopology {
         let mut edges: Vec<[u32; 4]> = Vec::with_capacity(quads.len() * 2);
         for (f, q) in quads.iter().enumerate() {
             if q.iter().any(|&i| i as usize >= num_vertices) {
-                return Err(Error::OutOfRange { name: "face index", detail: format!("face {f} indexes a vertex >= {num_vertices}") });
+                return Err(Error::OutOfRange {
+                    name: "face index",
+                    detail: format!("face {f} indexes a vertex >= {num_vertices}"),
+                });
             }
             for k in 0..4 {
                 let (a, b) = (q[k], q[(k + 1) % 4]);

@@ -176,7 +176,8 @@ impl Figure<'_> {
             let f = self.forward();
             let side = up.cross(&f).normalize();
             if let Some(ring) = self.band(7, &torso, t0 + 0.03, 1.07) {
-                let front = ring.iter().copied().max_by(|a, b| (a - p).dot(&f).total_cmp(&(b - p).dot(&f))).unwrap_or(p);
+                let front =
+                    ring.iter().copied().max_by(|a, b| (a - p).dot(&f).total_cmp(&(b - p).dot(&f))).unwrap_or(p);
                 let h = 0.035;
                 let sq: Vec<Vector3<f64>> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0)]
                     .iter()
@@ -223,14 +224,17 @@ impl Figure<'_> {
         let flare = rng.random_range(0.1..0.3);
         let top_r = rs - f * 0.06;
         let top_l = ls - f * 0.06;
-        let bottom = |top: Vector3<f64>, sgn: f64| Vector3::new(top.x, low + drop, top.z) + side * (sgn * flare) - f * 0.18;
+        let bottom =
+            |top: Vector3<f64>, sgn: f64| Vector3::new(top.x, low + drop, top.z) + side * (sgn * flare) - f * 0.18;
         let (br, bl) = (bottom(top_r, -1.0), bottom(top_l, 1.0));
         let curve = |a: Vector3<f64>, b: Vector3<f64>| -> Vec<Vector3<f64>> {
             let ctrl = (a + b) / 2.0 - f * 0.12;
-            (0..=40).map(|i| {
-                let t = i as f64 / 40.0;
-                a * (1.0 - t) * (1.0 - t) + ctrl * 2.0 * t * (1.0 - t) + b * t * t
-            }).collect()
+            (0..=40)
+                .map(|i| {
+                    let t = i as f64 / 40.0;
+                    a * (1.0 - t) * (1.0 - t) + ctrl * 2.0 * t * (1.0 - t) + b * t * t
+                })
+                .collect()
         };
         self.visible_runs(&curve(top_r, br), out);
         self.visible_runs(&curve(top_l, bl), out);
@@ -292,7 +296,12 @@ impl Figure<'_> {
             Hair::Spiky => {
                 let spikes = rng.random_range(5..9);
                 let pts: Vec<[f64; 2]> = (0..=2 * spikes)
-                    .map(|i| at(-span + 2.0 * span * i as f64 / (2 * spikes) as f64, if i % 2 == 1 { rng.random_range(1.25..1.5) } else { 1.0 }))
+                    .map(|i| {
+                        at(
+                            -span + 2.0 * span * i as f64 / (2 * spikes) as f64,
+                            if i % 2 == 1 { rng.random_range(1.25..1.5) } else { 1.0 },
+                        )
+                    })
                     .collect();
                 out.push(pts);
             }
@@ -312,30 +321,40 @@ impl Figure<'_> {
                 let len = rng.random_range(1.8..3.2) * b;
                 for sgn in [-1.0, 1.0] {
                     let p0 = at(sgn * span, 1.0);
-                    let pts: Vec<[f64; 2]> = (0..=12).map(|i| {
-                        let t = i as f64 / 12.0;
-                        down(p0, len * t, sgn * a * 0.35 * t * t)
-                    }).collect();
+                    let pts: Vec<[f64; 2]> = (0..=12)
+                        .map(|i| {
+                            let t = i as f64 / 12.0;
+                            down(p0, len * t, sgn * a * 0.35 * t * t)
+                        })
+                        .collect();
                     out.push(pts);
                 }
             }
             Hair::Bun => {
                 let cb = at(0.0, 1.25);
                 let rb = 0.35 * a;
-                out.push((0..=30).map(|i| {
-                    let t = TAU * i as f64 / 30.0;
-                    [cb[0] + rb * t.cos(), cb[1] + rb * t.sin()]
-                }).collect());
+                out.push(
+                    (0..=30)
+                        .map(|i| {
+                            let t = TAU * i as f64 / 30.0;
+                            [cb[0] + rb * t.cos(), cb[1] + rb * t.sin()]
+                        })
+                        .collect(),
+                );
             }
             Hair::Ponytail => {
                 let sgn = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
                 let p0 = at(sgn * 1.2, 1.0);
                 let len = rng.random_range(1.5..2.5) * b;
                 for off in [0.0, 0.25] {
-                    out.push((0..=12).map(|i| {
-                        let t = i as f64 / 12.0;
-                        down(p0, len * t, sgn * a * (0.5 * t + off * (1.0 - t)))
-                    }).collect());
+                    out.push(
+                        (0..=12)
+                            .map(|i| {
+                                let t = i as f64 / 12.0;
+                                down(p0, len * t, sgn * a * (0.5 * t + off * (1.0 - t)))
+                            })
+                            .collect(),
+                    );
                 }
             }
             _ => {}

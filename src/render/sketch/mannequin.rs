@@ -17,7 +17,8 @@ const STREAM: u64 = 0x6D61_6E6E_6571_756E;
 
 /// Capsule radius of each bone of [`BONES`] as a fraction of the figure's standing height
 /// (bone 0, neck → head, is the head ellipse instead): the proportions of the bundled example.
-const RADIUS: [f64; NUM_BONES] = [0.0, 0.030, 0.028, 0.023, 0.030, 0.028, 0.023, 0.070, 0.037, 0.040, 0.030, 0.037, 0.040, 0.030];
+const RADIUS: [f64; NUM_BONES] =
+    [0.0, 0.030, 0.028, 0.023, 0.030, 0.028, 0.023, 0.070, 0.037, 0.040, 0.030, 0.037, 0.040, 0.030];
 
 fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (vx, vy) = (b[0] - a[0], b[1] - a[1]);
@@ -28,7 +29,13 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
 
 /// Draws a mannequin around `joints` (pixels, canonical order) of a figure `height_px` tall
 /// on a `width` × `height` page; deterministic in `seed`. Returns 8-bit gray pixels.
-pub fn render_mannequin(joints: &[[f64; 2]; NUM_JOINTS], height_px: f64, width: usize, height: usize, seed: u64) -> Vec<u8> {
+pub fn render_mannequin(
+    joints: &[[f64; 2]; NUM_JOINTS],
+    height_px: f64,
+    width: usize,
+    height: usize,
+    seed: u64,
+) -> Vec<u8> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM);
     let girth = rng.random_range(0.75..1.3);
     let radius: Vec<f64> = RADIUS.iter().map(|r| r * height_px * girth * rng.random_range(0.9..1.1)).collect();
@@ -36,7 +43,8 @@ pub fn render_mannequin(joints: &[[f64; 2]; NUM_JOINTS], height_px: f64, width: 
     let axis = [head[0] - neck[0], head[1] - neck[1]];
     let axis_len = axis[0].hypot(axis[1]).max(1e-9);
     let (ux, uy) = (axis[0] / axis_len, axis[1] / axis_len);
-    let (head_long, head_wide) = (0.077 * height_px * rng.random_range(0.85..1.15), 0.06 * height_px * rng.random_range(0.85..1.15));
+    let (head_long, head_wide) =
+        (0.077 * height_px * rng.random_range(0.85..1.15), 0.06 * height_px * rng.random_range(0.85..1.15));
     let half_width = rng.random_range(0.7..1.8);
     let belt = rng.random_bool(0.5);
     let (pelvis, r_hip, l_hip) = (joints[8], joints[9], joints[12]);
@@ -56,8 +64,12 @@ pub fn render_mannequin(joints: &[[f64; 2]; NUM_JOINTS], height_px: f64, width: 
             let p = [x as f64 + 0.5, y as f64 + 0.5];
             let d = distance(p);
             let mut ink = (1.0 - (d.abs() - half_width).max(0.0)).clamp(0.0, 1.0);
-            if belt && d < 0.0 && segment_distance(p, r_hip, l_hip).min(segment_distance(p, pelvis, r_hip)) < 0.02 * height_px {
-                let line = (1.0 - ((p[1] - 0.5 * (r_hip[1] + l_hip[1]) + 0.02 * height_px).abs() - 0.6).max(0.0)).clamp(0.0, 1.0);
+            if belt
+                && d < 0.0
+                && segment_distance(p, r_hip, l_hip).min(segment_distance(p, pelvis, r_hip)) < 0.02 * height_px
+            {
+                let line = (1.0 - ((p[1] - 0.5 * (r_hip[1] + l_hip[1]) + 0.02 * height_px).abs() - 0.6).max(0.0))
+                    .clamp(0.0, 1.0);
                 ink = ink.max(0.8 * line);
             }
             canvas.ink[y * width + x] = ink as f32;
@@ -80,8 +92,21 @@ mod tests {
     #[test]
     fn draws_an_outline_around_the_bones_and_is_deterministic() {
         let joints: [[f64; 2]; NUM_JOINTS] = [
-            [128.0, 35.0], [128.0, 59.0], [107.0, 63.0], [95.0, 98.0], [88.0, 131.0], [149.0, 63.0], [163.0, 96.0], [176.0, 126.0],
-            [128.0, 125.0], [117.0, 128.0], [114.0, 176.0], [111.0, 223.0], [139.0, 128.0], [144.0, 176.0], [150.0, 223.0],
+            [128.0, 35.0],
+            [128.0, 59.0],
+            [107.0, 63.0],
+            [95.0, 98.0],
+            [88.0, 131.0],
+            [149.0, 63.0],
+            [163.0, 96.0],
+            [176.0, 126.0],
+            [128.0, 125.0],
+            [117.0, 128.0],
+            [114.0, 176.0],
+            [111.0, 223.0],
+            [139.0, 128.0],
+            [144.0, 176.0],
+            [150.0, 223.0],
         ];
         let a = render_mannequin(&joints, 215.0, 256, 256, 7);
         assert_eq!(a, render_mannequin(&joints, 215.0, 256, 256, 7));

@@ -97,7 +97,8 @@ impl MocapLibrary {
                 }
             }
         }
-        Self::from_frames(frames).map_err(|_| Error::CorruptData(format!("{}: no upright mocap frame in any *.csv", dir.display())))
+        Self::from_frames(frames)
+            .map_err(|_| Error::CorruptData(format!("{}: no upright mocap frame in any *.csv", dir.display())))
     }
 
     /// A library from given frames (kept as they are). Errors when `frames` is empty.
@@ -160,7 +161,12 @@ mod tests {
             JOINT_NAMES.iter().flat_map(|n| ["x", "y", "z"].map(|a| format!("{n}_{a}"))).collect();
         let mut row = vec![0.0f64; 45];
         // Hips along -Z (character faces -X), pelvis at (1, 1, 1).
-        for (k, v) in [(joint::PELVIS, [1.0, 1.0, 1.0]), (joint::R_HIP, [1.0, 1.0, 1.1]), (joint::L_HIP, [1.0, 1.0, 0.9]), (joint::NECK, [1.0, 1.5, 1.0])] {
+        for (k, v) in [
+            (joint::PELVIS, [1.0, 1.0, 1.0]),
+            (joint::R_HIP, [1.0, 1.0, 1.1]),
+            (joint::L_HIP, [1.0, 1.0, 0.9]),
+            (joint::NECK, [1.0, 1.5, 1.0]),
+        ] {
             row[3 * k..3 * k + 3].copy_from_slice(&v);
         }
         let line = row.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",");

@@ -69,7 +69,16 @@ pub struct SketchRequest {
 impl SketchRequest {
     /// A fully random request of a square image.
     pub fn random(seed: u64, size: usize) -> SketchRequest {
-        SketchRequest { seed, width: size, height: size, gender: None, shape_weights: None, joints: None, camera: None, style: None }
+        SketchRequest {
+            seed,
+            width: size,
+            height: size,
+            gender: None,
+            shape_weights: None,
+            joints: None,
+            camera: None,
+            style: None,
+        }
     }
 }
 
@@ -175,14 +184,21 @@ impl SketchRenderer {
             None => space.gmm().sample(&mut rng),
         };
         let shape = space.synthesize(&weights)?;
-        let (rest_v, rest_j) = scene::apply_proportions(&shape.vertices, &shape.joints, self.model.skin_weights(), &style.proportions)?;
+        let (rest_v, rest_j) =
+            scene::apply_proportions(&shape.vertices, &shape.joints, self.model.skin_weights(), &style.proportions)?;
         let (source, pose_source) = match (&req.joints, &self.mocap) {
             (Some(j), _) => (*j, "given".to_string()),
             (None, Some(lib)) => match lib.random(&mut rng) {
                 Some(f) => (mocap::normalize_frame(&f.joints), format!("mocap:{}:{}", f.clip, f.frame)),
-                None => (mocap::normalize_frame(&crate::body::procedural::random_pose(&rest_j, &mut rng, 0.0)), "procedural".into()),
+                None => (
+                    mocap::normalize_frame(&crate::body::procedural::random_pose(&rest_j, &mut rng, 0.0)),
+                    "procedural".into(),
+                ),
             },
-            (None, None) => (mocap::normalize_frame(&crate::body::procedural::random_pose(&rest_j, &mut rng, 0.0)), "procedural".into()),
+            (None, None) => (
+                mocap::normalize_frame(&crate::body::procedural::random_pose(&rest_j, &mut rng, 0.0)),
+                "procedural".into(),
+            ),
         };
         let target = scene::retarget_directions(&rest_j, &source)?;
         let (posed, pose) = scene::pose_mesh(&rest_v, &rest_j, self.model.skin_weights(), &target)?;
@@ -197,9 +213,24 @@ impl SketchRenderer {
 
         let unit = req.width.min(req.height) as f64 / DEFAULT_SIZE as f64;
         let mut canvas = Canvas::new(req.width, req.height);
-        let pen = Pen { width: style.stroke_width * unit, ink: style.ink, wobble: style.wobble * unit, jitter: style.pressure_jitter, taper: 0.15 };
+        let pen = Pen {
+            width: style.stroke_width * unit,
+            ink: style.ink,
+            wobble: style.wobble * unit,
+            jitter: style.pressure_jitter,
+            taper: 0.15,
+        };
         let crease_pen = Pen { width: pen.width * 0.7, ink: style.ink * style.crease_ink, ..pen };
-        let lines = contours::extract_lines(&self.topo, &self.face_detail, self.model.faces(), &posed, &cam, &depth, style.crease_deg, 2.5 * unit);
+        let lines = contours::extract_lines(
+            &self.topo,
+            &self.face_detail,
+            self.model.faces(),
+            &posed,
+            &cam,
+            &depth,
+            style.crease_deg,
+            2.5 * unit,
+        );
         for mut line in lines {
             canvas::smooth(&mut line.pts, 2);
             let p = if line.kind == LineKind::Contour { pen } else { crease_pen };
@@ -213,9 +244,12 @@ impl SketchRenderer {
                 canvas.stroke(&shifted, &light, &mut rng);
             }
         }
-        let figure = costume::Figure { vertices: &posed, dominant: &self.dominant, joints: &pose.joints, cam: &cam, depth };
+        let figure =
+            costume::Figure { vertices: &posed, dominant: &self.dominant, joints: &pose.joints, cam: &cam, depth };
         let extra_pen = Pen { width: pen.width * 0.8, ..pen };
-        for l in figure.costume_lines(&style.costume, &mut rng).into_iter().chain(figure.hair_lines(style.hair, &mut rng)) {
+        for l in
+            figure.costume_lines(&style.costume, &mut rng).into_iter().chain(figure.hair_lines(style.hair, &mut rng))
+        {
             let mut l = l;
             canvas::smooth(&mut l, 1);
             canvas.stroke(&l, &extra_pen, &mut rng);
@@ -235,15 +269,37 @@ impl SketchRenderer {
         } else {
             None
         };
-        paper::clutter(&mut canvas, &pen, unit, style.stray_strokes, style.scribbles, style.text_rows, ground, &mut rng);
+        paper::clutter(
+            &mut canvas,
+            &pen,
+            unit,
+            style.stray_strokes,
+            style.scribbles,
+            style.text_rows,
+            ground,
+            &mut rng,
+        );
         let pixels = paper::compose(&canvas, style.paper_tone, style.paper_noise, 1.0, &mut rng);
 
         let joints2d = self.joints2d(&pose.joints, &posed, &cam, &depth);
         let height_m = {
-            let (lo, hi) = rest_v.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| (lo.min(v[1]), hi.max(v[1])));
+            let (lo, hi) =
+                rest_v.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| (lo.min(v[1]), hi.max(v[1])));
             (hi - lo) as f64
         };
-        let truth = GroundTruth::new(req, gender, weights, joints2d, &pose.joints, &rest_j, &cam, angles, height_m, pose_source, style);
+        let truth = GroundTruth::new(
+            req,
+            gender,
+            weights,
+            joints2d,
+            &pose.joints,
+            &rest_j,
+            &cam,
+            angles,
+            height_m,
+            pose_source,
+            style,
+        );
         Ok(Sketch { pixels, truth, rest_vertices: rest_v, posed_vertices: posed })
     }
 

@@ -12,7 +12,15 @@ use super::contours::DepthView;
 /// covered pixel comes from the depth gradient (`scale` pixels per metre); pixels whose shade
 /// `1 − max(0, n·L)` exceeds `1 − amount` get diagonal lines every `spacing` pixels, and the
 /// darkest also cross-hatching. `amount` 0 draws nothing.
-pub fn hatch<R: Rng + ?Sized>(canvas: &mut Canvas, depth: &DepthView<'_>, scale: f64, amount: f64, spacing: f64, ink: f64, rng: &mut R) {
+pub fn hatch<R: Rng + ?Sized>(
+    canvas: &mut Canvas,
+    depth: &DepthView<'_>,
+    scale: f64,
+    amount: f64,
+    spacing: f64,
+    ink: f64,
+    rng: &mut R,
+) {
     if amount <= 0.0 {
         return;
     }
@@ -67,7 +75,16 @@ fn anywhere<R: Rng + ?Sized>(rng: &mut R, w: f64, h: f64) -> [f64; 2] {
 /// text-like marks in a corner, and a ground line at image row `ground_y` between `x0` and `x1`
 /// when given. `unit` is the stroke scale in pixels (1 at 512²).
 #[allow(clippy::too_many_arguments)]
-pub fn clutter<R: Rng + ?Sized>(canvas: &mut Canvas, pen: &Pen, unit: f64, strays: usize, scribbles: usize, text_rows: usize, ground: Option<(f64, f64, f64)>, rng: &mut R) {
+pub fn clutter<R: Rng + ?Sized>(
+    canvas: &mut Canvas,
+    pen: &Pen,
+    unit: f64,
+    strays: usize,
+    scribbles: usize,
+    text_rows: usize,
+    ground: Option<(f64, f64, f64)>,
+    rng: &mut R,
+) {
     let (w, h) = (canvas.width as f64, canvas.height as f64);
     let light = Pen { ink: pen.ink * 0.6, width: pen.width * 0.7, ..*pen };
     for _ in 0..strays {
@@ -150,7 +167,10 @@ pub fn compose<R: Rng + ?Sized>(canvas: &Canvas, tone: f64, noise: f64, ink_dark
             let gx = x as f64 / w as f64 * G as f64;
             let (i, fx) = ((gx as usize).min(G - 1), gx - (gx as usize).min(G - 1) as f64);
             let g = |a: usize, b: usize| grid[b * (G + 1) + a];
-            let blot = g(i, j) * (1.0 - fx) * (1.0 - fy) + g(i + 1, j) * fx * (1.0 - fy) + g(i, j + 1) * (1.0 - fx) * fy + g(i + 1, j + 1) * fx * fy;
+            let blot = g(i, j) * (1.0 - fx) * (1.0 - fy)
+                + g(i + 1, j) * fx * (1.0 - fy)
+                + g(i, j + 1) * (1.0 - fx) * fy
+                + g(i + 1, j + 1) * fx * fy;
             let grain: f64 = rng.random_range(-1.0..1.0);
             let paper = (tone + noise * (0.6 * blot + 0.4 * grain)).clamp(0.0, 1.0);
             let ink = canvas.ink[y * w + x] as f64 * ink_dark;

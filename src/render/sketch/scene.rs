@@ -50,7 +50,13 @@ impl Default for Proportions {
 impl Proportions {
     /// Checks that every factor is finite and in 0.5..=2.0.
     pub fn validate(&self) -> Result<()> {
-        for (name, v) in [("proportions.legs", self.legs), ("proportions.arms", self.arms), ("proportions.shoulders", self.shoulders), ("proportions.head", self.head), ("proportions.torso", self.torso)] {
+        for (name, v) in [
+            ("proportions.legs", self.legs),
+            ("proportions.arms", self.arms),
+            ("proportions.shoulders", self.shoulders),
+            ("proportions.head", self.head),
+            ("proportions.torso", self.torso),
+        ] {
             ensure_finite(name, v)?;
             if !(0.5..=2.0).contains(&v) {
                 return Err(Error::OutOfRange { name, detail: format!("{v} is outside 0.5..=2.0") });
@@ -83,7 +89,12 @@ impl Proportions {
 
 /// Applies `props` to a rest mesh and its joints (see the module doc). Returns the new rest
 /// vertices and joints.
-pub fn apply_proportions(vertices: &[[f32; 3]], joints: &Joints3, weights: &[VertexWeights], props: &Proportions) -> Result<(Vec<[f32; 3]>, Joints3)> {
+pub fn apply_proportions(
+    vertices: &[[f32; 3]],
+    joints: &Joints3,
+    weights: &[VertexWeights],
+    props: &Proportions,
+) -> Result<(Vec<[f32; 3]>, Joints3)> {
     props.validate()?;
     ik::check_joints("rest joint", joints)?;
     let k = props.bone_factors();
@@ -157,7 +168,12 @@ pub fn retarget_directions(rest: &Joints3, source: &Joints3) -> Result<Joints3> 
 }
 
 /// Poses a rest mesh onto `target` joints (IK without retargeting, then LBS).
-pub fn pose_mesh(rest_vertices: &[[f32; 3]], rest_joints: &Joints3, weights: &[VertexWeights], target: &Joints3) -> Result<(Vec<[f32; 3]>, Pose)> {
+pub fn pose_mesh(
+    rest_vertices: &[[f32; 3]],
+    rest_joints: &Joints3,
+    weights: &[VertexWeights],
+    target: &Joints3,
+) -> Result<(Vec<[f32; 3]>, Pose)> {
     let pose = ik::solve(rest_joints, target, &IkOptions { retarget: false })?;
     let posed = skin(rest_vertices, weights, &pose, SkinMethod::Linear)?;
     Ok((posed, pose))
@@ -178,12 +194,18 @@ pub struct CameraAngles {
 impl CameraAngles {
     /// Uniform random angles in the near-frontal ranges (yaw ±30°, pitch ±10°, roll ±5°).
     pub fn random<R: Rng + ?Sized>(rng: &mut R) -> CameraAngles {
-        CameraAngles { yaw_deg: rng.random_range(-30.0..=30.0), pitch_deg: rng.random_range(-10.0..=10.0), roll_deg: rng.random_range(-5.0..=5.0) }
+        CameraAngles {
+            yaw_deg: rng.random_range(-30.0..=30.0),
+            pitch_deg: rng.random_range(-10.0..=10.0),
+            roll_deg: rng.random_range(-5.0..=5.0),
+        }
     }
 
     /// The rotation matrix. Errors on non-finite angles or any angle beyond ±90°.
     pub fn rotation(&self) -> Result<Matrix3<f64>> {
-        for (name, v) in [("camera yaw", self.yaw_deg), ("camera pitch", self.pitch_deg), ("camera roll", self.roll_deg)] {
+        for (name, v) in
+            [("camera yaw", self.yaw_deg), ("camera pitch", self.pitch_deg), ("camera roll", self.roll_deg)]
+        {
             ensure_finite(name, v)?;
             if v.abs() > 90.0 {
                 return Err(Error::OutOfRange { name, detail: format!("{v}° is beyond ±90°") });
@@ -198,7 +220,13 @@ impl CameraAngles {
 
 /// A camera with rotation `r` that fits `points` into a `width`×`height` image with `margin`
 /// (fraction of the smaller side left free on every side), centred, equal scales.
-pub fn fit_camera(r: Matrix3<f64>, points: &[[f32; 3]], width: usize, height: usize, margin: f64) -> Result<WeakPerspective> {
+pub fn fit_camera(
+    r: Matrix3<f64>,
+    points: &[[f32; 3]],
+    width: usize,
+    height: usize,
+    margin: f64,
+) -> Result<WeakPerspective> {
     if points.is_empty() {
         return Err(Error::OutOfRange { name: "mesh", detail: "no vertices to frame".into() });
     }
@@ -211,7 +239,10 @@ pub fn fit_camera(r: Matrix3<f64>, points: &[[f32; 3]], width: usize, height: us
     let free = margin * width.min(height) as f64;
     let s = ((width as f64 - 2.0 * free) / w).min((height as f64 - 2.0 * free) / h);
     if !(s.is_finite() && s > 0.0) {
-        return Err(Error::OutOfRange { name: "sketch margin", detail: format!("margin {margin} leaves no room in {width}x{height}") });
+        return Err(Error::OutOfRange {
+            name: "sketch margin",
+            detail: format!("margin {margin} leaves no room in {width}x{height}"),
+        });
     }
     let (cx, cy) = ((bb[0] + bb[2]) / 2.0, (bb[1] + bb[3]) / 2.0);
     let cam = WeakPerspective { sx: s, sy: s, r, t: [width as f64 / 2.0 - s * cx, height as f64 / 2.0 + s * cy] };

@@ -170,9 +170,16 @@ impl SketchStyle {
         }
         ensure_finite("style.margin", self.margin)?;
         if !(0.0..=0.4).contains(&self.margin) {
-            return Err(Error::OutOfRange { name: "style.margin", detail: format!("{} is outside 0..=0.4", self.margin) });
+            return Err(Error::OutOfRange {
+                name: "style.margin",
+                detail: format!("{} is outside 0..=0.4", self.margin),
+            });
         }
-        for (name, v, hi) in [("style.stray_strokes", self.stray_strokes, 500), ("style.scribbles", self.scribbles, 100), ("style.text_rows", self.text_rows, 40)] {
+        for (name, v, hi) in [
+            ("style.stray_strokes", self.stray_strokes, 500),
+            ("style.scribbles", self.scribbles, 100),
+            ("style.text_rows", self.text_rows, 40),
+        ] {
             if v > hi {
                 return Err(Error::OutOfRange { name, detail: format!("{v} is more than {hi}") });
             }

@@ -110,7 +110,13 @@ impl GroundTruth {
             visible: j2.visible.to_vec(),
             joints3d: joints.to_vec(),
             rest_joints3d: rest.to_vec(),
-            camera: CameraJson { sx: cam.sx, sy: cam.sy, r: std::array::from_fn(|i| std::array::from_fn(|j| cam.r[(i, j)])), t: cam.t, angles },
+            camera: CameraJson {
+                sx: cam.sx,
+                sy: cam.sy,
+                r: std::array::from_fn(|i| std::array::from_fn(|j| cam.r[(i, j)])),
+                t: cam.t,
+                angles,
+            },
             height_m,
             pose_source,
             style,
@@ -136,7 +142,10 @@ impl GroundTruth {
 /// Encodes the `.mesh` file (module doc).
 pub fn mesh_bytes(rest: &[[f32; 3]], posed: &[[f32; 3]]) -> Result<Vec<u8>> {
     if rest.len() != posed.len() {
-        return Err(Error::OutOfRange { name: "mesh", detail: format!("{} rest vs {} posed vertices", rest.len(), posed.len()) });
+        return Err(Error::OutOfRange {
+            name: "mesh",
+            detail: format!("{} rest vs {} posed vertices", rest.len(), posed.len()),
+        });
     }
     let mut b = Vec::with_capacity(20 + rest.len() * 24);
     b.extend_from_slice(MESH_MAGIC);
@@ -197,7 +206,8 @@ pub fn sample_complete(dir: &Path, stem: &str) -> bool {
 pub fn write_sample(dir: &Path, stem: &str, s: &Sketch) -> Result<()> {
     let [mesh, json, png] = sample_paths(dir, stem);
     write_atomic(&mesh, &mesh_bytes(&s.rest_vertices, &s.posed_vertices)?)?;
-    let text = serde_json::to_string_pretty(&s.truth).map_err(|e| Error::CorruptData(format!("ground truth JSON: {e}")))?;
+    let text =
+        serde_json::to_string_pretty(&s.truth).map_err(|e| Error::CorruptData(format!("ground truth JSON: {e}")))?;
     write_atomic(&json, text.as_bytes())?;
     let img = crate::image::GrayImage::from_vec(s.truth.width, s.truth.height, s.pixels.clone())?;
     crate::image::save_gray_png(&img, &png)
