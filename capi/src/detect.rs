@@ -287,7 +287,8 @@ mod tests {
     fn skb_detect_uses_the_embedded_detector() {
         use crate::{skb_context_free, skb_context_new};
         use sketchbody_core::render::sketch::{SketchRenderer, SketchRequest};
-        let r = SketchRenderer::new(std::sync::Arc::new(sketchbody_core::body::BodyModel::embedded().unwrap()), None).unwrap();
+        let r = SketchRenderer::new(std::sync::Arc::new(sketchbody_core::body::BodyModel::embedded().unwrap()), None)
+            .unwrap();
         let sk = r.render(&SketchRequest::random(11, 384)).unwrap();
         unsafe {
             let mut ctx = null_mut();

@@ -9,7 +9,9 @@ use sketchbody_core::body::BodyModel;
 use sketchbody_core::detect::DetectOptions;
 use sketchbody_core::error::Error;
 use sketchbody_core::image::{load_image, to_gray, GrayImage};
-use sketchbody_core::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
+use sketchbody_core::pipeline::{
+    run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult,
+};
 use sketchbody_core::pose::dict_io;
 use sketchbody_core::skeleton::NUM_JOINTS;
 

@@ -26,8 +26,9 @@ pub const SKB_ALPHA_TARGET_IDENTITY: u32 = 0;
 /// `skb_pose_options_set_alpha_target`: α pulls the pitch toward 0 (yaw and roll kept; default).
 pub const SKB_ALPHA_TARGET_LEVEL: u32 = 1;
 
-const _: () =
-    assert!(SKB_POSE_DIM as usize == POSE_DIM && SKB_POSE_MAX_BASES as usize == sketchbody_core::pose::options::MAX_BASES);
+const _: () = assert!(
+    SKB_POSE_DIM as usize == POSE_DIM && SKB_POSE_MAX_BASES as usize == sketchbody_core::pose::options::MAX_BASES
+);
 
 /// 15 image joints in canonical order (head, neck, r_shoulder, r_elbow, r_wrist, l_shoulder,
 /// l_elbow, l_wrist, pelvis, r_hip, r_knee, r_ankle, l_hip, l_knee, l_ankle): pixels, origin at

@@ -339,8 +339,8 @@ pub fn tiny_model() -> Model {
 
 #[cfg(test)]
 pub(crate) mod tests {
-    use super::*;
     pub(crate) use super::tiny_model;
+    use super::*;
 
     #[test]
     fn validation_names_the_problem() {

@@ -18,9 +18,8 @@ pub fn repo_root() -> PathBuf {
 /// When it is missing: panics if `SKB_REQUIRE_SHARED_DATA` is set (CI sets it in `.ci/run`),
 /// otherwise prints a SKIPPED line naming `what` and returns `None`.
 pub fn shared_data(what: &str) -> Option<PathBuf> {
-    let dir = std::env::var_os("SKB_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo_root().join("../shared/data"));
+    let dir =
+        std::env::var_os("SKB_SHARED_DATA").map(PathBuf::from).unwrap_or_else(|| repo_root().join("../shared/data"));
     if dir.is_dir() {
         return Some(dir);
     }
