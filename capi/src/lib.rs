@@ -7,7 +7,15 @@
 //! `SKB_ERR_PANIC` instead of aborting the host. Only the three text getters (`skb_version`,
 //! `skb_status_str`, `skb_last_error_message`) return a pointer instead of a status, and the
 //! `skb_*_free` functions return nothing (freeing NULL is a no-op).
+//!
+//! # Safety (every `unsafe extern "C"` function)
+//! Pointer arguments must be NULL (reported as `SKB_ERR_NULL_POINTER` where a value is needed)
+//! or valid for the documented number of elements for the duration of the call; handles must
+//! come from the matching `skb_*_new` and not be freed yet; strings are NUL-terminated UTF-8.
+//! The per-function docs state only what differs, so clippy's per-function `# Safety` section is
+//! not repeated 100 times.
 #![allow(non_camel_case_types)]
+#![allow(clippy::missing_safety_doc)]
 
 // Macros first; then the modules in the order the header presents them (cbindgen follows it):
 // status, errors and version, then images, bodies, poses, detection, the fit and the pipeline.

@@ -163,6 +163,7 @@ pub fn mesh_bytes(rest: &[[f32; 3]], posed: &[[f32; 3]]) -> Result<Vec<u8>> {
 
 /// Decodes a `.mesh` file into (rest, posed). Errors ([`Error::CorruptData`]): magic, version,
 /// length, CRC, non-finite values.
+#[allow(clippy::type_complexity)] // (rest vertices, posed vertices)
 pub fn parse_mesh(b: &[u8], what: &str) -> Result<(Vec<[f32; 3]>, Vec<[f32; 3]>)> {
     let bad = |m: &str| Error::CorruptData(format!("{what}: {m}"));
     if b.len() < 20 || &b[..8] != MESH_MAGIC {
