@@ -2,7 +2,7 @@
 //!
 //! The core library: safe Rust that returns [`Error`] values and never panics on bad input (the
 //! C ABI is the workspace member `capi/`, the command-line tool `cli/`). Conventions (joint order, image and 3-D frames, camera) are those of
-//! `DESIGN.md`: image space is pixels with the origin at the top-left corner of the top-left
+//! `docs/design.md`: image space is pixels with the origin at the top-left corner of the top-left
 //! pixel, x right, y down; 3-D space is metres, right-handed, +Y up, +Z toward the viewer.
 
 pub mod body;

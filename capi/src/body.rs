@@ -281,7 +281,7 @@ pub unsafe extern "C" fn skb_mesh_copy_joints(mesh: *const skb_mesh, dst: *mut f
 }
 
 /// Copies the skin weights: for vertex v, slots `4v .. 4v+3` of `bones` (bone indices 0..13,
-/// DESIGN.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
+/// docs/design.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
 /// Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count). On error
 /// nothing is written.
 #[no_mangle]

@@ -30,7 +30,7 @@ unsafe fn try_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, skb_status>
     p.as_mut().ok_or_else(|| fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")))
 }
 
-/// The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
+/// The weak-perspective camera of paper eq. (1) (docs/design.md): a model point X (metres, +Y up,
 /// +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
 /// `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
 /// layout (104 bytes) is part of the ABI.

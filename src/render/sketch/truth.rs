@@ -65,7 +65,7 @@ pub struct GroundTruth {
     pub gender: String,
     /// PCA shape weights (metres) of the body before proportions.
     pub shape_weights: Vec<f64>,
-    /// 15 joints in the image, pixels (DESIGN.md image frame, canonical order).
+    /// 15 joints in the image, pixels (docs/design.md image frame, canonical order).
     pub joints2d: Vec<[f64; 2]>,
     /// Whether each joint is visible (not hidden by another body part, inside the image).
     pub visible: Vec<bool>,
