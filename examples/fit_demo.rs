@@ -9,7 +9,7 @@ use sketchbody::body::{BodyModel, Gender};
 use sketchbody::camera::WeakPerspective;
 use sketchbody::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
 use sketchbody::image::{canny, CannyParams, GrayImage};
-use sketchbody::render::raster::Rasterizer;
+use sketchbody::raster::Rasterizer;
 
 fn aed(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
     let height = {

@@ -19,7 +19,7 @@ use sketchbody::body::{BodyModel, Gender};
 use sketchbody::camera::WeakPerspective;
 use sketchbody::fit::{fit_shape, FitOptions, FitProblem};
 use sketchbody::image::{canny, CannyParams, GrayImage};
-use sketchbody::render::raster::Rasterizer;
+use sketchbody::raster::Rasterizer;
 use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 
 /// Totals of one path: evaluations, wall and CPU seconds, whole-fit wall times.

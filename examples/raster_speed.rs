@@ -8,7 +8,7 @@ use nalgebra::Matrix3;
 use sketchbody::body::procedural::{capsule_humanoid, rest_joints};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::camera::WeakPerspective;
-use sketchbody::render::raster::{Facing, RasterStats, Rasterizer};
+use sketchbody::raster::{Facing, RasterStats, Rasterizer};
 
 fn main() {
     let mesh = capsule_humanoid(&rest_joints(), 40, 24);

@@ -12,7 +12,7 @@ use sketchbody::body::procedural::random_pose;
 use sketchbody::body::skin::{skin_into, SkinMethod};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::camera::WeakPerspective;
-use sketchbody::render::raster::Rasterizer;
+use sketchbody::raster::Rasterizer;
 
 fn main() {
     let args: Vec<usize> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();

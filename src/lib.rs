@@ -16,6 +16,7 @@ pub mod fsutil;
 pub mod image;
 pub mod pipeline;
 pub mod pose;
+pub mod raster;
 pub mod render;
 pub mod skeleton;
 

@@ -13,7 +13,7 @@ use sketchbody::body::skin::{skin_into, SkinMethod};
 use sketchbody::body::{BodyModel, FitProxy, Gender, PROXY_VERTICES};
 use sketchbody::camera::WeakPerspective;
 use sketchbody::fit::distance_transform;
-use sketchbody::render::raster::{Facing, Rasterizer};
+use sketchbody::raster::{Facing, Rasterizer};
 use sketchbody::Error;
 
 #[test]

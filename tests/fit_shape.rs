@@ -7,7 +7,7 @@ use sketchbody::body::{BodyModel, Gender};
 use sketchbody::camera::WeakPerspective;
 use sketchbody::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
 use sketchbody::image::{canny, CannyParams, GrayImage};
-use sketchbody::render::raster::Rasterizer;
+use sketchbody::raster::Rasterizer;
 use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 use sketchbody::Error;
 

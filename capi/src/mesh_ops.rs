@@ -13,8 +13,8 @@ use sketchbody_core::camera::WeakPerspective;
 use sketchbody_core::error::Error;
 use sketchbody_core::export::gltf::write_glb;
 use sketchbody_core::export::obj::write_obj;
+use sketchbody_core::raster::Rasterizer;
 use sketchbody_core::render::preview::{preview, save_rgb_png};
-use sketchbody_core::render::raster::Rasterizer;
 use sketchbody_core::skeleton::{Joints3, NUM_JOINTS};
 
 use super::body::{out_slice, skb_mesh};
@@ -107,7 +107,7 @@ pub unsafe extern "C" fn skb_rasterize_triangles(
         let v3 = try_status!(try_slice_of(verts.cast::<[f32; 3]>(), nverts, "verts"));
         let t3 = try_status!(try_slice_of(tris.cast::<[u32; 3]>(), ntris, "tris"));
         let (w, h) = (w as usize, h as usize);
-        try_core!(sketchbody_core::render::raster::check_size(w, h));
+        try_core!(sketchbody_core::raster::check_size(w, h));
         if mask_stride < w {
             return fail(&sketchbody_core::Error::BadStride { stride: mask_stride, row_bytes: w });
         }

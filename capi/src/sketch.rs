@@ -111,7 +111,7 @@ pub unsafe extern "C" fn skb_render_sketch(
         let ctx = try_status!(try_ref(ctx, "ctx"));
         let g = try_core!(Gender::from_index(gender));
         let (w, h) = (width as usize, height as usize);
-        try_core!(sketchbody_core::render::raster::check_size(w, h));
+        try_core!(sketchbody_core::raster::check_size(w, h));
         let needed = try_core!(ImageView::required_len(w, h, 1, out_stride));
         if out_pixels.is_null() {
             return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out_pixels is NULL");

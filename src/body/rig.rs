@@ -206,7 +206,7 @@ mod tests {
     use crate::body::procedural::random_pose;
     use crate::body::skin::{skin, SkinMethod};
     use crate::camera::WeakPerspective;
-    use crate::render::raster::Rasterizer;
+    use crate::raster::Rasterizer;
     use rand::SeedableRng;
 
     /// The embedded MakeHuman body poses, skins and rasterises: single-bone vertices follow

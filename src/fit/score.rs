@@ -91,7 +91,7 @@ impl SketchEvidence {
 
     /// [`SketchEvidence::score`] of a mask whose non-zero pixels all lie in the inclusive box
     /// `bounds = [x0, y0, x1, y1]` (`None`: the mask is empty), e.g.
-    /// [`crate::render::raster::Rasterizer::covered_bounds`]; only that box is scanned, and
+    /// [`crate::raster::Rasterizer::covered_bounds`]; only that box is scanned, and
     /// the result equals `score`'s.
     pub fn score_in(&self, mask: &[u8], bounds: Option<[usize; 4]>, kind: MatchScore) -> f64 {
         let b = bounds.map(|[x0, y0, x1, y1]| [x0, y0, x1.min(self.width - 1), y1.min(self.height - 1)]);

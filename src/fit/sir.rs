@@ -32,7 +32,7 @@ use crate::body::{BodyModel, FitProxy, Gender};
 use crate::camera::WeakPerspective;
 use crate::error::{ensure_finite, Error, Result};
 use crate::image::GrayImage;
-use crate::render::raster::{Facing, Rasterizer};
+use crate::raster::{Facing, Rasterizer};
 use crate::skeleton::{Joints2, Joints3, BONES};
 
 /// Options of [`fit_shape`], with documented defaults ([`FitOptions::default`]).

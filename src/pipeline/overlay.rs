@@ -5,8 +5,8 @@
 use crate::camera::WeakPerspective;
 use crate::error::Result;
 use crate::image::GrayImage;
+use crate::raster::{Rasterizer, MAX_RASTER_SIDE};
 use crate::render::preview::RgbImage;
-use crate::render::raster::{Rasterizer, MAX_RASTER_SIDE};
 use crate::skeleton::{joint, Joints2, BONES, NUM_JOINTS};
 
 const OUTLINE: [u8; 3] = [20, 170, 60];

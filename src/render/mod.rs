@@ -1,6 +1,6 @@
-//! Rendering: the silhouette/depth rasteriser used by the shape fit, preview images, and the
-//! synthetic concept-sketch renderer.
+//! Rendering for people and for data: preview images of a body, and the synthetic concept-sketch
+//! renderer (the data generator of training and benchmark sets). The rasteriser the shape fit
+//! uses is [`crate::raster`].
 
 pub mod preview;
-pub mod raster;
 pub mod sketch;

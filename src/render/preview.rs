@@ -5,9 +5,9 @@ use std::path::Path;
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
-use super::raster::{check_size, scan, setup, SUB};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
+use crate::raster::{check_size, scan, setup, SUB};
 
 /// An RGB image, rows of `width * 3` bytes.
 #[derive(Clone, Debug, PartialEq, Eq)]

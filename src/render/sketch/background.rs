@@ -11,7 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use super::canvas::{Canvas, Pen};
 use super::{paper, SketchStyle, DEFAULT_SIZE};
 use crate::error::Result;
-use crate::render::raster::check_size;
+use crate::raster::check_size;
 
 /// Stream tag mixed into the seed so that a background never repeats a figure sketch's stream.
 const STREAM: u64 = 0x6E6F_2D66_6967_7572;

@@ -39,7 +39,7 @@ use self::contours::{DepthView, EdgeTopology, LineKind};
 use crate::body::{BodyModel, Gender, VertexWeights};
 use crate::camera::WeakPerspective;
 use crate::error::Result;
-use crate::render::raster::{check_size, Rasterizer};
+use crate::raster::{check_size, Rasterizer};
 use crate::skeleton::{Joints2, Joints3, BONES, NUM_JOINTS};
 
 /// Default image side, pixels.
