@@ -15,20 +15,25 @@ use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 #[test]
 fn rebuilt_dictionary_matches_the_committed_asset() {
     let Some(data) = common::shared_data("pose dictionary rebuild") else { return };
-    let d =
-        learn_from_sources(Some(&data.join("mocap/deepmimic")), &[], &LearnSpec::library_default().unwrap()).unwrap();
+    let d = learn_from_sources(
+        &[data.join("mocap/deepmimic"), data.join("mocap/cmu")],
+        &[],
+        &LearnSpec::library_default().unwrap(),
+    )
+    .unwrap();
     let fresh = dict_io::to_bytes(&d);
     let committed = dict_io::embedded_bytes();
     assert!(
         fresh == committed,
         "assets/pose_dictionary.skbpd differs from a fresh build ({} vs {} bytes): rerun \
-         `sketchbody learn-poses --mocap ../shared/data/mocap/deepmimic --out assets/pose_dictionary.skbpd`",
+         `sketchbody learn-poses --mocap ../shared/data/mocap/deepmimic --mocap ../shared/data/mocap/cmu \
+         --out assets/pose_dictionary.skbpd`",
         fresh.len(),
         committed.len()
     );
-    assert!(d
-        .provenance
-        .contains("held_out: dance_b,jog,kick,long_long_walk3,long_long_walk3_mirror,long_stealthy_walk1"));
+    assert!(d.provenance.contains(
+        "held_out: dance_b,jog,kick,long_long_walk3,long_long_walk3_mirror,long_stealthy_walk1,06_*,08_*,13_*,16_*\n"
+    ));
     assert!(d.provenance.contains("retarget: female,male\n"));
 }
 

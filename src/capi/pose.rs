@@ -451,6 +451,8 @@ pub unsafe extern "C" fn skb_pose_refine(
             length_excess: s.length_excess,
             base,
             base_parts: None,
+            factors: crate::pose::figure::BodyFactors::default(),
+            plausible: true,
         };
         let e = try_core!(refine_pose(&d.inner, &j, &o, &start_est));
         *out = pose_out(&e, prior_weight(&d.inner, &j, &o));

@@ -6,6 +6,7 @@
 //! - [`bvh`]: BVH reader with a joint-name mapping for CMU-, Mixamo- and Rokoko-style rigs.
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
 //! - [`exemplar`]: the nearest-neighbour starts (exemplar poses ranked by an affine camera fit).
+//! - [`figure`]: drawn proportions as unknowns (per-group bone-length factors).
 //! - [`learn`]: clip selection and provenance for learning from folders and BVH files.
 //! - [`dict_io`]: the dictionary's binary file format and the embedded default.
 //! - [`options`]: solver options (κ, α, basis count, tolerance).
@@ -26,6 +27,7 @@ pub mod camera_fit;
 pub mod dict_io;
 pub mod dictionary;
 pub mod exemplar;
+pub mod figure;
 pub mod joint_fit;
 pub mod learn;
 pub mod metrics;

@@ -58,6 +58,9 @@ pub struct Args {
     /// Skip the final Levenberg–Marquardt refinement.
     #[arg(long)]
     no_refine: bool,
+    /// Keep the dictionary's proportions instead of estimating the drawn ones (factors 1).
+    #[arg(long)]
+    fixed_proportions: bool,
 }
 
 /// Runs the command.
@@ -80,6 +83,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         limb_candidates: a.limb_candidates,
         blend: a.blend,
         joint_noise: a.joint_noise,
+        proportions: !a.fixed_proportions,
     };
     let est = estimate_pose(&dict, &joints, &opts)?;
     let doc = pose3d_json(&est, &dict, &opts);
