@@ -75,26 +75,6 @@
 #define SKB_MAX_IMAGE_SIDE 16384
 
 /**
- * Length of a pose vector (x, y, z of each joint in canonical order).
- */
-#define SKB_POSE_DIM 45
-
-/**
- * Size of the basis arrays of `skb_pose3d` (the most bases a pose may use).
- */
-#define SKB_POSE_MAX_BASES 32
-
-/**
- * `skb_pose_options_set_alpha_target`: α pulls toward the identity (the paper's eq. 4).
- */
-#define SKB_ALPHA_TARGET_IDENTITY 0
-
-/**
- * `skb_pose_options_set_alpha_target`: α pulls the pitch toward 0 (yaw and roll kept; default).
- */
-#define SKB_ALPHA_TARGET_LEVEL 1
-
-/**
  * `skb_mesh_pose` flag: scale bones along their length so the joints land on the targets.
  */
 #define SKB_POSE_RETARGET 1
@@ -120,6 +100,31 @@
 #define SKB_JOINTS_ESTIMATED 2
 
 /**
+ * Length of a pose vector (x, y, z of each joint in canonical order).
+ */
+#define SKB_POSE_DIM 45
+
+/**
+ * Size of the basis arrays of `skb_pose3d` (the most bases a pose may use).
+ */
+#define SKB_POSE_MAX_BASES 32
+
+/**
+ * `skb_pose_options_set_alpha_target`: α pulls toward the identity (the paper's eq. 4).
+ */
+#define SKB_ALPHA_TARGET_IDENTITY 0
+
+/**
+ * `skb_pose_options_set_alpha_target`: α pulls the pitch toward 0 (yaw and roll kept; default).
+ */
+#define SKB_ALPHA_TARGET_LEVEL 1
+
+/**
+ * Number of proportion groups of `skb_pose_figure`.
+ */
+#define SKB_POSE_GROUPS 6
+
+/**
  * Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
  */
 #define SKB_SKETCH_STYLE_RANDOM 0
@@ -143,6 +148,79 @@
  * Patch version of the library this header belongs to.
  */
 #define SKB_VERSION_PATCH 0
+
+/**
+ * Number of proportion groups.
+ */
+#define NUM_GROUPS 6
+
+/**
+ * Smallest factor reported (half the reference length).
+ */
+#define FACTOR_MIN 0.5
+
+/**
+ * Largest factor reported (twice the reference length: a chibi head).
+ */
+#define FACTOR_MAX 2.0
+
+/**
+ * Bones of a group are used only when the first estimate's foreshortening (image length over
+ * true length, 1 = in the image plane) is at least this.
+ */
+#define MIN_FORESHORTENING 0.5
+
+/**
+ * Largest angle, degrees, of the torso (pelvis→neck) and of each leg (hip→ankle) from the image
+ * vertical for a standing figure.
+ */
+#define STANDING_MAX_TILT_DEG 10.0
+
+/**
+ * Smallest 2-D knee angle (hip–knee–ankle), degrees, of a standing figure's straight legs.
+ */
+#define STANDING_MIN_KNEE_DEG 170.0
+
+/**
+ * Largest height difference of the two ankles in the image, as a fraction of the leg's image
+ * length, for a figure standing on both feet.
+ */
+#define STANDING_MAX_ANKLE_STEP 0.05
+
+/**
+ * Spread of the standing residuals, metres: the torso's horizontal offset (3° of lean on a
+ * 0.5 m torso is 2.6 cm), the head's depth over the neck, each ankle's depth from the pelvis,
+ * the height difference of the ankles.
+ */
+#define SIGMA_UPRIGHT 0.02
+
+/**
+ * See [`SIGMA_UPRIGHT`].
+ */
+#define SIGMA_HEAD 0.03
+
+/**
+ * See [`SIGMA_UPRIGHT`].
+ */
+#define SIGMA_FEET 0.02
+
+/**
+ * See [`SIGMA_UPRIGHT`].
+ */
+#define SIGMA_GROUND 0.02
+
+/**
+ * The free-joint step's pull toward the dictionary pose along the viewing direction for a
+ * standing figure, metres (instead of [`super::joint_fit::SIGMA_3D`]).
+ */
+#define SIGMA_DEPTH_STANDING 0.25
+
+/**
+ * Reprojection RMS, as a fraction of the visible joints' bounding-box diagonal, above which an
+ * estimate is flagged implausible (5%: 25 px on a 500-px figure; exact mocap joints stay below
+ * 2%).
+ */
+#define IMPLAUSIBLE_RMS 0.05
 
 /**
  * Result of every sketchbody C function. 0 is success; any other value is an error whose text
@@ -494,6 +572,27 @@ typedef struct skb_pose3d {
    */
   uint32_t reserved;
 } skb_pose3d;
+
+/**
+ * The drawn proportions and plausibility of an estimate (`skb_estimate_pose_figure`).
+ */
+typedef struct skb_pose_figure {
+  /**
+   * Bone-length factors relative to the dictionary's skeleton: head, torso, shoulders, arms,
+   * hips, legs; each in [0.5, 2]; all 1 with proportions off.
+   */
+  double factors[SKB_POSE_GROUPS];
+  /**
+   * 1 when a plausible body explains the 2-D joints; 0 when the reprojection RMS exceeds 5%
+   * of the figure's extent or a factor sits at the end of its range (the estimate is still
+   * the best found).
+   */
+  int32_t plausible;
+  /**
+   * Zero.
+   */
+  int32_t reserved;
+} skb_pose_figure;
 
 
 
@@ -891,168 +990,6 @@ skb_status skb_gaussian_blur(const struct skb_image *src,
                              size_t dst_len);
 
 /**
- * Creates the embedded default dictionary (learned from the DeepMimic clips, see
- * assets/README.md). On success `*out` owns it. Thread-safe.
- */
-skb_status skb_pose_dictionary_new_default(struct skb_pose_dictionary **out);
-
-/**
- * Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody learn-poses`);
- * `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
- * `*out` owns the dictionary. Thread-safe.
- */
-skb_status skb_pose_dictionary_load(const char *path, struct skb_pose_dictionary **out);
-
-/**
- * Frees a dictionary. NULL is a no-op. Do not use it afterwards.
- */
-void skb_pose_dictionary_free(struct skb_pose_dictionary *dict);
-
-/**
- * Writes the number of basis poses K to `*out`. Thread-safe.
- */
-skb_status skb_pose_dictionary_num_bases(const struct skb_pose_dictionary *dict, uint32_t *out);
-
-/**
- * Copies the mean pose μ (45 values, metres) into `out` (`len` ≥ 45). Thread-safe.
- */
-skb_status skb_pose_dictionary_mean(const struct skb_pose_dictionary *dict,
-                                    double *out,
-                                    size_t len);
-
-/**
- * Copies basis `index` (< K; a unit 45-vector) into `out` (`len` ≥ 45) and its spread σ
- * (metres, used by the weight prior) into `*sigma` (may be NULL). Thread-safe.
- */
-skb_status skb_pose_dictionary_basis(const struct skb_pose_dictionary *dict,
-                                     uint32_t index,
-                                     double *out,
-                                     size_t len,
-                                     double *sigma);
-
-/**
- * Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
- * (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
- */
-skb_status skb_pose_dictionary_bone_lengths(const struct skb_pose_dictionary *dict,
-                                            double *out,
-                                            size_t len);
-
-/**
- * Creates options with the defaults. On success `*out` owns them. Thread-safe.
- */
-skb_status skb_pose_options_new(struct skb_pose_options **out);
-
-/**
- * Frees options. NULL is a no-op.
- */
-void skb_pose_options_free(struct skb_pose_options *opts);
-
-/**
- * Sets κ, the relative limb-length tolerance: |Σ‖X_i − X_j‖² − Σ l²| ≤ κ Σ l², in [0, 10]
- * (0 = equality; the paper's κ = 8 CMU units² is about 0.017, see docs/formats.md).
- */
-skb_status skb_pose_options_set_kappa(struct skb_pose_options *opts,
-                                      double kappa);
-
-/**
- * Sets α of eq. (4), the pull of the camera rotation toward its target
- * (`skb_pose_options_set_alpha_target`), in [0, 1]. Default 0.8.
- */
-skb_status skb_pose_options_set_alpha(struct skb_pose_options *opts, double alpha);
-
-/**
- * Sets what α pulls the camera rotation toward: `SKB_ALPHA_TARGET_LEVEL` (default: the
- * fitted rotation with its pitch removed, yaw and roll kept) or `SKB_ALPHA_TARGET_IDENTITY`
- * (the paper's eq. 4). Other values: `SKB_ERR_OUT_OF_RANGE`, options unchanged.
- */
-skb_status skb_pose_options_set_alpha_target(struct skb_pose_options *opts, uint32_t target);
-
-/**
- * Non-zero: one scale for both image axes (sx = sy, default); 0: independent sx and sy
- * (eq. 1), in the camera fit and in the refinement.
- */
-skb_status skb_pose_options_set_equal_scales(struct skb_pose_options *opts, bool equal);
-
-/**
- * Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).
- */
-skb_status skb_pose_options_set_max_bases(struct skb_pose_options *opts, uint32_t max_bases);
-
-/**
- * Sets the stopping tolerance on the reprojection RMS, pixels, in [0, 10000].
- */
-skb_status skb_pose_options_set_tolerance(struct skb_pose_options *opts, double tolerance_px);
-
-/**
- * Turns the final Levenberg–Marquardt refinement on (non-zero) or off.
- */
-skb_status skb_pose_options_set_refine(struct skb_pose_options *opts, bool refine);
-
-/**
- * Sets the weight prior, metres in [0, 1] (0 = the paper's eq. (3) exactly; see docs).
- */
-skb_status skb_pose_options_set_prior(struct skb_pose_options *opts, double prior_m);
-
-/**
- * Sets the number of nearest-neighbour starts, 0..=32: the pursuit runs from each of this
- * many training poses of the dictionary that best explain the 2-D joints and keeps the best
- * result (0 = from the mean pose, as in the paper).
- */
-skb_status skb_pose_options_set_starts(struct skb_pose_options *opts, uint32_t starts);
-
-/**
- * Sets the limb candidates for recomposing nearest-neighbour starts, 0..=4096 (0 = whole
- * training poses).
- */
-skb_status skb_pose_options_set_limb_candidates(struct skb_pose_options *opts, uint32_t count);
-
-/**
- * Sets the blend temperature of the exemplar starts' hypotheses, px² per visible joint in
- * [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
- */
-skb_status skb_pose_options_set_blend(struct skb_pose_options *opts, double tau_px2);
-
-/**
- * Sets the free-joint refinement's expected 2-D joint error, metres at the figure's scale (a
- * 1.75 m person) in [0, 1]; 0 turns it off. After the dictionary fit every joint may then
- * leave the dictionary's span to follow the 2-D joints, bone lengths kept (default 0.014 m,
- * 4 px on a 500-px figure; raise it for rough joints such as detections). With it on the
- * returned joints are no longer base + Σ basis · weight of the dictionary's own base pose;
- * `skb_pose_refine` still continues from them (see `skb_pose_refine`).
- */
-skb_status skb_pose_options_set_joint_noise(struct skb_pose_options *opts, double noise_m);
-
-/**
- * Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
- * refinement if enabled; by default from 12 exemplar starts whose results are blended, see
- * `skb_pose_options_set_starts`, and last the free-joint refinement, see
- * `skb_pose_options_set_joint_noise`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
- * joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
- * (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
- * beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
- * distinct `out`); about 1.2 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
- */
-skb_status skb_estimate_pose(const struct skb_pose_dictionary *dict,
-                             const struct skb_joints2d *joints,
-                             const struct skb_pose_options *opts,
-                             struct skb_pose3d *out);
-
-/**
- * The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
- * base pose is taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
- * start `skb_estimate_pose` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
- * and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
- * is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
- * to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
- */
-skb_status skb_pose_refine(const struct skb_pose_dictionary *dict,
-                           const struct skb_joints2d *joints,
-                           const struct skb_pose_options *opts,
-                           const struct skb_pose3d *start,
-                           struct skb_pose3d *out);
-
-/**
  * Creates a rasteriser and stores it in `*out` (caller owns it; free with
  * [`skb_rasterizer_free`]).
  */
@@ -1272,6 +1209,200 @@ skb_status skb_result_shape_weights(const struct skb_result *result,
  * for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
  */
 skb_status skb_result_mesh(const struct skb_result *result, struct skb_mesh **out);
+
+/**
+ * Creates the embedded default dictionary (learned from the DeepMimic clips, see
+ * assets/README.md). On success `*out` owns it. Thread-safe.
+ */
+skb_status skb_pose_dictionary_new_default(struct skb_pose_dictionary **out);
+
+/**
+ * Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody learn-poses`);
+ * `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
+ * `*out` owns the dictionary. Thread-safe.
+ */
+skb_status skb_pose_dictionary_load(const char *path, struct skb_pose_dictionary **out);
+
+/**
+ * Frees a dictionary. NULL is a no-op. Do not use it afterwards.
+ */
+void skb_pose_dictionary_free(struct skb_pose_dictionary *dict);
+
+/**
+ * Writes the number of basis poses K to `*out`. Thread-safe.
+ */
+skb_status skb_pose_dictionary_num_bases(const struct skb_pose_dictionary *dict, uint32_t *out);
+
+/**
+ * Copies the mean pose μ (45 values, metres) into `out` (`len` ≥ 45). Thread-safe.
+ */
+skb_status skb_pose_dictionary_mean(const struct skb_pose_dictionary *dict,
+                                    double *out,
+                                    size_t len);
+
+/**
+ * Copies basis `index` (< K; a unit 45-vector) into `out` (`len` ≥ 45) and its spread σ
+ * (metres, used by the weight prior) into `*sigma` (may be NULL). Thread-safe.
+ */
+skb_status skb_pose_dictionary_basis(const struct skb_pose_dictionary *dict,
+                                     uint32_t index,
+                                     double *out,
+                                     size_t len,
+                                     double *sigma);
+
+/**
+ * Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
+ * (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
+ */
+skb_status skb_pose_dictionary_bone_lengths(const struct skb_pose_dictionary *dict,
+                                            double *out,
+                                            size_t len);
+
+/**
+ * Creates options with the defaults. On success `*out` owns them. Thread-safe.
+ */
+skb_status skb_pose_options_new(struct skb_pose_options **out);
+
+/**
+ * Frees options. NULL is a no-op.
+ */
+void skb_pose_options_free(struct skb_pose_options *opts);
+
+/**
+ * Sets κ, the relative limb-length tolerance: |Σ‖X_i − X_j‖² − Σ l²| ≤ κ Σ l², in [0, 10]
+ * (0 = equality; the paper's κ = 8 CMU units² is about 0.017, see docs/formats.md).
+ */
+skb_status skb_pose_options_set_kappa(struct skb_pose_options *opts,
+                                      double kappa);
+
+/**
+ * Sets α of eq. (4), the pull of the camera rotation toward its target
+ * (`skb_pose_options_set_alpha_target`), in [0, 1]. Default 0.8.
+ */
+skb_status skb_pose_options_set_alpha(struct skb_pose_options *opts, double alpha);
+
+/**
+ * Sets what α pulls the camera rotation toward: `SKB_ALPHA_TARGET_LEVEL` (default: the
+ * fitted rotation with its pitch removed, yaw and roll kept) or `SKB_ALPHA_TARGET_IDENTITY`
+ * (the paper's eq. 4). Other values: `SKB_ERR_OUT_OF_RANGE`, options unchanged.
+ */
+skb_status skb_pose_options_set_alpha_target(struct skb_pose_options *opts, uint32_t target);
+
+/**
+ * Non-zero: one scale for both image axes (sx = sy, default); 0: independent sx and sy
+ * (eq. 1), in the camera fit and in the refinement.
+ */
+skb_status skb_pose_options_set_equal_scales(struct skb_pose_options *opts, bool equal);
+
+/**
+ * Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).
+ */
+skb_status skb_pose_options_set_max_bases(struct skb_pose_options *opts, uint32_t max_bases);
+
+/**
+ * Sets the stopping tolerance on the reprojection RMS, pixels, in [0, 10000].
+ */
+skb_status skb_pose_options_set_tolerance(struct skb_pose_options *opts, double tolerance_px);
+
+/**
+ * Turns the final Levenberg–Marquardt refinement on (non-zero) or off.
+ */
+skb_status skb_pose_options_set_refine(struct skb_pose_options *opts, bool refine);
+
+/**
+ * Sets the weight prior, metres in [0, 1] (0 = the paper's eq. (3) exactly; see docs).
+ */
+skb_status skb_pose_options_set_prior(struct skb_pose_options *opts, double prior_m);
+
+/**
+ * Sets the number of nearest-neighbour starts, 0..=32: the pursuit runs from each of this
+ * many training poses of the dictionary that best explain the 2-D joints and keeps the best
+ * result (0 = from the mean pose, as in the paper).
+ */
+skb_status skb_pose_options_set_starts(struct skb_pose_options *opts, uint32_t starts);
+
+/**
+ * Sets the limb candidates for recomposing nearest-neighbour starts, 0..=4096 (0 = whole
+ * training poses).
+ */
+skb_status skb_pose_options_set_limb_candidates(struct skb_pose_options *opts, uint32_t count);
+
+/**
+ * Sets the blend temperature of the exemplar starts' hypotheses, px² per visible joint in
+ * [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
+ */
+skb_status skb_pose_options_set_blend(struct skb_pose_options *opts, double tau_px2);
+
+/**
+ * Sets the free-joint refinement's expected 2-D joint error, metres at the figure's scale (a
+ * 1.75 m person) in [0, 1]; 0 turns it off. After the dictionary fit every joint may then
+ * leave the dictionary's span to follow the 2-D joints, bone lengths kept (default 0.014 m,
+ * 4 px on a 500-px figure; raise it for rough joints such as detections). With it on the
+ * returned joints are no longer base + Σ basis · weight of the dictionary's own base pose;
+ * `skb_pose_refine` still continues from them (see `skb_pose_refine`).
+ */
+skb_status skb_pose_options_set_joint_noise(struct skb_pose_options *opts, double noise_m);
+
+/**
+ * Sets whether the drawn proportions are estimated with the pose (default on): six per-group
+ * bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_estimate_pose_figure`
+ * returns them) and a second solve on the 2-D joints unstylised by them; the returned joints
+ * then have the figure's proportions. Turn it off for `skb_pose_refine` (the fixed-basis
+ * refinement needs joints = base + Σ basis · weight on the dictionary's skeleton).
+ */
+skb_status skb_pose_options_set_proportions(struct skb_pose_options *opts, bool on);
+
+/**
+ * Sets the standing prior of the free-joint refinement (default on): for a figure whose 2-D
+ * joints show it standing on both feet, an upright torso, the head over the neck and both
+ * ankles under the pelvis on one ground plane. Acts only with joint noise > 0.
+ */
+skb_status skb_pose_options_set_standing_prior(struct skb_pose_options *opts, bool on);
+
+/**
+ * Sets the knee limits of the free-joint refinement (default on): knees bent backwards are
+ * flipped in depth (image and bone lengths unchanged). Acts only with joint noise > 0.
+ */
+skb_status skb_pose_options_set_knee_limits(struct skb_pose_options *opts, bool on);
+
+/**
+ * `skb_estimate_pose` that also writes the drawn proportions and the plausibility flag to
+ * `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
+ */
+skb_status skb_estimate_pose_figure(const struct skb_pose_dictionary *dict,
+                                    const struct skb_joints2d *joints,
+                                    const struct skb_pose_options *opts,
+                                    struct skb_pose3d *out,
+                                    struct skb_pose_figure *figure);
+
+/**
+ * Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
+ * refinement if enabled; by default from 12 exemplar starts whose results are blended, see
+ * `skb_pose_options_set_starts`, and last the free-joint refinement, see
+ * `skb_pose_options_set_joint_noise`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
+ * joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
+ * (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
+ * beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
+ * distinct `out`); about 1.2 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
+ */
+skb_status skb_estimate_pose(const struct skb_pose_dictionary *dict,
+                             const struct skb_joints2d *joints,
+                             const struct skb_pose_options *opts,
+                             struct skb_pose3d *out);
+
+/**
+ * The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
+ * base pose is taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
+ * start `skb_estimate_pose` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
+ * and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
+ * is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
+ * to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
+ */
+skb_status skb_pose_refine(const struct skb_pose_dictionary *dict,
+                           const struct skb_joints2d *joints,
+                           const struct skb_pose_options *opts,
+                           const struct skb_pose3d *start,
+                           struct skb_pose3d *out);
 
 /**
  * Creates options with the defaults. `*out` receives a handle the caller owns.

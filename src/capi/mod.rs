@@ -60,13 +60,15 @@ pub use pipeline::{
     skb_result_shape_weights, skb_run_pipeline, SKB_JOINTS_ESTIMATED, SKB_JOINTS_POSED, SKB_JOINTS_REST,
 };
 pub use pose::{
-    skb_estimate_pose, skb_joints2d, skb_pose3d, skb_pose_dictionary, skb_pose_dictionary_basis,
-    skb_pose_dictionary_bone_lengths, skb_pose_dictionary_free, skb_pose_dictionary_load, skb_pose_dictionary_mean,
-    skb_pose_dictionary_new_default, skb_pose_dictionary_num_bases, skb_pose_options, skb_pose_options_free,
-    skb_pose_options_new, skb_pose_options_set_alpha, skb_pose_options_set_blend, skb_pose_options_set_joint_noise,
-    skb_pose_options_set_kappa, skb_pose_options_set_limb_candidates, skb_pose_options_set_max_bases,
-    skb_pose_options_set_prior, skb_pose_options_set_refine, skb_pose_options_set_starts,
-    skb_pose_options_set_tolerance, skb_pose_refine, SKB_POSE_DIM, SKB_POSE_MAX_BASES,
+    skb_estimate_pose, skb_estimate_pose_figure, skb_joints2d, skb_pose3d, skb_pose_dictionary,
+    skb_pose_dictionary_basis, skb_pose_dictionary_bone_lengths, skb_pose_dictionary_free, skb_pose_dictionary_load,
+    skb_pose_dictionary_mean, skb_pose_dictionary_new_default, skb_pose_dictionary_num_bases, skb_pose_figure,
+    skb_pose_options, skb_pose_options_free, skb_pose_options_new, skb_pose_options_set_alpha,
+    skb_pose_options_set_blend, skb_pose_options_set_joint_noise, skb_pose_options_set_kappa,
+    skb_pose_options_set_knee_limits, skb_pose_options_set_limb_candidates, skb_pose_options_set_max_bases,
+    skb_pose_options_set_prior, skb_pose_options_set_proportions, skb_pose_options_set_refine,
+    skb_pose_options_set_standing_prior, skb_pose_options_set_starts, skb_pose_options_set_tolerance, skb_pose_refine,
+    SKB_POSE_DIM, SKB_POSE_GROUPS, SKB_POSE_MAX_BASES,
 };
 pub use sketch::{
     skb_render_sketch, skb_sketch_options, skb_sketch_options_free, skb_sketch_options_new,

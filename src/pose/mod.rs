@@ -9,6 +9,7 @@
 //! - [`figure`]: drawn proportions as unknowns (per-group bone-length factors).
 //! - [`learn`]: clip selection and provenance for learning from folders and BVH files.
 //! - [`dict_io`]: the dictionary's binary file format and the embedded default.
+//! - [`plausibility`]: the standing prior and the knee limits of the free-joint step.
 //! - [`options`]: solver options (κ, α, basis count, tolerance).
 //! - [`problem`]: a validated 2-D input with the model of eq. (1)–(3).
 //! - [`qcls`]: least squares under the two-sided limb-length constraint of eq. (3).
@@ -33,6 +34,7 @@ pub mod learn;
 pub mod metrics;
 pub mod motion;
 pub mod options;
+pub mod plausibility;
 pub mod problem;
 pub mod pursuit;
 pub mod qcls;

@@ -118,6 +118,13 @@ pub struct PoseOptions {
     /// the pose: a second solve on the 2-D joints unstylised by factors estimated from the
     /// first (about twice the time). `false` = the dictionary's proportions (factors 1).
     pub proportions: bool,
+    /// The standing prior of the free-joint step ([`super::plausibility`]): for a figure the
+    /// 2-D joints show standing on both feet, an upright torso, the head over the neck and both
+    /// ankles under the pelvis at one height. Needs `joint_noise` > 0.
+    pub standing_prior: bool,
+    /// Knee limits of the free-joint step ([`super::plausibility::unbend_knees`]): knees bent
+    /// backwards are flipped in depth. Needs `joint_noise` > 0.
+    pub knee_limits: bool,
 }
 
 impl Default for PoseOptions {
@@ -142,6 +149,8 @@ impl Default for PoseOptions {
             blend: 30.0,
             joint_noise: 0.014,
             proportions: true,
+            standing_prior: true,
+            knee_limits: true,
         }
     }
 }

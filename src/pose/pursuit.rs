@@ -189,7 +189,8 @@ fn estimate_fixed(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Re
 /// The free-joint refinement of `est` when [`PoseOptions::joint_noise`] > 0.
 fn with_joint_fit(prob: &Problem, opts: &PoseOptions, est: PoseEstimate) -> PoseEstimate {
     if opts.joint_noise > 0.0 {
-        super::joint_fit::fit_joints(prob, &est, opts.joint_noise)
+        let priors = super::joint_fit::Priors { standing: opts.standing_prior, knee_limits: opts.knee_limits };
+        super::joint_fit::fit_joints(prob, &est, opts.joint_noise, &priors)
     } else {
         est
     }

@@ -77,6 +77,12 @@ pub struct Args {
     /// Keep the dictionary's proportions in configuration (d) (no factor estimate).
     #[arg(long)]
     fixed_proportions: bool,
+    /// Switch off the standing prior in configuration (d).
+    #[arg(long)]
+    no_standing_prior: bool,
+    /// Switch off the knee limits in configuration (d).
+    #[arg(long)]
+    no_knee_limits: bool,
     /// Run configuration (d) only.
     #[arg(long)]
     only_default: bool,
@@ -210,6 +216,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         blend: a.blend.unwrap_or(def.blend),
         joint_noise: a.joint_noise.unwrap_or(def.joint_noise),
         proportions: def.proportions && !a.fixed_proportions,
+        standing_prior: def.standing_prior && !a.no_standing_prior,
+        knee_limits: def.knee_limits && !a.no_knee_limits,
         ..def
     };
     if a.suite {
@@ -236,6 +244,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         blend: 0.0,
         joint_noise: 0.0,
         proportions: false,
+        standing_prior: false,
+        knee_limits: false,
     };
     let configs = [
         ("(a) mean pose, camera fitted", PoseOptions { max_bases: 0, alpha: 0.0, refine: false, ..paper }),
