@@ -4,6 +4,7 @@
 //! kinematics and skinning. [`BodyModel::embedded`] decodes the model compiled into the library;
 //! `build` makes it from the MakeHuman data (`sketchbody build-model`).
 
+#[cfg(feature = "model-builder")]
 pub mod build;
 pub mod decimate;
 mod format;
@@ -12,7 +13,9 @@ mod gmm;
 pub mod ik;
 mod model;
 pub mod procedural;
+pub mod proportions;
 mod proxy;
+pub mod retarget;
 pub mod rig;
 pub mod skin;
 

@@ -25,6 +25,9 @@ mod sketch;
 mod status;
 mod version;
 
+#[cfg(test)]
+mod tests;
+
 pub use body::{
     skb_context, skb_context_default_dim, skb_context_free, skb_context_new, skb_context_num_components, skb_mesh,
     skb_mesh_copy_faces, skb_mesh_copy_joints, skb_mesh_copy_shape_weights, skb_mesh_copy_skin_weights,
