@@ -39,5 +39,9 @@ int main(void) {
     FIELD(skb_pose3d, num_bases);
     FIELD(skb_pose3d, bases);
     FIELD(skb_pose3d, reserved);
+    SIZE(skb_pose_figure);
+    FIELD(skb_pose_figure, factors);
+    FIELD(skb_pose_figure, plausible);
+    FIELD(skb_pose_figure, reserved);
     return 0;
 }

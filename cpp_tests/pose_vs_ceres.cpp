@@ -326,6 +326,7 @@ int main(int argc, char** argv) {
     // one scale for both axes (skb_pose_options_set_equal_scales) is a different objective.
     check(skb_pose_options_set_equal_scales(opts, false), "independent sx, sy");
     check(skb_pose_options_set_joint_noise(opts, 0.0), "free-joint refinement off");
+    check(skb_pose_options_set_proportions(opts, false), "dictionary proportions (fixed basis)");
     if (pass == 0) {
       check(skb_pose_options_set_prior(opts, 0.0), "prior");
       check(skb_pose_options_set_starts(opts, 0), "starts");

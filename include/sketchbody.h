@@ -84,6 +84,11 @@
 #define SKB_ALPHA_TARGET_LEVEL 1
 
 /**
+ * Number of proportion groups of `skb_pose_figure`.
+ */
+#define SKB_POSE_GROUPS 6
+
+/**
  * `skb_fit_options_set_score`: the paper's eq. 7 (IoU of the silhouette with the edge map).
  */
 #define SKB_SCORE_PAPER 0
@@ -380,7 +385,7 @@ typedef struct skb_image {
 } skb_image;
 
 /**
- * The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
+ * The weak-perspective camera of paper eq. (1) (docs/design.md): a model point X (metres, +Y up,
  * +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
  * `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
  * layout (104 bytes) is part of the ABI.
@@ -481,6 +486,27 @@ typedef struct skb_pose3d {
    */
   uint32_t reserved;
 } skb_pose3d;
+
+/**
+ * The drawn proportions and plausibility of an estimate (`skb_estimate_pose_figure`).
+ */
+typedef struct skb_pose_figure {
+  /**
+   * Bone-length factors relative to the dictionary's skeleton: head, torso, shoulders, arms,
+   * hips, legs; each in [0.5, 2]; all 1 with proportions off.
+   */
+  double factors[SKB_POSE_GROUPS];
+  /**
+   * 1 when a plausible body explains the 2-D joints; 0 when the reprojection RMS exceeds 5%
+   * of the figure's extent or a factor sits at the end of its range (the estimate is still
+   * the best found).
+   */
+  int32_t plausible;
+  /**
+   * Zero.
+   */
+  int32_t reserved;
+} skb_pose_figure;
 
 /**
  * Progress callback: called from the calling thread with the fraction of the work done
@@ -636,7 +662,7 @@ skb_status skb_mesh_copy_joints(const struct skb_mesh *mesh, double *dst, size_t
 
 /**
  * Copies the skin weights: for vertex v, slots `4v .. 4v+3` of `bones` (bone indices 0..13,
- * DESIGN.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
+ * docs/design.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
  * Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count). On error
  * nothing is written.
  */
@@ -884,6 +910,38 @@ skb_status skb_pose_options_set_blend(struct skb_pose_options *opts, double tau_
  * `skb_pose_refine` still continues from them (see `skb_pose_refine`).
  */
 skb_status skb_pose_options_set_joint_noise(struct skb_pose_options *opts, double noise_m);
+
+/**
+ * Sets whether the drawn proportions are estimated with the pose (default on): six per-group
+ * bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_estimate_pose_figure`
+ * returns them) and a second solve on the 2-D joints unstylised by them; the returned joints
+ * then have the figure's proportions. Turn it off for `skb_pose_refine` (the fixed-basis
+ * refinement needs joints = base + Σ basis · weight on the dictionary's skeleton).
+ */
+skb_status skb_pose_options_set_proportions(struct skb_pose_options *opts, bool on);
+
+/**
+ * Sets the standing prior of the free-joint refinement (default on): for a figure whose 2-D
+ * joints show it standing on both feet, an upright torso, the head over the neck and both
+ * ankles under the pelvis on one ground plane. Acts only with joint noise > 0.
+ */
+skb_status skb_pose_options_set_standing_prior(struct skb_pose_options *opts, bool on);
+
+/**
+ * Sets the knee limits of the free-joint refinement (default on): knees bent backwards are
+ * flipped in depth (image and bone lengths unchanged). Acts only with joint noise > 0.
+ */
+skb_status skb_pose_options_set_knee_limits(struct skb_pose_options *opts, bool on);
+
+/**
+ * `skb_estimate_pose` that also writes the drawn proportions and the plausibility flag to
+ * `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
+ */
+skb_status skb_estimate_pose_figure(const struct skb_pose_dictionary *dict,
+                                    const struct skb_joints2d *joints,
+                                    const struct skb_pose_options *opts,
+                                    struct skb_pose3d *out,
+                                    struct skb_pose_figure *figure);
 
 /**
  * Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint

@@ -15,20 +15,25 @@ use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 #[test]
 fn rebuilt_dictionary_matches_the_committed_asset() {
     let Some(data) = common::shared_data("pose dictionary rebuild") else { return };
-    let d =
-        learn_from_sources(Some(&data.join("mocap/deepmimic")), &[], &LearnSpec::library_default().unwrap()).unwrap();
+    let d = learn_from_sources(
+        &[data.join("mocap/deepmimic"), data.join("mocap/cmu")],
+        &[],
+        &LearnSpec::library_default().unwrap(),
+    )
+    .unwrap();
     let fresh = dict_io::to_bytes(&d);
     let committed = dict_io::embedded_bytes();
     assert!(
         fresh == committed,
         "assets/pose_dictionary.skbpd differs from a fresh build ({} vs {} bytes): rerun \
-         `sketchbody learn-poses --mocap ../shared/data/mocap/deepmimic --out assets/pose_dictionary.skbpd`",
+         `sketchbody learn-poses --mocap ../shared/data/mocap/deepmimic --mocap ../shared/data/mocap/cmu \
+         --out assets/pose_dictionary.skbpd`",
         fresh.len(),
         committed.len()
     );
-    assert!(d
-        .provenance
-        .contains("held_out: dance_b,jog,kick,long_long_walk3,long_long_walk3_mirror,long_stealthy_walk1"));
+    assert!(d.provenance.contains(
+        "held_out: dance_b,jog,kick,long_long_walk3,long_long_walk3_mirror,long_stealthy_walk1,06_*,08_*,13_*,16_*\n"
+    ));
     assert!(d.provenance.contains("retarget: female,male\n"));
 }
 
@@ -67,7 +72,7 @@ fn pitch_deg(r: &nalgebra::Matrix3<f64>) -> f64 {
 }
 
 #[test]
-fn frontal_example_sketch_gets_a_level_camera() {
+fn frontal_example_sketch_gets_a_level_camera_and_stands_straight() {
     // The example sketch is drawn from the front; its estimated camera must not be pitched
     // (the body would lean back in the side preview). Without the pull (α = 0) it is.
     let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(
@@ -79,6 +84,17 @@ fn frontal_example_sketch_gets_a_level_camera() {
     let est = estimate_pose(&dict, &joints, &PoseOptions::default()).unwrap();
     assert!(pitch_deg(&est.camera.r).abs() < 10.0, "default pitch {:.1} deg", pitch_deg(&est.camera.r));
     assert_eq!(est.camera.sx, est.camera.sy, "equal scales by default");
-    let free = estimate_pose(&dict, &joints, &PoseOptions { alpha: 0.0, ..PoseOptions::default() }).unwrap();
-    assert!(pitch_deg(&free.camera.r).abs() > 15.0, "alpha 0 pitch {:.1} deg", pitch_deg(&free.camera.r));
+    // The standing figure comes out straight (issue 16): torso lean <= 3 deg, the ankles within
+    // 3 cm of each other and of the pelvis in depth; without the standing prior it leans.
+    use sketchbody::pose::metrics::torso_lean_deg;
+    use sketchbody::skeleton::joint;
+    let depth = |x: &sketchbody::skeleton::Joints3, j: usize| x[j][2] - x[joint::PELVIS][2];
+    let lean = torso_lean_deg(&est.joints);
+    assert!(lean <= 3.0, "lean {lean:.1} deg");
+    let (r, l) = (depth(&est.joints, joint::R_ANKLE), depth(&est.joints, joint::L_ANKLE));
+    assert!((r - l).abs() <= 0.03 && r.abs() <= 0.03 && l.abs() <= 0.03, "ankle depths {r:.3} {l:.3} m");
+    assert!(est.plausible);
+    let off = PoseOptions { standing_prior: false, ..PoseOptions::default() };
+    let bent = estimate_pose(&dict, &joints, &off).unwrap();
+    assert!(torso_lean_deg(&bent.joints) > 5.0, "lean without the prior {:.1} deg", torso_lean_deg(&bent.joints));
 }

@@ -349,6 +349,79 @@ pub unsafe extern "C" fn skb_pose_options_set_joint_noise(opts: *mut skb_pose_op
     ffi_boundary! { set_option(opts, |o| o.joint_noise = noise_m) }
 }
 
+/// Sets whether the drawn proportions are estimated with the pose (default on): six per-group
+/// bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_estimate_pose_figure`
+/// returns them) and a second solve on the 2-D joints unstylised by them; the returned joints
+/// then have the figure's proportions. Turn it off for `skb_pose_refine` (the fixed-basis
+/// refinement needs joints = base + Σ basis · weight on the dictionary's skeleton).
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_proportions(opts: *mut skb_pose_options, on: bool) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.proportions = on) }
+}
+
+/// Sets the standing prior of the free-joint refinement (default on): for a figure whose 2-D
+/// joints show it standing on both feet, an upright torso, the head over the neck and both
+/// ankles under the pelvis on one ground plane. Acts only with joint noise > 0.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_standing_prior(opts: *mut skb_pose_options, on: bool) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.standing_prior = on) }
+}
+
+/// Sets the knee limits of the free-joint refinement (default on): knees bent backwards are
+/// flipped in depth (image and bone lengths unchanged). Acts only with joint noise > 0.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_knee_limits(opts: *mut skb_pose_options, on: bool) -> skb_status {
+    ffi_boundary! { set_option(opts, |o| o.knee_limits = on) }
+}
+
+/// Number of proportion groups of `skb_pose_figure`.
+pub const SKB_POSE_GROUPS: u32 = 6;
+
+/// The drawn proportions and plausibility of an estimate (`skb_estimate_pose_figure`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+#[allow(non_camel_case_types)]
+pub struct skb_pose_figure {
+    /// Bone-length factors relative to the dictionary's skeleton: head, torso, shoulders, arms,
+    /// hips, legs; each in [0.5, 2]; all 1 with proportions off.
+    pub factors: [f64; SKB_POSE_GROUPS as usize],
+    /// 1 when a plausible body explains the 2-D joints; 0 when the reprojection RMS exceeds 5%
+    /// of the figure's extent or a factor sits at the end of its range (the estimate is still
+    /// the best found).
+    pub plausible: i32,
+    /// Zero.
+    pub reserved: i32,
+}
+
+const _: () = assert!(SKB_POSE_GROUPS as usize == sketchbody_core::pose::figure::NUM_GROUPS);
+
+/// `skb_estimate_pose` that also writes the drawn proportions and the plausibility flag to
+/// `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_estimate_pose_figure(
+    dict: *const skb_pose_dictionary,
+    joints: *const skb_joints2d,
+    opts: *const skb_pose_options,
+    out: *mut skb_pose3d,
+    figure: *mut skb_pose_figure,
+) -> skb_status {
+    ffi_boundary! {
+        let d = try_status!(try_ref(dict, "dict"));
+        let j = joints_in(try_status!(try_ref(joints, "joints")));
+        let o = opts.as_ref().map(|o| o.inner).unwrap_or_default();
+        if out.is_null() {
+            return null("out");
+        }
+        if figure.is_null() {
+            return null("figure");
+        }
+        let e = try_core!(estimate_pose(&d.inner, &j, &o));
+        *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
+        *figure = skb_pose_figure { factors: e.factors.k, plausible: i32::from(e.plausible), reserved: 0 };
+        skb_status::SKB_OK
+    }
+}
+
 pub(crate) fn joints_in(j: &skb_joints2d) -> Joints2 {
     Joints2 { xy: j.xy, visible: std::array::from_fn(|k| j.visible[k] != 0) }
 }
@@ -452,6 +525,8 @@ pub unsafe extern "C" fn skb_pose_refine(
             length_excess: s.length_excess,
             base,
             base_parts: None,
+            factors: sketchbody_core::pose::figure::BodyFactors::default(),
+            plausible: true,
         };
         let e = try_core!(refine_pose(&d.inner, &j, &o, &start_est));
         *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
@@ -504,8 +579,21 @@ mod tests {
             assert_eq!(skb_pose_options_set_joint_noise(o, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
             assert_eq!(skb_pose_options_set_joint_noise(o, 1.5), skb_status::SKB_ERR_OUT_OF_RANGE);
             let j = figure();
-            // The free-joint refinement (on by default) follows the 2-D joints more closely.
             let mut p: skb_pose3d = std::mem::zeroed();
+            let mut fig: skb_pose_figure = std::mem::zeroed();
+            assert_eq!(skb_estimate_pose_figure(d, &j, o, &mut p, &mut fig), skb_status::SKB_OK);
+            assert!(fig.factors.iter().all(|k| (0.5..=2.0).contains(k)) && fig.plausible == 1, "{fig:?}");
+            assert_eq!(
+                skb_estimate_pose_figure(d, &j, o, &mut p, std::ptr::null_mut()),
+                skb_status::SKB_ERR_NULL_POINTER
+            );
+            // The fixed-basis refinement below continues from the dictionary's skeleton.
+            assert_eq!(skb_pose_options_set_proportions(o, false), skb_status::SKB_OK);
+            assert!(!(*o).inner.proportions);
+            assert_eq!(skb_pose_options_set_standing_prior(o, false), skb_status::SKB_OK);
+            assert_eq!(skb_pose_options_set_knee_limits(o, false), skb_status::SKB_OK);
+            assert!(!(*o).inner.standing_prior && !(*o).inner.knee_limits);
+            // The free-joint refinement (on by default) follows the 2-D joints more closely.
             assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
             let free_rms = p.rms_px;
             assert_eq!(skb_pose_options_set_joint_noise(o, 0.0), skb_status::SKB_OK);

@@ -74,6 +74,15 @@ pub struct Args {
     /// Override the free-joint refinement's 2-D joint noise (m; 0 = off) of configuration (d).
     #[arg(long)]
     joint_noise: Option<f64>,
+    /// Keep the dictionary's proportions in configuration (d) (no factor estimate).
+    #[arg(long)]
+    fixed_proportions: bool,
+    /// Switch off the standing prior in configuration (d).
+    #[arg(long)]
+    no_standing_prior: bool,
+    /// Switch off the knee limits in configuration (d).
+    #[arg(long)]
+    no_knee_limits: bool,
     /// Run configuration (d) only.
     #[arg(long)]
     only_default: bool,
@@ -86,6 +95,17 @@ pub struct Args {
     /// retargeted the same way as the dictionary's training frames).
     #[arg(long)]
     source_skeleton: bool,
+    /// The held-out suite instead (held-out DeepMimic clips and, with `--cmu`, held-out CMU
+    /// subjects; standard and stylised proportions; near-frontal and side views; each `--sigma`;
+    /// configuration (d) only; `bench_pose_suite`).
+    #[arg(long)]
+    suite: bool,
+    /// With `--suite`: the CMU folder (../shared/data/mocap/cmu).
+    #[arg(long)]
+    cmu: Option<PathBuf>,
+    /// With `--suite`: cases per set (evenly spaced over its held-out frames).
+    #[arg(long, default_value_t = 360)]
+    cases: usize,
     /// With `--dataset`: only the first N samples.
     #[arg(long)]
     first: Option<usize>,
@@ -106,7 +126,9 @@ struct Sample {
 }
 
 fn load(a: &Args, dict: &Dictionary) -> Result<(Vec<String>, Vec<Sample>, &'static str), CliError> {
-    let clips = a.clips.clone().unwrap_or_else(|| held_out_of(dict));
+    // Whole-subject entries (`06_*`) name CMU clips, measured by `--suite`.
+    let clips: Vec<String> =
+        a.clips.clone().unwrap_or_else(|| held_out_of(dict).into_iter().filter(|c| !c.ends_with('*')).collect());
     if clips.is_empty() {
         return Err(CliError("bench-pose: no clips (the dictionary records none held out; give --clips)".into()));
     }
@@ -193,8 +215,14 @@ pub fn run(a: Args) -> Result<(), CliError> {
         limb_candidates: a.limb_candidates.unwrap_or(def.limb_candidates),
         blend: a.blend.unwrap_or(def.blend),
         joint_noise: a.joint_noise.unwrap_or(def.joint_noise),
+        proportions: def.proportions && !a.fixed_proportions,
+        standing_prior: def.standing_prior && !a.no_standing_prior,
+        knee_limits: def.knee_limits && !a.no_knee_limits,
         ..def
     };
+    if a.suite {
+        return crate::bench_pose_suite::run(&dict, &ours, &a.mocap, a.cmu.as_ref(), a.cases, &a.sigma, a.seed);
+    }
     if let Some(ds) = &a.dataset {
         return crate::bench_pose_dataset::run(ds, &a.mocap, &dict, &ours, a.first);
     }
@@ -215,6 +243,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         limb_candidates: 0,
         blend: 0.0,
         joint_noise: 0.0,
+        proportions: false,
+        standing_prior: false,
+        knee_limits: false,
     };
     let configs = [
         ("(a) mean pose, camera fitted", PoseOptions { max_bases: 0, alpha: 0.0, refine: false, ..paper }),

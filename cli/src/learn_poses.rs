@@ -12,13 +12,15 @@ use crate::CliError;
 /// Arguments of `sketchbody learn-poses`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Folder of motion tables (`*.csv`, canonical joints, e.g. ../shared/data/mocap/deepmimic).
+    /// Folder of motion tables (`*.csv`, canonical joints, e.g. ../shared/data/mocap/deepmimic);
+    /// repeatable (the library's dictionary: the DeepMimic and the CMU folders).
     #[arg(long)]
-    mocap: Option<PathBuf>,
+    mocap: Vec<PathBuf>,
     /// BVH files to learn from (CMU-, Mixamo- or Rokoko-style joint names); repeatable.
     #[arg(long)]
     bvh: Vec<PathBuf>,
-    /// Clip names held out for measurement (comma-separated); default: the library's list.
+    /// Clip names held out for measurement (comma-separated; `SS_*` = a whole CMU subject);
+    /// default: the library's list.
     #[arg(long, value_delimiter = ',')]
     holdout: Option<Vec<String>>,
     /// Further clip names to leave out (comma-separated).
@@ -51,7 +53,7 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(a: Args) -> Result<(), CliError> {
-    if a.mocap.is_none() && a.bvh.is_empty() {
+    if a.mocap.is_empty() && a.bvh.is_empty() {
         return Err(CliError("learn-poses: give --mocap DIR and/or --bvh FILE".into()));
     }
     let mut excluded = a.exclude.clone();
@@ -69,7 +71,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         },
         retarget: if a.source_skeleton { Vec::new() } else { body_model_skeletons(&BodyModel::embedded()?) },
     };
-    let d = learn_from_sources(a.mocap.as_deref(), &a.bvh, &spec)?;
+    let d = learn_from_sources(&a.mocap, &a.bvh, &spec)?;
     dict_io::write(&d, &a.out)?;
     println!(
         "{}: {} bases in {} actions, {} exemplars",

@@ -4,6 +4,7 @@
 
 mod bench_pose;
 mod bench_pose_dataset;
+mod bench_pose_suite;
 mod body;
 mod build_model;
 mod convert_detector;

@@ -58,6 +58,15 @@ pub struct Args {
     /// Skip the final Levenberg–Marquardt refinement.
     #[arg(long)]
     no_refine: bool,
+    /// Keep the dictionary's proportions instead of estimating the drawn ones (factors 1).
+    #[arg(long)]
+    fixed_proportions: bool,
+    /// Switch off the standing prior (upright torso, feet under the pelvis on one ground plane).
+    #[arg(long)]
+    no_standing_prior: bool,
+    /// Switch off the knee limits (knees bent backwards flipped in depth).
+    #[arg(long)]
+    no_knee_limits: bool,
 }
 
 /// Runs the command.
@@ -80,6 +89,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         limb_candidates: a.limb_candidates,
         blend: a.blend,
         joint_noise: a.joint_noise,
+        proportions: !a.fixed_proportions,
+        standing_prior: !a.no_standing_prior,
+        knee_limits: !a.no_knee_limits,
     };
     let est = estimate_pose(&dict, &joints, &opts)?;
     let doc = pose3d_json(&est, &dict, &opts);

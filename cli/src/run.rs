@@ -156,6 +156,17 @@ fn report(
         r.pose.rms,
         r.pose.length_excess
     );
+    let factors: Vec<String> = sketchbody::pose::figure::GROUP_NAMES
+        .iter()
+        .zip(&r.pose.factors.k)
+        .map(|(n, k)| format!("{n} {k:.3}"))
+        .collect();
+    let _ = writeln!(
+        s,
+        "- drawn proportions (bone factors vs the dictionary skeleton): {}; {}",
+        factors.join(", "),
+        if r.pose.plausible { "plausible" } else { "LOW PLAUSIBILITY (no plausible body explains the 2-D joints)" }
+    );
     let _ = writeln!(
         s,
         "- camera: sx {:.2}, sy {:.2} px/m, t ({:.1}, {:.1}) px",

@@ -111,6 +111,8 @@ fn truth_pose(t: &GroundTruth, stem: &str) -> Result<PoseEstimate, CliError> {
         length_excess: 0.0,
         base: joints,
         base_parts: None,
+        factors: sketchbody::pose::figure::BodyFactors::default(),
+        plausible: true,
     })
 }
 

@@ -1,10 +1,12 @@
 //! 3-D pose files (`sketchbody-pose3d`, version 1; docs/formats.md): the 15 estimated 3-D joints
 //! (metres of a 1.75 m person, model frame), the weak-perspective camera, the chosen dictionary
-//! bases, the reprojection RMS and the solver options. Written by `sketchbody pose` and
+//! bases, the reprojection RMS, the drawn proportions (per-group bone factors), the plausibility
+//! flag and the solver options. Written by `sketchbody pose` and
 //! `sketchbody run`.
 
 use serde_json::{json, Map, Value};
 
+use crate::pose::figure::GROUP_NAMES;
 use crate::pose::{Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::JOINT_NAMES;
 
@@ -24,6 +26,8 @@ pub fn pose3d_json(est: &PoseEstimate, dict: &Dictionary, opts: &PoseOptions) ->
         .zip(&est.weights)
         .map(|(&b, &w)| json!({"index": b, "action": dict.action_of(b).unwrap_or(""), "weight": w}))
         .collect();
+    let factors: Map<String, Value> =
+        GROUP_NAMES.iter().zip(&est.factors.k).map(|(n, k)| (n.to_string(), json!(k))).collect();
     json!({
         "format": POSE3D_FORMAT,
         "version": 1,
@@ -38,6 +42,8 @@ pub fn pose3d_json(est: &PoseEstimate, dict: &Dictionary, opts: &PoseOptions) ->
         "reprojection_rms_px": est.rms,
         "length_excess": est.length_excess,
         "base_exemplars": est.base_parts,
-        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "alpha_target": opts.alpha_target.name(), "equal_scales": opts.equal_scales, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior, "starts": opts.starts, "limb_candidates": opts.limb_candidates, "blend": opts.blend, "joint_noise": opts.joint_noise},
+        "proportions": factors,
+        "plausible": est.plausible,
+        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "alpha_target": opts.alpha_target.name(), "equal_scales": opts.equal_scales, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior, "starts": opts.starts, "limb_candidates": opts.limb_candidates, "blend": opts.blend, "joint_noise": opts.joint_noise, "proportions": opts.proportions},
     })
 }

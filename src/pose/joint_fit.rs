@@ -7,6 +7,10 @@
 //!
 //! `Σ_visible ‖π(Y_j) − u_j‖² / σ_px² + Σ_j ‖Y_j − Ŷ_j‖² / σ_3d² + Σ_bones (‖Y_c − Y_p‖ − l̂_cp)² / σ_len²`
 //!
+//! plus, with the plausibility priors ([`Priors`], [`super::plausibility`]) for a standing
+//! figure, its linear standing residuals, the depth part of the second term then at
+//! [`SIGMA_DEPTH_STANDING`]; knees left bent backwards are flipped in depth at the end.
+//!
 //! with Ŷ and l̂ the estimate's joints and bone lengths, σ_px = `joint_noise` × the camera's
 //! scale (so the trade-off does not depend on the image size), σ_3d = [`SIGMA_3D`] and
 //! σ_len = [`SIGMA_LEN`]. Under weak perspective the image fixes each bone's in-plane offset
@@ -19,6 +23,7 @@
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use super::dictionary::{pose_to_vec, vec_to_pose, with_bone_lengths};
+use super::plausibility::{standing_in_image, standing_residuals, unbend_knees, LinearResidual, SIGMA_DEPTH_STANDING};
 use super::problem::Problem;
 use super::pursuit::PoseEstimate;
 use crate::camera::WeakPerspective;
@@ -44,6 +49,10 @@ struct JointProblem<'p> {
     wp: f64,
     wd: f64,
     wl: f64,
+    /// 1/σ² of the prior along the viewing direction (camera z; `wd` unless standing).
+    wz: f64,
+    /// Plausibility residuals ([`super::plausibility`]).
+    linear: Vec<LinearResidual>,
 }
 
 impl JointProblem<'_> {
@@ -55,9 +64,14 @@ impl JointProblem<'_> {
     fn cost(&self, y: &Joints) -> f64 {
         let image: f64 =
             self.prob.vis.iter().map(|&j| self.image_residual(&y[j], j).iter().map(|r| r * r).sum::<f64>()).sum();
-        let prior: f64 = y.iter().zip(&self.y0).map(|(a, b)| (a - b).norm_squared()).sum();
+        let prior: f64 = y
+            .iter()
+            .zip(&self.y0)
+            .map(|(a, b)| self.wd * (a - b).xy().norm_squared() + self.wz * (a.z - b.z).powi(2))
+            .sum();
         let bones: f64 = BONES.iter().zip(&self.len).map(|(&(p, c), l)| ((y[c] - y[p]).norm() - l).powi(2)).sum();
-        self.wp * image + self.wd * prior + self.wl * bones
+        let linear: f64 = self.linear.iter().map(|r| r.w * r.c.dot(&(y[r.a] - y[r.b])).powi(2)).sum();
+        self.wp * image + prior + self.wl * bones + linear
     }
 
     /// Gauss–Newton normal equations (JᵀJ, Jᵀr) at `y`.
@@ -74,8 +88,23 @@ impl JointProblem<'_> {
         }
         for j in 0..NUM_JOINTS {
             for a in 0..3 {
-                h[(3 * j + a, 3 * j + a)] += self.wd;
-                g[3 * j + a] += self.wd * (y[j][a] - self.y0[j][a]);
+                let w = if a == 2 { self.wz } else { self.wd };
+                h[(3 * j + a, 3 * j + a)] += w;
+                g[3 * j + a] += w * (y[j][a] - self.y0[j][a]);
+            }
+        }
+        for r in &self.linear {
+            let v = r.w * r.c.dot(&(y[r.a] - y[r.b]));
+            let cc = r.c * r.c.transpose() * r.w;
+            for a in 0..3 {
+                g[3 * r.a + a] += v * r.c[a];
+                g[3 * r.b + a] -= v * r.c[a];
+                for e in 0..3 {
+                    h[(3 * r.a + a, 3 * r.a + e)] += cc[(a, e)];
+                    h[(3 * r.b + a, 3 * r.b + e)] += cc[(a, e)];
+                    h[(3 * r.a + a, 3 * r.b + e)] -= cc[(a, e)];
+                    h[(3 * r.b + a, 3 * r.a + e)] -= cc[(a, e)];
+                }
             }
         }
         for (&(p, c), l) in BONES.iter().zip(&self.len) {
@@ -101,14 +130,24 @@ impl JointProblem<'_> {
     }
 }
 
-/// Refines `est` for `prob` with 2-D joint noise `noise_m` metres (> 0; see the module doc).
-/// The camera, bases and weights are kept; the base pose is redefined so that joints =
-/// base + Σ B w still holds, and the RMS is that of the new joints. Returns `est` unchanged
-/// when no step lowers the cost.
-pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64) -> PoseEstimate {
+/// Which plausibility priors ([`super::plausibility`]) the free-joint step applies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Priors {
+    /// The standing prior, for figures the 2-D joints show standing on both feet.
+    pub standing: bool,
+    /// Knees bent backwards are flipped in depth.
+    pub knee_limits: bool,
+}
+
+/// Refines `est` for `prob` with 2-D joint noise `noise_m` metres (> 0; see the module doc) and
+/// the plausibility `priors`. The camera, bases and weights are kept; the base pose is
+/// redefined so that joints = base + Σ B w still holds, and the RMS is that of the new joints.
+/// Returns `est` unchanged when no step lowers the cost and no knee is flipped.
+pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64, priors: &Priors) -> PoseEstimate {
     let cam = &est.camera;
     let y0: Joints = std::array::from_fn(|j| cam.r * Vector3::from(est.joints[j]));
     let sigma_px = noise_m * 0.5 * (cam.sx + cam.sy);
+    let standing = priors.standing && standing_in_image(&prob.uv, &std::array::from_fn(|j| prob.vis.contains(&j)));
     let jp = JointProblem {
         prob,
         cam,
@@ -117,6 +156,8 @@ pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64) -> PoseEstim
         wp: 1.0 / (sigma_px * sigma_px),
         wd: 1.0 / (SIGMA_3D * SIGMA_3D),
         wl: 1.0 / (SIGMA_LEN * SIGMA_LEN),
+        wz: if standing { 1.0 / (SIGMA_DEPTH_STANDING * SIGMA_DEPTH_STANDING) } else { 1.0 / (SIGMA_3D * SIGMA_3D) },
+        linear: if standing { standing_residuals(&cam.r) } else { Vec::new() },
     };
     let mut y = y0;
     let mut f = jp.cost(&y);
@@ -150,7 +191,8 @@ pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64) -> PoseEstim
             }
         }
     }
-    if !(f < f0) {
+    let flipped = if priors.knee_limits { unbend_knees(&mut y) } else { 0 };
+    if !(f < f0) && flipped == 0 {
         return est.clone();
     }
     let rt = cam.r.transpose();
@@ -203,7 +245,7 @@ mod tests {
         }
         let prob = Problem::new(&d, &j, 0.0).unwrap().with_base(pose_to_vec(&bend(0.0)));
         let est = finish(&prob, cam, vec![], vec![]);
-        let out = fit_joints(&prob, &est, 0.002);
+        let out = fit_joints(&prob, &est, 0.002, &Priors::default());
         assert!(out.rms < 0.25 * est.rms, "rms {} -> {}", est.rms, out.rms);
         let err = |x: &crate::skeleton::Joints3| (v(&x[4]) - v(&truth[4])).norm();
         assert!(err(&out.joints) < 0.3 * err(&est.joints), "wrist error {} -> {}", err(&est.joints), err(&out.joints));
@@ -217,7 +259,7 @@ mod tests {
         assert_eq!(out.base, out.joints);
         // An estimate that already explains the image is left as it is.
         let exact = PoseEstimate { joints: truth, ..est.clone() };
-        let again = fit_joints(&prob, &exact, 0.002);
+        let again = fit_joints(&prob, &exact, 0.002, &Priors::default());
         assert_eq!(again.joints, exact.joints);
     }
 }

@@ -2,7 +2,7 @@
 //! and excluded clips) and the provenance text stored in the dictionary file.
 //!
 //! The committed asset `assets/pose_dictionary.skbpd` is rebuilt with
-//! `sketchbody learn-poses --mocap ../shared/data/mocap/deepmimic --out assets/pose_dictionary.skbpd`
+//! `sketchbody learn-poses --mocap ../shared/data/mocap/deepmimic --mocap ../shared/data/mocap/cmu --out assets/pose_dictionary.skbpd`
 //! which is [`learn_from_sources`] with [`LearnSpec::library_default`].
 //!
 //! **Joint convention (retargeting).** A motion clip's joints follow its capture skeleton
@@ -27,12 +27,34 @@ use crate::body::{BodyModel, Gender};
 use crate::error::{Error, Result};
 use crate::skeleton::Joints3;
 
-/// Clips held out of the default dictionary for measurement (`bench-pose`).
+/// Clips held out of the default dictionary for measurement (`bench-pose`): six DeepMimic
+/// clips and four whole CMU subjects (`SS_*`: 06 basketball and 08 walks on the Character
+/// Creator and Daz skeletons, 13 jumps and reaches, 16 jumps on the ASF skeleton).
 pub fn default_held_out() -> Vec<String> {
-    ["dance_b", "jog", "kick", "long_long_walk3", "long_long_walk3_mirror", "long_stealthy_walk1"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect()
+    [
+        "dance_b",
+        "jog",
+        "kick",
+        "long_long_walk3",
+        "long_long_walk3_mirror",
+        "long_stealthy_walk1",
+        "06_*",
+        "08_*",
+        "13_*",
+        "16_*",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect()
+}
+
+/// Whether clip `name` matches a held-out or excluded entry: the same name, or for an entry
+/// ending in `*` (a whole CMU subject, `06_*`) a name starting with what precedes it.
+pub fn clip_matches(entry: &str, name: &str) -> bool {
+    match entry.strip_suffix('*') {
+        Some(prefix) => name.starts_with(prefix),
+        None => entry == name,
+    }
 }
 
 /// The clips with lying or upside-down poses (data/mocap/README.md).
@@ -118,13 +140,14 @@ fn stem(p: &Path) -> String {
     p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
 }
 
-/// Reads the clips of `mocap` (a folder of motion tables, optional) and `bvh` files, drops the
-/// held-out and excluded ones, and learns the dictionary. The provenance lists the clips used
+/// Reads the clips of the `mocap` folders of motion tables (clip names must differ across
+/// folders) and the `bvh` files, drops the held-out and excluded ones ([`clip_matches`]), and
+/// learns the dictionary. The provenance lists the clips used
 /// (file stems), the held-out and excluded names and the parameters, one `key: value` per line.
-pub fn learn_from_sources(mocap: Option<&Path>, bvh: &[PathBuf], spec: &LearnSpec) -> Result<Dictionary> {
+pub fn learn_from_sources(mocap: &[PathBuf], bvh: &[PathBuf], spec: &LearnSpec) -> Result<Dictionary> {
     let mut clips: Vec<(String, Vec<Joints3>)> = Vec::new();
-    let skip = |name: &str| spec.held_out.iter().chain(&spec.excluded).any(|h| h == name);
-    if let Some(dir) = mocap {
+    let skip = |name: &str| spec.held_out.iter().chain(&spec.excluded).any(|h| clip_matches(h, name));
+    for dir in mocap {
         for f in motion_files(dir)? {
             let name = stem(&f);
             if !skip(&name) {
@@ -209,13 +232,13 @@ mod tests {
             params: LearnParams::default(),
             retarget: vec![],
         };
-        let d = learn_from_sources(None, &[a.clone(), b.clone()], &spec).unwrap();
+        let d = learn_from_sources(&[], &[a.clone(), b.clone()], &spec).unwrap();
         assert_eq!(d.actions.len(), 1);
         assert_eq!(d.actions[0].name, "swing");
         assert!(d.provenance.contains("clips: swing\n"));
         assert_eq!(held_out_of(&d), vec!["heldout".to_string()]);
         std::fs::write(&a, "HIERARCHY\nROOT x\n{").unwrap();
-        assert!(learn_from_sources(None, &[a], &spec).is_err());
+        assert!(learn_from_sources(&[], &[a], &spec).is_err());
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -266,10 +289,10 @@ mod tests {
             frames.iter().map(|x| x.iter().flatten().map(|v| v.to_string()).collect::<Vec<_>>().join(",")).collect();
         std::fs::write(dir.join("bend.csv"), format!("{}\n{}\n", header.join(","), rows.join("\n"))).unwrap();
         let spec = LearnSpec { retarget: skel, held_out: vec![], ..LearnSpec::default() };
-        let d = learn_from_sources(Some(&dir), &[], &spec).unwrap();
+        let d = learn_from_sources(&[dir.clone()], &[], &spec).unwrap();
         assert_eq!(retarget_of(&d), vec!["female".to_string(), "male".to_string()]);
         let plain =
-            learn_from_sources(Some(&dir), &[], &LearnSpec { held_out: vec![], ..LearnSpec::default() }).unwrap();
+            learn_from_sources(&[dir.clone()], &[], &LearnSpec { held_out: vec![], ..LearnSpec::default() }).unwrap();
         assert!(retarget_of(&plain).is_empty());
         // Learned bone lengths are the skeletons' (normalised), not the source's long arms.
         let b = 3; // r_elbow -> r_wrist

@@ -6,8 +6,10 @@
 //! - [`bvh`]: BVH reader with a joint-name mapping for CMU-, Mixamo- and Rokoko-style rigs.
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
 //! - [`exemplar`]: the nearest-neighbour starts (exemplar poses ranked by an affine camera fit).
+//! - [`figure`]: drawn proportions as unknowns (per-group bone-length factors).
 //! - [`learn`]: clip selection and provenance for learning from folders and BVH files.
 //! - [`dict_io`]: the dictionary's binary file format and the embedded default.
+//! - [`plausibility`]: the standing prior and the knee limits of the free-joint step.
 //! - [`options`]: solver options (κ, α, basis count, tolerance).
 //! - [`problem`]: a validated 2-D input with the model of eq. (1)–(3).
 //! - [`qcls`]: least squares under the two-sided limb-length constraint of eq. (3).
@@ -26,11 +28,13 @@ pub mod camera_fit;
 pub mod dict_io;
 pub mod dictionary;
 pub mod exemplar;
+pub mod figure;
 pub mod joint_fit;
 pub mod learn;
 pub mod metrics;
 pub mod motion;
 pub mod options;
+pub mod plausibility;
 pub mod problem;
 pub mod pursuit;
 pub mod qcls;

@@ -114,6 +114,17 @@ pub struct PoseOptions {
     /// every joint leave the dictionary's span, trading the 2-D fit against staying near the
     /// dictionary pose, with the bone lengths kept. 0 = off (the pose of eq. 3 as solved).
     pub joint_noise: f64,
+    /// Estimate the drawn proportions (per-group bone-length factors, [`super::figure`]) with
+    /// the pose: a second solve on the 2-D joints unstylised by factors estimated from the
+    /// first (about twice the time). `false` = the dictionary's proportions (factors 1).
+    pub proportions: bool,
+    /// The standing prior of the free-joint step ([`super::plausibility`]): for a figure the
+    /// 2-D joints show standing on both feet, an upright torso, the head over the neck and both
+    /// ankles under the pelvis at one height. Needs `joint_noise` > 0.
+    pub standing_prior: bool,
+    /// Knee limits of the free-joint step ([`super::plausibility::unbend_knees`]): knees bent
+    /// backwards are flipped in depth. Needs `joint_noise` > 0.
+    pub knee_limits: bool,
 }
 
 impl Default for PoseOptions {
@@ -121,7 +132,8 @@ impl Default for PoseOptions {
     /// toward the level target (the pitch pulled to 0; the paper's identity target pulls the
     /// yaw too and measured worse), equal scales, up to 4 bases, 0.5 px, refined, prior 0.1 m,
     /// 12 exemplar starts recomposed from 64 limb candidates, blended at τ = 30 px² per joint,
-    /// then the free-joint refinement at 0.014 m (4 px on a 500-px figure).
+    /// then the free-joint refinement at 0.014 m (4 px on a 500-px figure), with the proportions
+    /// estimated.
     fn default() -> Self {
         PoseOptions {
             kappa: 0.05,
@@ -136,6 +148,9 @@ impl Default for PoseOptions {
             limb_candidates: 64,
             blend: 30.0,
             joint_noise: 0.014,
+            proportions: true,
+            standing_prior: true,
+            knee_limits: true,
         }
     }
 }

@@ -16,6 +16,7 @@ use nalgebra::{DVector, Vector3};
 
 use super::camera_fit::{fit_camera, CameraPrior};
 use super::dictionary::Dictionary;
+use super::figure::{estimate_factors, BodyFactors, FACTOR_MAX, FACTOR_MIN};
 use super::options::PoseOptions;
 use super::problem::Problem;
 use super::qcls;
@@ -43,7 +44,20 @@ pub struct PoseEstimate {
     /// For an exemplar start: the exemplar columns of its torso and of its limbs (right arm,
     /// left arm, right leg, left leg; all equal unless recomposed); `None` for μ.
     pub base_parts: Option<[usize; 5]>,
+    /// The drawn proportions: per-group bone-length factors relative to the dictionary's
+    /// skeleton ([`super::figure`]; all 1 unless [`PoseOptions::proportions`]). `joints` is the
+    /// dictionary pose (`base` + Σ B w, after the free-joint step) with these factors applied.
+    pub factors: BodyFactors,
+    /// `false` when no plausible body explains the 2-D joints: the reprojection RMS exceeds
+    /// [`IMPLAUSIBLE_RMS`] of the visible joints' extent, or a factor sits at its range's end.
+    /// The estimate is still the best found.
+    pub plausible: bool,
 }
+
+/// Reprojection RMS, as a fraction of the visible joints' bounding-box diagonal, above which an
+/// estimate is flagged implausible (5%: 25 px on a 500-px figure; exact mocap joints stay below
+/// 2%).
+pub const IMPLAUSIBLE_RMS: f64 = 0.05;
 
 /// How many of the most correlated bases each pursuit step tries.
 const CANDIDATES: usize = 1;
@@ -68,6 +82,8 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
         length_excess: excess,
         base: crate::pose::dictionary::vec_to_pose(prob.base.as_slice()),
         base_parts: None,
+        factors: BodyFactors::default(),
+        plausible: true,
     }
 }
 
@@ -80,8 +96,52 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
 /// [`PoseOptions::blend`]; 0 = the one with the lowest objective) and, if refinement is on, a
 /// blend of several is refined once more from its own base pose. Last, with
 /// [`PoseOptions::joint_noise`] > 0, the free-joint refinement ([`super::joint_fit`]).
+///
+/// With [`PoseOptions::proportions`], the drawn proportions are unknowns too: the factors are
+/// estimated from that first estimate ([`super::figure::estimate_factors`]), the whole solve
+/// runs again on the 2-D joints unstylised by them, and the factors are applied to its joints
+/// (the first estimate is kept when that second solve fails or fits the image worse). Every
+/// estimate is flagged for plausibility ([`PoseEstimate::plausible`]).
 pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
     opts.validate()?;
+    let first = estimate_fixed(dict, joints, opts)?;
+    let est = if opts.proportions { with_proportions(dict, joints, opts, first) } else { first };
+    Ok(flag_plausibility(joints, est))
+}
+
+/// The second solve of [`estimate_pose`] with estimated factors (see there).
+fn with_proportions(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions, first: PoseEstimate) -> PoseEstimate {
+    let c = &first.camera;
+    let f = estimate_factors(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy);
+    if f.k.iter().all(|k| (k - 1.0).abs() < 1e-3) {
+        return first;
+    }
+    let Ok(second) = estimate_fixed(dict, &f.unstylise_2d(joints), opts) else { return first };
+    let x = f.apply(&second.joints);
+    let xs: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(x[j]));
+    let Ok(prob) = Problem::new(dict, joints, 0.0) else { return first };
+    let rms = prob.rms(&second.camera, &xs);
+    if !(rms <= first.rms) && rms > opts.tolerance {
+        return first;
+    }
+    PoseEstimate { joints: x, rms, factors: f, ..second }
+}
+
+/// Sets [`PoseEstimate::plausible`].
+fn flag_plausibility(joints: &Joints2, est: PoseEstimate) -> PoseEstimate {
+    let vis: Vec<&[f64; 2]> = joints.xy.iter().zip(&joints.visible).filter(|(_, v)| **v).map(|(p, _)| p).collect();
+    let span = |a: usize| {
+        let (lo, hi) = vis.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p[a]), h.max(p[a])));
+        hi - lo
+    };
+    let extent = span(0).hypot(span(1));
+    let at_bound = est.factors.k.iter().any(|&k| k <= FACTOR_MIN + 1e-9 || k >= FACTOR_MAX - 1e-9);
+    let plausible = est.rms.is_finite() && est.rms <= IMPLAUSIBLE_RMS * extent && !at_bound;
+    PoseEstimate { plausible, ..est }
+}
+
+/// [`estimate_pose`] with the dictionary's proportions (no factors, no plausibility flag).
+fn estimate_fixed(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
     let prob = Problem::new(dict, joints, opts.prior)?;
     if opts.starts == 0 || dict.exemplars.ncols() == 0 {
         let cam = fit_camera(&prob.pose(&[], &[]), &prob.uv, &prob.vis, &CameraPrior::of(opts))?;
@@ -129,7 +189,8 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
 /// The free-joint refinement of `est` when [`PoseOptions::joint_noise`] > 0.
 fn with_joint_fit(prob: &Problem, opts: &PoseOptions, est: PoseEstimate) -> PoseEstimate {
     if opts.joint_noise > 0.0 {
-        super::joint_fit::fit_joints(prob, &est, opts.joint_noise)
+        let priors = super::joint_fit::Priors { standing: opts.standing_prior, knee_limits: opts.knee_limits };
+        super::joint_fit::fit_joints(prob, &est, opts.joint_noise, &priors)
     } else {
         est
     }

@@ -1,0 +1,232 @@
+//! Plausibility priors of the 3-D pose step, each switchable ([`super::PoseOptions`]):
+//!
+//! - **Standing** ([`standing_in_image`], [`standing_residuals`]): for a figure the 2-D joints
+//!   show standing on both feet (torso and both legs near the image vertical, legs nearly
+//!   straight, ankles lowest and level), the free-joint step ([`super::joint_fit`]) adds linear
+//!   residuals in the model frame — an upright torso (pelvis→neck without horizontal
+//!   components), the head over the neck, both ankles under the pelvis in depth and at one
+//!   height (a common ground plane) — and relaxes its pull toward the dictionary pose in depth,
+//!   so that depth follows these priors instead of the dictionary's guess.
+//! - **Knee limits** ([`unbend_knees`]): a knee bent backwards (the shin swung forward of the
+//!   thigh, against the body's facing) gets the depth flip of its thigh, shin or whole leg that
+//!   bends it forward: under weak perspective the image and every bone length are unchanged. (Elbows are left alone: their bending plane depends on the upper arm's
+//!   twist, which 15 joints do not show.)
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::skeleton::{joint, NUM_JOINTS};
+
+/// Largest angle, degrees, of the torso (pelvis→neck) and of each leg (hip→ankle) from the image
+/// vertical for a standing figure.
+pub const STANDING_MAX_TILT_DEG: f64 = 10.0;
+/// Smallest 2-D knee angle (hip–knee–ankle), degrees, of a standing figure's straight legs.
+pub const STANDING_MIN_KNEE_DEG: f64 = 170.0;
+/// Largest height difference of the two ankles in the image, as a fraction of the leg's image
+/// length, for a figure standing on both feet.
+pub const STANDING_MAX_ANKLE_STEP: f64 = 0.05;
+
+/// Spread of the standing residuals, metres: the torso's horizontal offset (3° of lean on a
+/// 0.5 m torso is 2.6 cm), the head's depth over the neck, each ankle's depth from the pelvis,
+/// the height difference of the ankles.
+pub const SIGMA_UPRIGHT: f64 = 0.02;
+/// See [`SIGMA_UPRIGHT`].
+pub const SIGMA_HEAD: f64 = 0.03;
+/// See [`SIGMA_UPRIGHT`].
+pub const SIGMA_FEET: f64 = 0.02;
+/// See [`SIGMA_UPRIGHT`].
+pub const SIGMA_GROUND: f64 = 0.02;
+/// The free-joint step's pull toward the dictionary pose along the viewing direction for a
+/// standing figure, metres (instead of [`super::joint_fit::SIGMA_3D`]).
+pub const SIGMA_DEPTH_STANDING: f64 = 0.25;
+
+/// One linear residual `c · (y_a − y_b)` (camera-frame joints `y`; `b = None`: `c · y_a`) with
+/// weight `w` = 1/σ².
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearResidual {
+    /// First joint.
+    pub a: usize,
+    /// Second joint (subtracted).
+    pub b: usize,
+    /// Direction (camera frame).
+    pub c: Vector3<f64>,
+    /// Weight, 1/m².
+    pub w: f64,
+}
+
+fn angle_from_vertical(d: [f64; 2]) -> f64 {
+    d[0].abs().atan2(d[1].abs()).to_degrees()
+}
+
+/// Whether the 2-D joints (pixels, y down) show a figure standing on both feet (module doc;
+/// thresholds [`STANDING_MAX_TILT_DEG`], [`STANDING_MIN_KNEE_DEG`], [`STANDING_MAX_ANKLE_STEP`]).
+/// Every joint of the torso and legs must be visible.
+pub fn standing_in_image(uv: &[[f64; 2]; NUM_JOINTS], visible: &[bool; NUM_JOINTS]) -> bool {
+    use joint::*;
+    let needed = [NECK, PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE];
+    if !needed.iter().all(|&j| visible[j]) {
+        return false;
+    }
+    let d = |a: usize, b: usize| [uv[b][0] - uv[a][0], uv[b][1] - uv[a][1]];
+    let torso = d(PELVIS, NECK);
+    if !(torso[1] < 0.0) || angle_from_vertical(torso) > STANDING_MAX_TILT_DEG {
+        return false;
+    }
+    let mut legs = 0.0;
+    for (h, k, a) in [(R_HIP, R_KNEE, R_ANKLE), (L_HIP, L_KNEE, L_ANKLE)] {
+        let leg = d(h, a);
+        if !(leg[1] > 0.0) || angle_from_vertical(leg) > STANDING_MAX_TILT_DEG {
+            return false;
+        }
+        let (u, v) = (d(k, h), d(k, a));
+        let (nu, nv) = (u[0].hypot(u[1]), v[0].hypot(v[1]));
+        if !(nu > 0.0 && nv > 0.0) {
+            return false;
+        }
+        let cos = ((u[0] * v[0] + u[1] * v[1]) / (nu * nv)).clamp(-1.0, 1.0);
+        if cos.acos().to_degrees() < STANDING_MIN_KNEE_DEG {
+            return false;
+        }
+        legs += 0.5 * leg[0].hypot(leg[1]);
+    }
+    (uv[R_ANKLE][1] - uv[L_ANKLE][1]).abs() <= STANDING_MAX_ANKLE_STEP * legs
+}
+
+/// The standing residuals (module doc) for the camera rotation `r` (model → camera): model
+/// component `k` of a camera-frame vector `v` is `r.column(k) · v`.
+pub fn standing_residuals(r: &Matrix3<f64>) -> Vec<LinearResidual> {
+    use joint::*;
+    let (x, y, z) = (r.column(0).into_owned(), r.column(1).into_owned(), r.column(2).into_owned());
+    let w = |s: f64| 1.0 / (s * s);
+    vec![
+        LinearResidual { a: NECK, b: PELVIS, c: x, w: w(SIGMA_UPRIGHT) },
+        LinearResidual { a: NECK, b: PELVIS, c: z, w: w(SIGMA_UPRIGHT) },
+        LinearResidual { a: HEAD, b: NECK, c: z, w: w(SIGMA_HEAD) },
+        LinearResidual { a: R_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET) },
+        LinearResidual { a: L_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET) },
+        LinearResidual { a: R_ANKLE, b: L_ANKLE, c: y, w: w(SIGMA_GROUND) },
+    ]
+}
+
+/// Bend of a knee: `(knee − hip) × (ankle − knee)` along the body's left, over the two bones'
+/// length product (> 0 forward, the natural bend; < 0 backwards).
+fn knee_bend(h: &Vector3<f64>, k: &Vector3<f64>, a: &Vector3<f64>, left: &Vector3<f64>) -> f64 {
+    let (t, s) = (k - h, a - k);
+    let scale = t.norm() * s.norm();
+    if scale > 0.0 {
+        t.cross(&s).dot(left) / scale
+    } else {
+        0.0
+    }
+}
+
+/// Unbends every backwards-bent knee of the camera-frame joints `y` (module doc): a knee whose
+/// bend ([`knee_bend`]; the body's left from the hips and shoulders) is below −0.05 gets the
+/// depth flip (camera z, so the image and bone lengths are unchanged) of its thigh, its shin or
+/// its whole leg that bends it forward (bend > 0.05) with the least depth change of knee and ankle. Returns
+/// how many knees were changed.
+pub fn unbend_knees(y: &mut [Vector3<f64>; NUM_JOINTS]) -> usize {
+    use joint::*;
+    let left = (y[L_HIP] - y[R_HIP]) + 0.5 * (y[L_SHOULDER] - y[R_SHOULDER]);
+    let Some(left) = left.try_normalize(1e-9) else { return 0 };
+    let mut n = 0;
+    for (h, k, a) in [(R_HIP, R_KNEE, R_ANKLE), (L_HIP, L_KNEE, L_ANKLE)] {
+        let (ph, pk, pa) = (y[h], y[k], y[a]);
+        if knee_bend(&ph, &pk, &pa, &left) >= -0.05 {
+            continue;
+        }
+        let flip = |p: Vector3<f64>, about: f64| Vector3::new(p.x, p.y, 2.0 * about - p.z);
+        let thigh_k = flip(pk, ph.z);
+        let candidates = [
+            (thigh_k, pa + (thigh_k - pk)),   // the thigh (the shin follows)
+            (pk, flip(pa, pk.z)),             // the shin
+            (flip(pk, ph.z), flip(pa, ph.z)), // the whole leg
+        ];
+        let best = candidates.iter().filter(|(k2, a2)| knee_bend(&ph, k2, a2, &left) > 0.05).min_by(|x, z| {
+            let cost = |c: &(Vector3<f64>, Vector3<f64>)| (c.0.z - pk.z).abs() + (c.1.z - pa.z).abs();
+            cost(x).total_cmp(&cost(z))
+        });
+        if let Some(&(k2, a2)) = best {
+            y[k] = k2;
+            y[a] = a2;
+            n += 1;
+        }
+    }
+    n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn standing_uv() -> [[f64; 2]; NUM_JOINTS] {
+        use joint::*;
+        let mut uv = [[0.0; 2]; NUM_JOINTS];
+        for (j, p) in [
+            (HEAD, [250.0, 60.0]),
+            (NECK, [250.0, 120.0]),
+            (R_SHOULDER, [210.0, 130.0]),
+            (R_ELBOW, [200.0, 200.0]),
+            (R_WRIST, [195.0, 260.0]),
+            (L_SHOULDER, [290.0, 130.0]),
+            (L_ELBOW, [300.0, 200.0]),
+            (L_WRIST, [305.0, 260.0]),
+            (PELVIS, [250.0, 270.0]),
+            (R_HIP, [230.0, 275.0]),
+            (R_KNEE, [228.0, 380.0]),
+            (R_ANKLE, [226.0, 480.0]),
+            (L_HIP, [270.0, 275.0]),
+            (L_KNEE, [272.0, 380.0]),
+            (L_ANKLE, [274.0, 482.0]),
+        ] {
+            uv[j] = p;
+        }
+        uv
+    }
+
+    #[test]
+    fn standing_is_detected_only_for_upright_straight_legs_on_level_feet() {
+        let uv = standing_uv();
+        let vis = [true; NUM_JOINTS];
+        assert!(standing_in_image(&uv, &vis));
+        let mut step = uv;
+        step[joint::L_ANKLE][1] = 420.0;
+        assert!(!standing_in_image(&step, &vis));
+        let mut bent = uv;
+        bent[joint::R_KNEE][0] = 180.0;
+        assert!(!standing_in_image(&bent, &vis));
+        let mut hidden = vis;
+        hidden[joint::L_KNEE] = false;
+        assert!(!standing_in_image(&uv, &hidden));
+        let lying: [[f64; 2]; NUM_JOINTS] = std::array::from_fn(|j| [uv[j][1], uv[j][0]]);
+        assert!(!standing_in_image(&lying, &vis));
+    }
+
+    #[test]
+    fn a_backwards_knee_is_mirrored_keeping_image_and_lengths() {
+        use joint::*;
+        // Camera frame, body facing the viewer (+z): left at +x, up +y.
+        let mut y = [Vector3::zeros(); NUM_JOINTS];
+        y[R_HIP] = Vector3::new(-0.1, 0.0, 0.0);
+        y[L_HIP] = Vector3::new(0.1, 0.0, 0.0);
+        y[NECK] = Vector3::new(0.0, 0.5, 0.0);
+        y[R_SHOULDER] = Vector3::new(-0.18, 0.45, 0.0);
+        y[L_SHOULDER] = Vector3::new(0.18, 0.45, 0.0);
+        // Right knee behind the hip-ankle line (bent backwards), left knee in front (fine).
+        y[R_KNEE] = Vector3::new(-0.1, -0.4, -0.1);
+        y[R_ANKLE] = Vector3::new(-0.1, -0.8, 0.0);
+        y[L_KNEE] = Vector3::new(0.1, -0.4, 0.1);
+        y[L_ANKLE] = Vector3::new(0.1, -0.8, 0.0);
+        let before = y;
+        assert_eq!(unbend_knees(&mut y), 1);
+        let left = Vector3::x();
+        assert!(knee_bend(&y[R_HIP], &y[R_KNEE], &y[R_ANKLE], &left) > 0.0, "{:?}", y[R_KNEE]);
+        for j in [R_KNEE, R_ANKLE] {
+            assert!((y[j].xy() - before[j].xy()).norm() < 1e-12);
+        }
+        for (a, b) in [(R_HIP, R_KNEE), (R_KNEE, R_ANKLE)] {
+            assert!(((y[b] - y[a]).norm() - (before[b] - before[a]).norm()).abs() < 1e-12);
+        }
+        assert_eq!(y[L_KNEE], before[L_KNEE]);
+        assert_eq!(unbend_knees(&mut y), 0);
+    }
+}
