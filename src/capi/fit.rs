@@ -4,13 +4,13 @@
 use std::ffi::{c_int, c_void};
 use std::sync::Arc;
 
-use crate::body::ik::{solve, IkOptions};
-use crate::body::skin::{skin, SkinMethod};
+use crate::body::skin::SkinMethod;
 use crate::body::Gender;
 use crate::camera::WeakPerspective;
 use crate::error::Error;
-use crate::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
+use crate::fit::{FitOptions, MatchScore};
 use crate::image::to_gray;
+use crate::pipeline::{fit_body, BodyChoice};
 use crate::skeleton::{Joints3, NUM_JOINTS};
 
 use super::body::{skb_context, skb_mesh, write_out};
@@ -280,31 +280,20 @@ pub unsafe extern "C" fn skb_fit_shape(
         if edge_map.as_bytes().iter().all(|&e| e == 0) {
             return fail(&Error::BlankImage { width: edge_map.width(), height: edge_map.height(), low: 0.0, high: 0.0 });
         }
-        let genders = gender.map_or(Gender::ALL.to_vec(), |g| vec![g]);
         let mut cb = progress_closure(progress, user);
-        let mut best: Option<(Gender, crate::fit::FitResult)> = None;
-        for (i, &g) in genders.iter().enumerate() {
-            let problem = FitProblem { model: &ctx.model, gender: g, pose: &pose, camera: &cam, edges: &edge_map, joints2d: None };
-            let n = genders.len() as f32;
-            let r = try_core!(fit_shape(&problem, &fit_opts, &mut |f| cb((i as f32 + f) / n)));
-            if best.as_ref().is_none_or(|(_, b)| r.best_score > b.best_score) {
-                best = Some((g, r));
-            }
-        }
-        let Some((g, r)) = best else { return fail_with(skb_status::SKB_ERR_PANIC, "no gender fitted") };
-        let mut rest = try_core!(ctx.model.space(g).synthesize(&r.weights));
-        if let Some(props) = &r.proportions {
-            try_core!(crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, ctx.model.skin_weights(), props));
-        }
-        if let Some(h) = fit_opts.height {
-            try_core!(crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h));
-        }
-        let ik = try_core!(solve(&rest.joints, &pose, &IkOptions { retarget: fit_opts.retarget }));
-        let vertices = try_core!(skin(&rest.vertices, ctx.model.skin_weights(), &ik, fit_opts.skinning));
+        let choice = BodyChoice { gender, ..BodyChoice::default() };
+        let body = try_core!(fit_body(&ctx.model, &pose, &cam, &edge_map, None, &fit_opts, &choice, &mut cb));
         if !score.is_null() {
-            *score = r.best_score;
+            *score = body.score;
         }
-        let mesh = skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, weights: r.weights, posed: Some(Box::new(Posed { pose: ik, vertices })) };
+        let posed = Posed { pose: body.ik_pose, vertices: body.posed_vertices };
+        let mesh = skb_mesh {
+            model: Arc::clone(&ctx.model),
+            gender: body.gender,
+            rest: body.rest,
+            weights: body.weights,
+            posed: Some(Box::new(posed)),
+        };
         try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
         skb_status::SKB_OK
     }

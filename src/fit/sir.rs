@@ -25,6 +25,7 @@ use super::proportions::{apply_in_place, proportions_of, FactorPrior};
 use super::score::{MatchScore, SketchEvidence};
 use super::transition::Transition;
 use crate::body::ik::{self, IkOptions};
+use crate::body::proportions::Proportions;
 use crate::body::rig::{scale_to_height, y_extent};
 use crate::body::skin::{skin_into, SkinMethod};
 use crate::body::{BodyModel, FitProxy, Gender};
@@ -32,7 +33,6 @@ use crate::camera::WeakPerspective;
 use crate::error::{ensure_finite, Error, Result};
 use crate::image::GrayImage;
 use crate::render::raster::{Facing, Rasterizer};
-use crate::render::sketch::scene::Proportions;
 use crate::skeleton::{Joints2, Joints3, BONES};
 
 /// Options of [`fit_shape`], with documented defaults ([`FitOptions::default`]).

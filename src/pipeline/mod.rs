@@ -10,21 +10,22 @@
 //! options and the one whose best sample scores higher is chosen (both scores are reported);
 //! every match score is "higher is better" and measured in the same units for both genders.
 
+pub mod body_fit;
 pub mod joints;
 pub mod overlay;
 
 use std::time::Instant;
 
-use crate::body::ik::{self, IkOptions, Pose};
+use crate::body::ik::Pose;
 use crate::body::rig::RiggedMesh;
-use crate::body::skin::skin;
 use crate::body::{BodyModel, Gender};
 use crate::error::{Error, Result};
-use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult};
+use crate::fit::FitOptions;
 use crate::image::{canny, CannyParams, GrayImage};
 use crate::pose::{estimate_pose, Dictionary, PoseEstimate, PoseOptions};
-use crate::skeleton::{Joints2, Joints3};
+use crate::skeleton::Joints2;
 
+pub use body_fit::{fit_body, refit_camera, BodyChoice, FittedBody, GenderFit};
 pub use joints::{DetectedJoints, GivenJoints, JointsSource};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
@@ -53,45 +54,6 @@ pub struct PipelineOptions {
     /// `--oracle-pose` passes the ground truth to show what the fit reaches when the pose is
     /// right). Default `None` (estimate the pose).
     pub given_pose: Option<PoseEstimate>,
-}
-
-/// The pose estimate with its camera refitted to a body's skeleton: the body's rest joints
-/// `rest` are posed to the estimate's bone directions by IK (its own bone lengths), rotated by
-/// the estimate's R, and `sx, tx` / `sy, ty` are the least-squares fit of their projections to
-/// the visible 2-D joints. The pose solver reports a 1.75 m person of its dictionary's
-/// proportions, and a single weak-perspective view cannot tell a small near figure from a large
-/// far one; without this the shape fit spends shape weights on the solver's arbitrary scale.
-/// Errors: IK's; [`Error::Degenerate`] when a scale comes out non-positive.
-pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> Result<PoseEstimate> {
-    let posed = ik::solve(rest, &pose.joints, &IkOptions { retarget: false })?.joints;
-    let targets: Vec<(usize, [f64; 2])> =
-        (0..posed.len()).filter(|&k| joints2d.visible[k]).map(|k| (k, joints2d.xy[k])).collect();
-    let camera = pose.camera.refit_scale(&posed, &targets)?;
-    Ok(PoseEstimate { camera, ..pose.clone() })
-}
-
-/// The gender's mean rest skeleton, scaled about its pelvis to `height` metres when given
-/// ([`crate::fit::FitOptions::height`]).
-fn mean_skeleton(model: &BodyModel, gender: Gender, height: Option<f64>) -> Result<Joints3> {
-    let space = model.space(gender);
-    let mut joints = *space.mean_joints();
-    if let Some(h) = height {
-        crate::body::rig::scale_to_height(&mut space.mean().to_vec(), &mut joints, h)?;
-    }
-    Ok(joints)
-}
-
-/// One gender's fit.
-#[derive(Clone, Debug, PartialEq)]
-pub struct GenderFit {
-    /// The shape space fitted.
-    pub gender: Gender,
-    /// The SIR's result (`None` for the mean shape).
-    pub fit: Option<FitResult>,
-    /// Best sample's match score (higher is better); NaN for the mean shape.
-    pub score: f64,
-    /// Wall-clock seconds of this fit.
-    pub seconds: f64,
 }
 
 /// Wall-clock seconds of each stage.
@@ -187,12 +149,6 @@ pub fn run_pipeline(
     if w < MIN_SKETCH_SIDE || h < MIN_SKETCH_SIDE {
         return Err(Error::ImageTooSmall { width: w, height: h, min: MIN_SKETCH_SIDE });
     }
-    if options.mean_shape && options.gender.is_none() {
-        return Err(Error::OutOfRange {
-            name: "gender",
-            detail: "the mean-shape baseline needs a gender (nothing to choose by)".into(),
-        });
-    }
     p.report(0.0)?;
     let t = Instant::now();
     let edges = canny(&sketch.view(), &options.canny)?;
@@ -217,79 +173,29 @@ pub fn run_pipeline(
     timings.pose = t.elapsed().as_secs_f64();
     p.report(0.06)?;
 
-    let genders: Vec<Gender> = options.gender.map_or(Gender::ALL.to_vec(), |g| vec![g]);
-    let mut fits = Vec::with_capacity(genders.len());
-    let t = Instant::now();
-    let span = 0.9 / genders.len() as f32;
-    let mut poses = Vec::with_capacity(genders.len());
-    for (i, &gender) in genders.iter().enumerate() {
-        let tf = Instant::now();
-        let pose = if options.keep_pose_scale {
-            pose.clone()
-        } else {
-            refit_camera(&pose, &mean_skeleton(model, gender, options.fit.height)?, &joints2d)?
-        };
-        poses.push(pose);
-        let pose = &poses[i];
-        if options.mean_shape {
-            fits.push(GenderFit { gender, fit: None, score: f64::NAN, seconds: 0.0 });
-            continue;
-        }
-        let problem = FitProblem {
-            model,
-            gender,
-            pose: &pose.joints,
-            camera: &pose.camera,
-            edges: &edges,
-            joints2d: Some(&joints2d),
-        };
-        let base = 0.06 + span * i as f32;
-        let mut cb = |f: f32| (p.callback)((base + span * f).clamp(0.0, 1.0));
-        let fit = fit_shape(&problem, &options.fit, &mut cb)?;
-        fits.push(GenderFit { gender, score: fit.best_score, fit: Some(fit), seconds: tf.elapsed().as_secs_f64() });
-    }
-    timings.fit = t.elapsed().as_secs_f64();
-    // Highest score wins; ties (and NaN mean-shape scores) keep the first.
-    let chosen = (1..fits.len()).fold(0, |best, k| if fits[k].score > fits[best].score { k } else { best });
-    let gender = fits[chosen].gender;
-    let weights = fits[chosen].fit.as_ref().map_or_else(Vec::new, |f| f.weights.clone());
-    let score = fits[chosen].score;
-    let pose = poses.swap_remove(chosen);
-
-    let t = Instant::now();
-    let mut mesh = RiggedMesh::from_model(model, gender, &weights)?;
-    if let Some(props) = fits[chosen].fit.as_ref().and_then(|f| f.proportions.as_ref()) {
-        crate::fit::proportions::apply_in_place(&mut mesh.vertices, &mut mesh.joints, &mesh.weights, props)?;
-    }
-    if let Some(h) = options.fit.height {
-        mesh = mesh.scaled_to_height(h)?;
-    }
-    // With per-sample cameras the chosen body's own skeleton sets the image scale.
-    let pose = if options.fit.sample_camera && !options.mean_shape {
-        refit_camera(&pose, &mesh.joints, &joints2d)?
-    } else {
-        pose
-    };
-    let ik_pose = ik::solve(&mesh.joints, &pose.joints, &IkOptions { retarget: options.fit.retarget })?;
-    let posed_vertices = skin(&mesh.vertices, &mesh.weights, &ik_pose, options.fit.skinning)?;
-    let posed_joints = ik_pose.joints;
-    timings.posing = t.elapsed().as_secs_f64();
+    let choice =
+        BodyChoice { gender: options.gender, mean_shape: options.mean_shape, keep_pose_scale: options.keep_pose_scale };
+    let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
+    let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &options.fit, &choice, &mut cb)?;
+    timings.fit = body.fit_seconds;
+    timings.posing = body.posing_seconds;
+    let mesh = RiggedMesh::from_rest(model, &body.rest);
     timings.total = t0.elapsed().as_secs_f64();
     p.report(1.0)?;
     Ok(PipelineResult {
         edges,
         joints2d,
         joints_source: source.name().to_string(),
-        pose,
-        fits,
-        gender,
+        pose: PoseEstimate { camera: body.camera, ..pose },
+        fits: body.fits,
+        gender: body.gender,
         gender_by_score: options.gender.is_none(),
-        weights,
-        score,
+        weights: body.weights,
+        score: body.score,
         mesh,
-        ik_pose,
-        posed_vertices,
-        posed_joints,
+        posed_joints: body.ik_pose.joints,
+        ik_pose: body.ik_pose,
+        posed_vertices: body.posed_vertices,
         timings,
     })
 }

@@ -178,7 +178,7 @@ fn report(
     let how = if r.gender_by_score { "chosen by score (higher is better)" } else { "given" };
     let _ = writeln!(s, "- gender: {} ({how})", r.gender.name());
     let chosen = r.fits.iter().find(|g| g.gender == r.gender).and_then(|g| g.fit.as_ref());
-    let factors = |p: &sketchbody::render::sketch::scene::Proportions| {
+    let factors = |p: &sketchbody::body::proportions::Proportions| {
         format!(
             "legs {:.3}, arms {:.3}, shoulders {:.3}, head {:.3}, torso {:.3}",
             p.legs, p.arms, p.shoulders, p.head, p.torso
