@@ -16,6 +16,7 @@ mod ptr;
 mod body;
 mod detect;
 mod error;
+mod export;
 mod fit;
 mod image;
 mod mesh_ops;
@@ -37,6 +38,12 @@ pub use detect::{
     skb_detect_options_set_threshold, skb_detector, skb_detector_detect, skb_detector_free, skb_detector_new_from_file,
 };
 pub use error::skb_last_error_message;
+pub use export::{
+    skb_export_options, skb_export_options_free, skb_export_options_new, skb_export_options_set_naming,
+    skb_export_options_set_origin, skb_export_options_set_rest_pose, skb_mesh_write_glb_with_options,
+    SKB_NAMING_MIXAMO, SKB_NAMING_PROJECT, SKB_NAMING_UNREAL, SKB_ORIGIN_FLOOR, SKB_ORIGIN_PELVIS, SKB_REST_A_POSE,
+    SKB_REST_T_POSE,
+};
 pub use fit::{
     skb_fit_options, skb_fit_options_free, skb_fit_options_new, skb_fit_options_set_dims,
     skb_fit_options_set_estimate_proportions, skb_fit_options_set_gender, skb_fit_options_set_height,
