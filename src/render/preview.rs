@@ -223,10 +223,15 @@ mod tests {
         let img = compare_preview(&sketch, &m.vertices, &m.triangles(), &cam, 64).unwrap();
         assert_eq!((img.width, img.height), (3 * 32 + 128, 64));
         let at = |i: usize, j: usize| img.data[(j * img.width + i) * 3..][..3].to_vec();
-        assert_eq!(at(16, 32), vec![255, 255, 255], "sketch panel");
-        assert_ne!(at(32 + 16, 32), BACKGROUND.to_vec(), "body at the image centre");
-        assert_eq!(at(32, 2), BACKGROUND.to_vec(), "no body in the top-left corner");
-        let blend = at(64 + 16, 32);
-        assert!(blend[0] > at(32 + 16, 32)[0] && blend[0] < 255);
+        // The chest (between the pelvis and the neck) where the camera projects it.
+        let j = rest_joints();
+        let chest = (Vector3::from(j[1]) + Vector3::from(j[8])) / 2.0;
+        let [u, v] = cam.project(&chest);
+        let (i, k) = ((u * 32.0 / 100.0) as usize, (v * 64.0 / 200.0) as usize);
+        assert_eq!(at(i, k), vec![255, 255, 255], "sketch panel");
+        assert_ne!(at(32 + i, k), BACKGROUND.to_vec(), "body at the chest");
+        assert_eq!(at(32, 0), BACKGROUND.to_vec(), "no body in the top-left corner");
+        let blend = at(64 + i, k);
+        assert!(blend[0] > at(32 + i, k)[0] && blend[0] < 255);
     }
 }
