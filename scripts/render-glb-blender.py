@@ -28,6 +28,7 @@ scene = bpy.context.scene
 scene.render.engine = "CYCLES"
 scene.cycles.device = "CPU"
 scene.cycles.samples = 32
+scene.cycles.use_denoising = False
 scene.render.resolution_x, scene.render.resolution_y = 480, 720
 scene.render.film_transparent = False
 world = bpy.data.worlds.new("world")
