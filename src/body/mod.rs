@@ -4,6 +4,7 @@
 //! kinematics and skinning. [`BodyModel::embedded`] decodes the model compiled into the library;
 //! `build` makes it from the MakeHuman data (`sketchbody build-model`).
 
+#[cfg(feature = "model-builder")]
 pub mod build;
 pub mod decimate;
 mod format;

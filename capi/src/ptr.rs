@@ -78,7 +78,7 @@ macro_rules! try_core {
     ($e:expr) => {
         match $e {
             Ok(v) => v,
-            Err(e) => return $crate::capi::error_fail(&e),
+            Err(e) => return $crate::error_fail(&e),
         }
     };
 }
