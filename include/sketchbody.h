@@ -64,6 +64,41 @@
 #define SKB_POSE_DUAL_QUATERNION 2
 
 /**
+ * Bone names: the project's (`pelvis`, `spine`, `r_elbow`, …; the default).
+ */
+#define SKB_NAMING_PROJECT 0
+
+/**
+ * Bone names: Mixamo's (`mixamorig:Hips`, `mixamorig:RightForeArm`, …).
+ */
+#define SKB_NAMING_MIXAMO 1
+
+/**
+ * Bone names: Unreal-style, MakeHuman's `game_engine` (`root`, `pelvis`, `spine_01`, …).
+ */
+#define SKB_NAMING_UNREAL 2
+
+/**
+ * Rest pose: MakeHuman's A-pose (the default).
+ */
+#define SKB_REST_A_POSE 0
+
+/**
+ * Rest pose: MakeHuman's T-pose.
+ */
+#define SKB_REST_T_POSE 1
+
+/**
+ * Origin on the floor between the feet (the default).
+ */
+#define SKB_ORIGIN_FLOOR 0
+
+/**
+ * Origin at the rest pelvis joint.
+ */
+#define SKB_ORIGIN_PELVIS 1
+
+/**
  * Length of a pose vector (x, y, z of each joint in canonical order).
  */
 #define SKB_POSE_DIM 45
@@ -292,6 +327,13 @@ typedef struct skb_detect_options skb_detect_options;
  * once.
  */
 typedef struct skb_detector skb_detector;
+
+/**
+ * Export options of the rigged GLB (docs/formats.md, "body.glb"). Create with
+ * `skb_export_options_new` (defaults: project names, A-pose, floor), free with
+ * `skb_export_options_free`. Not shared between threads while being set.
+ */
+typedef struct skb_export_options skb_export_options;
 
 /**
  * Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
@@ -766,9 +808,10 @@ skb_status skb_mesh_rasterize(const struct skb_mesh *mesh,
 skb_status skb_mesh_write_obj(const struct skb_mesh *mesh, const char *path, bool posed);
 
 /**
- * Writes the mesh as binary glTF 2.0 to `path` (UTF-8): rest mesh with skin, 15 joint nodes,
- * a "posed" scene (the current pose; the rest pose if never posed) and a "rest" scene. See
- * docs/formats.md. Written atomically. Only reads `mesh`.
+ * Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with the default export options
+ * (`skb_mesh_write_glb_with_options` with NULL options): one scene, the rest mesh skinned to
+ * MakeHuman's 53-bone rig with project names, posed by the current pose (the rest pose if never
+ * posed), origin on the floor. See docs/formats.md. Written atomically. Only reads `mesh`.
  */
 skb_status skb_mesh_write_glb(const struct skb_mesh *mesh, const char *path);
 
@@ -777,6 +820,44 @@ skb_status skb_mesh_write_glb(const struct skb_mesh *mesh, const char *path);
  * `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
  */
 skb_status skb_mesh_write_preview(const struct skb_mesh *mesh, const char *path, uint32_t size);
+
+/**
+ * Creates export options with the defaults into `*out` (the caller owns them).
+ */
+skb_status skb_export_options_new(struct skb_export_options **out);
+
+/**
+ * Frees export options. NULL is a no-op.
+ */
+void skb_export_options_free(struct skb_export_options *opts);
+
+/**
+ * Sets the bone names: `SKB_NAMING_PROJECT`, `SKB_NAMING_MIXAMO` or `SKB_NAMING_UNREAL`;
+ * anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+ */
+skb_status skb_export_options_set_naming(struct skb_export_options *opts, uint32_t naming);
+
+/**
+ * Sets the rest pose: `SKB_REST_A_POSE` or `SKB_REST_T_POSE`; anything else is
+ * `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+ */
+skb_status skb_export_options_set_rest_pose(struct skb_export_options *opts, uint32_t rest);
+
+/**
+ * Sets the origin: `SKB_ORIGIN_FLOOR` or `SKB_ORIGIN_PELVIS`; anything else is
+ * `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+ */
+skb_status skb_export_options_set_origin(struct skb_export_options *opts, uint32_t origin);
+
+/**
+ * Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
+ * scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
+ * pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
+ * "pose". See docs/formats.md. Written atomically. Only reads `mesh` and `opts`.
+ */
+skb_status skb_mesh_write_glb_with_options(const struct skb_mesh *mesh,
+                                           const char *path,
+                                           const struct skb_export_options *opts);
 
 /**
  * Creates the embedded default dictionary (learned from the DeepMimic clips, see

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Runs every test of sketchbody on a fresh Debian 12 machine: installs the Debian packages it
-# needs when missing, then cargo tests, the CMake/ctest harness (OpenCV, Ceres, Embree
-# cross-checks, C and C++ API tests under sanitizers) and the Python ctypes test.
+# needs when missing (blender and python3-numpy for the Blender import test), then cargo tests,
+# the CMake/ctest harness (OpenCV, Ceres, Embree cross-checks, C and C++ API tests under
+# sanitizers) and the Python ctypes test.
 # Set SKB_REQUIRE_SHARED_DATA=1 to turn "skipped: ../shared/data missing" into failures (CI does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(cmake g++ pkg-config python3 libopencv-dev libceres-dev libembree-dev)
+packages=(cmake g++ pkg-config python3 libopencv-dev libceres-dev libembree-dev blender python3-numpy)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

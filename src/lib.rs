@@ -18,6 +18,7 @@ pub mod pipeline;
 pub mod pose;
 pub mod raster;
 pub mod render;
+pub mod rig;
 pub mod skeleton;
 
 pub use error::{Error, Result};

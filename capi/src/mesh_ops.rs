@@ -7,11 +7,10 @@ use std::path::Path;
 use nalgebra::Matrix3;
 
 use sketchbody_core::body::ik::{solve, IkOptions, Pose};
-use sketchbody_core::body::rig::{FaceUvs, RiggedMesh};
+use sketchbody_core::body::rig::FaceUvs;
 use sketchbody_core::body::skin::{skin, SkinMethod};
 use sketchbody_core::camera::WeakPerspective;
 use sketchbody_core::error::Error;
-use sketchbody_core::export::gltf::write_glb;
 use sketchbody_core::export::obj::write_obj;
 use sketchbody_core::raster::Rasterizer;
 use sketchbody_core::render::preview::{preview, save_rgb_png};
@@ -260,19 +259,13 @@ pub unsafe extern "C" fn skb_mesh_write_obj(mesh: *const skb_mesh, path: *const 
     }
 }
 
-/// Writes the mesh as binary glTF 2.0 to `path` (UTF-8): rest mesh with skin, 15 joint nodes,
-/// a "posed" scene (the current pose; the rest pose if never posed) and a "rest" scene. See
-/// docs/formats.md. Written atomically. Only reads `mesh`.
+/// Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with the default export options
+/// (`skb_mesh_write_glb_with_options` with NULL options): one scene, the rest mesh skinned to
+/// MakeHuman's 53-bone rig with project names, posed by the current pose (the rest pose if never
+/// posed), origin on the floor. See docs/formats.md. Written atomically. Only reads `mesh`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_glb(mesh: *const skb_mesh, path: *const c_char) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let path = try_status!(path_arg(path, "path"));
-        let rest_pose = Pose::rest(&m.rest.joints);
-        let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
-        try_core!(write_glb(path, &RiggedMesh::from_rest(&m.model, &m.rest), pose));
-        skb_status::SKB_OK
-    }
+    super::export::skb_mesh_write_glb_with_options(mesh, path, std::ptr::null())
 }
 
 /// Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,

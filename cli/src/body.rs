@@ -1,5 +1,5 @@
 //! `sketchbody body`: a body of the embedded shape model, optionally posed to a 3-D joints file,
-//! written as .glb (skinned, posed and rest scenes) or .obj, with an optional preview PNG.
+//! written as .glb (MakeHuman's 53-bone rig, one posed scene) or .obj, with an optional preview PNG.
 
 use std::path::PathBuf;
 
@@ -11,7 +11,9 @@ use sketchbody::export::gltf::write_glb;
 use sketchbody::export::joints::load_joints3_json;
 use sketchbody::export::obj::write_obj;
 use sketchbody::render::preview::{preview, save_rgb_png};
+use sketchbody::rig::RigScene;
 
+use crate::rig_args::RigArgs;
 use crate::CliError;
 
 /// Arguments of `sketchbody body`.
@@ -33,9 +35,11 @@ pub struct Args {
     /// Dual-quaternion skinning instead of linear blend skinning (for OBJ and the preview).
     #[arg(long)]
     dqs: bool,
-    /// Output: .glb (skinned mesh, skeleton, posed and rest scenes) or .obj (posed mesh).
+    /// Output: .glb (rest mesh on the rig, posed, one scene) or .obj (posed mesh).
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    rig: RigArgs,
     /// Also write front and side views of the posed mesh as a PNG.
     #[arg(long)]
     preview: Option<PathBuf>,
@@ -51,6 +55,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         return Err(CliError(format!("{}: output must end in .glb or .obj", a.out.display())));
     }
     let gender = Gender::parse(&a.gender)?;
+    let rig_options = a.rig.options()?;
     let model = BodyModel::embedded()?;
     let mesh = RiggedMesh::from_model(&model, gender, &a.weights)?;
     let pose = match &a.pose {
@@ -66,7 +71,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         None => None,
     };
     if ext.as_deref() == Some("glb") {
-        write_glb(&a.out, &mesh, &pose)?;
+        write_glb(&a.out, &mesh, &RigScene::build(model.rig(), &mesh, &pose, &rig_options)?, None)?;
     } else {
         write_obj(&a.out, &posed, &mesh.quads, mesh.uvs.as_ref())?;
     }

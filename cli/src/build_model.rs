@@ -54,6 +54,16 @@ pub fn run(a: Args) -> Result<(), CliError> {
         report.rig_check.1,
         report.rig_check.0 * 1000.0
     );
+    let (cubes, mean) = &report.production_rig_error;
+    let mut by_error = cubes.clone();
+    by_error.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let top: Vec<String> = by_error.iter().take(3).map(|(c, e)| format!("{c} {:.2} mm", e * 1000.0)).collect();
+    println!(
+        "production rig: {} joint cubes regressed, held-out error mean {:.3} mm, largest {}",
+        cubes.len(),
+        mean * 1000.0,
+        top.join(", ")
+    );
     for (g, r) in Gender::ALL.iter().zip(&report.genders) {
         let energy: Vec<String> = r.cumulative_energy.iter().map(|e| format!("{:.1}", e * 100.0)).collect();
         println!("{}: cumulative energy % = {}", g.name(), energy.join(" "));

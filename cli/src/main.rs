@@ -18,6 +18,7 @@ mod learn_poses;
 mod make_dataset;
 mod pose;
 mod render_sketch;
+mod rig_args;
 mod run;
 mod run_dataset;
 mod search_args;

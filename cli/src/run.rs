@@ -3,9 +3,12 @@
 //! staging folder and moved into DIR together (`fsutil::StagingDir`): a failed, cancelled or
 //! interrupted (Ctrl-C) run leaves no file of its own in DIR.
 //!
-//! Files: `body.glb` (rigged; scenes "posed" and "rest"), `body.obj` (posed mesh), `body_rest.obj`,
-//! `joints2d.json` (sketchbody-joints2d), `pose3d.json` (sketchbody-pose3d: 3-D joints and
-//! camera), `overlay.png`, `preview.png` (front and side of the posed mesh), `report.md`.
+//! Files: `body.glb` (one scene: the rest mesh on MakeHuman's 53-bone rig, posed, with a
+//! one-frame clip and the sketch as its texture), `body.obj` (posed mesh), `body_rest.obj`,
+//! `body.mtl` + `body_texture.png` (the texture, unless `--no-texture`), `joints2d.json`
+//! (sketchbody-joints2d), `pose3d.json` (sketchbody-pose3d: 3-D joints and camera),
+//! `overlay.png`, `preview.png` (sketch, body through the camera, blend, front, side),
+//! `report.md`.
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -17,16 +20,19 @@ use sketchbody::body::{BodyModel, Gender};
 use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::export::gltf::write_glb;
 use sketchbody::export::joints2d::{load_joints2d, write_joints2d};
-use sketchbody::export::obj::write_obj;
+use sketchbody::export::obj::{mtl_string, write_obj_with_material};
 use sketchbody::export::pose3d::pose3d_json;
+use sketchbody::export::texture::{png_bytes, project_sketch};
 use sketchbody::fsutil::{write_atomic, StagingDir};
-use sketchbody::image::load_image;
+use sketchbody::image::{load_rgb_image, to_gray};
 use sketchbody::pipeline::overlay::overlay;
 use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use sketchbody::pose::dict_io;
-use sketchbody::render::preview::{preview, save_rgb_png};
+use sketchbody::render::preview::{compare_preview, save_rgb_png};
+use sketchbody::rig::RigScene;
 
 use crate::fit_args::{score_name, FitArgs};
+use crate::rig_args::RigArgs;
 use crate::CliError;
 
 /// Arguments of `sketchbody run`.
@@ -49,7 +55,15 @@ pub struct Args {
     mean_shape: bool,
     #[command(flatten)]
     fit: FitArgs,
-    /// Side of each preview view, pixels.
+    #[command(flatten)]
+    rig: RigArgs,
+    /// No texture: the GLB gets a plain skin colour and the OBJs no material.
+    #[arg(long)]
+    no_texture: bool,
+    /// Side of the texture projected from the sketch, texels (1..=4096).
+    #[arg(long, default_value_t = sketchbody::export::texture::DEFAULT_TEXTURE_SIZE)]
+    texture_size: usize,
+    /// Height of the preview's panels, pixels.
     #[arg(long, default_value_t = 512)]
     preview_size: usize,
     /// No progress bar.
@@ -207,7 +221,11 @@ fn report(
         "load {load_s:.3}, edges {:.3}, joints {:.3}, pose {:.3}, fit {:.3}, posing {:.3}, pipeline {:.3}, writing {write_s:.3}",
         t.edges, t.joints, t.pose, t.fit, t.posing, t.total
     );
-    let _ = writeln!(s, "\n## Files\n\nbody.glb, body.obj, body_rest.obj, joints2d.json, pose3d.json, overlay.png, preview.png, report.md");
+    let tex = if a.no_texture { "" } else { " body.mtl, body_texture.png," };
+    let _ = writeln!(
+        s,
+        "\n## Files\n\nbody.glb, body.obj, body_rest.obj,{tex} joints2d.json, pose3d.json, overlay.png, preview.png, report.md"
+    );
     s
 }
 
@@ -226,7 +244,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         keep_pose_scale: a.fit.keep_pose_scale,
         ..PipelineOptions::default()
     };
-    let sketch = load_image(&a.sketch)?;
+    let sketch_rgb = load_rgb_image(&a.sketch)?;
+    let sketch = to_gray(&sketch_rgb.view())?;
+    let rig_options = a.rig.options()?;
     let detector: Model;
     let detect_options = DetectOptions::default();
     let source: Box<dyn JointsSource + '_> = match &a.joints {
@@ -252,10 +272,25 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let t_write = Instant::now();
     let tris = r.mesh.triangles();
     let over = overlay(&sketch, &r.joints2d, &r.posed_vertices, &tris, &r.pose.camera)?;
-    let views = preview(&r.posed_vertices, &tris, a.preview_size)?;
-    write_glb(&staging.path("body.glb"), &r.mesh, &r.ik_pose)?;
-    write_obj(&staging.path("body.obj"), &r.posed_vertices, &r.mesh.quads, r.mesh.uvs.as_ref())?;
-    write_obj(&staging.path("body_rest.obj"), &r.mesh.vertices, &r.mesh.quads, r.mesh.uvs.as_ref())?;
+    let views = compare_preview(&sketch_rgb, &r.posed_vertices, &tris, &r.pose.camera, a.preview_size)?;
+    let scene = RigScene::build(model.rig(), &r.mesh, &r.ik_pose, &rig_options)?;
+    let texture = match (&r.mesh.uvs, a.no_texture) {
+        (Some(uvs), false) => {
+            let (img, _) =
+                project_sketch(&sketch_rgb, &r.posed_vertices, &r.mesh.quads, uvs, &r.pose.camera, a.texture_size)?;
+            Some(png_bytes(&img)?)
+        }
+        _ => None,
+    };
+    write_glb(&staging.path("body.glb"), &r.mesh, &scene, texture.as_deref())?;
+    let mtl = texture.as_ref().map(|_| "body.mtl");
+    if let Some(png) = &texture {
+        write_atomic(&staging.path("body_texture.png"), png)?;
+        write_atomic(&staging.path("body.mtl"), mtl_string("body_texture.png").as_bytes())?;
+    }
+    let uvs = r.mesh.uvs.as_ref();
+    write_obj_with_material(&staging.path("body.obj"), &r.posed_vertices, &r.mesh.quads, uvs, mtl)?;
+    write_obj_with_material(&staging.path("body_rest.obj"), &r.mesh.vertices, &r.mesh.quads, uvs, mtl)?;
     write_joints2d(&staging.path("joints2d.json"), &r.joints2d)?;
     let mut pose_bytes =
         serde_json::to_vec_pretty(&pose3d_json(&r.pose, &dict, &opts.pose)).map_err(|e| CliError(e.to_string()))?;

@@ -53,8 +53,10 @@ fn run_writes_every_output() {
         names(&out_dir),
         [
             "body.glb",
+            "body.mtl",
             "body.obj",
             "body_rest.obj",
+            "body_texture.png",
             "joints2d.json",
             "overlay.png",
             "pose3d.json",
@@ -64,16 +66,21 @@ fn run_writes_every_output() {
     );
     let glb = std::fs::read(out_dir.join("body.glb")).unwrap();
     assert_eq!(&glb[..4], b"glTF");
+    let json = String::from_utf8_lossy(&glb[20..20 + u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize]);
+    assert!(json.contains("\"image/png\"") && json.contains("\"r_elbow\""), "textured, project names");
     assert_eq!(load_joints2d(&out_dir.join("joints2d.json")).unwrap(), load_joints2d(Path::new(JOINTS)).unwrap());
     let pose: serde_json::Value = serde_json::from_slice(&std::fs::read(out_dir.join("pose3d.json")).unwrap()).unwrap();
     assert_eq!(pose["format"], "sketchbody-pose3d");
     assert!(pose["camera"]["sx"].as_f64().unwrap() > 100.0);
     let obj = std::fs::read_to_string(out_dir.join("body.obj")).unwrap();
     assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 13380);
+    assert!(obj.contains("\nmtllib body.mtl\n"));
+    assert!(std::fs::read_to_string(out_dir.join("body.mtl")).unwrap().contains("map_Kd body_texture.png"));
     let overlay = image::open(out_dir.join("overlay.png")).unwrap();
     assert_eq!((overlay.width(), overlay.height()), (512, 512));
     let preview = image::open(out_dir.join("preview.png")).unwrap();
-    assert_eq!((preview.width(), preview.height()), (256, 128));
+    // Sketch, camera view, blend (the 512×512 sketch's aspect, 128 px high), then front and side.
+    assert_eq!((preview.width(), preview.height()), (3 * 128 + 256, 128));
     let report = std::fs::read_to_string(out_dir.join("report.md")).unwrap();
     assert!(report.contains("gender: female (given)"), "{report}");
     assert!(report.contains("samples 24"), "{report}");
@@ -90,7 +97,30 @@ fn run_writes_every_output() {
         .copied()
         .collect::<Vec<_>>());
     assert!(out.status.success());
-    assert_eq!(names(&out_dir).len(), 8);
+    assert_eq!(names(&out_dir).len(), 10);
+    // Options: no texture, Unreal names, T-pose, pelvis origin; a bad value is a clear error.
+    let plain = dir.join("plain");
+    let flags = ["--no-texture", "--naming", "unreal", "--rest-pose", "t", "--origin", "pelvis"];
+    let args: Vec<&str> = [SKETCH, "--joints", JOINTS, "--out", plain.to_str().unwrap(), "--gender", "f"]
+        .iter()
+        .chain(&FAST)
+        .chain(&flags)
+        .copied()
+        .collect();
+    let out = run(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(names(&plain).len(), 8);
+    let glb = std::fs::read(plain.join("body.glb")).unwrap();
+    assert!(String::from_utf8_lossy(&glb).contains("\"lowerarm_r\""));
+    let bad = dir.join("bad");
+    let args: Vec<&str> = [SKETCH, "--joints", JOINTS, "--out", bad.to_str().unwrap(), "--naming", "rigify"]
+        .iter()
+        .chain(&FAST)
+        .copied()
+        .collect();
+    let out = run(&args);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("bone naming"));
+    assert!(!bad.exists(), "nothing written on a bad option");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

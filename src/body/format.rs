@@ -1,5 +1,6 @@
 //! The `.skbm` body-model file format (docs/formats.md, "Body model .skbm"): a 48-byte header
-//! (magic, version, sizes), little-endian arrays, and a CRC-32 of everything before it.
+//! (magic, version, sizes), little-endian arrays (topology, skin, the two shape spaces, then the
+//! production rig, variable-length), and a CRC-32 of everything before it.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -8,11 +9,12 @@ use crate::skeleton::{Joints3, NUM_BONES, NUM_JOINTS};
 
 use super::gmm::Gmm;
 use super::model::{BodyModel, ShapeSpace, VertexWeights, MAX_INFLUENCES};
+use crate::rig::{PointRegressor, RigData, NUM_RIG_BONES};
 
 /// First 8 bytes of every `.skbm` file.
 pub const SKBM_MAGIC: [u8; 8] = *b"SKBMODEL";
 /// The format version this library reads and writes.
-pub const SKBM_VERSION: u32 = 1;
+pub const SKBM_VERSION: u32 = 2;
 const HEADER_LEN: usize = 48;
 /// Caps on header counts, far above the MakeHuman body, so a corrupt header cannot request
 /// gigabytes of memory before the length check.
@@ -33,8 +35,9 @@ struct Sizes {
 }
 
 impl Sizes {
-    /// Total file length these counts imply, or `None` on overflow.
-    fn file_len(&self) -> Option<usize> {
+    /// Length of the fixed part (header to the end of the shape spaces) these counts imply, or
+    /// `None` on overflow.
+    fn fixed_len(&self) -> Option<usize> {
         let (v, f, t) = (self.vertices as usize, self.faces as usize, self.uvs as usize);
         let (k, d, c) = (self.components as usize, self.gmm_dims as usize, self.gmm_components as usize);
         let shared = f.checked_mul(32)? + t * 8 + v * MAX_INFLUENCES * 5;
@@ -44,7 +47,7 @@ impl Sizes {
             + NUM_JOINTS * 12
             + k.checked_mul(v * 12 + NUM_JOINTS * 12)?
             + c * (4 + d * 4 + d * d * 4);
-        HEADER_LEN.checked_add(shared)?.checked_add(per_gender.checked_mul(2)?)?.checked_add(4)
+        HEADER_LEN.checked_add(shared)?.checked_add(per_gender.checked_mul(2)?)
     }
 }
 
@@ -105,6 +108,25 @@ impl BodyModel {
                 }
             }
         }
+        put_u32(&mut out, NUM_RIG_BONES as u32);
+        let r = &self.rig;
+        for b in 0..NUM_RIG_BONES {
+            put_f32(&mut out, r.rolls[b] as f64);
+            r.tpose[b].iter().for_each(|&a| put_f32(&mut out, a as f64));
+            for end in [&r.heads[b], &r.tails[b]] {
+                put_u32(&mut out, end.terms.len() as u32);
+                for &(i, w) in &end.terms {
+                    put_u32(&mut out, i);
+                    put_f32(&mut out, w as f64);
+                }
+            }
+        }
+        for w in &r.skin {
+            out.extend_from_slice(&w.bones);
+        }
+        for w in &r.skin {
+            w.weights.iter().for_each(|&c| put_f32(&mut out, c as f64));
+        }
         let crc = crc32fast::hash(&out);
         put_u32(&mut out, crc);
         out
@@ -155,23 +177,20 @@ impl BodyModel {
         {
             return Err(corrupt(format!("header counts out of range: {sizes:?}")));
         }
-        let expected = sizes.file_len().ok_or_else(|| corrupt(format!("header counts overflow: {sizes:?}")))?;
+        let fixed = sizes.fixed_len().ok_or_else(|| corrupt(format!("header counts overflow: {sizes:?}")))?;
+        // The rig: a bone count, per bone ≥ 28 bytes, then 20 bytes of skin per vertex; the CRC.
+        let min_rig = 4 + NUM_RIG_BONES * 28 + sizes.vertices as usize * MAX_INFLUENCES * 5;
+        let expected = fixed + min_rig + 4;
         if bytes.len() < expected {
-            return Err(corrupt(format!("truncated: {} bytes, the header implies {expected}", bytes.len())));
+            return Err(corrupt(format!("truncated: {} bytes, the header implies at least {expected}", bytes.len())));
         }
-        if bytes.len() > expected {
-            return Err(corrupt(format!(
-                "{} trailing bytes after the {expected} the header implies",
-                bytes.len() - expected
-            )));
-        }
-        let stored =
-            u32::from_le_bytes([bytes[expected - 4], bytes[expected - 3], bytes[expected - 2], bytes[expected - 1]]);
-        let actual = crc32fast::hash(&bytes[..expected - 4]);
+        let n = bytes.len();
+        let stored = u32::from_le_bytes([bytes[n - 4], bytes[n - 3], bytes[n - 2], bytes[n - 1]]);
+        let actual = crc32fast::hash(&bytes[..n - 4]);
         if stored != actual {
             return Err(corrupt(format!("checksum mismatch: stored CRC-32 {stored:08x}, computed {actual:08x}")));
         }
-        let mut r = Reader { bytes, pos: HEADER_LEN };
+        let mut r = Reader { bytes: &bytes[..n - 4], pos: HEADER_LEN };
         let model = r.model(&sizes).map_err(|e| match e {
             Error::CorruptData(m) => Error::CorruptData(format!("body model: {m}")),
             other => other,
@@ -188,10 +207,20 @@ struct Reader<'a> {
 }
 
 impl Reader<'_> {
+    /// The next `n` bytes; a truncated file gives empty/short slices, caught by [`Self::check`].
     fn take(&mut self, n: usize) -> &[u8] {
-        let s = &self.bytes[self.pos..self.pos + n];
-        self.pos += n;
+        let end = self.pos.saturating_add(n).min(self.bytes.len());
+        let s = &self.bytes[self.pos.min(end)..end];
+        self.pos = self.pos.saturating_add(n);
         s
+    }
+
+    /// Errors when a read ran past the end.
+    fn check(&self, what: &str) -> Result<()> {
+        if self.pos > self.bytes.len() {
+            return Err(Error::CorruptData(format!("truncated in the {what}")));
+        }
+        Ok(())
     }
 
     fn u32s(&mut self, n: usize) -> Vec<u32> {
@@ -201,6 +230,9 @@ impl Reader<'_> {
     fn f32s(&mut self, n: usize, what: &str) -> Result<Vec<f32>> {
         let v: Vec<f32> =
             self.take(4 * n).chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        if v.len() != n {
+            return Err(Error::CorruptData(format!("truncated in the {what}s")));
+        }
         match v.iter().position(|x| !x.is_finite()) {
             Some(i) => Err(Error::CorruptData(format!("{what} value {i} is not finite"))),
             None => Ok(v),
@@ -231,7 +263,51 @@ impl Reader<'_> {
             .collect();
         let female = self.space(s)?;
         let male = self.space(s)?;
-        Ok(BodyModel { faces, face_uvs, uvs, skin, spaces: [female, male], proxy: Default::default() })
+        let rig = self.rig(nv)?;
+        if self.pos != self.bytes.len() {
+            return Err(Error::CorruptData(format!("{} trailing bytes after the rig", self.bytes.len() - self.pos)));
+        }
+        Ok(BodyModel { faces, face_uvs, uvs, skin, spaces: [female, male], rig, proxy: Default::default() })
+    }
+
+    /// The rig section: bone count, per bone roll, T-pose angles, head and tail regressors; skin.
+    fn rig(&mut self, nv: usize) -> Result<RigData> {
+        let count = self.u32s(1).first().copied().unwrap_or(0) as usize;
+        if count != NUM_RIG_BONES {
+            return Err(Error::CorruptData(format!("the rig has {count} bones, expected {NUM_RIG_BONES}")));
+        }
+        let (mut heads, mut tails, mut rolls, mut tpose) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..count {
+            rolls.push(self.f32s(1, "rig roll")?[0]);
+            let t = self.f32s(3, "T-pose angle")?;
+            tpose.push([t[0], t[1], t[2]]);
+            for out in [&mut heads, &mut tails] {
+                let n = self.u32s(1).first().copied().unwrap_or(0) as usize;
+                if n == 0 || n > 4096 {
+                    return Err(Error::CorruptData(format!("a rig bone end has {n} terms")));
+                }
+                let raw = self.take(8 * n).to_vec();
+                self.check("rig")?;
+                let terms = raw
+                    .chunks_exact(8)
+                    .map(|c| {
+                        (u32::from_le_bytes([c[0], c[1], c[2], c[3]]), f32::from_le_bytes([c[4], c[5], c[6], c[7]]))
+                    })
+                    .collect();
+                out.push(PointRegressor { terms });
+            }
+        }
+        let bones = self.take(MAX_INFLUENCES * nv).to_vec();
+        self.check("rig skin")?;
+        let weights = self.f32s(MAX_INFLUENCES * nv, "rig skin weight")?;
+        let skin = bones
+            .chunks_exact(4)
+            .zip(weights.chunks_exact(4))
+            .map(|(b, w)| VertexWeights { bones: [b[0], b[1], b[2], b[3]], weights: [w[0], w[1], w[2], w[3]] })
+            .collect();
+        let rig = RigData { heads, tails, rolls, tpose, skin };
+        rig.validate(nv)?;
+        Ok(rig)
     }
 
     fn space(&mut self, s: &Sizes) -> Result<ShapeSpace> {
@@ -281,7 +357,19 @@ pub(crate) mod tests {
             uvs: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
             skin: vec![w; 4],
             spaces: [space.clone(), space],
+            rig: tiny_rig(4),
             proxy: Default::default(),
+        }
+    }
+
+    /// A rig whose bones all run from joint 0 to joint 1, every vertex on bone 0.
+    pub(crate) fn tiny_rig(num_vertices: usize) -> RigData {
+        RigData {
+            heads: vec![PointRegressor::joint(0); NUM_RIG_BONES],
+            tails: vec![PointRegressor::joint(1); NUM_RIG_BONES],
+            rolls: vec![0.0; NUM_RIG_BONES],
+            tpose: vec![[0.0; 3]; NUM_RIG_BONES],
+            skin: vec![VertexWeights { bones: [0; 4], weights: [1.0, 0.0, 0.0, 0.0] }; num_vertices],
         }
     }
 
@@ -315,12 +403,18 @@ pub(crate) mod tests {
         assert!(corrupt_message(&b).contains("bad magic"));
         assert!(corrupt_message(b"SKB").contains("bad magic"));
         let mut b = good.clone();
-        b[8] = 2;
-        assert!(corrupt_message(&b).contains("unsupported version 2"));
+        b[8] = 9;
+        assert!(corrupt_message(&b).contains("unsupported version 9"));
         assert!(corrupt_message(&good[..30]).contains("truncated"));
-        assert!(corrupt_message(&good[..good.len() - 1]).contains("truncated"));
+        assert!(corrupt_message(&good[..good.len() - 1]).contains("checksum"));
+        let mut b = good[..good.len() - 4].to_vec();
+        b.truncate(b.len() - 6);
+        b.extend_from_slice(&[0; 4]);
+        fix_crc(&mut b);
+        assert!(corrupt_message(&b).contains("truncated"), "{}", corrupt_message(&b));
         let mut b = good.clone();
         b.push(0);
+        fix_crc(&mut b);
         assert!(corrupt_message(&b).contains("trailing bytes"));
         let mut b = good.clone();
         let mid = b.len() / 2;

@@ -178,6 +178,8 @@ pub struct BodyModel {
     pub(crate) uvs: Vec<[f32; 2]>,
     pub(crate) skin: Vec<VertexWeights>,
     pub(crate) spaces: [ShapeSpace; 2],
+    /// MakeHuman's production rig fitted to the model ([`crate::rig`]).
+    pub(crate) rig: crate::rig::RigData,
     /// The fit proxy, built on first use ([`BodyModel::fit_proxy`]).
     pub(crate) proxy: super::proxy::ProxyCell,
 }
@@ -223,11 +225,18 @@ impl BodyModel {
         &self.skin
     }
 
+    /// The production rig: MakeHuman's `game_engine` skeleton placed by regressors on the
+    /// canonical joints and body vertices, its rolls, T-pose and skin weights ([`crate::rig`]).
+    pub fn rig(&self) -> &crate::rig::RigData {
+        &self.rig
+    }
+
     /// Checks cross-references: face and UV indices in range, skin weights valid, both shape
-    /// spaces with the same vertex count. Used by the loader and the builder.
+    /// spaces with the same vertex count, the rig valid. Used by the loader and the builder.
     pub(crate) fn validate(&self) -> Result<()> {
         let nv = self.skin.len();
         let bad = |m: String| Err(Error::CorruptData(m));
+        self.rig.validate(nv)?;
         for s in &self.spaces {
             if s.mean.len() != nv {
                 return bad(format!("shape space has {} vertices, skin weights {}", s.mean.len(), nv));

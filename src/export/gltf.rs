@@ -1,26 +1,23 @@
-//! Binary glTF 2.0 (.glb): the rest mesh with normals, UVs, skin weights (`JOINTS_0`,
-//! `WEIGHTS_0`) and inverse bind matrices; the 15 canonical joints as nodes; two scenes, "posed"
-//! (the default: node rotations and translations from IK) and "rest" (the bind pose).
+//! Binary glTF 2.0 (.glb), one scene: the rest mesh (normals, UVs, optional base-colour
+//! texture) skinned (`JOINTS_0`, `WEIGHTS_0`, inverse bind matrices) to MakeHuman's 53-bone
+//! production armature ([`crate::rig`]), posed: the nodes carry the body's pose as bone
+//! rotations, with a translation on the root only; the same pose is also a one-frame animation
+//! clip named "pose" (STEP interpolation, time 0).
 //!
-//! Skeleton: one node per joint, named as in [`JOINT_NAMES`], parented as in `PARENT`, placed at
-//! the joint. The node of joint `c` carries the rotation of the bone ending at `c`, so vertices
-//! of bone `b = (s, c)` are skinned to joint node `c` and move rigidly with the bone. The pelvis
-//! node carries the pelvis frame ([`Pose::root`]) and has no vertices. With IK retargeting the
-//! posed joints still land on the targets (node translations) but glTF has no per-bone stretch:
-//! vertices follow their bone rigidly from its end joint instead of stretching.
-//! UVs are written with v flipped (glTF's origin is the top-left of the texture).
-
+//! Nodes 0..53 are the bones in [`crate::rig::RIG_BONES`] order, named in the chosen convention,
+//! each placed at its bone's head with its rest frame (local +Y along the bone, MakeHuman's roll);
+//! node 53 is the mesh. The scene's roots are the root bone (at the floor by default) and the
+//! mesh. UVs are written with v flipped (glTF's texture origin is the top-left).
 use std::collections::HashMap;
 use std::path::Path;
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
-use crate::body::ik::Pose;
 use crate::body::rig::{vertex_normals, RiggedMesh};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::skeleton::{joint::PELVIS, Joints3, BONES, JOINT_NAMES, NUM_JOINTS, PARENT};
+use crate::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -68,54 +65,18 @@ fn vec_json(v: &Vector3<f64>) -> Value {
     json!([v.x, v.y, v.z])
 }
 
-/// Nodes of one skeleton (15 joints, then the skinned mesh node) with global rotations `rot`
-/// per joint and positions `pos`; node indices start at `base`.
-fn skeleton_nodes(
-    base: usize,
-    pos: &Joints3,
-    rot: &[UnitQuaternion<f64>; NUM_JOINTS],
-    skin: usize,
-    tag: &str,
-) -> Vec<Value> {
-    let mut nodes = Vec::with_capacity(NUM_JOINTS + 1);
-    for j in 0..NUM_JOINTS {
-        let (t, r) = match PARENT[j] {
-            None => (Vector3::from(pos[j]), rot[j]),
-            Some(p) => {
-                let inv = rot[p].inverse();
-                (inv * (Vector3::from(pos[j]) - Vector3::from(pos[p])), inv * rot[j])
-            }
-        };
-        let children: Vec<usize> = (0..NUM_JOINTS).filter(|&c| PARENT[c] == Some(j)).map(|c| base + c).collect();
-        let mut node = json!({"name": JOINT_NAMES[j], "translation": vec_json(&t), "rotation": quat_json(&r)});
-        if !children.is_empty() {
-            node["children"] = json!(children);
-        }
-        nodes.push(node);
-    }
-    nodes.push(json!({"name": format!("body ({tag})"), "mesh": 0, "skin": skin}));
-    nodes
-}
-
-/// Global rotation carried by each joint node: the pelvis frame for the pelvis, otherwise the
-/// rotation of the bone ending at the joint.
-fn joint_rotations(pose: &Pose) -> [UnitQuaternion<f64>; NUM_JOINTS] {
-    let mut r = [pose.root; NUM_JOINTS];
-    for (b, &(_, c)) in BONES.iter().enumerate() {
-        r[c] = pose.rotations[b];
-    }
-    r
-}
-
-/// The .glb bytes of `mesh` (rest pose, with its skin) and `pose` (made by IK from
-/// `mesh.joints`). Errors when the mesh is invalid or the pose's rest joints differ from the
-/// mesh's.
-pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
+/// The .glb bytes of `scene` (built by [`RigScene::build`] from `mesh`), with faces and UVs from
+/// `mesh` and, when given, `texture_png` (PNG bytes) as the base-colour texture. Errors: the
+/// mesh is invalid or its vertex count differs from the scene's; the file would exceed 4 GiB.
+pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>) -> Result<Vec<u8>> {
     mesh.validate()?;
-    let same_rest = mesh.joints.iter().flatten().zip(pose.rest.iter().flatten()).all(|(a, b)| (a - b).abs() < 1e-9);
-    if !same_rest {
-        return Err(Error::OutOfRange { name: "pose", detail: "its rest joints are not the mesh's".into() });
+    if scene.rest_vertices.len() != mesh.vertices.len() || scene.skin.len() != mesh.vertices.len() {
+        return Err(Error::OutOfRange {
+            name: "rig scene",
+            detail: format!("{} vertices for a mesh of {}", scene.rest_vertices.len(), mesh.vertices.len()),
+        });
     }
+    let vertices = &scene.rest_vertices;
     // Split vertices where a vertex has several UVs (glTF attributes are per vertex).
     let mut key_to_new: HashMap<(u32, u32), u32> = HashMap::new();
     let mut source: Vec<(u32, u32)> = Vec::new();
@@ -136,10 +97,10 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
             tris.extend_from_slice(&[c[0], c[2], c[3]]);
         }
     }
-    let normals = vertex_normals(&mesh.vertices, &mesh.quads);
+    let normals = vertex_normals(vertices, &mesh.quads);
     let n = source.len();
     let mut bin = Bin::default();
-    let pos: Vec<[f32; 3]> = source.iter().map(|&(v, _)| mesh.vertices[v as usize]).collect();
+    let pos: Vec<[f32; 3]> = source.iter().map(|&(v, _)| vertices[v as usize]).collect();
     let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
     for p in &pos {
         for k in 0..3 {
@@ -171,23 +132,13 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
         );
         attributes.insert("TEXCOORD_0".into(), json!(a));
     }
-    // Skin: bone b drives joint node BONES[b].1; merge duplicates, renormalise.
     let mut joints_bytes = Vec::with_capacity(n * 4);
     let mut weights = Vec::with_capacity(n * 4);
     for &(v, _) in &source {
-        let mut slots: Vec<(u8, f32)> = Vec::with_capacity(4);
-        for (b, w) in mesh.weights[v as usize].influences() {
-            let j = BONES[b].1 as u8;
-            match slots.iter_mut().find(|s| s.0 == j) {
-                Some(s) => s.1 += w,
-                None => slots.push((j, w)),
-            }
-        }
-        let sum: f32 = slots.iter().map(|s| s.1).sum();
-        slots.resize(4, (0, 0.0));
-        for s in &slots {
-            joints_bytes.push(s.0);
-            weights.push(s.1 / sum);
+        let w = &scene.skin[v as usize];
+        for k in 0..4 {
+            joints_bytes.push(if w.weights[k] > 0.0 { w.bones[k] } else { 0 });
+            weights.push(w.weights[k]);
         }
     }
     let a =
@@ -202,33 +153,93 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
         Some(ELEMENT_ARRAY_BUFFER),
         json!({"componentType": UNSIGNED_INT, "count": tris.len(), "type": "SCALAR"}),
     );
-    // Inverse bind matrices: translation by -J_rest (column-major 4x4).
-    let ibm = f32_bytes(mesh.joints.iter().flat_map(|j| {
-        let t = j.map(|c| -(c as f32));
-        [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, t[0], t[1], t[2], 1.0]
+    let arm = &scene.armature;
+    // Inverse bind matrices: the inverse of each bone's rest transform [F_b | h_b].
+    let ibm = f32_bytes((0..NUM_RIG_BONES).flat_map(|b| {
+        let m = Isometry3::from_parts(Translation3::from(arm.heads[b]), arm.frames[b]).inverse().to_homogeneous();
+        m.as_slice().iter().map(|&c| c as f32).collect::<Vec<_>>()
     }));
-    let ibm = bin.add(&ibm, None, json!({"componentType": FLOAT, "count": NUM_JOINTS, "type": "MAT4"}));
+    let ibm = bin.add(&ibm, None, json!({"componentType": FLOAT, "count": NUM_RIG_BONES, "type": "MAT4"}));
 
-    let posed_rot = joint_rotations(pose);
-    let rest_rot = [UnitQuaternion::identity(); NUM_JOINTS];
-    let mut nodes = skeleton_nodes(0, &pose.joints, &posed_rot, 0, "posed");
-    nodes.extend(skeleton_nodes(NUM_JOINTS + 1, &mesh.joints, &rest_rot, 1, "rest"));
-    let skin = |base: usize, name: &str| json!({"name": name, "inverseBindMatrices": ibm, "skeleton": base + PELVIS, "joints": (base..base + NUM_JOINTS).collect::<Vec<_>>()});
-    let doc = json!({
+    let local = scene.pose.local_rotations(arm);
+    let translation = |b: usize| -> Vector3<f64> {
+        match RIG_BONES[b].parent {
+            None => arm.heads[b] + scene.pose.root_translation,
+            Some(p) => arm.frames[p].inverse() * (arm.heads[b] - arm.heads[p]),
+        }
+    };
+    let mut nodes = Vec::with_capacity(NUM_RIG_BONES + 1);
+    for (b, name) in scene.names.iter().enumerate() {
+        let children: Vec<usize> = (0..NUM_RIG_BONES).filter(|&c| RIG_BONES[c].parent == Some(b)).collect();
+        let mut node =
+            json!({"name": name, "translation": vec_json(&translation(b)), "rotation": quat_json(&local[b])});
+        if !children.is_empty() {
+            node["children"] = json!(children);
+        }
+        nodes.push(node);
+    }
+    nodes.push(json!({"name": "body", "mesh": 0, "skin": 0}));
+    // The one-frame clip: every bone's rotation and the root's translation at t = 0.
+    let time = bin.add(
+        &f32_bytes([0.0]),
+        None,
+        json!({"componentType": FLOAT, "count": 1, "type": "SCALAR", "min": [0.0], "max": [0.0]}),
+    );
+    let mut samplers = Vec::with_capacity(NUM_RIG_BONES + 1);
+    let mut channels = Vec::with_capacity(NUM_RIG_BONES + 1);
+    for (b, q) in local.iter().enumerate() {
+        let c = q.quaternion().coords.normalize();
+        let out = bin.add(
+            &f32_bytes([c[0], c[1], c[2], c[3]].map(|x| x as f32)),
+            None,
+            json!({"componentType": FLOAT, "count": 1, "type": "VEC4"}),
+        );
+        samplers.push(json!({"input": time, "output": out, "interpolation": "STEP"}));
+        channels.push(json!({"sampler": samplers.len() - 1, "target": {"node": b, "path": "rotation"}}));
+    }
+    let t = translation(0);
+    let out = bin.add(
+        &f32_bytes([t.x, t.y, t.z].map(|x| x as f32)),
+        None,
+        json!({"componentType": FLOAT, "count": 1, "type": "VEC3"}),
+    );
+    samplers.push(json!({"input": time, "output": out, "interpolation": "STEP"}));
+    channels.push(json!({"sampler": samplers.len() - 1, "target": {"node": 0, "path": "translation"}}));
+
+    let mut material = json!({"name": "skin", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.7, 0.65, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}, "doubleSided": true});
+    let mut extra = serde_json::Map::new();
+    if let Some(png) = texture_png {
+        while bin.data.len() % 4 != 0 {
+            bin.data.push(0);
+        }
+        bin.views.push(json!({"buffer": 0, "byteOffset": bin.data.len(), "byteLength": png.len()}));
+        bin.data.extend_from_slice(png);
+        extra.insert(
+            "images".into(),
+            json!([{"name": "sketch", "bufferView": bin.views.len() - 1, "mimeType": "image/png"}]),
+        );
+        extra
+            .insert("samplers".into(), json!([{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}]));
+        extra.insert("textures".into(), json!([{"sampler": 0, "source": 0}]));
+        material["pbrMetallicRoughness"]["baseColorFactor"] = json!([1.0, 1.0, 1.0, 1.0]);
+        material["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0, "texCoord": 0});
+    }
+    let mut doc = json!({
         "asset": {"version": "2.0", "generator": format!("sketchbody {}", crate::VERSION)},
         "scene": 0,
-        "scenes": [
-            {"name": "posed", "nodes": [PELVIS, NUM_JOINTS]},
-            {"name": "rest", "nodes": [NUM_JOINTS + 1 + PELVIS, 2 * NUM_JOINTS + 1]},
-        ],
+        "scenes": [{"name": "body", "nodes": [0, NUM_RIG_BONES]}],
         "nodes": nodes,
-        "skins": [skin(0, "posed"), skin(NUM_JOINTS + 1, "rest")],
+        "skins": [{"name": "armature", "inverseBindMatrices": ibm, "skeleton": 0, "joints": (0..NUM_RIG_BONES).collect::<Vec<_>>()}],
         "meshes": [{"name": "body", "primitives": [{"attributes": attributes, "indices": indices, "mode": 4, "material": 0}]}],
-        "materials": [{"name": "skin", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.7, 0.65, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}, "doubleSided": true}],
+        "materials": [material],
+        "animations": [{"name": "pose", "samplers": samplers, "channels": channels}],
         "buffers": [{"byteLength": bin.data.len()}],
         "bufferViews": bin.views,
         "accessors": bin.accessors,
     });
+    for (k, v) in extra {
+        doc[k] = v;
+    }
     let mut text = serde_json::to_vec(&doc).map_err(|e| Error::CorruptData(format!("glTF JSON: {e}")))?;
     while text.len() % 4 != 0 {
         text.push(b' ');
@@ -254,57 +265,71 @@ pub fn glb_bytes(mesh: &RiggedMesh, pose: &Pose) -> Result<Vec<u8>> {
 }
 
 /// Writes [`glb_bytes`] to `path` atomically.
-pub fn write_glb(path: &Path, mesh: &RiggedMesh, pose: &Pose) -> Result<()> {
-    write_atomic(path, &glb_bytes(mesh, pose)?)
+pub fn write_glb(path: &Path, mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>) -> Result<()> {
+    write_atomic(path, &glb_bytes(mesh, scene, texture_png)?)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::body::ik::{solve, IkOptions};
-    use crate::body::procedural::{capsule_humanoid, random_pose, rest_joints};
-    use crate::body::skin::{skin, SkinMethod};
+    use crate::body::procedural::random_pose;
+    use crate::body::{BodyModel, Gender};
+    use crate::rig::RigOptions;
     use rand::SeedableRng;
 
-    /// Reads the JSON chunk back and applies the posed scene's node transforms to the skin,
-    /// checking that glTF's skinning reproduces our LBS for single-bone vertices.
+    fn parse(glb: &[u8]) -> Value {
+        let jlen = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        serde_json::from_slice(&glb[20..20 + jlen]).unwrap()
+    }
+
+    /// Reads the JSON chunk back, composes the node transforms and the inverse bind matrices as
+    /// a glTF viewer does, and checks the skinned result is the scene's posed vertices.
     #[test]
-    fn posed_scene_reproduces_our_skinning() {
-        let rest = rest_joints();
-        let mesh = capsule_humanoid(&rest, 8, 6);
+    fn the_nodes_and_bind_matrices_reproduce_the_posed_body() {
+        let model = BodyModel::embedded().unwrap();
+        let mesh = RiggedMesh::from_model(&model, Gender::Male, &[]).unwrap();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let pose = solve(&rest, &random_pose(&rest, &mut rng, 0.0), &IkOptions::default()).unwrap();
-        let glb = glb_bytes(&mesh, &pose).unwrap();
+        let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+        let scene = RigScene::build(model.rig(), &mesh, &pose, &RigOptions::default()).unwrap();
+        let glb = glb_bytes(&mesh, &scene, None).unwrap();
         assert_eq!(&glb[..4], b"glTF");
         assert_eq!(u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize, glb.len());
-        let jlen = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
-        let doc: Value = serde_json::from_slice(&glb[20..20 + jlen]).unwrap();
-        // Global transforms of the posed joint nodes.
-        let mut global = vec![(UnitQuaternion::identity(), Vector3::zeros()); NUM_JOINTS];
-        let order = [8, 1, 0, 2, 3, 4, 5, 6, 7, 9, 10, 11, 12, 13, 14];
-        for &j in &order {
-            let node = &doc["nodes"][j];
+        let doc = parse(&glb);
+        assert_eq!(doc["scenes"].as_array().unwrap().len(), 1);
+        assert_eq!(doc["nodes"].as_array().unwrap().len(), NUM_RIG_BONES + 1);
+        assert_eq!(doc["nodes"][9]["name"], "r_elbow");
+        let mut global: Vec<nalgebra::Isometry3<f64>> = Vec::new();
+        for b in 0..NUM_RIG_BONES {
+            let node = &doc["nodes"][b];
             let t: Vec<f64> = serde_json::from_value(node["translation"].clone()).unwrap();
             let r: Vec<f64> = serde_json::from_value(node["rotation"].clone()).unwrap();
             let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(r[3], r[0], r[1], r[2]));
-            let t = Vector3::new(t[0], t[1], t[2]);
-            global[j] = match PARENT[j] {
-                None => (q, t),
-                Some(p) => (global[p].0 * q, global[p].1 + global[p].0 * t),
-            };
+            let local = Isometry3::from_parts(Translation3::new(t[0], t[1], t[2]), q);
+            global.push(match RIG_BONES[b].parent {
+                None => local,
+                Some(p) => global[p] * local,
+            });
         }
-        let ours = skin(&mesh.vertices, &mesh.weights, &pose, SkinMethod::Linear).unwrap();
-        for (i, w) in mesh.weights.iter().enumerate() {
-            let x = Vector3::new(mesh.vertices[i][0] as f64, mesh.vertices[i][1] as f64, mesh.vertices[i][2] as f64);
-            let mut p = Vector3::zeros();
-            for (b, wt) in w.influences() {
-                let c = BONES[b].1;
-                p += (global[c].1 + global[c].0 * (x - Vector3::from(rest[c]))) * wt as f64;
+        let arm = &scene.armature;
+        let mut worst = 0.0f64;
+        for (i, v) in scene.rest_vertices.iter().enumerate() {
+            let x = nalgebra::Point3::new(v[0] as f64, v[1] as f64, v[2] as f64);
+            let w = &scene.skin[i];
+            let mut p = nalgebra::Vector3::zeros();
+            for k in 0..4 {
+                let b = w.bones[k] as usize;
+                let bind = Isometry3::from_parts(Translation3::from(arm.heads[b]), arm.frames[b]).inverse();
+                p += (global[b] * (bind * x)).coords * w.weights[k] as f64;
             }
-            let e = (p - Vector3::new(ours[i][0] as f64, ours[i][1] as f64, ours[i][2] as f64)).norm();
-            assert!(e < 1e-5, "vertex {i} off by {e}");
+            let o = scene.posed_vertices[i];
+            worst = worst.max((p - nalgebra::Vector3::new(o[0] as f64, o[1] as f64, o[2] as f64)).norm());
         }
-        let other = Pose::rest(&random_pose(&rest, &mut rng, 0.1));
-        assert!(glb_bytes(&mesh, &other).is_err());
+        assert!(worst < 1e-5, "glTF skinning differs from the scene's by {worst} m");
+        // Feet on the floor, rest and posed.
+        let low = |v: &[[f32; 3]]| v.iter().map(|p| p[1]).fold(f32::INFINITY, f32::min);
+        assert!(low(&scene.rest_vertices).abs() < 1e-6 && low(&scene.posed_vertices).abs() < 1e-6);
+        let other = crate::body::ik::Pose::rest(&random_pose(&mesh.joints, &mut rng, 0.1));
+        assert!(RigScene::build(model.rig(), &mesh, &other, &RigOptions::default()).is_err());
     }
 }

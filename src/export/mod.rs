@@ -6,3 +6,4 @@ pub mod joints;
 pub mod joints2d;
 pub mod obj;
 pub mod pose3d;
+pub mod texture;

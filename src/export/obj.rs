@@ -1,4 +1,5 @@
-//! Wavefront OBJ: positions (metres), per-vertex normals, optional per-corner UVs, quads kept.
+//! Wavefront OBJ: positions (metres), per-vertex normals, optional per-corner UVs, quads kept;
+//! optionally a material library (`.mtl`) naming a base-colour texture beside it.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -11,6 +12,17 @@ use crate::fsutil::write_atomic;
 /// `vt` when `uvs` is given, and one `f` per quad (1-based `v/vt/vn`); a quad whose last corner
 /// repeats its third is written as a triangle. Errors on out-of-range indices.
 pub fn obj_string(vertices: &[[f32; 3]], quads: &[[u32; 4]], uvs: Option<&FaceUvs>) -> Result<String> {
+    obj_string_with_material(vertices, quads, uvs, None)
+}
+
+/// [`obj_string`] with, when `mtl` is given, `mtllib MTL` and `usemtl skin` lines before the
+/// faces (the material of [`mtl_string`]).
+pub fn obj_string_with_material(
+    vertices: &[[f32; 3]],
+    quads: &[[u32; 4]],
+    uvs: Option<&FaceUvs>,
+    mtl: Option<&str>,
+) -> Result<String> {
     let n = vertices.len();
     if let Some(f) = quads.iter().position(|q| q.iter().any(|&i| i as usize >= n)) {
         return Err(Error::OutOfRange { name: "face index", detail: format!("face {f} indexes a vertex >= {n}") });
@@ -38,6 +50,9 @@ pub fn obj_string(vertices: &[[f32; 3]], quads: &[[u32; 4]], uvs: Option<&FaceUv
     for v in &normals {
         let _ = writeln!(s, "vn {} {} {}", v[0], v[1], v[2]);
     }
+    if let Some(lib) = mtl {
+        let _ = writeln!(s, "mtllib {lib}\nusemtl skin");
+    }
     for (f, q) in quads.iter().enumerate() {
         let corners = if q[3] == q[2] { 3 } else { 4 };
         s.push('f');
@@ -55,6 +70,23 @@ pub fn obj_string(vertices: &[[f32; 3]], quads: &[[u32; 4]], uvs: Option<&FaceUv
         s.push('\n');
     }
     Ok(s)
+}
+
+/// The material library of a textured OBJ: one material `skin`, white diffuse modulated by the
+/// PNG `texture` (a file name beside the `.mtl`).
+pub fn mtl_string(texture: &str) -> String {
+    format!("# sketchbody material\nnewmtl skin\nKa 0 0 0\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd {texture}\n")
+}
+
+/// Writes [`obj_string_with_material`] to `path` atomically.
+pub fn write_obj_with_material(
+    path: &Path,
+    vertices: &[[f32; 3]],
+    quads: &[[u32; 4]],
+    uvs: Option<&FaceUvs>,
+    mtl: Option<&str>,
+) -> Result<()> {
+    write_atomic(path, obj_string_with_material(vertices, quads, uvs, mtl)?.as_bytes())
 }
 
 /// Writes [`obj_string`] to `path` atomically.
@@ -81,6 +113,9 @@ mod tests {
         assert_eq!(s.matches("\nvt ").count(), 4);
         let s = obj_string(&v, &quads, None).unwrap();
         assert!(s.contains("\nf 1//1 2//2 3//3 4//4\n"));
+        let m = obj_string_with_material(&v, &quads, Some(&uvs), Some("body.mtl")).unwrap();
+        assert!(m.contains("\nmtllib body.mtl\nusemtl skin\nf 1/1/1"), "{m}");
+        assert!(mtl_string("t.png").contains("\nmap_Kd t.png\n"));
         assert!(obj_string(&v, &[[0, 1, 2, 9]], None).is_err());
         let dir = std::env::temp_dir().join(format!("skb-obj-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

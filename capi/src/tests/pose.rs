@@ -102,7 +102,28 @@ fn mesh_poses_rasterises_and_exports() {
         assert_eq!(skb_mesh_write_preview(mesh, p("a.png").as_ptr(), 64), skb_status::SKB_OK, "{}", last_error());
         assert_eq!(skb_mesh_write_obj(mesh, p("missing/a.obj").as_ptr(), false), skb_status::SKB_ERR_IO);
         assert_eq!(skb_mesh_write_glb(mesh, ptr::null()), skb_status::SKB_ERR_NULL_POINTER);
+        // Export options: Mixamo names, T-pose, pelvis origin; out-of-range values are specific
+        // errors that leave the options as they were.
+        let mut o: *mut skb_export_options = ptr::null_mut();
+        assert_eq!(skb_export_options_new(&mut o), skb_status::SKB_OK);
+        assert_eq!(skb_export_options_set_naming(o, SKB_NAMING_MIXAMO), skb_status::SKB_OK);
+        assert_eq!(skb_export_options_set_rest_pose(o, SKB_REST_T_POSE), skb_status::SKB_OK);
+        assert_eq!(skb_export_options_set_origin(o, SKB_ORIGIN_PELVIS), skb_status::SKB_OK);
+        assert_eq!(skb_export_options_set_naming(o, 3), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(skb_export_options_set_rest_pose(o, 2), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(skb_export_options_set_origin(o, 9), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(skb_export_options_set_naming(ptr::null_mut(), 0), skb_status::SKB_ERR_NULL_POINTER);
+        let st = skb_mesh_write_glb_with_options(mesh, p("m.glb").as_ptr(), o);
+        assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
+        skb_export_options_free(o);
+        skb_export_options_free(ptr::null_mut());
     }
+    let glb = std::fs::read(dir.join("m.glb")).unwrap();
+    let text = String::from_utf8_lossy(&glb[..4000.min(glb.len())]).to_string()
+        + &String::from_utf8_lossy(&glb[20..20 + u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize]);
+    assert!(text.contains("\"mixamorig:Hips\"") && text.contains("\"mixamorig:RightForeArm\""));
+    let plain = std::fs::read(dir.join("a.glb")).unwrap();
+    assert!(String::from_utf8_lossy(&plain).contains("\"r_elbow\""));
     for f in ["a.glb", "a.obj", "a.png"] {
         assert!(std::fs::metadata(dir.join(f)).unwrap().len() > 1000, "{f}");
     }

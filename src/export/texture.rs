@@ -1,0 +1,221 @@
+//! A base-colour texture from the sketch: every texel of MakeHuman's UV layout whose surface
+//! point the estimated camera sees (facing it and not hidden behind another part of the posed
+//! body) takes the sketch's colour where that point projects; every other texel gets
+//! [`NEUTRAL`], a light grey (no mirrored fill: a sketch's left and right sides are rarely drawn
+//! alike, and a wrong copy is worse than a neutral patch). Visible texels are grown by
+//! [`GUTTER`] texels into the unused space around UV islands, so filtering at island borders
+//! does not bleed grey into the drawing.
+
+use nalgebra::Vector3;
+
+use crate::body::rig::FaceUvs;
+use crate::camera::WeakPerspective;
+use crate::error::{Error, Result};
+use crate::image::RgbImage as SketchRgb;
+use crate::raster::{Rasterizer, MAX_RASTER_SIDE};
+use crate::render::preview::RgbImage;
+
+/// Colour of the texels the sketch does not see.
+pub const NEUTRAL: [u8; 3] = [190, 190, 190];
+/// Texels visible texels grow into the unused space around UV islands.
+pub const GUTTER: usize = 2;
+/// Default texture side, texels.
+pub const DEFAULT_TEXTURE_SIZE: usize = 1024;
+/// A texel is visible when its point is at most this far (metres, along the view) behind the
+/// nearest surface at its pixel.
+pub const DEPTH_TOLERANCE: f64 = 0.01;
+
+/// What a projection did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TextureStats {
+    /// Texels inside some UV triangle.
+    pub texels: usize,
+    /// Of those, texels the sketch coloured.
+    pub visible: usize,
+}
+
+/// Projects `sketch` (colour, same pixels as the image the pose was estimated on) onto the
+/// posed mesh (`posed` vertices, metres, model frame; `quads` with per-corner `uvs`) through
+/// `camera`, into a `size`×`size` texture (row 0 is the top, v = 1). A sketch that sees no face
+/// gives an all-neutral texture. Errors: `size` 0 or above 4096, UV faces that do not match the
+/// quads or index out of range, a non-finite vertex ([`Error::OutOfRange`] / [`Error::NonFinite`]).
+pub fn project_sketch(
+    sketch: &SketchRgb,
+    posed: &[[f32; 3]],
+    quads: &[[u32; 4]],
+    uvs: &FaceUvs,
+    camera: &WeakPerspective,
+    size: usize,
+) -> Result<(RgbImage, TextureStats)> {
+    if size == 0 || size > MAX_RASTER_SIDE {
+        return Err(Error::OutOfRange {
+            name: "texture size",
+            detail: format!("{size}: expected 1..={MAX_RASTER_SIDE}"),
+        });
+    }
+    let (n, m) = (posed.len(), uvs.coords.len());
+    if uvs.quads.len() != quads.len()
+        || quads.iter().any(|q| q.iter().any(|&i| i as usize >= n))
+        || uvs.quads.iter().any(|q| q.iter().any(|&i| i as usize >= m))
+    {
+        return Err(Error::OutOfRange {
+            name: "UV faces",
+            detail: format!("{} UV faces for {} faces", uvs.quads.len(), quads.len()),
+        });
+    }
+    if let Some(c) = posed.iter().flatten().find(|c| !c.is_finite()) {
+        return Err(Error::NonFinite { name: "mesh vertex", value: *c as f64 });
+    }
+    camera.validate()?;
+    let (w, h) = (sketch.width(), sketch.height());
+    let tris = crate::body::rig::quads_to_triangles(quads);
+    let mut raster = Rasterizer::new();
+    let depth: Option<Vec<f32>> = match raster.rasterize(posed, &tris, camera, w, h, true) {
+        Ok(_) => Some(raster.depth().to_vec()),
+        Err(Error::MeshOutsideImage { .. }) => None,
+        Err(e) => return Err(e),
+    };
+    let pixels = sketch.as_bytes();
+    let sample = |x: f64, y: f64| -> [u8; 3] {
+        // Bilinear, pixel centres at +0.5.
+        let (fx, fy) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
+        let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (ax, ay) = (fx - x0 as f64, fy - y0 as f64);
+        let px = |i: usize, j: usize, c: usize| pixels[(j * w + i) * 3 + c] as f64;
+        [0, 1, 2].map(|c| {
+            let top = px(x0, y0, c) * (1.0 - ax) + px(x1, y0, c) * ax;
+            let bottom = px(x0, y1, c) * (1.0 - ax) + px(x1, y1, c) * ax;
+            (top * (1.0 - ay) + bottom * ay).round() as u8
+        })
+    };
+    // 0 unused, 1 inside a triangle but unseen, 2 coloured.
+    let mut state = vec![0u8; size * size];
+    let mut img = RgbImage { width: size, height: size, data: NEUTRAL.repeat(size * size) };
+    let view = camera.r.transpose() * Vector3::z();
+    let p3 =
+        |i: u32| Vector3::new(posed[i as usize][0] as f64, posed[i as usize][1] as f64, posed[i as usize][2] as f64);
+    for (f, q) in quads.iter().enumerate() {
+        let uq = uvs.quads[f];
+        let corners: &[[usize; 3]] = if q[3] == q[2] || q[3] == q[0] { &[[0, 1, 2]] } else { &[[0, 1, 2], [0, 2, 3]] };
+        for c in corners {
+            let p = c.map(|k| p3(q[k]));
+            let normal = (p[1] - p[0]).cross(&(p[2] - p[0]));
+            let facing = normal.dot(&view) > 0.0;
+            let t = c.map(|k| {
+                let uv = uvs.coords[uq[k] as usize];
+                [uv[0] as f64 * size as f64, (1.0 - uv[1] as f64) * size as f64]
+            });
+            let area = (t[1][0] - t[0][0]) * (t[2][1] - t[0][1]) - (t[1][1] - t[0][1]) * (t[2][0] - t[0][0]);
+            if area.abs() < 1e-12 {
+                continue;
+            }
+            let lo = |k: usize| t.iter().map(|v| v[k]).fold(f64::INFINITY, f64::min).floor().max(0.0) as usize;
+            let hi = |k: usize| (t.iter().map(|v| v[k]).fold(f64::NEG_INFINITY, f64::max).ceil() as usize).min(size);
+            for j in lo(1)..hi(1) {
+                for i in lo(0)..hi(0) {
+                    let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
+                    let b1 = ((x - t[0][0]) * (t[2][1] - t[0][1]) - (y - t[0][1]) * (t[2][0] - t[0][0])) / area;
+                    let b2 = ((t[1][0] - t[0][0]) * (y - t[0][1]) - (t[1][1] - t[0][1]) * (x - t[0][0])) / area;
+                    let b0 = 1.0 - b1 - b2;
+                    if b0 < -1e-9 || b1 < -1e-9 || b2 < -1e-9 {
+                        continue;
+                    }
+                    let k = j * size + i;
+                    if state[k] == 2 {
+                        continue;
+                    }
+                    state[k] = 1;
+                    let Some(depth) = depth.as_ref().filter(|_| facing) else { continue };
+                    let point = p[0] * b0 + p[1] * b1 + p[2] * b2;
+                    let [u, v] = camera.project(&point);
+                    if !(u >= 0.0 && v >= 0.0 && u < w as f64 && v < h as f64) {
+                        continue;
+                    }
+                    let nearest = depth[v as usize * w + u as usize] as f64;
+                    if camera.depth(&point) >= nearest - DEPTH_TOLERANCE {
+                        state[k] = 2;
+                        img.data[k * 3..k * 3 + 3].copy_from_slice(&sample(u, v));
+                    }
+                }
+            }
+        }
+    }
+    let stats = TextureStats {
+        texels: state.iter().filter(|&&s| s > 0).count(),
+        visible: state.iter().filter(|&&s| s == 2).count(),
+    };
+    for _ in 0..GUTTER {
+        let before = state.clone();
+        for j in 0..size {
+            for i in 0..size {
+                if before[j * size + i] != 0 {
+                    continue;
+                }
+                let near = [(0i64, -1i64), (0, 1), (-1, 0), (1, 0)].iter().find_map(|&(di, dj)| {
+                    let (a, b) = (i as i64 + di, j as i64 + dj);
+                    (a >= 0
+                        && b >= 0
+                        && a < size as i64
+                        && b < size as i64
+                        && before[b as usize * size + a as usize] == 2)
+                        .then_some(b as usize * size + a as usize)
+                });
+                if let Some(src) = near {
+                    state[j * size + i] = 2;
+                    let c: [u8; 3] = img.data[src * 3..src * 3 + 3].try_into().unwrap_or(NEUTRAL);
+                    img.data[(j * size + i) * 3..(j * size + i) * 3 + 3].copy_from_slice(&c);
+                }
+            }
+        }
+    }
+    Ok((img, stats))
+}
+
+/// PNG bytes of an RGB image. Errors: the encoder's ([`Error::CorruptData`]).
+pub fn png_bytes(img: &RgbImage) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    let enc = image::codecs::png::PngEncoder::new(&mut bytes);
+    image::ImageEncoder::write_image(
+        enc,
+        &img.data,
+        img.width as u32,
+        img.height as u32,
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| Error::CorruptData(format!("PNG encoding failed: {e}")))?;
+    Ok(bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Matrix3;
+
+    /// A unit square facing the camera: the front texels take the sketch's colour; turned away,
+    /// none do and the texture is neutral; off-image likewise, and the call still succeeds.
+    #[test]
+    fn visible_faces_take_the_sketch_colour_and_hidden_ones_stay_neutral() {
+        let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let quads = [[0, 1, 2, 3]];
+        let uvs = FaceUvs { coords: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], quads: vec![[0, 1, 2, 3]] };
+        let sketch = SketchRgb::from_vec(64, 64, [200u8, 30, 30].repeat(64 * 64)).unwrap();
+        let cam = WeakPerspective { sx: 40.0, sy: 40.0, r: Matrix3::identity(), t: [10.0, 50.0] };
+        let (img, stats) = project_sketch(&sketch, &v, &quads, &uvs, &cam, 16).unwrap();
+        assert_eq!(stats.texels, 256);
+        assert_eq!(stats.visible, 256);
+        assert_eq!(&img.data[..3], &[200, 30, 30]);
+        let back = WeakPerspective {
+            r: *nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), std::f64::consts::PI).matrix(),
+            t: [50.0, 50.0],
+            ..cam
+        };
+        let (img, stats) = project_sketch(&sketch, &v, &quads, &uvs, &back, 16).unwrap();
+        assert_eq!(stats.visible, 0);
+        assert!(img.data.chunks(3).all(|p| p == NEUTRAL));
+        let away = WeakPerspective { t: [-500.0, 50.0], ..cam };
+        assert_eq!(project_sketch(&sketch, &v, &quads, &uvs, &away, 16).unwrap().1.visible, 0);
+        assert!(project_sketch(&sketch, &v, &quads, &uvs, &cam, 0).is_err());
+        assert!(png_bytes(&img).unwrap().starts_with(b"\x89PNG"));
+    }
+}
