@@ -58,7 +58,7 @@ fn fit_beats_the_mean_shape_and_is_deterministic() {
     let c = case();
     let problem = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &c.truth.joints,
         camera: &c.camera,
         edges: &c.edges,
@@ -88,7 +88,7 @@ fn paper_score_and_cancellation() {
     let c = case();
     let problem = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &c.truth.joints,
         camera: &c.camera,
         edges: &c.edges,
@@ -123,7 +123,7 @@ fn joint_term_penalises_off_joints_and_is_validated() {
     }
     let base = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &c.truth.joints,
         camera: &c.camera,
         edges: &c.edges,
@@ -164,7 +164,7 @@ fn per_sample_cameras_ignore_the_problem_cameras_scale() {
     let wrong = WeakPerspective { sx: 88.0, sy: 88.0, t: [143.0, 150.0], ..c.camera };
     let right = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &c.truth.joints,
         camera: &c.camera,
         edges: &c.edges,
@@ -220,7 +220,7 @@ fn bone_factors_find_long_legs() {
     };
     let problem = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &j,
         camera: &camera,
         edges: &edges,

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use sketchbody::body::{BodyModel, Gender};
+use sketchbody::body::{BodyModel, Gender, ShapeChoice};
 use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::fit::FitOptions;
@@ -32,7 +32,7 @@ fn fast(gender: Option<Gender>) -> PipelineOptions {
 }
 
 #[test]
-fn fits_both_genders_chooses_by_score_and_is_deterministic() {
+fn fits_gender_as_a_continuous_weight_and_is_deterministic() {
     let (model, dict, sketch, j) = inputs();
     let mut fractions = Vec::new();
     let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &fast(None), &mut |f| {
@@ -40,11 +40,19 @@ fn fits_both_genders_chooses_by_score_and_is_deterministic() {
         true
     })
     .unwrap();
-    assert_eq!(r.fits.len(), 2);
-    assert!(r.gender_by_score);
-    let best = if r.fits[0].score >= r.fits[1].score { &r.fits[0] } else { &r.fits[1] };
-    assert_eq!(r.gender, best.gender);
+    assert_eq!(r.fits.len(), 1);
+    assert!(r.gender_fitted && r.space == ShapeChoice::Blended);
+    let best = &r.fits[0];
     assert_eq!(r.score, best.score);
+    // The reported gender is the nearer end of the fitted value; the confidence is the
+    // posterior mass of that half.
+    assert!((0.0..=1.0).contains(&r.gender_value));
+    assert_eq!(r.gender, if r.gender_value > 0.5 { Gender::Male } else { Gender::Female });
+    assert!((0.5..=1.0).contains(&r.gender_confidence));
+    let blend = model.blended().unwrap();
+    let range = blend.space().gmm().marginal(r.weights.len()).unwrap().range(sketchbody::fit::PRIOR_RANGE_SD);
+    assert!(r.weights.iter().zip(&range).all(|(w, (lo, hi))| (lo..=hi).contains(&w)), "{:?}", r.weights);
+    assert!((0.0..=1.0).contains(&r.edge_support));
     assert!(r.fits.iter().all(|g| g.score.is_finite() && g.score < 0.0));
     assert_eq!(r.weights, best.fit.as_ref().unwrap().weights);
     assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");

@@ -231,7 +231,15 @@ impl Reader<'_> {
             .collect();
         let female = self.space(s)?;
         let male = self.space(s)?;
-        Ok(BodyModel { faces, face_uvs, uvs, skin, spaces: [female, male], proxy: Default::default() })
+        Ok(BodyModel {
+            faces,
+            face_uvs,
+            uvs,
+            skin,
+            spaces: [female, male],
+            proxy: Default::default(),
+            blend: Default::default(),
+        })
     }
 
     fn space(&mut self, s: &Sizes) -> Result<ShapeSpace> {
@@ -282,6 +290,7 @@ pub(crate) mod tests {
             skin: vec![w; 4],
             spaces: [space.clone(), space],
             proxy: Default::default(),
+            blend: Default::default(),
         }
     }
 

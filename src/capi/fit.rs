@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use crate::body::ik::{solve, IkOptions};
 use crate::body::skin::{skin, SkinMethod};
-use crate::body::Gender;
+use crate::body::{Gender, ShapeChoice};
 use crate::camera::WeakPerspective;
 use crate::error::Error;
 use crate::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
@@ -198,6 +198,14 @@ pub unsafe extern "C" fn skb_fit_options_set_skinning(opts: *mut skb_fit_options
     }
 }
 
+/// Sets the clothing-robust chamfer's cap, raster pixels, finite and > 0 (default 4): silhouette
+/// boundary pixels inside the sketch's outer outline cost at most this, so strokes that may be
+/// clothing do not pull the body outward; 12 or more is the plain chamfer.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_inside_cap(opts: *mut skb_fit_options, cap: f64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.inside_cap = cap; Ok(()) }) }
+}
+
 /// Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
 /// dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
 #[no_mangle]
@@ -205,8 +213,9 @@ pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, di
     ffi_boundary! { set_fit(opts, |o| { o.dims = (dims > 0).then_some(dims as usize); Ok(()) }) }
 }
 
-/// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (fit both,
-/// keep the better score).
+/// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
+/// fit the both-sexes space, gender a continuous weight; read the result with
+/// `skb_result_gender_value`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_gender(opts: *mut skb_fit_options, gender: u32) -> skb_status {
     ffi_boundary! {
@@ -236,8 +245,9 @@ pub(crate) fn progress_closure(progress: skb_progress_fn, user: *mut c_void) -> 
 /// `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
 /// `skb_pose3d.joints` from `skb_estimate_pose`); `camera` maps them to `edges`' pixels; `edges`
 /// is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
-/// `skb_canny`); `opts` may be NULL for the defaults (gender automatic: both shape spaces are
-/// fitted and the better score kept). `progress` may be NULL; a non-zero return cancels
+/// `skb_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
+/// fitted, gender a continuous weight; the mesh's gender is the nearer one and its weights are
+/// the blended space's, weight 0 its gender axis). `progress` may be NULL; a non-zero return cancels
 /// (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
 /// caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
 /// weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
@@ -280,19 +290,12 @@ pub unsafe extern "C" fn skb_fit_shape(
         if edge_map.as_bytes().iter().all(|&e| e == 0) {
             return fail(&Error::BlankImage { width: edge_map.width(), height: edge_map.height(), low: 0.0, high: 0.0 });
         }
-        let genders = gender.map_or(Gender::ALL.to_vec(), |g| vec![g]);
+        let choice = gender.map_or(ShapeChoice::Blended, ShapeChoice::Gendered);
         let mut cb = progress_closure(progress, user);
-        let mut best: Option<(Gender, crate::fit::FitResult)> = None;
-        for (i, &g) in genders.iter().enumerate() {
-            let problem = FitProblem { model: &ctx.model, gender: g, pose: &pose, camera: &cam, edges: &edge_map, joints2d: None };
-            let n = genders.len() as f32;
-            let r = try_core!(fit_shape(&problem, &fit_opts, &mut |f| cb((i as f32 + f) / n)));
-            if best.as_ref().is_none_or(|(_, b)| r.best_score > b.best_score) {
-                best = Some((g, r));
-            }
-        }
-        let Some((g, r)) = best else { return fail_with(skb_status::SKB_ERR_PANIC, "no gender fitted") };
-        let mut rest = try_core!(ctx.model.space(g).synthesize(&r.weights));
+        let problem = FitProblem { model: &ctx.model, gender: choice, pose: &pose, camera: &cam, edges: &edge_map, joints2d: None };
+        let r = try_core!(fit_shape(&problem, &fit_opts, &mut cb));
+        let g = gender.unwrap_or(if r.gender_value.unwrap_or(0.5) > 0.5 { Gender::Male } else { Gender::Female });
+        let mut rest = try_core!(try_core!(ctx.model.shape_space(choice)).synthesize(&r.weights));
         if let Some(props) = &r.proportions {
             try_core!(crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, ctx.model.skin_weights(), props));
         }

@@ -6,9 +6,11 @@
 //! - [`joints`]: the 2-D joints source (the caller's joints, or the detector's).
 //! - [`overlay`]: the overlay picture (sketch, joints, bones, fitted silhouette outline).
 //!
-//! Gender: when [`PipelineOptions::gender`] is `None` both shape spaces are fitted with the same
-//! options and the one whose best sample scores higher is chosen (both scores are reported);
-//! every match score is "higher is better" and measured in the same units for both genders.
+//! Gender: when [`PipelineOptions::gender`] is `None` the both-sexes space is fitted
+//! ([`crate::body::BlendedSpace`]: gender is a continuous shape weight, 0 female … 1 male, fitted
+//! with the others), so there is no hard gender choice to get wrong; the result reports the
+//! fitted gender value and the posterior probability of its half. Given a gender, that gender's
+//! space is fitted.
 
 pub mod joints;
 pub mod overlay;
@@ -18,7 +20,7 @@ use std::time::Instant;
 use crate::body::ik::{self, IkOptions, Pose};
 use crate::body::rig::RiggedMesh;
 use crate::body::skin::skin;
-use crate::body::{BodyModel, Gender};
+use crate::body::{BodyModel, Gender, ShapeChoice};
 use crate::error::{Error, Result};
 use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult};
 use crate::image::{canny, CannyParams, GrayImage};
@@ -40,7 +42,8 @@ pub struct PipelineOptions {
     pub pose: PoseOptions,
     /// Shape-fit options (samples, iterations, score, seed, skinning, ...).
     pub fit: FitOptions,
-    /// The shape space to fit; `None` fits both and keeps the better-scoring one.
+    /// The shape space to fit: a gender's, or with `None` (the default) the both-sexes space
+    /// with gender as a fitted continuous weight.
     pub gender: Option<Gender>,
     /// Skip the fit and use the gender's mean shape, posed the same way (the baseline of the
     /// benchmark). Needs `gender`.
@@ -70,10 +73,10 @@ pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> 
     Ok(PoseEstimate { camera, ..pose.clone() })
 }
 
-/// The gender's mean rest skeleton, scaled about its pelvis to `height` metres when given
+/// The space's mean rest skeleton, scaled about its pelvis to `height` metres when given
 /// ([`crate::fit::FitOptions::height`]).
-fn mean_skeleton(model: &BodyModel, gender: Gender, height: Option<f64>) -> Result<Joints3> {
-    let space = model.space(gender);
+fn mean_skeleton(model: &BodyModel, choice: ShapeChoice, height: Option<f64>) -> Result<Joints3> {
+    let space = model.shape_space(choice)?;
     let mut joints = *space.mean_joints();
     if let Some(h) = height {
         crate::body::rig::scale_to_height(&mut space.mean().to_vec(), &mut joints, h)?;
@@ -81,11 +84,11 @@ fn mean_skeleton(model: &BodyModel, gender: Gender, height: Option<f64>) -> Resu
     Ok(joints)
 }
 
-/// One gender's fit.
+/// One shape space's fit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GenderFit {
     /// The shape space fitted.
-    pub gender: Gender,
+    pub space: ShapeChoice,
     /// The SIR's result (`None` for the mean shape).
     pub fit: Option<FitResult>,
     /// Best sample's match score (higher is better); NaN for the mean shape.
@@ -125,14 +128,30 @@ pub struct PipelineResult {
     /// `fit.height` when given; unless `keep_pose_scale`), and with `fit.sample_camera` then to
     /// the chosen body's own skeleton.
     pub pose: PoseEstimate,
-    /// The fits, in order: the given gender, or female then male.
+    /// The fit (one: the given gender's space, or the blended one).
     pub fits: Vec<GenderFit>,
-    /// The chosen shape space.
+    /// The space fitted.
+    pub space: ShapeChoice,
+    /// The nearer gender: the given one, or for the blended space male when
+    /// [`PipelineResult::gender_value`] > 0.5.
     pub gender: Gender,
-    /// `true` when the gender was chosen by score, `false` when the caller gave it.
-    pub gender_by_score: bool,
-    /// PCA weights of the chosen shape (Y* of the SIR; empty for the mean shape), metres.
+    /// Gender value, 0 = female mean … 1 = male mean: 0 or 1 when given, else the fit's
+    /// posterior mean ([`crate::fit::FitResult::gender_value`]).
+    pub gender_value: f64,
+    /// Probability that [`PipelineResult::gender`] is the right half (gender value on its side
+    /// of 0.5) under the fit's posterior: 1 when the gender was given, 0.5..=1 when fitted.
+    pub gender_confidence: f64,
+    /// `true` when the gender was fitted, `false` when the caller gave it.
+    pub gender_fitted: bool,
+    /// PCA weights of the fitted shape in [`PipelineResult::space`] (Y* of the SIR; empty for
+    /// the mean shape), metres; weight 0 of the blended space is its gender axis.
     pub weights: Vec<f64>,
+    /// Fraction of the fitted silhouette's boundary the sketch's strokes support
+    /// ([`crate::fit::FitResult::edge_support`]; NaN for the mean shape).
+    pub edge_support: f64,
+    /// The fit is low-evidence ([`crate::fit::FitResult::low_evidence`]): the body is mostly the
+    /// prior's (e.g. a figure under a cloak to the ground). `false` for the mean shape.
+    pub low_evidence: bool,
     /// Best match score of the chosen fit (NaN for the mean shape).
     pub score: f64,
     /// The rest mesh with its joints, UVs and skin weights.
@@ -217,48 +236,53 @@ pub fn run_pipeline(
     timings.pose = t.elapsed().as_secs_f64();
     p.report(0.06)?;
 
-    let genders: Vec<Gender> = options.gender.map_or(Gender::ALL.to_vec(), |g| vec![g]);
-    let mut fits = Vec::with_capacity(genders.len());
+    let choice = options.gender.map_or(ShapeChoice::Blended, ShapeChoice::Gendered);
     let t = Instant::now();
-    let span = 0.9 / genders.len() as f32;
-    let mut poses = Vec::with_capacity(genders.len());
-    for (i, &gender) in genders.iter().enumerate() {
-        let tf = Instant::now();
-        let pose = if options.keep_pose_scale {
-            pose.clone()
-        } else {
-            refit_camera(&pose, &mean_skeleton(model, gender, options.fit.height)?, &joints2d)?
-        };
-        poses.push(pose);
-        let pose = &poses[i];
-        if options.mean_shape {
-            fits.push(GenderFit { gender, fit: None, score: f64::NAN, seconds: 0.0 });
-            continue;
-        }
+    let pose = if options.keep_pose_scale {
+        pose.clone()
+    } else {
+        refit_camera(&pose, &mean_skeleton(model, choice, options.fit.height)?, &joints2d)?
+    };
+    let fit = if options.mean_shape {
+        GenderFit { space: choice, fit: None, score: f64::NAN, seconds: 0.0 }
+    } else {
         let problem = FitProblem {
             model,
-            gender,
+            gender: choice,
             pose: &pose.joints,
             camera: &pose.camera,
             edges: &edges,
             joints2d: Some(&joints2d),
         };
-        let base = 0.06 + span * i as f32;
-        let mut cb = |f: f32| (p.callback)((base + span * f).clamp(0.0, 1.0));
+        let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
         let fit = fit_shape(&problem, &options.fit, &mut cb)?;
-        fits.push(GenderFit { gender, score: fit.best_score, fit: Some(fit), seconds: tf.elapsed().as_secs_f64() });
-    }
+        GenderFit { space: choice, score: fit.best_score, fit: Some(fit), seconds: t.elapsed().as_secs_f64() }
+    };
     timings.fit = t.elapsed().as_secs_f64();
-    // Highest score wins; ties (and NaN mean-shape scores) keep the first.
-    let chosen = (1..fits.len()).fold(0, |best, k| if fits[k].score > fits[best].score { k } else { best });
-    let gender = fits[chosen].gender;
-    let weights = fits[chosen].fit.as_ref().map_or_else(Vec::new, |f| f.weights.clone());
-    let score = fits[chosen].score;
-    let pose = poses.swap_remove(chosen);
+    let weights = fit.fit.as_ref().map_or_else(Vec::new, |f| f.weights.clone());
+    let score = fit.score;
+    let (gender, gender_value, gender_confidence) = match (options.gender, fit.fit.as_ref()) {
+        (Some(g), _) => (g, g.index() as f64, 1.0),
+        (None, Some(f)) => {
+            let value = f.gender_value.unwrap_or(0.5);
+            let male = f.male_probability.unwrap_or(0.5);
+            if value > 0.5 {
+                (Gender::Male, value, male.max(1.0 - male))
+            } else {
+                (Gender::Female, value, male.max(1.0 - male))
+            }
+        }
+        (None, None) => {
+            return Err(Error::OutOfRange { name: "gender", detail: "the mean-shape baseline needs a gender".into() })
+        }
+    };
+    let (edge_support, low_evidence) =
+        fit.fit.as_ref().map_or((f64::NAN, false), |f| (f.edge_support, f.low_evidence()));
+    let fits = vec![fit];
 
     let t = Instant::now();
-    let mut mesh = RiggedMesh::from_model(model, gender, &weights)?;
-    if let Some(props) = fits[chosen].fit.as_ref().and_then(|f| f.proportions.as_ref()) {
+    let mut mesh = RiggedMesh::from_rest(model, &model.shape_space(choice)?.synthesize(&weights)?);
+    if let Some(props) = fits[0].fit.as_ref().and_then(|f| f.proportions.as_ref()) {
         crate::fit::proportions::apply_in_place(&mut mesh.vertices, &mut mesh.joints, &mesh.weights, props)?;
     }
     if let Some(h) = options.fit.height {
@@ -282,9 +306,14 @@ pub fn run_pipeline(
         joints_source: source.name().to_string(),
         pose,
         fits,
+        space: choice,
         gender,
-        gender_by_score: options.gender.is_none(),
+        gender_value,
+        gender_confidence,
+        gender_fitted: options.gender.is_none(),
         weights,
+        edge_support,
+        low_evidence,
         score,
         mesh,
         ik_pose,

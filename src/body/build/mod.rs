@@ -283,6 +283,7 @@ pub fn build_model(data: &MakeHumanData, opts: &BuildOptions) -> Result<(BodyMod
         skin: data.skin.clone(),
         spaces: [female, male],
         proxy: Default::default(),
+        blend: Default::default(),
     };
     built.validate()?;
     // Return exactly what the file holds (f32 storage), so reports and the file agree.
