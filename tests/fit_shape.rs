@@ -262,3 +262,31 @@ fn bone_factors_find_long_legs() {
         Err(Error::OutOfRange { name: "proportion sd", .. })
     ));
 }
+
+/// The clothing-robust chamfer: a silhouette well inside a closed outline (a body under a coat)
+/// costs at most the inside cap, one crossing the outline the full distance.
+#[test]
+fn inside_cap_limits_the_pull_of_an_outline_around_the_silhouette() {
+    use sketchbody::fit::{MatchScore, SketchEvidence, CHAMFER_CAP};
+    let (w, h) = (64, 64);
+    let mut edges = vec![0u8; w * h];
+    for i in 8..56 {
+        for (x, y) in [(i, 8), (i, 55), (8, i), (55, i)] {
+            edges[y * w + x] = 255;
+        }
+    }
+    let edges = GrayImage::from_vec(w, h, edges).unwrap();
+    let square = |lo: usize, hi: usize| -> Vec<u8> {
+        (0..w * h).map(|i| ((lo..hi).contains(&(i % w)) && (lo..hi).contains(&(i / w))) as u8).collect()
+    };
+    let plain = SketchEvidence::new(&edges, w, h, &[[32.0, 32.0]]).unwrap();
+    let robust = SketchEvidence::new(&edges, w, h, &[[32.0, 32.0]]).unwrap().with_inside_cap(4.0);
+    let inner = square(24, 40); // boundary 16 px inside the outline
+    let outer = square(0, 64); // boundary on the image border, outside the outline
+    assert_eq!(plain.score(&inner, MatchScore::Chamfer), -(CHAMFER_CAP as f64));
+    assert_eq!(robust.score(&inner, MatchScore::Chamfer), -4.0);
+    assert!(robust.score(&outer, MatchScore::Chamfer) < -4.0);
+    assert_eq!(robust.score(&outer, MatchScore::Chamfer), plain.score(&outer, MatchScore::Chamfer));
+    assert_eq!(robust.edge_support(&inner, Some([0, 0, w - 1, h - 1]), 2.0), 0.0);
+    assert_eq!(robust.edge_support(&square(9, 55), Some([0, 0, w - 1, h - 1]), 2.0), 1.0);
+}

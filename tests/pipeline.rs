@@ -246,3 +246,42 @@ fn known_height_per_sample_cameras_and_a_given_pose() {
         Err(Error::NonFinite { .. })
     ));
 }
+
+/// The example sketch under a cloak to the ground: everything below the shoulders is replaced
+/// by a wide trapezoid outline (no body stroke left inside it). The fit still returns a body of
+/// plausible size inside the prior's range and flags it as low-evidence.
+#[test]
+fn a_cloak_to_the_ground_gives_a_plausible_body_flagged_low_evidence() {
+    let (model, dict, sketch, j) = inputs();
+    let (w, h) = (sketch.width(), sketch.height());
+    let (ls, rs) = (j.xy[joint::L_SHOULDER], j.xy[joint::R_SHOULDER]);
+    let top = ls[1].min(rs[1]);
+    let bottom = j.xy[joint::L_ANKLE][1].max(j.xy[joint::R_ANKLE][1]) + 4.0;
+    let centre = 0.5 * (ls[0] + rs[0]);
+    let half_top = 0.5 * (ls[0] - rs[0]).abs() + 12.0;
+    let half_bottom = 2.2 * half_top;
+    let half_at = |y: f64| half_top + (half_bottom - half_top) * ((y - top) / (bottom - top)).clamp(0.0, 1.0);
+    let mut pixels = sketch.as_bytes().to_vec();
+    for y in 0..h {
+        for x in 0..w {
+            let (fx, fy) = (x as f64, y as f64);
+            if fy < top || fy > bottom + 3.0 {
+                continue;
+            }
+            let d = (fx - centre).abs() - half_at(fy);
+            if d <= 3.0 {
+                // Outline 3 px thick on the sides and the hem, paper inside.
+                let edge = d >= 0.0 || fy >= bottom;
+                pixels[y * w + x] = if edge { 0 } else { 255 };
+            }
+        }
+    }
+    let cloaked = GrayImage::from_vec(w, h, pixels).unwrap();
+    let r = run_pipeline(&model, &dict, &cloaked, &GivenJoints(j), &fast(None), &mut |_| true).unwrap();
+    assert!(r.low_evidence, "edge support {}", r.edge_support);
+    let range = model.blended().unwrap().space().gmm().marginal(r.weights.len()).unwrap();
+    let range = range.range(sketchbody::fit::PRIOR_RANGE_SD);
+    assert!(r.weights.iter().zip(&range).all(|(w, (lo, hi))| (lo..=hi).contains(&w)), "{:?}", r.weights);
+    let height = sketchbody::body::rig::y_extent(&r.mesh.vertices);
+    assert!((1.4..2.1).contains(&height), "height {height} m");
+}

@@ -538,6 +538,21 @@ pub fn fit_shape(
         }
         ShapeChoice::Gendered(_) => (None, None),
     };
+    if let (ShapeChoice::Blended, true, Some(male)) =
+        (problem.gender, std::env::var("SKB_EXP_HALF").is_ok(), male_probability)
+    {
+        let blend = problem.model.blended()?;
+        let side = |y: &[f64]| (blend.gender_value(&y[..dims]) > 0.5) == (male > 0.5);
+        let total: f64 = population.iter().zip(&last_weights).filter(|(y, _)| side(y)).map(|(_, w)| w).sum();
+        if total > 0.0 {
+            weighted_mean = (0..state_dims)
+                .map(|k| {
+                    population.iter().zip(&last_weights).filter(|(y, _)| side(y)).map(|(y, w)| w * y[k]).sum::<f64>()
+                        / total
+                })
+                .collect();
+        }
+    }
     clamp(&mut weighted_mean);
     let edge_support = evaluator.evaluate(&weighted_mean, &mut Scratch::default())?.map_or(0.0, |(_, support)| support);
     let proportions = factors.map(|_| proportions_of(&weighted_mean[dims..]));
