@@ -205,7 +205,7 @@ fn per_sample_cameras_ignore_the_problem_cameras_scale() {
 
 #[test]
 fn bone_factors_find_long_legs() {
-    use sketchbody::render::sketch::scene::{apply_proportions, Proportions};
+    use sketchbody::body::proportions::{apply_proportions, Proportions};
     let c = case();
     let props = Proportions { legs: 1.2, ..Proportions::default() };
     let (v, j) = apply_proportions(&c.truth.vertices, &c.truth.joints, c.model.skin_weights(), &props).unwrap();

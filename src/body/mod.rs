@@ -13,7 +13,9 @@ mod gmm;
 pub mod ik;
 mod model;
 pub mod procedural;
+pub mod proportions;
 mod proxy;
+pub mod retarget;
 pub mod rig;
 pub mod skin;
 

@@ -4,13 +4,13 @@
 use std::ffi::{c_int, c_void};
 use std::sync::Arc;
 
-use crate::body::ik::{solve, IkOptions};
-use crate::body::skin::{skin, SkinMethod};
-use crate::body::{Gender, ShapeChoice};
+use crate::body::skin::SkinMethod;
+use crate::body::Gender;
 use crate::camera::WeakPerspective;
 use crate::error::Error;
-use crate::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
+use crate::fit::{FitOptions, MatchScore};
 use crate::image::to_gray;
+use crate::pipeline::{fit_body, BodyChoice};
 use crate::skeleton::{Joints3, NUM_JOINTS};
 
 use super::body::{skb_context, skb_mesh, write_out};
@@ -39,7 +39,7 @@ pub const SKB_SCORE_TWO_SIDED_CHAMFER: u32 = 3;
 pub const SKB_SKIN_LINEAR: u32 = 0;
 /// `skb_fit_options_set_skinning`: dual-quaternion skinning.
 pub const SKB_SKIN_DUAL_QUATERNION: u32 = 1;
-/// `skb_fit_options_set_gender`: fit both shape spaces and keep the better-scoring one (default).
+/// `skb_fit_options_set_gender`: fit the both-sexes space with gender as a continuous weight (default).
 pub const SKB_GENDER_AUTO: u32 = 2;
 
 /// Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
@@ -214,8 +214,7 @@ pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, di
 }
 
 /// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
-/// fit the both-sexes space, gender a continuous weight; read the result with
-/// `skb_result_gender_value`).
+/// fit the both-sexes space, gender a continuous weight; `skb_result_gender_value` reads it).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_gender(opts: *mut skb_fit_options, gender: u32) -> skb_status {
     ffi_boundary! {
@@ -290,24 +289,20 @@ pub unsafe extern "C" fn skb_fit_shape(
         if edge_map.as_bytes().iter().all(|&e| e == 0) {
             return fail(&Error::BlankImage { width: edge_map.width(), height: edge_map.height(), low: 0.0, high: 0.0 });
         }
-        let choice = gender.map_or(ShapeChoice::Blended, ShapeChoice::Gendered);
         let mut cb = progress_closure(progress, user);
-        let problem = FitProblem { model: &ctx.model, gender: choice, pose: &pose, camera: &cam, edges: &edge_map, joints2d: None };
-        let r = try_core!(fit_shape(&problem, &fit_opts, &mut cb));
-        let g = gender.unwrap_or(if r.gender_value.unwrap_or(0.5) > 0.5 { Gender::Male } else { Gender::Female });
-        let mut rest = try_core!(try_core!(ctx.model.shape_space(choice)).synthesize(&r.weights));
-        if let Some(props) = &r.proportions {
-            try_core!(crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, ctx.model.skin_weights(), props));
-        }
-        if let Some(h) = fit_opts.height {
-            try_core!(crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h));
-        }
-        let ik = try_core!(solve(&rest.joints, &pose, &IkOptions { retarget: fit_opts.retarget }));
-        let vertices = try_core!(skin(&rest.vertices, ctx.model.skin_weights(), &ik, fit_opts.skinning));
+        let choice = BodyChoice { gender, ..BodyChoice::default() };
+        let body = try_core!(fit_body(&ctx.model, &pose, &cam, &edge_map, None, &fit_opts, &choice, &mut cb));
         if !score.is_null() {
-            *score = r.best_score;
+            *score = body.score;
         }
-        let mesh = skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, weights: r.weights, posed: Some(Box::new(Posed { pose: ik, vertices })) };
+        let posed = Posed { pose: body.ik_pose, vertices: body.posed_vertices };
+        let mesh = skb_mesh {
+            model: Arc::clone(&ctx.model),
+            gender: body.gender,
+            rest: body.rest,
+            weights: body.weights,
+            posed: Some(Box::new(posed)),
+        };
         try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
         skb_status::SKB_OK
     }

@@ -66,7 +66,7 @@ fn costume(t: &GroundTruth) -> bool {
 }
 
 fn custom_proportions(t: &GroundTruth) -> bool {
-    t.style.proportions != crate::render::sketch::scene::Proportions::default()
+    t.style.proportions != crate::body::proportions::Proportions::default()
 }
 
 /// The groups [`style_breakdown`] reports: every rendering choice that could make a figure

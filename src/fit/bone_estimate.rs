@@ -25,9 +25,9 @@
 
 use nalgebra::{Matrix6, Vector3, Vector6};
 
+use crate::body::proportions::Proportions;
 use crate::camera::WeakPerspective;
 use crate::error::{ensure_finite, Error, Result};
-use crate::render::sketch::scene::Proportions;
 use crate::skeleton::{joint, Joints2, Joints3, BONES, NUM_BONES};
 
 /// Group of each canonical bone in [`Proportions`] order (0 legs, 1 arms, 2 shoulders, 3 head,
@@ -205,9 +205,9 @@ pub fn estimate_proportions(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::body::proportions::apply_proportions;
     use crate::body::BodyModel;
     use crate::body::Gender;
-    use crate::render::sketch::scene::apply_proportions;
     use crate::skeleton::NUM_JOINTS;
     use nalgebra::Rotation3;
 

@@ -16,9 +16,9 @@
 use rand::Rng;
 use rand_distr::StandardNormal;
 
+use crate::body::proportions::{apply_proportions, Proportions};
 use crate::body::VertexWeights;
 use crate::error::Result;
-use crate::render::sketch::scene::{apply_proportions, Proportions};
 use crate::skeleton::Joints3;
 
 /// Number of factors (legs, arms, shoulders, head, torso).

@@ -12,21 +12,22 @@
 //! fitted gender value and the posterior probability of its half. Given a gender, that gender's
 //! space is fitted.
 
+pub mod body_fit;
 pub mod joints;
 pub mod overlay;
 
 use std::time::Instant;
 
-use crate::body::ik::{self, IkOptions, Pose};
+use crate::body::ik::Pose;
 use crate::body::rig::RiggedMesh;
-use crate::body::skin::skin;
 use crate::body::{BodyModel, Gender, ShapeChoice};
 use crate::error::{Error, Result};
-use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult};
+use crate::fit::FitOptions;
 use crate::image::{canny, CannyParams, GrayImage};
 use crate::pose::{estimate_pose, Dictionary, PoseEstimate, PoseOptions};
-use crate::skeleton::{Joints2, Joints3};
+use crate::skeleton::Joints2;
 
+pub use body_fit::{fit_body, refit_camera, BodyChoice, FittedBody, GenderFit};
 pub use joints::{DetectedJoints, GivenJoints, JointsSource};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
@@ -56,45 +57,6 @@ pub struct PipelineOptions {
     /// `--oracle-pose` passes the ground truth to show what the fit reaches when the pose is
     /// right). Default `None` (estimate the pose).
     pub given_pose: Option<PoseEstimate>,
-}
-
-/// The pose estimate with its camera refitted to a body's skeleton: the body's rest joints
-/// `rest` are posed to the estimate's bone directions by IK (its own bone lengths), rotated by
-/// the estimate's R, and `sx, tx` / `sy, ty` are the least-squares fit of their projections to
-/// the visible 2-D joints. The pose solver reports a 1.75 m person of its dictionary's
-/// proportions, and a single weak-perspective view cannot tell a small near figure from a large
-/// far one; without this the shape fit spends shape weights on the solver's arbitrary scale.
-/// Errors: IK's; [`Error::Degenerate`] when a scale comes out non-positive.
-pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> Result<PoseEstimate> {
-    let posed = ik::solve(rest, &pose.joints, &IkOptions { retarget: false })?.joints;
-    let targets: Vec<(usize, [f64; 2])> =
-        (0..posed.len()).filter(|&k| joints2d.visible[k]).map(|k| (k, joints2d.xy[k])).collect();
-    let camera = pose.camera.refit_scale(&posed, &targets)?;
-    Ok(PoseEstimate { camera, ..pose.clone() })
-}
-
-/// The space's mean rest skeleton, scaled about its pelvis to `height` metres when given
-/// ([`crate::fit::FitOptions::height`]).
-fn mean_skeleton(model: &BodyModel, choice: ShapeChoice, height: Option<f64>) -> Result<Joints3> {
-    let space = model.shape_space(choice)?;
-    let mut joints = *space.mean_joints();
-    if let Some(h) = height {
-        crate::body::rig::scale_to_height(&mut space.mean().to_vec(), &mut joints, h)?;
-    }
-    Ok(joints)
-}
-
-/// One shape space's fit.
-#[derive(Clone, Debug, PartialEq)]
-pub struct GenderFit {
-    /// The shape space fitted.
-    pub space: ShapeChoice,
-    /// The SIR's result (`None` for the mean shape).
-    pub fit: Option<FitResult>,
-    /// Best sample's match score (higher is better); NaN for the mean shape.
-    pub score: f64,
-    /// Wall-clock seconds of this fit.
-    pub seconds: f64,
 }
 
 /// Wall-clock seconds of each stage.
@@ -132,26 +94,20 @@ pub struct PipelineResult {
     pub fits: Vec<GenderFit>,
     /// The space fitted.
     pub space: ShapeChoice,
-    /// The nearer gender: the given one, or for the blended space male when
-    /// [`PipelineResult::gender_value`] > 0.5.
+    /// The chosen shape space.
     pub gender: Gender,
-    /// Gender value, 0 = female mean … 1 = male mean: 0 or 1 when given, else the fit's
-    /// posterior mean ([`crate::fit::FitResult::gender_value`]).
+    /// Gender value, 0 = female mean … 1 = male mean ([`FittedBody::gender_value`]).
     pub gender_value: f64,
-    /// Probability that [`PipelineResult::gender`] is the right half (gender value on its side
-    /// of 0.5) under the fit's posterior: 1 when the gender was given, 0.5..=1 when fitted.
+    /// Probability that [`PipelineResult::gender`] is the right half ([`FittedBody::gender_confidence`]).
     pub gender_confidence: f64,
     /// `true` when the gender was fitted, `false` when the caller gave it.
     pub gender_fitted: bool,
-    /// PCA weights of the fitted shape in [`PipelineResult::space`] (Y* of the SIR; empty for
-    /// the mean shape), metres; weight 0 of the blended space is its gender axis.
-    pub weights: Vec<f64>,
-    /// Fraction of the fitted silhouette's boundary the sketch's strokes support
-    /// ([`crate::fit::FitResult::edge_support`]; NaN for the mean shape).
+    /// Fraction of the fitted outline the sketch supports ([`FittedBody::edge_support`]).
     pub edge_support: f64,
-    /// The fit is low-evidence ([`crate::fit::FitResult::low_evidence`]): the body is mostly the
-    /// prior's (e.g. a figure under a cloak to the ground). `false` for the mean shape.
+    /// The fit is low-evidence ([`FittedBody::low_evidence`]).
     pub low_evidence: bool,
+    /// PCA weights of the chosen shape (Y* of the SIR; empty for the mean shape), metres.
+    pub weights: Vec<f64>,
     /// Best match score of the chosen fit (NaN for the mean shape).
     pub score: f64,
     /// The rest mesh with its joints, UVs and skin weights.
@@ -206,12 +162,6 @@ pub fn run_pipeline(
     if w < MIN_SKETCH_SIDE || h < MIN_SKETCH_SIDE {
         return Err(Error::ImageTooSmall { width: w, height: h, min: MIN_SKETCH_SIDE });
     }
-    if options.mean_shape && options.gender.is_none() {
-        return Err(Error::OutOfRange {
-            name: "gender",
-            detail: "the mean-shape baseline needs a gender (nothing to choose by)".into(),
-        });
-    }
     p.report(0.0)?;
     let t = Instant::now();
     let edges = canny(&sketch.view(), &options.canny)?;
@@ -236,89 +186,34 @@ pub fn run_pipeline(
     timings.pose = t.elapsed().as_secs_f64();
     p.report(0.06)?;
 
-    let choice = options.gender.map_or(ShapeChoice::Blended, ShapeChoice::Gendered);
-    let t = Instant::now();
-    let pose = if options.keep_pose_scale {
-        pose.clone()
-    } else {
-        refit_camera(&pose, &mean_skeleton(model, choice, options.fit.height)?, &joints2d)?
-    };
-    let fit = if options.mean_shape {
-        GenderFit { space: choice, fit: None, score: f64::NAN, seconds: 0.0 }
-    } else {
-        let problem = FitProblem {
-            model,
-            gender: choice,
-            pose: &pose.joints,
-            camera: &pose.camera,
-            edges: &edges,
-            joints2d: Some(&joints2d),
-        };
-        let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
-        let fit = fit_shape(&problem, &options.fit, &mut cb)?;
-        GenderFit { space: choice, score: fit.best_score, fit: Some(fit), seconds: t.elapsed().as_secs_f64() }
-    };
-    timings.fit = t.elapsed().as_secs_f64();
-    let weights = fit.fit.as_ref().map_or_else(Vec::new, |f| f.weights.clone());
-    let score = fit.score;
-    let (gender, gender_value, gender_confidence) = match (options.gender, fit.fit.as_ref()) {
-        (Some(g), _) => (g, g.index() as f64, 1.0),
-        (None, Some(f)) => {
-            let value = f.gender_value.unwrap_or(0.5);
-            let male = f.male_probability.unwrap_or(0.5);
-            if value > 0.5 {
-                (Gender::Male, value, male.max(1.0 - male))
-            } else {
-                (Gender::Female, value, male.max(1.0 - male))
-            }
-        }
-        (None, None) => {
-            return Err(Error::OutOfRange { name: "gender", detail: "the mean-shape baseline needs a gender".into() })
-        }
-    };
-    let (edge_support, low_evidence) =
-        fit.fit.as_ref().map_or((f64::NAN, false), |f| (f.edge_support, f.low_evidence()));
-    let fits = vec![fit];
-
-    let t = Instant::now();
-    let mut mesh = RiggedMesh::from_rest(model, &model.shape_space(choice)?.synthesize(&weights)?);
-    if let Some(props) = fits[0].fit.as_ref().and_then(|f| f.proportions.as_ref()) {
-        crate::fit::proportions::apply_in_place(&mut mesh.vertices, &mut mesh.joints, &mesh.weights, props)?;
-    }
-    if let Some(h) = options.fit.height {
-        mesh = mesh.scaled_to_height(h)?;
-    }
-    // With per-sample cameras the chosen body's own skeleton sets the image scale.
-    let pose = if options.fit.sample_camera && !options.mean_shape {
-        refit_camera(&pose, &mesh.joints, &joints2d)?
-    } else {
-        pose
-    };
-    let ik_pose = ik::solve(&mesh.joints, &pose.joints, &IkOptions { retarget: options.fit.retarget })?;
-    let posed_vertices = skin(&mesh.vertices, &mesh.weights, &ik_pose, options.fit.skinning)?;
-    let posed_joints = ik_pose.joints;
-    timings.posing = t.elapsed().as_secs_f64();
+    let choice =
+        BodyChoice { gender: options.gender, mean_shape: options.mean_shape, keep_pose_scale: options.keep_pose_scale };
+    let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
+    let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &options.fit, &choice, &mut cb)?;
+    timings.fit = body.fit_seconds;
+    timings.posing = body.posing_seconds;
+    let mesh = RiggedMesh::from_rest(model, &body.rest);
     timings.total = t0.elapsed().as_secs_f64();
     p.report(1.0)?;
     Ok(PipelineResult {
         edges,
         joints2d,
         joints_source: source.name().to_string(),
-        pose,
-        fits,
-        space: choice,
-        gender,
-        gender_value,
-        gender_confidence,
+        pose: PoseEstimate { camera: body.camera, ..pose },
+        fits: body.fits,
+        space: body.space,
+        gender: body.gender,
+        gender_value: body.gender_value,
+        gender_confidence: body.gender_confidence,
         gender_fitted: options.gender.is_none(),
-        weights,
-        edge_support,
-        low_evidence,
-        score,
+        edge_support: body.edge_support,
+        low_evidence: body.low_evidence,
+        weights: body.weights,
+        score: body.score,
         mesh,
-        ik_pose,
-        posed_vertices,
-        posed_joints,
+        posed_joints: body.ik_pose.joints,
+        ik_pose: body.ik_pose,
+        posed_vertices: body.posed_vertices,
         timings,
     })
 }

@@ -11,7 +11,7 @@
 //! uses the body model's rig joints (shoulders ~10 cm below the neck, pelvis above the hips,
 //! a longer torso, shorter arms and thighs). With [`LearnSpec::retarget`] set, each training
 //! frame is first retargeted onto one of the given rest skeletons exactly as the renderer poses
-//! a body ([`crate::render::sketch::scene::retarget_directions`]: every bone keeps the frame's
+//! a body ([`crate::body::retarget::retarget_directions`]: every bone keeps the frame's
 //! direction and takes the skeleton's length; the girdle bones turn with the chest and hip
 //! frames), frame `i` of a clip onto skeleton `i mod n`; the dictionary is then learned in the
 //! rig's convention. [`LearnSpec::library_default`] uses the body model's female and male mean
@@ -22,9 +22,9 @@ use std::path::{Path, PathBuf};
 use super::bvh::Bvh;
 use super::dictionary::{Dictionary, LearnParams};
 use super::motion::read_motion_csv;
+use crate::body::retarget::retarget_directions;
 use crate::body::{BodyModel, Gender};
 use crate::error::{Error, Result};
-use crate::render::sketch::scene::retarget_directions;
 use crate::skeleton::Joints3;
 
 /// Clips held out of the default dictionary for measurement (`bench-pose`).

@@ -202,7 +202,7 @@ fn report(
         );
     }
     let chosen = r.fits.first().and_then(|g| g.fit.as_ref());
-    let factors = |p: &sketchbody::render::sketch::scene::Proportions| {
+    let factors = |p: &sketchbody::body::proportions::Proportions| {
         format!(
             "legs {:.3}, arms {:.3}, shoulders {:.3}, head {:.3}, torso {:.3}",
             p.legs, p.arms, p.shoulders, p.head, p.torso

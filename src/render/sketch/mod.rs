@@ -27,9 +27,10 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+pub use crate::body::proportions::Proportions;
 pub use costume::{Costume, Hair};
 pub use mocap::MocapLibrary;
-pub use scene::{CameraAngles, Proportions};
+pub use scene::CameraAngles;
 pub use style::SketchStyle;
 pub use truth::GroundTruth;
 
@@ -184,8 +185,12 @@ impl SketchRenderer {
             None => space.gmm().sample(&mut rng),
         };
         let shape = space.synthesize(&weights)?;
-        let (rest_v, rest_j) =
-            scene::apply_proportions(&shape.vertices, &shape.joints, self.model.skin_weights(), &style.proportions)?;
+        let (rest_v, rest_j) = crate::body::proportions::apply_proportions(
+            &shape.vertices,
+            &shape.joints,
+            self.model.skin_weights(),
+            &style.proportions,
+        )?;
         let (source, pose_source) = match (&req.joints, &self.mocap) {
             (Some(j), _) => (*j, "given".to_string()),
             (None, Some(lib)) => match lib.random(&mut rng) {
@@ -200,8 +205,8 @@ impl SketchRenderer {
                 "procedural".into(),
             ),
         };
-        let target = scene::retarget_directions(&rest_j, &source)?;
-        let (posed, pose) = scene::pose_mesh(&rest_v, &rest_j, self.model.skin_weights(), &target)?;
+        let target = crate::body::retarget::retarget_directions(&rest_j, &source)?;
+        let (posed, pose) = crate::body::retarget::pose_mesh(&rest_v, &rest_j, self.model.skin_weights(), &target)?;
         let angles = match req.camera {
             Some(a) => a,
             None => CameraAngles::random(&mut rng),

@@ -6,7 +6,8 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use super::costume::{Costume, Hair};
-use super::scene::Proportions;
+use super::scene::random_proportions;
+use crate::body::proportions::Proportions;
 use crate::error::{ensure_finite, Error, Result};
 
 /// Drawing parameters. Field docs give: meaning; accepted range; random range.
@@ -111,7 +112,7 @@ impl SketchStyle {
             cape: rng.random_bool(0.12),
         };
         let hair = Hair::ALL[rng.random_range(0..Hair::ALL.len())];
-        let proportions = Proportions::random(rng, 0.5);
+        let proportions = random_proportions(rng, 0.5);
         let paper_tone = rng.random_range(0.82..1.0);
         let paper_noise = rng.random_range(0.0..0.07);
         let stray_strokes = rng.random_range(0..10);

@@ -1,0 +1,217 @@
+//! The shape stage in one place: fit the shape space the caller asks for (a gender's, or without
+//! one the both-sexes space with gender as a continuous weight, [`crate::body::BlendedSpace`]),
+//! apply its bone-length factors, scale it to the height, pose it by IK and skin it. [`super::run_pipeline`]
+//! and the C API's `skb_fit_shape` both call [`fit_body`].
+
+use std::time::Instant;
+
+use crate::body::ik::{self, IkOptions, Pose};
+use crate::body::skin::skin;
+use crate::body::{BodyModel, Gender, RestShape, ShapeChoice};
+use crate::camera::WeakPerspective;
+use crate::error::{Error, Result};
+use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult};
+use crate::image::GrayImage;
+use crate::pose::PoseEstimate;
+use crate::skeleton::{Joints2, Joints3};
+
+/// The pose estimate with its camera refitted to a body's skeleton: the body's rest joints
+/// `rest` are posed to the estimate's bone directions by IK (its own bone lengths), rotated by
+/// the estimate's R, and `sx, tx` / `sy, ty` are the least-squares fit of their projections to
+/// the visible 2-D joints. The pose solver reports a 1.75 m person of its dictionary's
+/// proportions, and a single weak-perspective view cannot tell a small near figure from a large
+/// far one; without this the shape fit spends shape weights on the solver's arbitrary scale.
+/// Errors: IK's; [`Error::Degenerate`] when a scale comes out non-positive.
+pub fn refit_camera(pose: &PoseEstimate, rest: &Joints3, joints2d: &Joints2) -> Result<PoseEstimate> {
+    let camera = refit_scale(&pose.joints, &pose.camera, rest, joints2d)?;
+    Ok(PoseEstimate { camera, ..pose.clone() })
+}
+
+/// [`refit_camera`] on a bare pose and camera: the refitted camera.
+fn refit_scale(
+    pose: &Joints3,
+    camera: &WeakPerspective,
+    rest: &Joints3,
+    joints2d: &Joints2,
+) -> Result<WeakPerspective> {
+    let posed = ik::solve(rest, pose, &IkOptions { retarget: false })?.joints;
+    let targets: Vec<(usize, [f64; 2])> =
+        (0..posed.len()).filter(|&k| joints2d.visible[k]).map(|k| (k, joints2d.xy[k])).collect();
+    camera.refit_scale(&posed, &targets)
+}
+
+/// The space's mean rest skeleton, scaled about its pelvis to `height` metres when given
+/// ([`FitOptions::height`]).
+fn mean_skeleton(model: &BodyModel, choice: ShapeChoice, height: Option<f64>) -> Result<Joints3> {
+    let space = model.shape_space(choice)?;
+    let mut joints = *space.mean_joints();
+    if let Some(h) = height {
+        crate::body::rig::scale_to_height(&mut space.mean().to_vec(), &mut joints, h)?;
+    }
+    Ok(joints)
+}
+
+/// One shape space's fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GenderFit {
+    /// The shape space fitted.
+    pub space: ShapeChoice,
+    /// The SIR's result (`None` for the mean shape).
+    pub fit: Option<FitResult>,
+    /// Best sample's match score (higher is better); NaN for the mean shape.
+    pub score: f64,
+    /// Wall-clock seconds of this fit.
+    pub seconds: f64,
+}
+
+/// Which shape space [`fit_body`] fits and how it treats the camera. `Default`: the both-sexes
+/// space (gender fitted), camera refitted to the body.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BodyChoice {
+    /// The shape space to fit: a gender's, or with `None` the both-sexes space with gender as a
+    /// fitted continuous weight.
+    pub gender: Option<Gender>,
+    /// Skip the fit and use the gender's mean shape, posed the same way (the benchmark's
+    /// baseline). Needs `gender`.
+    pub mean_shape: bool,
+    /// Keep the pose solver's camera (fitted to a 1.75 m person of the dictionary's
+    /// proportions) instead of refitting its scales and translation to each body's skeleton
+    /// ([`refit_camera`]; only done when the 2-D joints are given).
+    pub keep_pose_scale: bool,
+}
+
+/// What [`fit_body`] produces. Owns its data.
+#[derive(Clone, Debug)]
+pub struct FittedBody {
+    /// The fit (one: the given gender's space, or the blended one).
+    pub fits: Vec<GenderFit>,
+    /// The space fitted.
+    pub space: ShapeChoice,
+    /// The nearer gender: the given one, or for the blended space male when
+    /// [`FittedBody::gender_value`] > 0.5.
+    pub gender: Gender,
+    /// Gender value, 0 = female mean … 1 = male mean: 0 or 1 when given, else the fit's
+    /// posterior mean ([`FitResult::gender_value`]).
+    pub gender_value: f64,
+    /// Probability under the fit's posterior that [`FittedBody::gender`] is the right half
+    /// (the gender value on its side of 0.5): 1 when the gender was given, 0.5..=1 when fitted.
+    pub gender_confidence: f64,
+    /// PCA weights of the fitted shape in [`FittedBody::space`] (Y* of the SIR; empty for the
+    /// mean shape), metres; weight 0 of the blended space is its gender axis.
+    pub weights: Vec<f64>,
+    /// Fraction of the fitted silhouette's boundary the sketch's strokes support
+    /// ([`FitResult::edge_support`]; NaN for the mean shape).
+    pub edge_support: f64,
+    /// The fit is low-evidence ([`FitResult::low_evidence`]): the body is mostly the prior's
+    /// (e.g. a figure under a cloak to the ground). `false` for the mean shape.
+    pub low_evidence: bool,
+    /// Best match score of the chosen fit (NaN for the mean shape).
+    pub score: f64,
+    /// The camera refitted to the chosen body (see [`BodyChoice::keep_pose_scale`] and
+    /// [`FitOptions::sample_camera`]), pixels.
+    pub camera: WeakPerspective,
+    /// The chosen rest shape with its bone-length factors applied and scaled to
+    /// [`FitOptions::height`] when given (model frame, metres).
+    pub rest: RestShape,
+    /// The IK pose taking `rest.joints` to the estimated 3-D joints.
+    pub ik_pose: Pose,
+    /// The posed vertices (model frame, metres); project with `pose.camera`.
+    pub posed_vertices: Vec<[f32; 3]>,
+    /// Wall-clock seconds of every fit together.
+    pub fit_seconds: f64,
+    /// Wall-clock seconds of posing the chosen shape (IK and skinning).
+    pub posing_seconds: f64,
+}
+
+/// Fits the body to `edges` (255 edge, 0 not) under the 3-D `pose` (canonical joints, metres)
+/// seen through `camera`: the chosen shape space by SIR ([`fit_shape`]; without a gender the
+/// both-sexes space, so no hard gender choice), then bone-length factors, height, IK and
+/// skinning. With `joints2d` the camera is refitted to each body's skeleton (and,
+/// with [`FitOptions::sample_camera`], to the chosen body's) and the fit uses the joints term.
+/// `progress(fraction)` (0..=1 over the fits, non-decreasing) returning `false` cancels.
+///
+/// Errors: `mean_shape` without a gender ([`Error::OutOfRange`]); the camera refit's, the fit's,
+/// IK's and skinning's errors; [`Error::Cancelled`].
+pub fn fit_body(
+    model: &BodyModel,
+    pose: &Joints3,
+    camera: &WeakPerspective,
+    edges: &GrayImage,
+    joints2d: Option<&Joints2>,
+    options: &FitOptions,
+    choice: &BodyChoice,
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<FittedBody> {
+    if choice.mean_shape && choice.gender.is_none() {
+        return Err(Error::OutOfRange {
+            name: "gender",
+            detail: "the mean-shape baseline needs a gender (nothing to choose by)".into(),
+        });
+    }
+    let space = choice.gender.map_or(ShapeChoice::Blended, ShapeChoice::Gendered);
+    let t = Instant::now();
+    let camera = match joints2d {
+        Some(j2) if !choice.keep_pose_scale => {
+            refit_scale(pose, camera, &mean_skeleton(model, space, options.height)?, j2)?
+        }
+        _ => *camera,
+    };
+    let fit = if choice.mean_shape {
+        GenderFit { space, fit: None, score: f64::NAN, seconds: 0.0 }
+    } else {
+        let problem = FitProblem { model, gender: space, pose, camera: &camera, edges, joints2d };
+        let fit = fit_shape(&problem, options, &mut |f| progress(f.clamp(0.0, 1.0)))?;
+        GenderFit { space, score: fit.best_score, fit: Some(fit), seconds: t.elapsed().as_secs_f64() }
+    };
+    let fit_seconds = t.elapsed().as_secs_f64();
+    let weights = fit.fit.as_ref().map_or_else(Vec::new, |f| f.weights.clone());
+    let score = fit.score;
+    let (gender, gender_value, gender_confidence) = match (choice.gender, fit.fit.as_ref()) {
+        (Some(g), _) => (g, g.index() as f64, 1.0),
+        (None, Some(f)) => {
+            let value = f.gender_value.unwrap_or(0.5);
+            let male = f.male_probability.unwrap_or(0.5);
+            (if value > 0.5 { Gender::Male } else { Gender::Female }, value, male.max(1.0 - male))
+        }
+        (None, None) => {
+            return Err(Error::OutOfRange { name: "gender", detail: "the mean-shape baseline needs a gender".into() })
+        }
+    };
+    let (edge_support, low_evidence) =
+        fit.fit.as_ref().map_or((f64::NAN, false), |f| (f.edge_support, f.low_evidence()));
+    let proportions = fit.fit.as_ref().and_then(|f| f.proportions);
+    let fits = vec![fit];
+
+    let t = Instant::now();
+    let mut rest = model.shape_space(space)?.synthesize(&weights)?;
+    if let Some(props) = &proportions {
+        crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, model.skin_weights(), props)?;
+    }
+    if let Some(h) = options.height {
+        crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h)?;
+    }
+    // With per-sample cameras the chosen body's own skeleton sets the image scale.
+    let camera = match joints2d {
+        Some(j2) if options.sample_camera && !choice.mean_shape => refit_scale(pose, &camera, &rest.joints, j2)?,
+        _ => camera,
+    };
+    let ik_pose = ik::solve(&rest.joints, pose, &IkOptions { retarget: options.retarget })?;
+    let posed_vertices = skin(&rest.vertices, model.skin_weights(), &ik_pose, options.skinning)?;
+    Ok(FittedBody {
+        fits,
+        space,
+        gender,
+        gender_value,
+        gender_confidence,
+        weights,
+        edge_support,
+        low_evidence,
+        score,
+        camera,
+        rest,
+        ik_pose,
+        posed_vertices,
+        fit_seconds,
+        posing_seconds: t.elapsed().as_secs_f64(),
+    })
+}
