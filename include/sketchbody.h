@@ -9,6 +9,18 @@
 #include <stdint.h>
 
 /**
+ * Components kept in the blended space (as many as each gendered space stores in the shipped
+ * model; fewer when the span is smaller).
+ */
+#define BLEND_COMPONENTS 16
+
+/**
+ * Default fitting dimension of the blended space: the gender weight plus the 4 shape weights
+ * each gendered space fits by default (96% of its energy).
+ */
+#define BLEND_DEFAULT_DIM 5
+
+/**
  * Female shape space (value of the `gender` arguments).
  */
 #define SKB_GENDER_FEMALE 0
@@ -65,7 +77,7 @@
 #define SKB_SKIN_DUAL_QUATERNION 1
 
 /**
- * `skb_fit_options_set_gender`: fit both shape spaces and keep the better-scoring one (default).
+ * `skb_fit_options_set_gender`: fit the both-sexes space with gender as a continuous weight (default).
  */
 #define SKB_GENDER_AUTO 2
 
@@ -73,26 +85,6 @@
  * Largest accepted image width or height, in pixels.
  */
 #define SKB_MAX_IMAGE_SIDE 16384
-
-/**
- * Length of a pose vector (x, y, z of each joint in canonical order).
- */
-#define SKB_POSE_DIM 45
-
-/**
- * Size of the basis arrays of `skb_pose3d` (the most bases a pose may use).
- */
-#define SKB_POSE_MAX_BASES 32
-
-/**
- * `skb_pose_options_set_alpha_target`: α pulls toward the identity (the paper's eq. 4).
- */
-#define SKB_ALPHA_TARGET_IDENTITY 0
-
-/**
- * `skb_pose_options_set_alpha_target`: α pulls the pitch toward 0 (yaw and roll kept; default).
- */
-#define SKB_ALPHA_TARGET_LEVEL 1
 
 /**
  * `skb_mesh_pose` flag: scale bones along their length so the joints land on the targets.
@@ -120,6 +112,26 @@
 #define SKB_JOINTS_ESTIMATED 2
 
 /**
+ * Length of a pose vector (x, y, z of each joint in canonical order).
+ */
+#define SKB_POSE_DIM 45
+
+/**
+ * Size of the basis arrays of `skb_pose3d` (the most bases a pose may use).
+ */
+#define SKB_POSE_MAX_BASES 32
+
+/**
+ * `skb_pose_options_set_alpha_target`: α pulls toward the identity (the paper's eq. 4).
+ */
+#define SKB_ALPHA_TARGET_IDENTITY 0
+
+/**
+ * `skb_pose_options_set_alpha_target`: α pulls the pitch toward 0 (yaw and roll kept; default).
+ */
+#define SKB_ALPHA_TARGET_LEVEL 1
+
+/**
  * Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
  */
 #define SKB_SKETCH_STYLE_RANDOM 0
@@ -143,6 +155,25 @@
  * Patch version of the library this header belongs to.
  */
 #define SKB_VERSION_PATCH 0
+
+/**
+ * Every PCA weight the fit returns or scores lies within this many standard deviations of some
+ * component mean of its prior ([`crate::body::Gmm::range`]): the prior's documented range.
+ */
+#define PRIOR_RANGE_SD 3.0
+
+/**
+ * A fitted silhouette with less than this fraction of its boundary within
+ * [`EDGE_SUPPORT_RADIUS`] raster pixels of a stroke is reported as low-evidence
+ * ([`FitResult::low_evidence`]): the body is mostly the prior's, not the sketch's (e.g. under a
+ * cloak to the ground).
+ */
+#define LOW_EVIDENCE_SUPPORT 0.5
+
+/**
+ * Radius of [`FitResult::edge_support`], raster pixels.
+ */
+#define EDGE_SUPPORT_RADIUS 2.0
 
 /**
  * Result of every sketchbody C function. 0 is success; any other value is an error whose text
@@ -821,14 +852,21 @@ skb_status skb_fit_options_set_seed(struct skb_fit_options *opts, uint64_t seed)
 skb_status skb_fit_options_set_skinning(struct skb_fit_options *opts, uint32_t method);
 
 /**
+ * Sets the clothing-robust chamfer's cap, raster pixels, finite and > 0 (default 4): silhouette
+ * boundary pixels inside the sketch's outer outline cost at most this, so strokes that may be
+ * clothing do not pull the body outward; 12 or more is the plain chamfer.
+ */
+skb_status skb_fit_options_set_inside_cap(struct skb_fit_options *opts, double cap);
+
+/**
  * Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
  * dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
  */
 skb_status skb_fit_options_set_dims(struct skb_fit_options *opts, uint32_t dims);
 
 /**
- * Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (fit both,
- * keep the better score).
+ * Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
+ * fit the both-sexes space, gender a continuous weight; `skb_result_gender_value` reads it).
  */
 skb_status skb_fit_options_set_gender(struct skb_fit_options *opts, uint32_t gender);
 
@@ -837,8 +875,9 @@ skb_status skb_fit_options_set_gender(struct skb_fit_options *opts, uint32_t gen
  * `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
  * `skb_pose3d.joints` from `skb_estimate_pose`); `camera` maps them to `edges`' pixels; `edges`
  * is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
- * `skb_canny`); `opts` may be NULL for the defaults (gender automatic: both shape spaces are
- * fitted and the better score kept). `progress` may be NULL; a non-zero return cancels
+ * `skb_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
+ * fitted, gender a continuous weight; the mesh's gender is the nearer one and its weights are
+ * the blended space's, weight 0 its gender axis). `progress` may be NULL; a non-zero return cancels
  * (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
  * caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
  * weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
@@ -889,6 +928,247 @@ skb_status skb_gaussian_blur(const struct skb_image *src,
                              uint8_t *dst,
                              size_t dst_stride,
                              size_t dst_len);
+
+/**
+ * Creates a rasteriser and stores it in `*out` (caller owns it; free with
+ * [`skb_rasterizer_free`]).
+ */
+skb_status skb_rasterizer_new(struct skb_rasterizer **out);
+
+/**
+ * Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
+ */
+void skb_rasterizer_free(struct skb_rasterizer *r);
+
+/**
+ * Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
+ * points as x, y, z floats (metres, model frame), `tris` holds `ntris` triangles as three
+ * 0-based vertex indices. Pixel (i, j) is set to 255 when its centre (i + 0.5, j + 0.5) lies
+ * inside a projected triangle (top-left fill rule, both windings), else 0. Writes `h` rows of
+ * `w` bytes into `mask`, rows `mask_stride` bytes apart; `mask_len` must be at least
+ * `mask_stride * (h - 1) + w`. Sizes 1..=4096 a side. Errors: NULL pointers, bad sizes or
+ * strides, an invalid camera, index out of range, non-finite vertices, vertices projecting
+ * beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
+ * entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
+ * Arrays are only read during the call. Thread-safe with distinct rasterisers.
+ */
+skb_status skb_rasterize_triangles(struct skb_rasterizer *rasterizer,
+                                   const float *verts,
+                                   size_t nverts,
+                                   const uint32_t *tris,
+                                   size_t ntris,
+                                   const struct skb_camera *cam,
+                                   uint32_t w,
+                                   uint32_t h,
+                                   uint8_t *mask,
+                                   size_t mask_stride,
+                                   size_t mask_len);
+
+/**
+ * Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,
+ * metres, model frame; `joints_len` must be 45) by inverse kinematics and skinning. `flags` is
+ * 0 or a combination of `SKB_POSE_RETARGET` and `SKB_POSE_DUAL_QUATERNION`. The pose replaces
+ * any earlier one (the rest shape is kept; posing to the rest joints gives the rest pose).
+ * Errors: non-finite joints (`SKB_ERR_NON_FINITE`), coincident joints
+ * (`SKB_ERR_DEGENERATE_BONE`), unknown flags or a wrong length (`SKB_ERR_OUT_OF_RANGE`); on
+ * error the mesh is unchanged. Needs exclusive use of `mesh`; skinning runs on the rayon pool.
+ */
+skb_status skb_mesh_pose(struct skb_mesh *mesh,
+                         const double *joints,
+                         size_t joints_len,
+                         uint32_t flags);
+
+/**
+ * Copies the posed vertices (the rest vertices before any `skb_mesh_pose`) as x, y, z floats
+ * (metres) into `dst` of `dst_len` floats (at least 3 × vertex count). On error nothing is
+ * written. Only reads `mesh`.
+ */
+skb_status skb_mesh_copy_posed_vertices(const struct skb_mesh *mesh, float *dst, size_t dst_len);
+
+/**
+ * Copies the posed joints (15 × x, y, z doubles, metres; the rest joints before any
+ * `skb_mesh_pose`) into `dst` of `dst_len` doubles (at least 45). Only reads `mesh`.
+ */
+skb_status skb_mesh_copy_posed_joints(const struct skb_mesh *mesh, double *dst, size_t dst_len);
+
+/**
+ * Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
+ * [`skb_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
+ */
+skb_status skb_mesh_rasterize(const struct skb_mesh *mesh,
+                              struct skb_rasterizer *rasterizer,
+                              const struct skb_camera *cam,
+                              uint32_t w,
+                              uint32_t h,
+                              uint8_t *mask,
+                              size_t mask_stride,
+                              size_t mask_len);
+
+/**
+ * Writes the mesh as Wavefront OBJ to `path` (UTF-8): the posed vertices when `posed`, else the
+ * rest pose; normals, MakeHuman UVs, quads. Written atomically: on error no file is left.
+ * Only reads `mesh`.
+ */
+skb_status skb_mesh_write_obj(const struct skb_mesh *mesh, const char *path, bool posed);
+
+/**
+ * Writes the mesh as binary glTF 2.0 to `path` (UTF-8): rest mesh with skin, 15 joint nodes,
+ * a "posed" scene (the current pose; the rest pose if never posed) and a "rest" scene. See
+ * docs/formats.md. Written atomically. Only reads `mesh`.
+ */
+skb_status skb_mesh_write_glb(const struct skb_mesh *mesh, const char *path);
+
+/**
+ * Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
+ * `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
+ */
+skb_status skb_mesh_write_preview(const struct skb_mesh *mesh, const char *path, uint32_t size);
+
+/**
+ * Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as gray into `*out` (caller owns it).
+ * Errors: `SKB_ERR_IO` (missing, unreadable), `SKB_ERR_DECODE` (not an image, truncated),
+ * `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
+ */
+skb_status skb_gray_image_load(const char *path, struct skb_gray_image **out);
+
+/**
+ * A borrowed 1-channel `skb_image` view of `img` into `*out`, valid while `img` lives.
+ */
+skb_status skb_gray_image_view(const struct skb_gray_image *img, struct skb_image *out);
+
+/**
+ * Frees an image from `skb_gray_image_load`. NULL is a no-op.
+ */
+void skb_gray_image_free(struct skb_gray_image *img);
+
+/**
+ * Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
+ * edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
+ * context's embedded detector finds them, as `skb_detect` with default options), the 3-D
+ * pose and camera, the shape fit, and the fitted shape posed to the estimate.
+ * `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
+ * fit options' gender defaults to automatic: the both-sexes space, gender fitted) are
+ * only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
+ * cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
+ * `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
+ * untouched. Errors: `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BLANK_IMAGE`,
+ * `SKB_ERR_NO_FIGURE` (NULL joints and the detector finds no figure),
+ * `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
+ * NaN), the pose solver's (`SKB_ERR_TOO_FEW_JOINTS`, `SKB_ERR_COINCIDENT_JOINTS`,
+ * `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
+ * callback is called on the calling thread.
+ */
+skb_status skb_run_pipeline(const struct skb_context *ctx,
+                            const struct skb_image *sketch,
+                            const struct skb_joints2d *joints,
+                            const struct skb_pose_dictionary *dict,
+                            const struct skb_pose_options *pose_opts,
+                            const struct skb_fit_options *fit_opts,
+                            skb_progress_fn progress,
+                            void *user,
+                            struct skb_result **out);
+
+/**
+ * Frees a result. NULL is a no-op.
+ */
+void skb_result_free(struct skb_result *result);
+
+/**
+ * The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
+ * or with automatic gender the nearer end of the fitted gender value (`skb_result_gender_value`);
+ * whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
+ */
+skb_status skb_result_gender(const struct skb_result *result, uint32_t *gender, bool *by_score);
+
+/**
+ * The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
+ * when the gender was given) and into `*confidence` (may be NULL) the probability, under the
+ * fit's posterior, that the gender value is on `skb_result_gender`'s side of 0.5 (0.5..=1;
+ * 1 when the gender was given).
+ */
+skb_status skb_result_gender_value(const struct skb_result *result,
+                                   double *value,
+                                   double *confidence);
+
+/**
+ * Whether the fit is low-evidence (1: the sketch's strokes support less than half of the
+ * fitted outline, e.g. a figure under a cloak to the ground: the body is mostly the prior's)
+ * into `*low`, and that fraction (0..=1; NaN for the mean shape) into `*edge_support` (may be
+ * NULL).
+ */
+skb_status skb_result_evidence(const struct skb_result *result, bool *low, double *edge_support);
+
+/**
+ * The best match score (higher is better) of the fit into `*score`; `gender` must be the
+ * result's gender (`skb_result_gender`: one space is fitted, the given gender's or the
+ * both-sexes one). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
+ */
+skb_status skb_result_score(const struct skb_result *result, uint32_t gender, double *score);
+
+/**
+ * Vertex count (13380) and quad-face count (13378) into `*vertices` and `*faces` (either may
+ * be NULL).
+ */
+skb_status skb_result_counts(const struct skb_result *result, size_t *vertices, size_t *faces);
+
+/**
+ * Copies the posed (`posed` non-zero) or rest vertices, x, y, z floats in metres, model frame,
+ * into `dst` of `dst_len` floats (≥ 3 × vertex count). On error nothing is written.
+ */
+skb_status skb_result_copy_vertices(const struct skb_result *result,
+                                    bool posed,
+                                    float *dst,
+                                    size_t dst_len);
+
+/**
+ * Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside; a
+ * triangle repeats its third index) into `dst` of `dst_len` integers (≥ 4 × face count).
+ */
+skb_status skb_result_copy_faces(const struct skb_result *result, uint32_t *dst, size_t dst_len);
+
+/**
+ * The 2-D joints used (pixels, with visibility) into `*out`.
+ */
+skb_status skb_result_joints2d(const struct skb_result *result, struct skb_joints2d *out);
+
+/**
+ * Copies 15 3-D joints (x, y, z doubles, metres, model frame) into `dst` (`dst_len` ≥ 45):
+ * `which` is `SKB_JOINTS_REST`, `SKB_JOINTS_POSED` or `SKB_JOINTS_ESTIMATED`.
+ */
+skb_status skb_result_copy_joints3d(const struct skb_result *result,
+                                    uint32_t which,
+                                    double *dst,
+                                    size_t dst_len);
+
+/**
+ * The estimated weak-perspective camera (model metres → sketch pixels) into `*out`.
+ */
+skb_status skb_result_camera(const struct skb_result *result, struct skb_camera *out);
+
+/**
+ * Copies the skin weights as `skb_mesh_copy_skin_weights` does: for vertex v, slots
+ * `4v .. 4v+3` of `bones` (bone indices 0..13) and `weights` (summing to 1); both hold `len`
+ * elements (≥ 4 × vertex count).
+ */
+skb_status skb_result_copy_skin_weights(const struct skb_result *result,
+                                        uint32_t *bones,
+                                        float *weights,
+                                        size_t len);
+
+/**
+ * The fitted PCA shape weights (metres): their number into `*count` (may be NULL) and, when
+ * `dst` is not NULL, the weights into `dst` (`dst_len` ≥ count).
+ */
+skb_status skb_result_shape_weights(const struct skb_result *result,
+                                    double *dst,
+                                    size_t dst_len,
+                                    size_t *count);
+
+/**
+ * A new `skb_mesh` of the result (the fitted rest shape, posed as in the result) into `*out`,
+ * for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
+ */
+skb_status skb_result_mesh(const struct skb_result *result, struct skb_mesh **out);
 
 /**
  * Creates the embedded default dictionary (learned from the DeepMimic clips, see
@@ -1051,227 +1331,6 @@ skb_status skb_pose_refine(const struct skb_pose_dictionary *dict,
                            const struct skb_pose_options *opts,
                            const struct skb_pose3d *start,
                            struct skb_pose3d *out);
-
-/**
- * Creates a rasteriser and stores it in `*out` (caller owns it; free with
- * [`skb_rasterizer_free`]).
- */
-skb_status skb_rasterizer_new(struct skb_rasterizer **out);
-
-/**
- * Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
- */
-void skb_rasterizer_free(struct skb_rasterizer *r);
-
-/**
- * Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
- * points as x, y, z floats (metres, model frame), `tris` holds `ntris` triangles as three
- * 0-based vertex indices. Pixel (i, j) is set to 255 when its centre (i + 0.5, j + 0.5) lies
- * inside a projected triangle (top-left fill rule, both windings), else 0. Writes `h` rows of
- * `w` bytes into `mask`, rows `mask_stride` bytes apart; `mask_len` must be at least
- * `mask_stride * (h - 1) + w`. Sizes 1..=4096 a side. Errors: NULL pointers, bad sizes or
- * strides, an invalid camera, index out of range, non-finite vertices, vertices projecting
- * beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
- * entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
- * Arrays are only read during the call. Thread-safe with distinct rasterisers.
- */
-skb_status skb_rasterize_triangles(struct skb_rasterizer *rasterizer,
-                                   const float *verts,
-                                   size_t nverts,
-                                   const uint32_t *tris,
-                                   size_t ntris,
-                                   const struct skb_camera *cam,
-                                   uint32_t w,
-                                   uint32_t h,
-                                   uint8_t *mask,
-                                   size_t mask_stride,
-                                   size_t mask_len);
-
-/**
- * Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,
- * metres, model frame; `joints_len` must be 45) by inverse kinematics and skinning. `flags` is
- * 0 or a combination of `SKB_POSE_RETARGET` and `SKB_POSE_DUAL_QUATERNION`. The pose replaces
- * any earlier one (the rest shape is kept; posing to the rest joints gives the rest pose).
- * Errors: non-finite joints (`SKB_ERR_NON_FINITE`), coincident joints
- * (`SKB_ERR_DEGENERATE_BONE`), unknown flags or a wrong length (`SKB_ERR_OUT_OF_RANGE`); on
- * error the mesh is unchanged. Needs exclusive use of `mesh`; skinning runs on the rayon pool.
- */
-skb_status skb_mesh_pose(struct skb_mesh *mesh,
-                         const double *joints,
-                         size_t joints_len,
-                         uint32_t flags);
-
-/**
- * Copies the posed vertices (the rest vertices before any `skb_mesh_pose`) as x, y, z floats
- * (metres) into `dst` of `dst_len` floats (at least 3 × vertex count). On error nothing is
- * written. Only reads `mesh`.
- */
-skb_status skb_mesh_copy_posed_vertices(const struct skb_mesh *mesh, float *dst, size_t dst_len);
-
-/**
- * Copies the posed joints (15 × x, y, z doubles, metres; the rest joints before any
- * `skb_mesh_pose`) into `dst` of `dst_len` doubles (at least 45). Only reads `mesh`.
- */
-skb_status skb_mesh_copy_posed_joints(const struct skb_mesh *mesh, double *dst, size_t dst_len);
-
-/**
- * Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
- * [`skb_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
- */
-skb_status skb_mesh_rasterize(const struct skb_mesh *mesh,
-                              struct skb_rasterizer *rasterizer,
-                              const struct skb_camera *cam,
-                              uint32_t w,
-                              uint32_t h,
-                              uint8_t *mask,
-                              size_t mask_stride,
-                              size_t mask_len);
-
-/**
- * Writes the mesh as Wavefront OBJ to `path` (UTF-8): the posed vertices when `posed`, else the
- * rest pose; normals, MakeHuman UVs, quads. Written atomically: on error no file is left.
- * Only reads `mesh`.
- */
-skb_status skb_mesh_write_obj(const struct skb_mesh *mesh, const char *path, bool posed);
-
-/**
- * Writes the mesh as binary glTF 2.0 to `path` (UTF-8): rest mesh with skin, 15 joint nodes,
- * a "posed" scene (the current pose; the rest pose if never posed) and a "rest" scene. See
- * docs/formats.md. Written atomically. Only reads `mesh`.
- */
-skb_status skb_mesh_write_glb(const struct skb_mesh *mesh, const char *path);
-
-/**
- * Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
- * `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
- */
-skb_status skb_mesh_write_preview(const struct skb_mesh *mesh, const char *path, uint32_t size);
-
-/**
- * Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as gray into `*out` (caller owns it).
- * Errors: `SKB_ERR_IO` (missing, unreadable), `SKB_ERR_DECODE` (not an image, truncated),
- * `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
- */
-skb_status skb_gray_image_load(const char *path, struct skb_gray_image **out);
-
-/**
- * A borrowed 1-channel `skb_image` view of `img` into `*out`, valid while `img` lives.
- */
-skb_status skb_gray_image_view(const struct skb_gray_image *img, struct skb_image *out);
-
-/**
- * Frees an image from `skb_gray_image_load`. NULL is a no-op.
- */
-void skb_gray_image_free(struct skb_gray_image *img);
-
-/**
- * Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
- * edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
- * context's embedded detector finds them, as `skb_detect` with default options), the 3-D
- * pose and camera, the shape fit, and the fitted shape posed to the estimate.
- * `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
- * fit options' gender defaults to automatic, fitting both and keeping the better score) are
- * only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
- * cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
- * `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
- * untouched. Errors: `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BLANK_IMAGE`,
- * `SKB_ERR_NO_FIGURE` (NULL joints and the detector finds no figure),
- * `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
- * NaN), the pose solver's (`SKB_ERR_TOO_FEW_JOINTS`, `SKB_ERR_COINCIDENT_JOINTS`,
- * `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
- * callback is called on the calling thread.
- */
-skb_status skb_run_pipeline(const struct skb_context *ctx,
-                            const struct skb_image *sketch,
-                            const struct skb_joints2d *joints,
-                            const struct skb_pose_dictionary *dict,
-                            const struct skb_pose_options *pose_opts,
-                            const struct skb_fit_options *fit_opts,
-                            skb_progress_fn progress,
-                            void *user,
-                            struct skb_result **out);
-
-/**
- * Frees a result. NULL is a no-op.
- */
-void skb_result_free(struct skb_result *result);
-
-/**
- * The chosen gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`, and whether it
- * was chosen by score (1) or given (0) into `*by_score` (may be NULL).
- */
-skb_status skb_result_gender(const struct skb_result *result, uint32_t *gender, bool *by_score);
-
-/**
- * The best match score (higher is better) of the fit of `gender` into `*score`. Errors:
- * `SKB_ERR_OUT_OF_RANGE` when that gender was not fitted (a gender was given).
- */
-skb_status skb_result_score(const struct skb_result *result, uint32_t gender, double *score);
-
-/**
- * Vertex count (13380) and quad-face count (13378) into `*vertices` and `*faces` (either may
- * be NULL).
- */
-skb_status skb_result_counts(const struct skb_result *result, size_t *vertices, size_t *faces);
-
-/**
- * Copies the posed (`posed` non-zero) or rest vertices, x, y, z floats in metres, model frame,
- * into `dst` of `dst_len` floats (≥ 3 × vertex count). On error nothing is written.
- */
-skb_status skb_result_copy_vertices(const struct skb_result *result,
-                                    bool posed,
-                                    float *dst,
-                                    size_t dst_len);
-
-/**
- * Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside; a
- * triangle repeats its third index) into `dst` of `dst_len` integers (≥ 4 × face count).
- */
-skb_status skb_result_copy_faces(const struct skb_result *result, uint32_t *dst, size_t dst_len);
-
-/**
- * The 2-D joints used (pixels, with visibility) into `*out`.
- */
-skb_status skb_result_joints2d(const struct skb_result *result, struct skb_joints2d *out);
-
-/**
- * Copies 15 3-D joints (x, y, z doubles, metres, model frame) into `dst` (`dst_len` ≥ 45):
- * `which` is `SKB_JOINTS_REST`, `SKB_JOINTS_POSED` or `SKB_JOINTS_ESTIMATED`.
- */
-skb_status skb_result_copy_joints3d(const struct skb_result *result,
-                                    uint32_t which,
-                                    double *dst,
-                                    size_t dst_len);
-
-/**
- * The estimated weak-perspective camera (model metres → sketch pixels) into `*out`.
- */
-skb_status skb_result_camera(const struct skb_result *result, struct skb_camera *out);
-
-/**
- * Copies the skin weights as `skb_mesh_copy_skin_weights` does: for vertex v, slots
- * `4v .. 4v+3` of `bones` (bone indices 0..13) and `weights` (summing to 1); both hold `len`
- * elements (≥ 4 × vertex count).
- */
-skb_status skb_result_copy_skin_weights(const struct skb_result *result,
-                                        uint32_t *bones,
-                                        float *weights,
-                                        size_t len);
-
-/**
- * The fitted PCA shape weights (metres): their number into `*count` (may be NULL) and, when
- * `dst` is not NULL, the weights into `dst` (`dst_len` ≥ count).
- */
-skb_status skb_result_shape_weights(const struct skb_result *result,
-                                    double *dst,
-                                    size_t dst_len,
-                                    size_t *count);
-
-/**
- * A new `skb_mesh` of the result (the fitted rest shape, posed as in the result) into `*out`,
- * for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
- */
-skb_status skb_result_mesh(const struct skb_result *result, struct skb_mesh **out);
 
 /**
  * Creates options with the defaults. `*out` receives a handle the caller owns.
