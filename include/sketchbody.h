@@ -9,18 +9,6 @@
 #include <stdint.h>
 
 /**
- * Components kept in the blended space (as many as each gendered space stores in the shipped
- * model; fewer when the span is smaller).
- */
-#define BLEND_COMPONENTS 16
-
-/**
- * Default fitting dimension of the blended space: the gender weight plus the 4 shape weights
- * each gendered space fits by default (96% of its energy).
- */
-#define BLEND_DEFAULT_DIM 5
-
-/**
  * Female shape space (value of the `gender` arguments).
  */
 #define SKB_GENDER_FEMALE 0
@@ -155,25 +143,6 @@
  * Patch version of the library this header belongs to.
  */
 #define SKB_VERSION_PATCH 0
-
-/**
- * Every PCA weight the fit returns or scores lies within this many standard deviations of some
- * component mean of its prior ([`crate::body::Gmm::range`]): the prior's documented range.
- */
-#define PRIOR_RANGE_SD 3.0
-
-/**
- * A fitted silhouette with less than this fraction of its boundary within
- * [`EDGE_SUPPORT_RADIUS`] raster pixels of a stroke is reported as low-evidence
- * ([`FitResult::low_evidence`]): the body is mostly the prior's, not the sketch's (e.g. under a
- * cloak to the ground).
- */
-#define LOW_EVIDENCE_SUPPORT 0.5
-
-/**
- * Radius of [`FitResult::edge_support`], raster pixels.
- */
-#define EDGE_SUPPORT_RADIUS 2.0
 
 /**
  * Result of every sketchbody C function. 0 is success; any other value is an error whose text
