@@ -79,6 +79,10 @@ fn options_setters_validate() {
         assert_eq!(skb_fit_options_set_joint_weight(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
         assert!(last_error().contains("joint weight"), "{}", last_error());
         assert_eq!(skb_fit_options_set_joint_weight(i.opts, 0.0), skb_status::SKB_OK);
+        assert_eq!(skb_fit_options_set_inside_cap(i.opts, 0.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(skb_fit_options_set_inside_cap(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
+        assert!(last_error().contains("inside cap"), "{}", last_error());
+        assert_eq!(skb_fit_options_set_inside_cap(i.opts, 4.0), skb_status::SKB_OK);
         assert_eq!(skb_fit_options_set_height(i.opts, -1.7), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_height(i.opts, 12.0), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_height(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);

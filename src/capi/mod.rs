@@ -40,12 +40,12 @@ pub use error::skb_last_error_message;
 pub use fit::{
     skb_fit_options, skb_fit_options_free, skb_fit_options_new, skb_fit_options_set_dims,
     skb_fit_options_set_estimate_proportions, skb_fit_options_set_gender, skb_fit_options_set_height,
-    skb_fit_options_set_iterations, skb_fit_options_set_joint_weight, skb_fit_options_set_proportion_sd,
-    skb_fit_options_set_raster_side, skb_fit_options_set_sample_camera, skb_fit_options_set_samples,
-    skb_fit_options_set_score, skb_fit_options_set_seed, skb_fit_options_set_skinning, skb_fit_options_set_temperature,
-    skb_fit_options_set_tolerance, skb_fit_options_set_transition_scale, skb_fit_shape, skb_progress_fn,
-    SKB_GENDER_AUTO, SKB_SCORE_CHAMFER, SKB_SCORE_FILLED_IOU, SKB_SCORE_PAPER, SKB_SCORE_TWO_SIDED_CHAMFER,
-    SKB_SKIN_DUAL_QUATERNION, SKB_SKIN_LINEAR,
+    skb_fit_options_set_inside_cap, skb_fit_options_set_iterations, skb_fit_options_set_joint_weight,
+    skb_fit_options_set_proportion_sd, skb_fit_options_set_raster_side, skb_fit_options_set_sample_camera,
+    skb_fit_options_set_samples, skb_fit_options_set_score, skb_fit_options_set_seed, skb_fit_options_set_skinning,
+    skb_fit_options_set_temperature, skb_fit_options_set_tolerance, skb_fit_options_set_transition_scale,
+    skb_fit_shape, skb_progress_fn, SKB_GENDER_AUTO, SKB_SCORE_CHAMFER, SKB_SCORE_FILLED_IOU, SKB_SCORE_PAPER,
+    SKB_SCORE_TWO_SIDED_CHAMFER, SKB_SKIN_DUAL_QUATERNION, SKB_SKIN_LINEAR,
 };
 pub use image::{skb_canny, skb_gaussian_blur, skb_image, SKB_MAX_IMAGE_SIDE};
 pub use mesh_ops::{
@@ -56,8 +56,9 @@ pub use mesh_ops::{
 pub use pipeline::{
     skb_gray_image, skb_gray_image_free, skb_gray_image_load, skb_gray_image_view, skb_result, skb_result_camera,
     skb_result_copy_faces, skb_result_copy_joints3d, skb_result_copy_skin_weights, skb_result_copy_vertices,
-    skb_result_counts, skb_result_free, skb_result_gender, skb_result_joints2d, skb_result_mesh, skb_result_score,
-    skb_result_shape_weights, skb_run_pipeline, SKB_JOINTS_ESTIMATED, SKB_JOINTS_POSED, SKB_JOINTS_REST,
+    skb_result_counts, skb_result_evidence, skb_result_free, skb_result_gender, skb_result_gender_value,
+    skb_result_joints2d, skb_result_mesh, skb_result_score, skb_result_shape_weights, skb_run_pipeline,
+    SKB_JOINTS_ESTIMATED, SKB_JOINTS_POSED, SKB_JOINTS_REST,
 };
 pub use pose::{
     skb_estimate_pose, skb_joints2d, skb_pose3d, skb_pose_dictionary, skb_pose_dictionary_basis,
