@@ -20,9 +20,13 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 jobs=$(nproc)
+echo "== lint gates: cargo fmt --check, cargo clippy -D warnings"
+cargo fmt --all --check
+cargo clippy --release --workspace --all-targets --all-features -- -D warnings
+
 echo "== cargo test (release build, shared with the CMake build)"
-cargo test --release --all-targets
-cargo test --release --doc
+cargo test --release --workspace --all-targets --all-features
+cargo test --release --workspace --doc --all-features
 
 echo "== CMake build + ctest"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release

@@ -1,4 +1,4 @@
-//! The weak-perspective camera of paper eq. (1), in DESIGN.md's convention:
+//! The weak-perspective camera of paper eq. (1), in docs/design.md's convention:
 //! `u = sx (R X)_x + tx`, `v = -sy (R X)_y + ty`, with X in metres (model frame, +Y up, +Z toward
 //! the viewer) and (u, v) in pixels (image frame, y down). `R` near identity means the figure
 //! faces the viewer.

@@ -1,14 +1,15 @@
 //! The library's error type. Every fallible core function returns [`Result`]; the C ABI maps
-//! each variant to one `skb_status` code (see `capi::status`).
+//! each variant to one `skb_status` code (see `capi/src/status.rs`).
 
 use std::path::PathBuf;
 
 /// Largest accepted image side, in pixels (inputs larger than this are rejected).
 pub const MAX_IMAGE_SIDE: usize = 16384;
 
-/// Everything that can go wrong in sketchbody. Messages carry the offending value.
+/// Everything that can go wrong in sketchbody. Messages carry the offending value. Deliberately
+/// exhaustive: the C API (`capi/src/status.rs`) matches every variant, so a new variant cannot
+/// compile until it has its own status code.
 #[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
 pub enum Error {
     /// A width or height is zero.
     #[error("image size {width}x{height} is empty: width and height must be at least 1")]

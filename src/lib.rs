@@ -1,13 +1,12 @@
 //! sketchbody: turn a 2-D concept sketch of a human character into a rigged 3-D base mesh.
 //!
-//! The core (everything except [`capi`]) is safe Rust: it returns [`Error`] values and never
-//! panics on bad input. Conventions (joint order, image and 3-D frames, camera) are those of
-//! `DESIGN.md`: image space is pixels with the origin at the top-left corner of the top-left
+//! The core library: safe Rust that returns [`Error`] values and never panics on bad input (the
+//! C ABI is the workspace member `capi/`, the command-line tool `cli/`). Conventions (joint order, image and 3-D frames, camera) are those of
+//! `docs/design.md`: image space is pixels with the origin at the top-left corner of the top-left
 //! pixel, x right, y down; 3-D space is metres, right-handed, +Y up, +Z toward the viewer.
 
 pub mod body;
 pub mod camera;
-pub mod capi;
 pub mod detect;
 pub mod error;
 pub mod eval;

@@ -1,4 +1,4 @@
-//! The canonical 15-joint skeleton shared by every stage (DESIGN.md, "Canonical joints").
+//! The canonical 15-joint skeleton shared by every stage (docs/design.md, "Canonical joints").
 //! "r" is the character's own right. 3-D joints are metres in the model frame (+Y up, +Z toward
 //! the viewer); 2-D joints are image pixels (origin top-left, y down).
 
@@ -45,7 +45,7 @@ pub const JOINT_NAMES: [&str; NUM_JOINTS] = [
     "l_ankle",
 ];
 
-/// The 14 bones as (parent joint, child joint), in DESIGN.md's order. Bone `b` ends at joint
+/// The 14 bones as (parent joint, child joint), in docs/design.md's order. Bone `b` ends at joint
 /// `BONES[b].1`; the hierarchy is rooted at the pelvis.
 pub const BONES: [(usize, usize); NUM_BONES] = [
     (1, 0),   // neck -> head

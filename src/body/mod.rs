@@ -5,6 +5,7 @@
 //! `build` makes it from the MakeHuman data (`sketchbody build-model`).
 
 mod blend;
+#[cfg(feature = "model-builder")]
 pub mod build;
 pub mod decimate;
 mod format;

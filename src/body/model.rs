@@ -28,7 +28,7 @@ pub struct VertexWeights {
 pub struct RestShape {
     /// Body vertex positions (13380 for the MakeHuman body), in [`BodyModel::faces`]' indexing.
     pub vertices: Vec<[f32; 3]>,
-    /// Canonical joints (DESIGN.md order).
+    /// Canonical joints (docs/design.md order).
     pub joints: Joints3,
 }
 

@@ -32,6 +32,7 @@ pub fn radius(a: f64, b: f64, range: f64) -> Option<usize> {
 
 /// `max − min` of `v`, NaN when `v` holds a NaN or an infinity (then [`radius`] declines and the
 /// envelope kernel runs); eight lanes of plain arithmetic so that it vectorises.
+#[allow(clippy::eq_op)] // `x - x` on purpose: 0 for finite x, NaN otherwise, and it vectorises
 fn value_range(v: &[f32]) -> f64 {
     let (mut lo, mut hi, mut bad) = ([f32::INFINITY; 8], [f32::NEG_INFINITY; 8], [0f32; 8]);
     let mut chunks = v.chunks_exact(8);

@@ -307,37 +307,40 @@ mod json {
     }
 }
 
+/// A tiny valid model for tests (a root and one child with 2 mixtures each, 2x2 filters), also
+/// used by the C API's tests (feature `test-fixtures`). Not a detector of anything.
+#[cfg(any(test, feature = "test-fixtures"))]
+pub fn tiny_model() -> Model {
+    let f = |s: f32| Filter {
+        rows: 2,
+        cols: 2,
+        w: (0..2 * 2 * FEAT_DIM).map(|i| s * ((i % 7) as f32 - 3.0) / 10.0).collect(),
+    };
+    let parts = vec![
+        Part { parent: None, filter: vec![0, 1], def: vec![], bias: vec![vec![0]] },
+        Part { parent: Some(0), filter: vec![2, 3], def: vec![0, 1], bias: vec![vec![1, 2], vec![3, 4]] },
+    ];
+    let defs = vec![
+        Deformation { w: [0.1, 0.0, 0.1, 0.0], anchor: [1, 3] },
+        Deformation { w: [0.05, 0.01, 0.2, -0.01], anchor: [2, 3] },
+    ];
+    Model::new(
+        4,
+        5,
+        -1.0,
+        vec![f(1.0), f(-1.0), f(0.5), f(2.0)],
+        defs,
+        vec![0.0, 0.1, -0.2, 0.3, 0.0],
+        parts,
+        [0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1],
+    )
+    .unwrap()
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
+    pub(crate) use super::tiny_model;
     use super::*;
-
-    /// A tiny valid model: a root and one child with 2 mixtures each, 2x2 filters.
-    pub(crate) fn tiny_model() -> Model {
-        let f = |s: f32| Filter {
-            rows: 2,
-            cols: 2,
-            w: (0..2 * 2 * FEAT_DIM).map(|i| s * ((i % 7) as f32 - 3.0) / 10.0).collect(),
-        };
-        let parts = vec![
-            Part { parent: None, filter: vec![0, 1], def: vec![], bias: vec![vec![0]] },
-            Part { parent: Some(0), filter: vec![2, 3], def: vec![0, 1], bias: vec![vec![1, 2], vec![3, 4]] },
-        ];
-        let defs = vec![
-            Deformation { w: [0.1, 0.0, 0.1, 0.0], anchor: [1, 3] },
-            Deformation { w: [0.05, 0.01, 0.2, -0.01], anchor: [2, 3] },
-        ];
-        Model::new(
-            4,
-            5,
-            -1.0,
-            vec![f(1.0), f(-1.0), f(0.5), f(2.0)],
-            defs,
-            vec![0.0, 0.1, -0.2, 0.3, 0.0],
-            parts,
-            [0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1],
-        )
-        .unwrap()
-    }
 
     #[test]
     fn validation_names_the_problem() {

@@ -63,7 +63,7 @@ pub fn tight_box(p: &[[f64; 2]]) -> [f64; 4] {
 /// The authors' `bestoverlap`: the highest-scoring candidate (list sorted best first) whose box
 /// of part centres covers more than `overlap` of `gt` (pixel-index boxes, +1 inclusive areas).
 /// Centres are compared in pixel-index coordinates (continuous − 0.5).
-pub fn best_overlap<'a>(cands: &'a [Candidate], gt: [f64; 4], overlap: f64) -> Option<&'a Candidate> {
+pub fn best_overlap(cands: &[Candidate], gt: [f64; 4], overlap: f64) -> Option<&Candidate> {
     let garea = (gt[2] - gt[0] + 1.0) * (gt[3] - gt[1] + 1.0);
     cands.iter().find(|c| {
         let centres: Vec<[f64; 2]> = c

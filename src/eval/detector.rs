@@ -14,7 +14,7 @@ use nalgebra::Vector3;
 use super::metrics::pck;
 
 /// Stream tag of the held-out styles.
-const STYLE_STREAM: u64 = 0x4845_4C44_4F55_54;
+const STYLE_STREAM: u64 = 0x0048_454C_444F_5554;
 
 /// Request `i` of the held-out set of `seed`: a random sketch whose style (drawn from its own
 /// stream) has hair `hair` (all other style choices random as usual).

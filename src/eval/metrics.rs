@@ -242,7 +242,7 @@ mod tests {
         // A reflection cannot be undone by a rotation.
         let m: Vec<[f64; 3]> = a.iter().map(|p| [-p[0], p[1], p[2]]).collect();
         assert!(pa_mpjpe(&a, &m).unwrap() > 0.05);
-        assert!(pa_mpjpe(&a, &vec![[1.0, 1.0, 1.0]; 5]).is_err());
+        assert!(pa_mpjpe(&a, &[[1.0, 1.0, 1.0]; 5]).is_err());
         let s = scale_to_reference(&a, &b, &[(0, 1), (0, 2)], 0).unwrap();
         let len = |p: &[[f64; 3]]| {
             (Vector3::from(p[1]) - Vector3::from(p[0])).norm() + (Vector3::from(p[2]) - Vector3::from(p[0])).norm()

@@ -377,7 +377,7 @@ mod tests {
         let d = distance_transform(&src, w, h);
         for y in 0..h {
             for x in 0..w {
-                let want = (((x as f64 - 3.0).powi(2) + (y as f64 - 2.0).powi(2)) as f64).sqrt() as f32;
+                let want = ((x as f64 - 3.0).powi(2) + (y as f64 - 2.0).powi(2)).sqrt() as f32;
                 assert!((d[y * w + x] - want).abs() < 1e-5, "({x},{y}): {} vs {want}", d[y * w + x]);
             }
         }

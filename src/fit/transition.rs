@@ -119,7 +119,7 @@ mod tests {
         let xs: Vec<f64> = (0..n).map(|_| t.sample(&[-1.0], &mut rng)[0]).collect();
         let mean = xs.iter().sum::<f64>() / n as f64;
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
-        assert!((mean - (-1.0 * 4.0 + 2.0 * 1.0) / 5.0).abs() < 0.02, "mean {mean}");
+        assert!((mean - (-4.0 + 2.0 * 1.0) / 5.0).abs() < 0.02, "mean {mean}");
         assert!((var - 0.8).abs() < 0.03, "variance {var}");
     }
 

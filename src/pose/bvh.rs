@@ -314,7 +314,7 @@ pub(crate) mod tests {
         let n_joints = s.matches("CHANNELS 3").count();
         for f in frames {
             let mut row: Vec<String> = f.iter().map(|v| v.to_string()).collect();
-            row.extend(std::iter::repeat("0".to_string()).take(3 * n_joints));
+            row.extend(std::iter::repeat_n("0".to_string(), 3 * n_joints));
             s.push_str(&row.join(" "));
             s.push('\n');
         }

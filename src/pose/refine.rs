@@ -170,6 +170,8 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
         let full = Normal::new(&j, &r);
         // The tangent-space system of this linearisation (built on first use): n = ∇g at w,
         // T its orthonormal complement, and the normal equations of [J_camera, J_Ω T].
+        // Computed once on first use; `Some(None)` when the tangent space is degenerate.
+        #[allow(clippy::type_complexity)]
         let mut tangent: Option<Option<(DVector<f64>, DMatrix<f64>, Normal)>> = None;
         let mut accepted = false;
         while !accepted && lambda <= 1e16 {

@@ -3,13 +3,23 @@
 
 use std::path::PathBuf;
 
+/// The repository's top folder: the package's own folder for the core's tests, its parent for
+/// the workspace members' (`capi/`, `cli/`).
+pub fn repo_root() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    if dir.join("assets").is_dir() {
+        dir
+    } else {
+        dir.join("..")
+    }
+}
+
 /// The reference data folder (`../shared/data` beside the repository, or `$SKB_SHARED_DATA`).
 /// When it is missing: panics if `SKB_REQUIRE_SHARED_DATA` is set (CI sets it in `.ci/run`),
 /// otherwise prints a SKIPPED line naming `what` and returns `None`.
 pub fn shared_data(what: &str) -> Option<PathBuf> {
-    let dir = std::env::var_os("SKB_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    let dir =
+        std::env::var_os("SKB_SHARED_DATA").map(PathBuf::from).unwrap_or_else(|| repo_root().join("../shared/data"));
     if dir.is_dir() {
         return Some(dir);
     }

@@ -23,6 +23,9 @@ use super::gender::Gender;
 use super::model::{BodyModel, ShapeSpace, VertexWeights};
 use em::{fit_gmm, EmOptions};
 use macros::MacroParams;
+
+/// One sampled human: its parameters, body vertices (metres) and joints.
+pub type Sample = (HumanParams, Vec<[f64; 3]>, Joints3);
 use rig::JointRegressor;
 use sample::{HumanParams, Sampler};
 use synth::TargetSet;
@@ -160,13 +163,7 @@ impl MakeHumanData {
 
     /// `n` humans of `gender` drawn with ChaCha8 (`seed`, `stream`): their parameters, body
     /// vertices (metres) and joints.
-    pub fn sample(
-        &self,
-        gender: Gender,
-        n: usize,
-        seed: u64,
-        stream: u64,
-    ) -> Result<Vec<(HumanParams, Vec<[f64; 3]>, Joints3)>> {
+    pub fn sample(&self, gender: Gender, n: usize, seed: u64, stream: u64) -> Result<Vec<Sample>> {
         let sampler = Sampler::new(&self.targets.categories)?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(stream);

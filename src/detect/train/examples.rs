@@ -134,5 +134,5 @@ pub fn render_positives(
 
 /// Negative pages `0..n` of `seed` at `size`² (gray, 8-bit).
 pub fn render_negatives(seed: u64, n: usize, size: usize) -> Result<Vec<Vec<u8>>> {
-    (0..n).into_par_iter().map(|i| render_background(sample_seed(seed ^ 0x4E45_47, i as u64), size, size)).collect()
+    (0..n).into_par_iter().map(|i| render_background(sample_seed(seed ^ 0x004E_4547, i as u64), size, size)).collect()
 }

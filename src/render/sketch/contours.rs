@@ -174,8 +174,7 @@ fn chain(edges: &[[u32; 2]]) -> Vec<Vec<u32>> {
     starts.extend(rest);
     let mut out = Vec::new();
     for s in starts {
-        loop {
-            let Some(&first) = adj[&s].iter().find(|&&e| !used[e]) else { break };
+        while let Some(&first) = adj[&s].iter().find(|&&e| !used[e]) {
             let mut path = vec![s];
             let (mut cur, mut e) = (s, first);
             loop {

@@ -329,7 +329,7 @@ impl SketchRenderer {
                 }
             }
             let inside = uv[0] >= 0.0 && uv[1] >= 0.0 && uv[0] < depth.width as f64 && uv[1] < depth.height as f64;
-            out.visible[k] = inside && depth.at(uv[0], uv[1]).map_or(true, |d| d <= front + 0.02);
+            out.visible[k] = inside && depth.at(uv[0], uv[1]).is_none_or(|d| d <= front + 0.02);
         }
         out
     }

@@ -65,7 +65,7 @@ pub struct GroundTruth {
     pub gender: String,
     /// PCA shape weights (metres) of the body before proportions.
     pub shape_weights: Vec<f64>,
-    /// 15 joints in the image, pixels (DESIGN.md image frame, canonical order).
+    /// 15 joints in the image, pixels (docs/design.md image frame, canonical order).
     pub joints2d: Vec<[f64; 2]>,
     /// Whether each joint is visible (not hidden by another body part, inside the image).
     pub visible: Vec<bool>,
@@ -163,6 +163,7 @@ pub fn mesh_bytes(rest: &[[f32; 3]], posed: &[[f32; 3]]) -> Result<Vec<u8>> {
 
 /// Decodes a `.mesh` file into (rest, posed). Errors ([`Error::CorruptData`]): magic, version,
 /// length, CRC, non-finite values.
+#[allow(clippy::type_complexity)] // (rest vertices, posed vertices)
 pub fn parse_mesh(b: &[u8], what: &str) -> Result<(Vec<[f32; 3]>, Vec<[f32; 3]>)> {
     let bad = |m: &str| Error::CorruptData(format!("{what}: {m}"));
     if b.len() < 20 || &b[..8] != MESH_MAGIC {

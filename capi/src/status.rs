@@ -2,7 +2,7 @@
 
 use std::ffi::c_char;
 
-use crate::error::Error;
+use sketchbody_core::error::Error;
 
 /// Result of every sketchbody C function. 0 is success; any other value is an error whose text
 /// is given by [`skb_status_str`] (generic) and `skb_last_error_message` (specific).

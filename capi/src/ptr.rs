@@ -78,7 +78,7 @@ macro_rules! try_core {
     ($e:expr) => {
         match $e {
             Ok(v) => v,
-            Err(e) => return $crate::capi::error_fail(&e),
+            Err(e) => return $crate::error_fail(&e),
         }
     };
 }
@@ -92,7 +92,7 @@ pub(crate) unsafe fn try_slice_of<'a, T>(p: *const T, len: usize, name: &str) ->
     if p.is_null() {
         return Err(null(name));
     }
-    if len.checked_mul(std::mem::size_of::<T>()).map_or(true, |b| b > isize::MAX as usize) {
+    if len.checked_mul(std::mem::size_of::<T>()).is_none_or(|b| b > isize::MAX as usize) {
         return Err(fail_with(skb_status::SKB_ERR_OUT_OF_RANGE, &format!("{name}: {len} elements is absurd")));
     }
     Ok(std::slice::from_raw_parts(p, len))

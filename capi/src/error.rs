@@ -21,7 +21,7 @@ pub(crate) fn clear_last_error() {
 }
 
 /// Records a core error and returns its status.
-pub(crate) fn fail(e: &crate::Error) -> skb_status {
+pub(crate) fn fail(e: &sketchbody_core::Error) -> skb_status {
     set_last_error(&e.to_string());
     skb_status::from(e)
 }

@@ -3,7 +3,7 @@
 use std::ffi::CStr;
 use std::ptr;
 
-use sketchbody::capi::*;
+use crate::*;
 
 fn last_error() -> String {
     unsafe { CStr::from_ptr(skb_last_error_message()) }.to_string_lossy().into_owned()
@@ -62,9 +62,9 @@ fn mesh_from_shape_reports_counts_and_copies_data() {
         assert_eq!(skb_mesh_copy_skin_weights(mesh, bones.as_mut_ptr(), w.as_mut_ptr(), ns), skb_status::SKB_OK);
     }
     // Same as the Rust API.
-    let model = sketchbody::body::BodyModel::embedded().unwrap();
+    let model = sketchbody_core::body::BodyModel::embedded().unwrap();
     let rest = model
-        .space(sketchbody::body::Gender::Male)
+        .space(sketchbody_core::body::Gender::Male)
         .synthesize(&[0.3f32 as f64, -0.2f32 as f64, 0.1f32 as f64])
         .unwrap();
     assert_eq!(&verts[..3], &rest.vertices[0]);

@@ -5,17 +5,17 @@
 use std::ffi::{c_int, c_void, CStr, CString};
 use std::ptr;
 
-use sketchbody::capi::*;
+use crate::*;
 
-const SKETCH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/sketch.png");
-const JOINTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/sketch_joints.json");
+const SKETCH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sketch.png");
+const JOINTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sketch_joints.json");
 
 fn last_error() -> String {
     unsafe { CStr::from_ptr(skb_last_error_message()) }.to_string_lossy().into_owned()
 }
 
 fn joints() -> skb_joints2d {
-    let j = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(JOINTS)).unwrap();
+    let j = sketchbody_core::export::joints2d::load_joints2d(std::path::Path::new(JOINTS)).unwrap();
     skb_joints2d { xy: j.xy, visible: [1; 15], reserved: 0 }
 }
 

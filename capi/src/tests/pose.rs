@@ -4,9 +4,9 @@
 use std::ffi::{CStr, CString};
 use std::ptr;
 
+use crate::*;
 use rand::SeedableRng;
-use sketchbody::body::procedural::random_pose;
-use sketchbody::capi::*;
+use sketchbody_core::body::procedural::random_pose;
 
 fn last_error() -> String {
     unsafe { CStr::from_ptr(skb_last_error_message()) }.to_string_lossy().into_owned()

@@ -78,7 +78,7 @@ pub fn renderer(mocap: Option<&Path>) -> Result<SketchRenderer, CliError> {
 pub fn run(a: Args) -> Result<(), CliError> {
     let (width, height) = parse_size(&a.size)?;
     let gender = a.gender.as_deref().map(Gender::parse).transpose()?;
-    if a.out.extension().map_or(true, |e| e != "png") {
+    if a.out.extension().is_none_or(|e| e != "png") {
         return Err(CliError(format!("--out {}: must end in .png", a.out.display())));
     }
     let dir = match a.out.parent() {

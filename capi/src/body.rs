@@ -3,9 +3,9 @@
 
 use std::sync::Arc;
 
-use crate::body::{BodyModel, Gender, RestShape, MAX_INFLUENCES};
-use crate::error::Error;
-use crate::skeleton::{NUM_BONES, NUM_JOINTS};
+use sketchbody_core::body::{BodyModel, Gender, RestShape, MAX_INFLUENCES};
+use sketchbody_core::error::Error;
+use sketchbody_core::skeleton::{NUM_BONES, NUM_JOINTS};
 
 use super::error::{fail, fail_with};
 use super::ptr::{free_box, give, out_slot, try_ref};
@@ -31,7 +31,7 @@ const _: () = assert!(SKB_MAX_INFLUENCES as usize == MAX_INFLUENCES);
 /// model alive on their own: a context may be freed before the meshes made from it.
 pub struct skb_context {
     pub(crate) model: Arc<BodyModel>,
-    pub(crate) detector: std::sync::OnceLock<Result<crate::detect::Model, String>>,
+    pub(crate) detector: std::sync::OnceLock<Result<sketchbody_core::detect::Model, String>>,
 }
 
 /// A body mesh: a shape of one gender in the rest pose (MakeHuman's A-pose), metres, model frame
@@ -281,7 +281,7 @@ pub unsafe extern "C" fn skb_mesh_copy_joints(mesh: *const skb_mesh, dst: *mut f
 }
 
 /// Copies the skin weights: for vertex v, slots `4v .. 4v+3` of `bones` (bone indices 0..13,
-/// DESIGN.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
+/// docs/design.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
 /// Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count). On error
 /// nothing is written.
 #[no_mangle]
@@ -303,7 +303,7 @@ pub unsafe extern "C" fn skb_mesh_copy_skin_weights(
 /// # Safety
 /// `bones` and `weights` must be NULL or valid for writes of `len` elements.
 pub(crate) unsafe fn copy_skin_weights(
-    skin: &[crate::body::VertexWeights],
+    skin: &[sketchbody_core::body::VertexWeights],
     bones: *mut u32,
     weights: *mut f32,
     len: usize,

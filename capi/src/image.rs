@@ -1,6 +1,6 @@
 //! `skb_image` views and the image functions (Canny, Gaussian blur).
 
-use crate::image::{canny_into, gaussian_blur, CannyParams, ImageView};
+use sketchbody_core::image::{canny_into, gaussian_blur, CannyParams, ImageView};
 
 use super::error::fail;
 use super::ptr::{try_ref, try_slice, try_slice_mut};
@@ -60,7 +60,7 @@ pub unsafe extern "C" fn skb_canny(
     ffi_boundary! {
         let view = try_status!(view_of(src));
         if !matches!(aperture, 3 | 5 | 7) {
-            return fail(&crate::Error::InvalidAperture(aperture as i64));
+            return fail(&sketchbody_core::Error::InvalidAperture(aperture as i64));
         }
         let params = CannyParams { threshold1, threshold2, aperture: aperture as u32, l2_gradient };
         let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
@@ -85,11 +85,11 @@ pub unsafe extern "C" fn skb_gaussian_blur(
         let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
         let (w, h) = (view.width(), view.height());
         if dst_stride < w {
-            return fail(&crate::Error::BadStride { stride: dst_stride, row_bytes: w });
+            return fail(&sketchbody_core::Error::BadStride { stride: dst_stride, row_bytes: w });
         }
         let needed = dst_stride * (h - 1) + w;
         if dst_len < needed {
-            return fail(&crate::Error::BufferTooSmall { len: dst_len, needed });
+            return fail(&sketchbody_core::Error::BufferTooSmall { len: dst_len, needed });
         }
         let blurred = try_core!(gaussian_blur(&view, sigma));
         for (y, row) in blurred.as_bytes().chunks_exact(w).enumerate() {
@@ -101,4 +101,4 @@ pub unsafe extern "C" fn skb_gaussian_blur(
 
 /// Largest accepted image width or height, in pixels.
 pub const SKB_MAX_IMAGE_SIDE: u32 = 16384;
-const _: () = assert!(SKB_MAX_IMAGE_SIDE as usize == crate::error::MAX_IMAGE_SIDE);
+const _: () = assert!(SKB_MAX_IMAGE_SIDE as usize == sketchbody_core::error::MAX_IMAGE_SIDE);

@@ -3,11 +3,11 @@
 
 use std::sync::Arc;
 
-use crate::body::Gender;
-use crate::error::Error;
-use crate::image::ImageView;
-use crate::render::sketch::{CameraAngles, SketchRenderer, SketchRequest, SketchStyle};
-use crate::skeleton::NUM_JOINTS;
+use sketchbody_core::body::Gender;
+use sketchbody_core::error::Error;
+use sketchbody_core::image::ImageView;
+use sketchbody_core::render::sketch::{CameraAngles, SketchRenderer, SketchRequest, SketchStyle};
+use sketchbody_core::skeleton::NUM_JOINTS;
 
 use super::body::skb_context;
 use super::error::{fail, fail_with};
@@ -111,7 +111,7 @@ pub unsafe extern "C" fn skb_render_sketch(
         let ctx = try_status!(try_ref(ctx, "ctx"));
         let g = try_core!(Gender::from_index(gender));
         let (w, h) = (width as usize, height as usize);
-        try_core!(crate::render::raster::check_size(w, h));
+        try_core!(sketchbody_core::render::raster::check_size(w, h));
         let needed = try_core!(ImageView::required_len(w, h, 1, out_stride));
         if out_pixels.is_null() {
             return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out_pixels is NULL");
@@ -162,7 +162,7 @@ pub unsafe extern "C" fn skb_render_sketch(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::capi::{skb_context_free, skb_context_new};
+    use crate::{skb_context_free, skb_context_new};
 
     #[test]
     fn renders_into_a_strided_buffer_and_rejects_bad_input() {

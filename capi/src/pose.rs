@@ -6,12 +6,12 @@ use std::path::Path;
 
 use nalgebra::Matrix3;
 
-use crate::camera::WeakPerspective;
-use crate::error::Error;
-use crate::pose::dictionary::POSE_DIM;
-use crate::pose::options::RotationTarget;
-use crate::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate, PoseOptions};
-use crate::skeleton::{Joints2, NUM_BONES};
+use sketchbody_core::camera::WeakPerspective;
+use sketchbody_core::error::Error;
+use sketchbody_core::pose::dictionary::POSE_DIM;
+use sketchbody_core::pose::options::RotationTarget;
+use sketchbody_core::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate, PoseOptions};
+use sketchbody_core::skeleton::{Joints2, NUM_BONES};
 
 use super::error::{fail, fail_with};
 use super::ptr::{free_box, give, out_slot, try_ref};
@@ -26,8 +26,9 @@ pub const SKB_ALPHA_TARGET_IDENTITY: u32 = 0;
 /// `skb_pose_options_set_alpha_target`: α pulls the pitch toward 0 (yaw and roll kept; default).
 pub const SKB_ALPHA_TARGET_LEVEL: u32 = 1;
 
-const _: () =
-    assert!(SKB_POSE_DIM as usize == POSE_DIM && SKB_POSE_MAX_BASES as usize == crate::pose::options::MAX_BASES);
+const _: () = assert!(
+    SKB_POSE_DIM as usize == POSE_DIM && SKB_POSE_MAX_BASES as usize == sketchbody_core::pose::options::MAX_BASES
+);
 
 /// 15 image joints in canonical order (head, neck, r_shoulder, r_elbow, r_wrist, l_shoulder,
 /// l_elbow, l_wrist, pelvis, r_hip, r_knee, r_ankle, l_hip, l_knee, l_ankle): pixels, origin at
@@ -100,7 +101,7 @@ fn null(name: &str) -> skb_status {
 }
 
 fn out_of_range(name: &'static str, detail: String) -> skb_status {
-    fail(&crate::Error::OutOfRange { name, detail })
+    fail(&sketchbody_core::Error::OutOfRange { name, detail })
 }
 
 /// Creates the embedded default dictionary (learned from the DeepMimic clips, see
@@ -167,7 +168,7 @@ pub unsafe extern "C" fn skb_pose_dictionary_mean(
             return null("out");
         }
         if len < POSE_DIM {
-            return fail(&crate::Error::BufferTooSmall { len, needed: POSE_DIM });
+            return fail(&sketchbody_core::Error::BufferTooSmall { len, needed: POSE_DIM });
         }
         std::slice::from_raw_parts_mut(out, POSE_DIM).copy_from_slice(d.inner.mean.as_slice());
         skb_status::SKB_OK
@@ -194,7 +195,7 @@ pub unsafe extern "C" fn skb_pose_dictionary_basis(
             return out_of_range("basis index", format!("{k} is not below {}", d.inner.num_bases()));
         }
         if len < POSE_DIM {
-            return fail(&crate::Error::BufferTooSmall { len, needed: POSE_DIM });
+            return fail(&sketchbody_core::Error::BufferTooSmall { len, needed: POSE_DIM });
         }
         std::slice::from_raw_parts_mut(out, POSE_DIM).copy_from_slice(d.inner.bases.column(k).as_slice());
         if !sigma.is_null() {
@@ -218,7 +219,7 @@ pub unsafe extern "C" fn skb_pose_dictionary_bone_lengths(
             return null("out");
         }
         if len < NUM_BONES {
-            return fail(&crate::Error::BufferTooSmall { len, needed: NUM_BONES });
+            return fail(&sketchbody_core::Error::BufferTooSmall { len, needed: NUM_BONES });
         }
         std::slice::from_raw_parts_mut(out, NUM_BONES).copy_from_slice(&d.inner.bone_lengths);
         skb_status::SKB_OK
@@ -375,7 +376,7 @@ fn pose_out(e: &PoseEstimate, prior_weight: f64) -> skb_pose3d {
 }
 
 fn prior_weight(d: &Dictionary, j: &Joints2, o: &PoseOptions) -> f64 {
-    crate::pose::problem::Problem::new(d, j, o.prior).map(|p| p.prior_w).unwrap_or(0.0)
+    sketchbody_core::pose::problem::Problem::new(d, j, o.prior).map(|p| p.prior_w).unwrap_or(0.0)
 }
 
 /// Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
@@ -434,14 +435,14 @@ pub unsafe extern "C" fn skb_pose_refine(
         }
         let camera = WeakPerspective { sx: s.sx, sy: s.sy, r: Matrix3::from_row_slice(&s.r), t: s.t };
         // The base pose (μ or an exemplar start) is what the joints are without the bases.
-        let mut base = crate::pose::dictionary::pose_to_vec(&s.joints);
+        let mut base = sketchbody_core::pose::dictionary::pose_to_vec(&s.joints);
         for (&b, &w) in s.bases[..n].iter().zip(&s.weights[..n]) {
             if b as usize >= d.inner.num_bases() {
                 return out_of_range("start->bases", format!("index {b} is not below {}", d.inner.num_bases()));
             }
             base.axpy(-w, &d.inner.bases.column(b as usize), 1.0);
         }
-        let base = crate::pose::dictionary::vec_to_pose(base.as_slice());
+        let base = sketchbody_core::pose::dictionary::vec_to_pose(base.as_slice());
         let start_est = PoseEstimate {
             joints: s.joints,
             camera,

@@ -5,13 +5,15 @@
 use std::ffi::{c_char, c_void};
 use std::sync::Arc;
 
-use crate::body::BodyModel;
-use crate::detect::DetectOptions;
-use crate::error::Error;
-use crate::image::{load_image, to_gray, GrayImage};
-use crate::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
-use crate::pose::dict_io;
-use crate::skeleton::NUM_JOINTS;
+use sketchbody_core::body::BodyModel;
+use sketchbody_core::detect::DetectOptions;
+use sketchbody_core::error::Error;
+use sketchbody_core::image::{load_image, to_gray, GrayImage};
+use sketchbody_core::pipeline::{
+    run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult,
+};
+use sketchbody_core::pose::dict_io;
+use sketchbody_core::skeleton::NUM_JOINTS;
 
 use super::body::{copy_skin_weights, out_slice, skb_context, skb_mesh, write_out};
 use super::detect::embedded_detector;
@@ -359,7 +361,7 @@ pub unsafe extern "C" fn skb_result_mesh(result: *const skb_result, out: *mut *m
     ffi_boundary! {
         let res = try_status!(try_ref(result, "result"));
         let r = &res.inner;
-        let rest = crate::body::RestShape { vertices: r.mesh.vertices.clone(), joints: r.mesh.joints };
+        let rest = sketchbody_core::body::RestShape { vertices: r.mesh.vertices.clone(), joints: r.mesh.joints };
         let posed = Posed { pose: r.ik_pose.clone(), vertices: r.posed_vertices.clone() };
         let mesh = skb_mesh { model: Arc::clone(&res.model), gender: r.gender, rest, weights: r.weights.clone(), posed: Some(Box::new(posed)) };
         try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));

@@ -5,10 +5,11 @@ use std::path::Path;
 
 #[test]
 fn committed_header_matches_fresh_generation() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let config = cbindgen::Config::from_file(root.join("cbindgen.toml")).expect("cbindgen.toml parses");
+    let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = crate_dir.join("..");
+    let config = cbindgen::Config::from_file(crate_dir.join("cbindgen.toml")).expect("capi/cbindgen.toml parses");
     let bindings = cbindgen::Builder::new()
-        .with_crate(root)
+        .with_crate(crate_dir)
         .with_config(config)
         .generate()
         .expect("cbindgen generates the header");
@@ -31,7 +32,7 @@ fn committed_header_matches_fresh_generation() {
 /// (plus its include guard) and never pollutes a plug-in's namespace.
 #[test]
 fn header_defines_only_skb_names() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let header = std::fs::read_to_string(root.join("include/sketchbody.h")).expect("read include/sketchbody.h");
     let foreign: Vec<&str> = header
         .lines()

@@ -79,7 +79,7 @@ pub fn parse_hair(s: &str) -> Result<Option<Hair>, CliError> {
 
 /// Runs the command.
 pub fn run(a: Args) -> Result<(), CliError> {
-    if a.out.extension().map_or(true, |e| e != "skbd") {
+    if a.out.extension().is_none_or(|e| e != "skbd") {
         return Err(CliError(format!("--out {}: must end in .skbd", a.out.display())));
     }
     let o = TrainOptions {

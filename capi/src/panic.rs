@@ -4,10 +4,10 @@
 /// becomes `SKB_ERR_PANIC` with the panic text as the last error message.
 macro_rules! ffi_boundary {
     ($($body:tt)*) => {{
-        $crate::capi::error_reset();
-        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> $crate::capi::skb_status { $($body)* })) {
+        $crate::error_reset();
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> $crate::skb_status { $($body)* })) {
             Ok(status) => status,
-            Err(payload) => $crate::capi::panic_status(payload),
+            Err(payload) => $crate::panic_status(payload),
         }
     }};
 }

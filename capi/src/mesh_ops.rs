@@ -6,16 +6,16 @@ use std::path::Path;
 
 use nalgebra::Matrix3;
 
-use crate::body::ik::{solve, IkOptions, Pose};
-use crate::body::rig::{FaceUvs, RiggedMesh};
-use crate::body::skin::{skin, SkinMethod};
-use crate::camera::WeakPerspective;
-use crate::error::Error;
-use crate::export::gltf::write_glb;
-use crate::export::obj::write_obj;
-use crate::render::preview::{preview, save_rgb_png};
-use crate::render::raster::Rasterizer;
-use crate::skeleton::{Joints3, NUM_JOINTS};
+use sketchbody_core::body::ik::{solve, IkOptions, Pose};
+use sketchbody_core::body::rig::{FaceUvs, RiggedMesh};
+use sketchbody_core::body::skin::{skin, SkinMethod};
+use sketchbody_core::camera::WeakPerspective;
+use sketchbody_core::error::Error;
+use sketchbody_core::export::gltf::write_glb;
+use sketchbody_core::export::obj::write_obj;
+use sketchbody_core::render::preview::{preview, save_rgb_png};
+use sketchbody_core::render::raster::Rasterizer;
+use sketchbody_core::skeleton::{Joints3, NUM_JOINTS};
 
 use super::body::{out_slice, skb_mesh};
 use super::error::{fail, fail_with};
@@ -30,7 +30,7 @@ unsafe fn try_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, skb_status>
     p.as_mut().ok_or_else(|| fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")))
 }
 
-/// The weak-perspective camera of paper eq. (1) (DESIGN.md): a model point X (metres, +Y up,
+/// The weak-perspective camera of paper eq. (1) (docs/design.md): a model point X (metres, +Y up,
 /// +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
 /// `r` is the rotation, row-major (`r[3 * row + col]`). A plain struct: copy it freely; its
 /// layout (104 bytes) is part of the ABI.
@@ -107,14 +107,14 @@ pub unsafe extern "C" fn skb_rasterize_triangles(
         let v3 = try_status!(try_slice_of(verts.cast::<[f32; 3]>(), nverts, "verts"));
         let t3 = try_status!(try_slice_of(tris.cast::<[u32; 3]>(), ntris, "tris"));
         let (w, h) = (w as usize, h as usize);
-        try_core!(crate::render::raster::check_size(w, h));
+        try_core!(sketchbody_core::render::raster::check_size(w, h));
         if mask_stride < w {
-            return fail(&crate::Error::BadStride { stride: mask_stride, row_bytes: w });
+            return fail(&sketchbody_core::Error::BadStride { stride: mask_stride, row_bytes: w });
         }
         let needed = try_status!(mask_stride.checked_mul(h - 1).and_then(|x| x.checked_add(w))
             .ok_or_else(|| fail_with(skb_status::SKB_ERR_OUT_OF_RANGE, "mask_stride is absurd")));
         if mask_len < needed {
-            return fail(&crate::Error::BufferTooSmall { len: mask_len, needed });
+            return fail(&sketchbody_core::Error::BufferTooSmall { len: mask_len, needed });
         }
         let out = try_status!(try_slice_mut(mask, mask_len, "mask"));
         let mut temp = None;

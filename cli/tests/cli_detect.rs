@@ -2,6 +2,7 @@
 //! sketch with the PARSE model (reference data), one-line errors for corrupt models and tiny
 //! images, and nothing written on failure.
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use std::path::PathBuf;
@@ -31,7 +32,7 @@ fn corrupt_model_is_named_and_nothing_is_written() {
     let model = dir.join("bad.skbd");
     std::fs::write(&model, b"SKBDET\0\0\x01\0\0\0").unwrap();
     let out = dir.join("j.json");
-    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
+    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../assets/examples/sketch.png");
     let err = one_line_failure(cli().arg("detect").arg(&sketch).arg("--model").arg(&model).arg("--out").arg(&out));
     assert!(err.contains("bad.skbd") && err.contains("truncated"), "{err}");
     assert!(!out.exists());
@@ -47,7 +48,7 @@ fn detect_finds_the_example_sketch_and_rejects_tiny_images() {
     let skbd = dir.join("parse.skbd");
     let st = cli().arg("convert-detector").arg(data.join("fmp/parse_model.json")).arg(&skbd).status().unwrap();
     assert!(st.success());
-    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
+    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../assets/examples/sketch.png");
     let (out, overlay) = (dir.join("j.json"), dir.join("o.png"));
     // Cells of at least 8 px: the figure fills the 512² sketch (and the search stays quick).
     let st = cli()
@@ -84,7 +85,7 @@ fn detect_finds_the_example_sketch_and_rejects_tiny_images() {
 #[test]
 fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
     let dir = scratch("embedded");
-    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
+    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../assets/examples/sketch.png");
     let (out, overlay) = (dir.join("j.json"), dir.join("o.png"));
     let res = cli()
         .args(["detect", "--min-cell", "4"])
@@ -124,7 +125,7 @@ fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
 #[test]
 fn levels_per_octave_and_figure_flags_reach_the_search() {
     let dir = scratch("levels");
-    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/examples/sketch.png");
+    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../assets/examples/sketch.png");
     let score = |extra: &[&str], name: &str| {
         let out = dir.join(name);
         let res = cli()

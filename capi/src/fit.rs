@@ -4,14 +4,14 @@
 use std::ffi::{c_int, c_void};
 use std::sync::Arc;
 
-use crate::body::skin::SkinMethod;
-use crate::body::Gender;
-use crate::camera::WeakPerspective;
-use crate::error::Error;
-use crate::fit::{FitOptions, MatchScore};
-use crate::image::to_gray;
-use crate::pipeline::{fit_body, BodyChoice};
-use crate::skeleton::{Joints3, NUM_JOINTS};
+use sketchbody_core::body::skin::SkinMethod;
+use sketchbody_core::body::Gender;
+use sketchbody_core::camera::WeakPerspective;
+use sketchbody_core::error::Error;
+use sketchbody_core::fit::{FitOptions, MatchScore};
+use sketchbody_core::image::to_gray;
+use sketchbody_core::pipeline::{fit_body, BodyChoice};
+use sketchbody_core::skeleton::{Joints3, NUM_JOINTS};
 
 use super::body::{skb_context, skb_mesh, write_out};
 use super::error::{fail, fail_with};

@@ -8,8 +8,8 @@ use std::process::{Command, Output};
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::image::{save_gray_png, GrayImage};
 
-const SKETCH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/sketch.png");
-const JOINTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/sketch_joints.json");
+const SKETCH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sketch.png");
+const JOINTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sketch_joints.json");
 /// Small fit settings: the tests check plumbing, not accuracy.
 const FAST: [&str; 6] = ["--samples", "24", "--iterations", "2", "--quiet", "--preview-size=128"];
 

@@ -135,21 +135,18 @@ fn report(
     );
     let _ = writeln!(
         s,
-        "- fit: score {}, samples {}, ≤ {} iterations, transition scale {}, temperature {}, raster side {} px, tolerance {}, dims {}, seed {}, skinning {:?}{}\n",
+        "- fit: score {}, samples {}, ≤ {} iterations, transition scale {}, temperature {}, raster side {} px, tolerance {}, dims {}, seed {}, skinning {:?}{}{}{}{}{}{}\n",
         score_name(f.score), f.samples, f.max_iterations, f.transition_scale, f.temperature, f.raster_max_side, f.tolerance,
         f.dims.map_or("default".into(), |d| d.to_string()), f.seed, f.skinning,
-        format!(
-            "{}{}{}{}{}{}",
-            if f.retarget { ", retarget" } else { "" },
-            if opts.keep_pose_scale { ", solver camera kept" } else { ", camera refitted to the mean skeleton" },
-            if f.sample_camera { ", per-sample cameras" } else { "" },
-            match (f.proportion_sd > 0.0, f.estimate_proportions) {
-                (false, _) => String::new(),
-                (true, est) => format!(", bone factors sd {}{}", f.proportion_sd, if est { " centred on their 2-D estimate" } else { "" }),
-            },
-            f.height.map_or(String::new(), |h| format!(", height {h} m")),
-            if opts.mean_shape { " (mean shape: fit skipped)" } else { "" }
-        )
+        if f.retarget { ", retarget" } else { "" },
+        if opts.keep_pose_scale { ", solver camera kept" } else { ", camera refitted to the mean skeleton" },
+        if f.sample_camera { ", per-sample cameras" } else { "" },
+        match (f.proportion_sd > 0.0, f.estimate_proportions) {
+            (false, _) => String::new(),
+            (true, est) => format!(", bone factors sd {}{}", f.proportion_sd, if est { " centred on their 2-D estimate" } else { "" }),
+        },
+        f.height.map_or(String::new(), |h| format!(", height {h} m")),
+        if opts.mean_shape { " (mean shape: fit skipped)" } else { "" }
     );
     let _ = writeln!(s, "## Results\n");
     let _ = writeln!(

@@ -5,15 +5,15 @@
 use std::ffi::{c_char, CStr};
 use std::path::PathBuf;
 
-use crate::detect::{detect, DetectOptions, Detection, Model, SearchScales};
-use crate::skeleton::NUM_JOINTS;
+use sketchbody_core::detect::{detect, DetectOptions, Detection, Model, SearchScales};
+use sketchbody_core::skeleton::NUM_JOINTS;
 
 use super::body::{out_slice, skb_context};
 use super::error::{fail, fail_with};
 use super::image::{skb_image, view_of};
 use super::ptr::{free_box, give, out_slot, try_ref};
 use super::status::skb_status;
-use crate::error::Error;
+use sketchbody_core::error::Error;
 
 /// A detector model (flexible mixture of parts). Create with `skb_detector_new_from_file`,
 /// release with `skb_detector_free`. Immutable: one detector may be used from several threads at
@@ -219,7 +219,7 @@ pub unsafe extern "C" fn skb_detect(
 /// Runs the detection and writes the best figure's joints, confidences and score; on "no
 /// figure" writes only the best score found and returns `SKB_ERR_NO_FIGURE`.
 fn detect_into(
-    view: &crate::image::ImageView<'_>,
+    view: &sketchbody_core::image::ImageView<'_>,
     model: &Model,
     o: &DetectOptions,
     xy: &mut [f64],
@@ -279,15 +279,16 @@ fn write_best(best: &Detection, xy: &mut [f64], cf: &mut [f64], score: &mut f64)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::detect::model::tests::tiny_model;
+    use sketchbody_core::detect::model::tiny_model;
     use std::ffi::CString;
     use std::ptr::{null, null_mut};
 
     #[test]
     fn skb_detect_uses_the_embedded_detector() {
-        use crate::capi::{skb_context_free, skb_context_new};
-        use crate::render::sketch::{SketchRenderer, SketchRequest};
-        let r = SketchRenderer::new(std::sync::Arc::new(crate::body::BodyModel::embedded().unwrap()), None).unwrap();
+        use crate::{skb_context_free, skb_context_new};
+        use sketchbody_core::render::sketch::{SketchRenderer, SketchRequest};
+        let r = SketchRenderer::new(std::sync::Arc::new(sketchbody_core::body::BodyModel::embedded().unwrap()), None)
+            .unwrap();
         let sk = r.render(&SketchRequest::random(11, 384)).unwrap();
         unsafe {
             let mut ctx = null_mut();
@@ -300,7 +301,7 @@ mod tests {
             );
             let truth = &sk.truth.joints2d;
             let est: Vec<[f64; 2]> = (0..15).map(|j| [xy[2 * j], xy[2 * j + 1]]).collect();
-            let pck = crate::eval::metrics::pck(truth, &est, 0.2).unwrap();
+            let pck = sketchbody_core::eval::metrics::pck(truth, &est, 0.2).unwrap();
             assert!(pck >= 0.8, "PCK@0.2 {pck}: {est:?} vs {truth:?}");
             assert!(cf.iter().all(|&c| c > 0.0 && c < 1.0) && s.is_finite());
 

@@ -1,0 +1,7 @@
+//! The C API called through its `extern "C"` functions as a C host would, and the generated
+//! header checked against a fresh cbindgen run.
+
+mod body;
+mod fit;
+mod header;
+mod pose;
