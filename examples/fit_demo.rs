@@ -44,8 +44,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         totals[0] += aed(&truth.vertices, &mean.vertices);
         print!("sample {i} ({gender:?}): mean shape AED {:.4}", aed(&truth.vertices, &mean.vertices));
         for (k, &score) in scores.iter().enumerate() {
-            let problem =
-                FitProblem { model: &model, gender, pose: &truth.joints, camera: &cam, edges: &edges, joints2d: None };
+            let problem = FitProblem {
+                model: &model,
+                gender: gender.into(),
+                pose: &truth.joints,
+                camera: &cam,
+                edges: &edges,
+                joints2d: None,
+            };
             let options = FitOptions { score, seed: 100 + i as u64, ..FitOptions::default() };
             let start = std::time::Instant::now();
             let result = fit_shape(&problem, &options, &mut |_| true)?;

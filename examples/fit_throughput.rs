@@ -90,7 +90,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let problem = FitProblem {
             model: &model,
-            gender,
+            gender: gender.into(),
             pose: &truth.joints,
             camera: &cam,
             edges: &edges,

@@ -155,7 +155,7 @@
 #define SKB_SKIN_DUAL_QUATERNION 1
 
 /**
- * `skb_fit_options_set_gender`: fit both shape spaces and keep the better-scoring one (default).
+ * `skb_fit_options_set_gender`: fit the both-sexes space with gender as a continuous weight (default).
  */
 #define SKB_GENDER_AUTO 2
 
@@ -1251,14 +1251,21 @@ skb_status skb_fit_options_set_seed(struct skb_fit_options *opts, uint64_t seed)
 skb_status skb_fit_options_set_skinning(struct skb_fit_options *opts, uint32_t method);
 
 /**
+ * Sets the clothing-robust chamfer's cap, raster pixels, finite and > 0 (default 4): silhouette
+ * boundary pixels inside the sketch's outer outline cost at most this, so strokes that may be
+ * clothing do not pull the body outward; 12 or more is the plain chamfer.
+ */
+skb_status skb_fit_options_set_inside_cap(struct skb_fit_options *opts, double cap);
+
+/**
  * Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
  * dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
  */
 skb_status skb_fit_options_set_dims(struct skb_fit_options *opts, uint32_t dims);
 
 /**
- * Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (fit both,
- * keep the better score).
+ * Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
+ * fit the both-sexes space, gender a continuous weight; `skb_result_gender_value` reads it).
  */
 skb_status skb_fit_options_set_gender(struct skb_fit_options *opts, uint32_t gender);
 
@@ -1267,8 +1274,9 @@ skb_status skb_fit_options_set_gender(struct skb_fit_options *opts, uint32_t gen
  * `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
  * `skb_pose3d.joints` from `skb_estimate_pose`); `camera` maps them to `edges`' pixels; `edges`
  * is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
- * `skb_canny`); `opts` may be NULL for the defaults (gender automatic: both shape spaces are
- * fitted and the better score kept). `progress` may be NULL; a non-zero return cancels
+ * `skb_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
+ * fitted, gender a continuous weight; the mesh's gender is the nearer one and its weights are
+ * the blended space's, weight 0 its gender axis). `progress` may be NULL; a non-zero return cancels
  * (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
  * caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
  * weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
@@ -1314,7 +1322,7 @@ void skb_gray_image_free(struct skb_gray_image *img);
  * context's embedded detector finds them, as `skb_detect` with default options), the 3-D
  * pose and camera, the shape fit, and the fitted shape posed to the estimate.
  * `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
- * fit options' gender defaults to automatic, fitting both and keeping the better score) are
+ * fit options' gender defaults to automatic: the both-sexes space, gender fitted) are
  * only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
  * cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
  * `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
@@ -1341,14 +1349,34 @@ skb_status skb_run_pipeline(const struct skb_context *ctx,
 void skb_result_free(struct skb_result *result);
 
 /**
- * The chosen gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`, and whether it
- * was chosen by score (1) or given (0) into `*by_score` (may be NULL).
+ * The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
+ * or with automatic gender the nearer end of the fitted gender value (`skb_result_gender_value`);
+ * whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
  */
 skb_status skb_result_gender(const struct skb_result *result, uint32_t *gender, bool *by_score);
 
 /**
- * The best match score (higher is better) of the fit of `gender` into `*score`. Errors:
- * `SKB_ERR_OUT_OF_RANGE` when that gender was not fitted (a gender was given).
+ * The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
+ * when the gender was given) and into `*confidence` (may be NULL) the probability, under the
+ * fit's posterior, that the gender value is on `skb_result_gender`'s side of 0.5 (0.5..=1;
+ * 1 when the gender was given).
+ */
+skb_status skb_result_gender_value(const struct skb_result *result,
+                                   double *value,
+                                   double *confidence);
+
+/**
+ * Whether the fit is low-evidence (1: the sketch's strokes support less than half of the
+ * fitted outline, e.g. a figure under a cloak to the ground: the body is mostly the prior's)
+ * into `*low`, and that fraction (0..=1; NaN for the mean shape) into `*edge_support` (may be
+ * NULL).
+ */
+skb_status skb_result_evidence(const struct skb_result *result, bool *low, double *edge_support);
+
+/**
+ * The best match score (higher is better) of the fit into `*score`; `gender` must be the
+ * result's gender (`skb_result_gender`: one space is fitted, the given gender's or the
+ * both-sexes one). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
  */
 skb_status skb_result_score(const struct skb_result *result, uint32_t gender, double *score);
 

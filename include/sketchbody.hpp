@@ -171,8 +171,15 @@ class Result {
 public:
     explicit Result(skb_result *raw) noexcept : r_(raw) {}
     uint32_t gender() const { uint32_t g = 0; check(skb_result_gender(r_.get(), &g, nullptr)); return g; }
+    /// True when the gender was fitted (automatic), false when given.
     bool gender_by_score() const { uint32_t g = 0; bool b = false; check(skb_result_gender(r_.get(), &g, &b)); return b; }
-    /// Best match score of gender g's fit (throws when g was not fitted).
+    /// Fitted gender value, 0 = female mean … 1 = male mean (0 or 1 when given).
+    double gender_value() const { double v = 0; check(skb_result_gender_value(r_.get(), &v, nullptr)); return v; }
+    /// Posterior probability that gender() is the right half (1 when given).
+    double gender_confidence() const { double v = 0, c = 0; check(skb_result_gender_value(r_.get(), &v, &c)); return c; }
+    /// True when the sketch supports less than half of the fitted outline (mostly clothing).
+    bool low_evidence() const { bool l = false; check(skb_result_evidence(r_.get(), &l, nullptr)); return l; }
+    /// Best match score of the fit; g must be gender() (throws otherwise).
     double score(uint32_t g) const { double s = 0; check(skb_result_score(r_.get(), g, &s)); return s; }
     size_t vertex_count() const { size_t v = 0; check(skb_result_counts(r_.get(), &v, nullptr)); return v; }
     size_t face_count() const { size_t f = 0; check(skb_result_counts(r_.get(), nullptr, &f)); return f; }

@@ -58,7 +58,7 @@ fn fit_beats_the_mean_shape_and_is_deterministic() {
     let c = case();
     let problem = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &c.truth.joints,
         camera: &c.camera,
         edges: &c.edges,
@@ -88,7 +88,7 @@ fn paper_score_and_cancellation() {
     let c = case();
     let problem = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &c.truth.joints,
         camera: &c.camera,
         edges: &c.edges,
@@ -123,7 +123,7 @@ fn joint_term_penalises_off_joints_and_is_validated() {
     }
     let base = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &c.truth.joints,
         camera: &c.camera,
         edges: &c.edges,
@@ -164,7 +164,7 @@ fn per_sample_cameras_ignore_the_problem_cameras_scale() {
     let wrong = WeakPerspective { sx: 88.0, sy: 88.0, t: [143.0, 150.0], ..c.camera };
     let right = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &c.truth.joints,
         camera: &c.camera,
         edges: &c.edges,
@@ -220,7 +220,7 @@ fn bone_factors_find_long_legs() {
     };
     let problem = FitProblem {
         model: &c.model,
-        gender: Gender::Male,
+        gender: Gender::Male.into(),
         pose: &j,
         camera: &camera,
         edges: &edges,
@@ -261,4 +261,32 @@ fn bone_factors_find_long_legs() {
         fit_shape(&problem, &FitOptions { proportion_sd: 0.6, ..o.clone() }, &mut |_| true),
         Err(Error::OutOfRange { name: "proportion sd", .. })
     ));
+}
+
+/// The clothing-robust chamfer: a silhouette well inside a closed outline (a body under a coat)
+/// costs at most the inside cap, one crossing the outline the full distance.
+#[test]
+fn inside_cap_limits_the_pull_of_an_outline_around_the_silhouette() {
+    use sketchbody::fit::{MatchScore, SketchEvidence, CHAMFER_CAP};
+    let (w, h) = (64, 64);
+    let mut edges = vec![0u8; w * h];
+    for i in 8..56 {
+        for (x, y) in [(i, 8), (i, 55), (8, i), (55, i)] {
+            edges[y * w + x] = 255;
+        }
+    }
+    let edges = GrayImage::from_vec(w, h, edges).unwrap();
+    let square = |lo: usize, hi: usize| -> Vec<u8> {
+        (0..w * h).map(|i| ((lo..hi).contains(&(i % w)) && (lo..hi).contains(&(i / w))) as u8).collect()
+    };
+    let plain = SketchEvidence::new(&edges, w, h, &[[32.0, 32.0]]).unwrap();
+    let robust = SketchEvidence::new(&edges, w, h, &[[32.0, 32.0]]).unwrap().with_inside_cap(4.0);
+    let inner = square(24, 40); // boundary 16 px inside the outline
+    let outer = square(0, 64); // boundary on the image border, outside the outline
+    assert_eq!(plain.score(&inner, MatchScore::Chamfer), -(CHAMFER_CAP as f64));
+    assert_eq!(robust.score(&inner, MatchScore::Chamfer), -4.0);
+    assert!(robust.score(&outer, MatchScore::Chamfer) < -4.0);
+    assert_eq!(robust.score(&outer, MatchScore::Chamfer), plain.score(&outer, MatchScore::Chamfer));
+    assert_eq!(robust.edge_support(&inner, Some([0, 0, w - 1, h - 1]), 2.0), 0.0);
+    assert_eq!(robust.edge_support(&square(9, 55), Some([0, 0, w - 1, h - 1]), 2.0), 1.0);
 }

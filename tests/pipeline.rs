@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use sketchbody::body::{BodyModel, Gender};
+use sketchbody::body::{BodyModel, Gender, ShapeChoice};
 use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::fit::FitOptions;
@@ -32,7 +32,7 @@ fn fast(gender: Option<Gender>) -> PipelineOptions {
 }
 
 #[test]
-fn fits_both_genders_chooses_by_score_and_is_deterministic() {
+fn fits_gender_as_a_continuous_weight_and_is_deterministic() {
     let (model, dict, sketch, j) = inputs();
     let mut fractions = Vec::new();
     let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &fast(None), &mut |f| {
@@ -40,11 +40,19 @@ fn fits_both_genders_chooses_by_score_and_is_deterministic() {
         true
     })
     .unwrap();
-    assert_eq!(r.fits.len(), 2);
-    assert!(r.gender_by_score);
-    let best = if r.fits[0].score >= r.fits[1].score { &r.fits[0] } else { &r.fits[1] };
-    assert_eq!(r.gender, best.gender);
+    assert_eq!(r.fits.len(), 1);
+    assert!(r.gender_fitted && r.space == ShapeChoice::Blended);
+    let best = &r.fits[0];
     assert_eq!(r.score, best.score);
+    // The reported gender is the nearer end of the fitted value; the confidence is the
+    // posterior mass of that half.
+    assert!((0.0..=1.0).contains(&r.gender_value));
+    assert_eq!(r.gender, if r.gender_value > 0.5 { Gender::Male } else { Gender::Female });
+    assert!((0.5..=1.0).contains(&r.gender_confidence));
+    let blend = model.blended().unwrap();
+    let range = blend.space().gmm().marginal(r.weights.len()).unwrap().range(sketchbody::fit::PRIOR_RANGE_SD);
+    assert!(r.weights.iter().zip(&range).all(|(w, (lo, hi))| (lo..=hi).contains(&w)), "{:?}", r.weights);
+    assert!((0.0..=1.0).contains(&r.edge_support));
     assert!(r.fits.iter().all(|g| g.score.is_finite() && g.score < 0.0));
     assert_eq!(r.weights, best.fit.as_ref().unwrap().weights);
     assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");
@@ -239,4 +247,43 @@ fn known_height_per_sample_cameras_and_a_given_pose() {
         run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &g, &mut |_| true),
         Err(Error::NonFinite { .. })
     ));
+}
+
+/// The example sketch under a cloak to the ground: everything below the shoulders is replaced
+/// by a wide trapezoid outline (no body stroke left inside it). The fit still returns a body of
+/// plausible size inside the prior's range and flags it as low-evidence.
+#[test]
+fn a_cloak_to_the_ground_gives_a_plausible_body_flagged_low_evidence() {
+    let (model, dict, sketch, j) = inputs();
+    let (w, h) = (sketch.width(), sketch.height());
+    let (ls, rs) = (j.xy[joint::L_SHOULDER], j.xy[joint::R_SHOULDER]);
+    let top = ls[1].min(rs[1]);
+    let bottom = j.xy[joint::L_ANKLE][1].max(j.xy[joint::R_ANKLE][1]) + 4.0;
+    let centre = 0.5 * (ls[0] + rs[0]);
+    let half_top = 0.5 * (ls[0] - rs[0]).abs() + 12.0;
+    let half_bottom = 2.2 * half_top;
+    let half_at = |y: f64| half_top + (half_bottom - half_top) * ((y - top) / (bottom - top)).clamp(0.0, 1.0);
+    let mut pixels = sketch.as_bytes().to_vec();
+    for y in 0..h {
+        for x in 0..w {
+            let (fx, fy) = (x as f64, y as f64);
+            if fy < top || fy > bottom + 3.0 {
+                continue;
+            }
+            let d = (fx - centre).abs() - half_at(fy);
+            if d <= 3.0 {
+                // Outline 3 px thick on the sides and the hem, paper inside.
+                let edge = d >= 0.0 || fy >= bottom;
+                pixels[y * w + x] = if edge { 0 } else { 255 };
+            }
+        }
+    }
+    let cloaked = GrayImage::from_vec(w, h, pixels).unwrap();
+    let r = run_pipeline(&model, &dict, &cloaked, &GivenJoints(j), &fast(None), &mut |_| true).unwrap();
+    assert!(r.low_evidence, "edge support {}", r.edge_support);
+    let range = model.blended().unwrap().space().gmm().marginal(r.weights.len()).unwrap();
+    let range = range.range(sketchbody::fit::PRIOR_RANGE_SD);
+    assert!(r.weights.iter().zip(&range).all(|(w, (lo, hi))| (lo..=hi).contains(&w)), "{:?}", r.weights);
+    let height = sketchbody::body::rig::y_extent(&r.mesh.vertices);
+    assert!((1.4..2.1).contains(&height), "height {height} m");
 }

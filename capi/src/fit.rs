@@ -39,7 +39,7 @@ pub const SKB_SCORE_TWO_SIDED_CHAMFER: u32 = 3;
 pub const SKB_SKIN_LINEAR: u32 = 0;
 /// `skb_fit_options_set_skinning`: dual-quaternion skinning.
 pub const SKB_SKIN_DUAL_QUATERNION: u32 = 1;
-/// `skb_fit_options_set_gender`: fit both shape spaces and keep the better-scoring one (default).
+/// `skb_fit_options_set_gender`: fit the both-sexes space with gender as a continuous weight (default).
 pub const SKB_GENDER_AUTO: u32 = 2;
 
 /// Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
@@ -198,6 +198,14 @@ pub unsafe extern "C" fn skb_fit_options_set_skinning(opts: *mut skb_fit_options
     }
 }
 
+/// Sets the clothing-robust chamfer's cap, raster pixels, finite and > 0 (default 4): silhouette
+/// boundary pixels inside the sketch's outer outline cost at most this, so strokes that may be
+/// clothing do not pull the body outward; 12 or more is the plain chamfer.
+#[no_mangle]
+pub unsafe extern "C" fn skb_fit_options_set_inside_cap(opts: *mut skb_fit_options, cap: f64) -> skb_status {
+    ffi_boundary! { set_fit(opts, |o| { o.inside_cap = cap; Ok(()) }) }
+}
+
 /// Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
 /// dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
 #[no_mangle]
@@ -205,8 +213,8 @@ pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, di
     ffi_boundary! { set_fit(opts, |o| { o.dims = (dims > 0).then_some(dims as usize); Ok(()) }) }
 }
 
-/// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (fit both,
-/// keep the better score).
+/// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
+/// fit the both-sexes space, gender a continuous weight; `skb_result_gender_value` reads it).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_gender(opts: *mut skb_fit_options, gender: u32) -> skb_status {
     ffi_boundary! {
@@ -236,8 +244,9 @@ pub(crate) fn progress_closure(progress: skb_progress_fn, user: *mut c_void) -> 
 /// `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
 /// `skb_pose3d.joints` from `skb_estimate_pose`); `camera` maps them to `edges`' pixels; `edges`
 /// is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
-/// `skb_canny`); `opts` may be NULL for the defaults (gender automatic: both shape spaces are
-/// fitted and the better score kept). `progress` may be NULL; a non-zero return cancels
+/// `skb_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
+/// fitted, gender a continuous weight; the mesh's gender is the nearer one and its weights are
+/// the blended space's, weight 0 its gender axis). `progress` may be NULL; a non-zero return cancels
 /// (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
 /// caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
 /// weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the

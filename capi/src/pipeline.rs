@@ -80,7 +80,7 @@ pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
 /// context's embedded detector finds them, as `skb_detect` with default options), the 3-D
 /// pose and camera, the shape fit, and the fitted shape posed to the estimate.
 /// `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
-/// fit options' gender defaults to automatic, fitting both and keeping the better score) are
+/// fit options' gender defaults to automatic: the both-sexes space, gender fitted) are
 /// only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
 /// cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
 /// `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
@@ -139,8 +139,9 @@ pub unsafe extern "C" fn skb_result_free(result: *mut skb_result) {
     free_box(result)
 }
 
-/// The chosen gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`, and whether it
-/// was chosen by score (1) or given (0) into `*by_score` (may be NULL).
+/// The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
+/// or with automatic gender the nearer end of the fitted gender value (`skb_result_gender_value`);
+/// whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_gender(
     result: *const skb_result,
@@ -151,19 +152,60 @@ pub unsafe extern "C" fn skb_result_gender(
         let r = &try_status!(try_ref(result, "result")).inner;
         try_status!(write_out(gender, r.gender as u32, "gender"));
         if !by_score.is_null() {
-            *by_score = r.gender_by_score;
+            *by_score = r.gender_fitted;
         }
         skb_status::SKB_OK
     }
 }
 
-/// The best match score (higher is better) of the fit of `gender` into `*score`. Errors:
-/// `SKB_ERR_OUT_OF_RANGE` when that gender was not fitted (a gender was given).
+/// The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
+/// when the gender was given) and into `*confidence` (may be NULL) the probability, under the
+/// fit's posterior, that the gender value is on `skb_result_gender`'s side of 0.5 (0.5..=1;
+/// 1 when the gender was given).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_gender_value(
+    result: *const skb_result,
+    value: *mut f64,
+    confidence: *mut f64,
+) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        try_status!(write_out(value, r.gender_value, "value"));
+        if !confidence.is_null() {
+            *confidence = r.gender_confidence;
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Whether the fit is low-evidence (1: the sketch's strokes support less than half of the
+/// fitted outline, e.g. a figure under a cloak to the ground: the body is mostly the prior's)
+/// into `*low`, and that fraction (0..=1; NaN for the mean shape) into `*edge_support` (may be
+/// NULL).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_evidence(
+    result: *const skb_result,
+    low: *mut bool,
+    edge_support: *mut f64,
+) -> skb_status {
+    ffi_boundary! {
+        let r = &try_status!(try_ref(result, "result")).inner;
+        try_status!(write_out(low, r.low_evidence, "low"));
+        if !edge_support.is_null() {
+            *edge_support = r.edge_support;
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// The best match score (higher is better) of the fit into `*score`; `gender` must be the
+/// result's gender (`skb_result_gender`: one space is fitted, the given gender's or the
+/// both-sexes one). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32, score: *mut f64) -> skb_status {
     ffi_boundary! {
         let r = &try_status!(try_ref(result, "result")).inner;
-        let Some(g) = r.fits.iter().find(|g| g.gender as u32 == gender) else {
+        let Some(g) = r.fits.first().filter(|_| r.gender as u32 == gender) else {
             return super::error::fail(&Error::OutOfRange { name: "gender", detail: format!("{gender} was not fitted") });
         };
         try_status!(write_out(score, g.score, "score"));

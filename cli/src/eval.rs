@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use sketchbody::eval::by_style::{gender_confusion, shape_by_style, STYLE_METRICS};
 use sketchbody::eval::score::{Summary, METRICS, METRIC_DECIMALS};
 use sketchbody::eval::{score_dataset, SampleScore};
 use sketchbody::fsutil::write_atomic;
@@ -24,6 +25,10 @@ pub struct Args {
     /// Per-sample CSV (default: RESULTS/eval.csv).
     #[arg(long)]
     csv: Option<PathBuf>,
+    /// Also print the rest and posed AED per style group (eval-detector's groups plus the true
+    /// genders) and the confusion table of the results' gender against the truth.
+    #[arg(long)]
+    by_style: bool,
 }
 
 fn fmt(v: f64, k: usize) -> String {
@@ -77,6 +82,53 @@ pub fn run(a: Args) -> Result<(), CliError> {
                 let ((va, na), (vb, nb)) = (suma.metrics[k], sumb.metrics[k]);
                 println!("| {m} | {} | {na} | {} | {nb} | {} |", fmt(va, k), fmt(vb, k), fmt(vb - va, k));
             }
+        }
+    }
+    if a.by_style {
+        print_by_style(&a, &sa, other.as_ref().map(|(sb, _)| sb.as_slice()))?;
+    }
+    Ok(())
+}
+
+fn print_by_style(a: &Args, sa: &[SampleScore], sb: Option<&[SampleScore]>) -> Result<(), CliError> {
+    let ra = shape_by_style(&a.dataset, sa)?;
+    let rb = sb.map(|s| shape_by_style(&a.dataset, s)).transpose()?;
+    let cols = STYLE_METRICS.join(" | ");
+    println!();
+    match &rb {
+        None => {
+            println!("| style group | n | {cols} |");
+            println!("|---|---:|---:|---:|---:|---:|");
+        }
+        Some(_) => {
+            println!("| style group | n | A: {cols} | B: {cols} | B/A centred |");
+            println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+        }
+    }
+    for (k, row) in ra.iter().enumerate() {
+        let f = |m: &[f64; 4]| {
+            m.iter().map(|v| if v.is_nan() { "-".into() } else { format!("{v:.4}") }).collect::<Vec<_>>()
+        };
+        let mut line = format!("| {} | {} | {}", row.name, row.n, f(&row.means).join(" | "));
+        if let Some(rb) = &rb {
+            let b = &rb[k];
+            let _ = write!(line, " | {} | {:.3}", f(&b.means).join(" | "), b.means[1] / row.means[1]);
+        }
+        println!("{line} |");
+    }
+    for (dir, scores) in [(Some(a.results.as_path()), Some(sa)), (a.compare.as_deref(), sb)] {
+        let (Some(dir), Some(scores)) = (dir, scores) else { continue };
+        if let Some(t) = gender_confusion(&a.dataset, dir, scores)? {
+            let right = t[0][0] + t[1][1];
+            let total = right + t[0][1] + t[1][0];
+            println!(
+                "gender of {} (rows true, columns estimated): female -> female {}, female -> male {}, male -> female {}, male -> male {}; {right}/{total} right",
+                dir.display(),
+                t[0][0],
+                t[0][1],
+                t[1][0],
+                t[1][1]
+            );
         }
     }
     Ok(())

@@ -62,6 +62,10 @@ pub struct FitArgs {
     /// lengths, the estimated pose and camera (`--estimate-proportions true|false`).
     #[arg(long, default_value_t = FitOptions::default().estimate_proportions, action = clap::ArgAction::Set)]
     pub estimate_proportions: bool,
+    /// Clothing-robust chamfer cap, raster pixels: silhouette boundary pixels inside the
+    /// sketch's outer outline cost at most this (12 = the plain chamfer).
+    #[arg(long, default_value_t = FitOptions::default().inside_cap)]
+    pub inside_cap: f64,
     /// Keep the pose solver's camera instead of refitting its scales and translation to the
     /// gender's mean skeleton before the fit.
     #[arg(long)]
@@ -108,6 +112,7 @@ impl FitArgs {
             sample_camera: self.sample_camera,
             height: self.height,
             proportion_sd: self.proportion_sd,
+            inside_cap: self.inside_cap,
             estimate_proportions: self.estimate_proportions,
         })
     }

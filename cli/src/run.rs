@@ -192,14 +192,38 @@ fn report(
         let _ = writeln!(
             s,
             "- {} fit: best score {:.5}, {it} iterations, {ev} sample evaluations, {:.2} s",
-            g.gender.name(),
+            g.space.name(),
             g.score,
             g.seconds
         );
     }
-    let how = if r.gender_by_score { "chosen by score (higher is better)" } else { "given" };
-    let _ = writeln!(s, "- gender: {} ({how})", r.gender.name());
-    let chosen = r.fits.iter().find(|g| g.gender == r.gender).and_then(|g| g.fit.as_ref());
+    if r.gender_fitted {
+        let _ = writeln!(
+            s,
+            "- gender: fitted as a continuous shape weight (both-sexes space): value {:.2} (0 female … 1 male), \
+             nearer {} with posterior probability {:.2}",
+            r.gender_value,
+            r.gender.name(),
+            r.gender_confidence
+        );
+    } else {
+        let _ = writeln!(s, "- gender: {} (given)", r.gender.name());
+    }
+    if r.edge_support.is_finite() {
+        let flag = if r.low_evidence {
+            "**low evidence**: the strokes support little of the fitted outline (mostly clothing, or a wrong \
+             pose); the body is mostly the prior's"
+        } else {
+            "ok"
+        };
+        let _ = writeln!(
+            s,
+            "- evidence: {:.0}% of the fitted outline within {} raster px of a stroke: {flag}",
+            100.0 * r.edge_support,
+            sketchbody::fit::EDGE_SUPPORT_RADIUS
+        );
+    }
+    let chosen = r.fits.first().and_then(|g| g.fit.as_ref());
     let factors = |p: &sketchbody::body::proportions::Proportions| {
         format!(
             "legs {:.3}, arms {:.3}, shoulders {:.3}, head {:.3}, torso {:.3}",
@@ -301,13 +325,17 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let text = report(&a, &opts, &r, (sketch.width(), sketch.height()), load_s, t_write.elapsed().as_secs_f64());
     write_atomic(&staging.path("report.md"), text.as_bytes())?;
     staging.commit()?;
-    let scores: Vec<String> = r.fits.iter().map(|g| format!("{} {:.4}", g.gender.name(), g.score)).collect();
+    let scores: Vec<String> = r.fits.iter().map(|g| format!("{} {:.4}", g.space.name(), g.score)).collect();
+    let gender = if r.gender_fitted {
+        format!("gender {:.2} fitted, {} p={:.2}", r.gender_value, r.gender.name(), r.gender_confidence)
+    } else {
+        format!("{} given", r.gender.name())
+    };
     println!(
-        "{}: {} ({}), score {}, {:.2} s",
+        "{}: {gender}, score {}{}, {:.2} s",
         a.out.display(),
-        r.gender.name(),
-        if r.gender_by_score { "by score" } else { "given" },
         scores.join(", "),
+        if r.low_evidence { ", LOW EVIDENCE" } else { "" },
         t_all.elapsed().as_secs_f64()
     );
     Ok(())

@@ -145,18 +145,22 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
     let scores: serde_json::Map<String, serde_json::Value> = r
         .fits
         .iter()
-        .map(|g| (g.gender.name().to_string(), json!(if g.score.is_finite() { Some(g.score) } else { None })))
+        .map(|g| (g.space.name().to_string(), json!(if g.score.is_finite() { Some(g.score) } else { None })))
         .collect();
     let doc = json!({
         "joints2d": r.joints2d.xy,
         "joints3d": r.posed_joints,
         "camera_r": [[rm[(0, 0)], rm[(0, 1)], rm[(0, 2)]], [rm[(1, 0)], rm[(1, 1)], rm[(1, 2)]], [rm[(2, 0)], rm[(2, 1)], rm[(2, 2)]]],
         "gender": r.gender.name(),
-        "gender_by_score": r.gender_by_score,
+        "gender_fitted": r.gender_fitted,
+        "gender_value": r.gender_value,
+        "gender_confidence": r.gender_confidence,
+        "edge_support": if r.edge_support.is_finite() { Some(r.edge_support) } else { None },
+        "low_evidence": r.low_evidence,
         "scores": scores,
         "shape_weights": r.weights,
-        "proportions": r.fits.iter().find(|g| g.gender == r.gender).and_then(|g| g.fit.as_ref()).and_then(|f| f.proportions),
-        "proportion_estimate": r.fits.iter().find(|g| g.gender == r.gender).and_then(|g| g.fit.as_ref()).and_then(|f| f.proportion_estimate),
+        "proportions": r.fits.first().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportions),
+        "proportion_estimate": r.fits.first().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportion_estimate),
         "seconds": r.timings.total,
     });
     write_atomic(&out.join(format!("{stem}.json")), doc.to_string().as_bytes())?;

@@ -267,7 +267,16 @@ impl Reader<'_> {
         if self.pos != self.bytes.len() {
             return Err(Error::CorruptData(format!("{} trailing bytes after the rig", self.bytes.len() - self.pos)));
         }
-        Ok(BodyModel { faces, face_uvs, uvs, skin, spaces: [female, male], rig, proxy: Default::default() })
+        Ok(BodyModel {
+            faces,
+            face_uvs,
+            uvs,
+            skin,
+            spaces: [female, male],
+            rig,
+            proxy: Default::default(),
+            blend: Default::default(),
+        })
     }
 
     /// The rig section: bone count, per bone roll, T-pose angles, head and tail regressors; skin.
@@ -359,6 +368,7 @@ pub(crate) mod tests {
             spaces: [space.clone(), space],
             rig: tiny_rig(4),
             proxy: Default::default(),
+            blend: Default::default(),
         }
     }
 

@@ -131,6 +131,20 @@ impl Gmm {
         (&self.means[c] + &self.chol[c] * z).iter().copied().collect()
     }
 
+    /// Per dimension, the smallest and largest of `mean ± k_sd · sd` over the components: the
+    /// box in which the prior puts essentially all its mass for `k_sd` ≈ 3 (the fit keeps its
+    /// weights in it, [`crate::fit::PRIOR_RANGE_SD`]).
+    pub fn range(&self, k_sd: f64) -> Vec<(f64, f64)> {
+        (0..self.dims())
+            .map(|d| {
+                self.means.iter().zip(&self.covariances).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (m, c)| {
+                    let sd = c[(d, d)].max(0.0).sqrt();
+                    (lo.min(m[d] - k_sd * sd), hi.max(m[d] + k_sd * sd))
+                })
+            })
+            .collect()
+    }
+
     /// The mixture's marginal over its first `dims` weights (1..=[`Gmm::dims`]): same component
     /// weights, leading sub-vectors of the means and leading blocks of the covariances.
     pub fn marginal(&self, dims: usize) -> Result<Gmm> {

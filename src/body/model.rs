@@ -169,6 +169,32 @@ impl ShapeSpace {
     }
 }
 
+/// Which shape space a fit or a body uses: one gender's, or the both-sexes space with gender as
+/// a continuous weight ([`super::BlendedSpace`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ShapeChoice {
+    /// The gendered space of the model file.
+    Gendered(Gender),
+    /// The both-sexes space built at load time from the two gendered ones.
+    Blended,
+}
+
+impl From<Gender> for ShapeChoice {
+    fn from(g: Gender) -> Self {
+        ShapeChoice::Gendered(g)
+    }
+}
+
+impl ShapeChoice {
+    /// "female", "male" or "blended".
+    pub fn name(self) -> &'static str {
+        match self {
+            ShapeChoice::Gendered(g) => g.name(),
+            ShapeChoice::Blended => "blended",
+        }
+    }
+}
+
 /// The body model: MakeHuman's body topology (quads), UVs, skin weights to the 14 canonical
 /// bones, and a female and a male [`ShapeSpace`]. Immutable; `Send + Sync`.
 #[derive(Clone, Debug)]
@@ -182,6 +208,8 @@ pub struct BodyModel {
     pub(crate) rig: crate::rig::RigData,
     /// The fit proxy, built on first use ([`BodyModel::fit_proxy`]).
     pub(crate) proxy: super::proxy::ProxyCell,
+    /// The both-sexes space, built on first use ([`BodyModel::blended`]).
+    pub(crate) blend: super::blend::BlendCell,
 }
 
 impl BodyModel {
@@ -193,6 +221,14 @@ impl BodyModel {
     /// The shape space of `gender`.
     pub fn space(&self, gender: Gender) -> &ShapeSpace {
         &self.spaces[gender.index()]
+    }
+
+    /// The shape space of `choice` (the blended one is built on first use).
+    pub fn shape_space(&self, choice: ShapeChoice) -> Result<&ShapeSpace> {
+        match choice {
+            ShapeChoice::Gendered(g) => Ok(self.space(g)),
+            ShapeChoice::Blended => Ok(self.blended()?.space()),
+        }
     }
 
     /// Number of body vertices (13380).

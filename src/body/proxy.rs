@@ -10,7 +10,7 @@
 use std::sync::OnceLock;
 
 use super::decimate::decimate;
-use super::model::{BodyModel, ShapeSpace, VertexWeights};
+use super::model::{BodyModel, ShapeChoice, ShapeSpace, VertexWeights};
 use super::Gender;
 use crate::error::Result;
 use crate::skeleton::Joints3;
@@ -88,6 +88,8 @@ pub struct FitProxy {
     triangles: Vec<[u32; 3]>,
     skin: Vec<VertexWeights>,
     spaces: [ProxySpace; 2],
+    /// The blended space restricted to the kept vertices, built on first use.
+    blended: OnceLock<ProxySpace>,
 }
 
 impl FitProxy {
@@ -106,6 +108,7 @@ impl FitProxy {
             ],
             kept: d.kept,
             triangles: d.triangles,
+            blended: OnceLock::new(),
         })
     }
 
@@ -128,6 +131,21 @@ impl FitProxy {
     /// The shape space of `gender` restricted to the proxy's vertices.
     pub fn space(&self, gender: Gender) -> &ProxySpace {
         &self.spaces[gender.index()]
+    }
+
+    /// The shape space of `choice` restricted to the proxy's vertices; `model` must be the
+    /// model this proxy was built from (the blended space is taken from it on first use).
+    pub fn shape_space(&self, model: &BodyModel, choice: ShapeChoice) -> Result<&ProxySpace> {
+        match choice {
+            ShapeChoice::Gendered(g) => Ok(self.space(g)),
+            ShapeChoice::Blended => {
+                if let Some(p) = self.blended.get() {
+                    return Ok(p);
+                }
+                let built = ProxySpace::new(model.blended()?.space(), &self.kept);
+                Ok(self.blended.get_or_init(|| built))
+            }
+        }
     }
 }
 

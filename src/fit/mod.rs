@@ -8,5 +8,8 @@ mod transition;
 
 pub use bone_estimate::{estimate_proportions, EstimateOptions, ProportionEstimate};
 pub use score::{distance_transform, MatchScore, SketchEvidence, CHAMFER_CAP};
-pub use sir::{fit_shape, FitOptions, FitProblem, FitResult, IterationStats};
+pub use sir::{
+    fit_shape, FitOptions, FitProblem, FitResult, IterationStats, EDGE_SUPPORT_RADIUS, LOW_EVIDENCE_SUPPORT,
+    PRIOR_RANGE_SD,
+};
 pub use transition::Transition;

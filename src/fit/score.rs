@@ -36,6 +36,12 @@ pub struct SketchEvidence {
     distance: Vec<f32>,
     figure: Vec<u8>,
     figure_count: usize,
+    /// 1 where a pixel is not reachable from the image border without crossing a stroke (the
+    /// drawing's outer outline filled: body and clothing alike).
+    inside: Vec<u8>,
+    /// Cap of the chamfer distance of mask boundary pixels inside the outline
+    /// ([`SketchEvidence::with_inside_cap`]); [`CHAMFER_CAP`] = no distinction.
+    inside_cap: f32,
 }
 
 impl SketchEvidence {
@@ -65,9 +71,55 @@ impl SketchEvidence {
             });
         }
         let distance = distance_transform(&edges, width, height);
-        let figure = filled_figure(&edges, width, height, skeleton_px);
+        let (figure, inside) = filled_figure(&edges, width, height, skeleton_px);
         let figure_count = figure.iter().filter(|&&f| f != 0).count();
-        Ok(Self { width, height, edges, edge_count, distance, figure, figure_count })
+        Ok(Self { width, height, edges, edge_count, distance, figure, figure_count, inside, inside_cap: CHAMFER_CAP })
+    }
+
+    /// The clothing-robust chamfer: a mask boundary pixel inside the drawing's outer outline
+    /// costs its distance to the nearest stroke capped at `cap` raster pixels, one outside it
+    /// the full distance (capped at [`CHAMFER_CAP`]). Strokes under loose clothing are often
+    /// missing, so a body boundary far inside the outline is weak evidence; a boundary outside
+    /// every stroke is strong evidence against the shape. Interior strokes (creases, muscle
+    /// lines, costume seams) count like any other stroke. `cap` ≥ [`CHAMFER_CAP`] (or not
+    /// finite / not positive) keeps the plain chamfer.
+    pub fn with_inside_cap(mut self, cap: f64) -> Self {
+        self.inside_cap = if cap.is_finite() && cap > 0.0 { (cap as f32).min(CHAMFER_CAP) } else { CHAMFER_CAP };
+        self
+    }
+
+    /// Fraction of a mask's boundary pixels within `radius` raster pixels of a stroke (0 for an
+    /// empty mask): how much of a fitted silhouette the sketch actually supports.
+    pub fn edge_support(&self, mask: &[u8], bounds: Option<[usize; 4]>, radius: f64) -> f64 {
+        let (mut near, mut n) = (0usize, 0usize);
+        self.for_each_boundary(mask, bounds, |i| {
+            n += 1;
+            near += (self.distance[i] as f64 <= radius) as usize;
+        });
+        if n == 0 {
+            0.0
+        } else {
+            near as f64 / n as f64
+        }
+    }
+
+    /// Calls `f` with the index of every boundary pixel of `mask` inside `bounds`.
+    fn for_each_boundary(&self, mask: &[u8], bounds: Option<[usize; 4]>, mut f: impl FnMut(usize)) {
+        let (w, h) = (self.width, self.height);
+        let inside = |x: usize, y: usize| mask[y * w + x] != 0;
+        if let Some([x0, y0, x1, y1]) = bounds {
+            for y in y0..=y1.min(h - 1) {
+                for x in x0..=x1.min(w - 1) {
+                    if !inside(x, y) {
+                        continue;
+                    }
+                    let border = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
+                    if border || !inside(x - 1, y) || !inside(x + 1, y) || !inside(x, y - 1) || !inside(x, y + 1) {
+                        f(y * w + x);
+                    }
+                }
+            }
+        }
     }
 
     /// Raster width in pixels.
@@ -115,23 +167,12 @@ impl SketchEvidence {
     }
 
     fn boundary_chamfer(&self, mask: &[u8], bounds: Option<[usize; 4]>) -> f64 {
-        let (w, h) = (self.width, self.height);
-        let inside = |x: usize, y: usize| mask[y * w + x] != 0;
         let (mut sum, mut n) = (0.0f64, 0usize);
-        if let Some([x0, y0, x1, y1]) = bounds {
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    if !inside(x, y) {
-                        continue;
-                    }
-                    let border = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
-                    if border || !inside(x - 1, y) || !inside(x + 1, y) || !inside(x, y - 1) || !inside(x, y + 1) {
-                        sum += self.distance[y * w + x].min(CHAMFER_CAP) as f64;
-                        n += 1;
-                    }
-                }
-            }
-        }
+        self.for_each_boundary(mask, bounds, |i| {
+            let cap = if self.inside[i] != 0 { self.inside_cap } else { CHAMFER_CAP };
+            sum += self.distance[i].min(cap) as f64;
+            n += 1;
+        });
         if n == 0 {
             CHAMFER_CAP as f64
         } else {
@@ -229,8 +270,8 @@ fn dt_1d(f: &[f64], out: &mut Vec<f64>) {
 /// The figure region: dilate edges by one pixel (closing small gaps), flood the background from
 /// the border through non-edge pixels, and keep the enclosed components (plus their strokes)
 /// that contain a skeleton point. Falls back to all enclosed pixels when no skeleton point lands
-/// in one.
-fn filled_figure(edges: &[u8], w: usize, h: usize, skeleton_px: &[[f64; 2]]) -> Vec<u8> {
+/// in one. Also returns the outline's inside (every pixel not reachable from the border).
+fn filled_figure(edges: &[u8], w: usize, h: usize, skeleton_px: &[[f64; 2]]) -> (Vec<u8>, Vec<u8>) {
     let mut wall = edges.to_vec();
     for y in 0..h {
         for x in 0..w {
@@ -320,7 +361,8 @@ fn filled_figure(edges: &[u8], w: usize, h: usize, skeleton_px: &[[f64; 2]]) -> 
             }
         }
     }
-    figure
+    let inside = label.iter().map(|&l| (l != 2) as u8).collect();
+    (figure, inside)
 }
 
 #[cfg(test)]

@@ -28,7 +28,7 @@ use crate::body::ik::{self, IkOptions};
 use crate::body::proportions::Proportions;
 use crate::body::rig::{scale_to_height, y_extent};
 use crate::body::skin::{skin_into, SkinMethod};
-use crate::body::{BodyModel, FitProxy, Gender};
+use crate::body::{BodyModel, FitProxy, ProxySpace, ShapeChoice, ShapeSpace};
 use crate::camera::WeakPerspective;
 use crate::error::{ensure_finite, Error, Result};
 use crate::image::GrayImage;
@@ -108,7 +108,28 @@ pub struct FitOptions {
     /// Default on (40 sketches `make-dataset 40 --seed 77`, estimated poses: rest AED 0.0366 vs
     /// 0.0400 off, 0.0155 vs 0.0197 at the reference height; docs/benchmarks.md, issue 6).
     pub estimate_proportions: bool,
+    /// Clothing-robust chamfer ([`SketchEvidence::with_inside_cap`]): silhouette boundary
+    /// pixels inside the sketch's outer outline cost their distance to the nearest stroke capped
+    /// at this many raster pixels, those outside it the full capped distance, so outline
+    /// strokes that may be clothing (coats, capes, skirts) do not pull the body outward while a
+    /// body crossing the outline is still penalised. [`super::CHAMFER_CAP`] (12) turns it off.
+    /// Only the chamfer scores use it. Default 4.0 (docs/benchmarks.md, "Shape fit": chosen on
+    /// the tuning set `make-dataset 60 --seed 78`). Finite, > 0.
+    pub inside_cap: f64,
 }
+
+/// Every PCA weight the fit returns or scores lies within this many standard deviations of some
+/// component mean of its prior ([`crate::body::Gmm::range`]): the prior's documented range.
+pub const PRIOR_RANGE_SD: f64 = 3.0;
+
+/// A fitted silhouette with less than this fraction of its boundary within
+/// [`EDGE_SUPPORT_RADIUS`] raster pixels of a stroke is reported as low-evidence
+/// ([`FitResult::low_evidence`]): the body is mostly the prior's, not the sketch's (e.g. under a
+/// cloak to the ground).
+pub const LOW_EVIDENCE_SUPPORT: f64 = 0.5;
+
+/// Radius of [`FitResult::edge_support`], raster pixels.
+pub const EDGE_SUPPORT_RADIUS: f64 = 2.0;
 
 impl Default for FitOptions {
     fn default() -> Self {
@@ -129,15 +150,17 @@ impl Default for FitOptions {
             height: None,
             proportion_sd: 0.1,
             estimate_proportions: true,
+            inside_cap: 4.0,
         }
     }
 }
 
-/// What the fit works on: the model, a gender, the estimated 3-D pose (metres, model frame),
+/// What the fit works on: the model, a shape space (a gender's, or the blended one with gender as
+/// weight 0), the estimated 3-D pose (metres, model frame),
 /// the estimated camera (image pixels) and the sketch's edge map (non-zero = edge).
 pub struct FitProblem<'a> {
     pub model: &'a BodyModel,
-    pub gender: Gender,
+    pub gender: ShapeChoice,
     pub pose: &'a Joints3,
     pub camera: &'a WeakPerspective,
     pub edges: &'a GrayImage,
@@ -156,10 +179,12 @@ pub struct IterationStats {
     pub effective_samples: f64,
 }
 
-/// The fit's result. Weights are PCA weights of the gender's shape space (first `dims`).
+/// The fit's result. Weights are PCA weights of the problem's shape space (first `dims`), each
+/// within the prior's range ([`PRIOR_RANGE_SD`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitResult {
-    /// Y* = Σ w Y over the last iteration.
+    /// Y* = Σ w Y over the last iteration (blended space: over the samples on the more probable
+    /// side of gender value 0.5, weights renormalised).
     pub weights: Vec<f64>,
     /// Bone-length factors of Y* (`exp` of the weighted mean log factors); `None` unless
     /// [`FitOptions::proportion_sd`] > 0.
@@ -173,6 +198,24 @@ pub struct FitResult {
     pub history: Vec<IterationStats>,
     /// Samples evaluated (synthesis + posing + skinning + raster + score).
     pub evaluations: usize,
+    /// Blended space only: the posterior mean of the gender value over the last iteration's
+    /// weighted samples ([`crate::body::BlendedSpace::gender_value`]: 0 female mean … 1 male
+    /// mean), clamped to 0..=1.
+    pub gender_value: Option<f64>,
+    /// Blended space only: the posterior probability (last iteration's weights) that the gender
+    /// value is above 0.5, i.e. of the male-leaning half.
+    pub male_probability: Option<f64>,
+    /// Fraction of Y*'s silhouette boundary within [`EDGE_SUPPORT_RADIUS`] raster pixels of a
+    /// stroke (0..=1).
+    pub edge_support: f64,
+}
+
+impl FitResult {
+    /// `true` when [`FitResult::edge_support`] is below [`LOW_EVIDENCE_SUPPORT`]: the sketch
+    /// supports little of the fitted outline (mostly clothing, or a wrong pose).
+    pub fn low_evidence(&self) -> bool {
+        self.edge_support < LOW_EVIDENCE_SUPPORT
+    }
 }
 
 /// Splits 64-bit seeds (SplitMix64 finaliser).
@@ -201,6 +244,7 @@ impl FitOptions {
         positive("transition scale", self.transition_scale)?;
         positive("temperature", self.temperature)?;
         positive("tolerance", self.tolerance)?;
+        positive("inside cap", self.inside_cap)?;
         ensure_finite("joint weight", self.joint_weight)?;
         if self.joint_weight < 0.0 {
             return Err(Error::OutOfRange {
@@ -246,6 +290,8 @@ struct Evaluator<'a> {
     problem: &'a FitProblem<'a>,
     options: &'a FitOptions,
     proxy: &'a FitProxy,
+    space: &'a ShapeSpace,
+    proxy_space: &'a ProxySpace,
     raster_camera: WeakPerspective,
     evidence: SketchEvidence,
     /// Visible 2-D joints in raster pixels (index, position), empty when the term is off.
@@ -268,14 +314,19 @@ impl Evaluator<'_> {
     /// Score of one shape (higher is better); a shape that cannot be posed or lands outside the
     /// image scores −∞.
     fn score(&self, y: &[f64], s: &mut Scratch) -> Result<f64> {
-        let space = self.problem.model.space(self.problem.gender);
-        let mut joints = self.proxy.space(self.problem.gender).synthesize_into(space, &y[..self.dims], &mut s.rest)?;
+        Ok(self.evaluate(y, s)?.map_or(f64::NEG_INFINITY, |(score, _)| score))
+    }
+
+    /// Score and edge support of one shape; `None` when it cannot be posed or lands outside
+    /// the image.
+    fn evaluate(&self, y: &[f64], s: &mut Scratch) -> Result<Option<(f64, f64)>> {
+        let mut joints = self.proxy_space.synthesize_into(self.space, &y[..self.dims], &mut s.rest)?;
         if y.len() > self.dims {
             match apply_in_place(&mut s.rest, &mut joints, self.proxy.skin_weights(), &proportions_of(&y[self.dims..]))
             {
                 Ok(()) => {}
                 Err(Error::NonFinite { .. }) => return Err(Error::NonFinite { name: "shape", value: f64::NAN }),
-                Err(_) => return Ok(f64::NEG_INFINITY),
+                Err(_) => return Ok(None),
             }
         }
         if let (Some(h), false) = (self.options.height, self.options.sample_camera) {
@@ -284,12 +335,12 @@ impl Evaluator<'_> {
         let pose = match ik::solve(&joints, self.problem.pose, &IkOptions { retarget: self.options.retarget }) {
             Ok(p) => p,
             Err(Error::NonFinite { .. }) => return Err(Error::NonFinite { name: "pose", value: f64::NAN }),
-            Err(_) => return Ok(f64::NEG_INFINITY),
+            Err(_) => return Ok(None),
         };
         let camera = if self.options.sample_camera && !self.joints_px.is_empty() {
             match self.raster_camera.refit_scale(&pose.joints, &self.joints_px) {
                 Ok(c) => c,
-                Err(Error::Degenerate(_)) => return Ok(f64::NEG_INFINITY),
+                Err(Error::Degenerate(_)) => return Ok(None),
                 Err(e) => return Err(e),
             }
         } else {
@@ -298,11 +349,13 @@ impl Evaluator<'_> {
         skin_into(&s.rest, self.proxy.skin_weights(), &pose, self.options.skinning, &mut s.posed)?;
         let (w, h) = (self.evidence.width(), self.evidence.height());
         match s.raster.rasterize_mask(&s.posed, self.proxy.triangles(), &camera, w, h, Facing::Front) {
-            Ok(_) => Ok(self.evidence.score_in(s.raster.mask(), s.raster.covered_bounds(), self.options.score)
-                - self.joint_penalty(&pose.joints, &camera)),
-            Err(Error::MeshOutsideImage { .. }) | Err(Error::OutOfRange { name: "projected vertex", .. }) => {
-                Ok(f64::NEG_INFINITY)
+            Ok(_) => {
+                let (mask, bounds) = (s.raster.mask(), s.raster.covered_bounds());
+                let score = self.evidence.score_in(mask, bounds, self.options.score)
+                    - self.joint_penalty(&pose.joints, &camera);
+                Ok(Some((score, self.evidence.edge_support(mask, bounds, EDGE_SUPPORT_RADIUS))))
             }
+            Err(Error::MeshOutsideImage { .. }) | Err(Error::OutOfRange { name: "projected vertex", .. }) => Ok(None),
             Err(e) => Err(e),
         }
     }
@@ -337,7 +390,9 @@ pub fn fit_shape(
     options.validate()?;
     problem.camera.validate()?;
     crate::body::ik::check_joints("pose", problem.pose)?;
-    let space = problem.model.space(problem.gender);
+    let space = problem.model.shape_space(problem.gender)?;
+    let proxy = problem.model.fit_proxy()?;
+    let proxy_space = proxy.shape_space(problem.model, problem.gender)?;
     let dims = options.dims.unwrap_or(space.default_dim());
     let prior_full = space.gmm();
     if dims == 0 || dims > prior_full.dims() {
@@ -347,6 +402,8 @@ pub fn fit_shape(
         });
     }
     let prior = prior_full.marginal(dims)?;
+    let range = prior.range(PRIOR_RANGE_SD);
+    let clamp = |y: &mut Vec<f64>| y.iter_mut().zip(&range).for_each(|(v, &(lo, hi))| *v = v.clamp(lo, hi));
     let sigma: Vec<f64> = space.variances()[..dims].iter().map(|l| options.transition_scale.powi(2) * l).collect();
     let transition = Transition::new(&prior, &sigma)?;
 
@@ -373,13 +430,15 @@ pub fn fit_shape(
     let evaluator = Evaluator {
         problem,
         options,
-        proxy: problem.model.fit_proxy()?,
+        proxy,
+        space,
+        proxy_space,
         raster_camera,
-        evidence: SketchEvidence::new(problem.edges, rw, rh, &skeleton_px)?,
+        evidence: SketchEvidence::new(problem.edges, rw, rh, &skeleton_px)?.with_inside_cap(options.inside_cap),
         joints_px: joints_in_raster(problem.joints2d, f)?,
         height_correction: {
             let mut proxy_mean = Vec::new();
-            problem.model.fit_proxy()?.space(problem.gender).synthesize_into(space, &[], &mut proxy_mean)?;
+            proxy_space.synthesize_into(space, &[], &mut proxy_mean)?;
             y_extent(space.mean()) / y_extent(&proxy_mean)
         },
         dims,
@@ -412,6 +471,7 @@ pub fn fit_shape(
         .map(|i| {
             let rng = &mut sample_rng(options.seed, 0, i);
             let mut y = prior.sample(rng);
+            clamp(&mut y);
             if let Some(f) = &factors {
                 f.extend_initial(&mut y, rng);
             }
@@ -423,6 +483,7 @@ pub fn fit_shape(
     let mut previous_mean: Option<Vec<f64>> = None;
     let mut weighted_mean = vec![0.0; state_dims];
     let mut evaluations = 0;
+    let mut last_weights = vec![1.0 / options.samples as f64; options.samples];
     for t in 0..options.max_iterations {
         if t > 0 {
             population = population
@@ -431,6 +492,7 @@ pub fn fit_shape(
                 .map(|(i, y)| {
                     let rng = &mut sample_rng(options.seed, t, i);
                     let mut next = transition.sample(&y[..dims], rng);
+                    clamp(&mut next);
                     if let Some(f) = &factors {
                         f.extend_successor(&y[dims..], &mut next, rng);
                     }
@@ -442,6 +504,7 @@ pub fn fit_shape(
             population.par_iter().map_init(Scratch::default, |s, y| evaluator.score(y, s)).collect::<Result<_>>()?;
         evaluations += scores.len();
         let weights = importance_weights(&scores, options)?;
+        last_weights.clone_from(&weights);
         for (y, &s) in population.iter().zip(&scores) {
             if s > best.0 {
                 best = (s, y.clone());
@@ -466,6 +529,34 @@ pub fn fit_shape(
         previous_mean = Some(weighted_mean.clone());
         population = systematic_resample(&population, &weights, &mut sample_rng(options.seed, t, usize::MAX));
     }
+    let (gender_value, male_probability) = match problem.gender {
+        ShapeChoice::Blended => {
+            let blend = problem.model.blended()?;
+            let t: Vec<f64> = population.iter().map(|y| blend.gender_value(&y[..dims])).collect();
+            let mean_t: f64 = t.iter().zip(&last_weights).map(|(t, w)| t * w).sum();
+            let male: f64 = t.iter().zip(&last_weights).filter(|(t, _)| **t > 0.5).map(|(_, w)| w).sum();
+            (Some(mean_t.clamp(0.0, 1.0)), Some(male.clamp(0.0, 1.0)))
+        }
+        ShapeChoice::Gendered(_) => (None, None),
+    };
+    // Blended space: Y* is the posterior mean over the samples on the more probable side of
+    // gender 0.5. When a sketch does not settle the gender the posterior is bimodal, and the
+    // mean of both modes is neither body (tuning set: rest AED centred 0.0231 vs 0.0243).
+    if let (ShapeChoice::Blended, Some(male)) = (problem.gender, male_probability) {
+        let blend = problem.model.blended()?;
+        let side = |y: &[f64]| (blend.gender_value(&y[..dims]) > 0.5) == (male > 0.5);
+        let total: f64 = population.iter().zip(&last_weights).filter(|(y, _)| side(y)).map(|(_, w)| w).sum();
+        if total > 0.0 {
+            weighted_mean = (0..state_dims)
+                .map(|k| {
+                    population.iter().zip(&last_weights).filter(|(y, _)| side(y)).map(|(y, w)| w * y[k]).sum::<f64>()
+                        / total
+                })
+                .collect();
+        }
+    }
+    clamp(&mut weighted_mean);
+    let edge_support = evaluator.evaluate(&weighted_mean, &mut Scratch::default())?.map_or(0.0, |(_, support)| support);
     let proportions = factors.map(|_| proportions_of(&weighted_mean[dims..]));
     weighted_mean.truncate(dims);
     best.1.truncate(dims);
@@ -478,6 +569,9 @@ pub fn fit_shape(
         best_score: best.0,
         history,
         evaluations,
+        gender_value,
+        male_probability,
+        edge_support,
     })
 }
 

@@ -1,12 +1,13 @@
-//! The shape stage in one place: fit each shape space the caller allows, keep the best, apply its
-//! bone-length factors, scale it to the height, pose it by IK and skin it. [`super::run_pipeline`]
+//! The shape stage in one place: fit the shape space the caller asks for (a gender's, or without
+//! one the both-sexes space with gender as a continuous weight, [`crate::body::BlendedSpace`]),
+//! apply its bone-length factors, scale it to the height, pose it by IK and skin it. [`super::run_pipeline`]
 //! and the C API's `skb_fit_shape` both call [`fit_body`].
 
 use std::time::Instant;
 
 use crate::body::ik::{self, IkOptions, Pose};
 use crate::body::skin::skin;
-use crate::body::{BodyModel, Gender, RestShape};
+use crate::body::{BodyModel, Gender, RestShape, ShapeChoice};
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
 use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult};
@@ -39,10 +40,10 @@ fn refit_scale(
     camera.refit_scale(&posed, &targets)
 }
 
-/// The gender's mean rest skeleton, scaled about its pelvis to `height` metres when given
+/// The space's mean rest skeleton, scaled about its pelvis to `height` metres when given
 /// ([`FitOptions::height`]).
-fn mean_skeleton(model: &BodyModel, gender: Gender, height: Option<f64>) -> Result<Joints3> {
-    let space = model.space(gender);
+fn mean_skeleton(model: &BodyModel, choice: ShapeChoice, height: Option<f64>) -> Result<Joints3> {
+    let space = model.shape_space(choice)?;
     let mut joints = *space.mean_joints();
     if let Some(h) = height {
         crate::body::rig::scale_to_height(&mut space.mean().to_vec(), &mut joints, h)?;
@@ -50,11 +51,11 @@ fn mean_skeleton(model: &BodyModel, gender: Gender, height: Option<f64>) -> Resu
     Ok(joints)
 }
 
-/// One gender's fit.
+/// One shape space's fit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GenderFit {
     /// The shape space fitted.
-    pub gender: Gender,
+    pub space: ShapeChoice,
     /// The SIR's result (`None` for the mean shape).
     pub fit: Option<FitResult>,
     /// Best sample's match score (higher is better); NaN for the mean shape.
@@ -63,11 +64,12 @@ pub struct GenderFit {
     pub seconds: f64,
 }
 
-/// Which shape spaces [`fit_body`] tries and how it treats the camera. `Default`: both genders,
-/// fitted, camera refitted to each body.
+/// Which shape space [`fit_body`] fits and how it treats the camera. `Default`: the both-sexes
+/// space (gender fitted), camera refitted to the body.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BodyChoice {
-    /// The shape space to fit; `None` fits both and keeps the better-scoring one.
+    /// The shape space to fit: a gender's, or with `None` the both-sexes space with gender as a
+    /// fitted continuous weight.
     pub gender: Option<Gender>,
     /// Skip the fit and use the gender's mean shape, posed the same way (the benchmark's
     /// baseline). Needs `gender`.
@@ -81,12 +83,28 @@ pub struct BodyChoice {
 /// What [`fit_body`] produces. Owns its data.
 #[derive(Clone, Debug)]
 pub struct FittedBody {
-    /// The fits, in order: the given gender, or female then male.
+    /// The fit (one: the given gender's space, or the blended one).
     pub fits: Vec<GenderFit>,
-    /// The chosen shape space.
+    /// The space fitted.
+    pub space: ShapeChoice,
+    /// The nearer gender: the given one, or for the blended space male when
+    /// [`FittedBody::gender_value`] > 0.5.
     pub gender: Gender,
-    /// PCA weights of the chosen shape (Y* of the SIR; empty for the mean shape), metres.
+    /// Gender value, 0 = female mean … 1 = male mean: 0 or 1 when given, else the fit's
+    /// posterior mean ([`FitResult::gender_value`]).
+    pub gender_value: f64,
+    /// Probability under the fit's posterior that [`FittedBody::gender`] is the right half
+    /// (the gender value on its side of 0.5): 1 when the gender was given, 0.5..=1 when fitted.
+    pub gender_confidence: f64,
+    /// PCA weights of the fitted shape in [`FittedBody::space`] (Y* of the SIR; empty for the
+    /// mean shape), metres; weight 0 of the blended space is its gender axis.
     pub weights: Vec<f64>,
+    /// Fraction of the fitted silhouette's boundary the sketch's strokes support
+    /// ([`FitResult::edge_support`]; NaN for the mean shape).
+    pub edge_support: f64,
+    /// The fit is low-evidence ([`FitResult::low_evidence`]): the body is mostly the prior's
+    /// (e.g. a figure under a cloak to the ground). `false` for the mean shape.
+    pub low_evidence: bool,
     /// Best match score of the chosen fit (NaN for the mean shape).
     pub score: f64,
     /// The camera refitted to the chosen body (see [`BodyChoice::keep_pose_scale`] and
@@ -106,9 +124,9 @@ pub struct FittedBody {
 }
 
 /// Fits the body to `edges` (255 edge, 0 not) under the 3-D `pose` (canonical joints, metres)
-/// seen through `camera`: each allowed shape space by
-/// SIR ([`fit_shape`]), the best score wins (ties keep the first), then bone-length factors,
-/// height, IK and skinning. With `joints2d` the camera is refitted to each body's skeleton (and,
+/// seen through `camera`: the chosen shape space by SIR ([`fit_shape`]; without a gender the
+/// both-sexes space, so no hard gender choice), then bone-length factors, height, IK and
+/// skinning. With `joints2d` the camera is refitted to each body's skeleton (and,
 /// with [`FitOptions::sample_camera`], to the chosen body's) and the fit uses the joints term.
 /// `progress(fraction)` (0..=1 over the fits, non-decreasing) returning `false` cancels.
 ///
@@ -130,40 +148,43 @@ pub fn fit_body(
             detail: "the mean-shape baseline needs a gender (nothing to choose by)".into(),
         });
     }
-    let genders: Vec<Gender> = choice.gender.map_or(Gender::ALL.to_vec(), |g| vec![g]);
-    let n = genders.len() as f32;
+    let space = choice.gender.map_or(ShapeChoice::Blended, ShapeChoice::Gendered);
     let t = Instant::now();
-    let mut fits = Vec::with_capacity(genders.len());
-    let mut cameras = Vec::with_capacity(genders.len());
-    for (i, &gender) in genders.iter().enumerate() {
-        let tf = Instant::now();
-        let camera = match joints2d {
-            Some(j2) if !choice.keep_pose_scale => {
-                refit_scale(pose, camera, &mean_skeleton(model, gender, options.height)?, j2)?
-            }
-            _ => *camera,
-        };
-        if choice.mean_shape {
-            fits.push(GenderFit { gender, fit: None, score: f64::NAN, seconds: 0.0 });
-            cameras.push(camera);
-            continue;
+    let camera = match joints2d {
+        Some(j2) if !choice.keep_pose_scale => {
+            refit_scale(pose, camera, &mean_skeleton(model, space, options.height)?, j2)?
         }
-        let problem = FitProblem { model, gender, pose, camera: &camera, edges, joints2d };
-        let fit = fit_shape(&problem, options, &mut |f| progress(((i as f32 + f) / n).clamp(0.0, 1.0)))?;
-        fits.push(GenderFit { gender, score: fit.best_score, fit: Some(fit), seconds: tf.elapsed().as_secs_f64() });
-        cameras.push(camera);
-    }
+        _ => *camera,
+    };
+    let fit = if choice.mean_shape {
+        GenderFit { space, fit: None, score: f64::NAN, seconds: 0.0 }
+    } else {
+        let problem = FitProblem { model, gender: space, pose, camera: &camera, edges, joints2d };
+        let fit = fit_shape(&problem, options, &mut |f| progress(f.clamp(0.0, 1.0)))?;
+        GenderFit { space, score: fit.best_score, fit: Some(fit), seconds: t.elapsed().as_secs_f64() }
+    };
     let fit_seconds = t.elapsed().as_secs_f64();
-    // Highest score wins; ties (and NaN mean-shape scores) keep the first.
-    let chosen = (1..fits.len()).fold(0, |best, k| if fits[k].score > fits[best].score { k } else { best });
-    let gender = fits[chosen].gender;
-    let weights = fits[chosen].fit.as_ref().map_or_else(Vec::new, |f| f.weights.clone());
-    let score = fits[chosen].score;
-    let camera = cameras.swap_remove(chosen);
+    let weights = fit.fit.as_ref().map_or_else(Vec::new, |f| f.weights.clone());
+    let score = fit.score;
+    let (gender, gender_value, gender_confidence) = match (choice.gender, fit.fit.as_ref()) {
+        (Some(g), _) => (g, g.index() as f64, 1.0),
+        (None, Some(f)) => {
+            let value = f.gender_value.unwrap_or(0.5);
+            let male = f.male_probability.unwrap_or(0.5);
+            (if value > 0.5 { Gender::Male } else { Gender::Female }, value, male.max(1.0 - male))
+        }
+        (None, None) => {
+            return Err(Error::OutOfRange { name: "gender", detail: "the mean-shape baseline needs a gender".into() })
+        }
+    };
+    let (edge_support, low_evidence) =
+        fit.fit.as_ref().map_or((f64::NAN, false), |f| (f.edge_support, f.low_evidence()));
+    let proportions = fit.fit.as_ref().and_then(|f| f.proportions);
+    let fits = vec![fit];
 
     let t = Instant::now();
-    let mut rest = model.space(gender).synthesize(&weights)?;
-    if let Some(props) = fits[chosen].fit.as_ref().and_then(|f| f.proportions.as_ref()) {
+    let mut rest = model.shape_space(space)?.synthesize(&weights)?;
+    if let Some(props) = &proportions {
         crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, model.skin_weights(), props)?;
     }
     if let Some(h) = options.height {
@@ -178,8 +199,13 @@ pub fn fit_body(
     let posed_vertices = skin(&rest.vertices, model.skin_weights(), &ik_pose, options.skinning)?;
     Ok(FittedBody {
         fits,
+        space,
         gender,
+        gender_value,
+        gender_confidence,
         weights,
+        edge_support,
+        low_evidence,
         score,
         camera,
         rest,

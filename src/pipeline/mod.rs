@@ -6,9 +6,11 @@
 //! - [`joints`]: the 2-D joints source (the caller's joints, or the detector's).
 //! - [`overlay`]: the overlay picture (sketch, joints, bones, fitted silhouette outline).
 //!
-//! Gender: when [`PipelineOptions::gender`] is `None` both shape spaces are fitted with the same
-//! options and the one whose best sample scores higher is chosen (both scores are reported);
-//! every match score is "higher is better" and measured in the same units for both genders.
+//! Gender: when [`PipelineOptions::gender`] is `None` the both-sexes space is fitted
+//! ([`crate::body::BlendedSpace`]: gender is a continuous shape weight, 0 female … 1 male, fitted
+//! with the others), so there is no hard gender choice to get wrong; the result reports the
+//! fitted gender value and the posterior probability of its half. Given a gender, that gender's
+//! space is fitted.
 
 pub mod body_fit;
 pub mod joints;
@@ -18,7 +20,7 @@ use std::time::Instant;
 
 use crate::body::ik::Pose;
 use crate::body::rig::RiggedMesh;
-use crate::body::{BodyModel, Gender};
+use crate::body::{BodyModel, Gender, ShapeChoice};
 use crate::error::{Error, Result};
 use crate::fit::FitOptions;
 use crate::image::{canny, CannyParams, GrayImage};
@@ -41,7 +43,8 @@ pub struct PipelineOptions {
     pub pose: PoseOptions,
     /// Shape-fit options (samples, iterations, score, seed, skinning, ...).
     pub fit: FitOptions,
-    /// The shape space to fit; `None` fits both and keeps the better-scoring one.
+    /// The shape space to fit: a gender's, or with `None` (the default) the both-sexes space
+    /// with gender as a fitted continuous weight.
     pub gender: Option<Gender>,
     /// Skip the fit and use the gender's mean shape, posed the same way (the baseline of the
     /// benchmark). Needs `gender`.
@@ -87,12 +90,22 @@ pub struct PipelineResult {
     /// `fit.height` when given; unless `keep_pose_scale`), and with `fit.sample_camera` then to
     /// the chosen body's own skeleton.
     pub pose: PoseEstimate,
-    /// The fits, in order: the given gender, or female then male.
+    /// The fit (one: the given gender's space, or the blended one).
     pub fits: Vec<GenderFit>,
+    /// The space fitted.
+    pub space: ShapeChoice,
     /// The chosen shape space.
     pub gender: Gender,
-    /// `true` when the gender was chosen by score, `false` when the caller gave it.
-    pub gender_by_score: bool,
+    /// Gender value, 0 = female mean … 1 = male mean ([`FittedBody::gender_value`]).
+    pub gender_value: f64,
+    /// Probability that [`PipelineResult::gender`] is the right half ([`FittedBody::gender_confidence`]).
+    pub gender_confidence: f64,
+    /// `true` when the gender was fitted, `false` when the caller gave it.
+    pub gender_fitted: bool,
+    /// Fraction of the fitted outline the sketch supports ([`FittedBody::edge_support`]).
+    pub edge_support: f64,
+    /// The fit is low-evidence ([`FittedBody::low_evidence`]).
+    pub low_evidence: bool,
     /// PCA weights of the chosen shape (Y* of the SIR; empty for the mean shape), metres.
     pub weights: Vec<f64>,
     /// Best match score of the chosen fit (NaN for the mean shape).
@@ -188,8 +201,13 @@ pub fn run_pipeline(
         joints_source: source.name().to_string(),
         pose: PoseEstimate { camera: body.camera, ..pose },
         fits: body.fits,
+        space: body.space,
         gender: body.gender,
-        gender_by_score: options.gender.is_none(),
+        gender_value: body.gender_value,
+        gender_confidence: body.gender_confidence,
+        gender_fitted: options.gender.is_none(),
+        edge_support: body.edge_support,
+        low_evidence: body.low_evidence,
         weights: body.weights,
         score: body.score,
         mesh,

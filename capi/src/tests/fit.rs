@@ -79,6 +79,10 @@ fn options_setters_validate() {
         assert_eq!(skb_fit_options_set_joint_weight(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
         assert!(last_error().contains("joint weight"), "{}", last_error());
         assert_eq!(skb_fit_options_set_joint_weight(i.opts, 0.0), skb_status::SKB_OK);
+        assert_eq!(skb_fit_options_set_inside_cap(i.opts, 0.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+        assert_eq!(skb_fit_options_set_inside_cap(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
+        assert!(last_error().contains("inside cap"), "{}", last_error());
+        assert_eq!(skb_fit_options_set_inside_cap(i.opts, 4.0), skb_status::SKB_OK);
         assert_eq!(skb_fit_options_set_height(i.opts, -1.7), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_height(i.opts, 12.0), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_height(i.opts, f64::NAN), skb_status::SKB_ERR_NON_FINITE);
@@ -174,10 +178,18 @@ fn pipeline_result_accessors() {
         let (mut g, mut by_score) = (9u32, false);
         assert_eq!(skb_result_gender(r, &mut g, &mut by_score), skb_status::SKB_OK);
         assert!(by_score && g <= 1);
-        let (mut sf, mut sm) = (0.0, 0.0);
-        assert_eq!(skb_result_score(r, SKB_GENDER_FEMALE, &mut sf), skb_status::SKB_OK);
-        assert_eq!(skb_result_score(r, SKB_GENDER_MALE, &mut sm), skb_status::SKB_OK);
-        assert_eq!(if g == SKB_GENDER_FEMALE { sf } else { sm }, sf.max(sm));
+        // One space is fitted (the both-sexes one): its score under the result's gender only.
+        let mut sc = 0.0;
+        assert_eq!(skb_result_score(r, g, &mut sc), skb_status::SKB_OK);
+        assert!(sc.is_finite());
+        assert_eq!(skb_result_score(r, 1 - g, &mut sc), skb_status::SKB_ERR_OUT_OF_RANGE);
+        let (mut value, mut confidence) = (f64::NAN, f64::NAN);
+        assert_eq!(skb_result_gender_value(r, &mut value, &mut confidence), skb_status::SKB_OK);
+        assert!((0.0..=1.0).contains(&value) && (0.5..=1.0).contains(&confidence), "{value} {confidence}");
+        assert_eq!(g == SKB_GENDER_MALE, value > 0.5);
+        let (mut low, mut support) = (true, f64::NAN);
+        assert_eq!(skb_result_evidence(r, &mut low, &mut support), skb_status::SKB_OK);
+        assert!((0.0..=1.0).contains(&support) && low == (support < 0.5));
         let mut n = 0usize;
         assert_eq!(skb_result_shape_weights(r, ptr::null_mut(), 0, &mut n), skb_status::SKB_OK);
         let mut w = vec![0.0; n];

@@ -353,6 +353,7 @@ pub fn build_model(data: &MakeHumanData, opts: &BuildOptions) -> Result<(BodyMod
         spaces: [female, male],
         rig: production,
         proxy: Default::default(),
+        blend: Default::default(),
     };
     built.validate()?;
     // Return exactly what the file holds (f32 storage), so reports and the file agree.
