@@ -34,6 +34,7 @@ fn read_truth(dataset: &Path, stem: &str) -> Result<GroundTruth> {
 pub fn shape_by_style(dataset: &Path, scores: &[SampleScore]) -> Result<Vec<StyleRow>> {
     let truths: Vec<GroundTruth> = scores.iter().map(|s| read_truth(dataset, &s.sample)).collect::<Result<_>>()?;
     let female = |t: &GroundTruth| t.gender == "female";
+    #[allow(clippy::type_complexity)] // (group name, membership test)
     let mut groups: Vec<(&'static str, Box<dyn Fn(&GroundTruth) -> bool>)> =
         STYLE_GROUPS.iter().map(|g| (g.name, Box::new(g.member) as Box<dyn Fn(&GroundTruth) -> bool>)).collect();
     groups.push(("true female", Box::new(female)));

@@ -289,10 +289,14 @@ mod tests {
             frames.iter().map(|x| x.iter().flatten().map(|v| v.to_string()).collect::<Vec<_>>().join(",")).collect();
         std::fs::write(dir.join("bend.csv"), format!("{}\n{}\n", header.join(","), rows.join("\n"))).unwrap();
         let spec = LearnSpec { retarget: skel, held_out: vec![], ..LearnSpec::default() };
-        let d = learn_from_sources(&[dir.clone()], &[], &spec).unwrap();
+        let d = learn_from_sources(std::slice::from_ref(&dir), &[], &spec).unwrap();
         assert_eq!(retarget_of(&d), vec!["female".to_string(), "male".to_string()]);
-        let plain =
-            learn_from_sources(&[dir.clone()], &[], &LearnSpec { held_out: vec![], ..LearnSpec::default() }).unwrap();
+        let plain = learn_from_sources(
+            std::slice::from_ref(&dir),
+            &[],
+            &LearnSpec { held_out: vec![], ..LearnSpec::default() },
+        )
+        .unwrap();
         assert!(retarget_of(&plain).is_empty());
         // Learned bone lengths are the skeletons' (normalised), not the source's long arms.
         let b = 3; // r_elbow -> r_wrist
