@@ -45,17 +45,25 @@ fn run(input: &serde_json::Value, dir: &std::path::Path) -> std::process::Output
 #[test]
 fn pose_writes_joints_camera_and_bases() {
     let dir = scratch("ok");
-    // From the mean pose (the paper's start) the mean pose's own view fits exactly.
-    let out = run_with(&joints_doc(), &dir, &["--starts", "0"]);
+    // From the mean pose (the paper's start), without the free-joint refinement (which trades a
+    // pixel for the standing prior), the mean pose's own view fits exactly.
+    let out = run_with(&joints_doc(), &dir, &["--starts", "0", "--joint-noise", "0"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("out.json")).unwrap()).unwrap();
     assert_eq!(v["format"], "sketchbody-pose3d");
     assert_eq!(v["joints"].as_object().unwrap().len(), 15);
     assert_eq!(v["camera"]["r"].as_array().unwrap().len(), 3);
-    assert!(v["reprojection_rms_px"].as_f64().unwrap() < 1.0);
+    let rms0 = v["reprojection_rms_px"].as_f64().unwrap();
+    assert!(rms0 < 1e-3, "rms from the mean pose {rms0}");
     assert!(v["bases"].is_array());
     assert!(v["base_exemplars"].is_null());
     assert_eq!(v["options"]["starts"], 0);
+    // With the refinement on, the standing prior may move the joints by about a pixel, no more.
+    let out = run_with(&joints_doc(), &dir, &["--starts", "0"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("out.json")).unwrap()).unwrap();
+    let rms_refined = v["reprojection_rms_px"].as_f64().unwrap();
+    assert!(rms_refined < 2.0, "rms with the refinement {rms_refined}");
     // The default starts from training exemplars (torso and four limbs recorded); the weight
     // prior toward them leaves a few pixels on this synthetic average figure.
     let out = run(&joints_doc(), &dir);
