@@ -28,7 +28,7 @@ use sketchbody::image::{load_rgb_image, to_gray};
 use sketchbody::pipeline::overlay::overlay;
 use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use sketchbody::pose::dict_io;
-use sketchbody::render::preview::{compare_preview, save_rgb_png};
+use sketchbody::render::preview::{compare_preview, save_rgb_png, SurfaceTexture};
 use sketchbody::rig::RigScene;
 
 use crate::fit_args::{score_name, FitArgs};
@@ -296,16 +296,19 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let t_write = Instant::now();
     let tris = r.mesh.triangles();
     let over = overlay(&sketch, &r.joints2d, &r.posed_vertices, &tris, &r.pose.camera)?;
-    let views = compare_preview(&sketch_rgb, &r.posed_vertices, &tris, &r.pose.camera, a.preview_size)?;
-    let scene = RigScene::build(model.rig(), &r.mesh, &r.ik_pose, &rig_options)?;
-    let texture = match (&r.mesh.uvs, a.no_texture) {
-        (Some(uvs), false) => {
-            let (img, _) =
-                project_sketch(&sketch_rgb, &r.posed_vertices, &r.mesh.quads, uvs, &r.pose.camera, a.texture_size)?;
-            Some(png_bytes(&img)?)
-        }
+    let texture_img = match (&r.mesh.uvs, a.no_texture) {
+        (Some(uvs), false) => Some((
+            project_sketch(&sketch_rgb, &r.posed_vertices, &r.mesh.quads, uvs, &r.pose.camera, a.texture_size)?.0,
+            uvs,
+        )),
         _ => None,
     };
+    let surface =
+        texture_img.as_ref().map(|(img, uvs)| SurfaceTexture::for_quads(img, &r.mesh.quads, uvs)).transpose()?;
+    let views =
+        compare_preview(&sketch_rgb, &r.posed_vertices, &tris, surface.as_ref(), &r.pose.camera, a.preview_size)?;
+    let scene = RigScene::build(model.rig(), &r.mesh, &r.ik_pose, &rig_options)?;
+    let texture = texture_img.as_ref().map(|(img, _)| png_bytes(img)).transpose()?;
     write_glb(&staging.path("body.glb"), &r.mesh, &scene, texture.as_deref())?;
     let mtl = texture.as_ref().map(|_| "body.mtl");
     if let Some(png) = &texture {

@@ -7,6 +7,7 @@ use std::path::Path;
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
+use crate::body::rig::FaceUvs;
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -26,10 +27,132 @@ pub struct RgbImage {
 const BACKGROUND: [u8; 3] = [236, 238, 242];
 const BASE: [f32; 3] = [205.0, 180.0, 165.0];
 
+/// A base-colour texture laid over a triangle list, so the preview shows what an export's
+/// material shows. Borrows the image; owns the per-corner UVs.
+#[derive(Clone, Debug)]
+pub struct SurfaceTexture<'a> {
+    image: &'a RgbImage,
+    /// (u, v) of each triangle's three corners, v up (row 0 of `image` is v = 1).
+    corners: Vec<[[f32; 2]; 3]>,
+}
+
+impl<'a> SurfaceTexture<'a> {
+    /// The texture of a quad mesh with per-corner `uvs`, for the triangles
+    /// [`quads_to_triangles`](crate::body::rig::quads_to_triangles) makes of `quads`, in that order.
+    /// Errors: UV faces that do not match the quads or index past the UV list, an empty image.
+    pub fn for_quads(image: &'a RgbImage, quads: &[[u32; 4]], uvs: &FaceUvs) -> Result<Self> {
+        let m = uvs.coords.len();
+        if uvs.quads.len() != quads.len() || uvs.quads.iter().flatten().any(|&i| i as usize >= m) {
+            return Err(Error::OutOfRange {
+                name: "texture UVs",
+                detail: format!("{} UV faces over {m} coordinates for {} quads", uvs.quads.len(), quads.len()),
+            });
+        }
+        if image.width == 0 || image.height == 0 || image.data.len() != image.width * image.height * 3 {
+            return Err(Error::OutOfRange { name: "texture", detail: "empty or mis-sized texture image".into() });
+        }
+        let uv = |k: u32| uvs.coords[k as usize];
+        let mut corners = Vec::with_capacity(2 * quads.len());
+        // The same split as `quads_to_triangles`, decided on the position indices.
+        for (q, t) in quads.iter().zip(&uvs.quads) {
+            corners.push([uv(t[0]), uv(t[1]), uv(t[2])]);
+            if q[3] != q[2] && q[3] != q[0] {
+                corners.push([uv(t[0]), uv(t[2]), uv(t[3])]);
+            }
+        }
+        Ok(Self { image, corners })
+    }
+
+    /// Triangles this texture covers.
+    pub fn triangles(&self) -> usize {
+        self.corners.len()
+    }
+
+    /// The texel (nearest) at barycentric weights `w` of triangle `t`.
+    fn texel(&self, t: usize, w: [f64; 3]) -> [f32; 3] {
+        let c = &self.corners[t];
+        let u = w[0] * c[0][0] as f64 + w[1] * c[1][0] as f64 + w[2] * c[2][0] as f64;
+        let v = w[0] * c[0][1] as f64 + w[1] * c[1][1] as f64 + w[2] * c[2][1] as f64;
+        let (iw, ih) = (self.image.width, self.image.height);
+        let x = ((u * iw as f64).floor().max(0.0) as usize).min(iw - 1);
+        let y = (((1.0 - v) * ih as f64).floor().max(0.0) as usize).min(ih - 1);
+        let o = (y * iw + x) * 3;
+        [0, 1, 2].map(|k| self.image.data[o + k] as f32)
+    }
+}
+
+/// Barycentric weights of point `p` in triangle `t` (either orientation), clamped into the
+/// triangle so pixel centres just outside a snapped edge still read a texel of this face.
+fn barycentric(t: [[f64; 2]; 3], p: [f64; 2]) -> [f64; 3] {
+    let (ab, ac, ap) = (
+        [t[1][0] - t[0][0], t[1][1] - t[0][1]],
+        [t[2][0] - t[0][0], t[2][1] - t[0][1]],
+        [p[0] - t[0][0], p[1] - t[0][1]],
+    );
+    let d = ab[0] * ac[1] - ab[1] * ac[0];
+    if d == 0.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    let wb = ((ap[0] * ac[1] - ap[1] * ac[0]) / d).clamp(0.0, 1.0);
+    let wc = ((ab[0] * ap[1] - ab[1] * ap[0]) / d).clamp(0.0, 1.0);
+    let s = wb + wc;
+    let (wb, wc) = if s > 1.0 { (wb / s, wc / s) } else { (wb, wc) };
+    [1.0 - wb - wc, wb, wc]
+}
+
+/// Draws `tris` of the camera-frame points `cam`, projected to fixed-point pixels `px` (1/SUB
+/// px) of a `w`×`h` canvas, calling `put(pixel_index, x, y, rgb)` for each pixel where a
+/// triangle is nearest: two-sided Lambert shading of the plain skin colour, or of `texture`'s
+/// texel when given.
+fn shade_triangles(
+    cam: &[Vector3<f64>],
+    px: &[[i64; 2]],
+    tris: &[[u32; 3]],
+    texture: Option<&SurfaceTexture>,
+    (w, h): (usize, usize),
+    mut put: impl FnMut(usize, usize, usize, [u8; 3]),
+) {
+    let light = Vector3::new(-0.4, 0.5, 1.0).normalize();
+    let mut depth = vec![f32::NEG_INFINITY; w * h];
+    for (t, tri) in tris.iter().enumerate() {
+        let [a, b, c] = tri.map(|i| i as usize);
+        let n = (cam[b] - cam[a]).cross(&(cam[c] - cam[a]));
+        if n.norm() < 1e-20 {
+            continue;
+        }
+        let lambert = (n.normalize().dot(&light)).abs() as f32;
+        let z = [cam[a].z as f32, cam[b].z as f32, cam[c].z as f32];
+        let Some(s) = setup([px[a], px[b], px[c]], z, w, h, true) else { continue };
+        let corners = [a, b, c].map(|k| [px[k][0] as f64, px[k][1] as f64]);
+        scan(&s, w, |idx, i, j, d| {
+            if d > depth[idx] {
+                depth[idx] = d;
+                let rgb = match texture {
+                    None => BASE.map(|c| (c * (0.3 + 0.7 * lambert)).min(255.0) as u8),
+                    Some(tex) => {
+                        let p = [(i as f64 + 0.5) * SUB as f64, (j as f64 + 0.5) * SUB as f64];
+                        let texel = tex.texel(t, barycentric(corners, p));
+                        texel.map(|c| (c * (0.55 + 0.45 * lambert)).min(255.0) as u8)
+                    }
+                };
+                put(idx, i, j, rgb);
+            }
+        });
+    }
+}
+
 /// One view of `vertices`/`tris` (metres, model frame) seen through rotation `r` (model →
 /// camera, orthographic along −Z of the camera), fitted into a `size`×`size` tile with a 5%
 /// margin, written into `img` at column offset `x0`.
-fn draw_view(img: &mut RgbImage, x0: usize, size: usize, vertices: &[[f32; 3]], tris: &[[u32; 3]], r: &Matrix3<f64>) {
+fn draw_view(
+    img: &mut RgbImage,
+    x0: usize,
+    size: usize,
+    vertices: &[[f32; 3]],
+    tris: &[[u32; 3]],
+    texture: Option<&SurfaceTexture>,
+    r: &Matrix3<f64>,
+) {
     let cam: Vec<Vector3<f64>> =
         vertices.iter().map(|v| r * Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)).collect();
     let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
@@ -48,32 +171,36 @@ fn draw_view(img: &mut RgbImage, x0: usize, size: usize, vertices: &[[f32; 3]], 
             [(u * SUB as f64).round() as i64, (v * SUB as f64).round() as i64]
         })
         .collect();
-    let light = Vector3::new(-0.4, 0.5, 1.0).normalize();
-    let mut depth = vec![f32::NEG_INFINITY; size * size];
-    for t in tris {
-        let [a, b, c] = t.map(|i| i as usize);
-        let n = (cam[b] - cam[a]).cross(&(cam[c] - cam[a]));
-        if n.norm() < 1e-20 {
-            continue;
-        }
-        let shade = 0.3 + 0.7 * (n.normalize().dot(&light)).abs() as f32;
-        let rgb = BASE.map(|c| (c * shade).min(255.0) as u8);
-        let z = [cam[a].z as f32, cam[b].z as f32, cam[c].z as f32];
-        let Some(s) = setup([px[a], px[b], px[c]], z, size, size, true) else { continue };
-        scan(&s, size, |idx, i, j, d| {
-            if d > depth[idx] {
-                depth[idx] = d;
-                let o = (j * img.width + x0 + i) * 3;
-                img.data[o..o + 3].copy_from_slice(&rgb);
-            }
-        });
-    }
+    let width = img.width;
+    shade_triangles(&cam, &px, tris, texture, (size, size), |_, i, j, rgb| {
+        let o = (j * width + x0 + i) * 3;
+        img.data[o..o + 3].copy_from_slice(&rgb);
+    });
 }
 
 /// Front and right-side views of a mesh, each `size`×`size` pixels (1..=4096), side by side.
 /// Errors: bad size, no triangles, out-of-range indices, non-finite vertices.
 pub fn preview(vertices: &[[f32; 3]], tris: &[[u32; 3]], size: usize) -> Result<RgbImage> {
+    preview_textured(vertices, tris, None, size)
+}
+
+/// [`preview`] with the surface shaded by `texture` (one UV triangle per entry of `tris`) when
+/// given. Errors: [`preview`]'s, a texture for another number of triangles.
+pub fn preview_textured(
+    vertices: &[[f32; 3]],
+    tris: &[[u32; 3]],
+    texture: Option<&SurfaceTexture>,
+    size: usize,
+) -> Result<RgbImage> {
     check_size(size, size)?;
+    if let Some(tex) = texture {
+        if tex.triangles() != tris.len() {
+            return Err(Error::OutOfRange {
+                name: "texture",
+                detail: format!("UVs for {} triangles, the mesh has {}", tex.triangles(), tris.len()),
+            });
+        }
+    }
     if tris.is_empty() {
         return Err(Error::OutOfRange { name: "triangles", detail: "no triangles to draw".into() });
     }
@@ -88,10 +215,10 @@ pub fn preview(vertices: &[[f32; 3]], tris: &[[u32; 3]], size: usize) -> Result<
         return Err(Error::NonFinite { name: "mesh vertex", value: *v as f64 });
     }
     let mut img = RgbImage { width: 2 * size, height: size, data: BACKGROUND.repeat(2 * size * size) };
-    draw_view(&mut img, 0, size, vertices, tris, &Matrix3::identity());
+    draw_view(&mut img, 0, size, vertices, tris, texture, &Matrix3::identity());
     // The character's right side (−X) faces the viewer: turn the model 90° about +Y.
     let side = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2).into_inner();
-    draw_view(&mut img, size, size, vertices, tris, &side);
+    draw_view(&mut img, size, size, vertices, tris, texture, &side);
     Ok(img)
 }
 
@@ -100,6 +227,7 @@ pub fn preview(vertices: &[[f32; 3]], tris: &[[u32; 3]], size: usize) -> Result<
 fn camera_view(
     vertices: &[[f32; 3]],
     tris: &[[u32; 3]],
+    texture: Option<&SurfaceTexture>,
     camera: &WeakPerspective,
     w: usize,
     h: usize,
@@ -114,45 +242,29 @@ fn camera_view(
             [(u * SUB as f64).round() as i64, (v * SUB as f64).round() as i64]
         })
         .collect();
-    let light = Vector3::new(-0.4, 0.5, 1.0).normalize();
-    let mut depth = vec![f32::NEG_INFINITY; w * h];
     let mut out = vec![None; w * h];
-    for t in tris {
-        let [a, b, c] = t.map(|i| i as usize);
-        let n = (cam[b] - cam[a]).cross(&(cam[c] - cam[a]));
-        if n.norm() < 1e-20 {
-            continue;
-        }
-        let shade = 0.3 + 0.7 * (n.normalize().dot(&light)).abs() as f32;
-        let rgb = BASE.map(|c| (c * shade).min(255.0) as u8);
-        let z = [cam[a].z as f32, cam[b].z as f32, cam[c].z as f32];
-        let Some(s) = setup([px[a], px[b], px[c]], z, w, h, true) else { continue };
-        scan(&s, w, |idx, _, _, d| {
-            if d > depth[idx] {
-                depth[idx] = d;
-                out[idx] = Some(rgb);
-            }
-        });
-    }
+    shade_triangles(&cam, &px, tris, texture, (w, h), |idx, _, _, rgb| out[idx] = Some(rgb));
     out
 }
 
 /// What an artist compares: four panels `size` pixels high, left to right — the sketch, the
 /// posed body through the estimated `camera` (same framing as the sketch), the body blended
 /// half over the sketch, then the body's front and right side ([`preview`]). The first three
-/// are the sketch's aspect ratio, scaled to `size` pixels high. Errors: [`preview`]'s, a camera
-/// that is not a rotation, a canvas over 4096 pixels wide.
+/// are the sketch's aspect ratio, scaled to `size` pixels high. With `texture` (the export's
+/// base colour, one UV triangle per entry of `tris`) every body panel shows it. Errors:
+/// [`preview_textured`]'s, a camera that is not a rotation, a canvas over 4096 pixels wide.
 pub fn compare_preview(
     sketch: &crate::image::RgbImage,
     vertices: &[[f32; 3]],
     tris: &[[u32; 3]],
+    texture: Option<&SurfaceTexture>,
     camera: &WeakPerspective,
     size: usize,
 ) -> Result<RgbImage> {
-    let views = preview(vertices, tris, size)?;
+    let views = preview_textured(vertices, tris, texture, size)?;
     camera.validate()?;
     let (sw, sh) = (sketch.width(), sketch.height());
-    let body = camera_view(vertices, tris, camera, sw, sh);
+    let body = camera_view(vertices, tris, texture, camera, sw, sh);
     let tile = ((size as f64 * sw as f64 / sh as f64).round() as usize).max(1);
     let width = 3 * tile + views.width;
     check_size(width, size)?;
@@ -220,7 +332,7 @@ mod tests {
         let m = capsule_humanoid(&rest_joints(), 10, 8);
         let sketch = crate::image::RgbImage::from_vec(100, 200, vec![255; 100 * 200 * 3]).unwrap();
         let cam = WeakPerspective { sx: 80.0, sy: 80.0, r: Matrix3::identity(), t: [50.0, 100.0] };
-        let img = compare_preview(&sketch, &m.vertices, &m.triangles(), &cam, 64).unwrap();
+        let img = compare_preview(&sketch, &m.vertices, &m.triangles(), None, &cam, 64).unwrap();
         assert_eq!((img.width, img.height), (3 * 32 + 128, 64));
         let at = |i: usize, j: usize| img.data[(j * img.width + i) * 3..][..3].to_vec();
         // The chest (between the pelvis and the neck) where the camera projects it.
@@ -233,5 +345,35 @@ mod tests {
         assert_eq!(at(32, 0), BACKGROUND.to_vec(), "no body in the top-left corner");
         let blend = at(64 + i, k);
         assert!(blend[0] > at(32 + i, k)[0] && blend[0] < 255);
+    }
+
+    /// A textured square shows the texture's two halves where its UVs put them, shaded but
+    /// recognisable; a texture for another triangle count is an error.
+    #[test]
+    fn textured_preview_shows_the_texture_where_the_uvs_put_it() {
+        let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0f32]];
+        let quads = [[0u32, 1, 2, 3]];
+        let uvs = FaceUvs { coords: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], quads: vec![[0, 1, 2, 3]] };
+        // Left half red, right half blue.
+        let mut data = Vec::new();
+        for _ in 0..8 {
+            for x in 0..8 {
+                data.extend_from_slice(if x < 4 { &[250, 0, 0] } else { &[0, 0, 250] });
+            }
+        }
+        let tex_img = RgbImage { width: 8, height: 8, data };
+        let tex = SurfaceTexture::for_quads(&tex_img, &quads, &uvs).unwrap();
+        let tris = crate::body::rig::quads_to_triangles(&quads);
+        assert_eq!(tex.triangles(), tris.len());
+        let img = preview_textured(&v, &tris, Some(&tex), 64).unwrap();
+        let at = |i: usize, j: usize| img.data[(j * img.width + i) * 3..][..3].to_vec();
+        let (left, right) = (at(16, 32), at(48, 32));
+        assert!(left[0] > 100 && left[2] == 0, "left {left:?}");
+        assert!(right[2] > 100 && right[0] == 0, "right {right:?}");
+        let plain = preview(&v, &tris, 64).unwrap();
+        assert_ne!(plain.data, img.data);
+        assert!(preview_textured(&v, &tris[..1], Some(&tex), 64).is_err());
+        let bad = FaceUvs { coords: uvs.coords.clone(), quads: vec![[0, 1, 2, 9]] };
+        assert!(SurfaceTexture::for_quads(&tex_img, &quads, &bad).is_err());
     }
 }
