@@ -27,6 +27,20 @@ pub struct SearchArgs {
     /// finer in scale, 1.4 times the work of the sketch default 7; 5 = every other level of 10).
     #[arg(long, default_value_t = SKETCH_LEVELS_PER_OCTAVE)]
     pub levels_per_octave: usize,
+    /// Ink-box normalisation: a drawing whose ink square is larger than N px is cropped to it and
+    /// downscaled to N² before the search (0 = off: the whole page, downscaled to 1024 px).
+    #[arg(long, default_value_t = sketchbody::detect::DEFAULT_NORMALISE_SIDE, value_parser = normalise_side)]
+    pub normalise: usize,
+}
+
+/// `--normalise`: 0 or at least the detector's smallest side.
+fn normalise_side(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
+    let min = sketchbody::detect::MIN_DETECT_SIDE;
+    if n != 0 && n < min {
+        return Err(format!("{n}: expected 0 (off) or at least {min}"));
+    }
+    Ok(n)
 }
 
 impl SearchArgs {
@@ -46,6 +60,7 @@ impl SearchArgs {
             max_cell_px: self.max_cell,
             search,
             levels_per_octave,
+            normalise: (self.normalise > 0).then_some(self.normalise),
             ..DetectOptions::default()
         }
     }

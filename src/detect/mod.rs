@@ -14,6 +14,7 @@ pub mod format;
 pub mod hog;
 pub mod joints;
 pub mod model;
+pub mod normalise;
 pub mod parse_eval;
 pub mod pyramid;
 pub mod train;
@@ -107,7 +108,17 @@ pub struct DetectOptions {
     /// coarser in scale; 5 gives every other level of 10 exactly. Range 1..=100. Default
     /// [`SKETCH_LEVELS_PER_OCTAVE`].
     pub levels_per_octave: Option<usize>,
+    /// Ink-box normalisation: when the square around the drawing's ink (its longer side at 0.8
+    /// of the square) is larger than this many px, that square is cropped and downscaled to it
+    /// before the search, so a large scan is seen at the size the model was trained on
+    /// ([`normalise::normalise`]). `None` searches the whole image (downscaled to `max_side`), as
+    /// does [`SearchScales::All`] (photos with small people keep their resolution).
+    /// Default [`DEFAULT_NORMALISE_SIDE`]; at least [`MIN_DETECT_SIDE`]; capped by `max_side`.
+    pub normalise: Option<usize>,
 }
+
+/// The default working side of ink-box normalisation, px: the training sketches' canvas.
+pub const DEFAULT_NORMALISE_SIDE: usize = 512;
 
 /// The documented default levels per octave for concept sketches ([`DetectOptions::default`]):
 /// 7 instead of the models' 10, 0.7 of the levels and of the work; on 300 held-out sketches
@@ -126,6 +137,7 @@ impl Default for DetectOptions {
             max_detections: 10,
             search: SKETCH_SEARCH,
             levels_per_octave: Some(SKETCH_LEVELS_PER_OCTAVE),
+            normalise: Some(DEFAULT_NORMALISE_SIDE),
         }
     }
 }
@@ -154,6 +166,11 @@ impl DetectOptions {
         if let Some(n) = self.levels_per_octave {
             if !(1..=100).contains(&n) {
                 return range("levels_per_octave", format!("{n} not in 1..=100"));
+            }
+        }
+        if let Some(n) = self.normalise {
+            if n < MIN_DETECT_SIDE {
+                return range("normalise", format!("{n} < {MIN_DETECT_SIDE}"));
             }
         }
         if let SearchScales::FigureFraction { min, max } = self.search {
@@ -275,7 +292,15 @@ pub fn to_detection(c: &Candidate, model: &Model, scale: f64) -> Detection {
 /// nothing reaches the threshold.
 pub fn detect(image: &ImageView<'_>, model: &Model, options: &DetectOptions) -> Result<Detections> {
     options.validate()?;
-    let (planes, scale) = prepare_image(image, options.max_side)?;
+    let normalise_side = if options.search == SearchScales::All { None } else { options.normalise };
+    let (planes, scale, offset) =
+        match normalise_side.and_then(|n| normalise::normalise(image, n.min(options.max_side))) {
+            Some(n) => (n.planes, n.scale, n.offset),
+            None => {
+                let (planes, scale) = prepare_image(image, options.max_side)?;
+                (planes, scale, [0.0, 0.0])
+            }
+        };
     let thresh = options.threshold.unwrap_or(model.thresh);
     let (lo, hi) = options.search.cell_range(model, planes.width, planes.height);
     let (lo, hi) = (lo.max(options.min_cell_px), hi.min(options.max_cell_px));
@@ -287,7 +312,23 @@ pub fn detect(image: &ImageView<'_>, model: &Model, options: &DetectOptions) -> 
         return Err(Error::NoFigure { score: best_score, threshold: thresh });
     }
     let kept = tree::nms(above, options.nms_overlap, options.max_detections);
-    Ok(Detections { all: kept.iter().map(|c| to_detection(c, model, scale)).collect() })
+    Ok(Detections { all: kept.iter().map(|c| shifted(to_detection(c, model, scale), offset)).collect() })
+}
+
+/// `d` moved by `offset` (input px): from a normalised crop's frame to the input image's.
+fn shifted(mut d: Detection, [dx, dy]: [f64; 2]) -> Detection {
+    if dx == 0.0 && dy == 0.0 {
+        return d;
+    }
+    for p in d.joints.xy.iter_mut().chain(d.parse_joints.iter_mut()) {
+        p[0] += dx;
+        p[1] += dy;
+    }
+    for b in &mut d.parts {
+        (b.x1, b.x2, b.y1, b.y2) = (b.x1 + dx, b.x2 + dx, b.y1 + dy, b.y2 + dy);
+    }
+    d.bbox = [d.bbox[0] + dx, d.bbox[1] + dy, d.bbox[2] + dx, d.bbox[3] + dy];
+    d
 }
 
 #[cfg(test)]
