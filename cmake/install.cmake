@@ -8,7 +8,7 @@ set(SKB_LINK_NAME "${CMAKE_SHARED_LIBRARY_PREFIX}sketchbody${CMAKE_SHARED_LIBRAR
 set(SKB_STATIC_NAME "${CMAKE_STATIC_LIBRARY_PREFIX}sketchbody${CMAKE_STATIC_LIBRARY_SUFFIX}")
 set(SKB_CMAKE_DIR "${CMAKE_INSTALL_LIBDIR}/cmake/sketchbody")
 
-# Release builds install the libraries without debug info (45 MB -> 11 MB for the .so, see
+# Release builds install the libraries without debug info (49 MB -> 16 MB for the .so, see
 # docs/benchmarks.md); Debug and RelWithDebInfo keep it, and so does SKB_KEEP_DEBUG_INFO=ON.
 set(SKB_STRIP_ON_INSTALL OFF)
 if(NOT SKB_KEEP_DEBUG_INFO AND NOT CMAKE_BUILD_TYPE MATCHES "^(Debug|RelWithDebInfo)$" AND CMAKE_STRIP)
