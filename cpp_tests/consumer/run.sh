@@ -5,7 +5,8 @@
 #   1. find_package(sketchbody) from the prefix (plus examples/plugin_host.cpp, run on the example),
 #   2. pkg-config (sketchbody.pc; Libs.private for the static link),
 #   3. add_subdirectory of the source tree, sharing cargo's folder (no cargo rebuild), checking
-#      that nothing in the source tree is written (a read-only checkout works) and tests are off.
+#      that it writes nothing into the source tree (no new files, Cargo.lock untouched: what a
+#      read-only checkout needs) and that the tests default to OFF.
 # Usage: run.sh SOURCE_DIR BUILD_DIR CARGO_TARGET_DIR BUILD_TYPE
 set -euo pipefail
 src=$(cd "$1" && pwd)
@@ -88,6 +89,11 @@ run_consumer "$tmp/pc_shared" shared
 run_consumer "$tmp/pc_static" static
 
 echo "== 3. add_subdirectory(sketchbody source tree)"
+# What would show a write into the source tree: new untracked files (git), a rewritten
+# Cargo.lock, anything new in <source>/target unless that is the cargo folder in use. (Edits to
+# tracked files by someone working in the tree while the test runs are not counted.)
+untracked() { git -C "$src" status --porcelain --untracked-files=all 2>/dev/null | grep '^??' | sort || true; }
+untracked >"$tmp/untracked.before"
 touch "$tmp/stamp"
 cmake -S "$here" -B "$tmp/sub" -DCMAKE_BUILD_TYPE="$build_type" -DSKB_CONSUMER_MODE=subdir \
   -DSKETCHBODY_SOURCE_DIR="$src" -DSKB_CARGO_TARGET_DIR="$cargo_dir" >"$tmp/sub.log" \
@@ -96,8 +102,14 @@ grep -q '^SKB_BUILD_TESTS:BOOL=OFF$' "$tmp/sub/CMakeCache.txt" || fail "SKB_BUIL
 cmake --build "$tmp/sub" >>"$tmp/sub.log" 2>&1 || { cat "$tmp/sub.log"; fail "add_subdirectory build"; }
 grep -E '^ *(Finished|Compiling)' "$tmp/sub.log" | sed 's/^ */cargo: /'
 cargo_abs=$(cd "$cargo_dir" && pwd)
-written=$(find "$src" -newer "$tmp/stamp" -type f -not -path "$cargo_abs/*" -not -path "$build/*" | head -n 5)
+written=$(comm -13 "$tmp/untracked.before" <(untracked) | grep -v -e "^?? ${build#"$src"/}/" -e "^?? ${cargo_abs#"$src"/}/" || true)
+[ "$src/Cargo.lock" -nt "$tmp/stamp" ] && written="$written Cargo.lock"
+if [ -d "$src/target" ] && [ "$cargo_abs" != "$src/target" ]; then
+  written="$written $(find "$src/target" -newer "$tmp/stamp" -type f | head -n 3)"
+fi
+written=$(echo "$written" | xargs)
 [ -z "$written" ] || fail "add_subdirectory wrote into the source tree: $written"
+echo "source tree unchanged by the add_subdirectory build"
 run_consumer "$tmp/sub/consumer_shared" shared
 run_consumer "$tmp/sub/consumer_static" static
 echo "== consumer_packaging: all three ways passed"
