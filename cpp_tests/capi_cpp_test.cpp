@@ -89,6 +89,67 @@ int main() {
     }
     CHECK(frees == 1);
 
+    // The mesh and rig wrappers (issue 18): a posed mean body rigged with Mixamo names, T-pose
+    // rest, origin on the floor.
+    {
+        sketchbody::Context ctx;
+        sketchbody::Mesh mesh(ctx, SKB_GENDER_MALE);
+        const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
+        std::vector<double> target = mesh.joints(false);
+        target[3 * 4 + 1] += 0.3;  // right wrist raised
+        mesh.pose(target);
+        const std::vector<double> posed = mesh.joints(true);
+        CHECK(posed[3 * 4 + 1] > target[3 * 4 + 1] - 0.3 + 0.1);  // the wrist went up (bone lengths kept)
+        const std::vector<float> rest_n = mesh.normals(false), posed_n = mesh.normals(true);
+        CHECK(rest_n.size() == 3 * nv && posed_n != rest_n);
+        bool unit = true;
+        for (size_t v = 0; v < nv; ++v)
+            unit = unit && std::fabs(std::hypot(posed_n[3 * v], posed_n[3 * v + 1], posed_n[3 * v + 2]) - 1.0) < 1e-4;
+        CHECK(unit);
+        const std::vector<uint32_t> quads = mesh.faces(), tris = mesh.triangles(), fuv = mesh.face_uvs();
+        const std::vector<float> uvs = mesh.uvs();
+        CHECK(quads.size() == 4 * nf && tris.size() == 6 * nf && fuv.size() == 4 * nf && uvs.size() == 2 * mesh.uv_count());
+        CHECK(tris[3] == quads[0] && tris[4] == quads[2] && tris[5] == quads[3]);
+        bool in_range = true;
+        for (uint32_t i : fuv) in_range = in_range && i < mesh.uv_count();
+        CHECK(in_range);
+
+        sketchbody::RigOptions o;
+        o.naming = SKB_NAMING_MIXAMO;
+        o.rest_pose = SKB_REST_T_POSE;
+        const sketchbody::Rig rig = mesh.rig(o);
+        const std::vector<std::string> names = rig.bone_names();
+        const std::vector<int32_t> parents = rig.parents();
+        CHECK(names.size() == SKB_NUM_RIG_BONES && names[0] == "mixamorig:Root" && names[1] == "mixamorig:Hips");
+        CHECK(parents.size() == SKB_NUM_RIG_BONES && parents[0] == -1 && parents[1] == 0);
+        CHECK(rig.rest_transforms().size() == SKB_RIG_TRANSFORM_LEN * SKB_NUM_RIG_BONES);
+        const std::vector<double> lr = rig.local_rotations();
+        bool unit_q = lr.size() == 4 * SKB_NUM_RIG_BONES;
+        for (size_t b = 0; unit_q && b < SKB_NUM_RIG_BONES; ++b)
+            unit_q = std::fabs(lr[4 * b] * lr[4 * b] + lr[4 * b + 1] * lr[4 * b + 1] + lr[4 * b + 2] * lr[4 * b + 2] +
+                               lr[4 * b + 3] * lr[4 * b + 3] - 1.0) < 1e-9;
+        CHECK(unit_q);
+        const std::vector<float> pv = rig.posed_vertices(), rv = rig.rest_vertices();
+        float low_posed = 1e9f, low_rest = 1e9f;
+        for (size_t v = 0; v < nv; ++v) {
+            low_posed = std::fmin(low_posed, pv[3 * v + 1]);
+            low_rest = std::fmin(low_rest, rv[3 * v + 1]);
+        }
+        // Origin on the floor: the posed body stands on it; the T-pose rest (feet turned from the
+        // A-pose the floor is measured on) within a centimetre.
+        CHECK(std::fabs(low_posed) < 1e-5f && std::fabs(low_rest) < 0.01f);
+        const sketchbody::SkinWeights skin = rig.skin_weights();
+        bool bones_ok = skin.bones.size() == SKB_MAX_INFLUENCES * nv;
+        for (uint32_t b : skin.bones) bones_ok = bones_ok && b < SKB_NUM_RIG_BONES;
+        CHECK(bones_ok);
+        CHECK(rig.posed_heads().size() == 3 * SKB_NUM_RIG_BONES && rig.root_translation().size() == 3);
+        sketchbody::RigOptions bad;
+        bad.naming = 7;
+        CHECK(status_of([&] { mesh.rig(bad); }) == SKB_ERR_OUT_OF_RANGE);
+        std::printf("capi_cpp_test: rig %zu bones (%s ... %s), %zu vertices, %zu UVs\n", names.size(), names[0].c_str(),
+                    names.back().c_str(), nv, mesh.uv_count());
+    }
+
     std::printf("%s (%d failed checks)\n", failures ? "FAIL" : "PASS", failures);
     return failures ? 1 : 0;
 }

@@ -161,8 +161,8 @@ int main(int argc, char **argv) {
         }
         expect(visible >= 12 && 5 * close >= 4 * visible, "most detected joints within 0.2 figure heights of the drawn ones");
         expect(d.vertex_count() == 13380, "the detected-joints run gives a body");
-        std::printf("plugin_host: %zu vertices, %zu faces, gender %s (scores f %.4f, m %.4f), cancel in %.2f s\n", nv, nf,
-                    g == SKB_GENDER_FEMALE ? "female" : "male", sf, sm, secs);
+        std::printf("plugin_host: %zu vertices, %zu faces, gender %s (value %.4f, confidence %.4f), cancel in %.2f s\n", nv,
+                    nf, g == SKB_GENDER_FEMALE ? "female" : "male", gv, gc, secs);
     } catch (const sketchbody::Error &e) {
         std::fprintf(stderr, "plugin_host: sketchbody error %d: %s\n", static_cast<int>(e.status()), e.what());
         return 1;

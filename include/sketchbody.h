@@ -99,6 +99,17 @@
 #define SKB_ORIGIN_PELVIS 1
 
 /**
+ * Number of bones of the production rig (MakeHuman's `game_engine` skeleton).
+ */
+#define SKB_NUM_RIG_BONES 53
+
+/**
+ * Doubles per bone in `skb_rig_copy_rest_transforms`: translation x, y, z then rotation
+ * quaternion x, y, z, w (glTF's order).
+ */
+#define SKB_RIG_TRANSFORM_LEN 7
+
+/**
  * Length of a pose vector (x, y, z of each joint in canonical order).
  */
 #define SKB_POSE_DIM 45
@@ -388,6 +399,13 @@ typedef struct skb_rasterizer skb_rasterizer;
  * all its data (nothing refers to the inputs). Immutable: several threads may read it at once.
  */
 typedef struct skb_result skb_result;
+
+/**
+ * The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb_with_options` writes for
+ * the same mesh and options. Create with `skb_mesh_rig_new`, release with `skb_rig_free`; it does
+ * not follow later `skb_mesh_pose` calls. Read-only, so several threads may use it at once.
+ */
+typedef struct skb_rig skb_rig;
 
 /**
  * Options of [`skb_render_sketch`]: the style and the camera angles. Create with
@@ -858,6 +876,143 @@ skb_status skb_export_options_set_origin(struct skb_export_options *opts, uint32
 skb_status skb_mesh_write_glb_with_options(const struct skb_mesh *mesh,
                                            const char *path,
                                            const struct skb_export_options *opts);
+
+/**
+ * Builds the rig of `mesh` in its current pose (the rest pose if never posed) with `opts`
+ * (NULL: the defaults: project names, A-pose rest, origin on the floor) into `*out`, which the
+ * caller owns (release with `skb_rig_free`). Errors: degenerate bones (`SKB_ERR_DEGENERATE_BONE`).
+ * Only reads `mesh` and `opts`.
+ */
+skb_status skb_mesh_rig_new(const struct skb_mesh *mesh,
+                            const struct skb_export_options *opts,
+                            struct skb_rig **out);
+
+/**
+ * Releases a rig. NULL is a no-op.
+ */
+void skb_rig_free(struct skb_rig *rig);
+
+/**
+ * Number of bones (`SKB_NUM_RIG_BONES`) into `*out`.
+ */
+skb_status skb_rig_bone_count(const struct skb_rig *rig, size_t *out);
+
+/**
+ * Number of vertices of the rig's mesh (the mesh's, 13380) into `*out`.
+ */
+skb_status skb_rig_vertex_count(const struct skb_rig *rig, size_t *out);
+
+/**
+ * Copies the name of bone `bone` (0 .. `SKB_NUM_RIG_BONES`−1; the GLB node's name in the chosen
+ * convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least the name's length
+ * + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+ */
+skb_status skb_rig_copy_bone_name(const struct skb_rig *rig,
+                                  size_t bone,
+                                  char *dst,
+                                  size_t dst_len);
+
+/**
+ * Copies each bone's parent index (−1 for the root, bone 0) into `dst` of `dst_len` integers
+ * (at least `SKB_NUM_RIG_BONES`). Parents come before their children; the order is the GLB's
+ * node and joint order.
+ */
+skb_status skb_rig_copy_parents(const struct skb_rig *rig, int32_t *dst, size_t dst_len);
+
+/**
+ * Copies each bone's rest transform relative to its parent, `SKB_RIG_TRANSFORM_LEN` doubles per
+ * bone: translation x, y, z (metres, in the parent bone's frame; the root's in the model frame,
+ * +Y up) then the rotation as a unit quaternion x, y, z, w (parent bone frame → this bone's
+ * frame; bone frames have Y along the bone, X the bend axis MakeHuman's roll gives). The rest
+ * is the rig's (A- or T-pose, placed at the chosen origin): the GLB's bind pose. Composing
+ * `parent · T(t) · R(q)` from the root gives each bone's rest frame and head. `dst` holds
+ * `dst_len` doubles (at least 7 × `SKB_NUM_RIG_BONES`).
+ */
+skb_status skb_rig_copy_rest_transforms(const struct skb_rig *rig, double *dst, size_t dst_len);
+
+/**
+ * Copies the posed rotation of each bone relative to its parent (4 doubles per bone: unit
+ * quaternion x, y, z, w; the root's relative to the model frame): the GLB nodes' `rotation`,
+ * what a DCC shows as the pose bones' rotations. With the rest translations of
+ * `skb_rig_copy_rest_transforms` (the root's plus `skb_rig_copy_root_translation`) they give the
+ * posed skeleton. `dst` holds `dst_len` doubles (at least 4 × `SKB_NUM_RIG_BONES`).
+ */
+skb_status skb_rig_copy_local_rotations(const struct skb_rig *rig, double *dst, size_t dst_len);
+
+/**
+ * Copies the root's translation in the pose (x, y, z doubles, metres, model frame; non-zero only
+ * with the origin on the floor, where it keeps the posed body's lowest point at y = 0) into
+ * `dst` of `dst_len` doubles (at least 3).
+ */
+skb_status skb_rig_copy_root_translation(const struct skb_rig *rig, double *dst, size_t dst_len);
+
+/**
+ * Copies the posed bone heads (x, y, z doubles per bone, metres, the export's frame) as the
+ * library computes them (the rig's forward kinematics, what a glTF viewer shows) into `dst` of
+ * `dst_len` doubles (at least 3 × `SKB_NUM_RIG_BONES`).
+ */
+skb_status skb_rig_copy_posed_heads(const struct skb_rig *rig, double *dst, size_t dst_len);
+
+/**
+ * Copies the translation from the mesh's model frame to the export's frame (x, y, z doubles,
+ * metres: the rig's rest = the mesh's rest + this, before any T-pose) into `dst` of `dst_len`
+ * doubles (at least 3).
+ */
+skb_status skb_rig_copy_offset(const struct skb_rig *rig, double *dst, size_t dst_len);
+
+/**
+ * Copies the rig's rest vertices (the bind pose: the mesh's rest placed at the chosen origin,
+ * skinned into the T-pose when asked; x, y, z floats, metres) into `dst` of `dst_len` floats (at
+ * least 3 × vertex count). Faces are the mesh's (`skb_mesh_copy_faces`,
+ * `skb_mesh_copy_triangles`).
+ */
+skb_status skb_rig_copy_rest_vertices(const struct skb_rig *rig, float *dst, size_t dst_len);
+
+/**
+ * Copies the rig's posed vertices (the rig's own linear blend skinning of the rest vertices,
+ * as a glTF viewer shows the GLB; x, y, z floats, metres) into `dst` of `dst_len` floats (at
+ * least 3 × vertex count).
+ */
+skb_status skb_rig_copy_posed_vertices(const struct skb_rig *rig, float *dst, size_t dst_len);
+
+/**
+ * Copies the skin weights to the 53 rig bones: for vertex v, slots `4v .. 4v+3` of `bones`
+ * (indices into the rig's bone order) and `weights` (summing to 1; unused slots bone 0, weight
+ * 0). Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count).
+ */
+skb_status skb_rig_copy_skin_weights(const struct skb_rig *rig,
+                                     uint32_t *bones,
+                                     float *weights,
+                                     size_t len);
+
+/**
+ * Number of UV coordinates of the mesh (texture corners shared by faces; more than the
+ * vertices, because seams split them) into `*out`.
+ */
+skb_status skb_mesh_uv_count(const struct skb_mesh *mesh, size_t *out);
+
+/**
+ * Copies the UV coordinates (u, v floats each, v up as in OBJ and MakeHuman; glTF's v is
+ * 1 − v) into `dst` of `dst_len` floats (at least 2 × `skb_mesh_uv_count`).
+ */
+skb_status skb_mesh_copy_uvs(const struct skb_mesh *mesh, float *dst, size_t dst_len);
+
+/**
+ * Copies, for each quad face, the UV index (into `skb_mesh_copy_uvs`) of each of its 4 corners,
+ * in the corner order of `skb_mesh_copy_faces`, into `dst` of `dst_len` integers (at least
+ * 4 × face count).
+ */
+skb_status skb_mesh_copy_face_uvs(const struct skb_mesh *mesh, uint32_t *dst, size_t dst_len);
+
+/**
+ * Copies unit vertex normals (x, y, z floats; area-weighted face normals, outward, as the GLB
+ * writes) of the rest vertices, or of the posed ones (`posed`: the current `skb_mesh_pose`,
+ * the rest before any), into `dst` of `dst_len` floats (at least 3 × vertex count).
+ */
+skb_status skb_mesh_copy_normals(const struct skb_mesh *mesh,
+                                 bool posed,
+                                 float *dst,
+                                 size_t dst_len);
 
 /**
  * Creates the embedded default dictionary (learned from the DeepMimic clips, see

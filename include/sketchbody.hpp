@@ -166,6 +166,132 @@ struct SkinWeights {
     std::vector<float> weights;
 };
 
+namespace detail {
+/// n elements copied out by a C getter f(handle, dst, dst_len).
+template <typename T, typename F, typename H>
+std::vector<T> copy_out(F f, const H *handle, size_t n) {
+    std::vector<T> v(n);
+    check(f(handle, v.data(), v.size()));
+    return v;
+}
+}  // namespace detail
+
+/// Options of the production rig (skb_export_options): bone names, rest pose, origin.
+struct RigOptions {
+    uint32_t naming = SKB_NAMING_PROJECT;     // SKB_NAMING_*
+    uint32_t rest_pose = SKB_REST_A_POSE;     // SKB_REST_*
+    uint32_t origin = SKB_ORIGIN_FLOOR;       // SKB_ORIGIN_*
+};
+
+/// The production rig of a mesh as the rigged GLB writes it (see skb_rig_*). Move-only.
+class Rig {
+public:
+    explicit Rig(skb_rig *raw) noexcept : r_(raw) {}
+    size_t bone_count() const { size_t n = 0; check(skb_rig_bone_count(r_.get(), &n)); return n; }
+    size_t vertex_count() const { size_t n = 0; check(skb_rig_vertex_count(r_.get(), &n)); return n; }
+    /// Bone names in the chosen convention, in the GLB's node order.
+    std::vector<std::string> bone_names() const {
+        std::vector<std::string> names(bone_count());
+        char buf[64];
+        for (size_t b = 0; b < names.size(); ++b) {
+            check(skb_rig_copy_bone_name(r_.get(), b, buf, sizeof buf));
+            names[b] = buf;
+        }
+        return names;
+    }
+    /// Parent index per bone, -1 for the root; parents come first.
+    std::vector<int32_t> parents() const { return copy<int32_t>(skb_rig_copy_parents, bone_count()); }
+    /// SKB_RIG_TRANSFORM_LEN doubles per bone: rest translation x, y, z (parent bone frame) and
+    /// rotation quaternion x, y, z, w, relative to the parent.
+    std::vector<double> rest_transforms() const {
+        return copy<double>(skb_rig_copy_rest_transforms, SKB_RIG_TRANSFORM_LEN * bone_count());
+    }
+    /// 4 doubles per bone: the posed rotation relative to the parent (x, y, z, w).
+    std::vector<double> local_rotations() const { return copy<double>(skb_rig_copy_local_rotations, 4 * bone_count()); }
+    /// The root's translation in the pose, metres.
+    std::vector<double> root_translation() const { return copy<double>(skb_rig_copy_root_translation, 3); }
+    /// Model frame -> export frame translation, metres.
+    std::vector<double> offset() const { return copy<double>(skb_rig_copy_offset, 3); }
+    /// Posed bone heads (x, y, z per bone), metres, as the library computes them.
+    std::vector<double> posed_heads() const { return copy<double>(skb_rig_copy_posed_heads, 3 * bone_count()); }
+    /// The bind-pose vertices (x, y, z per vertex), metres.
+    std::vector<float> rest_vertices() const { return copy<float>(skb_rig_copy_rest_vertices, 3 * vertex_count()); }
+    /// The rig's own skinning of them in the pose, metres.
+    std::vector<float> posed_vertices() const { return copy<float>(skb_rig_copy_posed_vertices, 3 * vertex_count()); }
+    /// Skin weights to the rig's bones (SKB_MAX_INFLUENCES slots per vertex).
+    SkinWeights skin_weights() const {
+        SkinWeights s{std::vector<uint32_t>(SKB_MAX_INFLUENCES * vertex_count()), std::vector<float>(SKB_MAX_INFLUENCES * vertex_count())};
+        check(skb_rig_copy_skin_weights(r_.get(), s.bones.data(), s.weights.data(), s.bones.size()));
+        return s;
+    }
+    const skb_rig *get() const noexcept { return r_.get(); }
+
+private:
+    template <typename T, typename F>
+    std::vector<T> copy(F f, size_t n) const { return detail::copy_out<T>(f, r_.get(), n); }
+    Handle<skb_rig, skb_rig_free> r_;
+};
+
+/// An owned body mesh (see skb_mesh_*). Move-only.
+class Mesh {
+public:
+    explicit Mesh(skb_mesh *raw) noexcept : m_(raw) {}
+    /// The rest-pose mesh of `gender` with PCA `weights` (empty: the mean shape).
+    Mesh(const Context &ctx, uint32_t gender, const std::vector<float> &weights = {}) {
+        check(skb_mesh_new_from_shape(ctx.get(), gender, weights.empty() ? nullptr : weights.data(), weights.size(), m_.out()));
+    }
+    size_t vertex_count() const { size_t n = 0; check(skb_mesh_vertex_count(m_.get(), &n)); return n; }
+    size_t face_count() const { size_t n = 0; check(skb_mesh_face_count(m_.get(), &n)); return n; }
+    size_t uv_count() const { size_t n = 0; check(skb_mesh_uv_count(m_.get(), &n)); return n; }
+    /// x, y, z per vertex, metres: the current pose's or the rest's.
+    std::vector<float> vertices(bool posed) const {
+        std::vector<float> v(3 * vertex_count());
+        check(posed ? skb_mesh_copy_posed_vertices(m_.get(), v.data(), v.size()) : skb_mesh_copy_vertices(m_.get(), v.data(), v.size()));
+        return v;
+    }
+    /// Unit vertex normals (x, y, z per vertex) of the posed or rest vertices.
+    std::vector<float> normals(bool posed) const {
+        std::vector<float> n(3 * vertex_count());
+        check(skb_mesh_copy_normals(m_.get(), posed, n.data(), n.size()));
+        return n;
+    }
+    /// 4 vertex indices per quad face.
+    std::vector<uint32_t> faces() const { return copy<uint32_t>(skb_mesh_copy_faces, 4 * face_count()); }
+    /// 3 vertex indices per triangle, two triangles per quad.
+    std::vector<uint32_t> triangles() const { return copy<uint32_t>(skb_mesh_copy_triangles, 6 * face_count()); }
+    /// u, v per UV coordinate (v up).
+    std::vector<float> uvs() const { return copy<float>(skb_mesh_copy_uvs, 2 * uv_count()); }
+    /// 4 UV indices per quad face, in the corner order of faces().
+    std::vector<uint32_t> face_uvs() const { return copy<uint32_t>(skb_mesh_copy_face_uvs, 4 * face_count()); }
+    /// The 15 joints (45 doubles), metres: posed or rest.
+    std::vector<double> joints(bool posed) const {
+        std::vector<double> j(3 * SKB_NUM_JOINTS);
+        check(posed ? skb_mesh_copy_posed_joints(m_.get(), j.data(), j.size()) : skb_mesh_copy_joints(m_.get(), j.data(), j.size()));
+        return j;
+    }
+    /// Poses the mesh to 15 target joints (45 doubles), see skb_mesh_pose.
+    void pose(const std::vector<double> &joints, uint32_t flags = 0) {
+        check(skb_mesh_pose(m_.get(), joints.data(), joints.size(), flags));
+    }
+    /// The production rig in the current pose, for `options`.
+    Rig rig(const RigOptions &options = {}) const {
+        Handle<skb_export_options, skb_export_options_free> o;
+        check(skb_export_options_new(o.out()));
+        check(skb_export_options_set_naming(o.get(), options.naming));
+        check(skb_export_options_set_rest_pose(o.get(), options.rest_pose));
+        check(skb_export_options_set_origin(o.get(), options.origin));
+        skb_rig *raw = nullptr;
+        check(skb_mesh_rig_new(m_.get(), o.get(), &raw));
+        return Rig(raw);
+    }
+    const skb_mesh *get() const noexcept { return m_.get(); }
+
+private:
+    template <typename T, typename F>
+    std::vector<T> copy(F f, size_t n) const { return detail::copy_out<T>(f, m_.get(), n); }
+    Handle<skb_mesh, skb_mesh_free> m_;
+};
+
 /// The owned result of run_pipeline (see skb_result_*). Move-only.
 class Result {
 public:
@@ -214,6 +340,12 @@ public:
         std::vector<double> w(n);
         if (n > 0) check(skb_result_shape_weights(r_.get(), w.data(), w.size(), &n));
         return w;
+    }
+    /// The result's mesh (fitted rest shape, posed as in the result) for the mesh and rig getters.
+    Mesh mesh() const {
+        skb_mesh *raw = nullptr;
+        check(skb_result_mesh(r_.get(), &raw));
+        return Mesh(raw);
     }
     const skb_result *get() const noexcept { return r_.get(); }
 

@@ -29,8 +29,8 @@ echo "== cargo test (release build, shared with the CMake build)"
 cargo test --release --workspace --all-targets --all-features
 cargo test --release --workspace --doc --all-features
 
-echo "== CMake build + ctest"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+echo "== CMake build + ctest (cargo's folder shared with the cargo tests above)"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSKB_CARGO_TARGET_DIR="$PWD/target"
 cmake --build build -j "$jobs"
 (cd build && ctest --output-on-failure -j 1)
 

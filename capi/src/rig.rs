@@ -1,0 +1,367 @@
+//! `skb_rig`: the production rig of a mesh as the rigged GLB writes it (MakeHuman's 53-bone
+//! `game_engine` skeleton for the chosen bone names, rest pose and origin), for hosts that build
+//! the rigged body in memory instead of importing the file: bone names, parents (the GLB's node
+//! order), rest transforms, the posed local rotations, the rig's rest vertices, normals and
+//! 53-bone skin weights. Also the mesh's UVs and normals. Every copy follows the mesh getters'
+//! convention: the caller's buffer holds `dst_len` elements, at least the documented count, and
+//! nothing is written on error.
+
+use std::ffi::c_char;
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use sketchbody_core::body::ik::Pose;
+use sketchbody_core::body::rig::{vertex_normals, RiggedMesh};
+use sketchbody_core::error::Error;
+use sketchbody_core::rig::{RigOptions, RigPose, RigScene, NUM_RIG_BONES, RIG_BONES};
+
+use super::body::{copy_skin_weights, out_slice, skb_mesh, write_out};
+use super::error::fail;
+use super::export::skb_export_options;
+use super::ptr::{free_box, give, out_slot, try_ref};
+use super::status::skb_status;
+
+/// Number of bones of the production rig (MakeHuman's `game_engine` skeleton).
+pub const SKB_NUM_RIG_BONES: u32 = 53;
+/// Doubles per bone in `skb_rig_copy_rest_transforms`: translation x, y, z then rotation
+/// quaternion x, y, z, w (glTF's order).
+pub const SKB_RIG_TRANSFORM_LEN: u32 = 7;
+const _: () = assert!(SKB_NUM_RIG_BONES as usize == NUM_RIG_BONES);
+
+/// The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb_with_options` writes for
+/// the same mesh and options. Create with `skb_mesh_rig_new`, release with `skb_rig_free`; it does
+/// not follow later `skb_mesh_pose` calls. Read-only, so several threads may use it at once.
+pub struct skb_rig {
+    scene: RigScene,
+    /// Each bone's rest transform relative to its parent (the root's: to the model frame).
+    rest_local: Vec<(Vector3<f64>, UnitQuaternion<f64>)>,
+    /// Each bone's posed rotation relative to its parent (the GLB nodes' `rotation`).
+    local: Vec<UnitQuaternion<f64>>,
+}
+
+/// Writes `rows` (`N` values each) into the caller's `dst` of `dst_len` elements (at least
+/// `N × rows.len()`); nothing on error.
+///
+/// # Safety
+/// `dst` must be NULL or valid for writes of `dst_len` elements of `T`.
+unsafe fn copy_rows<T: Copy, const N: usize>(rows: &[[T; N]], dst: *mut T, dst_len: usize) -> skb_status {
+    // SAFETY: the caller guarantees `dst` is NULL or valid for `dst_len` writes.
+    let o = try_status!(unsafe { out_slice(dst, dst_len, N * rows.len(), "dst") });
+    for (o, r) in o.chunks_exact_mut(N).zip(rows) {
+        o.copy_from_slice(r);
+    }
+    skb_status::SKB_OK
+}
+
+/// Builds the rig of `mesh` in its current pose (the rest pose if never posed) with `opts`
+/// (NULL: the defaults: project names, A-pose rest, origin on the floor) into `*out`, which the
+/// caller owns (release with `skb_rig_free`). Errors: degenerate bones (`SKB_ERR_DEGENERATE_BONE`).
+/// Only reads `mesh` and `opts`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_rig_new(
+    mesh: *const skb_mesh,
+    opts: *const skb_export_options,
+    out: *mut *mut skb_rig,
+) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `mesh` is NULL or a live mesh handle (the API's contract), only read here.
+        let m = try_status!(unsafe { try_ref(mesh, "mesh") });
+        let options = if opts.is_null() {
+            RigOptions::default()
+        } else {
+            // SAFETY: `opts` is non-NULL, so live export options (the API's contract), only read.
+            try_status!(unsafe { try_ref(opts, "opts") }).rig
+        };
+        // SAFETY: `out` is NULL or valid for writing one pointer.
+        let out = try_status!(unsafe { out_slot(out) });
+        let rest_pose = Pose::rest(&m.rest.joints);
+        let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
+        let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
+        let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
+        let arm = &scene.armature;
+        let rest_rot = RigPose::rest().local_rotations(arm);
+        let rest_local = RIG_BONES
+            .iter()
+            .enumerate()
+            .map(|(b, bone)| {
+                let t = match bone.parent {
+                    None => arm.heads[b],
+                    Some(p) => arm.frames[p].inverse() * (arm.heads[b] - arm.heads[p]),
+                };
+                (t, rest_rot[b])
+            })
+            .collect();
+        let local = scene.pose.local_rotations(arm);
+        give(out, skb_rig { scene, rest_local, local })
+    }
+}
+
+/// Releases a rig. NULL is a no-op.
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_free(rig: *mut skb_rig) {
+    // SAFETY: `rig` is NULL or a pointer from `skb_mesh_rig_new` not freed before.
+    unsafe { free_box(rig) }
+}
+
+/// Number of bones (`SKB_NUM_RIG_BONES`) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_bone_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `out` is NULL or valid for a write of one size_t.
+        try_status!(unsafe { write_out(out, r.scene.names.len(), "out") });
+        skb_status::SKB_OK
+    }
+}
+
+/// Number of vertices of the rig's mesh (the mesh's, 13380) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_vertex_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `out` is NULL or valid for a write of one size_t.
+        try_status!(unsafe { write_out(out, r.scene.rest_vertices.len(), "out") });
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the name of bone `bone` (0 .. `SKB_NUM_RIG_BONES`−1; the GLB node's name in the chosen
+/// convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least the name's length
+/// + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_bone_name(
+    rig: *const skb_rig,
+    bone: usize,
+    dst: *mut c_char,
+    dst_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        let Some(name) = r.scene.names.get(bone) else {
+            return fail(&Error::OutOfRange { name: "bone", detail: format!("{bone} >= {NUM_RIG_BONES}") });
+        };
+        let bytes = name.as_bytes();
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` bytes.
+        let o = try_status!(unsafe { out_slice(dst, dst_len, bytes.len() + 1, "dst") });
+        for (o, &c) in o.iter_mut().zip(bytes) {
+            *o = c as c_char;
+        }
+        o[bytes.len()] = 0;
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies each bone's parent index (−1 for the root, bone 0) into `dst` of `dst_len` integers
+/// (at least `SKB_NUM_RIG_BONES`). Parents come before their children; the order is the GLB's
+/// node and joint order.
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_parents(rig: *const skb_rig, dst: *mut i32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` integers.
+        let o = try_status!(unsafe { out_slice(dst, dst_len, NUM_RIG_BONES, "dst") });
+        for (o, bone) in o.iter_mut().zip(&RIG_BONES) {
+            *o = bone.parent.map_or(-1, |p| p as i32);
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies each bone's rest transform relative to its parent, `SKB_RIG_TRANSFORM_LEN` doubles per
+/// bone: translation x, y, z (metres, in the parent bone's frame; the root's in the model frame,
+/// +Y up) then the rotation as a unit quaternion x, y, z, w (parent bone frame → this bone's
+/// frame; bone frames have Y along the bone, X the bend axis MakeHuman's roll gives). The rest
+/// is the rig's (A- or T-pose, placed at the chosen origin): the GLB's bind pose. Composing
+/// `parent · T(t) · R(q)` from the root gives each bone's rest frame and head. `dst` holds
+/// `dst_len` doubles (at least 7 × `SKB_NUM_RIG_BONES`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_rest_transforms(
+    rig: *const skb_rig,
+    dst: *mut f64,
+    dst_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
+        let o = try_status!(unsafe { out_slice(dst, dst_len, 7 * NUM_RIG_BONES, "dst") });
+        for (o, (t, q)) in o.chunks_exact_mut(7).zip(&r.rest_local) {
+            o[..3].copy_from_slice(t.as_slice());
+            o[3..].copy_from_slice(q.quaternion().coords.as_slice());
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the posed rotation of each bone relative to its parent (4 doubles per bone: unit
+/// quaternion x, y, z, w; the root's relative to the model frame): the GLB nodes' `rotation`,
+/// what a DCC shows as the pose bones' rotations. With the rest translations of
+/// `skb_rig_copy_rest_transforms` (the root's plus `skb_rig_copy_root_translation`) they give the
+/// posed skeleton. `dst` holds `dst_len` doubles (at least 4 × `SKB_NUM_RIG_BONES`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_local_rotations(
+    rig: *const skb_rig,
+    dst: *mut f64,
+    dst_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        let rows: Vec<[f64; 4]> = r.local.iter().map(|q| q.quaternion().coords.into()).collect();
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
+        unsafe { copy_rows(&rows, dst, dst_len) }
+    }
+}
+
+/// Copies the root's translation in the pose (x, y, z doubles, metres, model frame; non-zero only
+/// with the origin on the floor, where it keeps the posed body's lowest point at y = 0) into
+/// `dst` of `dst_len` doubles (at least 3).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_root_translation(
+    rig: *const skb_rig,
+    dst: *mut f64,
+    dst_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
+        unsafe { copy_rows(&[r.scene.pose.root_translation.into()], dst, dst_len) }
+    }
+}
+
+/// Copies the posed bone heads (x, y, z doubles per bone, metres, the export's frame) as the
+/// library computes them (the rig's forward kinematics, what a glTF viewer shows) into `dst` of
+/// `dst_len` doubles (at least 3 × `SKB_NUM_RIG_BONES`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_posed_heads(rig: *const skb_rig, dst: *mut f64, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        let rows: Vec<[f64; 3]> = r.scene.pose.heads(&r.scene.armature).into_iter().map(Into::into).collect();
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
+        unsafe { copy_rows(&rows, dst, dst_len) }
+    }
+}
+
+/// Copies the translation from the mesh's model frame to the export's frame (x, y, z doubles,
+/// metres: the rig's rest = the mesh's rest + this, before any T-pose) into `dst` of `dst_len`
+/// doubles (at least 3).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_offset(rig: *const skb_rig, dst: *mut f64, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
+        unsafe { copy_rows(&[r.scene.offset.into()], dst, dst_len) }
+    }
+}
+
+/// Copies the rig's rest vertices (the bind pose: the mesh's rest placed at the chosen origin,
+/// skinned into the T-pose when asked; x, y, z floats, metres) into `dst` of `dst_len` floats (at
+/// least 3 × vertex count). Faces are the mesh's (`skb_mesh_copy_faces`,
+/// `skb_mesh_copy_triangles`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_rest_vertices(rig: *const skb_rig, dst: *mut f32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
+        unsafe { copy_rows(&r.scene.rest_vertices, dst, dst_len) }
+    }
+}
+
+/// Copies the rig's posed vertices (the rig's own linear blend skinning of the rest vertices,
+/// as a glTF viewer shows the GLB; x, y, z floats, metres) into `dst` of `dst_len` floats (at
+/// least 3 × vertex count).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_posed_vertices(rig: *const skb_rig, dst: *mut f32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
+        unsafe { copy_rows(&r.scene.posed_vertices, dst, dst_len) }
+    }
+}
+
+/// Copies the skin weights to the 53 rig bones: for vertex v, slots `4v .. 4v+3` of `bones`
+/// (indices into the rig's bone order) and `weights` (summing to 1; unused slots bone 0, weight
+/// 0). Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_skin_weights(
+    rig: *const skb_rig,
+    bones: *mut u32,
+    weights: *mut f32,
+    len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `bones` and `weights` are NULL or valid for writes of `len` elements each.
+        unsafe { copy_skin_weights(&r.scene.skin, bones, weights, len) }
+    }
+}
+
+/// Number of UV coordinates of the mesh (texture corners shared by faces; more than the
+/// vertices, because seams split them) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_uv_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `mesh` is NULL or a live mesh handle, only read.
+        let m = try_status!(unsafe { try_ref(mesh, "mesh") });
+        // SAFETY: `out` is NULL or valid for a write of one size_t.
+        try_status!(unsafe { write_out(out, m.model.uvs().len(), "out") });
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies the UV coordinates (u, v floats each, v up as in OBJ and MakeHuman; glTF's v is
+/// 1 − v) into `dst` of `dst_len` floats (at least 2 × `skb_mesh_uv_count`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_uvs(mesh: *const skb_mesh, dst: *mut f32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `mesh` is NULL or a live mesh handle, only read.
+        let m = try_status!(unsafe { try_ref(mesh, "mesh") });
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
+        unsafe { copy_rows(m.model.uvs(), dst, dst_len) }
+    }
+}
+
+/// Copies, for each quad face, the UV index (into `skb_mesh_copy_uvs`) of each of its 4 corners,
+/// in the corner order of `skb_mesh_copy_faces`, into `dst` of `dst_len` integers (at least
+/// 4 × face count).
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_face_uvs(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `mesh` is NULL or a live mesh handle, only read.
+        let m = try_status!(unsafe { try_ref(mesh, "mesh") });
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` integers.
+        unsafe { copy_rows(m.model.face_uvs(), dst, dst_len) }
+    }
+}
+
+/// Copies unit vertex normals (x, y, z floats; area-weighted face normals, outward, as the GLB
+/// writes) of the rest vertices, or of the posed ones (`posed`: the current `skb_mesh_pose`,
+/// the rest before any), into `dst` of `dst_len` floats (at least 3 × vertex count).
+#[no_mangle]
+pub unsafe extern "C" fn skb_mesh_copy_normals(
+    mesh: *const skb_mesh,
+    posed: bool,
+    dst: *mut f32,
+    dst_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `mesh` is NULL or a live mesh handle, only read.
+        let m = try_status!(unsafe { try_ref(mesh, "mesh") });
+        let v = match (&m.posed, posed) {
+            (Some(p), true) => &p.vertices,
+            _ => &m.rest.vertices,
+        };
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
+        unsafe { copy_rows(&vertex_normals(v, m.model.faces()), dst, dst_len) }
+    }
+}
