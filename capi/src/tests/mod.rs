@@ -5,3 +5,4 @@ mod body;
 mod fit;
 mod header;
 mod pose;
+mod reliability;
