@@ -6,3 +6,4 @@ mod fit;
 mod header;
 mod pose;
 mod reliability;
+mod thread_stress;
