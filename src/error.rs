@@ -6,6 +6,11 @@ use std::path::PathBuf;
 /// Largest accepted image side, in pixels (inputs larger than this are rejected).
 pub const MAX_IMAGE_SIDE: usize = 16384;
 
+/// Largest image a loader decodes, in pixels (64 Mpx = 2^26, e.g. 8192 x 8192): checked from
+/// the file's header before any pixel memory is allocated, so a small file claiming a huge
+/// image is refused instead of allocating gigabytes.
+pub const MAX_DECODED_PIXELS: usize = 1 << 26;
+
 /// Everything that can go wrong in sketchbody. Messages carry the offending value. Deliberately
 /// exhaustive: the C API (`capi/src/status.rs`) matches every variant, so a new variant cannot
 /// compile until it has its own status code.
@@ -17,6 +22,9 @@ pub enum Error {
     /// A width or height exceeds [`MAX_IMAGE_SIDE`].
     #[error("image size {width}x{height} exceeds the limit of {MAX_IMAGE_SIDE} px a side")]
     ImageTooLarge { width: usize, height: usize },
+    /// An image file's header claims more than [`MAX_DECODED_PIXELS`] pixels.
+    #[error("image size {width}x{height} exceeds the decoding limit of {MAX_DECODED_PIXELS} pixels")]
+    TooManyPixels { width: usize, height: usize },
     /// A row stride is smaller than one row of pixels.
     #[error("row stride {stride} bytes is smaller than one row ({row_bytes} bytes)")]
     BadStride { stride: usize, row_bytes: usize },

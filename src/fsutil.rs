@@ -1,33 +1,133 @@
-//! File-system helpers: atomic writes (temporary file in the same directory, then rename) and
-//! staging folders whose files appear in their destination together or not at all.
+//! File-system helpers: capped reads of regular files, atomic writes (a unique temporary file
+//! in the same directory, then rename) and staging folders whose files appear in their
+//! destination together or not at all.
 
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::error::{Error, Result};
 
-/// Writes `bytes` to `path` atomically: a sibling temporary file is written, flushed and renamed
-/// over `path`. On failure the temporary file is removed and `path` is untouched.
+/// An `Error::Io` naming `path`, of `kind`, with `msg`.
+fn io_error(path: &Path, kind: std::io::ErrorKind, msg: String) -> Error {
+    Error::Io { path: path.to_path_buf(), source: std::io::Error::new(kind, msg) }
+}
+
+/// Reads the whole of the regular file at `path` (symlinks followed), at most `cap` bytes.
+/// Errors ([`Error::Io`], naming the path): missing or unreadable; not a regular file (a FIFO,
+/// device or folder is refused before it is opened, so `/dev/zero` or a FIFO never hangs or
+/// exhausts memory); larger than `cap` bytes (checked from the size and again while reading).
+pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {
+    let io = |source| Error::Io { path: path.to_path_buf(), source };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(io_error(path, std::io::ErrorKind::InvalidInput, "not a regular file".into()));
+    }
+    let too_big = || io_error(path, std::io::ErrorKind::InvalidData, format!("larger than the {cap}-byte limit"));
+    if meta.len() > cap {
+        return Err(too_big());
+    }
+    let f = std::fs::File::open(path).map_err(io)?;
+    // The path may have been swapped between the check and the open: check the open file.
+    if !f.metadata().map_err(io)?.is_file() {
+        return Err(io_error(path, std::io::ErrorKind::InvalidInput, "not a regular file".into()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    f.take(cap + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > cap {
+        return Err(too_big());
+    }
+    Ok(bytes)
+}
+
+/// [`read_capped`] as UTF-8 text; invalid UTF-8 is an [`Error::Io`] of kind `InvalidData`.
+pub fn read_capped_string(path: &Path, cap: u64) -> Result<String> {
+    String::from_utf8(read_capped(path, cap)?)
+        .map_err(|_| io_error(path, std::io::ErrorKind::InvalidData, "not valid UTF-8 text".into()))
+}
+
+/// A name for a temporary file or folder no other call (in this process or another) uses:
+/// `PREFIX-PID-THREAD-N`, `N` a process-wide counter.
+fn unique_tag(prefix: &str) -> String {
+    static COUNTER: AtomicUsize = AtomicUsize::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let thread = format!("{:?}", std::thread::current().id());
+    let thread: String = thread.chars().filter(char::is_ascii_digit).collect();
+    format!("{prefix}-{}-{thread}-{n}", std::process::id())
+}
+
+/// Writes `bytes` to `path` atomically: a sibling temporary file (created exclusively, unique
+/// per call, so threads writing the same path never collide) is written, flushed and renamed
+/// over `path`. Only a regular file is ever replaced: when `path` is a symlink, a device, a FIFO
+/// or a folder the call fails with [`Error::Io`] (kind `InvalidInput`) and nothing is written.
+/// On failure the temporary file is removed and `path` is untouched.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let io_err = |source| Error::Io { path: path.to_path_buf(), source };
     let file_name = path
         .file_name()
         .ok_or_else(|| io_err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "output path has no file name")))?;
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.file_type().is_file() => {
+            return Err(io_error(
+                path,
+                std::io::ErrorKind::InvalidInput,
+                "exists and is not a regular file (symlinks, devices and folders are never replaced)".into(),
+            ));
+        }
+        Ok(_) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(io_err(e)),
+    }
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(file_name);
-    tmp_name.push(format!(".tmp{}", std::process::id()));
+    tmp_name.push(unique_tag(".tmp"));
     let tmp: PathBuf = path.with_file_name(tmp_name);
+    let mut created = false;
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
+        let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+        created = true;
         f.write_all(bytes)?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
     if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
+        if created {
+            let _ = std::fs::remove_file(&tmp);
+        }
         return Err(io_err(e));
     }
     Ok(())
+}
+
+/// The prefix of every staging folder's name.
+const STAGING_PREFIX: &str = ".sketchbody-tmp";
+
+/// Whether process `pid` is alive. Only answers on Linux (`/proc`); elsewhere every process is
+/// assumed alive, so nothing is ever removed by mistake.
+fn process_alive(pid: u32) -> bool {
+    if cfg!(target_os = "linux") && Path::new("/proc/self").exists() {
+        Path::new("/proc").join(pid.to_string()).exists()
+    } else {
+        true
+    }
+}
+
+/// Removes staging folders in `dir` left by processes that died before committing (killed
+/// runs): entries named `.sketchbody-tmp-PID-...` whose PID is no longer running. Errors are
+/// ignored (another run may be cleaning the same folder).
+fn remove_stale_staging(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(rest) = name.to_str().and_then(|n| n.strip_prefix(STAGING_PREFIX)).and_then(|r| r.strip_prefix('-'))
+        else {
+            continue;
+        };
+        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else { continue };
+        if pid != std::process::id() && !process_alive(pid) && e.file_type().is_ok_and(|t| t.is_dir()) {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
 }
 
 /// A folder of outputs written as a unit: files go into a hidden temporary folder and
@@ -36,7 +136,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 ///
 /// When the destination does not exist, the temporary folder is created beside it and renamed
 /// onto it (one atomic step); when it exists, the temporary folder is created inside it (hidden,
-/// `.sketchbody-tmp-PID-N`) and each file is renamed into place (each file atomically).
+/// `.sketchbody-tmp-PID-THREAD-N`) and each file is renamed into place (each file atomically).
+/// Staging folders of processes that died (a killed run) are removed by the next `new` that
+/// stages in the same place.
 #[derive(Debug)]
 pub struct StagingDir {
     tmp: PathBuf,
@@ -50,10 +152,8 @@ impl StagingDir {
     /// Errors ([`Error::Io`], naming the path): `dest` is a file, or a folder cannot be created
     /// (unwritable location, a file in the way).
     pub fn new(dest: &Path) -> Result<StagingDir> {
-        static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
         let io = |path: &Path, source| Error::Io { path: path.to_path_buf(), source };
-        let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let tag = format!(".sketchbody-tmp-{}-{n}", std::process::id());
+        let tag = unique_tag(STAGING_PREFIX);
         let dest_existed = dest.exists();
         let tmp = if dest_existed {
             if !dest.is_dir() {
@@ -62,6 +162,7 @@ impl StagingDir {
                     std::io::Error::new(std::io::ErrorKind::AlreadyExists, "exists and is not a folder"),
                 ));
             }
+            remove_stale_staging(dest);
             dest.join(tag)
         } else {
             let name = dest.file_name().ok_or_else(|| {
@@ -69,6 +170,7 @@ impl StagingDir {
             })?;
             let parent = dest.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
             std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
+            remove_stale_staging(parent);
             let mut t = std::ffi::OsString::from(&tag);
             t.push("-");
             t.push(name);
@@ -157,5 +259,114 @@ mod tests {
         assert!(matches!(StagingDir::new(&dest.join("x.txt")), Err(Error::Io { .. })));
         assert!(matches!(StagingDir::new(&dest.join("x.txt/sub")), Err(Error::Io { .. })));
         std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("skb-fsutil-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// Finding 3: only regular files are read, through the cap; `/dev/zero` and a FIFO fail fast.
+    #[test]
+    fn capped_reads_refuse_devices_fifos_and_oversized_files() {
+        let d = scratch("read");
+        let f = d.join("a.bin");
+        std::fs::write(&f, [1u8; 100]).unwrap();
+        assert_eq!(read_capped(&f, 100).unwrap().len(), 100);
+        let e = read_capped(&f, 99).unwrap_err();
+        assert!(e.to_string().contains("99-byte limit"), "{e}");
+        let e = read_capped(Path::new("/dev/zero"), 1 << 20).unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+        assert!(read_capped(&d, 1 << 20).unwrap_err().to_string().contains("not a regular file"));
+        let fifo = d.join("fifo");
+        if std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success()) {
+            let e = read_capped(&fifo, 1 << 20).unwrap_err();
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+        } else {
+            println!("mkfifo unavailable: FIFO case skipped");
+        }
+        std::fs::write(&f, [0xff, 0xfe]).unwrap();
+        assert!(read_capped_string(&f, 10).unwrap_err().to_string().contains("UTF-8"));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// Finding 5: a symlink, a folder or a device at the output path is never replaced.
+    #[test]
+    fn atomic_writer_replaces_only_regular_files() {
+        let d = scratch("kinds");
+        let target = d.join("target.txt");
+        std::fs::write(&target, b"keep").unwrap();
+        let link = d.join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let e = write_atomic(&link, b"new").unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"keep");
+        std::fs::create_dir(d.join("sub")).unwrap();
+        assert!(write_atomic(&d.join("sub"), b"x").is_err());
+        // A special file (FIFO here: a device node needs root to create) stays what it is.
+        let fifo = d.join("fifo");
+        let mut expected = 3;
+        if std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success()) {
+            use std::os::unix::fs::FileTypeExt;
+            assert!(write_atomic(&fifo, b"x").is_err());
+            assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+            expected += 1;
+        }
+        write_atomic(&target, b"new").unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        let names: Vec<_> = std::fs::read_dir(&d).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names.len(), expected, "no temporaries left: {names:?}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// Finding 6: 8 threads x 5 writes to one path all succeed, one of the payloads wins whole.
+    #[test]
+    fn same_path_writes_from_threads_all_succeed() {
+        let d = scratch("threads");
+        let path = d.join("out.bin");
+        std::thread::scope(|s| {
+            for t in 0..8u8 {
+                let path = &path;
+                s.spawn(move || {
+                    for _ in 0..5 {
+                        write_atomic(path, &[t; 4096]).unwrap();
+                    }
+                });
+            }
+        });
+        let got = std::fs::read(&path).unwrap();
+        assert_eq!(got.len(), 4096);
+        assert!(got.iter().all(|&b| b == got[0]), "one whole payload");
+        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1, "no temporaries left");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// Finding 7: a staging folder of a dead process is removed by the next run; live ones stay.
+    #[test]
+    fn stale_staging_folders_of_dead_processes_are_removed() {
+        let d = scratch("stale");
+        let dest = d.join("out");
+        std::fs::create_dir(&dest).unwrap();
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let stale = dest.join(format!("{STAGING_PREFIX}-{dead}-1-0"));
+        std::fs::create_dir(&stale).unwrap();
+        std::fs::write(stale.join("half.glb"), b"half").unwrap();
+        let beside = d.join(format!("{STAGING_PREFIX}-{dead}-1-1-new"));
+        std::fs::create_dir(&beside).unwrap();
+        let live = dest.join(format!("{STAGING_PREFIX}-{}-1-9", std::process::id()));
+        std::fs::create_dir(&live).unwrap();
+        let s = StagingDir::new(&dest).unwrap();
+        assert!(!stale.exists(), "stale staging inside the destination removed");
+        assert!(live.exists(), "this process's folders are left alone");
+        drop(s);
+        let s = StagingDir::new(&d.join("new")).unwrap();
+        assert!(!beside.exists(), "stale staging beside the destination removed");
+        drop(s);
+        std::fs::remove_dir_all(&d).unwrap();
     }
 }

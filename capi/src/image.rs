@@ -84,10 +84,7 @@ pub unsafe extern "C" fn skb_gaussian_blur(
         let view = try_status!(view_of(src));
         let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
         let (w, h) = (view.width(), view.height());
-        if dst_stride < w {
-            return fail(&sketchbody_core::Error::BadStride { stride: dst_stride, row_bytes: w });
-        }
-        let needed = dst_stride * (h - 1) + w;
+        let needed = try_core!(ImageView::required_len(w, h, 1, dst_stride));
         if dst_len < needed {
             return fail(&sketchbody_core::Error::BufferTooSmall { len: dst_len, needed });
         }

@@ -70,6 +70,7 @@ impl From<&Error> for skb_status {
         match e {
             Error::EmptyImage { .. } => SKB_ERR_EMPTY_IMAGE,
             Error::ImageTooLarge { .. } => SKB_ERR_IMAGE_TOO_LARGE,
+            Error::TooManyPixels { .. } => SKB_ERR_IMAGE_TOO_LARGE,
             Error::BadStride { .. } => SKB_ERR_BAD_STRIDE,
             Error::BufferTooSmall { .. } => SKB_ERR_BUFFER_TOO_SMALL,
             Error::UnsupportedChannels(_) => SKB_ERR_UNSUPPORTED_CHANNELS,

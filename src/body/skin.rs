@@ -121,7 +121,9 @@ fn dqs_vertex(bones: &[BoneXf; NUM_BONES], p: [f32; 3], w: &VertexWeights) -> [f
 }
 
 /// Skins `rest` vertices (metres, model frame) with `weights` (one entry per vertex) into
-/// `out` (resized to the vertex count). Errors when the lengths differ. Parallel, deterministic.
+/// `out` (resized to the vertex count). Errors when the lengths differ, and
+/// [`Error::NonFinite`] when a skinned coordinate overflows to infinity or NaN (a pose with huge
+/// joint positions): such a result is never reported as success. Parallel, deterministic.
 pub fn skin_into(
     rest: &[[f32; 3]],
     weights: &[VertexWeights],
@@ -149,6 +151,9 @@ pub fn skin_into(
             };
         }
     });
+    if let Some(c) = out.iter().flatten().find(|c| !c.is_finite()) {
+        return Err(Error::NonFinite { name: "skinned vertex coordinate", value: *c as f64 });
+    }
     Ok(())
 }
 

@@ -18,6 +18,10 @@ use std::path::Path;
 use super::model::{Deformation, Filter, Model, Part, FEAT_DIM, NUM_PARSE_JOINTS};
 use crate::error::{Error, Result};
 
+/// Largest detector file (`.skbd` or its JSON form) the loaders read, in bytes (64 MiB; the
+/// shipped one is 0.5 MB). Larger files, and anything but a regular file, are `Error::Io`.
+pub const MAX_DETECTOR_FILE_BYTES: u64 = 64 << 20;
+
 /// File magic of the binary detector model.
 pub const MAGIC: [u8; 8] = *b"SKBDET\0\0";
 /// Current format version.
@@ -207,9 +211,10 @@ impl Model {
         crate::fsutil::write_atomic(path, &self.to_bytes())
     }
 
-    /// Loads a binary model file. Errors: `Io`, `CorruptData` (prefixed with the path).
+    /// Loads a binary model file (at most [`MAX_DETECTOR_FILE_BYTES`], a regular file).
+    /// Errors: `Io`, `CorruptData` (prefixed with the path).
     pub fn load(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        let bytes = crate::fsutil::read_capped(path, MAX_DETECTOR_FILE_BYTES)?;
         Self::from_bytes(&bytes).map_err(|e| match e {
             Error::CorruptData(m) => corrupt(format!("{}: {m}", path.display())),
             e => e,
@@ -218,7 +223,7 @@ impl Model {
 
     /// Loads either format: the binary one when the file starts with [`MAGIC`], else JSON.
     pub fn load_any(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        let bytes = crate::fsutil::read_capped(path, MAX_DETECTOR_FILE_BYTES)?;
         let r = if bytes.starts_with(&MAGIC) { Self::from_bytes(&bytes) } else { Self::from_json(&bytes) };
         r.map_err(|e| match e {
             Error::CorruptData(m) => corrupt(format!("{}: {m}", path.display())),

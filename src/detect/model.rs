@@ -216,7 +216,7 @@ impl Model {
     /// Loads the PARSE model JSON (`data/fmp/parse_model.json`, fields in its README). For tests
     /// and benchmarks: never embed or ship that file. Errors: `Io`, `CorruptData`.
     pub fn load_json(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        let bytes = crate::fsutil::read_capped(path, crate::detect::format::MAX_DETECTOR_FILE_BYTES)?;
         Self::from_json(&bytes).map_err(|e| match e {
             Error::CorruptData(m) => corrupt(format!("{}: {m}", path.display())),
             e => e,

@@ -20,10 +20,13 @@ pub struct Labelled {
     pub joints: [[f64; 2]; NUM_PARSE_JOINTS],
 }
 
+/// Largest `labels.csv` [`read_labels`] accepts, in bytes (16 MiB; PARSE's is about 60 kB).
+pub const MAX_LABELS_FILE_BYTES: u64 = 16 << 20;
+
 /// Reads `labels.csv` (header `image,lank_x,lank_y,...`). Errors: `Io`, `CorruptData` naming
 /// the line.
 pub fn read_labels(path: &Path) -> Result<Vec<Labelled>> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = crate::fsutil::read_capped_string(path, MAX_LABELS_FILE_BYTES)?;
     let bad = |line: usize, what: &str| Error::CorruptData(format!("{} line {line}: {what}", path.display()));
     let mut lines = text.lines();
     let header = lines.next().ok_or_else(|| bad(1, "empty file"))?;

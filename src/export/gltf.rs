@@ -76,6 +76,9 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
             detail: format!("{} vertices for a mesh of {}", scene.rest_vertices.len(), mesh.vertices.len()),
         });
     }
+    if let Some(c) = scene.rest_vertices.iter().flatten().find(|c| !c.is_finite()) {
+        return Err(Error::NonFinite { name: "vertex coordinate", value: *c as f64 });
+    }
     let vertices = &scene.rest_vertices;
     // Split vertices where a vertex has several UVs (glTF attributes are per vertex).
     let mut key_to_new: HashMap<(u32, u32), u32> = HashMap::new();

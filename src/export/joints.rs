@@ -43,9 +43,13 @@ pub fn parse_joints3_json(text: &str) -> Result<Joints3> {
     Ok(out)
 }
 
-/// Reads a joints JSON file.
+/// Largest joints JSON file (3-D or 2-D joints) the loaders read, in bytes (1 MiB; a joints file
+/// is about 2 kB). Larger files, and anything but a regular file, are `Error::Io`.
+pub const MAX_JOINTS_FILE_BYTES: u64 = 1 << 20;
+
+/// Reads a joints JSON file (a regular file of at most [`MAX_JOINTS_FILE_BYTES`]).
 pub fn load_joints3_json(path: &Path) -> Result<Joints3> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = crate::fsutil::read_capped_string(path, MAX_JOINTS_FILE_BYTES)?;
     parse_joints3_json(&text).map_err(|e| match e {
         Error::CorruptData(m) => Error::CorruptData(format!("{}: {m}", path.display())),
         other => other,

@@ -57,7 +57,7 @@ pub fn parse_joints2d(v: &Value) -> Result<Joints2> {
 
 /// Reads a `sketchbody-joints2d` file; errors name the file.
 pub fn load_joints2d(path: &Path) -> Result<Joints2> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = crate::fsutil::read_capped_string(path, crate::export::joints::MAX_JOINTS_FILE_BYTES)?;
     let v: Value =
         serde_json::from_str(&text).map_err(|e| Error::CorruptData(format!("{}: not JSON: {e}", path.display())))?;
     parse_joints2d(&v).map_err(|e| match e {

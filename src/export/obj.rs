@@ -24,6 +24,9 @@ pub fn obj_string_with_material(
     mtl: Option<&str>,
 ) -> Result<String> {
     let n = vertices.len();
+    if let Some(c) = vertices.iter().flatten().find(|c| !c.is_finite()) {
+        return Err(Error::NonFinite { name: "vertex coordinate", value: *c as f64 });
+    }
     if let Some(f) = quads.iter().position(|q| q.iter().any(|&i| i as usize >= n)) {
         return Err(Error::OutOfRange { name: "face index", detail: format!("face {f} indexes a vertex >= {n}") });
     }
@@ -97,6 +100,22 @@ pub fn write_obj(path: &Path, vertices: &[[f32; 3]], quads: &[[u32; 4]], uvs: Op
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Finding 4: non-finite vertices are refused, never written as `v inf inf inf`.
+    #[test]
+    fn non_finite_vertices_are_refused() {
+        let quads = [[0u32, 1, 2, 3]];
+        let mut v = [[0.0f32; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        assert!(obj_string(&v, &quads, None).is_ok());
+        v[2][1] = f32::INFINITY;
+        assert!(matches!(obj_string(&v, &quads, None), Err(Error::NonFinite { .. })));
+        v[2][1] = f32::NAN;
+        let dir = std::env::temp_dir().join(format!("skb-obj-nan-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        assert!(write_obj(&dir.join("a.obj"), &v, &quads, None).is_err());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn quads_uvs_and_normals_are_written_and_bad_indices_rejected() {

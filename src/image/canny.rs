@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use super::gray::to_gray;
 use super::sobel::{deriv_kernel, div16_round_even, horizontal_pass, smooth_kernel, vertical_pass};
-use super::view::{check_size, GrayImage, ImageView};
+use super::view::{GrayImage, ImageView};
 use crate::error::{ensure_finite, Error, Result};
 
 /// Canny settings, with OpenCV's meaning.
@@ -92,11 +92,7 @@ pub fn canny(src: &ImageView<'_>, params: &CannyParams) -> Result<GrayImage> {
 pub fn canny_into(src: &ImageView<'_>, params: &CannyParams, out: &mut [u8], out_stride: usize) -> Result<()> {
     let t = params.int_thresholds()?;
     let (w, h) = (src.width(), src.height());
-    check_size(w, h)?;
-    if out_stride < w {
-        return Err(Error::BadStride { stride: out_stride, row_bytes: w });
-    }
-    let needed = out_stride * (h - 1) + w;
+    let needed = ImageView::required_len(w, h, 1, out_stride)?;
     if out.len() < needed {
         return Err(Error::BufferTooSmall { len: out.len(), needed });
     }
@@ -425,5 +421,23 @@ fn nms_span(rows: &NmsRows<'_>, dx: &[i16], dy: &[i16], low: i32, high: i32, out
         let candidate = (mv > low) & (mv > before) & beats_after;
         let is_strong = candidate & (mv > high);
         out[i] = (!candidate) as u8 * NOT_EDGE + is_strong as u8 * STRONG;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Finding 1: a wrapping output stride is an error and the buffer is untouched.
+    #[test]
+    fn wrapping_output_stride_writes_nothing() {
+        let px = [100u8, 200, 100, 200, 100, 200, 100, 200, 100, 200, 100, 200];
+        let src = ImageView::gray(&px, 4, 3).unwrap();
+        let mut out = [0xA5u8; 64];
+        let e = canny_into(&src, &CannyParams::default(), &mut out, 1 << 63).unwrap_err();
+        assert!(matches!(e, Error::OutOfRange { name: "stride", .. }), "{e}");
+        assert!(out.iter().all(|&b| b == 0xA5));
+        canny_into(&src, &CannyParams::default(), &mut out, 16).unwrap();
+        assert!(out[4..16].iter().all(|&b| b == 0xA5), "padding between rows untouched");
     }
 }

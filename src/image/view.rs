@@ -25,9 +25,17 @@ pub(crate) fn check_size(width: usize, height: usize) -> Result<()> {
     Ok(())
 }
 
-/// Bytes needed by an image of this geometry: `stride * (height - 1) + row_bytes`.
-pub(crate) fn needed_bytes(width: usize, height: usize, channels: usize, stride: usize) -> usize {
-    stride * (height - 1) + width * channels
+/// Bytes needed by an image of this geometry: `stride * (height - 1) + width * channels`, with
+/// checked arithmetic (a caller's stride near `usize::MAX` is an error, never a wrapped length).
+/// `height` must be at least 1.
+pub(crate) fn needed_bytes(width: usize, height: usize, channels: usize, stride: usize) -> Result<usize> {
+    stride
+        .checked_mul(height.saturating_sub(1))
+        .and_then(|rows| width.checked_mul(channels).and_then(|row| rows.checked_add(row)))
+        .ok_or_else(|| Error::OutOfRange {
+            name: "stride",
+            detail: format!("{stride} bytes x {height} rows overflows the address space"),
+        })
 }
 
 impl<'a> ImageView<'a> {
@@ -52,7 +60,7 @@ impl<'a> ImageView<'a> {
         if stride < row_bytes {
             return Err(Error::BadStride { stride, row_bytes });
         }
-        Ok(needed_bytes(width, height, channels, stride))
+        needed_bytes(width, height, channels, stride)
     }
 
     /// A tightly packed single-channel view of `data` (`stride == width`).
@@ -134,5 +142,23 @@ impl GrayImage {
     /// A borrowed single-channel view of this image.
     pub fn view(&self) -> ImageView<'_> {
         ImageView { data: &self.data, width: self.width, height: self.height, channels: 1, stride: self.width }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Finding 1: lengths derived from caller strides never wrap.
+    #[test]
+    fn required_len_is_checked_against_overflow() {
+        assert_eq!(ImageView::required_len(4, 3, 1, 10).unwrap(), 24);
+        assert_eq!(ImageView::required_len(4, 1, 3, usize::MAX).unwrap(), 12, "one row needs no stride");
+        for (h, stride) in [(3, 1usize << 63), (2, usize::MAX), (16384, usize::MAX / 1000)] {
+            let e = ImageView::required_len(4, h, 1, stride).unwrap_err();
+            assert!(matches!(e, Error::OutOfRange { name: "stride", .. }), "{h} rows x {stride}: {e}");
+        }
+        let data = [0u8; 16];
+        assert!(ImageView::new(&data, 4, 3, 1, 1 << 63).is_err());
     }
 }

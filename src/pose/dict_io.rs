@@ -150,9 +150,13 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Dictionary> {
     Ok(d)
 }
 
-/// Reads a dictionary file.
+/// Largest pose dictionary file (`.skbpd`) [`read`] accepts, in bytes (256 MiB; the shipped one
+/// is 6 MB). Larger files, and anything but a regular file, are `Error::Io`.
+pub const MAX_DICTIONARY_FILE_BYTES: u64 = 256 << 20;
+
+/// Reads a dictionary file (a regular file of at most [`MAX_DICTIONARY_FILE_BYTES`]).
 pub fn read(path: &Path) -> Result<Dictionary> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let bytes = crate::fsutil::read_capped(path, MAX_DICTIONARY_FILE_BYTES)?;
     from_bytes(&bytes).map_err(|e| match e {
         Error::CorruptData(m) => Error::CorruptData(format!("{}: {m}", path.display())),
         e => e,

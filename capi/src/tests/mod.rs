@@ -5,3 +5,5 @@ mod body;
 mod fit;
 mod header;
 mod pose;
+mod reliability;
+mod thread_stress;

@@ -1,0 +1,158 @@
+//! Regression tests for the reliability audit (issue 20): each bad input ends in a specific
+//! status with nothing written, and a panic is reported, not printed.
+
+use std::ffi::{CStr, CString};
+use std::ptr;
+
+use crate::*;
+
+fn last_error() -> String {
+    unsafe { CStr::from_ptr(skb_last_error_message()) }.to_string_lossy().into_owned()
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("skb-capi-rel-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Finding 1: a stride whose `stride * (height - 1)` wraps is refused before anything is
+/// written, in Canny, the blur and the sketch renderer.
+#[test]
+fn wrapping_strides_are_refused_with_nothing_written() {
+    let px = [128u8; 4 * 3];
+    let im = skb_image { data: px.as_ptr(), width: 4, height: 3, stride: 4, channels: 1 };
+    // (1 << 63) * 2 wraps to 0, so an unchecked length would be just `width` bytes.
+    let stride = 1usize << 63;
+    let mut dst = [0xA5u8; 64];
+    unsafe {
+        let s = skb_canny(&im, 50.0, 150.0, 3, false, dst.as_mut_ptr(), stride, dst.len());
+        assert_eq!(s, skb_status::SKB_ERR_OUT_OF_RANGE, "{}", last_error());
+        assert!(last_error().contains("stride"), "{}", last_error());
+        let s = skb_gaussian_blur(&im, 1.0, dst.as_mut_ptr(), stride, dst.len());
+        assert_eq!(s, skb_status::SKB_ERR_OUT_OF_RANGE, "{}", last_error());
+        let mut ctx = ptr::null_mut();
+        assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
+        let s = skb_render_sketch(
+            ctx,
+            SKB_GENDER_MALE,
+            ptr::null(),
+            0,
+            ptr::null(),
+            1,
+            4,
+            3,
+            ptr::null(),
+            dst.as_mut_ptr(),
+            stride,
+            dst.len(),
+            ptr::null_mut(),
+            ptr::null_mut(),
+        );
+        assert_eq!(s, skb_status::SKB_ERR_OUT_OF_RANGE, "{}", last_error());
+        skb_context_free(ctx);
+    }
+    assert!(dst.iter().all(|&b| b == 0xA5), "canary intact");
+}
+
+/// Finding 3: `/dev/zero` and a directory are refused at once (not read until memory runs out).
+#[test]
+fn image_loader_refuses_special_files() {
+    for p in ["/dev/zero", "/tmp"] {
+        let path = CString::new(p).unwrap();
+        let mut out = ptr::null_mut();
+        assert_eq!(unsafe { skb_gray_image_load(path.as_ptr(), &mut out) }, skb_status::SKB_ERR_IO, "{p}");
+        assert!(out.is_null());
+        assert!(last_error().contains("not a regular file"), "{}", last_error());
+    }
+}
+
+/// Finding 4: joints x 1e300 give `SKB_ERR_NON_FINITE`, the mesh keeps its previous pose, and
+/// the writers still write only finite vertices.
+#[test]
+fn overflowing_pose_is_a_status_not_ok() {
+    let d = scratch("pose");
+    unsafe {
+        let mut ctx = ptr::null_mut();
+        assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
+        let mut mesh = ptr::null_mut();
+        assert_eq!(skb_mesh_new_from_shape(ctx, SKB_GENDER_MALE, ptr::null(), 0, &mut mesh), skb_status::SKB_OK);
+        let mut joints = [0f64; 45];
+        assert_eq!(skb_mesh_copy_joints(mesh, joints.as_mut_ptr(), 45), skb_status::SKB_OK);
+        let huge: Vec<f64> = joints.iter().map(|j| j * 1e300).collect();
+        let s = skb_mesh_pose(mesh, huge.as_ptr(), 45, 0);
+        assert_eq!(s, skb_status::SKB_ERR_NON_FINITE, "{}", last_error());
+        let mut nv = 0;
+        assert_eq!(skb_mesh_vertex_count(mesh, &mut nv), skb_status::SKB_OK);
+        let mut v = vec![0f32; 3 * nv];
+        assert_eq!(skb_mesh_copy_posed_vertices(mesh, v.as_mut_ptr(), v.len()), skb_status::SKB_OK);
+        assert!(v.iter().all(|c| c.is_finite()), "the failed pose left no trace");
+        let obj = CString::new(d.join("m.obj").to_str().unwrap()).unwrap();
+        assert_eq!(skb_mesh_write_obj(mesh, obj.as_ptr(), true), skb_status::SKB_OK);
+        skb_mesh_free(mesh);
+        skb_context_free(ctx);
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Finding 5: a symlink output path is refused and stays a symlink to the untouched target.
+#[test]
+fn glb_writer_refuses_a_symlink() {
+    let d = scratch("link");
+    let target = d.join("t.glb");
+    std::fs::write(&target, b"keep").unwrap();
+    let link = d.join("l.glb");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    unsafe {
+        let mut ctx = ptr::null_mut();
+        assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
+        let mut mesh = ptr::null_mut();
+        assert_eq!(skb_mesh_new_from_shape(ctx, SKB_GENDER_FEMALE, ptr::null(), 0, &mut mesh), skb_status::SKB_OK);
+        let p = CString::new(link.to_str().unwrap()).unwrap();
+        assert_eq!(skb_mesh_write_glb(mesh, p.as_ptr()), skb_status::SKB_ERR_IO, "{}", last_error());
+        assert!(last_error().contains("not a regular file"), "{}", last_error());
+        skb_mesh_free(mesh);
+        skb_context_free(ctx);
+    }
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert_eq!(std::fs::read(&target).unwrap(), b"keep");
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 2, "no temporaries left");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// The boundary itself: a panic becomes `SKB_ERR_PANIC` whose message carries the text and the
+/// source location, and the library stays usable.
+fn panicking_export() -> skb_status {
+    ffi_boundary! {
+        let v: Vec<u8> = Vec::new();
+        if v.is_empty() {
+            panic!("deliberate test panic");
+        }
+        skb_status::SKB_OK
+    }
+}
+
+/// Finding 8 (panic part): the message is captured for `skb_last_error_message` and the panic
+/// is not printed. The printing half runs in a child process whose stderr is inspected.
+#[test]
+fn panics_are_captured_not_printed() {
+    const CHILD: &str = "SKB_PANIC_QUIET_CHILD";
+    let status = panicking_export();
+    assert_eq!(status, skb_status::SKB_ERR_PANIC);
+    let msg = last_error();
+    assert!(msg.contains("deliberate test panic") && msg.contains("reliability.rs:"), "{msg}");
+    if std::env::var_os(CHILD).is_some() {
+        return;
+    }
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "tests::reliability::panics_are_captured_not_printed", "--nocapture", "--test-threads=1"])
+        .env(CHILD, "1")
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "child failed: {stderr}");
+    assert!(!stderr.contains("deliberate test panic"), "the panic was printed: {stderr}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("1 passed"), "the child ran the test");
+}
