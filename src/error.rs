@@ -20,9 +20,10 @@ pub enum Error {
     /// A row stride is smaller than one row of pixels.
     #[error("row stride {stride} bytes is smaller than one row ({row_bytes} bytes)")]
     BadStride { stride: usize, row_bytes: usize },
-    /// A pixel buffer is shorter than its declared geometry needs.
-    #[error("buffer holds {len} bytes but the image needs {needed}")]
-    BufferTooSmall { len: usize, needed: usize },
+    /// A buffer (named as the caller knows it: a C argument such as `dst`, or `image data`)
+    /// holds fewer `unit`s ("bytes", "elements") than the call needs.
+    #[error("buffer `{name}` holds {len} {unit}, {needed} needed")]
+    BufferTooSmall { name: &'static str, len: usize, needed: usize, unit: &'static str },
     /// The channel count is not 1, 3 or 4.
     #[error("unsupported channel count {0}: expected 1 (gray), 3 (RGB) or 4 (RGBA)")]
     UnsupportedChannels(usize),

@@ -100,7 +100,7 @@ pub unsafe extern "C" fn skb_gaussian_blur(
             }
             let needed = dst_stride * (h - 1) + w;
             if dst_len < needed {
-                return fail(&sketchbody_core::Error::BufferTooSmall { len: dst_len, needed });
+                return fail(&sketchbody_core::Error::BufferTooSmall { name: "dst", len: dst_len, needed, unit: "bytes" });
             }
             let blurred = try_core!(gaussian_blur(&view, sigma));
             for (y, row) in blurred.as_bytes().chunks_exact(w).enumerate() {

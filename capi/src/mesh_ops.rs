@@ -115,7 +115,7 @@ pub unsafe extern "C" fn skb_rasterize_triangles(
             let needed = try_status!(mask_stride.checked_mul(h - 1).and_then(|x| x.checked_add(w))
                 .ok_or_else(|| fail_with(skb_status::SKB_ERR_OUT_OF_RANGE, "mask_stride is absurd")));
             if mask_len < needed {
-                return fail(&sketchbody_core::Error::BufferTooSmall { len: mask_len, needed });
+                return fail(&sketchbody_core::Error::BufferTooSmall { name: "mask", len: mask_len, needed, unit: "bytes" });
             }
             let out = try_status!(try_slice_mut(mask, mask_len, "mask"));
             let mut temp = None;

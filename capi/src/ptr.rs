@@ -144,13 +144,14 @@ pub(crate) unsafe fn out_slice<'a, T>(
     p: *mut T,
     len: usize,
     needed: usize,
-    name: &str,
+    name: &'static str,
 ) -> Result<&'a mut [T], skb_status> {
     if p.is_null() {
         return Err(null(name));
     }
     if len < needed {
-        return Err(fail(&Error::BufferTooSmall { len, needed }));
+        let unit = if std::mem::size_of::<T>() == 1 { "bytes" } else { "elements" };
+        return Err(fail(&Error::BufferTooSmall { name, len, needed, unit }));
     }
     // SAFETY: forwarded contract.
     unsafe { try_slice_mut_of(p, len, name) }

@@ -135,7 +135,7 @@ pub unsafe extern "C" fn skb_render_sketch(
                 return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out_pixels is NULL");
             }
             if out_len < needed {
-                return fail(&Error::BufferTooSmall { len: out_len, needed });
+                return fail(&Error::BufferTooSmall { name: "out_pixels", len: out_len, needed, unit: "bytes" });
             }
             let shape_weights = if n_weights == 0 {
                 None

@@ -98,7 +98,7 @@ pub fn canny_into(src: &ImageView<'_>, params: &CannyParams, out: &mut [u8], out
     }
     let needed = out_stride * (h - 1) + w;
     if out.len() < needed {
-        return Err(Error::BufferTooSmall { len: out.len(), needed });
+        return Err(Error::BufferTooSmall { name: "out", len: out.len(), needed, unit: "bytes" });
     }
     let converted;
     let gray = if src.channels() == 1 {

@@ -113,6 +113,11 @@ fn bad_arguments_give_specific_statuses_and_write_nothing() {
         let mut small = [7f32; 5];
         assert_eq!(skb_mesh_copy_vertices(mesh, small.as_mut_ptr(), small.len()), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
         assert_eq!(small, [7f32; 5], "nothing written on error");
+        let mut nv = 0usize;
+        assert_eq!(skb_mesh_vertex_count(mesh, &mut nv), skb_status::SKB_OK);
+        assert_eq!(last_error(), "", "a success clears the message");
+        assert_eq!(skb_mesh_copy_vertices(mesh, small.as_mut_ptr(), small.len()), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
+        assert_eq!(last_error(), format!("buffer `dst` holds 5 elements, {} needed", 3 * nv));
         assert_eq!(skb_mesh_copy_joints(mesh, ptr::null_mut(), 45), skb_status::SKB_ERR_NULL_POINTER);
         let mut n = 0usize;
         assert_eq!(skb_mesh_vertex_count(ptr::null(), &mut n), skb_status::SKB_ERR_NULL_POINTER);
