@@ -18,19 +18,49 @@ pub const MAX_DECODED_PIXELS: usize = 1 << 26;
 pub enum Error {
     /// A width or height is zero.
     #[error("image size {width}x{height} is empty: width and height must be at least 1")]
-    EmptyImage { width: usize, height: usize },
+    EmptyImage {
+        /// Image width, pixels.
+        width: usize,
+        /// Image height, pixels.
+        height: usize,
+    },
     /// A width or height exceeds [`MAX_IMAGE_SIDE`].
     #[error("image size {width}x{height} exceeds the limit of {MAX_IMAGE_SIDE} px a side")]
-    ImageTooLarge { width: usize, height: usize },
+    ImageTooLarge {
+        /// Image width, pixels.
+        width: usize,
+        /// Image height, pixels.
+        height: usize,
+    },
     /// An image file's header claims more than [`MAX_DECODED_PIXELS`] pixels.
     #[error("image size {width}x{height} exceeds the decoding limit of {MAX_DECODED_PIXELS} pixels")]
-    TooManyPixels { width: usize, height: usize },
+    TooManyPixels {
+        /// Image width, pixels.
+        width: usize,
+        /// Image height, pixels.
+        height: usize,
+    },
     /// A row stride is smaller than one row of pixels.
     #[error("row stride {stride} bytes is smaller than one row ({row_bytes} bytes)")]
-    BadStride { stride: usize, row_bytes: usize },
-    /// A pixel buffer is shorter than its declared geometry needs.
-    #[error("buffer holds {len} bytes but the image needs {needed}")]
-    BufferTooSmall { len: usize, needed: usize },
+    BadStride {
+        /// The given row stride, bytes.
+        stride: usize,
+        /// Bytes of one row of pixels.
+        row_bytes: usize,
+    },
+    /// A buffer (named as the caller knows it: a C argument such as `dst`, or `image data`)
+    /// holds fewer `unit`s ("bytes", "elements") than the call needs.
+    #[error("buffer `{name}` holds {len} {unit}, {needed} needed")]
+    BufferTooSmall {
+        /// The buffer's name as the caller knows it.
+        name: &'static str,
+        /// What the buffer holds, in `unit`s.
+        len: usize,
+        /// What the call needs, in `unit`s.
+        needed: usize,
+        /// "bytes" or "elements".
+        unit: &'static str,
+    },
     /// The channel count is not 1, 3 or 4.
     #[error("unsupported channel count {0}: expected 1 (gray), 3 (RGB) or 4 (RGBA)")]
     UnsupportedChannels(usize),
@@ -39,49 +69,125 @@ pub enum Error {
     InvalidAperture(i64),
     /// A parameter that must be finite is NaN or infinite.
     #[error("{name} must be finite (got {value})")]
-    NonFinite { name: &'static str, value: f64 },
+    NonFinite {
+        /// The parameter's name.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+    },
     /// A parameter is outside its documented range.
     #[error("{name} is out of range: {detail}")]
-    OutOfRange { name: &'static str, detail: String },
+    OutOfRange {
+        /// The parameter's name.
+        name: &'static str,
+        /// What was expected and what was given.
+        detail: String,
+    },
     /// A file could not be read or written.
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
     /// A file is not a decodable image (or is truncated).
     #[error("{}: not a readable image: {reason}", path.display())]
-    Decode { path: PathBuf, reason: String },
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// Why decoding failed.
+        reason: String,
+    },
     /// A model or data file is corrupt, truncated or of the wrong format version.
     #[error("corrupt or unsupported data: {0}")]
     CorruptData(String),
     /// An image is too small to search for a figure.
     #[error("image size {width}x{height} is too small to detect a figure: both sides must be at least {min} px")]
-    ImageTooSmall { width: usize, height: usize, min: usize },
+    ImageTooSmall {
+        /// Image width, pixels.
+        width: usize,
+        /// Image height, pixels.
+        height: usize,
+        /// The least side length accepted, pixels.
+        min: usize,
+    },
     /// The detector found no figure scoring at least the threshold.
     #[error("no figure found: best score {score:.3} is below the threshold {threshold:.3}")]
-    NoFigure { score: f64, threshold: f64 },
+    NoFigure {
+        /// The best figure's score.
+        score: f64,
+        /// The score threshold.
+        threshold: f64,
+    },
     /// The operation was cancelled by the caller's progress callback.
     #[error("cancelled by the progress callback")]
     Cancelled,
     /// Too few usable (finite, visible) 2-D joints for the 3-D pose solver.
     #[error("too few usable joints: {detail}")]
-    TooFewJoints { detail: String },
+    TooFewJoints {
+        /// What was expected and what was given.
+        detail: String,
+    },
     /// Two joints that must be distinct coincide (e.g. both ends of a bone at one pixel).
     #[error("joints {a} and {b} coincide at ({x}, {y}) px")]
-    CoincidentJoints { a: &'static str, b: &'static str, x: f64, y: f64 },
+    CoincidentJoints {
+        /// Name of the first joint.
+        a: &'static str,
+        /// Name of the second joint.
+        b: &'static str,
+        /// Horizontal position, pixels.
+        x: f64,
+        /// Vertical position, pixels.
+        y: f64,
+    },
     /// The input has no usable geometry (all joints collinear, zero extent, rank-deficient fit).
     #[error("degenerate configuration: {0}")]
     Degenerate(String),
     /// A bone of a skeleton has (near) zero length: its two joints coincide.
     #[error("bone {from}-{to} has length {length:e} m: its joints coincide")]
-    DegenerateBone { from: &'static str, to: &'static str, length: f64 },
+    DegenerateBone {
+        /// Name of the bone's parent joint.
+        from: &'static str,
+        /// Name of the bone's child joint.
+        to: &'static str,
+        /// The bone's length, metres.
+        length: f64,
+    },
     /// A mesh to rasterise projects wholly outside the image.
     #[error("the projected mesh lies wholly outside the {width}x{height} image")]
-    MeshOutsideImage { width: usize, height: usize },
+    MeshOutsideImage {
+        /// Image width, pixels.
+        width: usize,
+        /// Image height, pixels.
+        height: usize,
+    },
     /// A visible 2-D joint lies outside the image it belongs to.
     #[error("joint {joint} at ({x}, {y}) px lies outside the {width}x{height} image")]
-    JointOutsideImage { joint: &'static str, x: f64, y: f64, width: usize, height: usize },
+    JointOutsideImage {
+        /// Name of the joint.
+        joint: &'static str,
+        /// Horizontal position, pixels.
+        x: f64,
+        /// Vertical position, pixels.
+        y: f64,
+        /// Image width, pixels.
+        width: usize,
+        /// Image height, pixels.
+        height: usize,
+    },
     /// The sketch has no edges at all (blank, uniform or too faint for the edge detector).
     #[error("the {width}x{height} sketch has no edges: it is blank or too faint (Canny thresholds {low}/{high})")]
-    BlankImage { width: usize, height: usize, low: f64, high: f64 },
+    BlankImage {
+        /// Image width, pixels.
+        width: usize,
+        /// Image height, pixels.
+        height: usize,
+        /// Canny's low threshold.
+        low: f64,
+        /// Canny's high threshold.
+        high: f64,
+    },
 }
 
 /// `Result` with [`Error`].

@@ -5,6 +5,8 @@
 //! `docs/design.md`: image space is pixels with the origin at the top-left corner of the top-left
 //! pixel, x right, y down; 3-D space is metres, right-handed, +Y up, +Z toward the viewer.
 
+#![deny(missing_docs)]
+
 pub mod body;
 pub mod camera;
 pub mod detect;

@@ -9,20 +9,35 @@ pub const NUM_BONES: usize = 14;
 
 /// Canonical joint indices.
 pub mod joint {
+    /// Index of the top of the head.
     pub const HEAD: usize = 0;
+    /// Index of the base of the neck.
     pub const NECK: usize = 1;
+    /// Index of the character's right shoulder.
     pub const R_SHOULDER: usize = 2;
+    /// Index of the right elbow.
     pub const R_ELBOW: usize = 3;
+    /// Index of the right wrist.
     pub const R_WRIST: usize = 4;
+    /// Index of the character's left shoulder.
     pub const L_SHOULDER: usize = 5;
+    /// Index of the left elbow.
     pub const L_ELBOW: usize = 6;
+    /// Index of the left wrist.
     pub const L_WRIST: usize = 7;
+    /// Index of the pelvis (root).
     pub const PELVIS: usize = 8;
+    /// Index of the right hip.
     pub const R_HIP: usize = 9;
+    /// Index of the right knee.
     pub const R_KNEE: usize = 10;
+    /// Index of the right ankle.
     pub const R_ANKLE: usize = 11;
+    /// Index of the left hip.
     pub const L_HIP: usize = 12;
+    /// Index of the left knee.
     pub const L_KNEE: usize = 13;
+    /// Index of the left ankle.
     pub const L_ANKLE: usize = 14;
 }
 

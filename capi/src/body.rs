@@ -7,8 +7,8 @@ use sketchbody_core::body::{BodyModel, Gender, RestShape, MAX_INFLUENCES};
 use sketchbody_core::error::Error;
 use sketchbody_core::skeleton::{NUM_BONES, NUM_JOINTS};
 
-use super::error::{fail, fail_with};
-use super::ptr::{free_box, give, out_slot, try_ref};
+use super::error::fail;
+use super::ptr::*;
 use super::status::skb_status;
 
 /// Female shape space (value of the `gender` arguments).
@@ -49,56 +49,28 @@ pub struct skb_mesh {
     pub(crate) posed: Option<Box<super::mesh_ops::Posed>>,
 }
 
-/// Mutable view of `len` elements at `p`, which must hold at least `needed`: NULL gives
-/// `SKB_ERR_NULL_POINTER`, a short buffer `SKB_ERR_BUFFER_TOO_SMALL` (lengths in elements).
-///
-/// # Safety
-/// `p` must be NULL or valid for writes of `len` elements of `T`, with no other live reference.
-pub(crate) unsafe fn out_slice<'a, T>(
-    p: *mut T,
-    len: usize,
-    needed: usize,
-    name: &str,
-) -> Result<&'a mut [T], skb_status> {
-    if p.is_null() {
-        return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")));
-    }
-    if len < needed {
-        return Err(fail(&Error::BufferTooSmall { len, needed }));
-    }
-    Ok(std::slice::from_raw_parts_mut(p, len))
-}
-
-/// Writes `value` through the out-pointer `out`, or fails with `SKB_ERR_NULL_POINTER`.
-///
-/// # Safety
-/// `out` must be NULL or valid for a write of `T`.
-pub(crate) unsafe fn write_out<T>(out: *mut T, value: T, name: &str) -> Result<(), skb_status> {
-    match out.as_mut() {
-        Some(o) => {
-            *o = value;
-            Ok(())
-        }
-        None => Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL"))),
-    }
-}
-
 /// Creates a context holding the body model compiled into the library. On success `*out`
 /// receives a new context the caller owns (release with `skb_context_free`); on failure `*out`
 /// is untouched. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_new(out: *mut *mut skb_context) -> skb_status {
-    ffi_boundary! {
-        let out = try_status!(out_slot(out));
-        let model = try_core!(BodyModel::embedded());
-        give(out, skb_context { model: Arc::new(model), detector: std::sync::OnceLock::new() })
+    // SAFETY: the header contract of `skb_context_new` (lib.rs § Safety): `out` is NULL or valid for the documented
+    // lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let out = try_status!(out_slot(out));
+            let model = try_core!(BodyModel::embedded());
+            give(out, skb_context { model: Arc::new(model), detector: std::sync::OnceLock::new() })
+        }
     }
 }
 
 /// Releases a context from `skb_context_new`. NULL is a no-op. Meshes made from it stay valid.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_free(ctx: *mut skb_context) {
-    free_box(ctx)
+    // SAFETY: the header requires `ctx` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(ctx) }
 }
 
 /// Number of principal components of `gender`'s shape space (the most weights
@@ -109,11 +81,15 @@ pub unsafe extern "C" fn skb_context_num_components(
     gender: u32,
     out: *mut usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let ctx = try_status!(try_ref(ctx, "ctx"));
-        let g = try_core!(Gender::from_index(gender));
-        try_status!(write_out(out, ctx.model.space(g).num_components(), "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_context_num_components` (lib.rs § Safety): `ctx`, `out` are NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let ctx = try_status!(try_ref(ctx, "ctx"));
+            let g = try_core!(Gender::from_index(gender));
+            try_status!(write_out(out, ctx.model.space(g).num_components(), "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -121,11 +97,15 @@ pub unsafe extern "C" fn skb_context_num_components(
 /// training variance) into `*out`. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_default_dim(ctx: *const skb_context, gender: u32, out: *mut usize) -> skb_status {
-    ffi_boundary! {
-        let ctx = try_status!(try_ref(ctx, "ctx"));
-        let g = try_core!(Gender::from_index(gender));
-        try_status!(write_out(out, ctx.model.space(g).default_dim(), "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_context_default_dim` (lib.rs § Safety): `ctx`, `out` are NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let ctx = try_status!(try_ref(ctx, "ctx"));
+            let g = try_core!(Gender::from_index(gender));
+            try_status!(write_out(out, ctx.model.space(g).default_dim(), "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -143,82 +123,108 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
     n: usize,
     out: *mut *mut skb_mesh,
 ) -> skb_status {
-    ffi_boundary! {
-        let ctx = try_status!(try_ref(ctx, "ctx"));
-        let out = try_status!(out_slot(out));
-        let g = try_core!(Gender::from_index(gender));
-        let space = ctx.model.space(g);
-        if n > space.num_components() {
-            return fail(&Error::OutOfRange {
-                name: "shape weight count",
-                detail: format!("got {n} weights, the shape space has {} components", space.num_components()),
-            });
+    // SAFETY: the header contract of `skb_mesh_new_from_shape` (lib.rs § Safety): `ctx`, `weights`, `out` are NULL
+    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let ctx = try_status!(try_ref(ctx, "ctx"));
+            let out = try_status!(out_slot(out));
+            let g = try_core!(Gender::from_index(gender));
+            let space = ctx.model.space(g);
+            if n > space.num_components() {
+                return fail(&Error::OutOfRange {
+                    name: "shape weight count",
+                    detail: format!("got {n} weights, the shape space has {} components", space.num_components()),
+                });
+            }
+            let w: Vec<f64> = if n == 0 {
+                Vec::new()
+            } else {
+                try_status!(try_slice_of(weights, n, "weights")).iter().map(|&x| x as f64).collect()
+            };
+            let rest = try_core!(space.synthesize(&w));
+            give(out, skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, weights: w, posed: None })
         }
-        let w: Vec<f64> = if n == 0 {
-            Vec::new()
-        } else if weights.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "weights is NULL");
-        } else {
-            std::slice::from_raw_parts(weights, n).iter().map(|&x| x as f64).collect()
-        };
-        let rest = try_core!(space.synthesize(&w));
-        give(out, skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, weights: w, posed: None })
     }
 }
 
 /// Releases a mesh. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_free(mesh: *mut skb_mesh) {
-    free_box(mesh)
+    // SAFETY: the header requires `mesh` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(mesh) }
 }
 
 /// The mesh's gender (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_gender(mesh: *const skb_mesh, out: *mut u32) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        try_status!(write_out(out, m.gender as u32, "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_gender` (lib.rs § Safety): `mesh`, `out` are NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            try_status!(write_out(out, m.gender as u32, "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
 /// Number of vertices (13380) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_vertex_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        try_status!(write_out(out, m.rest.vertices.len(), "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_vertex_count` (lib.rs § Safety): `mesh`, `out` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            try_status!(write_out(out, m.rest.vertices.len(), "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
 /// Number of quad faces (13378) into `*out`; the triangle count is twice that.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_face_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        try_status!(write_out(out, m.model.faces().len(), "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_face_count` (lib.rs § Safety): `mesh`, `out` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            try_status!(write_out(out, m.model.faces().len(), "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
 /// Number of joints (always `SKB_NUM_JOINTS`) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_joint_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        try_status!(write_out(out, m.rest.joints.len(), "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_joint_count` (lib.rs § Safety): `mesh`, `out` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            try_status!(write_out(out, m.rest.joints.len(), "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
 /// Number of skin-weight slots, `vertex count × SKB_MAX_INFLUENCES`, into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_skin_weight_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        try_status!(write_out(out, m.model.skin_weights().len() * MAX_INFLUENCES, "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_skin_weight_count` (lib.rs § Safety): `mesh`, `out` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            try_status!(write_out(out, m.model.skin_weights().len() * MAX_INFLUENCES, "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -226,13 +232,17 @@ pub unsafe extern "C" fn skb_mesh_skin_weight_count(mesh: *const skb_mesh, out: 
 /// floats (at least 3 × vertex count). On error nothing is written.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_vertices(mesh: *const skb_mesh, dst: *mut f32, dst_len: usize) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let out = try_status!(out_slice(dst, dst_len, 3 * m.rest.vertices.len(), "dst"));
-        for (o, v) in out.chunks_exact_mut(3).zip(&m.rest.vertices) {
-            o.copy_from_slice(v);
+    // SAFETY: the header contract of `skb_mesh_copy_vertices` (lib.rs § Safety): `mesh`, `dst` are NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let out = try_status!(out_slice(dst, dst_len, 3 * m.rest.vertices.len(), "dst"));
+            for (o, v) in out.chunks_exact_mut(3).zip(&m.rest.vertices) {
+                o.copy_from_slice(v);
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -240,14 +250,18 @@ pub unsafe extern "C" fn skb_mesh_copy_vertices(mesh: *const skb_mesh, dst: *mut
 /// `dst`, which holds `dst_len` integers (at least 4 × face count). On error nothing is written.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_faces(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let faces = m.model.faces();
-        let out = try_status!(out_slice(dst, dst_len, 4 * faces.len(), "dst"));
-        for (o, f) in out.chunks_exact_mut(4).zip(faces) {
-            o.copy_from_slice(f);
+    // SAFETY: the header contract of `skb_mesh_copy_faces` (lib.rs § Safety): `mesh`, `dst` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let faces = m.model.faces();
+            let out = try_status!(out_slice(dst, dst_len, 4 * faces.len(), "dst"));
+            for (o, f) in out.chunks_exact_mut(4).zip(faces) {
+                o.copy_from_slice(f);
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -255,14 +269,18 @@ pub unsafe extern "C" fn skb_mesh_copy_faces(mesh: *const skb_mesh, dst: *mut u3
 /// which holds `dst_len` integers (at least 6 × face count). On error nothing is written.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_triangles(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let faces = m.model.faces();
-        let out = try_status!(out_slice(dst, dst_len, 6 * faces.len(), "dst"));
-        for (o, &[a, b, c, d]) in out.chunks_exact_mut(6).zip(faces) {
-            o.copy_from_slice(&[a, b, c, a, c, d]);
+    // SAFETY: the header contract of `skb_mesh_copy_triangles` (lib.rs § Safety): `mesh`, `dst` are NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let faces = m.model.faces();
+            let out = try_status!(out_slice(dst, dst_len, 6 * faces.len(), "dst"));
+            for (o, &[a, b, c, d]) in out.chunks_exact_mut(6).zip(faces) {
+                o.copy_from_slice(&[a, b, c, a, c, d]);
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -270,13 +288,17 @@ pub unsafe extern "C" fn skb_mesh_copy_triangles(mesh: *const skb_mesh, dst: *mu
 /// holds `dst_len` doubles (at least 45). On error nothing is written.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_joints(mesh: *const skb_mesh, dst: *mut f64, dst_len: usize) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let out = try_status!(out_slice(dst, dst_len, 3 * NUM_JOINTS, "dst"));
-        for (o, j) in out.chunks_exact_mut(3).zip(&m.rest.joints) {
-            o.copy_from_slice(j);
+    // SAFETY: the header contract of `skb_mesh_copy_joints` (lib.rs § Safety): `mesh`, `dst` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let out = try_status!(out_slice(dst, dst_len, 3 * NUM_JOINTS, "dst"));
+            for (o, j) in out.chunks_exact_mut(3).zip(&m.rest.joints) {
+                o.copy_from_slice(j);
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -291,9 +313,14 @@ pub unsafe extern "C" fn skb_mesh_copy_skin_weights(
     weights: *mut f32,
     len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        copy_skin_weights(m.model.skin_weights(), bones, weights, len)
+    // SAFETY: the header contract of `skb_mesh_copy_skin_weights` (lib.rs § Safety): `mesh`, `bones`, `weights` are
+    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
+    // each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            copy_skin_weights(m.model.skin_weights(), bones, weights, len)
+        }
     }
 }
 
@@ -308,26 +335,35 @@ pub(crate) unsafe fn copy_skin_weights(
     weights: *mut f32,
     len: usize,
 ) -> skb_status {
-    let needed = MAX_INFLUENCES * skin.len();
-    let b = try_status!(out_slice(bones, len, needed, "bones"));
-    let w = try_status!(out_slice(weights, len, needed, "weights"));
-    for ((bo, wo), s) in b.chunks_exact_mut(MAX_INFLUENCES).zip(w.chunks_exact_mut(MAX_INFLUENCES)).zip(skin) {
-        for k in 0..MAX_INFLUENCES {
-            bo[k] = s.bones[k] as u32;
-            wo[k] = s.weights[k];
+    // SAFETY: this function's `# Safety` contract (`bones`, `weights` NULL or valid), forwarded to the ptr.rs
+    // helpers, which check NULL and lengths.
+    unsafe {
+        let needed = MAX_INFLUENCES * skin.len();
+        let b = try_status!(out_slice(bones, len, needed, "bones"));
+        let w = try_status!(out_slice(weights, len, needed, "weights"));
+        for ((bo, wo), s) in b.chunks_exact_mut(MAX_INFLUENCES).zip(w.chunks_exact_mut(MAX_INFLUENCES)).zip(skin) {
+            for k in 0..MAX_INFLUENCES {
+                bo[k] = s.bones[k] as u32;
+                wo[k] = s.weights[k];
+            }
         }
+        skb_status::SKB_OK
     }
-    skb_status::SKB_OK
 }
 
 /// Number of PCA shape weights the mesh was made from (as given to `skb_mesh_new_from_shape`,
 /// or found by `skb_fit_shape`) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_shape_weight_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        try_status!(write_out(out, m.weights.len(), "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_shape_weight_count` (lib.rs § Safety): `mesh`, `out` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            try_status!(write_out(out, m.weights.len(), "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -339,10 +375,15 @@ pub unsafe extern "C" fn skb_mesh_copy_shape_weights(
     dst: *mut f64,
     dst_len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let out = try_status!(out_slice(dst, dst_len, m.weights.len(), "dst"));
-        out[..m.weights.len()].copy_from_slice(&m.weights);
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_copy_shape_weights` (lib.rs § Safety): `mesh`, `dst` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let out = try_status!(out_slice(dst, dst_len, m.weights.len(), "dst"));
+            out[..m.weights.len()].copy_from_slice(&m.weights);
+            skb_status::SKB_OK
+        }
     }
 }

@@ -2,16 +2,16 @@
 //! `skb_detect`: detection with the context's embedded detector (trained on synthetic concept
 //! sketches), configured by an `skb_detect_options` handle.
 
-use std::ffi::{c_char, CStr};
+use std::ffi::c_char;
 use std::path::PathBuf;
 
 use sketchbody_core::detect::{detect, DetectOptions, Detection, Model, SearchScales};
 use sketchbody_core::skeleton::NUM_JOINTS;
 
-use super::body::{out_slice, skb_context};
+use super::body::skb_context;
 use super::error::{fail, fail_with};
 use super::image::{skb_image, view_of};
-use super::ptr::{free_box, give, out_slot, try_ref};
+use super::ptr::*;
 use super::status::skb_status;
 use sketchbody_core::error::Error;
 
@@ -29,23 +29,25 @@ pub struct skb_detector {
 /// Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_new_from_file(path: *const c_char, out: *mut *mut skb_detector) -> skb_status {
-    ffi_boundary! {
-        if path.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "path is NULL");
+    // SAFETY: the header contract of `skb_detector_new_from_file` (lib.rs § Safety): `path`, `out` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let p = try_status!(try_str(path, "path"));
+            let out = try_status!(out_slot(out));
+            let model = try_core!(Model::load_any(&PathBuf::from(p)));
+            give(out, skb_detector { model })
         }
-        let out = try_status!(out_slot(out));
-        let Ok(p) = CStr::from_ptr(path).to_str() else {
-            return fail_with(skb_status::SKB_ERR_INVALID_ARGUMENT, "path is not UTF-8");
-        };
-        let model = try_core!(Model::load_any(&PathBuf::from(p)));
-        give(out, skb_detector { model })
     }
 }
 
 /// Releases a detector. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_free(det: *mut skb_detector) {
-    free_box(det)
+    // SAFETY: the header requires `det` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(det) }
 }
 
 /// Detects the best-scoring figure in `image` with `det`. `threshold`: score threshold (NaN uses
@@ -71,13 +73,18 @@ pub unsafe extern "C" fn skb_detector_detect(
     confidence_len: usize,
     score: *mut f64,
 ) -> skb_status {
-    ffi_boundary! {
-        let det = try_status!(try_ref(det, "det"));
-        let view = try_status!(view_of(image));
-        let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
-        let threshold = if threshold.is_nan() { None } else { Some(threshold) };
-        let opts = DetectOptions { threshold, min_cell_px, ..Default::default() };
-        detect_into(&view, &det.model, &opts, xy, cf, score)
+    // SAFETY: the header contract of `skb_detector_detect` (lib.rs § Safety): `det`, `image`, `joints_xy`,
+    // `confidence`, `score` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check
+    // NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let det = try_status!(try_ref(det, "det"));
+            let view = try_status!(view_of(image));
+            let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
+            let threshold = if threshold.is_nan() { None } else { Some(threshold) };
+            let opts = DetectOptions { threshold, min_cell_px, ..Default::default() };
+            detect_into(&view, &det.model, &opts, xy, cf, score)
+        }
     }
 }
 
@@ -93,29 +100,39 @@ pub struct skb_detect_options {
 /// Creates options with the defaults. `*out` receives a handle the caller owns.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_new(out: *mut *mut skb_detect_options) -> skb_status {
-    ffi_boundary! {
-        let out = try_status!(out_slot(out));
-        give(out, skb_detect_options { inner: DetectOptions::default() })
+    // SAFETY: the header contract of `skb_detect_options_new` (lib.rs § Safety): `out` is NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let out = try_status!(out_slot(out));
+            give(out, skb_detect_options { inner: DetectOptions::default() })
+        }
     }
 }
 
 /// Releases options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_free(opts: *mut skb_detect_options) {
-    free_box(opts)
+    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(opts) }
 }
 
 /// Sets the score threshold (NaN restores the model's own). Infinite values are
 /// `SKB_ERR_NON_FINITE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_set_threshold(opts: *mut skb_detect_options, threshold: f64) -> skb_status {
-    ffi_boundary! {
-        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
-        if threshold.is_infinite() {
-            return fail(&Error::NonFinite { name: "threshold", value: threshold });
+    // SAFETY: the header contract of `skb_detect_options_set_threshold` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let o = try_status!(try_mut(opts, "opts"));
+            if threshold.is_infinite() {
+                return fail(&Error::NonFinite { name: "threshold", value: threshold });
+            }
+            o.inner.threshold = if threshold.is_nan() { None } else { Some(threshold) };
+            skb_status::SKB_OK
         }
-        o.inner.threshold = if threshold.is_nan() { None } else { Some(threshold) };
-        skb_status::SKB_OK
     }
 }
 
@@ -131,15 +148,19 @@ pub unsafe extern "C" fn skb_detect_options_set_scales(
     min_cell_px: f64,
     max_cell_px: f64,
 ) -> skb_status {
-    ffi_boundary! {
-        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
-        if !(min_cell_px >= 0.0 && min_cell_px.is_finite() && max_cell_px > min_cell_px) {
-            return fail(&Error::OutOfRange { name: "scales", detail: format!("min {min_cell_px}, max {max_cell_px}: need 0 ≤ min < max") });
+    // SAFETY: the header contract of `skb_detect_options_set_scales` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let o = try_status!(try_mut(opts, "opts"));
+            if !(min_cell_px >= 0.0 && min_cell_px.is_finite() && max_cell_px > min_cell_px) {
+                return fail(&Error::OutOfRange { name: "scales", detail: format!("min {min_cell_px}, max {max_cell_px}: need 0 ≤ min < max") });
+            }
+            o.inner.min_cell_px = min_cell_px;
+            o.inner.max_cell_px = max_cell_px;
+            o.inner.search = SearchScales::All;
+            skb_status::SKB_OK
         }
-        o.inner.min_cell_px = min_cell_px;
-        o.inner.max_cell_px = max_cell_px;
-        o.inner.search = SearchScales::All;
-        skb_status::SKB_OK
     }
 }
 
@@ -152,15 +173,20 @@ pub unsafe extern "C" fn skb_detect_options_set_figure_range(
     min_fraction: f64,
     max_fraction: f64,
 ) -> skb_status {
-    ffi_boundary! {
-        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
-        if !(min_fraction > 0.0 && max_fraction > min_fraction && max_fraction.is_finite()) {
-            return fail(&Error::OutOfRange { name: "figure range", detail: format!("min {min_fraction}, max {max_fraction}: need 0 < min < max, finite") });
+    // SAFETY: the header contract of `skb_detect_options_set_figure_range` (lib.rs § Safety): `opts` is NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let o = try_status!(try_mut(opts, "opts"));
+            if !(min_fraction > 0.0 && max_fraction > min_fraction && max_fraction.is_finite()) {
+                return fail(&Error::OutOfRange { name: "figure range", detail: format!("min {min_fraction}, max {max_fraction}: need 0 < min < max, finite") });
+            }
+            o.inner.search = SearchScales::FigureFraction { min: min_fraction, max: max_fraction };
+            o.inner.min_cell_px = 0.0;
+            o.inner.max_cell_px = f64::INFINITY;
+            skb_status::SKB_OK
         }
-        o.inner.search = SearchScales::FigureFraction { min: min_fraction, max: max_fraction };
-        o.inner.min_cell_px = 0.0;
-        o.inner.max_cell_px = f64::INFINITY;
-        skb_status::SKB_OK
     }
 }
 
@@ -173,13 +199,18 @@ pub unsafe extern "C" fn skb_detect_options_set_levels_per_octave(
     opts: *mut skb_detect_options,
     levels: u32,
 ) -> skb_status {
-    ffi_boundary! {
-        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
-        if levels > 100 {
-            return fail(&Error::OutOfRange { name: "levels_per_octave", detail: format!("{levels} not in 0..=100") });
+    // SAFETY: the header contract of `skb_detect_options_set_levels_per_octave` (lib.rs § Safety): `opts` is NULL
+    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let o = try_status!(try_mut(opts, "opts"));
+            if levels > 100 {
+                return fail(&Error::OutOfRange { name: "levels_per_octave", detail: format!("{levels} not in 0..=100") });
+            }
+            o.inner.levels_per_octave = (levels > 0).then_some(levels as usize);
+            skb_status::SKB_OK
         }
-        o.inner.levels_per_octave = (levels > 0).then_some(levels as usize);
-        skb_status::SKB_OK
     }
 }
 
@@ -202,17 +233,22 @@ pub unsafe extern "C" fn skb_detect(
     confidence_len: usize,
     score: *mut f64,
 ) -> skb_status {
-    ffi_boundary! {
-        let ctx = try_status!(try_ref(ctx, "ctx"));
-        let view = try_status!(view_of(image));
-        let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
-        let defaults = DetectOptions::default();
-        let o = opts.as_ref().map_or(&defaults, |o| &o.inner);
-        let model = match embedded_detector(ctx) {
-            Ok(m) => m,
-            Err(e) => return fail(&e),
-        };
-        detect_into(&view, model, o, xy, cf, score)
+    // SAFETY: the header contract of `skb_detect` (lib.rs § Safety): `ctx`, `image`, `opts`, `joints_xy`,
+    // `confidence`, `score` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check
+    // NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let ctx = try_status!(try_ref(ctx, "ctx"));
+            let view = try_status!(view_of(image));
+            let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
+            let defaults = DetectOptions::default();
+            let o = opt_ref(opts).map_or(&defaults, |o| &o.inner);
+            let model = match embedded_detector(ctx) {
+                Ok(m) => m,
+                Err(e) => return fail(&e),
+            };
+            detect_into(&view, model, o, xy, cf, score)
+        }
     }
 }
 
@@ -261,9 +297,13 @@ unsafe fn outputs<'a>(
     if joints_xy.is_null() || confidence.is_null() || score.is_null() {
         return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, "joints_xy, confidence and score must not be NULL"));
     }
-    let xy = out_slice(joints_xy, joints_len, 2 * NUM_JOINTS, "joints_xy")?;
-    let cf = out_slice(confidence, confidence_len, NUM_JOINTS, "confidence")?;
-    Ok((xy, cf, &mut *score))
+    // SAFETY: this function's `# Safety` contract (skb_detect's header docs: each pointer valid
+    // for its length), forwarded; the helpers check the lengths before borrowing.
+    unsafe {
+        let xy = out_slice(joints_xy, joints_len, 2 * NUM_JOINTS, "joints_xy")?;
+        let cf = out_slice(confidence, confidence_len, NUM_JOINTS, "confidence")?;
+        Ok((xy, cf, try_mut(score, "score")?))
+    }
 }
 
 /// Writes the joints, confidences and score of `best`.
@@ -290,6 +330,7 @@ mod tests {
         let r = SketchRenderer::new(std::sync::Arc::new(sketchbody_core::body::BodyModel::embedded().unwrap()), None)
             .unwrap();
         let sk = r.render(&SketchRequest::random(11, 384)).unwrap();
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         unsafe {
             let mut ctx = null_mut();
             assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
@@ -391,6 +432,7 @@ mod tests {
         let p = dir.join("m.skbd");
         tiny_model().save(&p).unwrap();
         let cp = CString::new(p.to_str().unwrap()).unwrap();
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         unsafe {
             let mut d: *mut skb_detector = null_mut();
             assert_eq!(skb_detector_new_from_file(null(), &mut d), skb_status::SKB_ERR_NULL_POINTER);

@@ -10,9 +10,9 @@ use sketchbody_core::export::gltf::write_glb;
 use sketchbody_core::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
 
 use super::body::skb_mesh;
-use super::error::{fail, fail_with};
+use super::error::fail;
 use super::mesh_ops::path_arg;
-use super::ptr::{free_box, give, out_slot, try_ref};
+use super::ptr::*;
 use super::status::skb_status;
 
 /// Bone names: the project's (`pelvis`, `spine`, `r_elbow`, …; the default).
@@ -40,23 +40,33 @@ pub struct skb_export_options {
 /// Creates export options with the defaults into `*out` (the caller owns them).
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_new(out: *mut *mut skb_export_options) -> skb_status {
-    ffi_boundary! {
-        let out = try_status!(out_slot(out));
-        give(out, skb_export_options { rig: RigOptions::default() })
+    // SAFETY: the header contract of `skb_export_options_new` (lib.rs § Safety): `out` is NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let out = try_status!(out_slot(out));
+            give(out, skb_export_options { rig: RigOptions::default() })
+        }
     }
 }
 
 /// Frees export options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_free(opts: *mut skb_export_options) {
-    free_box(opts)
+    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(opts) }
 }
 
 unsafe fn set(opts: *mut skb_export_options, f: impl FnOnce(&mut RigOptions) -> Result<(), Error>) -> skb_status {
-    let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
-    match f(&mut o.rig) {
-        Ok(()) => skb_status::SKB_OK,
-        Err(e) => fail(&e),
+    // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to the ptr.rs helpers, which
+    // check NULL and lengths.
+    unsafe {
+        let o = try_status!(try_mut(opts, "opts"));
+        match f(&mut o.rig) {
+            Ok(()) => skb_status::SKB_OK,
+            Err(e) => fail(&e),
+        }
     }
 }
 
@@ -64,14 +74,18 @@ unsafe fn set(opts: *mut skb_export_options, f: impl FnOnce(&mut RigOptions) -> 
 /// anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged).
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_naming(opts: *mut skb_export_options, naming: u32) -> skb_status {
-    ffi_boundary! {
-        set(opts, |o| {
-            o.naming = *Naming::ALL.get(naming as usize).ok_or_else(|| Error::OutOfRange {
-                name: "bone naming",
-                detail: format!("{naming} (expected 0 project, 1 mixamo, 2 unreal)"),
-            })?;
-            Ok(())
-        })
+    // SAFETY: the header contract of `skb_export_options_set_naming` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            set(opts, |o| {
+                o.naming = *Naming::ALL.get(naming as usize).ok_or_else(|| Error::OutOfRange {
+                    name: "bone naming",
+                    detail: format!("{naming} (expected 0 project, 1 mixamo, 2 unreal)"),
+                })?;
+                Ok(())
+            })
+        }
     }
 }
 
@@ -79,15 +93,19 @@ pub unsafe extern "C" fn skb_export_options_set_naming(opts: *mut skb_export_opt
 /// `SKB_ERR_OUT_OF_RANGE` (options unchanged).
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_rest_pose(opts: *mut skb_export_options, rest: u32) -> skb_status {
-    ffi_boundary! {
-        set(opts, |o| {
-            o.rest_pose = match rest {
-                SKB_REST_A_POSE => RestPose::APose,
-                SKB_REST_T_POSE => RestPose::TPose,
-                _ => return Err(Error::OutOfRange { name: "rest pose", detail: format!("{rest} (expected 0 A-pose, 1 T-pose)") }),
-            };
-            Ok(())
-        })
+    // SAFETY: the header contract of `skb_export_options_set_rest_pose` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            set(opts, |o| {
+                o.rest_pose = match rest {
+                    SKB_REST_A_POSE => RestPose::APose,
+                    SKB_REST_T_POSE => RestPose::TPose,
+                    _ => return Err(Error::OutOfRange { name: "rest pose", detail: format!("{rest} (expected 0 A-pose, 1 T-pose)") }),
+                };
+                Ok(())
+            })
+        }
     }
 }
 
@@ -95,15 +113,19 @@ pub unsafe extern "C" fn skb_export_options_set_rest_pose(opts: *mut skb_export_
 /// `SKB_ERR_OUT_OF_RANGE` (options unchanged).
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_options, origin: u32) -> skb_status {
-    ffi_boundary! {
-        set(opts, |o| {
-            o.placement = match origin {
-                SKB_ORIGIN_FLOOR => Placement::Floor,
-                SKB_ORIGIN_PELVIS => Placement::Pelvis,
-                _ => return Err(Error::OutOfRange { name: "origin", detail: format!("{origin} (expected 0 floor, 1 pelvis)") }),
-            };
-            Ok(())
-        })
+    // SAFETY: the header contract of `skb_export_options_set_origin` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            set(opts, |o| {
+                o.placement = match origin {
+                    SKB_ORIGIN_FLOOR => Placement::Floor,
+                    SKB_ORIGIN_PELVIS => Placement::Pelvis,
+                    _ => return Err(Error::OutOfRange { name: "origin", detail: format!("{origin} (expected 0 floor, 1 pelvis)") }),
+                };
+                Ok(())
+            })
+        }
     }
 }
 
@@ -117,15 +139,20 @@ pub unsafe extern "C" fn skb_mesh_write_glb_with_options(
     path: *const c_char,
     opts: *const skb_export_options,
 ) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let path = try_status!(path_arg(path, "path"));
-        let options = opts.as_ref().map_or_else(RigOptions::default, |o| o.rig);
-        let rest_pose = Pose::rest(&m.rest.joints);
-        let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
-        let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
-        let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
-        try_core!(write_glb(path, &rigged, &scene, None));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_write_glb_with_options` (lib.rs § Safety): `mesh`, `path`, `opts`
+    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
+    // before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let path = try_status!(path_arg(path, "path"));
+            let options = opt_ref(opts).map_or_else(RigOptions::default, |o| o.rig);
+            let rest_pose = Pose::rest(&m.rest.joints);
+            let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
+            let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
+            let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
+            try_core!(write_glb(path, &rigged, &scene, None));
+            skb_status::SKB_OK
+        }
     }
 }

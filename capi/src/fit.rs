@@ -13,11 +13,11 @@ use sketchbody_core::image::to_gray;
 use sketchbody_core::pipeline::{fit_body, BodyChoice};
 use sketchbody_core::skeleton::{Joints3, NUM_JOINTS};
 
-use super::body::{skb_context, skb_mesh, write_out};
+use super::body::{skb_context, skb_mesh};
 use super::error::{fail, fail_with};
 use super::image::{skb_image, view_of};
 use super::mesh_ops::{skb_camera, Posed};
-use super::ptr::{free_box, give, out_slot, try_ref, try_slice_of};
+use super::ptr::*;
 use super::status::skb_status;
 
 /// Progress callback: called from the calling thread with the fraction of the work done
@@ -57,68 +57,99 @@ pub struct skb_fit_options {
 /// Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_new(out: *mut *mut skb_fit_options) -> skb_status {
-    ffi_boundary! {
-        let out = try_status!(out_slot(out));
-        give(out, skb_fit_options { fit: FitOptions::default(), gender: None })
+    // SAFETY: the header contract of `skb_fit_options_new` (lib.rs § Safety): `out` is NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let out = try_status!(out_slot(out));
+            give(out, skb_fit_options { fit: FitOptions::default(), gender: None })
+        }
     }
 }
 
 /// Frees fit options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_free(opts: *mut skb_fit_options) {
-    free_box(opts)
+    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(opts) }
 }
 
 /// Applies `set` to a copy, validates it and stores it only if valid.
 unsafe fn set_fit(opts: *mut skb_fit_options, set: impl FnOnce(&mut FitOptions) -> Result<(), Error>) -> skb_status {
-    let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
-    let mut next = o.fit.clone();
-    try_core!(set(&mut next));
-    try_core!(next.validate());
-    o.fit = next;
-    skb_status::SKB_OK
+    // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to the ptr.rs helpers, which
+    // check NULL and lengths.
+    unsafe {
+        let o = try_status!(try_mut(opts, "opts"));
+        let mut next = o.fit.clone();
+        try_core!(set(&mut next));
+        try_core!(next.validate());
+        o.fit = next;
+        skb_status::SKB_OK
+    }
 }
 
 /// Sets the samples per SIR iteration, S, in 2..=100000.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_samples(opts: *mut skb_fit_options, samples: u32) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.samples = samples as usize; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_samples` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.samples = samples as usize; Ok(()) }) }
+    }
 }
 
 /// Sets the most SIR iterations, T, in 1..=1000.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_iterations(opts: *mut skb_fit_options, iterations: u32) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.max_iterations = iterations as usize; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_iterations` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.max_iterations = iterations as usize; Ok(()) }) }
+    }
 }
 
 /// Sets the transition step s in standard deviations (Σ = diag(s² λ_k)), finite and > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_transition_scale(opts: *mut skb_fit_options, scale: f64) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.transition_scale = scale; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_transition_scale` (lib.rs § Safety): `opts` is NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.transition_scale = scale; Ok(()) }) }
+    }
 }
 
 /// Sets the match score: `SKB_SCORE_PAPER`, `SKB_SCORE_FILLED_IOU`, `SKB_SCORE_CHAMFER` or
 /// `SKB_SCORE_TWO_SIDED_CHAMFER`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_score(opts: *mut skb_fit_options, score: u32) -> skb_status {
-    ffi_boundary! {
-        set_fit(opts, |o| {
-            o.score = match score {
-                SKB_SCORE_PAPER => MatchScore::Paper,
-                SKB_SCORE_FILLED_IOU => MatchScore::FilledIou,
-                SKB_SCORE_CHAMFER => MatchScore::Chamfer,
-                SKB_SCORE_TWO_SIDED_CHAMFER => MatchScore::TwoSidedChamfer,
-                _ => return Err(Error::OutOfRange { name: "score", detail: format!("{score} (expected 0 paper, 1 filled IoU, 2 chamfer, 3 two-sided chamfer)") }),
-            };
-            Ok(())
-        })
+    // SAFETY: the header contract of `skb_fit_options_set_score` (lib.rs § Safety): `opts` is NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            set_fit(opts, |o| {
+                o.score = match score {
+                    SKB_SCORE_PAPER => MatchScore::Paper,
+                    SKB_SCORE_FILLED_IOU => MatchScore::FilledIou,
+                    SKB_SCORE_CHAMFER => MatchScore::Chamfer,
+                    SKB_SCORE_TWO_SIDED_CHAMFER => MatchScore::TwoSidedChamfer,
+                    _ => return Err(Error::OutOfRange { name: "score", detail: format!("{score} (expected 0 paper, 1 filled IoU, 2 chamfer, 3 two-sided chamfer)") }),
+                };
+                Ok(())
+            })
+        }
     }
 }
 
 /// Sets the likelihood temperature of the non-paper scores (exp(score / temperature)), > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_temperature(opts: *mut skb_fit_options, temperature: f64) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.temperature = temperature; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_temperature` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.temperature = temperature; Ok(()) }) }
+    }
 }
 
 /// Sets the weight of the 2-D joint term, ≥ 0 (score loses weight × the mean distance in raster
@@ -127,7 +158,11 @@ pub unsafe extern "C" fn skb_fit_options_set_temperature(opts: *mut skb_fit_opti
 /// negative `SKB_ERR_OUT_OF_RANGE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_joint_weight(opts: *mut skb_fit_options, weight: f64) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.joint_weight = weight; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_joint_weight` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.joint_weight = weight; Ok(()) }) }
+    }
 }
 
 /// Sets the character's known rest height in metres (character sheets carry one), in
@@ -136,7 +171,11 @@ pub unsafe extern "C" fn skb_fit_options_set_joint_weight(opts: *mut skb_fit_opt
 /// `SKB_ERR_NON_FINITE`, other values outside the range (negative included) `SKB_ERR_OUT_OF_RANGE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_height(opts: *mut skb_fit_options, metres: f64) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.height = (metres != 0.0).then_some(metres); Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_height` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.height = (metres != 0.0).then_some(metres); Ok(()) }) }
+    }
 }
 
 /// Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
@@ -144,7 +183,11 @@ pub unsafe extern "C" fn skb_fit_options_set_height(opts: *mut skb_fit_options, 
 /// comes from the shape. Only `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_sample_camera(opts: *mut skb_fit_options, on: c_int) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.sample_camera = on != 0; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_sample_camera` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.sample_camera = on != 0; Ok(()) }) }
+    }
 }
 
 /// Sets the prior standard deviation of the fit's log bone-length factors (legs, arms,
@@ -152,7 +195,11 @@ pub unsafe extern "C" fn skb_fit_options_set_sample_camera(opts: *mut skb_fit_op
 /// `SKB_ERR_NON_FINITE`, values outside the range `SKB_ERR_OUT_OF_RANGE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_proportion_sd(opts: *mut skb_fit_options, sd: f64) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.proportion_sd = sd; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_proportion_sd` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.proportion_sd = sd; Ok(()) }) }
+    }
 }
 
 /// Turns the closed-form proportion estimate on (non-zero, the default) or off (0): the bone
@@ -162,39 +209,60 @@ pub unsafe extern "C" fn skb_fit_options_set_proportion_sd(opts: *mut skb_fit_op
 /// handle, like every setter.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_estimate_proportions(opts: *mut skb_fit_options, on: c_int) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.estimate_proportions = on != 0; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_estimate_proportions` (lib.rs § Safety): `opts` is NULL
+    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.estimate_proportions = on != 0; Ok(()) }) }
+    }
 }
 
 /// Sets the longest raster side of the fit, pixels, in 16..=4096.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_raster_side(opts: *mut skb_fit_options, side: u32) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.raster_max_side = side as usize; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_raster_side` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.raster_max_side = side as usize; Ok(()) }) }
+    }
 }
 
 /// Sets the convergence tolerance in standard deviations of the weights, finite and > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_tolerance(opts: *mut skb_fit_options, tolerance: f64) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.tolerance = tolerance; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_tolerance` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.tolerance = tolerance; Ok(()) }) }
+    }
 }
 
 /// Sets the seed of every random step (same seed, same result on any thread count).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_seed(opts: *mut skb_fit_options, seed: u64) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.seed = seed; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_seed` (lib.rs § Safety): `opts` is NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.seed = seed; Ok(()) }) }
+    }
 }
 
 /// Sets the skinning: `SKB_SKIN_LINEAR` or `SKB_SKIN_DUAL_QUATERNION`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_skinning(opts: *mut skb_fit_options, method: u32) -> skb_status {
-    ffi_boundary! {
-        set_fit(opts, |o| {
-            o.skinning = match method {
-                SKB_SKIN_LINEAR => SkinMethod::Linear,
-                SKB_SKIN_DUAL_QUATERNION => SkinMethod::DualQuaternion,
-                _ => return Err(Error::OutOfRange { name: "skinning", detail: format!("{method} (expected 0 linear, 1 dual quaternion)") }),
-            };
-            Ok(())
-        })
+    // SAFETY: the header contract of `skb_fit_options_set_skinning` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            set_fit(opts, |o| {
+                o.skinning = match method {
+                    SKB_SKIN_LINEAR => SkinMethod::Linear,
+                    SKB_SKIN_DUAL_QUATERNION => SkinMethod::DualQuaternion,
+                    _ => return Err(Error::OutOfRange { name: "skinning", detail: format!("{method} (expected 0 linear, 1 dual quaternion)") }),
+                };
+                Ok(())
+            })
+        }
     }
 }
 
@@ -203,31 +271,43 @@ pub unsafe extern "C" fn skb_fit_options_set_skinning(opts: *mut skb_fit_options
 /// clothing do not pull the body outward; 12 or more is the plain chamfer.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_inside_cap(opts: *mut skb_fit_options, cap: f64) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.inside_cap = cap; Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_inside_cap` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.inside_cap = cap; Ok(()) }) }
+    }
 }
 
 /// Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
 /// dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, dims: u32) -> skb_status {
-    ffi_boundary! { set_fit(opts, |o| { o.dims = (dims > 0).then_some(dims as usize); Ok(()) }) }
+    // SAFETY: the header contract of `skb_fit_options_set_dims` (lib.rs § Safety): `opts` is NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_fit(opts, |o| { o.dims = (dims > 0).then_some(dims as usize); Ok(()) }) }
+    }
 }
 
 /// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
 /// fit the both-sexes space, gender a continuous weight; `skb_result_gender_value` reads it).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_gender(opts: *mut skb_fit_options, gender: u32) -> skb_status {
-    ffi_boundary! {
-        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
-        o.gender = if gender == SKB_GENDER_AUTO {
-            None
-        } else {
-            match Gender::from_index(gender) {
-                Ok(g) => Some(g),
-                Err(_) => return fail(&Error::OutOfRange { name: "gender", detail: format!("{gender} (expected 0 female, 1 male, 2 auto)") }),
-            }
-        };
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_fit_options_set_gender` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let o = try_status!(try_mut(opts, "opts"));
+            o.gender = if gender == SKB_GENDER_AUTO {
+                None
+            } else {
+                match Gender::from_index(gender) {
+                    Ok(g) => Some(g),
+                    Err(_) => return fail(&Error::OutOfRange { name: "gender", detail: format!("{gender} (expected 0 female, 1 male, 2 auto)") }),
+                }
+            };
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -270,40 +350,43 @@ pub unsafe extern "C" fn skb_fit_shape(
     score: *mut f64,
     out: *mut *mut skb_mesh,
 ) -> skb_status {
-    ffi_boundary! {
-        let ctx = try_status!(try_ref(ctx, "ctx"));
-        if joints_len != 3 * NUM_JOINTS {
-            return fail(&Error::OutOfRange { name: "joints_len", detail: format!("{joints_len}, expected {}", 3 * NUM_JOINTS) });
+    // SAFETY: the header contract of `skb_fit_shape` (lib.rs § Safety): `ctx`, `joints`, `camera`, `edges`, `opts`,
+    // `progress`, `user`, `score`, `out` are NULL or valid for the documented lengths during the call; the ptr.rs
+    // helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let ctx = try_status!(try_ref(ctx, "ctx"));
+            if joints_len != 3 * NUM_JOINTS {
+                return fail(&Error::OutOfRange { name: "joints_len", detail: format!("{joints_len}, expected {}", 3 * NUM_JOINTS) });
+            }
+            let j = try_status!(try_slice_of(joints, joints_len, "joints"));
+            let pose: Joints3 = std::array::from_fn(|i| [j[3 * i], j[3 * i + 1], j[3 * i + 2]]);
+            let cam = WeakPerspective::from(try_status!(try_ref(camera, "camera")));
+            let edge_map = try_core!(to_gray(&try_status!(view_of(edges))));
+            if out.is_null() {
+                return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
+            }
+            let (fit_opts, gender) = match opt_ref(opts) {
+                Some(o) => (o.fit.clone(), o.gender),
+                None => (FitOptions::default(), None),
+            };
+            if edge_map.as_bytes().iter().all(|&e| e == 0) {
+                return fail(&Error::BlankImage { width: edge_map.width(), height: edge_map.height(), low: 0.0, high: 0.0 });
+            }
+            let mut cb = progress_closure(progress, user);
+            let choice = BodyChoice { gender, ..BodyChoice::default() };
+            let body = try_core!(fit_body(&ctx.model, &pose, &cam, &edge_map, None, &fit_opts, &choice, &mut cb));
+            write_opt(score, body.score);
+            let posed = Posed { pose: body.ik_pose, vertices: body.posed_vertices };
+            let mesh = skb_mesh {
+                model: Arc::clone(&ctx.model),
+                gender: body.gender,
+                rest: body.rest,
+                weights: body.weights,
+                posed: Some(Box::new(posed)),
+            };
+            try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
+            skb_status::SKB_OK
         }
-        let j = try_status!(try_slice_of(joints, joints_len, "joints"));
-        let pose: Joints3 = std::array::from_fn(|i| [j[3 * i], j[3 * i + 1], j[3 * i + 2]]);
-        let cam = WeakPerspective::from(try_status!(try_ref(camera, "camera")));
-        let edge_map = try_core!(to_gray(&try_status!(view_of(edges))));
-        if out.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out is NULL");
-        }
-        let (fit_opts, gender) = match opts.as_ref() {
-            Some(o) => (o.fit.clone(), o.gender),
-            None => (FitOptions::default(), None),
-        };
-        if edge_map.as_bytes().iter().all(|&e| e == 0) {
-            return fail(&Error::BlankImage { width: edge_map.width(), height: edge_map.height(), low: 0.0, high: 0.0 });
-        }
-        let mut cb = progress_closure(progress, user);
-        let choice = BodyChoice { gender, ..BodyChoice::default() };
-        let body = try_core!(fit_body(&ctx.model, &pose, &cam, &edge_map, None, &fit_opts, &choice, &mut cb));
-        if !score.is_null() {
-            *score = body.score;
-        }
-        let posed = Posed { pose: body.ik_pose, vertices: body.posed_vertices };
-        let mesh = skb_mesh {
-            model: Arc::clone(&ctx.model),
-            gender: body.gender,
-            rest: body.rest,
-            weights: body.weights,
-            posed: Some(Box::new(posed)),
-        };
-        try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
-        skb_status::SKB_OK
     }
 }

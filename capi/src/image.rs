@@ -3,7 +3,7 @@
 use sketchbody_core::image::{canny_into, gaussian_blur, CannyParams, ImageView};
 
 use super::error::fail;
-use super::ptr::{try_ref, try_slice, try_slice_mut};
+use super::ptr::*;
 use super::status::skb_status;
 
 /// A borrowed 8-bit image owned by the caller: `height` rows of `width` pixels, each pixel
@@ -32,11 +32,15 @@ const _: () = assert!(std::mem::size_of::<skb_image>() == 24 || std::mem::size_o
 /// # Safety
 /// `img` must be NULL or point to an `skb_image` whose `data` is valid for the described rows.
 pub(crate) unsafe fn view_of<'a>(img: *const skb_image) -> Result<ImageView<'a>, skb_status> {
-    let img = try_ref(img, "image")?;
-    let (w, h, c, s) = (img.width as usize, img.height as usize, img.channels as usize, img.stride as usize);
-    let len = ImageView::required_len(w, h, c, s).map_err(|e| fail(&e))?;
-    let data = try_slice(img.data, len, "image->data")?;
-    ImageView::new(data, w, h, c, s).map_err(|e| fail(&e))
+    // SAFETY: this function's `# Safety` contract (`img` NULL or valid), forwarded to the ptr.rs helpers, which
+    // check NULL and lengths.
+    unsafe {
+        let img = try_ref(img, "image")?;
+        let (w, h, c, s) = (img.width as usize, img.height as usize, img.channels as usize, img.stride as usize);
+        let len = ImageView::required_len(w, h, c, s).map_err(|e| fail(&e))?;
+        let data = try_slice(img.data, len, "image->data")?;
+        ImageView::new(data, w, h, c, s).map_err(|e| fail(&e))
+    }
 }
 
 /// Canny edges of `src`, bit-exact with OpenCV 4.6
@@ -57,15 +61,19 @@ pub unsafe extern "C" fn skb_canny(
     dst_stride: usize,
     dst_len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let view = try_status!(view_of(src));
-        if !matches!(aperture, 3 | 5 | 7) {
-            return fail(&sketchbody_core::Error::InvalidAperture(aperture as i64));
+    // SAFETY: the header contract of `skb_canny` (lib.rs § Safety): `src`, `dst` are NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let view = try_status!(view_of(src));
+            if !matches!(aperture, 3 | 5 | 7) {
+                return fail(&sketchbody_core::Error::InvalidAperture(aperture as i64));
+            }
+            let params = CannyParams { threshold1, threshold2, aperture: aperture as u32, l2_gradient };
+            let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
+            try_core!(canny_into(&view, &params, out, dst_stride));
+            skb_status::SKB_OK
         }
-        let params = CannyParams { threshold1, threshold2, aperture: aperture as u32, l2_gradient };
-        let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
-        try_core!(canny_into(&view, &params, out, dst_stride));
-        skb_status::SKB_OK
     }
 }
 
@@ -80,19 +88,23 @@ pub unsafe extern "C" fn skb_gaussian_blur(
     dst_stride: usize,
     dst_len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let view = try_status!(view_of(src));
-        let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
-        let (w, h) = (view.width(), view.height());
-        let needed = try_core!(ImageView::required_len(w, h, 1, dst_stride));
-        if dst_len < needed {
-            return fail(&sketchbody_core::Error::BufferTooSmall { len: dst_len, needed });
+    // SAFETY: the header contract of `skb_gaussian_blur` (lib.rs § Safety): `src`, `dst` are NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let view = try_status!(view_of(src));
+            let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
+            let (w, h) = (view.width(), view.height());
+            let needed = try_core!(ImageView::required_len(w, h, 1, dst_stride));
+            if dst_len < needed {
+                return fail(&sketchbody_core::Error::BufferTooSmall { name: "dst", len: dst_len, needed, unit: "bytes" });
+            }
+            let blurred = try_core!(gaussian_blur(&view, sigma));
+            for (y, row) in blurred.as_bytes().chunks_exact(w).enumerate() {
+                out[y * dst_stride..y * dst_stride + w].copy_from_slice(row);
+            }
+            skb_status::SKB_OK
         }
-        let blurred = try_core!(gaussian_blur(&view, sigma));
-        for (y, row) in blurred.as_bytes().chunks_exact(w).enumerate() {
-            out[y * dst_stride..y * dst_stride + w].copy_from_slice(row);
-        }
-        skb_status::SKB_OK
     }
 }
 

@@ -16,6 +16,7 @@
 //! not repeated 100 times.
 #![allow(non_camel_case_types)]
 #![allow(clippy::missing_safety_doc)]
+#![deny(unsafe_op_in_unsafe_fn)]
 
 // Macros first; then the modules in the order the header presents them (cbindgen follows it):
 // status, errors and version, then images, bodies, poses, detection, the fit and the pipeline.

@@ -1,7 +1,7 @@
 //! Mesh operations: the weak-perspective camera struct, the silhouette rasteriser
 //! (`skb_rasterizer`, also on raw arrays), and posing, rasterising and exporting an `skb_mesh`.
 
-use std::ffi::{c_char, CStr};
+use std::ffi::c_char;
 use std::path::Path;
 
 use nalgebra::Matrix3;
@@ -16,18 +16,10 @@ use sketchbody_core::raster::Rasterizer;
 use sketchbody_core::render::preview::{preview, save_rgb_png};
 use sketchbody_core::skeleton::{Joints3, NUM_JOINTS};
 
-use super::body::{out_slice, skb_mesh};
+use super::body::skb_mesh;
 use super::error::{fail, fail_with};
-use super::ptr::{free_box, give, out_slot, try_ref, try_slice_mut, try_slice_of};
+use super::ptr::*;
 use super::status::skb_status;
-
-/// Mutably borrows `*p`, or fails naming `name` when `p` is NULL.
-///
-/// # Safety
-/// `p` must be NULL or point to a valid `T` with no other live reference for `'a`.
-unsafe fn try_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, skb_status> {
-    p.as_mut().ok_or_else(|| fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")))
-}
 
 /// The weak-perspective camera of paper eq. (1) (docs/design.md): a model point X (metres, +Y up,
 /// +Z toward the viewer) maps to pixel `u = sx (R X)_x + t[0]`, `v = -sy (R X)_y + t[1]`.
@@ -65,16 +57,22 @@ pub struct skb_rasterizer {
 /// [`skb_rasterizer_free`]).
 #[no_mangle]
 pub unsafe extern "C" fn skb_rasterizer_new(out: *mut *mut skb_rasterizer) -> skb_status {
-    ffi_boundary! {
-        let out = try_status!(out_slot(out));
-        give(out, skb_rasterizer { inner: Rasterizer::new() })
+    // SAFETY: the header contract of `skb_rasterizer_new` (lib.rs § Safety): `out` is NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let out = try_status!(out_slot(out));
+            give(out, skb_rasterizer { inner: Rasterizer::new() })
+        }
     }
 }
 
 /// Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rasterizer_free(r: *mut skb_rasterizer) {
-    free_box(r)
+    // SAFETY: the header requires `r` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(r) }
 }
 
 /// Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
@@ -101,28 +99,36 @@ pub unsafe extern "C" fn skb_rasterize_triangles(
     mask_stride: usize,
     mask_len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let cam = WeakPerspective::from(try_status!(try_ref(cam, "cam")));
-        let v3 = try_status!(try_slice_of(verts.cast::<[f32; 3]>(), nverts, "verts"));
-        let t3 = try_status!(try_slice_of(tris.cast::<[u32; 3]>(), ntris, "tris"));
-        let (w, h) = (w as usize, h as usize);
-        try_core!(sketchbody_core::raster::check_size(w, h));
-        if mask_stride < w {
-            return fail(&sketchbody_core::Error::BadStride { stride: mask_stride, row_bytes: w });
+    // SAFETY: the header contract of `skb_rasterize_triangles` (lib.rs § Safety): `rasterizer`, `verts`, `tris`,
+    // `cam`, `mask` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and
+    // lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let cam = WeakPerspective::from(try_status!(try_ref(cam, "cam")));
+            let v3 = try_status!(try_slice_of(verts.cast::<[f32; 3]>(), nverts, "verts"));
+            let t3 = try_status!(try_slice_of(tris.cast::<[u32; 3]>(), ntris, "tris"));
+            let (w, h) = (w as usize, h as usize);
+            try_core!(sketchbody_core::raster::check_size(w, h));
+            if mask_stride < w {
+                return fail(&sketchbody_core::Error::BadStride { stride: mask_stride, row_bytes: w });
+            }
+            let needed = try_status!(mask_stride.checked_mul(h - 1).and_then(|x| x.checked_add(w))
+                .ok_or_else(|| fail_with(skb_status::SKB_ERR_OUT_OF_RANGE, "mask_stride is absurd")));
+            if mask_len < needed {
+                return fail(&sketchbody_core::Error::BufferTooSmall { name: "mask", len: mask_len, needed, unit: "bytes" });
+            }
+            let out = try_status!(try_slice_mut(mask, mask_len, "mask"));
+            let mut temp = None;
+            let r = match opt_mut(rasterizer) {
+                Some(r) => &mut r.inner,
+                None => temp.insert(Rasterizer::new()),
+            };
+            try_core!(r.rasterize(v3, t3, &cam, w, h, false));
+            for (y, row) in r.mask().chunks_exact(w).enumerate() {
+                out[y * mask_stride..y * mask_stride + w].copy_from_slice(row);
+            }
+            skb_status::SKB_OK
         }
-        let needed = try_status!(mask_stride.checked_mul(h - 1).and_then(|x| x.checked_add(w))
-            .ok_or_else(|| fail_with(skb_status::SKB_ERR_OUT_OF_RANGE, "mask_stride is absurd")));
-        if mask_len < needed {
-            return fail(&sketchbody_core::Error::BufferTooSmall { len: mask_len, needed });
-        }
-        let out = try_status!(try_slice_mut(mask, mask_len, "mask"));
-        let mut temp = None;
-        let r = if rasterizer.is_null() { temp.insert(Rasterizer::new()) } else { &mut (*rasterizer).inner };
-        try_core!(r.rasterize(v3, t3, &cam, w, h, false));
-        for (y, row) in r.mask().chunks_exact(w).enumerate() {
-            out[y * mask_stride..y * mask_stride + w].copy_from_slice(row);
-        }
-        skb_status::SKB_OK
     }
 }
 
@@ -142,14 +148,12 @@ fn posed_vertices(m: &skb_mesh) -> &[[f32; 3]] {
 }
 
 /// Borrows a NUL-terminated UTF-8 path.
+///
+/// # Safety
+/// `p` must be NULL or point to a NUL-terminated string that outlives `'a`.
 pub(crate) unsafe fn path_arg<'a>(p: *const c_char, name: &str) -> Result<&'a Path, skb_status> {
-    if p.is_null() {
-        return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL")));
-    }
-    let s = CStr::from_ptr(p)
-        .to_str()
-        .map_err(|_| fail_with(skb_status::SKB_ERR_INVALID_ARGUMENT, &format!("{name} is not UTF-8")))?;
-    Ok(Path::new(s))
+    // SAFETY: forwarded contract: `p` is NULL or a NUL-terminated string outliving `'a`.
+    Ok(Path::new(unsafe { try_str(p, name) }?))
 }
 
 /// Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,
@@ -166,21 +170,25 @@ pub unsafe extern "C" fn skb_mesh_pose(
     joints_len: usize,
     flags: u32,
 ) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_mut(mesh, "mesh"));
-        if joints_len != 3 * NUM_JOINTS {
-            return fail(&Error::OutOfRange { name: "joints_len", detail: format!("{joints_len}, expected {}", 3 * NUM_JOINTS) });
+    // SAFETY: the header contract of `skb_mesh_pose` (lib.rs § Safety): `mesh`, `joints` are NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_mut(mesh, "mesh"));
+            if joints_len != 3 * NUM_JOINTS {
+                return fail(&Error::OutOfRange { name: "joints_len", detail: format!("{joints_len}, expected {}", 3 * NUM_JOINTS) });
+            }
+            let j = try_status!(try_slice_of(joints, joints_len, "joints"));
+            if flags & !(SKB_POSE_RETARGET | SKB_POSE_DUAL_QUATERNION) != 0 {
+                return fail(&Error::OutOfRange { name: "flags", detail: format!("unknown bits in {flags:#x}") });
+            }
+            let target: Joints3 = std::array::from_fn(|i| [j[3 * i], j[3 * i + 1], j[3 * i + 2]]);
+            let pose = try_core!(solve(&m.rest.joints, &target, &IkOptions { retarget: flags & SKB_POSE_RETARGET != 0 }));
+            let method = if flags & SKB_POSE_DUAL_QUATERNION != 0 { SkinMethod::DualQuaternion } else { SkinMethod::Linear };
+            let vertices = try_core!(skin(&m.rest.vertices, m.model.skin_weights(), &pose, method));
+            m.posed = Some(Box::new(Posed { pose, vertices }));
+            skb_status::SKB_OK
         }
-        let j = try_status!(try_slice_of(joints, joints_len, "joints"));
-        if flags & !(SKB_POSE_RETARGET | SKB_POSE_DUAL_QUATERNION) != 0 {
-            return fail(&Error::OutOfRange { name: "flags", detail: format!("unknown bits in {flags:#x}") });
-        }
-        let target: Joints3 = std::array::from_fn(|i| [j[3 * i], j[3 * i + 1], j[3 * i + 2]]);
-        let pose = try_core!(solve(&m.rest.joints, &target, &IkOptions { retarget: flags & SKB_POSE_RETARGET != 0 }));
-        let method = if flags & SKB_POSE_DUAL_QUATERNION != 0 { SkinMethod::DualQuaternion } else { SkinMethod::Linear };
-        let vertices = try_core!(skin(&m.rest.vertices, m.model.skin_weights(), &pose, method));
-        m.posed = Some(Box::new(Posed { pose, vertices }));
-        skb_status::SKB_OK
     }
 }
 
@@ -193,14 +201,19 @@ pub unsafe extern "C" fn skb_mesh_copy_posed_vertices(
     dst: *mut f32,
     dst_len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let v = posed_vertices(m);
-        let out = try_status!(out_slice(dst, dst_len, 3 * v.len(), "dst"));
-        for (o, p) in out.chunks_exact_mut(3).zip(v) {
-            o.copy_from_slice(p);
+    // SAFETY: the header contract of `skb_mesh_copy_posed_vertices` (lib.rs § Safety): `mesh`, `dst` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let v = posed_vertices(m);
+            let out = try_status!(out_slice(dst, dst_len, 3 * v.len(), "dst"));
+            for (o, p) in out.chunks_exact_mut(3).zip(v) {
+                o.copy_from_slice(p);
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -212,14 +225,19 @@ pub unsafe extern "C" fn skb_mesh_copy_posed_joints(
     dst: *mut f64,
     dst_len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let j = m.posed.as_ref().map_or(&m.rest.joints, |p| &p.pose.joints);
-        let out = try_status!(out_slice(dst, dst_len, 3 * NUM_JOINTS, "dst"));
-        for (o, p) in out.chunks_exact_mut(3).zip(j) {
-            o.copy_from_slice(p);
+    // SAFETY: the header contract of `skb_mesh_copy_posed_joints` (lib.rs § Safety): `mesh`, `dst` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let j = m.posed.as_ref().map_or(&m.rest.joints, |p| &p.pose.joints);
+            let out = try_status!(out_slice(dst, dst_len, 3 * NUM_JOINTS, "dst"));
+            for (o, p) in out.chunks_exact_mut(3).zip(j) {
+                o.copy_from_slice(p);
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -236,11 +254,16 @@ pub unsafe extern "C" fn skb_mesh_rasterize(
     mask_stride: usize,
     mask_len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let v = posed_vertices(m);
-        let t = m.model.triangles();
-        skb_rasterize_triangles(rasterizer, v.as_ptr().cast(), v.len(), t.as_ptr().cast(), t.len(), cam, w, h, mask, mask_stride, mask_len)
+    // SAFETY: the header contract of `skb_mesh_rasterize` (lib.rs § Safety): `mesh`, `rasterizer`, `cam`, `mask`
+    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
+    // before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let v = posed_vertices(m);
+            let t = m.model.triangles();
+            skb_rasterize_triangles(rasterizer, v.as_ptr().cast(), v.len(), t.as_ptr().cast(), t.len(), cam, w, h, mask, mask_stride, mask_len)
+        }
     }
 }
 
@@ -249,13 +272,17 @@ pub unsafe extern "C" fn skb_mesh_rasterize(
 /// Only reads `mesh`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_obj(mesh: *const skb_mesh, path: *const c_char, posed: bool) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let path = try_status!(path_arg(path, "path"));
-        let v = if posed { posed_vertices(m) } else { &m.rest.vertices };
-        let uvs = FaceUvs { coords: m.model.uvs().to_vec(), quads: m.model.face_uvs().to_vec() };
-        try_core!(write_obj(path, v, m.model.faces(), Some(&uvs)));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_write_obj` (lib.rs § Safety): `mesh`, `path` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let path = try_status!(path_arg(path, "path"));
+            let v = if posed { posed_vertices(m) } else { &m.rest.vertices };
+            let uvs = FaceUvs { coords: m.model.uvs().to_vec(), quads: m.model.face_uvs().to_vec() };
+            try_core!(write_obj(path, v, m.model.faces(), Some(&uvs)));
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -265,18 +292,24 @@ pub unsafe extern "C" fn skb_mesh_write_obj(mesh: *const skb_mesh, path: *const 
 /// posed), origin on the floor. See docs/formats.md. Written atomically. Only reads `mesh`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_glb(mesh: *const skb_mesh, path: *const c_char) -> skb_status {
-    super::export::skb_mesh_write_glb_with_options(mesh, path, std::ptr::null())
+    // SAFETY: the header contract of `skb_mesh_write_glb` (lib.rs § Safety): `mesh`, `path` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe { super::export::skb_mesh_write_glb_with_options(mesh, path, std::ptr::null()) }
 }
 
 /// Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
 /// `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_preview(mesh: *const skb_mesh, path: *const c_char, size: u32) -> skb_status {
-    ffi_boundary! {
-        let m = try_status!(try_ref(mesh, "mesh"));
-        let path = try_status!(path_arg(path, "path"));
-        let img = try_core!(preview(posed_vertices(m), &m.model.triangles(), size as usize));
-        try_core!(save_rgb_png(&img, path));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_mesh_write_preview` (lib.rs § Safety): `mesh`, `path` are NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let path = try_status!(path_arg(path, "path"));
+            let img = try_core!(preview(posed_vertices(m), &m.model.triangles(), size as usize));
+            try_core!(save_rgb_png(&img, path));
+            skb_status::SKB_OK
+        }
     }
 }

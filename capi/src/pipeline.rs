@@ -15,13 +15,13 @@ use sketchbody_core::pipeline::{
 use sketchbody_core::pose::dict_io;
 use sketchbody_core::skeleton::NUM_JOINTS;
 
-use super::body::{copy_skin_weights, out_slice, skb_context, skb_mesh, write_out};
+use super::body::{copy_skin_weights, skb_context, skb_mesh};
 use super::detect::embedded_detector;
 use super::fit::{progress_closure, skb_fit_options, skb_progress_fn};
 use super::image::{skb_image, view_of};
 use super::mesh_ops::{path_arg, skb_camera, Posed};
 use super::pose::{joints_in, skb_joints2d, skb_pose_dictionary, skb_pose_options};
-use super::ptr::{free_box, give, out_slot, try_ref};
+use super::ptr::*;
 use super::status::skb_status;
 
 /// `skb_result_copy_joints3d`: the rest joints of the fitted shape.
@@ -50,29 +50,39 @@ pub struct skb_result {
 /// `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_gray_image_load(path: *const c_char, out: *mut *mut skb_gray_image) -> skb_status {
-    ffi_boundary! {
-        let p = try_status!(path_arg(path, "path"));
-        let out = try_status!(out_slot(out));
-        let inner = try_core!(load_image(p));
-        give(out, skb_gray_image { inner })
+    // SAFETY: the header contract of `skb_gray_image_load` (lib.rs § Safety): `path`, `out` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let p = try_status!(path_arg(path, "path"));
+            let out = try_status!(out_slot(out));
+            let inner = try_core!(load_image(p));
+            give(out, skb_gray_image { inner })
+        }
     }
 }
 
 /// A borrowed 1-channel `skb_image` view of `img` into `*out`, valid while `img` lives.
 #[no_mangle]
 pub unsafe extern "C" fn skb_gray_image_view(img: *const skb_gray_image, out: *mut skb_image) -> skb_status {
-    ffi_boundary! {
-        let i = &try_status!(try_ref(img, "img")).inner;
-        let (w, h) = (i.width() as u32, i.height() as u32);
-        try_status!(write_out(out, skb_image { data: i.as_bytes().as_ptr(), width: w, height: h, stride: w, channels: 1 }, "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_gray_image_view` (lib.rs § Safety): `img`, `out` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let i = &try_status!(try_ref(img, "img")).inner;
+            let (w, h) = (i.width() as u32, i.height() as u32);
+            try_status!(write_out(out, skb_image { data: i.as_bytes().as_ptr(), width: w, height: h, stride: w, channels: 1 }, "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
 /// Frees an image from `skb_gray_image_load`. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
-    free_box(img)
+    // SAFETY: the header requires `img` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(img) }
 }
 
 /// Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
@@ -102,41 +112,48 @@ pub unsafe extern "C" fn skb_run_pipeline(
     user: *mut c_void,
     out: *mut *mut skb_result,
 ) -> skb_status {
-    ffi_boundary! {
-        let ctx = try_status!(try_ref(ctx, "ctx"));
-        let gray = try_core!(to_gray(&try_status!(view_of(sketch))));
-        let out = try_status!(out_slot(out));
-        let detect_options = DetectOptions::default();
-        let source: Box<dyn JointsSource + '_> = match joints.as_ref() {
-            Some(j) => Box::new(GivenJoints(joints_in(j))),
-            None => Box::new(DetectedJoints { model: try_core!(embedded_detector(ctx)), options: &detect_options }),
-        };
-        let embedded;
-        let d = match dict.as_ref() {
-            Some(d) => &d.inner,
-            None => {
-                embedded = try_core!(dict_io::embedded());
-                &embedded
+    // SAFETY: the header contract of `skb_run_pipeline` (lib.rs § Safety): `ctx`, `sketch`, `joints`, `dict`,
+    // `pose_opts`, `fit_opts`, `progress`, `user`, `out` are NULL or valid for the documented lengths during the
+    // call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let ctx = try_status!(try_ref(ctx, "ctx"));
+            let gray = try_core!(to_gray(&try_status!(view_of(sketch))));
+            let out = try_status!(out_slot(out));
+            let detect_options = DetectOptions::default();
+            let source: Box<dyn JointsSource + '_> = match opt_ref(joints) {
+                Some(j) => Box::new(GivenJoints(joints_in(j))),
+                None => Box::new(DetectedJoints { model: try_core!(embedded_detector(ctx)), options: &detect_options }),
+            };
+            let embedded;
+            let d = match opt_ref(dict) {
+                Some(d) => &d.inner,
+                None => {
+                    embedded = try_core!(dict_io::embedded());
+                    &embedded
+                }
+            };
+            let mut options = PipelineOptions::default();
+            if let Some(p) = opt_ref(pose_opts) {
+                options.pose = p.inner;
             }
-        };
-        let mut options = PipelineOptions::default();
-        if let Some(p) = pose_opts.as_ref() {
-            options.pose = p.inner;
+            if let Some(f) = opt_ref(fit_opts) {
+                options.fit = f.fit.clone();
+                options.gender = f.gender;
+            }
+            let mut cb = progress_closure(progress, user);
+            let inner = try_core!(run_pipeline(&ctx.model, d, &gray, source.as_ref(), &options, &mut cb));
+            give(out, skb_result { model: Arc::clone(&ctx.model), inner })
         }
-        if let Some(f) = fit_opts.as_ref() {
-            options.fit = f.fit.clone();
-            options.gender = f.gender;
-        }
-        let mut cb = progress_closure(progress, user);
-        let inner = try_core!(run_pipeline(&ctx.model, d, &gray, source.as_ref(), &options, &mut cb));
-        give(out, skb_result { model: Arc::clone(&ctx.model), inner })
     }
 }
 
 /// Frees a result. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_free(result: *mut skb_result) {
-    free_box(result)
+    // SAFETY: the header requires `result` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(result) }
 }
 
 /// The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
@@ -148,13 +165,16 @@ pub unsafe extern "C" fn skb_result_gender(
     gender: *mut u32,
     by_score: *mut bool,
 ) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        try_status!(write_out(gender, r.gender as u32, "gender"));
-        if !by_score.is_null() {
-            *by_score = r.gender_fitted;
+    // SAFETY: the header contract of `skb_result_gender` (lib.rs § Safety): `result`, `gender`, `by_score` are NULL
+    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            try_status!(write_out(gender, r.gender as u32, "gender"));
+            write_opt(by_score, r.gender_fitted);
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -168,13 +188,16 @@ pub unsafe extern "C" fn skb_result_gender_value(
     value: *mut f64,
     confidence: *mut f64,
 ) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        try_status!(write_out(value, r.gender_value, "value"));
-        if !confidence.is_null() {
-            *confidence = r.gender_confidence;
+    // SAFETY: the header contract of `skb_result_gender_value` (lib.rs § Safety): `result`, `value`, `confidence`
+    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
+    // before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            try_status!(write_out(value, r.gender_value, "value"));
+            write_opt(confidence, r.gender_confidence);
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -188,13 +211,16 @@ pub unsafe extern "C" fn skb_result_evidence(
     low: *mut bool,
     edge_support: *mut f64,
 ) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        try_status!(write_out(low, r.low_evidence, "low"));
-        if !edge_support.is_null() {
-            *edge_support = r.edge_support;
+    // SAFETY: the header contract of `skb_result_evidence` (lib.rs § Safety): `result`, `low`, `edge_support` are
+    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
+    // each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            try_status!(write_out(low, r.low_evidence, "low"));
+            write_opt(edge_support, r.edge_support);
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -203,13 +229,17 @@ pub unsafe extern "C" fn skb_result_evidence(
 /// both-sexes one). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32, score: *mut f64) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        let Some(g) = r.fits.first().filter(|_| r.gender as u32 == gender) else {
-            return super::error::fail(&Error::OutOfRange { name: "gender", detail: format!("{gender} was not fitted") });
-        };
-        try_status!(write_out(score, g.score, "score"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_result_score` (lib.rs § Safety): `result`, `score` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let Some(g) = r.fits.first().filter(|_| r.gender as u32 == gender) else {
+                return super::error::fail(&Error::OutOfRange { name: "gender", detail: format!("{gender} was not fitted") });
+            };
+            try_status!(write_out(score, g.score, "score"));
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -221,15 +251,16 @@ pub unsafe extern "C" fn skb_result_counts(
     vertices: *mut usize,
     faces: *mut usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        if !vertices.is_null() {
-            *vertices = r.mesh.vertices.len();
+    // SAFETY: the header contract of `skb_result_counts` (lib.rs § Safety): `result`, `vertices`, `faces` are NULL
+    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            write_opt(vertices, r.mesh.vertices.len());
+            write_opt(faces, r.mesh.quads.len());
+            skb_status::SKB_OK
         }
-        if !faces.is_null() {
-            *faces = r.mesh.quads.len();
-        }
-        skb_status::SKB_OK
     }
 }
 
@@ -242,14 +273,19 @@ pub unsafe extern "C" fn skb_result_copy_vertices(
     dst: *mut f32,
     dst_len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        let v = if posed { &r.posed_vertices } else { &r.mesh.vertices };
-        let out = try_status!(out_slice(dst, dst_len, 3 * v.len(), "dst"));
-        for (o, p) in out.chunks_exact_mut(3).zip(v) {
-            o.copy_from_slice(p);
+    // SAFETY: the header contract of `skb_result_copy_vertices` (lib.rs § Safety): `result`, `dst` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let v = if posed { &r.posed_vertices } else { &r.mesh.vertices };
+            let out = try_status!(out_slice(dst, dst_len, 3 * v.len(), "dst"));
+            for (o, p) in out.chunks_exact_mut(3).zip(v) {
+                o.copy_from_slice(p);
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -257,24 +293,32 @@ pub unsafe extern "C" fn skb_result_copy_vertices(
 /// triangle repeats its third index) into `dst` of `dst_len` integers (≥ 4 × face count).
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_faces(result: *const skb_result, dst: *mut u32, dst_len: usize) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        let out = try_status!(out_slice(dst, dst_len, 4 * r.mesh.quads.len(), "dst"));
-        for (o, q) in out.chunks_exact_mut(4).zip(&r.mesh.quads) {
-            o.copy_from_slice(q);
+    // SAFETY: the header contract of `skb_result_copy_faces` (lib.rs § Safety): `result`, `dst` are NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let out = try_status!(out_slice(dst, dst_len, 4 * r.mesh.quads.len(), "dst"));
+            for (o, q) in out.chunks_exact_mut(4).zip(&r.mesh.quads) {
+                o.copy_from_slice(q);
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
 /// The 2-D joints used (pixels, with visibility) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_joints2d(result: *const skb_result, out: *mut skb_joints2d) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        let j = skb_joints2d { xy: r.joints2d.xy, visible: r.joints2d.visible.map(u8::from), reserved: 0 };
-        try_status!(write_out(out, j, "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_result_joints2d` (lib.rs § Safety): `result`, `out` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let j = skb_joints2d { xy: r.joints2d.xy, visible: r.joints2d.visible.map(u8::from), reserved: 0 };
+            try_status!(write_out(out, j, "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -287,31 +331,40 @@ pub unsafe extern "C" fn skb_result_copy_joints3d(
     dst: *mut f64,
     dst_len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        let j = match which {
-            SKB_JOINTS_REST => &r.mesh.joints,
-            SKB_JOINTS_POSED => &r.posed_joints,
-            SKB_JOINTS_ESTIMATED => &r.pose.joints,
-            _ => return super::error::fail(&Error::OutOfRange { name: "which", detail: format!("{which} (expected 0 rest, 1 posed, 2 estimated)") }),
-        };
-        let out = try_status!(out_slice(dst, dst_len, 3 * NUM_JOINTS, "dst"));
-        for (o, p) in out.chunks_exact_mut(3).zip(j) {
-            o.copy_from_slice(p);
+    // SAFETY: the header contract of `skb_result_copy_joints3d` (lib.rs § Safety): `result`, `dst` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let j = match which {
+                SKB_JOINTS_REST => &r.mesh.joints,
+                SKB_JOINTS_POSED => &r.posed_joints,
+                SKB_JOINTS_ESTIMATED => &r.pose.joints,
+                _ => return super::error::fail(&Error::OutOfRange { name: "which", detail: format!("{which} (expected 0 rest, 1 posed, 2 estimated)") }),
+            };
+            let out = try_status!(out_slice(dst, dst_len, 3 * NUM_JOINTS, "dst"));
+            for (o, p) in out.chunks_exact_mut(3).zip(j) {
+                o.copy_from_slice(p);
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
 /// The estimated weak-perspective camera (model metres → sketch pixels) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_camera(result: *const skb_result, out: *mut skb_camera) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        let c = &r.pose.camera;
-        let cam = skb_camera { sx: c.sx, sy: c.sy, r: std::array::from_fn(|i| c.r[(i / 3, i % 3)]), t: c.t };
-        try_status!(write_out(out, cam, "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_result_camera` (lib.rs § Safety): `result`, `out` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let c = &r.pose.camera;
+            let cam = skb_camera { sx: c.sx, sy: c.sy, r: std::array::from_fn(|i| c.r[(i / 3, i % 3)]), t: c.t };
+            try_status!(write_out(out, cam, "out"));
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -325,9 +378,14 @@ pub unsafe extern "C" fn skb_result_copy_skin_weights(
     weights: *mut f32,
     len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        copy_skin_weights(&r.mesh.weights, bones, weights, len)
+    // SAFETY: the header contract of `skb_result_copy_skin_weights` (lib.rs § Safety): `result`, `bones`, `weights`
+    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
+    // before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            copy_skin_weights(&r.mesh.weights, bones, weights, len)
+        }
     }
 }
 
@@ -340,17 +398,20 @@ pub unsafe extern "C" fn skb_result_shape_weights(
     dst_len: usize,
     count: *mut usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let r = &try_status!(try_ref(result, "result")).inner;
-        let n = r.weights.len();
-        if !dst.is_null() {
-            let out = try_status!(out_slice(dst, dst_len, n, "dst"));
-            out[..n].copy_from_slice(&r.weights);
+    // SAFETY: the header contract of `skb_result_shape_weights` (lib.rs § Safety): `result`, `dst`, `count` are
+    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
+    // each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let n = r.weights.len();
+            if !dst.is_null() {
+                let out = try_status!(out_slice(dst, dst_len, n, "dst"));
+                out[..n].copy_from_slice(&r.weights);
+            }
+            write_opt(count, n);
+            skb_status::SKB_OK
         }
-        if !count.is_null() {
-            *count = n;
-        }
-        skb_status::SKB_OK
     }
 }
 
@@ -358,13 +419,17 @@ pub unsafe extern "C" fn skb_result_shape_weights(
 /// for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_mesh(result: *const skb_result, out: *mut *mut skb_mesh) -> skb_status {
-    ffi_boundary! {
-        let res = try_status!(try_ref(result, "result"));
-        let r = &res.inner;
-        let rest = sketchbody_core::body::RestShape { vertices: r.mesh.vertices.clone(), joints: r.mesh.joints };
-        let posed = Posed { pose: r.ik_pose.clone(), vertices: r.posed_vertices.clone() };
-        let mesh = skb_mesh { model: Arc::clone(&res.model), gender: r.gender, rest, weights: r.weights.clone(), posed: Some(Box::new(posed)) };
-        try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_result_mesh` (lib.rs § Safety): `result`, `out` are NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let res = try_status!(try_ref(result, "result"));
+            let r = &res.inner;
+            let rest = sketchbody_core::body::RestShape { vertices: r.mesh.vertices.clone(), joints: r.mesh.joints };
+            let posed = Posed { pose: r.ik_pose.clone(), vertices: r.posed_vertices.clone() };
+            let mesh = skb_mesh { model: Arc::clone(&res.model), gender: r.gender, rest, weights: r.weights.clone(), posed: Some(Box::new(posed)) };
+            try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
+            skb_status::SKB_OK
+        }
     }
 }

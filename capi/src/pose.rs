@@ -1,7 +1,7 @@
 //! The 3-D pose step (paper §II-B): `skb_pose_dictionary`, `skb_pose_options`,
 //! `skb_estimate_pose` and the fixed-basis refinement `skb_pose_refine`.
 
-use std::ffi::{c_char, CStr};
+use std::ffi::c_char;
 use std::path::Path;
 
 use nalgebra::Matrix3;
@@ -13,8 +13,8 @@ use sketchbody_core::pose::options::RotationTarget;
 use sketchbody_core::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate, PoseOptions};
 use sketchbody_core::skeleton::{Joints2, NUM_BONES};
 
-use super::error::{fail, fail_with};
-use super::ptr::{free_box, give, out_slot, try_ref};
+use super::error::fail;
+use super::ptr::*;
 use super::status::skb_status;
 
 /// Length of a pose vector (x, y, z of each joint in canonical order).
@@ -79,7 +79,7 @@ pub struct skb_pose3d {
 }
 
 const _: () = assert!(std::mem::size_of::<skb_joints2d>() == 256);
-const _: () = assert!(std::mem::size_of::<skb_pose3d>() == 880);
+const _: () = assert!(std::mem::size_of::<skb_pose3d>() == 880 && std::mem::align_of::<skb_pose3d>() == 8);
 
 /// The basis-pose dictionary (mean pose, bases, bone lengths). Immutable after creation: one
 /// dictionary may be used from many threads at once. Free with `skb_pose_dictionary_free`.
@@ -96,10 +96,6 @@ pub struct skb_pose_options {
     pub(crate) inner: PoseOptions,
 }
 
-fn null(name: &str) -> skb_status {
-    fail_with(skb_status::SKB_ERR_NULL_POINTER, &format!("{name} is NULL"))
-}
-
 fn out_of_range(name: &'static str, detail: String) -> skb_status {
     fail(&sketchbody_core::Error::OutOfRange { name, detail })
 }
@@ -108,10 +104,14 @@ fn out_of_range(name: &'static str, detail: String) -> skb_status {
 /// assets/README.md). On success `*out` owns it. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_new_default(out: *mut *mut skb_pose_dictionary) -> skb_status {
-    ffi_boundary! {
-        let out = try_status!(out_slot(out));
-        let inner = try_core!(dict_io::embedded());
-        give(out, skb_pose_dictionary { inner })
+    // SAFETY: the header contract of `skb_pose_dictionary_new_default` (lib.rs § Safety): `out` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let out = try_status!(out_slot(out));
+            let inner = try_core!(dict_io::embedded());
+            give(out, skb_pose_dictionary { inner })
+        }
     }
 }
 
@@ -123,35 +123,39 @@ pub unsafe extern "C" fn skb_pose_dictionary_load(
     path: *const c_char,
     out: *mut *mut skb_pose_dictionary,
 ) -> skb_status {
-    ffi_boundary! {
-        if path.is_null() {
-            return null("path");
+    // SAFETY: the header contract of `skb_pose_dictionary_load` (lib.rs § Safety): `path`, `out` are NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let p = try_status!(try_str(path, "path"));
+            let out = try_status!(out_slot(out));
+            let inner = try_core!(dict_io::read(Path::new(p)));
+            give(out, skb_pose_dictionary { inner })
         }
-        let out = try_status!(out_slot(out));
-        let Ok(p) = CStr::from_ptr(path).to_str() else {
-            return fail_with(skb_status::SKB_ERR_INVALID_ARGUMENT, "path is not UTF-8");
-        };
-        let inner = try_core!(dict_io::read(Path::new(p)));
-        give(out, skb_pose_dictionary { inner })
     }
 }
 
 /// Frees a dictionary. NULL is a no-op. Do not use it afterwards.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_free(dict: *mut skb_pose_dictionary) {
-    free_box(dict)
+    // SAFETY: the header requires `dict` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(dict) }
 }
 
 /// Writes the number of basis poses K to `*out`. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_num_bases(dict: *const skb_pose_dictionary, out: *mut u32) -> skb_status {
-    ffi_boundary! {
-        let d = try_status!(try_ref(dict, "dict"));
-        if out.is_null() {
-            return null("out");
+    // SAFETY: the header contract of `skb_pose_dictionary_num_bases` (lib.rs § Safety): `dict`, `out` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let d = try_status!(try_ref(dict, "dict"));
+            let out = try_status!(try_mut(out, "out"));
+            *out = d.inner.num_bases() as u32;
+            skb_status::SKB_OK
         }
-        *out = d.inner.num_bases() as u32;
-        skb_status::SKB_OK
     }
 }
 
@@ -162,16 +166,14 @@ pub unsafe extern "C" fn skb_pose_dictionary_mean(
     out: *mut f64,
     len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let d = try_status!(try_ref(dict, "dict"));
-        if out.is_null() {
-            return null("out");
+    // SAFETY: the header contract of `skb_pose_dictionary_mean` (lib.rs § Safety): `dict`, `out` are NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let d = try_status!(try_ref(dict, "dict"));
+            try_status!(out_slice(out, len, POSE_DIM, "out"))[..POSE_DIM].copy_from_slice(d.inner.mean.as_slice());
+            skb_status::SKB_OK
         }
-        if len < POSE_DIM {
-            return fail(&sketchbody_core::Error::BufferTooSmall { len, needed: POSE_DIM });
-        }
-        std::slice::from_raw_parts_mut(out, POSE_DIM).copy_from_slice(d.inner.mean.as_slice());
-        skb_status::SKB_OK
     }
 }
 
@@ -185,23 +187,26 @@ pub unsafe extern "C" fn skb_pose_dictionary_basis(
     len: usize,
     sigma: *mut f64,
 ) -> skb_status {
-    ffi_boundary! {
-        let d = try_status!(try_ref(dict, "dict"));
-        if out.is_null() {
-            return null("out");
+    // SAFETY: the header contract of `skb_pose_dictionary_basis` (lib.rs § Safety): `dict`, `out`, `sigma` are NULL
+    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let d = try_status!(try_ref(dict, "dict"));
+            if out.is_null() {
+                return null("out");
+            }
+            let k = index as usize;
+            if k >= d.inner.num_bases() {
+                return out_of_range("basis index", format!("{k} is not below {}", d.inner.num_bases()));
+            }
+            if len < POSE_DIM {
+                return fail(&sketchbody_core::Error::BufferTooSmall { name: "out", len, needed: POSE_DIM, unit: "elements" });
+            }
+            try_status!(try_slice_mut_of(out, POSE_DIM, "out")).copy_from_slice(d.inner.bases.column(k).as_slice());
+            write_opt(sigma, d.inner.sigma[k]);
+            skb_status::SKB_OK
         }
-        let k = index as usize;
-        if k >= d.inner.num_bases() {
-            return out_of_range("basis index", format!("{k} is not below {}", d.inner.num_bases()));
-        }
-        if len < POSE_DIM {
-            return fail(&sketchbody_core::Error::BufferTooSmall { len, needed: POSE_DIM });
-        }
-        std::slice::from_raw_parts_mut(out, POSE_DIM).copy_from_slice(d.inner.bases.column(k).as_slice());
-        if !sigma.is_null() {
-            *sigma = d.inner.sigma[k];
-        }
-        skb_status::SKB_OK
     }
 }
 
@@ -213,56 +218,73 @@ pub unsafe extern "C" fn skb_pose_dictionary_bone_lengths(
     out: *mut f64,
     len: usize,
 ) -> skb_status {
-    ffi_boundary! {
-        let d = try_status!(try_ref(dict, "dict"));
-        if out.is_null() {
-            return null("out");
+    // SAFETY: the header contract of `skb_pose_dictionary_bone_lengths` (lib.rs § Safety): `dict`, `out` are NULL
+    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let d = try_status!(try_ref(dict, "dict"));
+            try_status!(out_slice(out, len, NUM_BONES, "out"))[..NUM_BONES].copy_from_slice(&d.inner.bone_lengths);
+            skb_status::SKB_OK
         }
-        if len < NUM_BONES {
-            return fail(&sketchbody_core::Error::BufferTooSmall { len, needed: NUM_BONES });
-        }
-        std::slice::from_raw_parts_mut(out, NUM_BONES).copy_from_slice(&d.inner.bone_lengths);
-        skb_status::SKB_OK
     }
 }
 
 /// Creates options with the defaults. On success `*out` owns them. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_new(out: *mut *mut skb_pose_options) -> skb_status {
-    ffi_boundary! {
-        let out = try_status!(out_slot(out));
-        give(out, skb_pose_options { inner: PoseOptions::default() })
+    // SAFETY: the header contract of `skb_pose_options_new` (lib.rs § Safety): `out` is NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let out = try_status!(out_slot(out));
+            give(out, skb_pose_options { inner: PoseOptions::default() })
+        }
     }
 }
 
 /// Frees options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_free(opts: *mut skb_pose_options) {
-    free_box(opts)
+    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(opts) }
 }
 
 /// Applies `set` to a copy of the options, validates the copy and stores it only if valid.
 unsafe fn set_option(opts: *mut skb_pose_options, set: impl FnOnce(&mut PoseOptions)) -> skb_status {
-    let Some(o) = opts.as_mut() else { return null("opts") };
-    let mut next = o.inner;
-    set(&mut next);
-    try_core!(next.validate());
-    o.inner = next;
-    skb_status::SKB_OK
+    // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to the ptr.rs helpers, which
+    // check NULL and lengths.
+    unsafe {
+        let o = try_status!(try_mut(opts, "opts"));
+        let mut next = o.inner;
+        set(&mut next);
+        try_core!(next.validate());
+        o.inner = next;
+        skb_status::SKB_OK
+    }
 }
 
 /// Sets κ, the relative limb-length tolerance: |Σ‖X_i − X_j‖² − Σ l²| ≤ κ Σ l², in [0, 10]
 /// (0 = equality; the paper's κ = 8 CMU units² is about 0.017, see docs/formats.md).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_kappa(opts: *mut skb_pose_options, kappa: f64) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.kappa = kappa) }
+    // SAFETY: the header contract of `skb_pose_options_set_kappa` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.kappa = kappa) }
+    }
 }
 
 /// Sets α of eq. (4), the pull of the camera rotation toward its target
 /// (`skb_pose_options_set_alpha_target`), in [0, 1]. Default 0.8.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_alpha(opts: *mut skb_pose_options, alpha: f64) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.alpha = alpha) }
+    // SAFETY: the header contract of `skb_pose_options_set_alpha` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.alpha = alpha) }
+    }
 }
 
 /// Sets what α pulls the camera rotation toward: `SKB_ALPHA_TARGET_LEVEL` (default: the
@@ -270,18 +292,22 @@ pub unsafe extern "C" fn skb_pose_options_set_alpha(opts: *mut skb_pose_options,
 /// (the paper's eq. 4). Other values: `SKB_ERR_OUT_OF_RANGE`, options unchanged.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_alpha_target(opts: *mut skb_pose_options, target: u32) -> skb_status {
-    ffi_boundary! {
-        let t = match target {
-            SKB_ALPHA_TARGET_IDENTITY => RotationTarget::Identity,
-            SKB_ALPHA_TARGET_LEVEL => RotationTarget::Level,
-            _ => {
-                if opts.is_null() {
-                    return null("opts");
+    // SAFETY: the header contract of `skb_pose_options_set_alpha_target` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let t = match target {
+                SKB_ALPHA_TARGET_IDENTITY => RotationTarget::Identity,
+                SKB_ALPHA_TARGET_LEVEL => RotationTarget::Level,
+                _ => {
+                    if opts.is_null() {
+                        return null("opts");
+                    }
+                    return fail(&Error::OutOfRange { name: "alpha_target", detail: format!("{target} (expected 0 identity, 1 level)") });
                 }
-                return fail(&Error::OutOfRange { name: "alpha_target", detail: format!("{target} (expected 0 identity, 1 level)") });
-            }
-        };
-        set_option(opts, |o| o.alpha_target = t)
+            };
+            set_option(opts, |o| o.alpha_target = t)
+        }
     }
 }
 
@@ -289,31 +315,51 @@ pub unsafe extern "C" fn skb_pose_options_set_alpha_target(opts: *mut skb_pose_o
 /// (eq. 1), in the camera fit and in the refinement.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_equal_scales(opts: *mut skb_pose_options, equal: bool) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.equal_scales = equal) }
+    // SAFETY: the header contract of `skb_pose_options_set_equal_scales` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.equal_scales = equal) }
+    }
 }
 
 /// Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_max_bases(opts: *mut skb_pose_options, max_bases: u32) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.max_bases = max_bases as usize) }
+    // SAFETY: the header contract of `skb_pose_options_set_max_bases` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.max_bases = max_bases as usize) }
+    }
 }
 
 /// Sets the stopping tolerance on the reprojection RMS, pixels, in [0, 10000].
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_tolerance(opts: *mut skb_pose_options, tolerance_px: f64) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.tolerance = tolerance_px) }
+    // SAFETY: the header contract of `skb_pose_options_set_tolerance` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.tolerance = tolerance_px) }
+    }
 }
 
 /// Turns the final Levenberg–Marquardt refinement on (non-zero) or off.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_refine(opts: *mut skb_pose_options, refine: bool) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.refine = refine) }
+    // SAFETY: the header contract of `skb_pose_options_set_refine` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.refine = refine) }
+    }
 }
 
 /// Sets the weight prior, metres in [0, 1] (0 = the paper's eq. (3) exactly; see docs).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_prior(opts: *mut skb_pose_options, prior_m: f64) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.prior = prior_m) }
+    // SAFETY: the header contract of `skb_pose_options_set_prior` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.prior = prior_m) }
+    }
 }
 
 /// Sets the number of nearest-neighbour starts, 0..=32: the pursuit runs from each of this
@@ -321,21 +367,34 @@ pub unsafe extern "C" fn skb_pose_options_set_prior(opts: *mut skb_pose_options,
 /// result (0 = from the mean pose, as in the paper).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_starts(opts: *mut skb_pose_options, starts: u32) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.starts = starts as usize) }
+    // SAFETY: the header contract of `skb_pose_options_set_starts` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.starts = starts as usize) }
+    }
 }
 
 /// Sets the limb candidates for recomposing nearest-neighbour starts, 0..=4096 (0 = whole
 /// training poses).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_limb_candidates(opts: *mut skb_pose_options, count: u32) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.limb_candidates = count as usize) }
+    // SAFETY: the header contract of `skb_pose_options_set_limb_candidates` (lib.rs § Safety): `opts` is NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.limb_candidates = count as usize) }
+    }
 }
 
 /// Sets the blend temperature of the exemplar starts' hypotheses, px² per visible joint in
 /// [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options, tau_px2: f64) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.blend = tau_px2) }
+    // SAFETY: the header contract of `skb_pose_options_set_blend` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.blend = tau_px2) }
+    }
 }
 
 /// Sets the free-joint refinement's expected 2-D joint error, metres at the figure's scale (a
@@ -346,7 +405,11 @@ pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options,
 /// `skb_pose_refine` still continues from them (see `skb_pose_refine`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_joint_noise(opts: *mut skb_pose_options, noise_m: f64) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.joint_noise = noise_m) }
+    // SAFETY: the header contract of `skb_pose_options_set_joint_noise` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.joint_noise = noise_m) }
+    }
 }
 
 /// Sets whether the drawn proportions are estimated with the pose (default on): six per-group
@@ -356,7 +419,11 @@ pub unsafe extern "C" fn skb_pose_options_set_joint_noise(opts: *mut skb_pose_op
 /// refinement needs joints = base + Σ basis · weight on the dictionary's skeleton).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_proportions(opts: *mut skb_pose_options, on: bool) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.proportions = on) }
+    // SAFETY: the header contract of `skb_pose_options_set_proportions` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.proportions = on) }
+    }
 }
 
 /// Sets the standing prior of the free-joint refinement (default on): for a figure whose 2-D
@@ -364,14 +431,23 @@ pub unsafe extern "C" fn skb_pose_options_set_proportions(opts: *mut skb_pose_op
 /// ankles under the pelvis on one ground plane. Acts only with joint noise > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_standing_prior(opts: *mut skb_pose_options, on: bool) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.standing_prior = on) }
+    // SAFETY: the header contract of `skb_pose_options_set_standing_prior` (lib.rs § Safety): `opts` is NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.standing_prior = on) }
+    }
 }
 
 /// Sets the knee limits of the free-joint refinement (default on): knees bent backwards are
 /// flipped in depth (image and bone lengths unchanged). Acts only with joint noise > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_knee_limits(opts: *mut skb_pose_options, on: bool) -> skb_status {
-    ffi_boundary! { set_option(opts, |o| o.knee_limits = on) }
+    // SAFETY: the header contract of `skb_pose_options_set_knee_limits` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.knee_limits = on) }
+    }
 }
 
 /// Number of proportion groups of `skb_pose_figure`.
@@ -405,20 +481,21 @@ pub unsafe extern "C" fn skb_estimate_pose_figure(
     out: *mut skb_pose3d,
     figure: *mut skb_pose_figure,
 ) -> skb_status {
-    ffi_boundary! {
-        let d = try_status!(try_ref(dict, "dict"));
-        let j = joints_in(try_status!(try_ref(joints, "joints")));
-        let o = opts.as_ref().map(|o| o.inner).unwrap_or_default();
-        if out.is_null() {
-            return null("out");
+    // SAFETY: the header contract of `skb_estimate_pose_figure` (lib.rs § Safety): `dict`, `joints`, `opts`, `out`,
+    // `figure` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and
+    // lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let d = try_status!(try_ref(dict, "dict"));
+            let j = joints_in(try_status!(try_ref(joints, "joints")));
+            let o = opt_ref(opts).map(|o| o.inner).unwrap_or_default();
+            let out = try_status!(try_mut(out, "out"));
+            let figure = try_status!(try_mut(figure, "figure"));
+            let e = try_core!(estimate_pose(&d.inner, &j, &o));
+            *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
+            *figure = skb_pose_figure { factors: e.factors.k, plausible: i32::from(e.plausible), reserved: 0 };
+            skb_status::SKB_OK
         }
-        if figure.is_null() {
-            return null("figure");
-        }
-        let e = try_core!(estimate_pose(&d.inner, &j, &o));
-        *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
-        *figure = skb_pose_figure { factors: e.factors.k, plausible: i32::from(e.plausible), reserved: 0 };
-        skb_status::SKB_OK
     }
 }
 
@@ -467,16 +544,19 @@ pub unsafe extern "C" fn skb_estimate_pose(
     opts: *const skb_pose_options,
     out: *mut skb_pose3d,
 ) -> skb_status {
-    ffi_boundary! {
-        let d = try_status!(try_ref(dict, "dict"));
-        let j = joints_in(try_status!(try_ref(joints, "joints")));
-        let o = opts.as_ref().map(|o| o.inner).unwrap_or_default();
-        if out.is_null() {
-            return null("out");
+    // SAFETY: the header contract of `skb_estimate_pose` (lib.rs § Safety): `dict`, `joints`, `opts`, `out` are
+    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
+    // each borrow.
+    unsafe {
+        ffi_boundary! {
+            let d = try_status!(try_ref(dict, "dict"));
+            let j = joints_in(try_status!(try_ref(joints, "joints")));
+            let o = opt_ref(opts).map(|o| o.inner).unwrap_or_default();
+            let out = try_status!(try_mut(out, "out"));
+            let e = try_core!(estimate_pose(&d.inner, &j, &o));
+            *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
+            skb_status::SKB_OK
         }
-        let e = try_core!(estimate_pose(&d.inner, &j, &o));
-        *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
-        skb_status::SKB_OK
     }
 }
 
@@ -494,43 +574,46 @@ pub unsafe extern "C" fn skb_pose_refine(
     start: *const skb_pose3d,
     out: *mut skb_pose3d,
 ) -> skb_status {
-    ffi_boundary! {
-        let d = try_status!(try_ref(dict, "dict"));
-        let j = joints_in(try_status!(try_ref(joints, "joints")));
-        let s = *try_status!(try_ref(start, "start"));
-        let o = opts.as_ref().map(|o| o.inner).unwrap_or_default();
-        if out.is_null() {
-            return null("out");
-        }
-        let n = s.num_bases as usize;
-        if n == 0 || n > SKB_POSE_MAX_BASES as usize {
-            return out_of_range("start->num_bases", format!("{n} is not in 1..=32"));
-        }
-        let camera = WeakPerspective { sx: s.sx, sy: s.sy, r: Matrix3::from_row_slice(&s.r), t: s.t };
-        // The base pose (μ or an exemplar start) is what the joints are without the bases.
-        let mut base = sketchbody_core::pose::dictionary::pose_to_vec(&s.joints);
-        for (&b, &w) in s.bases[..n].iter().zip(&s.weights[..n]) {
-            if b as usize >= d.inner.num_bases() {
-                return out_of_range("start->bases", format!("index {b} is not below {}", d.inner.num_bases()));
+    // SAFETY: the header contract of `skb_pose_refine` (lib.rs § Safety): `dict`, `joints`, `opts`, `start`, `out`
+    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
+    // before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let d = try_status!(try_ref(dict, "dict"));
+            let j = joints_in(try_status!(try_ref(joints, "joints")));
+            let s = *try_status!(try_ref(start, "start"));
+            let o = opt_ref(opts).map(|o| o.inner).unwrap_or_default();
+            let out = try_status!(try_mut(out, "out"));
+            let n = s.num_bases as usize;
+            if n == 0 || n > SKB_POSE_MAX_BASES as usize {
+                return out_of_range("start->num_bases", format!("{n} is not in 1..=32"));
             }
-            base.axpy(-w, &d.inner.bases.column(b as usize), 1.0);
+            let camera = WeakPerspective { sx: s.sx, sy: s.sy, r: Matrix3::from_row_slice(&s.r), t: s.t };
+            // The base pose (μ or an exemplar start) is what the joints are without the bases.
+            let mut base = sketchbody_core::pose::dictionary::pose_to_vec(&s.joints);
+            for (&b, &w) in s.bases[..n].iter().zip(&s.weights[..n]) {
+                if b as usize >= d.inner.num_bases() {
+                    return out_of_range("start->bases", format!("index {b} is not below {}", d.inner.num_bases()));
+                }
+                base.axpy(-w, &d.inner.bases.column(b as usize), 1.0);
+            }
+            let base = sketchbody_core::pose::dictionary::vec_to_pose(base.as_slice());
+            let start_est = PoseEstimate {
+                joints: s.joints,
+                camera,
+                bases: s.bases[..n].iter().map(|&b| b as usize).collect(),
+                weights: s.weights[..n].to_vec(),
+                rms: s.rms_px,
+                length_excess: s.length_excess,
+                base,
+                base_parts: None,
+                factors: sketchbody_core::pose::figure::BodyFactors::default(),
+                plausible: true,
+            };
+            let e = try_core!(refine_pose(&d.inner, &j, &o, &start_est));
+            *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
+            skb_status::SKB_OK
         }
-        let base = sketchbody_core::pose::dictionary::vec_to_pose(base.as_slice());
-        let start_est = PoseEstimate {
-            joints: s.joints,
-            camera,
-            bases: s.bases[..n].iter().map(|&b| b as usize).collect(),
-            weights: s.weights[..n].to_vec(),
-            rms: s.rms_px,
-            length_excess: s.length_excess,
-            base,
-            base_parts: None,
-            factors: sketchbody_core::pose::figure::BodyFactors::default(),
-            plausible: true,
-        };
-        let e = try_core!(refine_pose(&d.inner, &j, &o, &start_est));
-        *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
-        skb_status::SKB_OK
     }
 }
 
@@ -548,14 +631,8 @@ mod tests {
     }
 
     #[test]
-    fn layout_is_pinned() {
-        assert!(std::mem::size_of::<skb_joints2d>() == 256);
-        assert!(std::mem::size_of::<skb_pose3d>() == 880);
-        assert_eq!(std::mem::align_of::<skb_pose3d>(), 8);
-    }
-
-    #[test]
     fn estimate_refine_and_errors() {
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         unsafe {
             let mut d = std::ptr::null_mut();
             assert_eq!(skb_pose_dictionary_new_default(&mut d), skb_status::SKB_OK);

@@ -15,10 +15,10 @@ use sketchbody_core::body::rig::{vertex_normals, RiggedMesh};
 use sketchbody_core::error::Error;
 use sketchbody_core::rig::{RigOptions, RigPose, RigScene, NUM_RIG_BONES, RIG_BONES};
 
-use super::body::{copy_skin_weights, out_slice, skb_mesh, write_out};
+use super::body::{copy_skin_weights, skb_mesh};
 use super::error::fail;
 use super::export::skb_export_options;
-use super::ptr::{free_box, give, out_slot, try_ref};
+use super::ptr::{free_box, give, out_slice, out_slot, try_ref, write_out};
 use super::status::skb_status;
 
 /// Number of bones of the production rig (MakeHuman's `game_engine` skeleton).

@@ -11,7 +11,7 @@ use sketchbody_core::skeleton::NUM_JOINTS;
 
 use super::body::skb_context;
 use super::error::{fail, fail_with};
-use super::ptr::{free_box, give, out_slot, try_ref, try_slice_mut, try_slice_of};
+use super::ptr::*;
 use super::status::skb_status;
 
 /// Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
@@ -31,29 +31,39 @@ pub struct skb_sketch_options {
 /// Creates options with the defaults. `*out` receives a handle the caller owns.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_new(out: *mut *mut skb_sketch_options) -> skb_status {
-    ffi_boundary! {
-        let out = try_status!(out_slot(out));
-        give(out, skb_sketch_options { style: SKB_SKETCH_STYLE_RANDOM, camera: None })
+    // SAFETY: the header contract of `skb_sketch_options_new` (lib.rs § Safety): `out` is NULL or valid for the
+    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let out = try_status!(out_slot(out));
+            give(out, skb_sketch_options { style: SKB_SKETCH_STYLE_RANDOM, camera: None })
+        }
     }
 }
 
 /// Releases options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_free(opts: *mut skb_sketch_options) {
-    free_box(opts)
+    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(opts) }
 }
 
 /// Sets the style: `SKB_SKETCH_STYLE_RANDOM` or `SKB_SKETCH_STYLE_CLEAN`; anything else is
 /// `SKB_ERR_OUT_OF_RANGE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_set_style(opts: *mut skb_sketch_options, style: u32) -> skb_status {
-    ffi_boundary! {
-        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
-        if style > SKB_SKETCH_STYLE_CLEAN {
-            return fail(&Error::OutOfRange { name: "sketch style", detail: format!("{style} (expected 0 random or 1 clean)") });
+    // SAFETY: the header contract of `skb_sketch_options_set_style` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let o = try_status!(try_mut(opts, "opts"));
+            if style > SKB_SKETCH_STYLE_CLEAN {
+                return fail(&Error::OutOfRange { name: "sketch style", detail: format!("{style} (expected 0 random or 1 clean)") });
+            }
+            o.style = style;
+            skb_status::SKB_OK
         }
-        o.style = style;
-        skb_status::SKB_OK
     }
 }
 
@@ -66,12 +76,16 @@ pub unsafe extern "C" fn skb_sketch_options_set_camera(
     pitch_deg: f64,
     roll_deg: f64,
 ) -> skb_status {
-    ffi_boundary! {
-        let Some(o) = opts.as_mut() else { return fail_with(skb_status::SKB_ERR_NULL_POINTER, "opts is NULL") };
-        let a = CameraAngles { yaw_deg, pitch_deg, roll_deg };
-        try_core!(a.rotation());
-        o.camera = Some(a);
-        skb_status::SKB_OK
+    // SAFETY: the header contract of `skb_sketch_options_set_camera` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let o = try_status!(try_mut(opts, "opts"));
+            let a = CameraAngles { yaw_deg, pitch_deg, roll_deg };
+            try_core!(a.rotation());
+            o.camera = Some(a);
+            skb_status::SKB_OK
+        }
     }
 }
 
@@ -107,55 +121,58 @@ pub unsafe extern "C" fn skb_render_sketch(
     out_joints2d: *mut f64,
     out_visible: *mut u8,
 ) -> skb_status {
-    ffi_boundary! {
-        let ctx = try_status!(try_ref(ctx, "ctx"));
-        let g = try_core!(Gender::from_index(gender));
-        let (w, h) = (width as usize, height as usize);
-        try_core!(sketchbody_core::raster::check_size(w, h));
-        let needed = try_core!(ImageView::required_len(w, h, 1, out_stride));
-        if out_pixels.is_null() {
-            return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out_pixels is NULL");
-        }
-        if out_len < needed {
-            return fail(&Error::BufferTooSmall { len: out_len, needed });
-        }
-        let shape_weights = if n_weights == 0 {
-            None
-        } else {
-            let s = try_status!(try_slice_of(weights, n_weights, "weights"));
-            Some(s.iter().map(|&x| x as f64).collect::<Vec<f64>>())
-        };
-        let joints = if joints3d.is_null() {
-            None
-        } else {
-            let s = std::slice::from_raw_parts(joints3d, 3 * NUM_JOINTS);
-            Some(std::array::from_fn(|k| [s[3 * k], s[3 * k + 1], s[3 * k + 2]]))
-        };
-        let (style, camera) = match opts.as_ref() {
-            Some(o) => ((o.style == SKB_SKETCH_STYLE_CLEAN).then(SketchStyle::default), o.camera),
-            None => (None, None),
-        };
-        let renderer = try_core!(SketchRenderer::new(Arc::clone(&ctx.model), None));
-        let req = SketchRequest { seed, width: w, height: h, gender: Some(g), shape_weights, joints, camera, style };
-        let sketch = try_core!(renderer.render(&req));
-        let px = try_status!(try_slice_mut(out_pixels, out_len, "out_pixels"));
-        for (row, src) in sketch.pixels.chunks(w).enumerate() {
-            px[row * out_stride..row * out_stride + w].copy_from_slice(src);
-        }
-        if let Some(j) = out_joints2d.as_mut() {
-            let j = std::slice::from_raw_parts_mut(j, 2 * NUM_JOINTS);
-            for (k, p) in sketch.truth.joints2d.iter().enumerate() {
-                j[2 * k] = p[0];
-                j[2 * k + 1] = p[1];
+    // SAFETY: the header contract of `skb_render_sketch` (lib.rs § Safety): `ctx`, `weights`, `joints3d`, `opts`,
+    // `out_pixels`, `out_joints2d`, `out_visible` are NULL or valid for the documented lengths during the call; the
+    // ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let ctx = try_status!(try_ref(ctx, "ctx"));
+            let g = try_core!(Gender::from_index(gender));
+            let (w, h) = (width as usize, height as usize);
+            try_core!(sketchbody_core::raster::check_size(w, h));
+            let needed = try_core!(ImageView::required_len(w, h, 1, out_stride));
+            if out_pixels.is_null() {
+                return fail_with(skb_status::SKB_ERR_NULL_POINTER, "out_pixels is NULL");
             }
-        }
-        if let Some(v) = out_visible.as_mut() {
-            let v = std::slice::from_raw_parts_mut(v, NUM_JOINTS);
-            for (k, &vis) in sketch.truth.visible.iter().enumerate() {
-                v[k] = vis as u8;
+            if out_len < needed {
+                return fail(&Error::BufferTooSmall { name: "out_pixels", len: out_len, needed, unit: "bytes" });
             }
+            let shape_weights = if n_weights == 0 {
+                None
+            } else {
+                let s = try_status!(try_slice_of(weights, n_weights, "weights"));
+                Some(s.iter().map(|&x| x as f64).collect::<Vec<f64>>())
+            };
+            let joints = if joints3d.is_null() {
+                None
+            } else {
+                let s = try_status!(try_slice_of(joints3d, 3 * NUM_JOINTS, "joints3d"));
+                Some(std::array::from_fn(|k| [s[3 * k], s[3 * k + 1], s[3 * k + 2]]))
+            };
+            let (style, camera) = match opt_ref(opts) {
+                Some(o) => ((o.style == SKB_SKETCH_STYLE_CLEAN).then(SketchStyle::default), o.camera),
+                None => (None, None),
+            };
+            let renderer = try_core!(SketchRenderer::new(Arc::clone(&ctx.model), None));
+            let req = SketchRequest { seed, width: w, height: h, gender: Some(g), shape_weights, joints, camera, style };
+            let sketch = try_core!(renderer.render(&req));
+            let px = try_status!(try_slice_mut(out_pixels, out_len, "out_pixels"));
+            for (row, src) in sketch.pixels.chunks(w).enumerate() {
+                px[row * out_stride..row * out_stride + w].copy_from_slice(src);
+            }
+            if let Some(j) = try_status!(opt_slice_mut(out_joints2d, 2 * NUM_JOINTS, "out_joints2d")) {
+                for (k, p) in sketch.truth.joints2d.iter().enumerate() {
+                    j[2 * k] = p[0];
+                    j[2 * k + 1] = p[1];
+                }
+            }
+            if let Some(v) = try_status!(opt_slice_mut(out_visible, NUM_JOINTS, "out_visible")) {
+                for (k, &vis) in sketch.truth.visible.iter().enumerate() {
+                    v[k] = vis as u8;
+                }
+            }
+            skb_status::SKB_OK
         }
-        skb_status::SKB_OK
     }
 }
 
@@ -166,6 +183,7 @@ mod tests {
 
     #[test]
     fn renders_into_a_strided_buffer_and_rejects_bad_input() {
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         unsafe {
             let mut ctx = std::ptr::null_mut();
             assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);

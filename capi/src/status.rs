@@ -136,6 +136,7 @@ mod tests {
 
     #[test]
     fn every_status_has_its_own_text() {
+        // SAFETY: skb_status_str returns a static NUL-terminated string for every code (never NULL).
         let text = |c: u32| unsafe { std::ffi::CStr::from_ptr(skb_status_str(c)) }.to_str().unwrap().to_owned();
         let all: Vec<String> = (0..=25).map(text).collect();
         let unique: std::collections::HashSet<_> = all.iter().collect();

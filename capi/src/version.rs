@@ -29,6 +29,7 @@ mod tests {
         assert_eq!(SKB_VERSION_MINOR.to_string(), env!("CARGO_PKG_VERSION_MINOR"));
         assert_eq!(SKB_VERSION_PATCH.to_string(), env!("CARGO_PKG_VERSION_PATCH"));
         assert_eq!(SKB_VERSION_STRING, env!("CARGO_PKG_VERSION"));
+        // SAFETY: skb_version returns a static NUL-terminated string (never NULL).
         let runtime = unsafe { std::ffi::CStr::from_ptr(skb_version()) };
         assert_eq!(runtime.to_str().unwrap(), SKB_VERSION_STRING);
     }

@@ -28,13 +28,13 @@ pub struct Args {
     #[arg(long)]
     overlay: Option<PathBuf>,
     /// Score threshold (default: the model's); negative values as `--threshold=-2`.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::ranges::real(f64::MIN, f64::MAX, false))]
     threshold: Option<f64>,
     /// Scales searched.
     #[command(flatten)]
     search: crate::search_args::SearchArgs,
-    /// Longer-side cap in pixels; larger images are downscaled first.
-    #[arg(long, default_value_t = sketchbody::detect::DEFAULT_MAX_DETECT_SIDE)]
+    /// Longer-side cap in pixels (32..=16384); larger images are downscaled first.
+    #[arg(long, default_value_t = sketchbody::detect::DEFAULT_MAX_DETECT_SIDE, value_parser = crate::ranges::count(32..=16384))]
     max_side: usize,
 }
 

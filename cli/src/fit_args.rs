@@ -15,25 +15,25 @@ pub struct FitArgs {
     #[arg(long, default_value_t = FitOptions::default().seed)]
     pub seed: u64,
     /// Samples per SIR iteration (S).
-    #[arg(long, default_value_t = FitOptions::default().samples)]
+    #[arg(long, default_value_t = FitOptions::default().samples, value_parser = crate::ranges::count(2..=100_000))]
     pub samples: usize,
     /// Most SIR iterations (T).
-    #[arg(long, default_value_t = FitOptions::default().max_iterations)]
+    #[arg(long, default_value_t = FitOptions::default().max_iterations, value_parser = crate::ranges::count(1..=1000))]
     pub iterations: usize,
     /// Transition step in standard deviations (Σ = diag(s² λ)).
-    #[arg(long, default_value_t = FitOptions::default().transition_scale)]
+    #[arg(long, default_value_t = FitOptions::default().transition_scale, value_parser = crate::ranges::real(0.0, f64::MAX, true))]
     pub transition_scale: f64,
     /// Likelihood temperature of the non-paper scores.
-    #[arg(long, default_value_t = FitOptions::default().temperature)]
+    #[arg(long, default_value_t = FitOptions::default().temperature, value_parser = crate::ranges::real(0.0, f64::MAX, true))]
     pub temperature: f64,
     /// Longest raster side of the fit, pixels.
-    #[arg(long, default_value_t = FitOptions::default().raster_max_side)]
+    #[arg(long, default_value_t = FitOptions::default().raster_max_side, value_parser = crate::ranges::count(16..=4096))]
     pub raster_side: usize,
     /// Convergence tolerance, standard deviations.
-    #[arg(long, default_value_t = FitOptions::default().tolerance)]
+    #[arg(long, default_value_t = FitOptions::default().tolerance, value_parser = crate::ranges::real(0.0, f64::MAX, true))]
     pub tolerance: f64,
     /// Weight of the 2-D joint term (score loses this × mean projected-joint distance, raster px).
-    #[arg(long, default_value_t = FitOptions::default().joint_weight)]
+    #[arg(long, default_value_t = FitOptions::default().joint_weight, value_parser = crate::ranges::real(0.0, f64::MAX, false))]
     pub joint_weight: f64,
     /// PCA dimensions searched (default: the shape space's 96%-energy dimension).
     #[arg(long)]
@@ -52,11 +52,11 @@ pub struct FitArgs {
     pub sample_camera: bool,
     /// The character's rest height in metres, when known (character sheets carry one): the
     /// fitted mesh is scaled to it.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::ranges::real(0.1, 10.0, false))]
     pub height: Option<f64>,
     /// Also search bone-length factors (legs, arms, shoulders, head, torso) with this prior
     /// standard deviation of each log factor (0 = off).
-    #[arg(long, default_value_t = FitOptions::default().proportion_sd)]
+    #[arg(long, default_value_t = FitOptions::default().proportion_sd, value_parser = crate::ranges::real(0.0, 0.5, false))]
     pub proportion_sd: f64,
     /// Centre the bone factors' prior on their closed-form estimate from the 2-D joints' bone
     /// lengths, the estimated pose and camera (`--estimate-proportions true|false`).
@@ -64,7 +64,7 @@ pub struct FitArgs {
     pub estimate_proportions: bool,
     /// Clothing-robust chamfer cap, raster pixels: silhouette boundary pixels inside the
     /// sketch's outer outline cost at most this (12 = the plain chamfer).
-    #[arg(long, default_value_t = FitOptions::default().inside_cap)]
+    #[arg(long, default_value_t = FitOptions::default().inside_cap, value_parser = crate::ranges::real(0.0, f64::MAX, true))]
     pub inside_cap: f64,
     /// Keep the pose solver's camera instead of refitting its scales and translation to the
     /// gender's mean skeleton before the fit.

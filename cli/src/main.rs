@@ -17,6 +17,7 @@ mod fit_args;
 mod learn_poses;
 mod make_dataset;
 mod pose;
+mod ranges;
 mod render_sketch;
 mod rig_args;
 mod run;
@@ -26,7 +27,7 @@ mod train_detector;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// A failure to report: one line of text.
 pub struct CliError(pub String);
@@ -80,8 +81,43 @@ enum Command {
     MakeDataset(make_dataset::Args),
 }
 
+/// The commands an artist uses, listed first in `--help`; the rest build assets or measure.
+const ARTIST_COMMANDS: [&str; 5] = ["run", "detect", "pose", "body", "edges"];
+
+/// The top-level command with its help listing the artist's commands apart from the research
+/// and asset-building ones (clap lists subcommands in one block, so the template is built here
+/// from each subcommand's own one-line description).
+fn command() -> clap::Command {
+    let cmd = Cli::command();
+    let subs: Vec<(String, String)> = cmd
+        .get_subcommands()
+        .map(|c| (c.get_name().to_string(), c.get_about().map(|a| a.to_string()).unwrap_or_default()))
+        .collect();
+    let width = subs.iter().map(|(n, _)| n.len()).max().unwrap_or(0);
+    let list = |artist: bool| -> String {
+        let mut names: Vec<&(String, String)> =
+            subs.iter().filter(|(n, _)| ARTIST_COMMANDS.contains(&n.as_str()) == artist).collect();
+        if artist {
+            names.sort_by_key(|(n, _)| ARTIST_COMMANDS.iter().position(|a| a == n));
+        }
+        names.iter().map(|(n, about)| format!("  {n:width$}  {about}\n")).collect()
+    };
+    let template = format!(
+        "{{about-with-newline}}\n{{usage-heading}} {{usage}}\n\nCommands for artists:\n{}\n\
+         Research and asset-building commands:\n{}  help{}  Print this message or the help of the given \
+         subcommand(s)\n\nOptions:\n{{options}}{{after-help}}",
+        list(true),
+        list(false),
+        " ".repeat(width - 4),
+    );
+    cmd.help_template(template)
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::from_arg_matches(&command().get_matches()) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     let result = match cli.command {
         Command::Run(a) => run::run(a),
         Command::RunDataset(a) => run_dataset::run(a),

@@ -23,10 +23,10 @@ pub struct Args {
     #[arg(long)]
     dictionary: Option<PathBuf>,
     /// Relative limb-length tolerance κ (0 = equality).
-    #[arg(long, default_value_t = PoseOptions::default().kappa)]
+    #[arg(long, default_value_t = PoseOptions::default().kappa, value_parser = crate::ranges::real(0.0, 10.0, false))]
     kappa: f64,
     /// Pull of the camera rotation toward --alpha-target, α in [0, 1] (eq. 4).
-    #[arg(long, default_value_t = PoseOptions::default().alpha)]
+    #[arg(long, default_value_t = PoseOptions::default().alpha, value_parser = crate::ranges::real(0.0, 1.0, false))]
     alpha: f64,
     /// What α pulls toward: level (the pitch to 0, default) or identity (the paper's eq. 4).
     #[arg(long, default_value = PoseOptions::default().alpha_target.name())]
@@ -35,25 +35,25 @@ pub struct Args {
     #[arg(long)]
     free_scales: bool,
     /// Most bases to choose (0..=32).
-    #[arg(long, default_value_t = PoseOptions::default().max_bases)]
+    #[arg(long, default_value_t = PoseOptions::default().max_bases, value_parser = crate::ranges::count(0..=32))]
     max_bases: usize,
     /// Stop adding bases at this reprojection RMS, pixels.
-    #[arg(long, default_value_t = PoseOptions::default().tolerance)]
+    #[arg(long, default_value_t = PoseOptions::default().tolerance, value_parser = crate::ranges::real(0.0, 1.0e4, false))]
     tolerance: f64,
     /// Weight prior, metres (0 = the paper's eq. 3).
-    #[arg(long, default_value_t = PoseOptions::default().prior)]
+    #[arg(long, default_value_t = PoseOptions::default().prior, value_parser = crate::ranges::real(0.0, 1.0, false))]
     prior: f64,
     /// Nearest-neighbour starts (exemplar poses tried; 0 = start from the mean pose, the paper).
-    #[arg(long, default_value_t = PoseOptions::default().starts)]
+    #[arg(long, default_value_t = PoseOptions::default().starts, value_parser = crate::ranges::count(0..=32))]
     starts: usize,
     /// Limb candidates for recomposing exemplar starts (0 = whole exemplars).
-    #[arg(long, default_value_t = PoseOptions::default().limb_candidates)]
+    #[arg(long, default_value_t = PoseOptions::default().limb_candidates, value_parser = crate::ranges::count(0..=4096))]
     limb_candidates: usize,
     /// Blend temperature of the exemplar starts' hypotheses, px² per joint (0 = the best one).
-    #[arg(long, default_value_t = PoseOptions::default().blend)]
+    #[arg(long, default_value_t = PoseOptions::default().blend, value_parser = crate::ranges::real(0.0, 1.0e6, false))]
     blend: f64,
     /// Free-joint refinement: expected 2-D joint error, metres at the figure's scale (0 = off).
-    #[arg(long, default_value_t = PoseOptions::default().joint_noise)]
+    #[arg(long, default_value_t = PoseOptions::default().joint_noise, value_parser = crate::ranges::real(0.0, 1.0, false))]
     joint_noise: f64,
     /// Skip the final Levenberg–Marquardt refinement.
     #[arg(long)]

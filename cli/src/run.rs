@@ -61,10 +61,10 @@ pub struct Args {
     #[arg(long)]
     no_texture: bool,
     /// Side of the texture projected from the sketch, texels (1..=4096).
-    #[arg(long, default_value_t = sketchbody::export::texture::DEFAULT_TEXTURE_SIZE)]
+    #[arg(long, default_value_t = sketchbody::export::texture::DEFAULT_TEXTURE_SIZE, value_parser = crate::ranges::count(1..=4096))]
     texture_size: usize,
-    /// Height of the preview's panels, pixels.
-    #[arg(long, default_value_t = 512)]
+    /// Height of the preview's panels, pixels (1..=16384).
+    #[arg(long, default_value_t = 512, value_parser = crate::ranges::count(1..=16384))]
     preview_size: usize,
     /// No progress bar.
     #[arg(long)]

@@ -43,10 +43,8 @@ pub const GENDER_LEVELS: [f64; 4] = [0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0];
 
 /// Prior mass of each level of [`GENDER_LEVELS`] (levels of mass 0 are left out). Default: the
 /// ends only, so the prior is the two gendered priors side by side; the gender value still
-/// varies continuously with each population's spread along the gender axis. Chosen on the
-/// tuning set (`make-dataset 60 --seed 78`, first 40, ground-truth joints): rest AED centred
-/// 0.0231 with the ends only, 0.0248 with 0.1 on each in-between level (docs/benchmarks.md,
-/// "Shape fit").
+/// varies continuously with each population's spread along the gender axis. In-between
+/// levels measured worse on the tuning set (docs/benchmarks.md, "How the fit's defaults were chosen").
 pub const LEVEL_WEIGHTS: [f64; 4] = [0.5, 0.0, 0.0, 0.5];
 
 /// Default fitting dimension of the blended space: the gender weight plus the 4 shape weights

@@ -46,18 +46,13 @@ pub struct FitOptions {
     pub dims: Option<usize>,
     /// Transition step `s` in standard deviations: Σ = diag(s² λ_k) (default 0.3).
     pub transition_scale: f64,
-    /// The match score (default [`MatchScore::Chamfer`], chosen by measurement: on outline
-    /// sketches of 6 known bodies, `cargo run --release --example fit_demo -- 6 7` gave mean
-    /// AED/height 0.0091 for chamfer, 0.0186 for filled IoU, 0.0291 for the paper's eq. 7 and
-    /// 0.0381 for the mean shape).
+    /// The match score (default [`MatchScore::Chamfer`], the most accurate of the scores on
+    /// outline sketches; docs/benchmarks.md, "How the fit's defaults were chosen").
     pub score: MatchScore,
     /// For the non-paper scores, sample likelihood = exp(score / temperature) (for the chamfer
-    /// score the unit is raster pixels of mean boundary distance). Default 2.0, chosen with
-    /// `joint_weight` 1.0 on the 300 tuning sketches of `make-dataset 300 --seed 78` (the
-    /// held-out clips, other bodies than the benchmark's): rest AED 0.0414 with ground-truth
-    /// joints and 0.0492 with detected ones, vs 0.0429 and 0.0495 for the former 4.0 and 0.5
-    /// (docs/benchmarks.md, "Shape fit"). A much sharper likelihood (0.02) overfits silhouettes
-    /// that compensate pose error.
+    /// score the unit is raster pixels of mean boundary distance). Default 2.0: sharper
+    /// likelihoods overfit silhouettes that compensate pose error, flatter ones ignore the
+    /// sketch (docs/benchmarks.md, "How the fit's defaults were chosen"). Finite, > 0.
     pub temperature: f64,
     /// Longest raster side in pixels; the sketch is scored at this resolution (default 256).
     pub raster_max_side: usize,
@@ -81,9 +76,8 @@ pub struct FitOptions {
     /// ([`WeakPerspective::refit_scale`]) to its own posed rig joints vs the visible 2-D joints
     /// before it is rasterised and scored, so the body's size comes from its shape (proportions
     /// and the prior's correlations) rather than from [`FitProblem::camera`]'s scale (only its
-    /// rotation is used). Without 2-D joints the problem's camera is used. Default on (with the
-    /// other defaults, rest AED at the reference height 0.0228 vs 0.0243 with the problem camera
-    /// on `make-dataset 40 --seed 77`; docs/benchmarks.md, issue 6).
+    /// rotation is used). Without 2-D joints the problem's camera is used. Default on: the size
+    /// then follows the shape, which measures closer to the true body (docs/benchmarks.md, "How the fit's defaults were chosen").
     pub sample_camera: bool,
     /// The character's known rest height, metres (`None`: unknown, the default). With a
     /// problem camera (not [`sample_camera`](Self::sample_camera)) every sample's rest body is
@@ -95,26 +89,21 @@ pub struct FitOptions {
     pub height: Option<f64>,
     /// Search bone-length factors (legs, arms, shoulders, head, torso) with this prior standard
     /// deviation of each log factor (see [`super::proportions`]); 0 searches PCA weights only.
-    /// Default 0.1 (chosen on `make-dataset 40 --seed 77` with per-sample cameras and
-    /// temperature 4: rest AED 0.0427 vs 0.0456 without, 0.0442 at 0.05, 0.0428 at 0.15, 0.0435
-    /// at 0.2; on `make-dataset 300 --seed 78`, 0.07 and 0.15 were within 0.0002 of it).
-    /// Finite, in 0..=0.5.
+    /// Default 0.1, the best of the values measured (docs/benchmarks.md, "How the fit's defaults were chosen"). Finite, in 0..=0.5.
     pub proportion_sd: f64,
     /// Centre the bone factors' prior on the closed-form estimate of
     /// [`super::bone_estimate::estimate_proportions`] (bone lengths of the visible 2-D joints
     /// against the gender's mean skeleton, given the problem pose's bone directions and
     /// camera, default [`EstimateOptions`]) instead of 1. Needs [`FitProblem::joints2d`] and
     /// `proportion_sd > 0`; when the estimate is degenerate (no usable bone) the prior stays at 1.
-    /// Default on (40 sketches `make-dataset 40 --seed 77`, estimated poses: rest AED 0.0366 vs
-    /// 0.0400 off, 0.0155 vs 0.0197 at the reference height; docs/benchmarks.md, issue 6).
+    /// Default on: drawn proportions then start near the sketch's own (docs/benchmarks.md, "How the fit's defaults were chosen").
     pub estimate_proportions: bool,
     /// Clothing-robust chamfer ([`SketchEvidence::with_inside_cap`]): silhouette boundary
     /// pixels inside the sketch's outer outline cost their distance to the nearest stroke capped
     /// at this many raster pixels, those outside it the full capped distance, so outline
     /// strokes that may be clothing (coats, capes, skirts) do not pull the body outward while a
     /// body crossing the outline is still penalised. [`super::CHAMFER_CAP`] (12) turns it off.
-    /// Only the chamfer scores use it. Default 4.0 (docs/benchmarks.md, "Shape fit": chosen on
-    /// the tuning set `make-dataset 60 --seed 78`). Finite, > 0.
+    /// Only the chamfer scores use it. Default 4.0, the best on the tuning set (docs/benchmarks.md, "How the fit's defaults were chosen"). Finite, > 0.
     pub inside_cap: f64,
 }
 
@@ -159,10 +148,15 @@ impl Default for FitOptions {
 /// weight 0), the estimated 3-D pose (metres, model frame),
 /// the estimated camera (image pixels) and the sketch's edge map (non-zero = edge).
 pub struct FitProblem<'a> {
+    /// The body model the shape space belongs to.
     pub model: &'a BodyModel,
+    /// Which shape space is searched (a gender's, or the blended one).
     pub gender: ShapeChoice,
+    /// The estimated 3-D joints the samples are posed to (metres, model frame).
     pub pose: &'a Joints3,
+    /// The estimated camera mapping the posed body to image pixels.
     pub camera: &'a WeakPerspective,
+    /// The sketch's edge map (non-zero = edge), image pixels.
     pub edges: &'a GrayImage,
     /// The sketch's 2-D joints (image pixels), for the joint term of
     /// [`FitOptions::joint_weight`]; `None` turns the term off.
@@ -172,8 +166,9 @@ pub struct FitProblem<'a> {
 /// Per-iteration figures.
 #[derive(Clone, Debug, PartialEq)]
 pub struct IterationStats {
-    /// Best and weighted-mean score of the iteration's samples.
+    /// Best score of the iteration's samples.
     pub best_score: f64,
+    /// Weighted-mean score of the iteration's samples.
     pub mean_score: f64,
     /// Effective sample size 1 / Σ w² before resampling.
     pub effective_samples: f64,
@@ -194,7 +189,9 @@ pub struct FitResult {
     pub proportion_estimate: Option<Proportions>,
     /// The best-scoring sample seen (PCA weights).
     pub best_weights: Vec<f64>,
+    /// Score of [`FitResult::best_weights`].
     pub best_score: f64,
+    /// One entry per iteration, in order.
     pub history: Vec<IterationStats>,
     /// Samples evaluated (synthesis + posing + skinning + raster + score).
     pub evaluations: usize,

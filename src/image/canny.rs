@@ -94,7 +94,7 @@ pub fn canny_into(src: &ImageView<'_>, params: &CannyParams, out: &mut [u8], out
     let (w, h) = (src.width(), src.height());
     let needed = ImageView::required_len(w, h, 1, out_stride)?;
     if out.len() < needed {
-        return Err(Error::BufferTooSmall { len: out.len(), needed });
+        return Err(Error::BufferTooSmall { name: "out", len: out.len(), needed, unit: "bytes" });
     }
     let converted;
     let gray = if src.channels() == 1 {

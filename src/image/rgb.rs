@@ -22,7 +22,12 @@ impl RgbImage {
     pub fn from_vec(width: usize, height: usize, data: Vec<u8>) -> Result<Self> {
         check_size(width, height)?;
         if data.len() != 3 * width * height {
-            return Err(Error::BufferTooSmall { len: data.len(), needed: 3 * width * height });
+            return Err(Error::BufferTooSmall {
+                name: "pixels",
+                len: data.len(),
+                needed: 3 * width * height,
+                unit: "bytes",
+            });
         }
         Ok(Self { width, height, data })
     }
@@ -105,7 +110,10 @@ mod tests {
 
     #[test]
     fn sizes_are_checked_and_missing_files_named() {
-        assert!(matches!(RgbImage::from_vec(2, 2, vec![0; 11]), Err(Error::BufferTooSmall { len: 11, needed: 12 })));
+        assert!(matches!(
+            RgbImage::from_vec(2, 2, vec![0; 11]),
+            Err(Error::BufferTooSmall { len: 11, needed: 12, .. })
+        ));
         let im = RgbImage::from_vec(2, 1, vec![1, 2, 3, 4, 5, 6]).unwrap();
         assert_eq!(im.view().row(0), &[1, 2, 3, 4, 5, 6]);
         assert!(matches!(load_rgb_image(Path::new("/nonexistent/x.png")), Err(Error::Io { .. })));

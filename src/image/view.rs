@@ -44,7 +44,7 @@ impl<'a> ImageView<'a> {
     pub fn new(data: &'a [u8], width: usize, height: usize, channels: usize, stride: usize) -> Result<Self> {
         let needed = Self::required_len(width, height, channels, stride)?;
         if data.len() < needed {
-            return Err(Error::BufferTooSmall { len: data.len(), needed });
+            return Err(Error::BufferTooSmall { name: "image data", len: data.len(), needed, unit: "bytes" });
         }
         Ok(Self { data, width, height, channels, stride })
     }
@@ -110,7 +110,12 @@ impl GrayImage {
     pub fn from_vec(width: usize, height: usize, data: Vec<u8>) -> Result<Self> {
         check_size(width, height)?;
         if data.len() != width * height {
-            return Err(Error::BufferTooSmall { len: data.len(), needed: width * height });
+            return Err(Error::BufferTooSmall {
+                name: "pixels",
+                len: data.len(),
+                needed: width * height,
+                unit: "bytes",
+            });
         }
         Ok(Self { width, height, data })
     }

@@ -11,6 +11,7 @@ const SKETCH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sk
 const JOINTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sketch_joints.json");
 
 fn last_error() -> String {
+    // SAFETY: skb_last_error_message never returns NULL; the text lives until the next call.
     unsafe { CStr::from_ptr(skb_last_error_message()) }.to_string_lossy().into_owned()
 }
 
@@ -28,6 +29,7 @@ struct Inputs {
 
 impl Inputs {
     fn new() -> Inputs {
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         unsafe {
             let mut ctx = ptr::null_mut();
             assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
@@ -47,6 +49,7 @@ impl Inputs {
 
 impl Drop for Inputs {
     fn drop(&mut self) {
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         unsafe {
             skb_fit_options_free(self.opts);
             skb_gray_image_free(self.img);
@@ -56,19 +59,22 @@ impl Drop for Inputs {
 }
 
 unsafe extern "C" fn count_calls(user: *mut c_void, fraction: f32) -> c_int {
-    let v = &mut *(user as *mut Vec<f32>);
+    // SAFETY: the test passes `user` as a pointer to this local, alive for the whole fit.
+    let v = unsafe { &mut *(user as *mut Vec<f32>) };
     v.push(fraction);
     0
 }
 
 unsafe extern "C" fn cancel_in_fit(user: *mut c_void, fraction: f32) -> c_int {
-    *(user as *mut usize) += 1;
+    // SAFETY: the test passes `user` as a pointer to this local, alive for the whole fit.
+    unsafe { *(user as *mut usize) += 1 };
     (fraction > 0.06) as c_int
 }
 
 #[test]
 fn options_setters_validate() {
     let i = Inputs::new();
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
         assert_eq!(skb_fit_options_set_samples(i.opts, 1), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_iterations(i.opts, 0), skb_status::SKB_ERR_OUT_OF_RANGE);
@@ -131,6 +137,7 @@ fn pipeline_result_accessors() {
     let j = joints();
     let mut calls: Vec<f32> = Vec::new();
     let mut r = ptr::null_mut();
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
         let st = skb_run_pipeline(
             i.ctx,
@@ -216,6 +223,7 @@ fn pipeline_result_accessors() {
 fn pipeline_errors_and_cancel() {
     let i = Inputs::new();
     let j = joints();
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
         let mut r = ptr::null_mut();
         let go = |img: &skb_image, jp: *const skb_joints2d, r: &mut *mut skb_result| {
@@ -266,6 +274,7 @@ fn pipeline_errors_and_cancel() {
 #[test]
 fn fit_shape_from_c() {
     let i = Inputs::new();
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
         // Pose and camera from the pose step, edges from Canny, as a host chaining the steps.
         let mut dict = ptr::null_mut();
@@ -332,7 +341,8 @@ fn fit_shape_from_c() {
         let mut calls = 0usize;
         assert_eq!(skb_fit_options_set_iterations(i.opts, 100), skb_status::SKB_OK);
         unsafe extern "C" fn stop(user: *mut c_void, _f: f32) -> c_int {
-            *(user as *mut usize) += 1;
+            // SAFETY: the test passes `user` as a pointer to this local, alive for the whole fit.
+            unsafe { *(user as *mut usize) += 1 };
             1
         }
         assert_eq!(

@@ -45,3 +45,66 @@ fn header_defines_only_skb_names() {
         "the C header defines non-SKB_ names {foreign:?}: add them to cbindgen.toml's exclude list"
     );
 }
+
+/// The `skb_*` functions the header declares, in header order.
+fn declared_functions(header: &str) -> Vec<String> {
+    let mut names = Vec::new();
+    for line in header.lines().filter(|l| !l.starts_with(' ') && !l.starts_with("//") && !l.starts_with('#')) {
+        if let Some(open) = line.find('(') {
+            let head = &line[..open];
+            let name = head.rsplit(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).next().unwrap_or("");
+            if name.starts_with("skb_") && !names.iter().any(|n| n == name) {
+                names.push(name.to_string());
+            }
+        }
+    }
+    names
+}
+
+/// The `extern "C" fn skb_*` definitions of the crate's sources (outside tests), with whether
+/// each is `pub` and `#[no_mangle]` (what makes it a symbol of the library).
+fn defined_functions() -> Vec<(String, bool)> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(&src).expect("read capi/src") {
+        let path = entry.expect("dir entry").path();
+        if path.extension().is_none_or(|e| e != "rs") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).expect("read source");
+        let text = text.split("#[cfg(test)]").next().unwrap_or("");
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let Some(at) = line.find("extern \"C\" fn skb_") else { continue };
+            let name: String = line[at + "extern \"C\" fn ".len()..]
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            let attrs = lines[..i].iter().rev().take_while(|l| l.trim_start().starts_with("#["));
+            let exported = line.starts_with("pub ") && attrs.into_iter().any(|l| l.trim() == "#[no_mangle]");
+            out.push((name, exported));
+        }
+    }
+    out
+}
+
+/// Every `skb_*` function defined in Rust is exported (`pub`, `#[no_mangle]`) and declared in
+/// the header, and every declared one is defined: the header and the library list the same
+/// functions. The header opens with the status, error and version functions.
+#[test]
+fn header_declares_exactly_the_exported_functions() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let header = std::fs::read_to_string(root.join("include/sketchbody.h")).expect("read include/sketchbody.h");
+    let declared = declared_functions(&header);
+    let defined = defined_functions();
+    let hidden: Vec<&str> = defined.iter().filter(|(_, e)| !e).map(|(n, _)| n.as_str()).collect();
+    assert!(hidden.is_empty(), "skb_ functions without `pub` + #[no_mangle]: {hidden:?}");
+    let defined: std::collections::BTreeSet<&str> = defined.iter().map(|(n, _)| n.as_str()).collect();
+    let declared_set: std::collections::BTreeSet<&str> = declared.iter().map(String::as_str).collect();
+    let undeclared: Vec<_> = defined.difference(&declared_set).collect();
+    let undefined: Vec<_> = declared_set.difference(&defined).collect();
+    assert!(undeclared.is_empty(), "exported but not in the header: {undeclared:?}");
+    assert!(undefined.is_empty(), "in the header but not defined in Rust: {undefined:?}");
+    assert!(declared.len() > 100, "parsed only {} declarations", declared.len());
+    assert_eq!(declared[..3], ["skb_status_str", "skb_last_error_message", "skb_version"], "header order");
+}

@@ -9,6 +9,7 @@ use rand::SeedableRng;
 use sketchbody_core::body::procedural::random_pose;
 
 fn last_error() -> String {
+    // SAFETY: skb_last_error_message never returns NULL; the text lives until the next call.
     unsafe { CStr::from_ptr(skb_last_error_message()) }.to_string_lossy().into_owned()
 }
 
@@ -25,36 +26,44 @@ fn camera(size: f64) -> skb_camera {
 fn mesh_poses_rasterises_and_exports() {
     let mut ctx = ptr::null_mut();
     let mut mesh = ptr::null_mut();
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
         assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK, "{}", last_error());
         assert_eq!(skb_mesh_new_from_shape(ctx, SKB_GENDER_FEMALE, ptr::null(), 0, &mut mesh), skb_status::SKB_OK);
         skb_context_free(ctx);
     }
     let mut rest = [0.0f64; 45];
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     assert_eq!(unsafe { skb_mesh_copy_posed_joints(mesh, rest.as_mut_ptr(), 45) }, skb_status::SKB_OK);
     let rest_j: [[f64; 3]; 15] = std::array::from_fn(|i| [rest[3 * i], rest[3 * i + 1], rest[3 * i + 2]]);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
     let target = random_pose(&rest_j, &mut rng, 0.1);
     let flat: Vec<f64> = target.iter().flatten().copied().collect();
     let mut nv = 0usize;
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe { skb_mesh_vertex_count(mesh, &mut nv) };
     let mut verts = vec![0.0f32; 3 * nv];
     for flags in [0, SKB_POSE_DUAL_QUATERNION, SKB_POSE_RETARGET, SKB_POSE_RETARGET | SKB_POSE_DUAL_QUATERNION] {
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         assert_eq!(unsafe { skb_mesh_pose(mesh, flat.as_ptr(), 45, flags) }, skb_status::SKB_OK, "{}", last_error());
         let mut posed = [0.0f64; 45];
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         assert_eq!(unsafe { skb_mesh_copy_posed_joints(mesh, posed.as_mut_ptr(), 45) }, skb_status::SKB_OK);
         if flags & SKB_POSE_RETARGET != 0 {
             let err = posed.iter().zip(&flat).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             assert!(err < 1e-6, "retargeted joints off by {err} m");
         }
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         assert_eq!(unsafe { skb_mesh_copy_posed_vertices(mesh, verts.as_mut_ptr(), verts.len()) }, skb_status::SKB_OK);
         assert!(verts.iter().all(|c| c.is_finite()));
     }
     // The posed silhouette equals the raw-array raster of the posed vertices.
     let mut nf = 0usize;
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe { skb_mesh_face_count(mesh, &mut nf) };
     let mut tris = vec![0u32; 6 * nf];
     assert_eq!(
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
         unsafe { skb_mesh_copy_triangles(mesh, tris.as_mut_ptr(), tris.len()) },
         skb_status::SKB_OK,
         "{}",
@@ -62,6 +71,7 @@ fn mesh_poses_rasterises_and_exports() {
     );
     let cam = camera(128.0);
     let (mut a, mut b) = (vec![0u8; 128 * 128], vec![0u8; 130 * 128]);
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
         assert_eq!(
             skb_mesh_rasterize(mesh, ptr::null_mut(), &cam, 128, 128, a.as_mut_ptr(), 128, a.len()),
@@ -96,6 +106,7 @@ fn mesh_poses_rasterises_and_exports() {
     let dir = std::env::temp_dir().join(format!("skb-capi-pose-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let p = |n: &str| CString::new(dir.join(n).to_str().unwrap()).unwrap();
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
         assert_eq!(skb_mesh_write_glb(mesh, p("a.glb").as_ptr()), skb_status::SKB_OK, "{}", last_error());
         assert_eq!(skb_mesh_write_obj(mesh, p("a.obj").as_ptr(), true), skb_status::SKB_OK, "{}", last_error());
@@ -135,6 +146,7 @@ fn mesh_poses_rasterises_and_exports() {
     let mut coincident = flat.clone();
     coincident.copy_within(12..15, 9); // r_elbow onto r_wrist
     let mut before = vec![0.0f32; 3 * nv];
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
         skb_mesh_copy_posed_vertices(mesh, before.as_mut_ptr(), before.len());
         assert_eq!(skb_mesh_pose(mesh, bad.as_ptr(), 45, 0), skb_status::SKB_ERR_NON_FINITE);
