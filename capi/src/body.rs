@@ -3,6 +3,7 @@
 
 use std::sync::Arc;
 
+use sketchbody_core::body::ik::Pose;
 use sketchbody_core::body::{BodyModel, Gender, RestShape, MAX_INFLUENCES};
 use sketchbody_core::error::Error;
 use sketchbody_core::skeleton::{NUM_BONES, NUM_JOINTS};
@@ -34,6 +35,12 @@ pub struct skb_context {
     pub(crate) detector: std::sync::OnceLock<Result<sketchbody_core::detect::Model, String>>,
 }
 
+/// The pose of an `skb_mesh` and its skinned vertices.
+pub(crate) struct Posed {
+    pub(crate) pose: Pose,
+    pub(crate) vertices: Vec<[f32; 3]>,
+}
+
 /// A body mesh: a shape of one gender in the rest pose (MakeHuman's A-pose), metres, model frame
 /// (+Y up, +Z toward the viewer, the character's right at −X). Create with
 /// `skb_mesh_new_from_shape`, release with `skb_mesh_free`. Getters only read it, so several
@@ -46,7 +53,7 @@ pub struct skb_mesh {
     /// component count).
     pub(crate) weights: Vec<f64>,
     /// The current pose and posed vertices (`None`: rest pose), set by `skb_mesh_pose`.
-    pub(crate) posed: Option<Box<super::mesh_ops::Posed>>,
+    pub(crate) posed: Option<Box<Posed>>,
 }
 
 /// Creates a context holding the body model compiled into the library. On success `*out`

@@ -11,7 +11,6 @@ use sketchbody_core::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
 
 use super::body::skb_mesh;
 use super::error::fail;
-use super::mesh_ops::path_arg;
 use super::ptr::*;
 use super::status::skb_status;
 

@@ -13,10 +13,11 @@ use sketchbody_core::image::to_gray;
 use sketchbody_core::pipeline::{fit_body, BodyChoice};
 use sketchbody_core::skeleton::{Joints3, NUM_JOINTS};
 
+use super::body::Posed;
 use super::body::{skb_context, skb_mesh};
 use super::error::{fail, fail_with};
 use super::image::{skb_image, view_of};
-use super::mesh_ops::{skb_camera, Posed};
+use super::mesh_ops::skb_camera;
 use super::ptr::*;
 use super::status::skb_status;
 

@@ -2,11 +2,10 @@
 //! (`skb_rasterizer`, also on raw arrays), and posing, rasterising and exporting an `skb_mesh`.
 
 use std::ffi::c_char;
-use std::path::Path;
 
 use nalgebra::Matrix3;
 
-use sketchbody_core::body::ik::{solve, IkOptions, Pose};
+use sketchbody_core::body::ik::{solve, IkOptions};
 use sketchbody_core::body::rig::FaceUvs;
 use sketchbody_core::body::skin::{skin, SkinMethod};
 use sketchbody_core::camera::WeakPerspective;
@@ -16,7 +15,7 @@ use sketchbody_core::raster::Rasterizer;
 use sketchbody_core::render::preview::{preview, save_rgb_png};
 use sketchbody_core::skeleton::{Joints3, NUM_JOINTS};
 
-use super::body::skb_mesh;
+use super::body::{skb_mesh, Posed};
 use super::error::{fail, fail_with};
 use super::ptr::*;
 use super::status::skb_status;
@@ -137,23 +136,8 @@ pub const SKB_POSE_RETARGET: u32 = 1;
 /// `skb_mesh_pose` flag: dual-quaternion skinning instead of linear blend skinning.
 pub const SKB_POSE_DUAL_QUATERNION: u32 = 2;
 
-/// The pose of an `skb_mesh` and its skinned vertices.
-pub(crate) struct Posed {
-    pub(crate) pose: Pose,
-    pub(crate) vertices: Vec<[f32; 3]>,
-}
-
 fn posed_vertices(m: &skb_mesh) -> &[[f32; 3]] {
     m.posed.as_ref().map_or(&m.rest.vertices, |p| &p.vertices)
-}
-
-/// Borrows a NUL-terminated UTF-8 path.
-///
-/// # Safety
-/// `p` must be NULL or point to a NUL-terminated string that outlives `'a`.
-pub(crate) unsafe fn path_arg<'a>(p: *const c_char, name: &str) -> Result<&'a Path, skb_status> {
-    // SAFETY: forwarded contract: `p` is NULL or a NUL-terminated string outliving `'a`.
-    Ok(Path::new(unsafe { try_str(p, name) }?))
 }
 
 /// Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,

@@ -15,11 +15,12 @@ use sketchbody_core::pipeline::{
 use sketchbody_core::pose::dict_io;
 use sketchbody_core::skeleton::NUM_JOINTS;
 
+use super::body::Posed;
 use super::body::{copy_skin_weights, skb_context, skb_mesh};
 use super::detect::embedded_detector;
 use super::fit::{progress_closure, skb_fit_options, skb_progress_fn};
 use super::image::{skb_image, view_of};
-use super::mesh_ops::{path_arg, skb_camera, Posed};
+use super::mesh_ops::skb_camera;
 use super::pose::{joints_in, skb_joints2d, skb_pose_dictionary, skb_pose_options};
 use super::ptr::*;
 use super::status::skb_status;

@@ -8,6 +8,7 @@
 //! address-space bound) before building the reference.
 
 use std::ffi::{c_char, CStr};
+use std::path::Path;
 
 use sketchbody_core::error::Error;
 
@@ -235,4 +236,13 @@ macro_rules! try_core {
             Err(e) => return $crate::error_fail(&e),
         }
     };
+}
+
+/// Borrows a NUL-terminated UTF-8 path.
+///
+/// # Safety
+/// `p` must be NULL or point to a NUL-terminated string that outlives `'a`.
+pub(crate) unsafe fn path_arg<'a>(p: *const c_char, name: &str) -> Result<&'a Path, skb_status> {
+    // SAFETY: forwarded contract: `p` is NULL or a NUL-terminated string outliving `'a`.
+    Ok(Path::new(unsafe { try_str(p, name) }?))
 }
