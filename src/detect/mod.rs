@@ -13,6 +13,8 @@ pub mod fastconv;
 pub mod format;
 pub mod hog;
 pub mod joints;
+#[cfg(feature = "blazepose")]
+pub mod landmark;
 pub mod model;
 pub mod parse_eval;
 pub mod pyramid;
