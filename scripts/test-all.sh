@@ -23,11 +23,13 @@ fi
 jobs=$(nproc)
 echo "== lint gates: cargo fmt --check, cargo clippy -D warnings"
 cargo fmt --all --check
-cargo clippy --release --workspace --all-targets --all-features -- -D warnings
+# Every feature but the experimental `blazepose` (tract-onnx; not wired into the product yet).
+features=(--features sketchbody/model-builder,sketchbody/test-fixtures)
+cargo clippy --release --workspace --all-targets "${features[@]}" -- -D warnings
 
 echo "== cargo test (release build, shared with the CMake build)"
-cargo test --release --workspace --all-targets --all-features
-cargo test --release --workspace --doc --all-features
+cargo test --release --workspace --all-targets "${features[@]}"
+cargo test --release --workspace --doc "${features[@]}"
 
 echo "== CMake build + ctest (cargo's folder shared with the cargo tests above)"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSKB_CARGO_TARGET_DIR="$PWD/target"

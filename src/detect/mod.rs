@@ -13,6 +13,9 @@ pub mod fastconv;
 pub mod format;
 pub mod hog;
 pub mod joints;
+#[cfg(feature = "blazepose")]
+#[cfg(feature = "blazepose")]
+pub mod landmark;
 pub mod model;
 pub mod normalise;
 pub mod parse_eval;

@@ -1,0 +1,151 @@
+//! The BlazePose landmark backend: MediaPipe's pose landmark model ("full"), converted to ONNX
+//! and run in pure Rust by tract-onnx ([`model`]), with MediaPipe's pre- and post-processing:
+//! a square ROI ([`roi`]) from the ink's bounding box (1.25 × its larger side, no rotation),
+//! the affine 256×256 crop with white padding ([`crop`]), landmark decoding (x, y in crop px; z;
+//! visibility and presence logits through a sigmoid) and back-projection to image pixels, then
+//! a second pass on the ROI from the first pass's own alignment landmarks (hips' midpoint →
+//! scale point, rotated upright, 1.25 × twice their distance), and the map to the canonical
+//! joints ([`joints`]).
+
+pub mod crop;
+pub mod joints;
+pub mod model;
+pub mod roi;
+
+pub use model::LandmarkNet;
+pub use roi::Roi;
+
+use crate::error::{Error, Result};
+use crate::image::ImageView;
+use crate::skeleton::{Joints2, NUM_JOINTS};
+
+/// Pose landmarks (MediaPipe's order); the network's 6 further outputs are auxiliary.
+pub const NUM_POSE_LANDMARKS: usize = 33;
+/// Auxiliary landmark at the hips' midpoint: the second pass's ROI centre.
+pub const ALIGN_CENTER: usize = 33;
+/// Auxiliary landmark whose distance from [`ALIGN_CENTER`] sets the second pass's ROI size.
+pub const ALIGN_SCALE: usize = 34;
+
+/// One decoded landmark in image coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Landmark {
+    /// x, px (continuous image coordinates).
+    pub x: f64,
+    /// y, px.
+    pub y: f64,
+    /// Depth relative to the hips, px at the image's scale (smaller is nearer the camera).
+    pub z: f64,
+    /// Probability that the landmark is visible (not occluded), in (0, 1).
+    pub visibility: f64,
+    /// Probability that the landmark lies inside the crop, in (0, 1).
+    pub presence: f64,
+}
+
+/// Landmarks of one network pass on one ROI.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoiLandmarks {
+    /// The ROI the crop was taken from.
+    pub roi: Roi,
+    /// All 39 network landmarks (33 pose + 6 auxiliary), image px.
+    pub landmarks: Vec<Landmark>,
+    /// The network's pose-presence flag in [0, 1].
+    pub pose_flag: f64,
+}
+
+fn sigmoid(v: f32) -> f64 {
+    1.0 / (1.0 + (-(v as f64)).exp())
+}
+
+/// Runs `net` on the crop of `image` (1, 3 or 4 channels) inside `roi` and maps the landmarks
+/// back to image px. Errors: those of [`LandmarkNet::run`].
+pub fn landmarks_in_roi(net: &LandmarkNet, image: &ImageView<'_>, roi: &Roi) -> Result<RoiLandmarks> {
+    let raw = net.run(crop::crop_tensor(image, roi))?;
+    let n = crop::INPUT_SIDE as f64;
+    let landmarks = raw
+        .landmarks
+        .iter()
+        .map(|l| {
+            let [x, y] = roi.to_image(l[0] as f64 / n, l[1] as f64 / n);
+            let z = l[2] as f64 / n * roi.size;
+            Landmark { x, y, z, visibility: sigmoid(l[3]), presence: sigmoid(l[4]) }
+        })
+        .collect();
+    Ok(RoiLandmarks { roi: *roi, landmarks, pose_flag: raw.pose_flag as f64 })
+}
+
+/// The second pass's ROI from a pass's alignment landmarks. Errors: `Degenerate` when they
+/// coincide.
+pub fn roi_from_landmarks(l: &RoiLandmarks) -> Result<Roi> {
+    let (c, s) = (l.landmarks[ALIGN_CENTER], l.landmarks[ALIGN_SCALE]);
+    Roi::from_alignment([c.x, c.y], [s.x, s.y])
+}
+
+/// Options of [`detect_blazepose`]. `Default`: two passes, pose flag threshold 0.5.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlazePoseOptions {
+    /// Network passes: 1 (the ink-box ROI only) or 2 (then the ROI from the first pass's
+    /// landmarks, as MediaPipe tracks). Default 2.
+    pub passes: usize,
+    /// Smallest pose flag of the last pass accepted as a figure, in [0, 1]; below it the result
+    /// is [`Error::NoFigure`]. Default 0.5 (MediaPipe's tracking confidence).
+    pub min_pose_flag: f64,
+}
+
+impl Default for BlazePoseOptions {
+    fn default() -> Self {
+        Self { passes: 2, min_pose_flag: 0.5 }
+    }
+}
+
+/// A figure found by the landmark backend.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlazePoseDetection {
+    /// The last pass's pose flag in [0, 1].
+    pub score: f64,
+    /// The canonical 15 joints (all marked visible), px.
+    pub joints: Joints2,
+    /// Per canonical joint confidence (visibility × presence), in (0, 1).
+    pub confidence: [f64; NUM_JOINTS],
+    /// The last pass's landmarks and ROI.
+    pub pass: RoiLandmarks,
+}
+
+/// Finds the figure in `image`: first pass on the ink box's ROI, then (with `passes` = 2) a pass
+/// on the ROI from its own landmarks. Errors: `ImageTooSmall` (either side under
+/// `detect::MIN_DETECT_SIDE`), `OutOfRange` for bad options, `NoFigure` for a page without ink or
+/// a pose flag under `min_pose_flag`, and the network's errors.
+pub fn detect_blazepose(
+    net: &LandmarkNet,
+    image: &ImageView<'_>,
+    opts: &BlazePoseOptions,
+) -> Result<BlazePoseDetection> {
+    let (w, h) = (image.width(), image.height());
+    let min = super::MIN_DETECT_SIDE;
+    if w.min(h) < min {
+        return Err(Error::ImageTooSmall { width: w, height: h, min });
+    }
+    if !(1..=2).contains(&opts.passes) {
+        return Err(Error::OutOfRange { name: "passes", detail: format!("{} not in 1..=2", opts.passes) });
+    }
+    if !(0.0..=1.0).contains(&opts.min_pose_flag) {
+        return Err(Error::OutOfRange {
+            name: "min_pose_flag",
+            detail: format!("{} not in [0, 1]", opts.min_pose_flag),
+        });
+    }
+    let no_figure = |score: f64| Error::NoFigure { score, threshold: opts.min_pose_flag };
+    let ink = roi::ink_box(image).ok_or_else(|| no_figure(0.0))?;
+    let mut pass = landmarks_in_roi(net, image, &Roi::from_box(ink)?)?;
+    if opts.passes == 2 {
+        if let Ok(r) = roi_from_landmarks(&pass) {
+            pass = landmarks_in_roi(net, image, &r)?;
+        }
+    }
+    if pass.pose_flag < opts.min_pose_flag {
+        return Err(no_figure(pass.pose_flag));
+    }
+    let xy: Vec<[f64; 2]> = pass.landmarks.iter().map(|l| [l.x, l.y]).collect();
+    let conf: Vec<f64> = pass.landmarks.iter().map(|l| l.visibility * l.presence).collect();
+    let (joints, confidence) = joints::to_canonical(&xy[..NUM_POSE_LANDMARKS], &conf[..NUM_POSE_LANDMARKS]);
+    Ok(BlazePoseDetection { score: pass.pose_flag, joints, confidence, pass })
+}

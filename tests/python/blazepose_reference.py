@@ -1,0 +1,76 @@
+"""Reference landmarks for the BlazePose cross-check (tests/blazepose_reference.rs).
+
+Runs MediaPipe's own landmark model (the pose_landmark_full.tflite inside the mediapipe wheel,
+with TensorFlow's TFLite interpreter) on the crop of each image given by the ROI the Rust side
+chose, with MediaPipe's pre- and post-processing written independently of the Rust code: OpenCV
+warpAffine (bilinear, white border) mapping the ROI's corners to the 256x256 tensor's corners,
+RGB in [0, 1], landmarks x / 256, y / 256 rotated and scaled back into the image, sigmoid of the
+visibility and presence logits.
+
+Usage: blazepose_reference.py CASES.json OUT.json
+CASES.json: [{"image": path, "roi": {"cx", "cy", "size", "rotation"}}] in continuous pixel
+coordinates (pixel i covers [i, i + 1)). OUT.json: [{"image", "landmarks": [[x, y, vis, pres]
+x 39], "pose_flag"}].
+"""
+import json
+import math
+import os
+import sys
+
+import cv2
+import mediapipe
+import numpy as np
+import tensorflow as tf
+
+SIDE = 256
+
+
+def crop(rgb, roi):
+    """The ROI resampled to SIDE x SIDE, float32 RGB in [0, 1]."""
+    s, c = math.sin(roi["rotation"]), math.cos(roi["rotation"])
+    size = roi["size"]
+    # Inverse map: tensor pixel (u, v) -> continuous image point -> OpenCV pixel-centre point.
+    a = np.array([[size * c / SIDE, -size * s / SIDE], [size * s / SIDE, size * c / SIDE]])
+    t = np.array([roi["cx"], roi["cy"]]) - a @ np.array([SIDE / 2, SIDE / 2]) - 0.5
+    m = np.hstack([a, t[:, None]])
+    img = rgb.astype(np.float32) / 255.0
+    return cv2.warpAffine(img, m, (SIDE, SIDE), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=(1.0, 1.0, 1.0))
+
+
+def main():
+    cases = json.load(open(sys.argv[1]))
+    model = os.path.join(os.path.dirname(mediapipe.__file__), "modules/pose_landmark/pose_landmark_full.tflite")
+    interp = tf.lite.Interpreter(model_path=model)
+    interp.allocate_tensors()
+    inp = interp.get_input_details()[0]
+    outs = interp.get_output_details()
+    lm_out = next(o for o in outs if int(np.prod(o["shape"])) == 195)
+    flag_out = next(o for o in outs if int(np.prod(o["shape"])) == 1)
+    result = []
+    for case in cases:
+        bgr = cv2.imread(case["image"], cv2.IMREAD_UNCHANGED)
+        if bgr.ndim == 2:
+            rgb = np.repeat(bgr[:, :, None], 3, axis=2)
+        elif bgr.shape[2] == 4:
+            alpha = bgr[:, :, 3:4].astype(np.float32) / 255.0
+            rgb = np.rint(bgr[:, :, 2::-1] * alpha + 255.0 * (1 - alpha)).astype(np.uint8)
+        else:
+            rgb = bgr[:, :, ::-1]
+        roi = case["roi"]
+        interp.set_tensor(inp["index"], crop(rgb, roi)[None])
+        interp.invoke()
+        raw = interp.get_tensor(lm_out["index"]).reshape(39, 5).astype(np.float64)
+        s, c = math.sin(roi["rotation"]), math.cos(roi["rotation"])
+        lms = []
+        for x, y, _z, vis, pres in raw:
+            u, v = x / SIDE - 0.5, y / SIDE - 0.5
+            lms.append([roi["cx"] + roi["size"] * (c * u - s * v), roi["cy"] + roi["size"] * (s * u + c * v),
+                        1 / (1 + math.exp(-vis)), 1 / (1 + math.exp(-pres))])
+        flag = float(interp.get_tensor(flag_out["index"]).reshape(-1)[0])
+        result.append({"image": case["image"], "landmarks": lms, "pose_flag": flag})
+    json.dump(result, open(sys.argv[2], "w"))
+
+
+if __name__ == "__main__":
+    main()
