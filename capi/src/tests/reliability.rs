@@ -7,6 +7,7 @@ use std::ptr;
 use crate::*;
 
 fn last_error() -> String {
+    // SAFETY: test code; each pointer is NULL or a live local of the documented size.
     unsafe { CStr::from_ptr(skb_last_error_message()) }.to_string_lossy().into_owned()
 }
 
@@ -26,6 +27,7 @@ fn wrapping_strides_are_refused_with_nothing_written() {
     // (1 << 63) * 2 wraps to 0, so an unchecked length would be just `width` bytes.
     let stride = 1usize << 63;
     let mut dst = [0xA5u8; 64];
+    // SAFETY: test code; each pointer is NULL or a live local of the documented size.
     unsafe {
         let s = skb_canny(&im, 50.0, 150.0, 3, false, dst.as_mut_ptr(), stride, dst.len());
         assert_eq!(s, skb_status::SKB_ERR_OUT_OF_RANGE, "{}", last_error());
@@ -62,6 +64,7 @@ fn image_loader_refuses_special_files() {
     for p in ["/dev/zero", "/tmp"] {
         let path = CString::new(p).unwrap();
         let mut out = ptr::null_mut();
+        // SAFETY: test code; each pointer is NULL or a live local of the documented size.
         assert_eq!(unsafe { skb_gray_image_load(path.as_ptr(), &mut out) }, skb_status::SKB_ERR_IO, "{p}");
         assert!(out.is_null());
         assert!(last_error().contains("not a regular file"), "{}", last_error());
@@ -73,6 +76,7 @@ fn image_loader_refuses_special_files() {
 #[test]
 fn overflowing_pose_is_a_status_not_ok() {
     let d = scratch("pose");
+    // SAFETY: test code; each pointer is NULL or a live local of the documented size.
     unsafe {
         let mut ctx = ptr::null_mut();
         assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
@@ -104,6 +108,7 @@ fn glb_writer_refuses_a_symlink() {
     std::fs::write(&target, b"keep").unwrap();
     let link = d.join("l.glb");
     std::os::unix::fs::symlink(&target, &link).unwrap();
+    // SAFETY: test code; each pointer is NULL or a live local of the documented size.
     unsafe {
         let mut ctx = ptr::null_mut();
         assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);

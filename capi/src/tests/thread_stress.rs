@@ -7,6 +7,7 @@ use std::ptr;
 use crate::*;
 
 fn last_error() -> String {
+    // SAFETY: test code; live handles and locals of the documented sizes, shared ones only read.
     unsafe { CStr::from_ptr(skb_last_error_message()) }.to_string_lossy().into_owned()
 }
 
@@ -22,6 +23,7 @@ unsafe impl Sync for Shared {}
 /// One unit of work, its outputs as raw bits: a new posed mesh from the shared context (shape
 /// `k`), the shared mesh's vertices, and Canny edges of a shared image.
 fn work(s: Shared, k: usize, image: &[u8]) -> (Vec<u32>, Vec<u32>, Vec<u8>) {
+    // SAFETY: test code; live handles and locals of the documented sizes, shared ones only read.
     unsafe {
         let weights = [0.1 * k as f32, -0.05 * k as f32];
         let mut mesh = ptr::null_mut();
@@ -58,6 +60,7 @@ fn eight_threads_on_shared_handles_match_single_threaded_bits() {
     let image: Vec<u8> =
         (0..128 * 96).map(|i: usize| ((i % 128 / 16 + i / 128 / 12) % 2 * 180 + i % 7) as u8).collect();
     let mut s = Shared { ctx: ptr::null_mut(), mesh: ptr::null_mut() };
+    // SAFETY: test code; live handles and locals of the documented sizes, shared ones only read.
     unsafe {
         assert_eq!(skb_context_new(&mut s.ctx), skb_status::SKB_OK);
         assert_eq!(skb_mesh_new_from_shape(s.ctx, SKB_GENDER_FEMALE, ptr::null(), 0, &mut s.mesh), skb_status::SKB_OK);
@@ -75,6 +78,7 @@ fn eight_threads_on_shared_handles_match_single_threaded_bits() {
             });
         }
     });
+    // SAFETY: test code; live handles and locals of the documented sizes, shared ones only read.
     unsafe {
         skb_mesh_free(s.mesh);
         skb_context_free(s.ctx);
