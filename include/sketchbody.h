@@ -1187,7 +1187,7 @@ skb_status skb_estimate_pose_figure(const struct skb_pose_dictionary *dict,
  * joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
  * (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
  * beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
- * distinct `out`); about 1.2 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
+ * distinct `out`); CPU time per pose in docs/benchmarks.md ("3-D pose").
  */
 skb_status skb_estimate_pose(const struct skb_pose_dictionary *dict,
                              const struct skb_joints2d *joints,

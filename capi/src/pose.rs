@@ -487,12 +487,11 @@ pub unsafe extern "C" fn skb_estimate_pose_figure(
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
-            let j = joints_in(try_status!(try_ref(joints, "joints")));
-            let o = opt_ref(opts).map(|o| o.inner).unwrap_or_default();
+            let joints = try_status!(try_ref(joints, "joints"));
             let out = try_status!(try_mut(out, "out"));
             let figure = try_status!(try_mut(figure, "figure"));
-            let e = try_core!(estimate_pose(&d.inner, &j, &o));
-            *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
+            let (e, pose) = try_status!(estimate_out(d, joints, opt_ref(opts)));
+            *out = pose;
             *figure = skb_pose_figure { factors: e.factors.k, plausible: i32::from(e.plausible), reserved: 0 };
             skb_status::SKB_OK
         }
@@ -525,6 +524,20 @@ fn pose_out(e: &PoseEstimate, prior_weight: f64) -> skb_pose3d {
     out
 }
 
+/// The estimate of `skb_estimate_pose` / `skb_estimate_pose_figure` and its C form (`opts`
+/// `None` = the defaults); errors are already recorded for `skb_last_error_message`.
+fn estimate_out(
+    d: &skb_pose_dictionary,
+    joints: &skb_joints2d,
+    opts: Option<&skb_pose_options>,
+) -> Result<(PoseEstimate, skb_pose3d), skb_status> {
+    let j = joints_in(joints);
+    let o = opts.map(|o| o.inner).unwrap_or_default();
+    let e = estimate_pose(&d.inner, &j, &o).map_err(|err| fail(&err))?;
+    let pose = pose_out(&e, prior_weight(&d.inner, &j, &o));
+    Ok((e, pose))
+}
+
 fn prior_weight(d: &Dictionary, j: &Joints2, o: &PoseOptions) -> f64 {
     sketchbody_core::pose::problem::Problem::new(d, j, o.prior).map(|p| p.prior_w).unwrap_or(0.0)
 }
@@ -536,7 +549,7 @@ fn prior_weight(d: &Dictionary, j: &Joints2, o: &PoseOptions) -> f64 {
 /// joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
 /// (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
 /// beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
-/// distinct `out`); about 1.2 ms of CPU per pose with the defaults (0.5–0.8 ms with 0 starts).
+/// distinct `out`); CPU time per pose in docs/benchmarks.md ("3-D pose").
 #[no_mangle]
 pub unsafe extern "C" fn skb_estimate_pose(
     dict: *const skb_pose_dictionary,
@@ -550,11 +563,9 @@ pub unsafe extern "C" fn skb_estimate_pose(
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
-            let j = joints_in(try_status!(try_ref(joints, "joints")));
-            let o = opt_ref(opts).map(|o| o.inner).unwrap_or_default();
+            let joints = try_status!(try_ref(joints, "joints"));
             let out = try_status!(try_mut(out, "out"));
-            let e = try_core!(estimate_pose(&d.inner, &j, &o));
-            *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
+            *out = try_status!(estimate_out(d, joints, opt_ref(opts))).1;
             skb_status::SKB_OK
         }
     }
