@@ -428,6 +428,228 @@ fn nms_span(rows: &NmsRows<'_>, dx: &[i16], dy: &[i16], low: i32, high: i32, out
 mod tests {
     use super::*;
 
+    /// A plain, unoptimised Canny written from OpenCV 4.6's definition (separable Sobel with
+    /// replicated borders, aperture 7 scaled by 1/16 and rounded half-even, L1 or squared L2
+    /// magnitude, tangent-based non-maximum suppression with `>` before and `>=` after on the
+    /// axes, `>` on both diagonal neighbours, zero magnitude outside the image, 8-connected
+    /// hysteresis). The optimised banded code must agree with it bit for bit; the ctest
+    /// cross-check compares the same code with OpenCV itself.
+    fn reference_canny(px: &[u8], w: usize, h: usize, p: &CannyParams) -> Vec<u8> {
+        let k = p.aperture as usize;
+        let smooth: Vec<i64> = match k {
+            3 => vec![1, 2, 1],
+            5 => vec![1, 4, 6, 4, 1],
+            _ => vec![1, 6, 15, 20, 15, 6, 1],
+        };
+        let deriv: Vec<i64> = match k {
+            3 => vec![-1, 0, 1],
+            5 => vec![-1, -2, 0, 2, 1],
+            _ => vec![-1, -4, -5, 0, 5, 4, 1],
+        };
+        let r = (k / 2) as isize;
+        let at = |x: isize, y: isize| {
+            px[y.clamp(0, h as isize - 1) as usize * w + x.clamp(0, w as isize - 1) as usize] as i64
+        };
+        let mut gx = vec![0i32; w * h];
+        let mut gy = vec![0i32; w * h];
+        for y in 0..h as isize {
+            for x in 0..w as isize {
+                let (mut sx, mut sy) = (0i64, 0i64);
+                for j in -r..=r {
+                    for i in -r..=r {
+                        let v = at(x + i, y + j);
+                        sx += deriv[(i + r) as usize] * smooth[(j + r) as usize] * v;
+                        sy += smooth[(i + r) as usize] * deriv[(j + r) as usize] * v;
+                    }
+                }
+                let scale = |s: i64| -> i32 {
+                    if k == 7 {
+                        ((s as f64) / 16.0).round_ties_even() as i32
+                    } else {
+                        s as i32
+                    }
+                };
+                gx[y as usize * w + x as usize] = scale(sx).clamp(-32768, 32767);
+                gy[y as usize * w + x as usize] = scale(sy).clamp(-32768, 32767);
+            }
+        }
+        let mag: Vec<i64> = (0..w * h)
+            .map(|i| {
+                let (a, b) = (gx[i] as i64, gy[i] as i64);
+                if p.l2_gradient {
+                    a * a + b * b
+                } else {
+                    a.abs() + b.abs()
+                }
+            })
+            .collect();
+        let m_at = |x: isize, y: isize| {
+            if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
+                0
+            } else {
+                mag[y as usize * w + x as usize]
+            }
+        };
+        let t = p.int_thresholds().unwrap();
+        let (low, high) = (t.low as i64, t.high as i64);
+        // 0: not an edge, 1: weak, 2: strong.
+        let mut class = vec![0u8; w * h];
+        const TG22: i64 = 13573;
+        for y in 0..h as isize {
+            for x in 0..w as isize {
+                let i = y as usize * w + x as usize;
+                let m = mag[i];
+                if m <= low {
+                    continue;
+                }
+                let (dx, dy) = (gx[i] as i64, gy[i] as i64);
+                let ax = dx.abs();
+                let ay = dy.abs() << 15;
+                let tg22x = ax * TG22;
+                let keep = if ay < tg22x {
+                    m > m_at(x - 1, y) && m >= m_at(x + 1, y)
+                } else if ay > tg22x + (ax << 16) {
+                    m > m_at(x, y - 1) && m >= m_at(x, y + 1)
+                } else {
+                    let s = if (dx ^ dy) < 0 { -1 } else { 1 };
+                    m > m_at(x - s, y - 1) && m > m_at(x + s, y + 1)
+                };
+                if keep {
+                    class[i] = if m > high { 2 } else { 1 };
+                }
+            }
+        }
+        let mut stack: Vec<usize> = (0..w * h).filter(|&i| class[i] == 2).collect();
+        while let Some(i) = stack.pop() {
+            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            for (ox, oy) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+                let (nx, ny) = (x + ox, y + oy);
+                if nx >= 0 && ny >= 0 && nx < w as isize && ny < h as isize {
+                    let n = ny as usize * w + nx as usize;
+                    if class[n] == 1 {
+                        class[n] = 2;
+                        stack.push(n);
+                    }
+                }
+            }
+        }
+        class.iter().map(|&c| if c == 2 { 255 } else { 0 }).collect()
+    }
+
+    /// A deterministic test image: blocks of flat grey, a ramp and noise, so every gradient
+    /// direction, many tied magnitudes and thin weak chains occur.
+    fn test_image(w: usize, h: usize, seed: u64) -> Vec<u8> {
+        let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let mut next = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 33) as u32
+        };
+        (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                let block = if (x / 7 + y / 5) % 3 == 0 { 200 } else { 40 };
+                let ramp = (x * 3 + y * 2) as u32 % 60;
+                let noise = next() % 24;
+                ((block + ramp + noise) as u32).min(255) as u8
+            })
+            .collect()
+    }
+
+    /// The banded, vectorised Canny equals the plain reference for every aperture, L1 and L2,
+    /// and thresholds placed on, just below and just above gradient magnitudes that occur.
+    #[test]
+    fn matches_plain_reference_for_every_setting() {
+        let (w, h) = (61, 47);
+        for seed in 0..3u64 {
+            let px = test_image(w, h, seed);
+            let src = ImageView::gray(&px, w, h).unwrap();
+            for aperture in [3u32, 5, 7] {
+                for l2_gradient in [false, true] {
+                    let thresholds: &[(f64, f64)] = match (aperture, l2_gradient) {
+                        (3, false) => &[(50.0, 150.0), (100.0, 100.0), (80.0, 400.0), (200.0, 40.0)],
+                        (3, true) => &[(50.0, 150.0), (30.0, 120.0), (100.0, 100.0)],
+                        (5, false) => &[(300.0, 900.0), (500.0, 2000.0)],
+                        (5, true) => &[(200.0, 800.0), (400.0, 1500.0)],
+                        (7, false) => &[(2000.0, 8000.0), (4000.0, 16000.0)],
+                        _ => &[(1500.0, 6000.0), (3000.0, 12000.0)],
+                    };
+                    for &(threshold1, threshold2) in thresholds {
+                        let p = CannyParams { threshold1, threshold2, aperture, l2_gradient };
+                        let got = canny(&src, &p).unwrap();
+                        let want = reference_canny(&px, w, h, &p);
+                        let diff = got.as_bytes().iter().zip(&want).filter(|(a, b)| a != b).count();
+                        let edges = want.iter().filter(|&&v| v == 255).count();
+                        assert!(edges > 20 && edges < w * h / 2, "setting exercises edges: {edges}");
+                        assert_eq!(
+                            diff, 0,
+                            "seed {seed} aperture {aperture} l2 {l2_gradient} t {threshold1}/{threshold2}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// The thresholds are strict: a step whose magnitude equals `threshold2` is not strong and
+    /// one that equals `threshold1` is not even weak; one more grey level makes it an edge.
+    #[test]
+    fn thresholds_are_strict_at_the_exact_magnitude() {
+        let (w, h) = (16, 9);
+        // A vertical step of `d` grey levels: Sobel 3 gives |dx| = 4·d on the two columns beside it.
+        let step = |d: u8| -> Vec<u8> { (0..w * h).map(|i| if i % w < 8 { 100 } else { 100 + d }).collect() };
+        let edges = |px: &[u8], t1: f64, t2: f64| {
+            let src = ImageView::gray(px, w, h).unwrap();
+            let p = CannyParams { threshold1: t1, threshold2: t2, ..CannyParams::default() };
+            canny(&src, &p).unwrap().as_bytes().iter().filter(|&&v| v == 255).count()
+        };
+        let px = step(25); // magnitude 100
+        assert_eq!(edges(&px, 50.0, 100.0), 0, "m == high is not strong");
+        assert_eq!(edges(&px, 50.0, 99.0), h, "m > high: one column of edges");
+        assert_eq!(edges(&px, 99.5, 99.9), h, "fractional thresholds floor to 99");
+        assert_eq!(edges(&px, 100.0, 100.0), 0);
+        // L2 compares squared magnitudes: 100² against floor(t)².
+        let src = ImageView::gray(&px, w, h).unwrap();
+        let l2 = |t2: f64| {
+            let p = CannyParams { threshold1: 10.0, threshold2: t2, aperture: 3, l2_gradient: true };
+            canny(&src, &p).unwrap().as_bytes().iter().filter(|&&v| v == 255).count()
+        };
+        assert_eq!(l2(100.0), 0, "100² is not > 100²");
+        assert_eq!(l2(99.99), h, "99.99² floors below 100²");
+    }
+
+    /// Hysteresis follows weak chains in all eight directions, up-left and up-right included:
+    /// a diagonal step edge, faint at its upper end and strong at its lower end, is kept whole.
+    #[test]
+    fn hysteresis_follows_every_neighbour_direction() {
+        let (w, h) = (40, 40);
+        for flip in [false, true] {
+            // A diagonal step edge (one-pixel diagonal chains after suppression) whose contrast
+            // grows down the image: weak edges only at the top, strong ones at the bottom.
+            let px: Vec<u8> = (0..w * h)
+                .map(|i| {
+                    let (x, y) = (i % w, i / w);
+                    let bright = if flip { x + y > w - 1 } else { x > y };
+                    if bright {
+                        (110 + 3 * y) as u8
+                    } else {
+                        100
+                    }
+                })
+                .collect();
+            let src = ImageView::gray(&px, w, h).unwrap();
+            let p = CannyParams { threshold1: 20.0, threshold2: 300.0, ..CannyParams::default() };
+            let got = canny(&src, &p).unwrap();
+            let want = reference_canny(&px, w, h, &p);
+            assert_eq!(got.as_bytes(), &want[..], "flip {flip}");
+            let upper = got.as_bytes()[..10 * w].iter().filter(|&&v| v == 255).count();
+            assert!(upper > 0, "the faint end (rows < 10) is reached from the black end (flip {flip})");
+            let strong_only = CannyParams { threshold1: 300.0, ..p };
+            let alone = canny(&src, &strong_only).unwrap();
+            assert!(alone.as_bytes()[..10 * w].iter().all(|&v| v == 0), "rows < 10 hold weak pixels only");
+            assert!(alone.as_bytes().iter().any(|&v| v == 255), "the lower rows hold strong pixels");
+        }
+    }
+
     /// Finding 1: a wrapping output stride is an error and the buffer is untouched.
     #[test]
     fn wrapping_output_stride_writes_nothing() {
