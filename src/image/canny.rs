@@ -550,7 +550,7 @@ mod tests {
                 let block = if (x / 7 + y / 5) % 3 == 0 { 200 } else { 40 };
                 let ramp = (x * 3 + y * 2) as u32 % 60;
                 let noise = next() % 24;
-                ((block + ramp + noise) as u32).min(255) as u8
+                (block + ramp + noise).min(255) as u8
             })
             .collect()
     }
@@ -646,7 +646,7 @@ mod tests {
             let strong_only = CannyParams { threshold1: 300.0, ..p };
             let alone = canny(&src, &strong_only).unwrap();
             assert!(alone.as_bytes()[..10 * w].iter().all(|&v| v == 0), "rows < 10 hold weak pixels only");
-            assert!(alone.as_bytes().iter().any(|&v| v == 255), "the lower rows hold strong pixels");
+            assert!(alone.as_bytes().contains(&255), "the lower rows hold strong pixels");
         }
     }
 
