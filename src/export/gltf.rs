@@ -335,4 +335,77 @@ mod tests {
         let other = crate::body::ik::Pose::rest(&random_pose(&mesh.joints, &mut rng, 0.1));
         assert!(RigScene::build(model.rig(), &mesh, &other, &RigOptions::default()).is_err());
     }
+
+    /// The bytes of accessor `a` of `doc` in the binary chunk of `glb`.
+    fn accessor_bytes<'g>(glb: &'g [u8], doc: &Value, a: usize) -> &'g [u8] {
+        let jlen = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        let bin = &glb[20 + jlen + 8..];
+        let view = &doc["bufferViews"][doc["accessors"][a]["bufferView"].as_u64().unwrap() as usize];
+        let off = view["byteOffset"].as_u64().unwrap() as usize;
+        &bin[off..off + view["byteLength"].as_u64().unwrap() as usize]
+    }
+
+    /// Reads the binary chunk back as a viewer does: every quad is two triangles (a triangle
+    /// one), each index points at the right rest position, and `JOINTS_0` / `WEIGHTS_0` carry each
+    /// vertex's skin (bone 0 where the weight is 0, weights summing to 1).
+    #[test]
+    fn indices_joints_and_weights_read_back() {
+        let model = BodyModel::embedded().unwrap();
+        let mesh = RiggedMesh::from_model(&model, Gender::Female, &[]).unwrap();
+        let pose = crate::body::ik::Pose::rest(&mesh.joints);
+        let scene = RigScene::build(model.rig(), &mesh, &pose, &RigOptions::default()).unwrap();
+        let glb = glb_bytes(&mesh, &scene, None).unwrap();
+        let doc = parse(&glb);
+        let prim = &doc["meshes"][0]["primitives"][0];
+        let attr = |name: &str| prim["attributes"][name].as_u64().unwrap() as usize;
+        let idx: Vec<u32> = accessor_bytes(&glb, &doc, prim["indices"].as_u64().unwrap() as usize)
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        let tris = mesh.triangles();
+        let quads = mesh.quads.iter().filter(|q| q[3] != q[2]).count();
+        assert!(quads > 0 && quads < tris.len(), "the body has quads and triangles");
+        assert_eq!(tris.len(), quads * 2 + (mesh.quads.len() - quads));
+        assert_eq!(idx.len(), 3 * tris.len(), "index count");
+        assert_eq!(doc["accessors"][prim["indices"].as_u64().unwrap() as usize]["count"], idx.len());
+        let floats = |a: usize| -> Vec<f32> {
+            accessor_bytes(&glb, &doc, a).chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect()
+        };
+        let pos = floats(attr("POSITION"));
+        let weights = floats(attr("WEIGHTS_0"));
+        let joints = accessor_bytes(&glb, &doc, attr("JOINTS_0"));
+        let n = pos.len() / 3;
+        assert!(n >= mesh.vertices.len() && weights.len() == 4 * n && joints.len() == 4 * n);
+        // glTF vertex -> source vertex, from the triangles in order.
+        let mut source = vec![u32::MAX; n];
+        for (t, tri) in tris.iter().enumerate() {
+            for k in 0..3 {
+                let g = idx[3 * t + k] as usize;
+                assert!(g < n);
+                assert!(source[g] == u32::MAX || source[g] == tri[k], "glTF vertex {g} stands for two vertices");
+                source[g] = tri[k];
+                let want = scene.rest_vertices[tri[k] as usize];
+                assert_eq!(
+                    [pos[3 * g], pos[3 * g + 1], pos[3 * g + 2]],
+                    want,
+                    "position of corner {k} of triangle {t}"
+                );
+            }
+        }
+        assert!(source.iter().all(|&s| s != u32::MAX), "every glTF vertex is used");
+        let mut multi = 0;
+        for (g, &s) in source.iter().enumerate() {
+            let skin = &scene.skin[s as usize];
+            let w = &weights[4 * g..4 * g + 4];
+            assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5, "weights of {g} sum to 1");
+            for k in 0..4 {
+                assert_eq!(w[k], skin.weights[k]);
+                let want = if skin.weights[k] > 0.0 { skin.bones[k] } else { 0 };
+                assert_eq!(joints[4 * g + k], want, "joint {k} of glTF vertex {g}");
+                assert!((joints[4 * g + k] as usize) < NUM_RIG_BONES);
+            }
+            multi += usize::from(w.iter().filter(|&&x| x > 0.0).count() > 1);
+        }
+        assert!(multi > n / 10, "blended skin weights are present: {multi} of {n}");
+    }
 }
