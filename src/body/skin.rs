@@ -230,4 +230,34 @@ mod tests {
         assert_eq!(lbs, skin(&mesh.vertices, &mesh.weights, &pose, SkinMethod::Linear).unwrap());
         assert!(skin(&mesh.vertices[1..], &mesh.weights, &pose, SkinMethod::Linear).is_err());
     }
+
+    /// A quaternion and its negation are the same rotation: flipping the sign of every other
+    /// bone's stored rotation must not change dual-quaternion skinning (the blend keeps every
+    /// influence in the first one's hemisphere), here on a rigid motion of the whole body.
+    #[test]
+    fn dual_quaternion_blend_ignores_quaternion_sign() {
+        let rest = rest_joints();
+        let mesh = capsule_humanoid(&rest, 12, 8);
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 1.1);
+        let target: Vec<[f64; 3]> = rest
+            .iter()
+            .map(|p| {
+                let q = turn * Vector3::from(*p) + Vector3::new(-0.2, 0.1, 0.4);
+                [q.x, q.y, q.z]
+            })
+            .collect();
+        let target: [[f64; 3]; 15] = target.try_into().unwrap();
+        let pose = solve(&rest, &target, &IkOptions::default()).unwrap();
+        let want = skin(&mesh.vertices, &mesh.weights, &pose, SkinMethod::DualQuaternion).unwrap();
+        let mut flipped = pose.clone();
+        for (b, q) in flipped.rotations.iter_mut().enumerate() {
+            if b % 2 == 1 {
+                *q = UnitQuaternion::new_unchecked(-q.into_inner());
+            }
+        }
+        let got = skin(&mesh.vertices, &mesh.weights, &flipped, SkinMethod::DualQuaternion).unwrap();
+        let blended = mesh.weights.iter().filter(|w| w.weights[0] < 0.9).count();
+        assert!(blended > 50, "the mesh has blended vertices: {blended}");
+        assert!(max_dist(&got, &want) < 1e-5, "sign flips moved vertices by {} m", max_dist(&got, &want));
+    }
 }
