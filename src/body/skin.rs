@@ -239,14 +239,10 @@ mod tests {
         let rest = rest_joints();
         let mesh = capsule_humanoid(&rest, 12, 8);
         let turn = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 1.1);
-        let target: Vec<[f64; 3]> = rest
-            .iter()
-            .map(|p| {
-                let q = turn * Vector3::from(*p) + Vector3::new(-0.2, 0.1, 0.4);
-                [q.x, q.y, q.z]
-            })
-            .collect();
-        let target: [[f64; 3]; 15] = target.try_into().unwrap();
+        let target = rest.map(|p| {
+            let q = turn * Vector3::from(p) + Vector3::new(-0.2, 0.1, 0.4);
+            [q.x, q.y, q.z]
+        });
         let pose = solve(&rest, &target, &IkOptions::default()).unwrap();
         let want = skin(&mesh.vertices, &mesh.weights, &pose, SkinMethod::DualQuaternion).unwrap();
         let mut flipped = pose.clone();
