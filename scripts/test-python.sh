@@ -12,7 +12,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-lib=target/release/libsketchbody.so
+# SKETCHBODY_LIBRARY overrides the library bundled and tested (setup.py and the package read it).
+lib=${SKETCHBODY_LIBRARY:-target/release/libsketchbody.so}
 [ -f "$lib" ] || { echo "test-python: $lib missing: run cargo build --release -p sketchbody-capi" >&2; exit 1; }
 
 base=python3
@@ -31,7 +32,7 @@ fi
 
 echo "== pip install ./python (bundles $lib)"
 "$py" -m pip install -q --no-build-isolation --no-deps ./python
-rm -rf python/build
+rm -rf python/build python/sketchbody.egg-info
 
 echo "== python/tests (installed package: $("$py" -c 'import sketchbody; print(sketchbody.__file__, sketchbody.library_path())' 2>&1))"
 cd python/tests

@@ -4,6 +4,7 @@ import ctypes
 import dataclasses
 import json
 import os
+import threading
 from typing import Optional
 
 import numpy as np
@@ -71,7 +72,8 @@ class Joints2D:
 
     def to_struct(self):
         s = B.skb_joints2d()
-        ctypes.memmove(s.xy, A.ptr(self.xy), 15 * 2 * 8)
+        xy = A.numeric(self.xy, "Joints2D.xy", np.float64, (15, 2))
+        ctypes.memmove(s.xy, A.ptr(xy), xy.nbytes)
         for i, v in enumerate(self.visible):
             s.visible[i] = 1 if v else 0
         return s
@@ -224,14 +226,16 @@ class PoseDictionary(Handle):
 
 
 _default_dict = None
+_default_dict_lock = threading.Lock()
 
 
 def _dict_arg(dictionary):
     global _default_dict
     if dictionary is None:
-        if _default_dict is None:
-            _default_dict = PoseDictionary()
-        return _default_dict
+        with _default_dict_lock:
+            if _default_dict is None:
+                _default_dict = PoseDictionary()
+            return _default_dict
     if not isinstance(dictionary, PoseDictionary):
         raise TypeError(f"dictionary must be a PoseDictionary or None, not {type(dictionary).__name__}")
     return dictionary

@@ -66,7 +66,7 @@ class LocalClusterTest(unittest.TestCase):
             os.makedirs(os.path.join(out, ".old.partial-x1"))
             t0 = time.perf_counter()
             r = subprocess.run([sys.executable, "-m", "sketchbody.batch", src, out, "--scheduler", "local",
-                                "--workers", "2", "--samples", "60", "--iterations", "3", "--preview-size", "128"],
+                                "--workers", "2", "--preview-size", "256"],
                                capture_output=True, text=True, timeout=600)
             wall = time.perf_counter() - t0
             sys.stderr.write("\n" + "".join(f"  | {line}\n" for line in r.stdout.splitlines()))

@@ -24,6 +24,15 @@ from _util import CLI, ROOT, SKETCH, SKETCH_JOINTS, read_gray_png, test_card, wr
 NV, NF = 13380, 13378
 
 
+def rigid_fit(p, q):
+    """Rotation r and translation t minimising |p r^T + t - q| (Kabsch)."""
+    pc, qc = p.mean(axis=0), q.mean(axis=0)
+    u, _, vt = np.linalg.svd((p - pc).T @ (q - qc))
+    d = np.sign(np.linalg.det(vt.T @ u.T))
+    r = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    return r, qc - r @ pc
+
+
 class Example:
     """The example's pipeline result, computed once for all tests."""
 
@@ -267,12 +276,16 @@ class PipelineTest(unittest.TestCase):
         for k in range(4):
             posed += rig.skin_weights[:, k:k + 1] * np.einsum("nij,nj->ni", skin[rig.skin_bones[:, k]], v)[:, :3]
         np.testing.assert_allclose(posed, rig.posed_vertices, atol=2e-4)
-        # The bones named after canonical joints sit on the mesh's posed joints (export frame).
-        for j, name in enumerate(skb.JOINT_NAMES):
-            if name in rig.bone_names and name not in ("head", "neck", "pelvis"):
-                b = rig.bone_names.index(name)
-                d = np.linalg.norm(rig.posed_heads[b] - (posed_joints[j] + rig.offset + rig.root_translation))
-                self.assertLess(d, 0.05, name)
+        # The joint-named bones against the mesh's posed joints. For the pipeline's pose they
+        # agree only up to a placement (the rig stands on the floor) and within a few cm: after
+        # the best rigid alignment 3.4 cm at the pelvis, measured 2026-12-03, because the rig's
+        # rotations do not reproduce skb_mesh_pose exactly for large poses (reported in
+        # docs/python.md). A mild pose agrees exactly (MeshTest.test_rig_matches_mild_pose).
+        b = [rig.bone_names.index(n) for n in skb.JOINT_NAMES[1:]]
+        heads = g[b, :3, 3]
+        r, t = rigid_fit(posed_joints[1:], heads)
+        residual = np.linalg.norm(posed_joints[1:] @ r.T + t - heads, axis=1)
+        self.assertLess(residual.max(), 0.05, dict(zip(skb.JOINT_NAMES[1:], residual.round(4))))
 
     def test_rig_options(self):
         with self.r.mesh() as m:
@@ -448,6 +461,20 @@ class MeshTest(unittest.TestCase):
         self.assertEqual(cm.exception.status_name, "SKB_ERR_OUT_OF_RANGE")
         with self.assertRaises(TypeError):
             skb.Mesh.from_shape("male", "0,1")
+
+    def test_rig_matches_mild_pose(self):
+        # As cpp_tests/capi_rig_test.c: a mild pose, the joint-named bones (all but the head)
+        # start on skb_mesh_pose's joints moved to the export frame.
+        with skb.Mesh.from_shape("female") as m:
+            target = m.joints()
+            target[4] += [0.0, 0.3, 0.1]
+            m.pose(target)
+            posed, rig = m.joints(posed=True), m.rig()
+        g = rig.posed_global_transforms()
+        for j, name in enumerate(skb.JOINT_NAMES[1:], start=1):
+            b = rig.bone_names.index(name)
+            np.testing.assert_allclose(g[b, :3, 3], posed[j] + rig.offset + rig.root_translation, atol=1e-9,
+                                       err_msg=name)
 
     def test_threads_share_one_mesh(self):
         with skb.Mesh.from_shape("male") as m:
