@@ -236,6 +236,9 @@ class SKETCHBODY_OT_sketch_to_body(_Reporting, bpy.types.Operator):
                 raise UserError(
                     f"The detector found no figure in the sketch (best score {e.score:.2f}); give a joints file "
                     "(sketchbody-joints2d JSON) and correct the joints on the sketch")
+            except skb.SketchbodyError as e:
+                raise UserError(f"Joint detection failed: {e.message} ({e.status_name}); give a joints file "
+                                "(sketchbody-joints2d JSON) instead")
             joints, confidence = det.joints, np.asarray(det.confidence, dtype=np.float64)
         data = _run(skb, context, image_path, joints, _rig_options(skb, st))
         try:
@@ -310,6 +313,7 @@ class SKETCHBODY_OT_rerun(_Reporting, bpy.types.Operator):
             raise
         for m in build.find_markers(plane):
             m["skb_visible"] = bool(visible[m["skb_index"]])
+            build.highlight(m, st.threshold)
         self.report({"INFO"}, _summary(data, time.perf_counter() - t0))
         return {"FINISHED"}
 
@@ -391,6 +395,7 @@ class SKETCHBODY_PT_panel(bpy.types.Panel):
             box.label(text="Select a marker on the sketch, move it with G")
             if low:
                 box.label(text=f"Red: low confidence ({len(low)})", icon="ERROR")
+            box.label(text="Orange: moved (used by the last re-run)")
             box.prop(st, "threshold")
         box.operator(SKETCHBODY_OT_rerun.bl_idname, icon="FILE_REFRESH")
         box.operator(SKETCHBODY_OT_save_joints.bl_idname, icon="EXPORT")

@@ -22,8 +22,9 @@ BODY = "SKB_Body"
 MARKER_PREFIX = "SKB_joint_"
 BODY_MATERIAL = "SKB_BodyMaterial"
 PLANE_MATERIAL = "SKB_SketchMaterial"
-MARKER_MATERIALS = {"ok": ("SKB_JointOK", (0.1, 0.55, 1.0, 1.0)), "low": ("SKB_JointLow", (1.0, 0.05, 0.05, 1.0))}
-MARKER_RADIUS_PX = {"ok": 6.0, "low": 11.0}
+MARKER_MATERIALS = {"ok": ("SKB_JointOK", (0.1, 0.55, 1.0, 1.0)), "low": ("SKB_JointLow", (1.0, 0.05, 0.05, 1.0)),
+                    "moved": ("SKB_JointMoved", (1.0, 0.6, 0.0, 1.0))}
+MARKER_RADIUS_PX = {"ok": 6.0, "low": 11.0, "moved": 7.0}
 GAP = 0.4  # metres between the sketch plane's right edge and the body's left side
 
 
@@ -214,10 +215,11 @@ def make_markers(scene, plane, names, xy, confidence, visible, threshold):
 
 
 def highlight(marker, threshold):
-    """Marks a joint marker low-confidence (red, larger, name shown) when its confidence is
-    below `threshold` or the joint was given as missing; else blue and small."""
+    """Colours a joint marker: orange once the user moved it (a corrected joint, seen by the
+    last re-run), else red, larger and named when its confidence is below `threshold` or the
+    joint was given as missing, else blue and small."""
     low = marker["skb_confidence"] < threshold or not marker["skb_visible"]
-    kind = "low" if low else "ok"
+    kind = "moved" if marker.get("skb_moved") else "low" if low else "ok"
     marker.material_slots[0].material = _marker_material(kind)
     r = MARKER_RADIUS_PX[kind] * marker.parent["skb_metres_per_px"]
     marker.scale = (r, r, r)
@@ -234,8 +236,9 @@ def find_markers(plane):
 
 
 def read_markers(plane, names):
-    """(xy (15, 2) pixels, visible (15,) bool) from the markers' current positions. A joint
-    marked missing becomes visible once its marker was moved by more than half a pixel."""
+    """(xy (15, 2) pixels, visible (15,) bool) from the markers' current positions. A marker
+    moved by more than half a pixel from where detection (or the joints file) put it is marked
+    `skb_moved`; a joint given as missing becomes visible once its marker was moved."""
     markers = {o["skb_joint"]: o for o in find_markers(plane)}
     absent = [n for n in names if n not in markers]
     if absent:
@@ -247,6 +250,7 @@ def read_markers(plane, names):
         m = markers[n]
         xy[i] = plane_to_pixel(plane, inv @ m.matrix_world.translation)
         moved = math.dist(xy[i], m["skb_start_px"]) > 0.5
+        m["skb_moved"] = moved
         visible[i] = bool(m["skb_visible"]) or moved
     return xy, visible
 

@@ -182,6 +182,8 @@ t = time.perf_counter()
 res, err = run_op(bpy.ops.sketchbody.rerun)
 report["rerun_seconds"] = time.perf_counter() - t
 check("Re-run from corrected joints finished", res == {"FINISHED"}, f"{report['rerun_seconds']:.1f} s {err}")
+check("moved marker shown as corrected (orange)", wrist.active_material.name == "SKB_JointMoved"
+      and sum(m.active_material.name == "SKB_JointMoved" for m in markers) == 1, wrist.active_material.name)
 xy2, _ = build.read_markers(plane, skb.JOINT_NAMES)
 i = list(skb.JOINT_NAMES).index("r_wrist")
 check("moved marker reads back moved", np.allclose(xy2[i], file_xy[i] + [-30, -40], atol=1e-3), f"{xy2[i]}")
@@ -196,6 +198,29 @@ report["rerun_max_vertex_move_m"] = float(moved.max())
 check("result changed after the correction", moved.max() > 0.02 and len(skb_objects()) == 18,
       f"vertices moved up to {moved.max() * 100:.1f} cm; {hand} head moved "
       f"{np.linalg.norm(hand_after - hand_before) * 100:.1f} cm; {len(skb_objects())} SKB objects")
+
+
+
+class StubLayout:
+    """Stands in for a UI layout (background mode draws no panels): records the labels and
+    operators the panel would show."""
+
+    def __init__(self, log):
+        self.log = log
+
+    def __getattr__(self, name):
+        def call(*args, **kwargs):
+            if name in ("label", "operator", "prop"):
+                self.log.append((name, kwargs.get("text") or (args[-1] if args else "")))
+            return self
+        return call
+
+
+drawn = []
+panel = bpy.types.SKETCHBODY_PT_panel
+panel.draw(type("P", (), {"layout": StubLayout(drawn)})(), bpy.context)
+ops = [t for k, t in drawn if k == "operator"]
+check("panel draws its settings and four operators", len(ops) == 4 and ("prop", "image") in drawn, ", ".join(ops))
 
 # The picture: the sketch plane with its markers beside the body, front view, Workbench.
 pts = np.concatenate([posed2, [list(plane.matrix_world @ Vector(c)) for c in plane.bound_box]])
@@ -226,6 +251,41 @@ bpy.ops.render.render(write_still=True)
 report["render_seconds"] = time.perf_counter() - t
 check("screenshot rendered", os.path.getsize(out_png) > 10000, f"{out_png} in {report['render_seconds']:.1f} s")
 bpy.data.objects.remove(cam, do_unlink=True)
+
+# Other rig options: T-pose bind, Mixamo names; Blender's deformation must still be the library's.
+st.rest_pose, st.naming = "T", "MIXAMO"
+res, err = run_op(bpy.ops.sketchbody.rerun)
+xy3, vis3 = build.read_markers(plane, skb.JOINT_NAMES)
+with skb.run_pipeline(sketch, joints=skb.Joints2D(xy3, vis3),
+                      fit_options=skb.FitOptions(gender="auto", samples=st.samples, iterations=st.iterations)) as r:
+    with r.mesh() as m:
+        rig_t = m.rig(skb.ExportOptions(naming="mixamo", rest_pose="t"))
+body3, arm3 = bpy.data.objects["SKB_Body"], bpy.data.objects["SKB_Armature"]
+p3 = np.asarray(rig_t.posed_vertices, dtype=np.float64)
+err3 = np.linalg.norm(evaluated_vertices(body3) - np.stack([p3[:, 0], -p3[:, 2], p3[:, 1]], axis=1), axis=1)
+check("T-pose bind with Mixamo names: names and skinning as the library's",
+      res == {"FINISHED"} and [b.name for b in arm3.data.bones] == rig_t.bone_names and err3.max() < 1e-3,
+      f"{arm3.data.bones[1].name}, ...; max {err3.max() * 1000:.3f} mm")
+st.rest_pose, st.naming = "A", "PROJECT"
+
+# The detector path (no joints file): markers get the detector's confidences, the low ones red.
+# When the library's detector fails on this sketch, the add-on must report it and keep the scene.
+before_objects = skb_objects()
+st.joints = ""
+res, err = run_op(bpy.ops.sketchbody.sketch_to_body)
+if res == {"FINISHED"}:
+    conf = [m["skb_confidence"] for m in build.find_markers(build.find_plane())]
+    lows = [m for m in build.find_markers(build.find_plane()) if m["skb_low_confidence"]]
+    report["detector_confidence"] = conf
+    check("detector path: confidences on the markers, the low ones red and larger",
+          len(conf) == 15 and all(0 < c < 1 for c in conf)
+          and all(m.active_material.name == "SKB_JointLow" for m in lows)
+          and len(skb_objects()) == 18,
+          f"{len(lows)} below {st.threshold}: " + ", ".join(f"{m['skb_joint']} {m['skb_confidence']:.2f}" for m in lows))
+else:
+    report["detector_error"] = err
+    check("detector path failed cleanly: an error report, the scene kept",
+          ("detection" in err.lower() or "no figure" in err.lower()) and skb_objects() == before_objects, err.strip())
 
 res, err = run_op(bpy.ops.sketchbody.clear)
 check("Clear removes everything", res == {"FINISHED"} and skb_objects() == []
