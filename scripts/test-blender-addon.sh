@@ -3,7 +3,8 @@
 # checks the error paths, runs "Sketch to body" on assets/examples/sketch.png with
 # sketch_joints.json, checks the mesh, armature, weights, markers and material against the
 # sketchbody Python package, moves a joint marker and re-runs, and renders the result beside the
-# sketch to docs/img/blender-addon.png (integrations/blender/tests/test_addon.py).
+# sketch to target/blender-addon/blender-addon.png, copied to docs/img/blender-addon.png when it
+# differs visibly (integrations/blender/tests/test_addon.py).
 # The add-on finds the package in python/ of this checkout and the package finds
 # target/release/libsketchbody.so (built here when missing). Without Blender it prints SKIPPED,
 # or fails when SKB_REQUIRE_SHARED_DATA is set (as tests/blender_import.rs). Called by
@@ -30,13 +31,11 @@ status=0
 env -u SKETCHBODY_PYTHON_PATH -u SKETCHBODY_LIBRARY blender -b --factory-startup --python-exit-code 1 \
   --python integrations/blender/tests/test_addon.py -- \
   assets/examples/sketch.png assets/examples/sketch_joints.json "$out/blender-addon.png" "$out/report.json" \
+  docs/img/blender-addon.png \
   >"$out/blender.log" 2>&1 || status=$?
-grep -E '^(ok  |FAIL|blender add-on test|sketchbody package)' "$out/blender.log" || true
+grep -E '^(ok  |FAIL|blender add-on test|sketchbody package|docs picture)' "$out/blender.log" || true
 if [ "$status" -ne 0 ]; then
   echo "test-blender-addon: blender exited with status $status; its log ($out/blender.log):" >&2
   tail -40 "$out/blender.log" >&2
   exit 1
 fi
-mkdir -p docs/img
-cp "$out/blender-addon.png" docs/img/blender-addon.png
-echo "test-blender-addon: picture docs/img/blender-addon.png"
