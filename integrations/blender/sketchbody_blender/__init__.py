@@ -143,7 +143,8 @@ def _read_joints_file(skb, path):
         with open(path, encoding="utf-8") as f:
             raw = json.load(f).get("confidence")
     except (ValueError, KeyError, TypeError, OSError) as e:
-        raise UserError(f"Cannot read the joints file {path}: {e}")
+        detail = str(e) if path in str(e) else f"{path}: {e}"
+        raise UserError(f"Cannot read the joints file {detail}")
     conf = np.where(joints.visible, 1.0, 0.0)
     if isinstance(raw, dict):
         conf = np.array([float(raw.get(n, c)) for n, c in zip(skb.JOINT_NAMES, conf)])

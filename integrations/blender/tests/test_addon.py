@@ -91,6 +91,15 @@ check("missing image reports an error and makes nothing",
       res == {"CANCELLED"} and "not found" in err and skb_objects() == [] and "Sketchbody" not in bpy.data.collections,
       err.strip())
 
+# Error path 3: a joints file that is not a sketchbody-joints2d file.
+bad = os.path.join(os.path.dirname(report_path), "bad_joints.json")
+with open(bad, "w") as f:
+    f.write('{"format": "something-else"}')
+st.image, st.joints = sketch, bad
+res, err = run_op(bpy.ops.sketchbody.sketch_to_body)
+check("bad joints file reports an error and makes nothing",
+      res == {"CANCELLED"} and "joints file" in err and skb_objects() == [], err.strip())
+
 # The main job.
 skb = package.load()
 print(f"sketchbody package {skb.__file__}, library {skb.library_path()}", flush=True)
@@ -172,6 +181,17 @@ check("low-confidence marker highlighted",
       and ok_marker.active_material.name == "SKB_JointOK", f"{low_marker.active_material.name}")
 low_marker["skb_confidence"] = 1.0
 st.threshold = 0.5
+
+# A marker dragged off the sketch: the re-run refuses with a message and keeps the body.
+head_marker = markers[0]
+keep_loc = head_marker.location.copy()
+head_marker.location.y += plane["skb_height"] * plane["skb_metres_per_px"]
+bpy.context.view_layer.update()
+res, err = run_op(bpy.ops.sketchbody.rerun)
+check("marker off the sketch: re-run reports it, body kept",
+      res == {"CANCELLED"} and "outside the sketch: head" in err and len(skb_objects()) == 18, err.strip())
+head_marker.location = keep_loc
+bpy.context.view_layer.update()
 
 # The correction step: move the right wrist marker 40 px up and 30 px outward (left in the
 # image, -x), then re-run from the markers.
