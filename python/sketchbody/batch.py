@@ -17,8 +17,8 @@ in-process; with an address the tasks go to a running cluster (`dask scheduler`,
 on each machine, sketchbody installed on each, SKETCH_DIR and OUT_DIR on storage every worker
 sees at the same path; docs/python.md). `sketchbody run-dataset` stays the single-machine path.
 
-Why Dask distributed rather than Ray: it is pure Python and pip-installable on the Python the
-package already uses (numpy is its only compiled dependency), a LocalCluster runs in-process
+Why Dask distributed rather than Ray: dask and distributed are pure-Python packages that pip
+installs on the Python the package already uses, a LocalCluster runs in-process
 for the tests and for one workstation, the same code talks to a multi-machine cluster through
 one scheduler address, and its futures API (submit, as_completed, per-future exceptions) is all
 a one-task-per-file batch needs. Ray brings a large binary runtime (its own object store and

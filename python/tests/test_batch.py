@@ -98,6 +98,31 @@ class LocalClusterTest(unittest.TestCase):
                          "3 sketches: 1 ok, 2 failed"):
                 self.assertIn(line, r.stdout)
 
+    def test_cli_against_a_scheduler_address_with_skip_existing(self):
+        import logging
+
+        from distributed import LocalCluster
+
+        with tempfile.TemporaryDirectory() as src, tempfile.TemporaryDirectory() as root, \
+                LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None,
+                             silence_logs=logging.ERROR) as cluster:
+            make_inputs(src)
+            out = os.path.join(root, "out")
+            os.makedirs(os.path.join(out, "sketch"))
+            with open(os.path.join(out, "sketch", "kept.txt"), "w") as f:
+                f.write("an earlier run's output\n")
+            r = subprocess.run([sys.executable, "-m", "sketchbody.batch", src, out, "--scheduler",
+                                cluster.scheduler_address, "--skip-existing", "--quiet"],
+                               capture_output=True, text=True, timeout=600)
+            self.assertEqual(r.returncode, 1, r.stderr[-3000:])
+            self.assertIn("3 sketches: 1 ok, 2 failed", r.stdout)
+            with open(os.path.join(out, "batch.json")) as f:
+                recs = {rec["name"]: rec for rec in json.load(f)["results"]}
+            self.assertTrue(recs["sketch"]["ok"] and recs["sketch"]["skipped"])
+            self.assertEqual(os.listdir(os.path.join(out, "sketch")), ["kept.txt"])
+            self.assertEqual(recs["broken"]["status_name"], "SKB_ERR_DECODE")
+            self.assertEqual(sorted(os.listdir(out)), ["batch.json", "sketch"])
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

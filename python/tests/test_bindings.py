@@ -67,8 +67,10 @@ class BindingsTest(unittest.TestCase):
         out = subprocess.run([nm, "-D", "--defined-only", sketchbody.library_path()], check=True,
                              capture_output=True, text=True).stdout
         exported = {line.split()[-1] for line in out.splitlines() if line.split()[-1].startswith("skb_")}
-        self.assertEqual(exported - set(B.FUNCTIONS), set(), "exported but not declared")
-        self.assertEqual(set(B.FUNCTIONS) - exported, set(), "declared but not exported")
+        hint = ("regenerate the header (scripts/gen-header.sh) and the bindings (python3 python/tools/gen_bindings.py), "
+                f"and rebuild the library ({sketchbody.library_path()})")
+        self.assertEqual(exported - set(B.FUNCTIONS), set(), f"exported but not declared: {hint}")
+        self.assertEqual(set(B.FUNCTIONS) - exported, set(), f"declared but not exported: {hint}")
 
     def test_pointer_depth_of_every_argument(self):
         def depth_ct(t):
