@@ -168,6 +168,10 @@ def _run(skb, context, image_path, joints, rig_options):
             with result.mesh() as mesh:
                 rig = mesh.rig(rig_options)
                 data = dict(rig=rig, quads=mesh.faces(), uvs=mesh.uvs(), face_uvs=mesh.face_uvs())
+                # How squarely the sketch's camera sees each vertex: the posed normal's component
+                # toward the viewer (+Z of the camera frame), full from 0.2 on, none when facing away.
+                toward_viewer = (mesh.normals(posed=True) @ camera.r.T)[:, 2]
+                data["seen"] = np.clip(toward_viewer / 0.2, 0.0, 1.0)
     finally:
         wm.progress_end()
     sketch = skb.load_image(image_path)
@@ -261,7 +265,7 @@ class SKETCHBODY_OT_sketch_to_body(_Reporting, bpy.types.Operator):
             markers = build.make_markers(context.scene, plane, skb.JOINT_NAMES, joints.xy, confidence,
                                          joints.visible, st.threshold)
             build.build_body(context.scene, data["rig"], data["quads"], data["uvs"], data["face_uvs"],
-                             data["sketch_uv"], image)
+                             data["sketch_uv"], data["seen"], image)
         except Exception:
             build.clear(context.scene)  # nothing half-built stays in the scene
             raise
@@ -308,7 +312,7 @@ class SKETCHBODY_OT_rerun(_Reporting, bpy.types.Operator):
         build.remove_body()
         try:
             build.build_body(context.scene, data["rig"], data["quads"], data["uvs"], data["face_uvs"],
-                             data["sketch_uv"], image)
+                             data["sketch_uv"], data["seen"], image)
         except Exception:
             build.remove_body()
             raise

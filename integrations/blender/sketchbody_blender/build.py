@@ -25,6 +25,8 @@ PLANE_MATERIAL = "SKB_SketchMaterial"
 MARKER_MATERIALS = {"ok": ("SKB_JointOK", (0.1, 0.55, 1.0, 1.0)), "low": ("SKB_JointLow", (1.0, 0.05, 0.05, 1.0)),
                     "moved": ("SKB_JointMoved", (1.0, 0.6, 0.0, 1.0))}
 MARKER_RADIUS_PX = {"ok": 6.0, "low": 11.0, "moved": 7.0}
+UNSEEN_GREY = (0.55, 0.55, 0.55, 1.0)  # the body where the sketch does not see it (as the GLB's texture)
+SEEN = "sketch_seen"  # colour attribute: how squarely the sketch's camera sees each vertex (0..1)
 GAP = 0.4  # metres between the sketch plane's right edge and the body's left side
 
 
@@ -88,7 +90,14 @@ def load_image(path):
     return img
 
 
-def _image_material(name, image, uv_map=None, emission=False):
+def _socket(sockets, identifier):
+    return next(x for x in sockets if x.identifier == identifier)
+
+
+def _image_material(name, image, uv_map=None, emission=False, seen_attribute=None):
+    """A material showing `image` (through `uv_map`); lit (Principled) or unlit (Emission).
+    With `seen_attribute` (a colour attribute: 1 where the sketch sees the surface, 0 where it
+    does not) the unseen parts show a neutral grey instead of the projected strokes."""
     mat = bpy.data.materials.get(name) or bpy.data.materials.new(name)
     mat.use_nodes = True
     nt = mat.node_tree
@@ -108,7 +117,17 @@ def _image_material(name, image, uv_map=None, emission=False):
     else:
         sh = nt.nodes.new("ShaderNodeBsdfPrincipled")
         sh.inputs["Roughness"].default_value = 0.8
-        nt.links.new(tex.outputs["Color"], sh.inputs["Base Color"])
+        colour = tex.outputs["Color"]
+        if seen_attribute:
+            attr = nt.nodes.new("ShaderNodeAttribute")
+            attr.attribute_name = seen_attribute
+            mix = nt.nodes.new("ShaderNodeMix")
+            mix.data_type = "RGBA"
+            nt.links.new(attr.outputs["Fac"], _socket(mix.inputs, "Factor_Float"))
+            _socket(mix.inputs, "A_Color").default_value = UNSEEN_GREY
+            nt.links.new(colour, _socket(mix.inputs, "B_Color"))
+            colour = _socket(mix.outputs, "Result_Color")
+        nt.links.new(colour, sh.inputs["Base Color"])
         nt.links.new(sh.outputs["BSDF"], out.inputs["Surface"])
     nt.nodes.active = tex  # Workbench's texture colour and the viewport's texture paint use it
     return mat
@@ -333,11 +352,12 @@ def _mesh_from_arrays(name, vertices, quads, uv_layers):
     return me
 
 
-def build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, image):
+def build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image):
     """The armature (53 bones from the rig's names, parents and rest transforms, posed by its
     local rotations) and the skinned mesh (the rig's bind-pose vertices, vertex groups with the
     rig's weights, an Armature modifier, MakeHuman's UVs and the sketch's
-    projection as UV map "sketch" with the sketch as texture). Returns (armature, mesh)."""
+    projection as UV map "sketch" with the sketch as texture where `seen` (per vertex, 0..1,
+    the colour attribute "sketch_seen") says the sketch sees the surface). Returns (armature, mesh)."""
     coll = collection(scene)
     names = list(rig.bone_names)
     rest_local, posed_local, rest_global = rig_matrices(rig)
@@ -377,7 +397,10 @@ def build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, image):
                            {"sketch": sketch_uv, "MakeHuman": (uvs, face_uvs)})
     me.uv_layers["sketch"].active = True
     me.uv_layers["sketch"].active_render = True
-    me.materials.append(_image_material(BODY_MATERIAL, image, uv_map="sketch"))
+    attr = me.color_attributes.new(SEEN, "FLOAT_COLOR", "POINT")
+    seen = np.clip(np.asarray(seen, dtype=np.float32), 0.0, 1.0)
+    attr.data.foreach_set("color", np.repeat(seen[:, None], 4, axis=1).ravel())
+    me.materials.append(_image_material(BODY_MATERIAL, image, uv_map="sketch", seen_attribute=SEEN))
     body = bpy.data.objects.new(BODY, me)
     body.parent = arm
     coll.objects.link(body)

@@ -168,6 +168,16 @@ check("body material with the sketch as image texture",
       len(tex) == 1 and tex[0].image is not None and os.path.samefile(bpy.path.abspath(tex[0].image.filepath), sketch)
       and tex[0].image.size[0] > 0 and "sketch" in body.data.uv_layers, f"{mat.name} / {tex[0].image.name}")
 
+seen_attr = body.data.color_attributes.get("sketch_seen")
+seen = np.empty(nv * 4, dtype=np.float32)
+if seen_attr is not None:
+    seen_attr.data.foreach_get("color", seen)
+seen = seen.reshape(-1, 4)[:, 0]
+check("the sketch's view on the body: front seen, back grey",
+      seen_attr is not None and any(n.type == "ATTRIBUTE" and n.attribute_name == "sketch_seen"
+                                    for n in mat.node_tree.nodes) and 0.3 < float(np.mean(seen > 0.5)) < 0.7,
+      f"{np.mean(seen > 0.5):.0%} of the vertices seen, {np.mean(seen == 0):.0%} facing away")
+
 # Low-confidence highlighting: raise the threshold above the file's confidence (1) for one
 # joint by marking it missing via its confidence, and check the marker turns red and larger.
 low_marker = markers[names.index("l_wrist")]
