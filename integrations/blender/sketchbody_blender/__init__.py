@@ -106,8 +106,9 @@ class SketchbodySettings(bpy.types.PropertyGroup):
                          min=10, max=2000)
     iterations: IntProperty(name="Iterations", description="Fit iterations at most", default=8, min=1, max=50)
     threshold: FloatProperty(
-        name="Low confidence", default=0.5, min=0.0, max=1.0, update=_threshold_changed,
-        description="Detected joints below this confidence are highlighted (red, larger)")
+        name="Low confidence", default=0.75, min=0.0, max=1.0, update=_threshold_changed,
+        description="Detected joints whose confidence (the detector's calibrated probability that the joint is "
+                    "right) is below this are highlighted (red, larger); 0.75 is the library's low-confidence level")
 
 
 def _settings(context):

@@ -178,19 +178,19 @@ check("the sketch's view on the body: front seen, back grey",
                                     for n in mat.node_tree.nodes) and 0.3 < float(np.mean(seen > 0.5)) < 0.7,
       f"{np.mean(seen > 0.5):.0%} of the vertices seen, {np.mean(seen == 0):.0%} facing away")
 
-# Low-confidence highlighting: raise the threshold above the file's confidence (1) for one
-# joint by marking it missing via its confidence, and check the marker turns red and larger.
+# Low-confidence highlighting: give one joint a low confidence (the file's are all 1) and
+# change the threshold; its update callback re-highlights every marker.
+default_threshold = st.threshold
 low_marker = markers[names.index("l_wrist")]
 low_marker["skb_confidence"] = 0.2
-st.threshold = 0.5  # the update callback re-highlights every marker
-st.threshold = 0.51
+st.threshold = 0.5
 ok_marker = markers[0]
 check("low-confidence marker highlighted",
       low_marker["skb_low_confidence"] and low_marker.active_material.name == "SKB_JointLow"
       and low_marker.scale.x > ok_marker.scale.x and not ok_marker["skb_low_confidence"]
       and ok_marker.active_material.name == "SKB_JointOK", f"{low_marker.active_material.name}")
 low_marker["skb_confidence"] = 1.0
-st.threshold = 0.5
+st.threshold = default_threshold
 
 # A marker dragged off the sketch: the re-run refuses with a message and keeps the body.
 head_marker = markers[0]
@@ -255,37 +255,6 @@ panel.draw(type("P", (), {"layout": StubLayout(drawn)})(), bpy.context)
 ops = [t for k, t in drawn if k == "operator"]
 check("panel draws its settings and four operators", len(ops) == 4 and ("prop", "image") in drawn, ", ".join(ops))
 
-# The picture: the sketch plane with its markers beside the body, front view, Workbench.
-pts = np.concatenate([posed2, [list(plane.matrix_world @ Vector(c)) for c in plane.bound_box]])
-lo, hi = pts.min(axis=0), pts.max(axis=0)
-centre = (lo + hi) / 2
-cam = bpy.data.objects.new("render_camera", bpy.data.cameras.new("render_camera"))
-cam.data.type = "ORTHO"
-cam.data.ortho_scale = max((hi[0] - lo[0]) * 1.06, (hi[2] - lo[2]) * 1.06 * 800 / 600)
-cam.location = (centre[0], lo[1] - 5.0, centre[2])
-cam.rotation_euler = (math.radians(90), 0.0, 0.0)
-scene.collection.objects.link(cam)
-scene.camera = cam
-world = bpy.data.worlds.new("render_world")
-world.color = (0.75, 0.76, 0.8)  # Workbench's background
-scene.world = world
-scene.render.engine = "BLENDER_WORKBENCH"
-scene.display.shading.light = "STUDIO"
-scene.display.shading.color_type = "TEXTURE"
-scene.display.shading.show_cavity = True
-scene.display.render_aa = "8"
-scene.render.resolution_x, scene.render.resolution_y = 800, 600
-scene.render.resolution_percentage = 100
-scene.render.film_transparent = False
-scene.render.image_settings.file_format = "PNG"
-scene.render.filepath = out_png
-t = time.perf_counter()
-bpy.ops.render.render(write_still=True)
-report["render_seconds"] = time.perf_counter() - t
-check("screenshot rendered", os.path.getsize(out_png) > 10000, f"{out_png} in {report['render_seconds']:.1f} s")
-bpy.data.objects.remove(cam, do_unlink=True)
-
-
 def pixels(path):
     im = bpy.data.images.load(path)
     a = np.empty(im.size[0] * im.size[1] * 4, dtype=np.float32)
@@ -295,18 +264,58 @@ def pixels(path):
     return size, a
 
 
-# The docs picture is replaced only when the render differs visibly (Workbench's antialiasing
-# changes a few pixels by a few levels from run to run; no need to dirty the checkout for that).
-if docs_png:
-    new_size, new_px = pixels(out_png)
-    old_size, old_px = pixels(docs_png) if os.path.exists(docs_png) else (None, None)
-    changed = old_size != new_size or float(np.mean(np.abs(new_px - old_px) > 16 / 255)) > 1e-3
-    if changed:
-        import shutil
+def render(body_obj, path, docs_path):
+    """The sketch plane with its markers beside the body, front view, Workbench, 800x600, to
+    `path`; copied to `docs_path` only when it differs visibly (Workbench's antialiasing changes
+    a few pixels by a few levels from run to run: no need to dirty the checkout for that)."""
+    plane_obj = build.find_plane()
+    pts = np.concatenate([evaluated_vertices(body_obj),
+                          [list(plane_obj.matrix_world @ Vector(c)) for c in plane_obj.bound_box]])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    centre = (lo + hi) / 2
+    cam = bpy.data.objects.new("render_camera", bpy.data.cameras.new("render_camera"))
+    cam.data.type = "ORTHO"
+    cam.data.ortho_scale = max((hi[0] - lo[0]) * 1.06, (hi[2] - lo[2]) * 1.06 * 800 / 600)
+    cam.location = (centre[0], lo[1] - 5.0, centre[2])
+    cam.rotation_euler = (math.radians(90), 0.0, 0.0)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    if scene.world is None:
+        scene.world = bpy.data.worlds.new("render_world")
+    scene.world.color = (0.75, 0.76, 0.8)  # Workbench's background
+    scene.render.engine = "BLENDER_WORKBENCH"
+    scene.display.shading.light = "STUDIO"
+    scene.display.shading.color_type = "TEXTURE"
+    scene.display.shading.show_cavity = True
+    scene.display.render_aa = "8"
+    scene.render.resolution_x, scene.render.resolution_y = 800, 600
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = False
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.filepath = path
+    t = time.perf_counter()
+    bpy.ops.render.render(write_still=True)
+    seconds = time.perf_counter() - t
+    bpy.data.objects.remove(cam, do_unlink=True)
+    check("screenshot rendered", os.path.getsize(path) > 10000, f"{path} in {seconds:.1f} s")
+    if docs_path:
+        new_size, new_px = pixels(path)
+        old_size, old_px = pixels(docs_path) if os.path.exists(docs_path) else (None, None)
+        changed = old_size != new_size or float(np.mean(np.abs(new_px - old_px) > 16 / 255)) > 1e-3
+        if changed:
+            import shutil
 
-        shutil.copyfile(out_png, docs_png)
-    print(f"docs picture {docs_png}: {'updated' if changed else 'unchanged (same render within antialiasing noise)'}",
-          flush=True)
+            shutil.copyfile(path, docs_path)
+        print(f"docs picture {docs_path}: {'updated' if changed else 'unchanged (same render within antialiasing noise)'}",
+              flush=True)
+
+
+def with_suffix(path, suffix):
+    return None if path is None else path[:-len(".png")] + suffix + ".png"
+
+
+# The picture after the correction.
+render(body2, out_png, docs_png)
 
 # Other rig options: T-pose bind, Mixamo names; Blender's deformation must still be the library's.
 st.rest_pose, st.naming = "T", "MIXAMO"
@@ -338,6 +347,8 @@ if res == {"FINISHED"}:
           and all(m.active_material.name == "SKB_JointLow" for m in lows)
           and len(skb_objects()) == 18,
           f"{len(lows)} below {st.threshold}: " + ", ".join(f"{m['skb_joint']} {m['skb_confidence']:.2f}" for m in lows))
+    # The picture of the detector's joints, the doubtful ones red.
+    render(bpy.data.objects["SKB_Body"], with_suffix(out_png, "-detect"), with_suffix(docs_png, "-detect"))
 else:
     report["detector_error"] = err
     check("detector path failed cleanly: an error report, the scene kept",
