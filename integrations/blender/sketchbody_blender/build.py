@@ -210,7 +210,6 @@ def make_markers(scene, plane, names, xy, confidence, visible, threshold):
     missing are larger and red; the others blue."""
     coll = collection(scene)
     sphere = _sphere_mesh()
-    s = plane["skb_metres_per_px"]
     markers = []
     for i, name in enumerate(names):
         obj = bpy.data.objects.new(MARKER_PREFIX + name, sphere)
