@@ -1,9 +1,11 @@
 /* skb_detect from C (built -Wall -Wextra -Werror under ASan + UBSan): the context's embedded
- * detector finds the figure of a rendered sketch (strided buffer) close to its true joints, two
- * threads get the same answer, options set the threshold, the searched scales, the figure range
- * and the levels per octave, "no figure" returns SKB_ERR_NO_FIGURE with the best score (from
- * skb_detect and skb_detector_detect), and every error path returns its specific
- * status with a message and leaves the joints untouched. */
+ * backends find the figure of a rendered sketch (strided buffer) close to its true joints with
+ * calibrated confidences, two threads get the same answer, skb_detect_figure reports the backend
+ * kept and the low-confidence flag, options choose the backend, strictness, the threshold, the
+ * searched scales, the figure range and the levels per octave, "no figure" returns
+ * SKB_ERR_NO_FIGURE (a blank page; strict with an unreachable threshold, with the best raw score
+ * from skb_detect and skb_detector_detect), and every error path returns its specific status
+ * with a message and leaves the joints untouched. */
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -70,57 +72,71 @@ int main(void) {
     double p1 = pck(truth, a.xy, 0.1), p2 = pck(truth, a.xy, 0.2);
     CHECK(p2 >= 0.8);
     int conf_ok = 1;
-    for (int k = 0; k < 15; ++k) conf_ok &= a.conf[k] > 0.0 && a.conf[k] < 1.0;
-    CHECK(conf_ok && isfinite(a.score));
-    printf("sketch %dx%d seed 21: score %.3f, PCK@0.1 %.2f, PCK@0.2 %.2f, head (%.1f, %.1f) vs true (%.1f, %.1f); "
+    double mean_conf = 0.0;
+    for (int k = 0; k < 15; ++k) {
+        conf_ok &= a.conf[k] >= 0.0 && a.conf[k] <= 1.0;
+        mean_conf += a.conf[k] / 15.0;
+    }
+    CHECK(conf_ok && fabs(a.score - mean_conf) < 1e-12);
+    printf("sketch %dx%d seed 21: confidence %.3f, PCK@0.1 %.2f, PCK@0.2 %.2f, head (%.1f, %.1f) vs true (%.1f, %.1f); "
            "2 threads identical\n",
            W, H, a.score, p1, p2, a.xy[0], a.xy[1], truth[0], truth[1]);
+    skb_figure_info info;
+    memset(&info, 0xAB, sizeof info);
+    double xy[30], conf[15], score = 0.0;
+    CHECK(skb_detect_figure(ctx, &g_img, NULL, xy, 30, conf, 15, &info) == SKB_OK);
+    CHECK(memcmp(xy, a.xy, sizeof xy) == 0 && info.confidence == a.score);
+    CHECK(info.backend == SKB_DETECTOR_FMP || info.backend == SKB_DETECTOR_BLAZEPOSE);
+    CHECK(info.low_confidence == (info.confidence < SKB_LOW_CONFIDENCE ? 1u : 0u));
+    CHECK(info.presence >= 0.5 && info.presence <= 1.0 && info.reserved == 0);
+    printf("figure: backend %u, confidence %.3f, presence %.3f, low %u, %u other figure(s)\n", info.backend,
+           info.confidence, info.presence, info.low_confidence, info.other_figures);
 
     skb_detect_options *o = NULL;
     CHECK(skb_detect_options_new(&o) == SKB_OK);
-    /* A threshold above the best score: no figure, the score is still reported. */
-    CHECK(skb_detect_options_set_threshold(o, a.score + 1.0) == SKB_OK);
-    double xy[30], conf[15], score = 0.0;
+    CHECK(skb_detect_options_set_backend(o, SKB_DETECTOR_BLAZEPOSE) == SKB_OK);
+    CHECK(skb_detect_figure(ctx, &g_img, o, xy, 30, conf, 15, &info) == SKB_OK);
+    CHECK(info.backend == SKB_DETECTOR_BLAZEPOSE && pck(truth, xy, 0.2) >= 0.6);
+    printf("blazepose alone: PCK@0.2 %.2f, confidence %.3f\n", pck(truth, xy, 0.2), info.confidence);
+    CHECK(skb_detect_options_set_backend(o, 3) == SKB_ERR_OUT_OF_RANGE);
+    CHECK(skb_detect_options_set_backend(NULL, 0) == SKB_ERR_NULL_POINTER);
+    CHECK(skb_detect_options_set_strict(NULL, 1) == SKB_ERR_NULL_POINTER);
+    /* The sketch model's raw score, from a detector loaded by the caller (the embedded model's file). */
+    skb_detector *det = NULL;
+    CHECK(skb_detector_new_from_file(SKB_SOURCE_DIR "/assets/detector.skbd", &det) == SKB_OK);
+    double raw = 0.0, score2 = 0.0;
+    CHECK(skb_detector_detect(det, &g_img, NAN, 0.0, xy, 30, conf, 15, &raw) == SKB_OK);
+    /* Strict, the sketch model alone, a threshold above its best score: no figure, the score is
+     * still reported, nothing else written. */
+    CHECK(skb_detect_options_set_backend(o, SKB_DETECTOR_FMP) == SKB_OK);
+    CHECK(skb_detect_options_set_strict(o, 1) == SKB_OK);
+    CHECK(skb_detect_options_set_threshold(o, raw + 1.0) == SKB_OK);
     memset(xy, 0xAB, sizeof xy);
     double sentinel = xy[0];
     CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_ERR_NO_FIGURE);
-    CHECK(fabs(score - a.score) < 1e-9);
+    CHECK(fabs(score - raw) < 1e-9);
     CHECK(strstr(skb_last_error_message(), "no figure") != NULL);
     CHECK(memcmp(&xy[0], &sentinel, sizeof sentinel) == 0);
-    printf("no figure ok: %s\n", skb_last_error_message());
-    /* The same no-figure report from a detector loaded by the caller: the embedded model's file. */
-    skb_detector *det = NULL;
-    CHECK(skb_detector_new_from_file(SKB_SOURCE_DIR "/assets/detector.skbd", &det) == SKB_OK);
-    double score2 = 0.0;
-    memset(xy, 0xAB, sizeof xy);
-    CHECK(skb_detector_detect(det, &g_img, a.score + 1.0, 0.0, xy, 30, conf, 15, &score2) == SKB_ERR_NO_FIGURE);
-    CHECK(fabs(score2 - a.score) < 1e-9);
+    printf("strict no figure ok: %s\n", skb_last_error_message());
+    /* The same no-figure report from skb_detector_detect. */
+    CHECK(skb_detector_detect(det, &g_img, raw + 1.0, 0.0, xy, 30, conf, 15, &score2) == SKB_ERR_NO_FIGURE);
+    CHECK(fabs(score2 - raw) < 1e-9);
     CHECK(memcmp(&xy[0], &sentinel, sizeof sentinel) == 0);
-    CHECK(skb_detector_detect(det, &g_img, NAN, 0.0, xy, 30, conf, 15, &score2) == SKB_OK);
-    CHECK(fabs(score2 - a.score) < 1e-9);
     skb_detector_free(det);
     skb_detector_free(NULL);
-    printf("no figure from skb_detector_detect ok: score %.3f\n", a.score);
-    /* Ten levels per octave (the model's own) search a superset of the levels of five. */
-    CHECK(skb_detect_options_set_threshold(o, -1e9) == SKB_OK);
+    printf("no figure from skb_detector_detect ok: score %.3f\n", raw);
+    CHECK(skb_detect_options_set_strict(o, 0) == SKB_OK);
+    CHECK(skb_detect_options_set_threshold(o, NAN) == SKB_OK);
     CHECK(skb_detect_options_set_levels_per_octave(o, 5) == SKB_OK);
-    double score5 = 0.0;
-    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score5) == SKB_OK);
-    CHECK(skb_detect_options_set_levels_per_octave(o, 0) == SKB_OK);
     CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_OK);
-    CHECK(score >= score5 && pck(truth, xy, 0.2) >= 0.8);
-    printf("levels per octave: best score %.3f with 5, %.3f with 10, %.3f with the default 7\n", score5, score, a.score);
+    CHECK(pck(truth, xy, 0.2) >= 0.8);
     CHECK(skb_detect_options_set_levels_per_octave(o, 101) == SKB_ERR_OUT_OF_RANGE);
     CHECK(skb_detect_options_set_levels_per_octave(NULL, 5) == SKB_ERR_NULL_POINTER);
     CHECK(skb_detect_options_set_levels_per_octave(o, 7) == SKB_OK);
-    /* Only figures of at most 0.3 of the side: the page-filling figure scores lower. */
-    CHECK(skb_detect_options_set_figure_range(o, 0.05, 0.3) == SKB_OK);
-    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_OK);
-    CHECK(score < a.score);
     CHECK(skb_detect_options_set_figure_range(o, 0.5, 0.5) == SKB_ERR_OUT_OF_RANGE);
     CHECK(skb_detect_options_set_figure_range(o, 0.0, 1.0) == SKB_ERR_OUT_OF_RANGE);
     CHECK(skb_detect_options_set_figure_range(o, NAN, 1.0) == SKB_ERR_OUT_OF_RANGE);
-    CHECK(skb_detect_options_set_threshold(o, NAN) == SKB_OK);
+    CHECK(skb_detect_options_set_figure_range(o, 0.5, 1.0) == SKB_OK);
     CHECK(skb_detect_options_set_threshold(o, INFINITY) == SKB_ERR_NON_FINITE);
     CHECK(skb_detect_options_set_threshold(NULL, 0.0) == SKB_ERR_NULL_POINTER);
     /* Scales of the figure only (its cells are about height / 40 px): same answer, less work. */
@@ -131,6 +147,15 @@ int main(void) {
     CHECK(skb_detect_options_set_scales(o, -1.0, 8.0) == SKB_ERR_OUT_OF_RANGE);
     CHECK(skb_detect_options_set_scales(o, NAN, 8.0) == SKB_ERR_OUT_OF_RANGE);
     CHECK(strlen(skb_last_error_message()) > 0);
+    /* A blank page holds no figure: the presence probability is the score. */
+    uint8_t *blank = malloc(LEN);
+    memset(blank, 255, LEN);
+    skb_image page = {blank, W, H, STRIDE, 1};
+    memset(xy, 0xAB, sizeof xy);
+    CHECK(skb_detect(ctx, &page, NULL, xy, 30, conf, 15, &score) == SKB_ERR_NO_FIGURE);
+    CHECK(score >= 0.0 && score < 0.5 && memcmp(&xy[0], &sentinel, sizeof sentinel) == 0);
+    printf("blank page: no figure, presence %.3f\n", score);
+    free(blank);
 
     /* Error paths: nothing written. */
     memset(xy, 0xAB, sizeof xy);

@@ -23,9 +23,12 @@ fi
 jobs=$(nproc)
 echo "== lint gates: cargo fmt --check, cargo clippy -D warnings"
 cargo fmt --all --check
-# Every feature but the experimental `blazepose` (tract-onnx; not wired into the product yet).
 features=(--features sketchbody/model-builder,sketchbody/test-fixtures)
 cargo clippy --release --workspace --all-targets "${features[@]}" -- -D warnings
+
+echo "== MediaPipe reference venv (the BlazePose cross-check, tests/blazepose_reference.rs)"
+SKB_MEDIAPIPE_PYTHON="$(scripts/mediapipe-venv.sh)"
+export SKB_MEDIAPIPE_PYTHON
 
 echo "== cargo test (release build, shared with the CMake build)"
 cargo test --release --workspace --all-targets "${features[@]}"

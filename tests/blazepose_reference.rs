@@ -7,12 +7,13 @@
 //! it the test prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
 //!
 //! Tolerance: the mean distance over the 33 pose landmarks, in px of the 256² crop, at most
-//! 1.0 on every image and 0.25 on average. Our ONNX copy matches the TFLite original to about
-//! 0.05 px on the same tensor (`scripts/convert-blazepose.sh`); the rest is the crop: OpenCV
-//! quantises bilinear sample positions to 1/32 px, and the network's landmarks move by a few
-//! tenths of a pixel for such changes of its input on some images.
-#![cfg(feature = "blazepose")]
-
+//! 0.05 on every image and 0.01 on average (measured: 0.0005 worst, 0.0002 mean over 64 cases);
+//! visibilities and the pose flag within 0.01. Our ONNX copy matches the TFLite original to about
+//! 0.05 px on the same tensor (`scripts/convert-blazepose.sh`); our crop samples at OpenCV's
+//! quantised positions (1/32 px), and both sides read the same decoded pixels (the photos are
+//! handed to the reference as the PNGs of our decode), so what remains is float rounding in the
+//! two inference engines (tract against TensorFlow Lite), bounded by the ONNX conversion's own
+//! 0.05 px.
 mod common;
 
 use std::path::{Path, PathBuf};
@@ -23,6 +24,7 @@ use sketchbody::body::BodyModel;
 use sketchbody::detect::landmark::{landmarks_in_roi, roi, roi_from_landmarks, LandmarkNet, Roi, NUM_POSE_LANDMARKS};
 use sketchbody::image::{load_rgb_image, save_gray_png, GrayImage, RgbImage};
 use sketchbody::render::sketch::{SketchRenderer, SketchRequest};
+use sketchbody::render::stylise::save_rgb_png;
 
 fn python() -> Option<PathBuf> {
     let p = std::env::var_os("SKB_MEDIAPIPE_PYTHON")
@@ -55,8 +57,13 @@ fn landmarks_match_mediapipe_on_photos_and_sketches() {
     let mut images: Vec<(PathBuf, RgbImage)> = (0..20)
         .map(|i| {
             let p = data.join(format!("parse/images/im{:04}.jpg", 101 + 10 * i));
+            // The reference reads the pixels we decoded (saved losslessly), so the check covers the
+            // network and MediaPipe's processing, not two JPEG decoders' rounding (libjpeg's and
+            // ours differ by a few levels, which moves landmarks on some photos).
             let img = load_rgb_image(&p).unwrap();
-            (p, img)
+            let png = dir.join(format!("photo{i}.png"));
+            save_rgb_png(&img, &png).unwrap();
+            (png, img)
         })
         .collect();
     let renderer = SketchRenderer::new(Arc::new(BodyModel::embedded().unwrap()), None).unwrap();
@@ -96,7 +103,7 @@ fn landmarks_match_mediapipe_on_photos_and_sketches() {
             let (x, y) = (p[0].as_f64().unwrap(), p[1].as_f64().unwrap());
             d += (l.landmarks[i].x - x).hypot(l.landmarks[i].y - y) * to_crop;
             let vis = p[2].as_f64().unwrap();
-            assert!((l.landmarks[i].visibility - vis).abs() < 0.05, "case {k} landmark {i}: visibility");
+            assert!((l.landmarks[i].visibility - vis).abs() < 0.01, "case {k} landmark {i}: visibility");
         }
         d /= NUM_POSE_LANDMARKS as f64;
         flag_diff = flag_diff.max((l.pose_flag - r["pose_flag"].as_f64().unwrap()).abs());
@@ -109,6 +116,6 @@ fn landmarks_match_mediapipe_on_photos_and_sketches() {
         "{} cases: mean {mean:.4} px, worst image {worst:.4} px at 256²; pose flag within {flag_diff:.4}",
         ours.len()
     );
-    assert!(worst <= 1.0 && mean <= 0.25, "mean {mean} worst {worst}");
-    assert!(flag_diff < 0.05, "pose flag differs by {flag_diff}");
+    assert!(worst <= 0.05 && mean <= 0.01, "mean {mean} worst {worst}");
+    assert!(flag_diff < 0.01, "pose flag differs by {flag_diff}");
 }

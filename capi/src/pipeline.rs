@@ -6,18 +6,19 @@ use std::ffi::{c_char, c_void};
 use std::sync::Arc;
 
 use sketchbody_core::body::BodyModel;
-use sketchbody_core::detect::DetectOptions;
+use sketchbody_core::detect::figure::FigureOptions;
+use sketchbody_core::detect::landmark::LandmarkNet;
 use sketchbody_core::error::Error;
 use sketchbody_core::image::{load_image, to_gray, GrayImage};
 use sketchbody_core::pipeline::{
-    run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult,
+    run_pipeline, FigureJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult,
 };
 use sketchbody_core::pose::dict_io;
 use sketchbody_core::skeleton::NUM_JOINTS;
 
 use super::body::Posed;
 use super::body::{copy_skin_weights, skb_context, skb_mesh};
-use super::detect::embedded_detector;
+use super::detect::{embedded_detector, figure_info, skb_figure_info};
 use super::fit::{progress_closure, skb_fit_options, skb_progress_fn};
 use super::image::{skb_image, view_of};
 use super::mesh_ops::skb_camera;
@@ -119,12 +120,22 @@ pub unsafe extern "C" fn skb_run_pipeline(
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));
-            let gray = try_core!(to_gray(&try_status!(view_of(sketch))));
+            let colour = try_status!(view_of(sketch));
+            let gray = try_core!(to_gray(&colour));
             let out = try_status!(out_slot(out));
-            let detect_options = DetectOptions::default();
+            let figure_options = FigureOptions::default();
+            let net;
             let source: Box<dyn JointsSource + '_> = match opt_ref(joints) {
                 Some(j) => Box::new(GivenJoints(joints_in(j))),
-                None => Box::new(DetectedJoints { model: try_core!(embedded_detector(ctx)), options: &detect_options }),
+                None => {
+                    net = try_core!(LandmarkNet::embedded());
+                    Box::new(FigureJoints {
+                        model: try_core!(embedded_detector(ctx)),
+                        net: &net,
+                        options: &figure_options,
+                        colour: Some(colour),
+                    })
+                }
             };
             let embedded;
             let d = match opt_ref(dict) {
@@ -198,6 +209,29 @@ pub unsafe extern "C" fn skb_result_gender_value(
             try_status!(write_out(value, r.gender_value, "value"));
             write_opt(confidence, r.gender_confidence);
             skb_status::SKB_OK
+        }
+    }
+}
+
+/// The detection behind the result's 2-D joints into `*info` (backend kept, calibrated
+/// confidence, presence, the low-confidence flag: show the joints to the user for correction).
+/// Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_run_pipeline`, not
+/// detected (nothing written); `SKB_ERR_NULL_POINTER`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_detection(result: *const skb_result, info: *mut skb_figure_info) -> skb_status {
+    // SAFETY: the header contract of `skb_result_detection` (lib.rs § Safety): `result`, `info` are NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let info = try_status!(try_mut(info, "info"));
+            match &r.detection {
+                Some(f) => {
+                    *info = figure_info(f);
+                    skb_status::SKB_OK
+                }
+                None => super::error::fail(&Error::OutOfRange { name: "detection", detail: "the 2-D joints were given, not detected".into() }),
+            }
         }
     }
 }

@@ -44,6 +44,20 @@ pub struct Args {
     /// every model, and the first model's margin over each baseline.
     #[arg(long)]
     by_style: bool,
+    /// The backends' proxy benchmark instead of the models' PCK: comma-separated sets from
+    /// synthetic (the held-out sketches above), parse (PARSE test photos 101-305), xdog, pencil,
+    /// flat (those photos stylised), negatives (blank, text and clutter pages); prints PCK, the
+    /// no-figure rate and time per set for fmp, blazepose, auto and the strict variants, and the
+    /// reliability table of the calibrated confidences.
+    #[arg(long)]
+    sets: Option<String>,
+    /// The PARSE folder for `--sets`.
+    #[arg(long, default_value = "../shared/data/parse")]
+    parse: PathBuf,
+    /// A calibration JSON for `--sets` (as `calibrate-detector` writes it) instead of the
+    /// embedded one.
+    #[arg(long)]
+    calibration: Option<PathBuf>,
 }
 
 /// Runs the command.
@@ -52,6 +66,16 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let hair = parse_hair(&a.hair)?;
     if a.n == 0 {
         return Err(CliError("--n must be ≥ 1".into()));
+    }
+    if let Some(sets) = &a.sets {
+        let specs = crate::eval_backends::benchmark_sets(sets, a.n, a.seed, w, hair)?;
+        let cal = match &a.calibration {
+            Some(p) => sketchbody::detect::calibration::Calibration::from_json(
+                &std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?,
+            )?,
+            None => sketchbody::detect::calibration::Calibration::embedded()?.clone(),
+        };
+        return crate::eval_backends::run_sets(&specs, &renderer(a.mocap.as_deref())?, &a.parse, &cal);
     }
     let mut names = vec![a.model.as_ref().map_or("embedded".to_string(), |p| p.display().to_string())];
     let mut models = vec![match &a.model {

@@ -2,20 +2,24 @@
 //! (clap) and `run(args) -> Result<(), CliError>`. Errors print one line (`sketchbody: ...`)
 //! naming the file and the reason, and exit with status 1 (2 for usage errors, from clap).
 
+mod backend_sets;
 mod bench_pose;
 mod bench_pose_dataset;
 mod bench_pose_suite;
 mod body;
 mod build_model;
+mod calibrate_detector;
 mod convert_detector;
 mod detect;
 mod edges;
 mod eval;
+mod eval_backends;
 mod eval_detector;
 mod eval_parse;
 mod fit_args;
 mod learn_poses;
 mod make_dataset;
+mod negative_page;
 mod pose;
 mod ranges;
 mod render_sketch;
@@ -23,6 +27,7 @@ mod rig_args;
 mod run;
 mod run_dataset;
 mod search_args;
+mod stylise;
 mod train_detector;
 
 use std::process::ExitCode;
@@ -75,10 +80,16 @@ enum Command {
     Eval(eval::Args),
     /// PCK@0.1/0.2 of detector models on held-out synthetic sketches.
     EvalDetector(eval_detector::Args),
+    /// Fit the detector backends' calibrated confidences on a calibration set (research).
+    CalibrateDetector(calibrate_detector::Args),
     /// Train a detector on synthetic concept sketches and write it as .skbd.
     TrainDetector(train_detector::Args),
     /// Render a dataset of N synthetic sketches in parallel (resumable; see docs/dataset.md).
     MakeDataset(make_dataset::Args),
+    /// A photo as an ink drawing, pencil sketch or flat-colour design (real-drawing proxy set).
+    Stylise(stylise::Args),
+    /// A page without a figure (blank, notes, clutter) for the detector's no-figure rate.
+    NegativePage(negative_page::Args),
 }
 
 /// The commands an artist uses, listed first in `--help`; the rest build assets or measure.
@@ -133,8 +144,11 @@ fn main() -> ExitCode {
         Command::RenderSketch(a) => render_sketch::run(a),
         Command::Eval(a) => eval::run(a),
         Command::MakeDataset(a) => make_dataset::run(a),
+        Command::Stylise(a) => stylise::run(a),
+        Command::NegativePage(a) => negative_page::run(a),
         Command::TrainDetector(a) => train_detector::run(a),
         Command::EvalDetector(a) => eval_detector::run(a),
+        Command::CalibrateDetector(a) => calibrate_detector::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -17,20 +17,23 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use sketchbody::body::{BodyModel, Gender};
-use sketchbody::detect::{DetectOptions, Model};
+use sketchbody::detect::figure::{Backend, FigureOptions};
+use sketchbody::detect::landmark::LandmarkNet;
+use sketchbody::detect::Model;
 use sketchbody::export::gltf::write_glb;
-use sketchbody::export::joints2d::{load_joints2d, write_joints2d};
+use sketchbody::export::joints2d::{load_joints2d, write_joints2d_with, LOW_CONFIDENCE_HINT};
 use sketchbody::export::obj::{mtl_string, write_obj_with_material};
 use sketchbody::export::pose3d::pose3d_json;
 use sketchbody::export::texture::{png_bytes, project_sketch};
 use sketchbody::fsutil::{write_atomic, StagingDir};
 use sketchbody::image::{load_rgb_image, to_gray};
 use sketchbody::pipeline::overlay::overlay;
-use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
+use sketchbody::pipeline::{run_pipeline, FigureJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use sketchbody::pose::dict_io;
 use sketchbody::render::preview::{compare_preview, save_rgb_png, SurfaceTexture};
 use sketchbody::rig::RigScene;
 
+use crate::detect::NO_FIGURE_HINT;
 use crate::fit_args::{score_name, FitArgs};
 use crate::rig_args::RigArgs;
 use crate::CliError;
@@ -44,9 +47,17 @@ pub struct Args {
     #[arg(long)]
     out: PathBuf,
     /// 2-D joints of the figure (sketchbody-joints2d JSON; the user-correction path). When
-    /// omitted, the embedded detector trained on concept sketches finds them.
+    /// omitted, the embedded detector finds them (see --detector).
     #[arg(long)]
     joints: Option<PathBuf>,
+    /// Detector backend without --joints: auto (the sketch model and BlazePose, the candidate
+    /// with the higher calibrated confidence), fmp (the sketch model), blazepose.
+    #[arg(long, default_value = "auto", value_parser = crate::detect::parse_backend)]
+    detector: Backend,
+    /// Hard detection thresholds: "no figure" unless a backend passes its own threshold (default:
+    /// the best figure whenever the image plausibly holds one).
+    #[arg(long)]
+    strict_detection: bool,
     /// Shape space: f or m; both are fitted and the better score is kept when omitted.
     #[arg(long)]
     gender: Option<String>,
@@ -134,6 +145,16 @@ fn report(
     let _ = writeln!(s, "- sketch: `{}` ({}×{} px)", a.sketch.display(), size.0, size.1);
     let joints = a.joints.as_ref().map_or("none".to_string(), |p| format!("`{}`", p.display()));
     let _ = writeln!(s, "- 2-D joints: {joints} (source: {})", r.joints_source);
+    if let Some(f) = &r.detection {
+        let _ = writeln!(
+            s,
+            "- detection: backend {}, confidence {:.2} (expected fraction of joints within 0.2 × the figure's size), presence {:.2}{}",
+            f.backend.name(),
+            f.confidence,
+            f.presence,
+            if f.low_confidence { format!("; **{LOW_CONFIDENCE_HINT}**") } else { String::new() }
+        );
+    }
     let _ = writeln!(s, "- library: sketchbody {}\n", sketchbody::VERSION);
     let _ = writeln!(s, "## Options\n");
     let _ = writeln!(
@@ -272,12 +293,19 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let sketch = to_gray(&sketch_rgb.view())?;
     let rig_options = a.rig.options()?;
     let detector: Model;
-    let detect_options = DetectOptions::default();
+    let net: LandmarkNet;
+    let figure_options = FigureOptions { backend: a.detector, strict: a.strict_detection, ..FigureOptions::default() };
     let source: Box<dyn JointsSource + '_> = match &a.joints {
         Some(p) => Box::new(GivenJoints(load_joints2d(p)?)),
         None => {
             detector = Model::embedded()?;
-            Box::new(DetectedJoints { model: &detector, options: &detect_options })
+            net = LandmarkNet::embedded()?;
+            Box::new(FigureJoints {
+                model: &detector,
+                net: &net,
+                options: &figure_options,
+                colour: Some(sketch_rgb.view()),
+            })
         }
     };
     // Fail on an unwritable output folder before the work.
@@ -291,6 +319,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
     bar.finish();
     let r = result.map_err(|e| match (&e, &a.joints) {
         (sketchbody::Error::JointOutsideImage { .. }, Some(p)) => CliError(format!("{}: {e}", p.display())),
+        (sketchbody::Error::NoFigure { .. }, None) => {
+            CliError(format!("{}: {e}; {}", a.sketch.display(), NO_FIGURE_HINT))
+        }
         _ => CliError(format!("{}: {e}", a.sketch.display())),
     })?;
     let t_write = Instant::now();
@@ -318,7 +349,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let uvs = r.mesh.uvs.as_ref();
     write_obj_with_material(&staging.path("body.obj"), &r.posed_vertices, &r.mesh.quads, uvs, mtl)?;
     write_obj_with_material(&staging.path("body_rest.obj"), &r.mesh.vertices, &r.mesh.quads, uvs, mtl)?;
-    write_joints2d(&staging.path("joints2d.json"), &r.joints2d)?;
+    write_joints2d_with(&staging.path("joints2d.json"), &r.joints2d, r.detection.as_ref())?;
     let mut pose_bytes =
         serde_json::to_vec_pretty(&pose3d_json(&r.pose, &dict, &opts.pose)).map_err(|e| CliError(e.to_string()))?;
     pose_bytes.push(b'\n');
@@ -341,5 +372,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         if r.low_evidence { ", LOW EVIDENCE" } else { "" },
         t_all.elapsed().as_secs_f64()
     );
+    if let Some(f) = r.detection.as_ref().filter(|f| f.low_confidence) {
+        eprintln!("sketchbody: detection confidence {:.2} ({}): {LOW_CONFIDENCE_HINT}", f.confidence, f.backend.name());
+    }
     Ok(())
 }

@@ -5,16 +5,16 @@
 //! ([`model`] for the PARSE JSON, [`format`] for the project's binary format) and the PARSE
 //! evaluation protocol ([`parse_eval`]).
 
+pub mod calibration;
 pub mod conv;
 pub mod dt;
 pub mod dtwin;
 pub mod embedded;
+pub mod figure;
 pub mod fastconv;
 pub mod format;
 pub mod hog;
 pub mod joints;
-#[cfg(feature = "blazepose")]
-#[cfg(feature = "blazepose")]
 pub mod landmark;
 pub mod model;
 pub mod normalise;

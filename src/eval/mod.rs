@@ -2,6 +2,7 @@
 //! (eq. 10, rest and posed), MPJPE and PA-MPJPE (mm) and PCK@0.1/0.2. The results-folder layout
 //! is in `docs/dataset.md`.
 
+pub mod backends;
 pub mod by_style;
 pub mod detector;
 pub mod metrics;

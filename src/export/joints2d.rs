@@ -7,6 +7,7 @@ use std::path::Path;
 
 use serde_json::{json, Map, Value};
 
+use crate::detect::figure::Figure;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::skeleton::{joint_index, Joints2, JOINT_NAMES, NUM_JOINTS};
@@ -78,6 +79,43 @@ pub fn joints2d_json(j: &Joints2) -> Result<Value> {
     }
     let missing: Vec<&str> = (0..NUM_JOINTS).filter(|&k| !j.visible[k]).map(|k| JOINT_NAMES[k]).collect();
     Ok(json!({"format": JOINTS2D_FORMAT, "version": 1, "joints": map, "missing": missing}))
+}
+
+/// The one-line hint shown with a low-confidence detection.
+pub const LOW_CONFIDENCE_HINT: &str =
+    "low detection confidence: look at overlay.png and correct the joints (edit joints2d.json, then pass it with --joints)";
+
+/// The `detection` object of a joints file: the backend, the calibrated figure confidence (the
+/// expected fraction of joints within 0.2 × the figure's size of the truth), the presence
+/// probability, the low-confidence flag with its hint, and each joint's calibrated confidence.
+pub fn detection_json(f: &Figure) -> Value {
+    let conf: Map<String, Value> =
+        JOINT_NAMES.iter().enumerate().map(|(k, n)| ((*n).to_string(), json!(f.joint_confidence[k]))).collect();
+    let mut v = json!({
+        "backend": f.backend.name(),
+        "confidence": f.confidence,
+        "presence": f.presence,
+        "low_confidence": f.low_confidence,
+        "joint_confidence": conf,
+        "raw_score": f.raw_score,
+        "other_figures": f.others.len(),
+    });
+    if f.low_confidence {
+        v["hint"] = json!(LOW_CONFIDENCE_HINT);
+    }
+    v
+}
+
+/// Writes [`joints2d_json`] to `path` atomically (pretty-printed, newline-terminated), with the
+/// detection behind the joints as `detection` ([`detection_json`]) when given.
+pub fn write_joints2d_with(path: &Path, j: &Joints2, detection: Option<&Figure>) -> Result<()> {
+    let mut v = joints2d_json(j)?;
+    if let Some(f) = detection {
+        v["detection"] = detection_json(f);
+    }
+    let mut bytes = serde_json::to_vec_pretty(&v).map_err(|e| Error::CorruptData(e.to_string()))?;
+    bytes.push(b'\n');
+    write_atomic(path, &bytes)
 }
 
 /// Writes [`joints2d_json`] to `path` atomically (pretty-printed, newline-terminated).

@@ -2,9 +2,11 @@
 //! detector: the caller's joints ([`GivenJoints`], the paper's user-correction path) or a
 //! detector's ([`DetectedJoints`], by default the embedded model trained on concept sketches).
 
+use crate::detect::figure::{detect_figure, Figure, FigureOptions};
+use crate::detect::landmark::LandmarkNet;
 use crate::detect::{detect, DetectOptions, Model};
 use crate::error::{Error, Result};
-use crate::image::GrayImage;
+use crate::image::{GrayImage, ImageView};
 use crate::skeleton::{Joints2, BONES, JOINT_NAMES, NUM_JOINTS};
 
 /// A provider of the 15 canonical 2-D joints of a sketch. Implementations must be deterministic
@@ -14,6 +16,11 @@ pub trait JointsSource: Sync {
     fn name(&self) -> &str;
     /// The joints of `sketch` (gray, 0 ink … 255 paper), pixels; `edges` is its Canny edge map.
     fn joints(&self, sketch: &GrayImage, edges: &GrayImage) -> Result<Joints2>;
+    /// The joints with the detection behind them (backend, calibrated confidences), when the
+    /// source is a single-figure detector; by default [`JointsSource::joints`] and `None`.
+    fn figure(&self, sketch: &GrayImage, edges: &GrayImage) -> Result<(Joints2, Option<Figure>)> {
+        Ok((self.joints(sketch, edges)?, None))
+    }
 }
 
 /// Joints given by the caller (a joints file, a user's clicks).
@@ -51,6 +58,42 @@ impl JointsSource for DetectedJoints<'_> {
         let mut j = detect(&sketch.view(), self.model, self.options)?.best().joints;
         hide_coincident_children(&mut j);
         Ok(j)
+    }
+}
+
+/// Joints from the single-figure detector ([`detect_figure`]; by default `auto`: the sketch model
+/// and BlazePose, the candidate with the higher calibrated confidence): the product's default
+/// source. Runs on `colour` when given (a painted drawing's colours help the landmark model),
+/// else on the gray sketch. Coincident children are marked missing as in [`DetectedJoints`].
+/// Errors as [`detect_figure`], notably [`Error::NoFigure`] on a page without a figure.
+#[derive(Clone, Copy, Debug)]
+pub struct FigureJoints<'a> {
+    /// The sketch model (borrowed).
+    pub model: &'a Model,
+    /// The landmark network (borrowed).
+    pub net: &'a LandmarkNet,
+    /// Backend and thresholds.
+    pub options: &'a FigureOptions,
+    /// The sketch in colour (same size as the gray sketch), if the caller has it.
+    pub colour: Option<ImageView<'a>>,
+}
+
+impl JointsSource for FigureJoints<'_> {
+    fn name(&self) -> &str {
+        "detector"
+    }
+    fn joints(&self, sketch: &GrayImage, edges: &GrayImage) -> Result<Joints2> {
+        Ok(self.figure(sketch, edges)?.0)
+    }
+    fn figure(&self, sketch: &GrayImage, _edges: &GrayImage) -> Result<(Joints2, Option<Figure>)> {
+        let view = match self.colour {
+            Some(c) if c.width() == sketch.width() && c.height() == sketch.height() => c,
+            _ => sketch.view(),
+        };
+        let f = detect_figure(&view, self.model, self.net, self.options)?;
+        let mut j = f.joints;
+        hide_coincident_children(&mut j);
+        Ok((j, Some(f)))
     }
 }
 

@@ -28,7 +28,7 @@ use crate::pose::{estimate_pose, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::Joints2;
 
 pub use body_fit::{fit_body, refit_camera, BodyChoice, FittedBody, GenderFit};
-pub use joints::{DetectedJoints, GivenJoints, JointsSource};
+pub use joints::{DetectedJoints, FigureJoints, GivenJoints, JointsSource};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
 pub const MIN_SKETCH_SIDE: usize = 32;
@@ -85,6 +85,9 @@ pub struct PipelineResult {
     pub joints2d: Joints2,
     /// Name of the joints source ([`JointsSource::name`]).
     pub joints_source: String,
+    /// The single-figure detection behind the joints (backend, calibrated confidences, the
+    /// low-confidence flag), when the source is [`FigureJoints`].
+    pub detection: Option<crate::detect::figure::Figure>,
     /// 3-D joints (metres of a 1.75 m person, model frame) and camera (pixels) used for the
     /// chosen gender: the camera refitted to that gender's mean skeleton (scaled to
     /// `fit.height` when given; unless `keep_pose_scale`), and with `fit.sample_camera` then to
@@ -173,7 +176,7 @@ pub fn run_pipeline(
     p.report(0.02)?;
 
     let t = Instant::now();
-    let joints2d = source.joints(sketch, &edges)?;
+    let (joints2d, detection) = source.figure(sketch, &edges)?;
     joints::check_in_image(&joints2d, w, h)?;
     timings.joints = t.elapsed().as_secs_f64();
     p.report(0.04)?;
@@ -199,6 +202,7 @@ pub fn run_pipeline(
         edges,
         joints2d,
         joints_source: source.name().to_string(),
+        detection,
         pose: PoseEstimate { camera: body.camera, ..pose },
         fits: body.fits,
         space: body.space,

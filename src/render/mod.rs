@@ -4,3 +4,4 @@
 
 pub mod preview;
 pub mod sketch;
+pub mod stylise;

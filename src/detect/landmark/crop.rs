@@ -1,13 +1,22 @@
 //! The model's input tensor: the ROI resampled to 256×256 RGB in [0, 1] by bilinear
-//! interpolation, white outside the image (MediaPipe's `ImageToTensorCalculator` with the
-//! corners of the ROI mapped to the tensor's corners: tensor pixel `(u, v)` samples the ROI at
-//! normalised `(u / 256, v / 256)`).
+//! interpolation, white outside the image, as MediaPipe's CPU `ImageToTensorCalculator` does
+//! it with OpenCV: the ROI's corners map to the tensor's corners (tensor pixel `(u, v)` samples
+//! the ROI at normalised `(u / 256, v / 256)`), and sample positions are quantised the way
+//! OpenCV's `warpAffine` quantises them (the affine map in 1/1024 px fixed point, positions
+//! rounded to 1/32 px, bilinear weights of those 1/32 steps). The network's landmarks move by up
+//! to a few tenths of a pixel when the crop is sampled at exact positions instead, so the
+//! reference cross-check (`tests/blazepose_reference.rs`) needs the same quantisation.
 
 use super::roi::Roi;
 use crate::image::{over_white, ImageView};
 
 /// Side of the landmark model's square input, px.
 pub const INPUT_SIDE: usize = 256;
+
+/// OpenCV's fixed-point precision of the affine map (`AB_BITS`): 1/1024 px.
+const AB_BITS: u32 = 10;
+/// OpenCV's sub-pixel precision of bilinear sample positions (`INTER_BITS`): 1/32 px.
+const INTER_BITS: u32 = 5;
 
 /// RGB of a gray, RGB or RGBA pixel (RGBA composited over white).
 pub(crate) fn rgb_of(p: &[u8]) -> [u8; 3] {
@@ -16,6 +25,25 @@ pub(crate) fn rgb_of(p: &[u8]) -> [u8; 3] {
         3 => [p[0], p[1], p[2]],
         _ => over_white([p[0], p[1], p[2], p[3]]),
     }
+}
+
+/// The inverse affine map of the crop, `[m00, m01, m02, m10, m11, m12]`: tensor pixel `(u, v)`
+/// → image pixel-centre coordinates `(m00 u + m01 v + m02, m10 u + m11 v + m12)` (pixel `i`'s
+/// centre at `i`), as `cv::warpAffine(..., WARP_INVERSE_MAP)` takes it.
+pub fn inverse_map(roi: &Roi) -> [f64; 6] {
+    let (s, c) = roi.rotation.sin_cos();
+    let n = INPUT_SIDE as f64;
+    let a = [roi.size * c / n, -roi.size * s / n, roi.size * s / n, roi.size * c / n];
+    let h = n / 2.0;
+    let t0 = roi.cx - (a[0] * h + a[1] * h) - 0.5;
+    let t1 = roi.cy - (a[2] * h + a[3] * h) - 0.5;
+    [a[0], a[1], t0, a[2], a[3], t1]
+}
+
+/// `v` in OpenCV's affine fixed point (`saturate_cast<int>(v * AB_SCALE)`: round half to even,
+/// saturated).
+fn fixed(v: f64) -> i64 {
+    (v * (1 << AB_BITS) as f64).round_ties_even().clamp(i32::MIN as f64, i32::MAX as f64) as i64
 }
 
 /// The 256×256×3 crop of `image` inside `roi`, row-major HWC, values in [0, 1]. Points outside the
@@ -29,21 +57,23 @@ pub fn crop_tensor(image: &ImageView<'_>, roi: &Roi) -> Vec<f32> {
         let row = image.row(y as usize);
         rgb_of(&row[x as usize * ch..(x as usize + 1) * ch]).map(|c| c as f32 / 255.0)
     };
-    let n = INPUT_SIDE as f64;
+    let m = inverse_map(roi);
+    let round_delta = 1i64 << (AB_BITS - INTER_BITS - 1);
+    let tab = (1i64 << INTER_BITS) as f32;
     let mut out = Vec::with_capacity(INPUT_SIDE * INPUT_SIDE * 3);
     for v in 0..INPUT_SIDE {
+        let x0 = fixed(m[1] * v as f64 + m[2]) + round_delta;
+        let y0 = fixed(m[4] * v as f64 + m[5]) + round_delta;
         for u in 0..INPUT_SIDE {
-            let [x, y] = roi.to_image(u as f64 / n, v as f64 / n);
-            // Continuous coordinates to pixel-centre coordinates for the interpolation.
-            let (x, y) = (x - 0.5, y - 0.5);
-            let (x0, y0) = (x.floor(), y.floor());
-            let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
-            let (x0, y0) = (x0 as i64, y0 as i64);
-            let (a, b, c, d) = (pixel(x0, y0), pixel(x0 + 1, y0), pixel(x0, y0 + 1), pixel(x0 + 1, y0 + 1));
+            let x = (x0 + fixed(m[0] * u as f64)) >> (AB_BITS - INTER_BITS);
+            let y = (y0 + fixed(m[3] * u as f64)) >> (AB_BITS - INTER_BITS);
+            let (ix, iy) = (x >> INTER_BITS, y >> INTER_BITS);
+            let mask = (1i64 << INTER_BITS) - 1;
+            let (fx, fy) = ((x & mask) as f32 / tab, (y & mask) as f32 / tab);
+            let (a, b, c, d) = (pixel(ix, iy), pixel(ix + 1, iy), pixel(ix, iy + 1), pixel(ix + 1, iy + 1));
+            let wts = [(1.0 - fy) * (1.0 - fx), (1.0 - fy) * fx, fy * (1.0 - fx), fy * fx];
             for k in 0..3 {
-                let top = a[k] + (b[k] - a[k]) * fx;
-                let bottom = c[k] + (d[k] - c[k]) * fx;
-                out.push(top + (bottom - top) * fy);
+                out.push(a[k] * wts[0] + b[k] * wts[1] + c[k] * wts[2] + d[k] * wts[3]);
             }
         }
     }
@@ -58,7 +88,8 @@ mod tests {
     fn linear_image_is_resampled_exactly_and_padded_white_outside() {
         // A 128² ramp x + y sampled by a ROI covering the image: tensor pixel (u, v) reads the
         // continuous point (u / 2, v / 2), i.e. pixel-centre coordinates (u / 2 - 0.5, v / 2 - 0.5),
-        // where bilinear interpolation of a linear image is exact.
+        // multiples of 1/32 px where the quantised bilinear interpolation of a linear image is
+        // exact.
         let s = 128;
         let px: Vec<u8> = (0..s * s).map(|i| (i % s + i / s) as u8).collect();
         let img = ImageView::gray(&px, s, s).unwrap();
@@ -73,5 +104,24 @@ mod tests {
         }
         let far = Roi { cx: -1000.0, cy: -1000.0, size: 10.0, rotation: 0.3 };
         assert!(crop_tensor(&img, &far).iter().all(|&v| v == 1.0));
+    }
+
+    /// Sample positions snap to the nearest 1/32 px, as in OpenCV's `warpAffine`: on a ramp
+    /// 0.01 px reads as 0 and 0.02 px as 1/32.
+    #[test]
+    fn sample_positions_are_rounded_to_a_32nd_of_a_pixel() {
+        let s = 64;
+        let px: Vec<u8> = (0..s * s).map(|i| (i % s) as u8).collect();
+        let img = ImageView::gray(&px, s, s).unwrap();
+        let at = |offset: f64| {
+            let roi = Roi { cx: 128.0 + 0.5 + offset, cy: 128.0, size: 256.0, rotation: 0.0 };
+            crop_tensor(&img, &roi)[3 * (20 * INPUT_SIDE + 10)] * 255.0
+        };
+        assert!((at(0.01) - 10.0).abs() < 1e-4, "{}", at(0.01));
+        assert!((at(0.02) - (10.0 + 1.0 / 32.0)).abs() < 1e-4, "{}", at(0.02));
+        assert_eq!(
+            inverse_map(&Roi { cx: 128.0, cy: 128.0, size: 256.0, rotation: 0.0 }),
+            [1.0, 0.0, -0.5, 0.0, 1.0, -0.5]
+        );
     }
 }

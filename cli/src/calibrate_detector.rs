@@ -1,0 +1,90 @@
+//! `sketchbody calibrate-detector --out assets/detector_calibration.json`: fits the detector
+//! backends' calibration (`detect::calibration`) on a calibration set disjoint from every
+//! benchmark set: rendered sketches of another seed than the held-out set's, PARSE *training*
+//! photos (1–100; with `--stylised` also through each stylisation), and pages without a figure.
+
+use std::path::PathBuf;
+
+use sketchbody::detect::figure::FigureOptions;
+use sketchbody::detect::landmark::LandmarkNet;
+use sketchbody::detect::Model;
+use sketchbody::eval::backends::fit_calibration;
+use sketchbody::render::stylise::{NegativePage, Stylisation};
+
+use crate::backend_sets::{gather_set, SetContext, SetSpec};
+use crate::render_sketch::renderer;
+use crate::CliError;
+
+/// Arguments of `sketchbody calibrate-detector`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Output calibration JSON.
+    #[arg(long)]
+    out: PathBuf,
+    /// The PARSE folder (images/ and labels.csv).
+    #[arg(long, default_value = "../shared/data/parse")]
+    parse: PathBuf,
+    /// Rendered sketches in the calibration set.
+    #[arg(long, default_value_t = 200)]
+    synthetic: usize,
+    /// Seed of the rendered sketches (the held-out benchmark uses 2, training 1).
+    #[arg(long, default_value_t = 11)]
+    seed: u64,
+    /// Last PARSE training photo used (1..=100).
+    #[arg(long, default_value_t = 100, value_parser = crate::ranges::count(1..=100))]
+    parse_last: usize,
+    /// Also calibrate on the PARSE training photos through each stylisation. Off by default, so
+    /// that the stylised benchmark sets (`eval-detector --sets`) test styles the calibration has
+    /// never seen.
+    #[arg(long)]
+    stylised: bool,
+    /// Pages of each kind without a figure (blank, text, clutter).
+    #[arg(long, default_value_t = 40)]
+    negatives: usize,
+    /// L2 penalty of the logistic fits.
+    #[arg(long, default_value_t = 1e-2)]
+    ridge: f64,
+    /// Folder of mocap clips for the renderer (default as in render-sketch).
+    #[arg(long)]
+    mocap: Option<PathBuf>,
+}
+
+/// Runs the command.
+pub fn run(a: Args) -> Result<(), CliError> {
+    let model = Model::embedded()?;
+    let net = LandmarkNet::embedded()?;
+    let r = renderer(a.mocap.as_deref())?;
+    let ctx = SetContext { renderer: &r, parse_dir: &a.parse, model: &model, net: &net };
+    let mut specs = vec![SetSpec::Synthetic { seed: a.seed, n: a.synthetic, size: 512, hair: None }];
+    specs.push(SetSpec::Parse { first: 1, last: a.parse_last, style: None });
+    if a.stylised {
+        for s in Stylisation::ALL {
+            specs.push(SetSpec::Parse { first: 1, last: a.parse_last, style: Some(s) });
+        }
+    }
+    for kind in NegativePage::ALL {
+        specs.push(SetSpec::Negative { kind, n: a.negatives, seed: a.seed });
+    }
+    let options = FigureOptions::default();
+    let mut samples = Vec::new();
+    for s in &specs {
+        samples.extend(gather_set(s, &ctx, &options)?);
+    }
+    let labels: Vec<String> = specs.iter().map(SetSpec::label).collect();
+    let provenance = format!(
+        "sketchbody calibrate-detector --synthetic {} --seed {} --parse-last {}{} --negatives {} --ridge {}; sets: {}; {} images",
+        a.synthetic,
+        a.seed,
+        a.parse_last,
+        if a.stylised { " --stylised" } else { "" },
+        a.negatives,
+        a.ridge,
+        labels.join(", "),
+        samples.len()
+    );
+    let cal = fit_calibration(&samples, a.ridge, &provenance)?;
+    sketchbody::fsutil::write_atomic(&a.out, (cal.to_json() + "\n").as_bytes())?;
+    println!("calibration of {} images written to {}", samples.len(), a.out.display());
+    println!("{}", cal.to_json());
+    Ok(())
+}

@@ -1,0 +1,108 @@
+//! `sketchbody eval-detector --sets ...`: the detector backends (fmp, blazepose, auto, and the
+//! strict variants) on the real-drawing proxy benchmark: held-out rendered sketches, the PARSE
+//! *test* photos (101–305) plain and through stylisations never used in training, and pages
+//! without a figure; PCK@0.1 / @0.2, the no-figure rate and time per set and backend, and the
+//! reliability table of `auto`'s calibrated confidence.
+
+use std::path::Path;
+
+use sketchbody::detect::calibration::Calibration;
+use sketchbody::detect::figure::{Backend, FigureOptions, Fusion};
+use sketchbody::detect::landmark::LandmarkNet;
+use sketchbody::detect::Model;
+use sketchbody::eval::backends::{expected_calibration_error, reliability, score_set, Sample};
+use sketchbody::render::sketch::{Hair, SketchRenderer};
+use sketchbody::render::stylise::{NegativePage, Stylisation};
+
+use crate::backend_sets::{gather_set, SetContext, SetSpec};
+use crate::CliError;
+
+/// The set names `--sets` takes.
+pub const SET_NAMES: &str = "synthetic, parse, xdog, pencil, flat, negatives";
+
+/// The benchmark sets named in `names` (comma separated, from [`SET_NAMES`]).
+pub fn benchmark_sets(
+    names: &str,
+    n: usize,
+    seed: u64,
+    size: usize,
+    hair: Option<Hair>,
+) -> Result<Vec<SetSpec>, CliError> {
+    let mut out = Vec::new();
+    for name in names.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        match name {
+            "synthetic" => out.push(SetSpec::Synthetic { seed, n, size, hair }),
+            "parse" => out.push(SetSpec::Parse { first: 101, last: 305, style: None }),
+            "negatives" => out.extend(NegativePage::ALL.map(|kind| SetSpec::Negative { kind, n: 60, seed })),
+            other => match other.parse::<Stylisation>() {
+                Ok(s) => out.push(SetSpec::Parse { first: 101, last: 305, style: Some(s) }),
+                Err(_) => return Err(CliError(format!("--sets: unknown set {other:?}; expected {SET_NAMES}"))),
+            },
+        }
+    }
+    Ok(out)
+}
+
+/// Runs the evaluation on `specs` and prints the tables.
+pub fn run_sets(
+    specs: &[SetSpec],
+    renderer: &SketchRenderer,
+    parse_dir: &Path,
+    cal: &Calibration,
+) -> Result<(), CliError> {
+    let model = Model::embedded()?;
+    let net = LandmarkNet::embedded()?;
+    let ctx = SetContext { renderer, parse_dir, model: &model, net: &net };
+    let options = FigureOptions::default();
+    let configs = [
+        (Backend::Fmp, false, Fusion::PerImage, "fmp"),
+        (Backend::BlazePose, false, Fusion::PerImage, "blazepose"),
+        (Backend::Auto, false, Fusion::PerImage, "auto"),
+        (Backend::Auto, false, Fusion::PerLimb, "auto per limb"),
+        (Backend::Fmp, true, Fusion::PerImage, "fmp strict"),
+        (Backend::BlazePose, true, Fusion::PerImage, "blazepose strict"),
+    ];
+    println!("PCK@0.1 / PCK@0.2, no-figure rate, mean ms per image (wall, images in parallel) per set and backend");
+    println!("{:<26} {:>4}  {}", "set", "n", configs.map(|c| format!("{:<30}", c.3)).join(""));
+    let mut positives: Vec<Sample> = Vec::new();
+    for spec in specs {
+        let samples = gather_set(spec, &ctx, &options)?;
+        let mut cells = Vec::new();
+        for &(backend, strict, fusion, _) in &configs {
+            let o = FigureOptions { backend, strict, fusion, ..FigureOptions::default() };
+            let s = score_set(&samples, cal, &o)?;
+            let pck = if s.pck[0].is_nan() {
+                "   -  /   -  ".to_string()
+            } else {
+                format!("{:.3} / {:.3}", s.pck[0], s.pck[1])
+            };
+            cells.push(format!("{pck} {:>5.1}% {:>4.0}ms  ", 100.0 * s.no_figure, 1e3 * s.seconds));
+        }
+        println!("{:<26} {:>4}  {}", spec.label(), samples.len(), cells.join(""));
+        let auto = score_set(&samples, cal, &FigureOptions::default())?;
+        let limb = score_set(&samples, cal, &FigureOptions { fusion: Fusion::PerLimb, ..FigureOptions::default() })?;
+        println!(
+            "{:<26}       auto kept fmp on {:.0}%, blazepose on {:.0}% of its answers; per limb: fmp {:.0}%, blazepose {:.0}%, mixed {:.0}%",
+            "",
+            100.0 * auto.chosen[0],
+            100.0 * auto.chosen[1],
+            100.0 * limb.chosen[0],
+            100.0 * limb.chosen[1],
+            100.0 * limb.chosen[2]
+        );
+        positives.extend(samples.into_iter().filter(|s| s.truth.is_some()));
+    }
+    for b in [Backend::Auto, Backend::Fmp, Backend::BlazePose] {
+        let table = reliability(&positives, cal, &FigureOptions { backend: b, ..FigureOptions::default() }, 10)?;
+        println!(
+            "reliability of {}'s confidence on {} images with a figure (bin: n, mean confidence, observed PCK@0.2); ECE {:.3}",
+            b.name(),
+            positives.len(),
+            expected_calibration_error(&table)
+        );
+        for bin in table.iter().filter(|b| b.n > 0) {
+            println!("  [{:.1}, {:.1})  {:>5}  {:.3}  {:.3}", bin.lo, bin.hi, bin.n, bin.mean_confidence, bin.observed);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,385 @@
+//! Single-figure detection, the product's default: the best figure in a drawing with calibrated
+//! confidences, from the sketch model ([`super::detect`], trained on concept sketches), the
+//! BlazePose landmark backend ([`super::landmark`], trained on photos) or both (`Auto`, which
+//! keeps per image the candidate whose calibrated joint confidences are higher).
+//!
+//! Semantics: the best figure is returned whenever the evidence says the image plausibly holds
+//! one (presence probability ≥ [`FigureOptions::min_presence`]); "no figure" is left for blank
+//! pages, text and clutter. `strict` restores hard thresholds (the sketch model's own threshold,
+//! BlazePose's pose flag ≥ 0.5). Confidences come from [`super::calibration`]: a joint's
+//! confidence estimates the probability that it lies within 0.2 × the figure's size of the truth
+//! (PCK@0.2), and the figure's confidence is their mean, the expected fraction of correct joints.
+
+use super::calibration::{clamp_score, joint_features, predict, presence_features, Calibration};
+use super::landmark::{detect_blazepose, BlazePoseDetection, BlazePoseOptions, LandmarkNet};
+use super::{detect, DetectOptions, Detection, Model};
+use crate::error::{Error, Result};
+use crate::image::ImageView;
+use crate::skeleton::{Joints2, NUM_JOINTS};
+
+/// Which 2-D joint detector runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Backend {
+    /// Both backends; per image the candidate with the higher calibrated confidence (default).
+    #[default]
+    Auto,
+    /// The flexible-mixture-of-parts sketch model (the embedded or a given `.skbd`).
+    Fmp,
+    /// MediaPipe's BlazePose landmark model.
+    BlazePose,
+}
+
+impl Backend {
+    /// The name used by the CLI, the JSON and the report: `auto`, `fmp`, `blazepose`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Auto => "auto",
+            Backend::Fmp => "fmp",
+            Backend::BlazePose => "blazepose",
+        }
+    }
+
+    /// Every backend, in CLI order.
+    pub const ALL: [Backend; 3] = [Backend::Auto, Backend::Fmp, Backend::BlazePose];
+}
+
+impl std::str::FromStr for Backend {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Backend::ALL.into_iter().find(|b| b.name() == s).ok_or_else(|| Error::OutOfRange {
+            name: "detector backend",
+            detail: format!("{s:?}: expected auto, fmp or blazepose"),
+        })
+    }
+}
+
+/// The default presence probability under which an image is "no figure".
+pub const DEFAULT_MIN_PRESENCE: f64 = 0.5;
+
+/// A figure confidence under this is flagged as low: the user should look at the overlay and
+/// correct the joints (`--joints`, the paper's user step).
+pub const LOW_CONFIDENCE: f64 = 0.75;
+
+/// How `Auto` combines the two backends' candidates.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Fusion {
+    /// The whole candidate with the higher mean calibrated confidence (default).
+    #[default]
+    PerImage,
+    /// Per limb ([`LIMB_GROUPS`]), the candidate whose calibrated confidences over the limb are
+    /// higher; the figure's backend is `Auto` when the limbs come from both.
+    PerLimb,
+}
+
+/// The joint groups [`Fusion::PerLimb`] takes from one backend each: head and neck, each arm,
+/// the hips with the pelvis, each lower leg.
+pub const LIMB_GROUPS: [&[usize]; 6] = [&[0, 1], &[2, 3, 4], &[5, 6, 7], &[8, 9, 12], &[10, 11], &[13, 14]];
+
+/// Options of [`detect_figure`]. `Default`: `Auto` per image, the sketch search defaults, two
+/// BlazePose passes, presence ≥ [`DEFAULT_MIN_PRESENCE`], not strict.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FigureOptions {
+    /// The backend(s) to run.
+    pub backend: Backend,
+    /// The sketch model's search. Its `threshold` is used only when `strict`.
+    pub sketch: DetectOptions,
+    /// BlazePose's passes (its `min_pose_flag` is used only when `strict`).
+    pub blazepose: BlazePoseOptions,
+    /// Hard thresholds instead of the calibrated presence: a backend's figure counts only when it
+    /// passes the backend's own threshold.
+    pub strict: bool,
+    /// Smallest presence probability accepted as a figure, in [0, 1] (not strict).
+    pub min_presence: f64,
+    /// How `Auto` combines the backends.
+    pub fusion: Fusion,
+}
+
+impl Default for FigureOptions {
+    fn default() -> Self {
+        Self {
+            backend: Backend::Auto,
+            sketch: DetectOptions::default(),
+            blazepose: BlazePoseOptions::default(),
+            strict: false,
+            min_presence: DEFAULT_MIN_PRESENCE,
+            fusion: Fusion::PerImage,
+        }
+    }
+}
+
+/// What the backends found in one image, before any decision: the raw material of
+/// [`decide`] and of the calibration (`sketchbody calibrate-detector`).
+#[derive(Clone, Debug)]
+pub struct Evidence {
+    /// The sketch model's best figures (best first; any score), `None` when it did not run or
+    /// no pyramid level fit the search range.
+    pub sketch: Option<Vec<Detection>>,
+    /// The sketch model's own threshold.
+    pub sketch_threshold: f64,
+    /// BlazePose's figure (any pose flag), `None` when it did not run or found no ink.
+    pub blazepose: Option<BlazePoseDetection>,
+}
+
+/// Runs the backends `backend` names on `image` (1, 3 or 4 channels) and collects their
+/// candidates without thresholds. Errors: `ImageTooSmall`, bad options, the models' errors.
+pub fn gather(
+    image: &ImageView<'_>,
+    model: &Model,
+    net: &LandmarkNet,
+    backend: Backend,
+    options: &FigureOptions,
+) -> Result<Evidence> {
+    let sketch = if backend != Backend::BlazePose {
+        let o = DetectOptions { threshold: Some(f64::MIN), ..options.sketch.clone() };
+        match detect(image, model, &o) {
+            Ok(d) => Some(d.all),
+            Err(Error::NoFigure { .. }) => None,
+            Err(e) => return Err(e),
+        }
+    } else {
+        None
+    };
+    let blazepose = if backend != Backend::Fmp {
+        let o = BlazePoseOptions { min_pose_flag: 0.0, ..options.blazepose };
+        match detect_blazepose(net, image, &o) {
+            Ok(d) => Some(d),
+            Err(Error::NoFigure { .. } | Error::Degenerate(_)) => None,
+            Err(e) => return Err(e),
+        }
+    } else {
+        None
+    };
+    Ok(Evidence { sketch, sketch_threshold: model.thresh, blazepose })
+}
+
+/// The figure [`detect_figure`] returns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Figure {
+    /// The backend whose joints these are (`Fmp` or `BlazePose`; `Auto` when [`Fusion::PerLimb`]
+    /// took limbs from both).
+    pub backend: Backend,
+    /// The canonical 15 joints, px.
+    pub joints: Joints2,
+    /// Calibrated per-joint confidence: the estimated probability that the joint is correct at
+    /// PCK@0.2, in [0, 1].
+    pub joint_confidence: [f64; NUM_JOINTS],
+    /// The figure's confidence, the mean of `joint_confidence`: the expected fraction of correct
+    /// joints, in [0, 1].
+    pub confidence: f64,
+    /// The calibrated probability that the image holds a figure, in [0, 1].
+    pub presence: f64,
+    /// `confidence` < [`LOW_CONFIDENCE`]: look at the overlay and correct the joints.
+    pub low_confidence: bool,
+    /// The backend's raw score (the sketch model's score or BlazePose's pose flag).
+    pub raw_score: f64,
+    /// Other figures the sketch model found above its threshold (its NMS list after its best,
+    /// which is the figure itself or overlaps it), best first.
+    pub others: Vec<Detection>,
+}
+
+/// Distances between the two backends' joints over the figure's size (the longer side of the
+/// BlazePose joints' bounding box, at least 1 px), and their median.
+fn agreement(a: &Joints2, b: &Joints2) -> ([f64; NUM_JOINTS], f64) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in &b.xy {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0);
+    let mut d = [0.0; NUM_JOINTS];
+    for j in 0..NUM_JOINTS {
+        d[j] = (a.xy[j][0] - b.xy[j][0]).hypot(a.xy[j][1] - b.xy[j][1]) / size;
+    }
+    let mut s = d;
+    s.sort_by(f64::total_cmp);
+    (d, s[NUM_JOINTS / 2])
+}
+
+/// One backend's candidate with the inputs of the calibration's joint models.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CandidateFeatures {
+    /// `Fmp` or `BlazePose`.
+    pub backend: Backend,
+    /// The candidate's joints, px.
+    pub joints: Joints2,
+    /// The backend's raw score (sketch model score or pose flag).
+    pub raw_score: f64,
+    /// Per joint, the features of the backend-alone model.
+    pub alone: Vec<Vec<f64>>,
+    /// Per joint, the features of the both-backends model (`None` when only one backend found a
+    /// candidate).
+    pub auto: Option<Vec<Vec<f64>>>,
+}
+
+/// Everything [`decide`] and the calibration read from one image's evidence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EvidenceFeatures {
+    /// The candidates (sketch model first).
+    pub candidates: Vec<CandidateFeatures>,
+    /// Presence features from the sketch model alone (when it found a candidate).
+    pub presence_fmp: Option<Vec<f64>>,
+    /// Presence features from BlazePose alone.
+    pub presence_blazepose: Option<Vec<f64>>,
+    /// Presence features from both (when both found a candidate).
+    pub presence_auto: Option<Vec<f64>>,
+}
+
+/// The calibration features of `evidence`: the sketch score enters relative to the model's
+/// threshold, the agreement as distances over the figure's size.
+pub fn features(evidence: &Evidence) -> EvidenceFeatures {
+    let sketch = evidence.sketch.as_ref().and_then(|v| v.first());
+    let bp = evidence.blazepose.as_ref();
+    let sketch_score = sketch.map(|d| clamp_score(d.score - evidence.sketch_threshold));
+    let agree = match (sketch, bp) {
+        (Some(s), Some(b)) => Some(agreement(&s.joints, &b.joints)),
+        _ => None,
+    };
+    let rows = |raw: &[f64; NUM_JOINTS], score: f64, with: bool| -> Vec<Vec<f64>> {
+        (0..NUM_JOINTS)
+            .map(|j| joint_features(raw[j], score, if with { agree.as_ref().map(|(d, m)| (d[j], *m)) } else { None }))
+            .collect()
+    };
+    let mut candidates = Vec::new();
+    if let (Some(s), Some(score)) = (sketch, sketch_score) {
+        candidates.push(CandidateFeatures {
+            backend: Backend::Fmp,
+            joints: s.joints,
+            raw_score: s.score,
+            alone: rows(&s.confidence, score, false),
+            auto: agree.as_ref().map(|_| rows(&s.confidence, score, true)),
+        });
+    }
+    if let Some(b) = bp {
+        candidates.push(CandidateFeatures {
+            backend: Backend::BlazePose,
+            joints: b.joints,
+            raw_score: b.score,
+            alone: rows(&b.confidence, b.score, false),
+            auto: agree.as_ref().map(|_| rows(&b.confidence, b.score, true)),
+        });
+    }
+    EvidenceFeatures {
+        candidates,
+        presence_fmp: sketch_score.map(|s| presence_features(Some(s), None, None)),
+        presence_blazepose: bp.map(|b| presence_features(None, Some(b.score), None)),
+        presence_auto: match (sketch_score, bp, &agree) {
+            (Some(s), Some(b), Some(a)) => Some(presence_features(Some(s), Some(b.score), Some(a.1))),
+            _ => None,
+        },
+    }
+}
+
+fn mean(c: &[f64; NUM_JOINTS]) -> f64 {
+    c.iter().sum::<f64>() / NUM_JOINTS as f64
+}
+
+/// A candidate of one backend with its calibrated confidences.
+#[derive(Clone, Copy)]
+struct Scored {
+    backend: Backend,
+    joints: Joints2,
+    conf: [f64; NUM_JOINTS],
+    raw_score: f64,
+}
+
+/// Decides the figure from `evidence` with calibration `cal`. Errors: `NoFigure` (with the
+/// presence probability as its score and `min_presence` as its threshold, or the backend's own
+/// score and threshold when strict) when no candidate counts as a figure; `CorruptData` for a
+/// calibration of the wrong shape.
+pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -> Result<Figure> {
+    let f = features(evidence);
+    let mut cands = Vec::new();
+    for c in &f.candidates {
+        let (w, rows) = match (c.backend, &c.auto) {
+            (Backend::Fmp, Some(r)) => (&cal.joints.fmp_auto, r),
+            (Backend::Fmp, None) => (&cal.joints.fmp, &c.alone),
+            (_, Some(r)) => (&cal.joints.blazepose_auto, r),
+            (_, None) => (&cal.joints.blazepose, &c.alone),
+        };
+        let mut conf = [0.0; NUM_JOINTS];
+        for j in 0..NUM_JOINTS {
+            conf[j] = predict(w, &rows[j])?;
+        }
+        cands.push(Scored { backend: c.backend, joints: c.joints, conf, raw_score: c.raw_score });
+    }
+    let presence = match (&f.presence_auto, &f.presence_fmp, &f.presence_blazepose) {
+        (Some(x), _, _) => predict(&cal.presence.auto, x)?,
+        (None, Some(x), _) => predict(&cal.presence.fmp, x)?,
+        (None, None, Some(x)) => predict(&cal.presence.blazepose, x)?,
+        (None, None, None) => 0.0,
+    };
+    let sketch_threshold = options.sketch.threshold.unwrap_or(evidence.sketch_threshold);
+    if options.strict {
+        cands.retain(|c| match c.backend {
+            Backend::Fmp => c.raw_score >= sketch_threshold,
+            _ => c.raw_score >= options.blazepose.min_pose_flag,
+        });
+    } else if presence < options.min_presence {
+        cands.clear();
+    }
+    if options.fusion == Fusion::PerLimb && cands.len() == 2 {
+        let mut mixed = Scored { backend: cands[0].backend, ..cands[0] };
+        let mut from = [0usize; 2];
+        for g in LIMB_GROUPS {
+            let sum = |c: &Scored| g.iter().map(|&j| c.conf[j]).sum::<f64>();
+            let k = usize::from(sum(&cands[1]) > sum(&cands[0]));
+            from[k] += 1;
+            for &j in g {
+                mixed.joints.xy[j] = cands[k].joints.xy[j];
+                mixed.joints.visible[j] = cands[k].joints.visible[j];
+                mixed.conf[j] = cands[k].conf[j];
+            }
+        }
+        if from[0] > 0 && from[1] > 0 {
+            mixed.backend = Backend::Auto;
+        } else if from[1] > 0 {
+            mixed = Scored { ..cands[1] };
+        }
+        cands = vec![mixed];
+    }
+    let Some(best) = cands.into_iter().max_by(|a, b| mean(&a.conf).total_cmp(&mean(&b.conf))) else {
+        return Err(if options.strict {
+            let sketch = evidence.sketch.as_ref().and_then(|v| v.first());
+            match (sketch, &evidence.blazepose) {
+                (Some(s), _) => Error::NoFigure { score: s.score, threshold: sketch_threshold },
+                (None, Some(b)) => Error::NoFigure { score: b.score, threshold: options.blazepose.min_pose_flag },
+                (None, None) => Error::NoFigure { score: f64::NEG_INFINITY, threshold: sketch_threshold },
+            }
+        } else {
+            Error::NoFigure { score: presence, threshold: options.min_presence }
+        });
+    };
+    let others = evidence.sketch.iter().flatten().skip(1).filter(|d| d.score >= sketch_threshold).cloned().collect();
+    let confidence = mean(&best.conf);
+    Ok(Figure {
+        backend: best.backend,
+        joints: best.joints,
+        joint_confidence: best.conf,
+        confidence,
+        presence,
+        low_confidence: confidence < LOW_CONFIDENCE,
+        raw_score: best.raw_score,
+        others,
+    })
+}
+
+/// The best figure of `image` (1, 3 or 4 channels) by `options.backend`, with calibrated
+/// confidences (the embedded calibration). Errors: `ImageTooSmall`, `OutOfRange` / `NonFinite`
+/// for bad options, `NoFigure` (see [`decide`]), the models' errors.
+pub fn detect_figure(
+    image: &ImageView<'_>,
+    model: &Model,
+    net: &LandmarkNet,
+    options: &FigureOptions,
+) -> Result<Figure> {
+    if !(0.0..=1.0).contains(&options.min_presence) {
+        return Err(Error::OutOfRange {
+            name: "min_presence",
+            detail: format!("{} not in [0, 1]", options.min_presence),
+        });
+    }
+    let evidence = gather(image, model, net, options.backend, options)?;
+    decide(&evidence, Calibration::embedded()?, options)
+}

@@ -1,0 +1,254 @@
+//! Evaluation and calibration of the detector backends ([`crate::detect::figure`]) on labelled
+//! image sets: rendered sketches, PARSE photos (plain or stylised) and pages without a figure.
+//! Each image's evidence is gathered once (both backends, each timed); every backend choice is
+//! then scored from it: PCK@0.1 / @0.2 of the returned figure (0 when none), the no-figure rate,
+//! and the reliability of the calibrated confidences.
+
+use crate::detect::calibration::{fit_logistic, Calibration, JointModels, PresenceModels};
+use crate::detect::figure::{decide, features, gather, Backend, Evidence, FigureOptions};
+use crate::detect::landmark::LandmarkNet;
+use crate::detect::Model;
+use crate::error::{Error, Result};
+use crate::image::ImageView;
+use crate::skeleton::NUM_JOINTS;
+
+use super::metrics::{pck, pck_normaliser};
+
+/// One image's evidence, its ground truth and the backends' times.
+#[derive(Clone, Debug)]
+pub struct Sample {
+    /// Both backends' candidates.
+    pub evidence: Evidence,
+    /// The true canonical joints, px; `None` for a page without a figure.
+    pub truth: Option<[[f64; 2]; NUM_JOINTS]>,
+    /// Wall time of the sketch model and of BlazePose on this image, s.
+    pub seconds: [f64; 2],
+}
+
+/// Runs both backends on `image` (timing each) and keeps their evidence with `truth`.
+/// Errors: as [`gather`].
+pub fn gather_sample(
+    image: &ImageView<'_>,
+    truth: Option<[[f64; 2]; NUM_JOINTS]>,
+    model: &Model,
+    net: &LandmarkNet,
+    options: &FigureOptions,
+) -> Result<Sample> {
+    let t0 = std::time::Instant::now();
+    let fmp = gather(image, model, net, Backend::Fmp, options)?;
+    let t1 = std::time::Instant::now();
+    let bp = gather(image, model, net, Backend::BlazePose, options)?;
+    let t2 = std::time::Instant::now();
+    Ok(Sample {
+        evidence: Evidence { sketch: fmp.sketch, sketch_threshold: fmp.sketch_threshold, blazepose: bp.blazepose },
+        truth,
+        seconds: [(t1 - t0).as_secs_f64(), (t2 - t1).as_secs_f64()],
+    })
+}
+
+/// The evidence a single backend would have gathered.
+fn restricted(e: &Evidence, backend: Backend) -> Evidence {
+    Evidence {
+        sketch: if backend == Backend::BlazePose { None } else { e.sketch.clone() },
+        sketch_threshold: e.sketch_threshold,
+        blazepose: if backend == Backend::Fmp { None } else { e.blazepose.clone() },
+    }
+}
+
+/// Per-joint correctness at PCK@0.2 of `joints` against `truth`.
+fn correct(truth: &[[f64; 2]; NUM_JOINTS], joints: &[[f64; 2]; NUM_JOINTS]) -> [bool; NUM_JOINTS] {
+    let thr = 0.2 * pck_normaliser(truth);
+    let mut c = [false; NUM_JOINTS];
+    for j in 0..NUM_JOINTS {
+        c[j] = (truth[j][0] - joints[j][0]).hypot(truth[j][1] - joints[j][1]) <= thr;
+    }
+    c
+}
+
+/// Fits every model of a [`Calibration`] on `samples` (images with a figure and pages without):
+/// joint models on the candidates' per-joint correctness at PCK@0.2, presence models on whether
+/// the image holds a figure. `ridge`: the L2 penalty. Errors: `OutOfRange` when a model has no
+/// rows or only one outcome, and [`fit_logistic`]'s.
+pub fn fit_calibration(samples: &[Sample], ridge: f64, provenance: &str) -> Result<Calibration> {
+    #[derive(Default)]
+    struct Rows {
+        x: Vec<Vec<f64>>,
+        y: Vec<bool>,
+    }
+    let mut joints: [Rows; 4] = Default::default();
+    let mut presence: [Rows; 3] = Default::default();
+    for s in samples {
+        let f = features(&s.evidence);
+        let has = s.truth.is_some();
+        for (k, x) in [&f.presence_fmp, &f.presence_blazepose, &f.presence_auto].into_iter().enumerate() {
+            if let Some(x) = x {
+                presence[k].x.push(x.clone());
+                presence[k].y.push(has);
+            }
+        }
+        let Some(truth) = &s.truth else { continue };
+        for c in &f.candidates {
+            let ok = correct(truth, &c.joints.xy);
+            let k = if c.backend == Backend::Fmp { 0 } else { 1 };
+            for j in 0..NUM_JOINTS {
+                joints[k].x.push(c.alone[j].clone());
+                joints[k].y.push(ok[j]);
+                if let Some(a) = &c.auto {
+                    joints[k + 2].x.push(a[j].clone());
+                    joints[k + 2].y.push(ok[j]);
+                }
+            }
+        }
+    }
+    let fit = |r: &Rows, name: &'static str| -> Result<Vec<f64>> {
+        let pos = r.y.iter().filter(|&&v| v).count();
+        if pos == 0 || pos == r.y.len() {
+            return Err(Error::OutOfRange {
+                name,
+                detail: format!("{} rows with {pos} positive: need both outcomes", r.y.len()),
+            });
+        }
+        fit_logistic(&r.x, &r.y, ridge)
+    };
+    Ok(Calibration {
+        format: "sketchbody-detector-calibration".into(),
+        version: 1,
+        provenance: provenance.into(),
+        joints: JointModels {
+            fmp: fit(&joints[0], "fmp joint rows")?,
+            blazepose: fit(&joints[1], "blazepose joint rows")?,
+            fmp_auto: fit(&joints[2], "fmp_auto joint rows")?,
+            blazepose_auto: fit(&joints[3], "blazepose_auto joint rows")?,
+        },
+        presence: PresenceModels {
+            fmp: fit(&presence[0], "fmp presence rows")?,
+            blazepose: fit(&presence[1], "blazepose presence rows")?,
+            auto: fit(&presence[2], "auto presence rows")?,
+        },
+    })
+}
+
+/// One backend's score on one set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SetScore {
+    /// Images in the set.
+    pub n: usize,
+    /// Mean PCK@0.1 and @0.2 over the images with a figure (0 for an image answered "no
+    /// figure"); NaN for a set without figures.
+    pub pck: [f64; 2],
+    /// Fraction of images answered "no figure".
+    pub no_figure: f64,
+    /// Mean wall time of the backend(s) per image, s (`auto`: both).
+    pub seconds: f64,
+    /// How often the answer came from fmp, blazepose, or limbs of both, as fractions of the
+    /// answered images.
+    pub chosen: [f64; 3],
+}
+
+/// One bin of a reliability table: figures whose confidence fell in `[lo, hi)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReliabilityBin {
+    /// Lower edge of the bin.
+    pub lo: f64,
+    /// Upper edge.
+    pub hi: f64,
+    /// Figures in the bin.
+    pub n: usize,
+    /// Their mean confidence.
+    pub mean_confidence: f64,
+    /// Their mean observed PCK@0.2.
+    pub observed: f64,
+}
+
+/// Scores `options` (backend, strictness, fusion) on `samples` (one set). Errors: the metrics'
+/// (degenerate ground truth) and a calibration of the wrong shape.
+pub fn score_set(samples: &[Sample], cal: &Calibration, options: &FigureOptions) -> Result<SetScore> {
+    let backend = options.backend;
+    let (mut p1, mut p2, mut with, mut none, mut secs, mut chosen, mut answered) =
+        (0.0, 0.0, 0usize, 0usize, 0.0, [0usize; 3], 0usize);
+    for s in samples {
+        secs += match backend {
+            Backend::Fmp => s.seconds[0],
+            Backend::BlazePose => s.seconds[1],
+            Backend::Auto => s.seconds[0] + s.seconds[1],
+        };
+        let fig = match decide(&restricted(&s.evidence, backend), cal, options) {
+            Ok(f) => Some(f),
+            Err(Error::NoFigure { .. }) => None,
+            Err(e) => return Err(e),
+        };
+        none += usize::from(fig.is_none());
+        if let Some(f) = &fig {
+            answered += 1;
+            match f.backend {
+                Backend::Fmp => chosen[0] += 1,
+                Backend::BlazePose => chosen[1] += 1,
+                Backend::Auto => chosen[2] += 1,
+            }
+        }
+        if let Some(t) = &s.truth {
+            with += 1;
+            if let Some(f) = &fig {
+                p1 += pck(t, &f.joints.xy, 0.1)?;
+                p2 += pck(t, &f.joints.xy, 0.2)?;
+            }
+        }
+    }
+    let n = samples.len().max(1) as f64;
+    let a = answered.max(1) as f64;
+    Ok(SetScore {
+        n: samples.len(),
+        pck: if with == 0 { [f64::NAN; 2] } else { [p1 / with as f64, p2 / with as f64] },
+        no_figure: none as f64 / n,
+        seconds: secs / n,
+        chosen: chosen.map(|c| c as f64 / a),
+    })
+}
+
+/// The reliability table of the figure confidence of `options`' backend on the images with a figure: `bins`
+/// equal bins of [0, 1], each with its mean confidence and observed PCK@0.2. Errors: as
+/// [`score_set`].
+pub fn reliability(
+    samples: &[Sample],
+    cal: &Calibration,
+    options: &FigureOptions,
+    bins: usize,
+) -> Result<Vec<ReliabilityBin>> {
+    let bins = bins.max(1);
+    let backend = options.backend;
+    let mut acc = vec![(0usize, 0.0, 0.0); bins];
+    for s in samples {
+        let Some(t) = &s.truth else { continue };
+        let f = match decide(&restricted(&s.evidence, backend), cal, options) {
+            Ok(f) => f,
+            Err(Error::NoFigure { .. }) => continue,
+            Err(e) => return Err(e),
+        };
+        let k = ((f.confidence * bins as f64) as usize).min(bins - 1);
+        acc[k].0 += 1;
+        acc[k].1 += f.confidence;
+        acc[k].2 += pck(t, &f.joints.xy, 0.2)?;
+    }
+    Ok(acc
+        .iter()
+        .enumerate()
+        .map(|(k, &(n, c, o))| ReliabilityBin {
+            lo: k as f64 / bins as f64,
+            hi: (k + 1) as f64 / bins as f64,
+            n,
+            mean_confidence: if n == 0 { f64::NAN } else { c / n as f64 },
+            observed: if n == 0 { f64::NAN } else { o / n as f64 },
+        })
+        .collect())
+}
+
+/// Expected calibration error of a reliability table: the bins' |confidence − observed|
+/// weighted by their counts.
+pub fn expected_calibration_error(table: &[ReliabilityBin]) -> f64 {
+    let n: usize = table.iter().map(|b| b.n).sum();
+    if n == 0 {
+        return f64::NAN;
+    }
+    table.iter().filter(|b| b.n > 0).map(|b| b.n as f64 * (b.mean_confidence - b.observed).abs()).sum::<f64>()
+        / n as f64
+}
