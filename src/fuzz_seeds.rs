@@ -31,8 +31,8 @@ fn jpeg(px: &[u8], w: u32, h: u32, colour: image::ExtendedColorType) -> Vec<u8> 
     out
 }
 
-/// Image seeds: gray/RGB/RGBA PNG, gray/RGB JPEG, a truncated JPEG and header bombs (a 5 kB JPEG
-/// and a 70-byte PNG claiming 16384², a JPEG claiming exactly 64 Mpx).
+/// Image seeds: gray/RGB/RGBA PNG, gray/RGB JPEG, a truncated JPEG and header bombs (a 1.8 kB JPEG
+/// and a 74-byte PNG claiming 16384², a JPEG claiming exactly 64 Mpx).
 fn image_seeds() -> Vec<(String, Vec<u8>)> {
     let g = sketch_crop();
     let gray = g.as_bytes().to_vec();

@@ -237,7 +237,7 @@ mod tests {
             if too_many {
                 assert!(matches!(r, Err(Error::TooManyPixels { .. })), "{w}x{h}: {:?}", r.err());
             } else {
-                // Exactly 64 Mpx passes the pixel limit, but a 3 kB stream cannot hold 8192²
+                // Exactly 64 Mpx passes the pixel limit, but a 96 x 64 image's stream cannot hold 8192²
                 // (strict zune-jpeg alone decoded it to 192 MB of grey, found by the fuzz seeds).
                 assert!(
                     matches!(&r, Err(Error::Decode { reason, .. }) if reason.contains("cannot hold")),
