@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Runs every test of sketchbody on a fresh Debian 12 machine: installs the Debian packages it
-# needs when missing (blender and python3-numpy for the Blender import test), then cargo tests,
+# needs when missing (blender and python3-numpy for the Blender import and add-on tests), then cargo tests,
 # a short run of every fuzz target (scripts/fuzz.sh; installs cargo-fuzz when missing), the
-# CMake/ctest harness (OpenCV, Ceres, Embree cross-checks, C and C++ API tests under sanitizers)
-# and the Python ctypes test.
+# CMake/ctest harness (OpenCV, Ceres, Embree cross-checks, C and C++ API tests under
+# sanitizers) and the Python package's tests (scripts/test-python.sh).
 # Set SKB_REQUIRE_SHARED_DATA=1 to turn "skipped: ../shared/data missing" into failures (CI does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -40,7 +40,10 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSKB_CARGO_TARGET_DIR="$PWD/targ
 cmake --build build -j "$jobs"
 (cd build && ctest --output-on-failure -j 1)
 
-echo "== Python ctypes test"
-python3 tests/python/test_capi.py
+echo "== Python package (python/tests: bindings drift, the pipeline, the Dask batch)"
+scripts/test-python.sh
+
+echo "== Blender add-on (integrations/blender, headless Blender 3.4; renders docs/img/blender-addon.png)"
+scripts/test-blender-addon.sh
 
 echo "== all tests passed"

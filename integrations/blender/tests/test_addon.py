@@ -1,0 +1,362 @@
+# Headless test of the Sketchbody Blender add-on (Debian's Blender 3.4):
+#   blender -b --factory-startup --python-exit-code 1 --python integrations/blender/tests/test_addon.py -- \
+#       SKETCH.png JOINTS.json OUT.png REPORT.json [DOCS.png]
+# Enables the add-on from integrations/blender/, checks the error paths (missing library: an
+# install hint; missing image: an error report) make nothing, runs "Sketch to body" on the sketch
+# and checks what it made against the sketchbody package (one mesh with the library's vertex and
+# face counts, one armature with the rig's 53 bones and parent tree, every vertex weighted, the
+# posed skin equal to the library's skinning, the posed bone heads equal to the library's forward
+# kinematics, 15 named markers, a material with the sketch as image texture), moves the right
+# wrist marker, re-runs and checks the body changed, renders the result beside the sketch plane
+# (Workbench, 800x600) to OUT.png (copied to DOCS.png when it differs visibly), tries the
+# detector path, and finally clears. Prints one line per check; any failure
+# raises, so Blender exits with status 1.
+import json
+import math
+import os
+import sys
+import time
+
+import bpy
+import numpy as np
+from mathutils import Vector
+
+T0 = time.perf_counter()
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))  # integrations/blender: the add-on package's parent
+args = [os.path.abspath(a) for a in sys.argv[sys.argv.index("--") + 1:]]
+sketch, joints_file, out_png, report_path = args[:4]
+docs_png = args[4] if len(args) > 4 else None  # where the picture goes when it changed
+report = {}
+
+
+def check(name, ok, detail=""):
+    line = f"{'ok  ' if ok else 'FAIL'} {name}" + (f": {detail}" if detail != "" else "")
+    print(line, flush=True)
+    report.setdefault("checks", []).append(line)
+    if not ok:
+        json.dump(report, open(report_path, "w"), indent=1)
+        raise AssertionError(line)
+
+
+def skb_objects():
+    return sorted(o.name for o in bpy.data.objects if o.name.startswith("SKB_"))
+
+
+def run_op(op):
+    """Runs an operator as a user would; returns (result set, error text or '')."""
+    try:
+        return op(), ""
+    except RuntimeError as e:  # background mode turns an ERROR report into RuntimeError
+        return {"CANCELLED"}, str(e)
+
+
+def evaluated_vertices(obj):
+    bpy.context.view_layer.update()
+    ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    m = ev.to_mesh()
+    co = np.empty(len(m.vertices) * 3, dtype=np.float64)
+    m.vertices.foreach_get("co", co)
+    ev.to_mesh_clear()
+    co = co.reshape(-1, 3)
+    mw = np.array(obj.matrix_world)
+    return co @ mw[:3, :3].T + mw[:3, 3]
+
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+import addon_utils  # noqa: E402
+
+mod = addon_utils.enable("sketchbody_blender", default_set=True, handle_error=None)
+check("add-on enabled", mod is not None and hasattr(bpy.types, "SKETCHBODY_PT_panel")
+      and hasattr(bpy.ops.sketchbody, "sketch_to_body"), getattr(mod, "bl_info", {}).get("name", ""))
+from sketchbody_blender import build, package  # noqa: E402
+
+scene = bpy.context.scene
+st = scene.sketchbody
+
+# Error path 1: the library is missing -> an error report with the install hint, nothing made.
+os.environ["SKETCHBODY_LIBRARY"] = "/nonexistent/libsketchbody.so"
+package.forget()
+st.image, st.joints = sketch, joints_file
+res, err = run_op(bpy.ops.sketchbody.sketch_to_body)
+del os.environ["SKETCHBODY_LIBRARY"]
+package.forget()
+check("missing library reports an install hint and makes nothing",
+      res == {"CANCELLED"} and "pip install ./python" in err and skb_objects() == [], err[:160] + "...")
+
+# Error path 2: the image does not exist.
+st.image = os.path.join(os.path.dirname(sketch), "no-such-sketch.png")
+res, err = run_op(bpy.ops.sketchbody.sketch_to_body)
+check("missing image reports an error and makes nothing",
+      res == {"CANCELLED"} and "not found" in err and skb_objects() == [] and "Sketchbody" not in bpy.data.collections,
+      err.strip())
+
+# Error path 3: a joints file that is not a sketchbody-joints2d file.
+bad = os.path.join(os.path.dirname(report_path), "bad_joints.json")
+with open(bad, "w") as f:
+    f.write('{"format": "something-else"}')
+st.image, st.joints = sketch, bad
+res, err = run_op(bpy.ops.sketchbody.sketch_to_body)
+check("bad joints file reports an error and makes nothing",
+      res == {"CANCELLED"} and "joints file" in err and skb_objects() == [], err.strip())
+
+# The main job.
+skb = package.load()
+print(f"sketchbody package {skb.__file__}, library {skb.library_path()}", flush=True)
+st.image, st.joints = sketch, joints_file
+st.gender, st.height, st.rest_pose = "AUTO", 0.0, "A"
+t = time.perf_counter()
+res, err = run_op(bpy.ops.sketchbody.sketch_to_body)
+report["sketch_to_body_seconds"] = time.perf_counter() - t
+check("Sketch to body finished", res == {"FINISHED"}, f"{report['sketch_to_body_seconds']:.1f} s {err}")
+
+# The same job through the package alone: the reference for what the add-on built.
+with skb.run_pipeline(sketch, joints=joints_file,
+                      fit_options=skb.FitOptions(gender="auto", samples=st.samples, iterations=st.iterations)) as r:
+    with r.mesh() as m:
+        rig = m.rig(skb.ExportOptions(rest_pose="a"))
+        n_faces = m.face_count
+
+meshes = [o for o in bpy.data.objects if o.type == "MESH" and o.name.startswith("SKB_Body")]
+arms = [o for o in bpy.data.objects if o.type == "ARMATURE"]
+check("one body mesh, one armature", len(meshes) == 1 and len(arms) == 1, skb_objects()[:3])
+body, arm = meshes[0], arms[0]
+nv = len(body.data.vertices)
+check("mesh vertices = library", nv == len(rig.rest_vertices), f"{nv} vs {len(rig.rest_vertices)}")
+check("mesh faces = library quads", len(body.data.polygons) == n_faces, f"{len(body.data.polygons)}")
+bones = arm.data.bones
+parents = {b.name: (b.parent.name if b.parent else None) for b in bones}
+expected = {n: (rig.bone_names[p] if p >= 0 else None) for n, p in zip(rig.bone_names, rig.parents)}
+check("armature has 53 bones with the rig's parent tree", len(bones) == 53 and parents == expected,
+      f"{len(bones)} bones, root {[n for n, p in parents.items() if p is None]}")
+check("mesh is skinned to the armature", body.parent == arm and any(
+    md.type == "ARMATURE" and md.object == arm for md in body.modifiers))
+unweighted = sum(1 for v in body.data.vertices if not any(g.weight > 0 for g in v.groups))
+check("every vertex in a weighted group", unweighted == 0 and len(body.vertex_groups) == 53,
+      f"{unweighted} unweighted, {len(body.vertex_groups)} groups")
+
+# Blender's armature deformation of the bind-pose mesh against the library's own skinning
+# (the rig's posed vertices, glTF frame: Blender x, -z, y).
+posed = evaluated_vertices(body)
+lib_posed = np.asarray(rig.posed_vertices, dtype=np.float64)
+lib_posed_blender = np.stack([lib_posed[:, 0], -lib_posed[:, 2], lib_posed[:, 1]], axis=1)
+err_skin = np.linalg.norm(posed - lib_posed_blender, axis=1)
+report["posed_vertex_error_max_m"] = float(err_skin.max())
+check("posed skin = library skinning", err_skin.max() < 1e-3,
+      f"max {err_skin.max() * 1000:.3f} mm, mean {err_skin.mean() * 1000:.4f} mm")
+heads = np.array([list(arm.matrix_world @ arm.pose.bones[n].head) for n in rig.bone_names])
+lib_heads = np.asarray(rig.posed_heads)
+lib_heads = np.stack([lib_heads[:, 0], -lib_heads[:, 2], lib_heads[:, 1]], axis=1)
+err_heads = np.linalg.norm(heads - lib_heads, axis=1)
+check("posed bone heads = library forward kinematics", err_heads.max() < 1e-4,
+      f"max {err_heads.max() * 1000:.4f} mm")
+check("feet on the floor", abs(posed[:, 2].min()) < 0.005, f"lowest z {posed[:, 2].min():.4f} m")
+
+plane = build.find_plane()
+markers = build.find_markers(plane) if plane else []
+names = [m["skb_joint"] for m in markers]
+check("15 joint markers on the sketch plane", len(markers) == 15 and names == list(skb.JOINT_NAMES)
+      and all(m.name == "SKB_joint_" + n and m.parent == plane for m, n in zip(markers, names)), ", ".join(names))
+file_xy = skb.Joints2D.from_json(joints_file).xy
+xy, visible = build.read_markers(plane, skb.JOINT_NAMES)
+check("markers read back as the file's pixels", np.abs(xy - file_xy).max() < 1e-3 and visible.all(),
+      f"max {np.abs(xy - file_xy).max():.2e} px")
+
+mat = body.active_material
+tex = [n for n in mat.node_tree.nodes if n.type == "TEX_IMAGE"] if mat and mat.use_nodes else []
+check("body material with the sketch as image texture",
+      len(tex) == 1 and tex[0].image is not None and os.path.samefile(bpy.path.abspath(tex[0].image.filepath), sketch)
+      and tex[0].image.size[0] > 0 and "sketch" in body.data.uv_layers, f"{mat.name} / {tex[0].image.name}")
+
+seen_attr = body.data.color_attributes.get("sketch_seen")
+seen = np.empty(nv * 4, dtype=np.float32)
+if seen_attr is not None:
+    seen_attr.data.foreach_get("color", seen)
+seen = seen.reshape(-1, 4)[:, 0]
+check("the sketch's view on the body: front seen, back grey",
+      seen_attr is not None and any(n.type == "ATTRIBUTE" and n.attribute_name == "sketch_seen"
+                                    for n in mat.node_tree.nodes) and 0.3 < float(np.mean(seen > 0.5)) < 0.7,
+      f"{np.mean(seen > 0.5):.0%} of the vertices seen, {np.mean(seen == 0):.0%} facing away")
+
+# Low-confidence highlighting: give one joint a low confidence (the file's are all 1) and
+# change the threshold; its update callback re-highlights every marker.
+default_threshold = st.threshold
+low_marker = markers[names.index("l_wrist")]
+low_marker["skb_confidence"] = 0.2
+st.threshold = 0.5
+ok_marker = markers[0]
+check("low-confidence marker highlighted",
+      low_marker["skb_low_confidence"] and low_marker.active_material.name == "SKB_JointLow"
+      and low_marker.scale.x > ok_marker.scale.x and not ok_marker["skb_low_confidence"]
+      and ok_marker.active_material.name == "SKB_JointOK", f"{low_marker.active_material.name}")
+low_marker["skb_confidence"] = 1.0
+st.threshold = default_threshold
+
+# A marker dragged off the sketch: the re-run refuses with a message and keeps the body.
+head_marker = markers[0]
+keep_loc = head_marker.location.copy()
+head_marker.location.y += plane["skb_height"] * plane["skb_metres_per_px"]
+bpy.context.view_layer.update()
+res, err = run_op(bpy.ops.sketchbody.rerun)
+check("marker off the sketch: re-run reports it, body kept",
+      res == {"CANCELLED"} and "outside the sketch: head" in err and len(skb_objects()) == 18, err.strip())
+head_marker.location = keep_loc
+bpy.context.view_layer.update()
+
+# The correction step: move the right wrist marker 40 px up and 30 px outward (left in the
+# image, -x), then re-run from the markers.
+wrist = markers[names.index("r_wrist")]
+s = plane["skb_metres_per_px"]
+wrist.location.x -= 30 * s
+wrist.location.y += 40 * s
+before_heads = heads.copy()
+before = posed.copy()
+t = time.perf_counter()
+res, err = run_op(bpy.ops.sketchbody.rerun)
+report["rerun_seconds"] = time.perf_counter() - t
+check("Re-run from corrected joints finished", res == {"FINISHED"}, f"{report['rerun_seconds']:.1f} s {err}")
+check("moved marker shown as corrected (orange)", wrist.active_material.name == "SKB_JointMoved"
+      and sum(m.active_material.name == "SKB_JointMoved" for m in markers) == 1, wrist.active_material.name)
+xy2, _ = build.read_markers(plane, skb.JOINT_NAMES)
+i = list(skb.JOINT_NAMES).index("r_wrist")
+check("moved marker reads back moved", np.allclose(xy2[i], file_xy[i] + [-30, -40], atol=1e-3), f"{xy2[i]}")
+body2 = bpy.data.objects["SKB_Body"]
+arm2 = bpy.data.objects["SKB_Armature"]
+posed2 = evaluated_vertices(body2)
+moved = np.linalg.norm(posed2 - before, axis=1)
+hand = arm2.data.bones[rig.bone_names.index("r_wrist") if "r_wrist" in rig.bone_names else 0].name
+hand_before = before_heads[rig.bone_names.index(hand)]
+hand_after = np.array(list(arm2.matrix_world @ arm2.pose.bones[hand].head))
+report["rerun_max_vertex_move_m"] = float(moved.max())
+check("result changed after the correction", moved.max() > 0.02 and len(skb_objects()) == 18,
+      f"vertices moved up to {moved.max() * 100:.1f} cm; {hand} head moved "
+      f"{np.linalg.norm(hand_after - hand_before) * 100:.1f} cm; {len(skb_objects())} SKB objects")
+
+
+
+class StubLayout:
+    """Stands in for a UI layout (background mode draws no panels): records the labels and
+    operators the panel would show."""
+
+    def __init__(self, log):
+        self.log = log
+
+    def __getattr__(self, name):
+        def call(*args, **kwargs):
+            if name in ("label", "operator", "prop"):
+                self.log.append((name, kwargs.get("text") or (args[-1] if args else "")))
+            return self
+        return call
+
+
+drawn = []
+panel = bpy.types.SKETCHBODY_PT_panel
+panel.draw(type("P", (), {"layout": StubLayout(drawn)})(), bpy.context)
+ops = [t for k, t in drawn if k == "operator"]
+check("panel draws its settings and four operators", len(ops) == 4 and ("prop", "image") in drawn, ", ".join(ops))
+
+def pixels(path):
+    im = bpy.data.images.load(path)
+    a = np.empty(im.size[0] * im.size[1] * 4, dtype=np.float32)
+    im.pixels.foreach_get(a)
+    size = tuple(im.size)
+    bpy.data.images.remove(im)
+    return size, a
+
+
+def render(body_obj, path, docs_path):
+    """The sketch plane with its markers beside the body, front view, Workbench, 800x600, to
+    `path`; copied to `docs_path` only when it differs visibly (Workbench's antialiasing changes
+    a few pixels by a few levels from run to run: no need to dirty the checkout for that)."""
+    plane_obj = build.find_plane()
+    pts = np.concatenate([evaluated_vertices(body_obj),
+                          [list(plane_obj.matrix_world @ Vector(c)) for c in plane_obj.bound_box]])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    centre = (lo + hi) / 2
+    cam = bpy.data.objects.new("render_camera", bpy.data.cameras.new("render_camera"))
+    cam.data.type = "ORTHO"
+    cam.data.ortho_scale = max((hi[0] - lo[0]) * 1.06, (hi[2] - lo[2]) * 1.06 * 800 / 600)
+    cam.location = (centre[0], lo[1] - 5.0, centre[2])
+    cam.rotation_euler = (math.radians(90), 0.0, 0.0)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    if scene.world is None:
+        scene.world = bpy.data.worlds.new("render_world")
+    scene.world.color = (0.75, 0.76, 0.8)  # Workbench's background
+    scene.render.engine = "BLENDER_WORKBENCH"
+    scene.display.shading.light = "STUDIO"
+    scene.display.shading.color_type = "TEXTURE"
+    scene.display.shading.show_cavity = True
+    scene.display.render_aa = "8"
+    scene.render.resolution_x, scene.render.resolution_y = 800, 600
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = False
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.filepath = path
+    t = time.perf_counter()
+    bpy.ops.render.render(write_still=True)
+    seconds = time.perf_counter() - t
+    bpy.data.objects.remove(cam, do_unlink=True)
+    check("screenshot rendered", os.path.getsize(path) > 10000, f"{path} in {seconds:.1f} s")
+    if docs_path:
+        new_size, new_px = pixels(path)
+        old_size, old_px = pixels(docs_path) if os.path.exists(docs_path) else (None, None)
+        changed = old_size != new_size or float(np.mean(np.abs(new_px - old_px) > 16 / 255)) > 1e-3
+        if changed:
+            import shutil
+
+            shutil.copyfile(path, docs_path)
+        print(f"docs picture {docs_path}: {'updated' if changed else 'unchanged (same render within antialiasing noise)'}",
+              flush=True)
+
+
+def with_suffix(path, suffix):
+    return None if path is None else path[:-len(".png")] + suffix + ".png"
+
+
+# The picture after the correction.
+render(body2, out_png, docs_png)
+
+# Other rig options: T-pose bind, Mixamo names; Blender's deformation must still be the library's.
+st.rest_pose, st.naming = "T", "MIXAMO"
+res, err = run_op(bpy.ops.sketchbody.rerun)
+xy3, vis3 = build.read_markers(plane, skb.JOINT_NAMES)
+with skb.run_pipeline(sketch, joints=skb.Joints2D(xy3, vis3),
+                      fit_options=skb.FitOptions(gender="auto", samples=st.samples, iterations=st.iterations)) as r:
+    with r.mesh() as m:
+        rig_t = m.rig(skb.ExportOptions(naming="mixamo", rest_pose="t"))
+body3, arm3 = bpy.data.objects["SKB_Body"], bpy.data.objects["SKB_Armature"]
+p3 = np.asarray(rig_t.posed_vertices, dtype=np.float64)
+err3 = np.linalg.norm(evaluated_vertices(body3) - np.stack([p3[:, 0], -p3[:, 2], p3[:, 1]], axis=1), axis=1)
+check("T-pose bind with Mixamo names: names and skinning as the library's",
+      res == {"FINISHED"} and [b.name for b in arm3.data.bones] == rig_t.bone_names and err3.max() < 1e-3,
+      f"{arm3.data.bones[1].name}, ...; max {err3.max() * 1000:.3f} mm")
+st.rest_pose, st.naming = "A", "PROJECT"
+
+# The detector path (no joints file): markers get the detector's confidences, the low ones red.
+# When the library's detector fails on this sketch, the add-on must report it and keep the scene.
+before_objects = skb_objects()
+st.joints = ""
+res, err = run_op(bpy.ops.sketchbody.sketch_to_body)
+if res == {"FINISHED"}:
+    conf = [m["skb_confidence"] for m in build.find_markers(build.find_plane())]
+    lows = [m for m in build.find_markers(build.find_plane()) if m["skb_low_confidence"]]
+    report["detector_confidence"] = conf
+    check("detector path: confidences on the markers, the low ones red and larger",
+          len(conf) == 15 and all(0 < c < 1 for c in conf)
+          and all(m.active_material.name == "SKB_JointLow" for m in lows)
+          and len(skb_objects()) == 18,
+          f"{len(lows)} below {st.threshold}: " + ", ".join(f"{m['skb_joint']} {m['skb_confidence']:.2f}" for m in lows))
+    # The picture of the detector's joints, the doubtful ones red.
+    render(bpy.data.objects["SKB_Body"], with_suffix(out_png, "-detect"), with_suffix(docs_png, "-detect"))
+else:
+    report["detector_error"] = err
+    check("detector path failed cleanly: an error report, the scene kept",
+          ("detection" in err.lower() or "no figure" in err.lower()) and skb_objects() == before_objects, err.strip())
+
+res, err = run_op(bpy.ops.sketchbody.clear)
+check("Clear removes everything", res == {"FINISHED"} and skb_objects() == []
+      and "Sketchbody" not in bpy.data.collections, str(skb_objects()))
+report["total_seconds"] = time.perf_counter() - T0
+print(f"blender add-on test: all checks passed in {report['total_seconds']:.1f} s", flush=True)
+json.dump(report, open(report_path, "w"), indent=1)

@@ -1,0 +1,269 @@
+"""Batch conversion of a folder of sketches on a Dask distributed cluster.
+
+    python -m sketchbody.batch SKETCH_DIR OUT_DIR [--scheduler local|tcp://HOST:8786] [--workers 2]
+
+One task per sketch. A sketch `NAME.png` (or .jpg/.jpeg) uses the 2-D joints in
+`NAME_joints.json` or `NAME.joints.json` beside it when present (the paper's user-correction
+step), else the embedded detector. Each task writes `OUT_DIR/NAME/` (body.glb, body.obj,
+body_rest.obj, joints2d.json, result.json, preview.png) atomically: into a hidden temporary
+folder `OUT_DIR/.NAME.partial-*` first, renamed to `OUT_DIR/NAME` when complete, so a failed or
+killed task never leaves a half-written `NAME/`. A failure is reported per sketch (a record
+with the status name and message) and never stops the batch. The records are printed as the
+tasks finish and written to `OUT_DIR/batch.json`; the exit status is 0 when every sketch
+converted, 1 when some failed.
+
+With `--scheduler local` (the default) a LocalCluster of `--workers` processes is started
+in-process; with an address the tasks go to a running cluster (`dask scheduler`, `dask worker`
+on each machine, sketchbody installed on each, SKETCH_DIR and OUT_DIR on storage every worker
+sees at the same path; docs/python.md). `sketchbody run-dataset` stays the single-machine path.
+
+Why Dask distributed rather than Ray: dask and distributed are pure-Python packages that pip
+installs on the Python the package already uses, a LocalCluster runs in-process
+for the tests and for one workstation, the same code talks to a multi-machine cluster through
+one scheduler address, and its futures API (submit, as_completed, per-future exceptions) is all
+a one-task-per-file batch needs. Ray brings a large binary runtime (its own object store and
+control service) that this coarse, file-in/file-out workload does not use.
+"""
+
+import argparse
+import dataclasses
+import glob
+import json
+import logging
+import os
+import shutil
+import socket
+import sys
+import tempfile
+import time
+import uuid
+
+SKETCH_EXTENSIONS = (".png", ".jpg", ".jpeg")
+RESULTS_FILE = "batch.json"
+
+
+@dataclasses.dataclass
+class Job:
+    """One sketch to convert: `name` (the output folder's name), `sketch` and the optional
+    `joints` file (absolute paths)."""
+
+    name: str
+    sketch: str
+    joints: str = None
+
+
+def find_sketches(sketch_dir):
+    """The Jobs of the PNG/JPEG files in `sketch_dir` (not recursive), sorted by name."""
+    jobs, seen = [], set()
+    for path in sorted(glob.glob(os.path.join(glob.escape(os.path.abspath(sketch_dir)), "*"))):
+        stem, ext = os.path.splitext(os.path.basename(path))
+        if ext.lower() not in SKETCH_EXTENSIONS or not os.path.isfile(path) or stem.startswith("."):
+            continue
+        name = stem if stem not in seen else f"{stem}_{ext[1:].lower()}"
+        seen.add(name)
+        joints = None
+        for cand in (f"{stem}_joints.json", f"{stem}.joints.json"):
+            p = os.path.join(os.path.dirname(path), cand)
+            if os.path.isfile(p):
+                joints = p
+                break
+        jobs.append(Job(name, path, joints))
+    return jobs
+
+
+def _record(job, **kw):
+    rec = {"name": job.name, "sketch": job.sketch, "joints": job.joints, "ok": False, "skipped": False,
+           "status": None, "status_name": None, "message": "", "output": None, "seconds": 0.0,
+           "host": socket.gethostname(), "pid": os.getpid()}
+    rec.update(kw)
+    return rec
+
+
+def _write_json(path, data):
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(data, f, indent=2)
+        f.write("\n")
+
+
+def convert_sketch(job, out_dir, fit_options=None, export_options=None, skip_existing=False, preview_size=512):
+    """Converts one sketch into `out_dir/job.name/` atomically (runs on a worker). Returns a
+    record dict: ok, status / status_name / message on failure, output, seconds, host, pid.
+    Never raises for a bad sketch: every exception becomes a failed record."""
+    t0 = time.perf_counter()
+    final = os.path.join(out_dir, job.name)
+    if skip_existing and os.path.isdir(final):
+        return _record(job, ok=True, skipped=True, output=final)
+    tmp = None
+    try:
+        import sketchbody as skb  # imported on the worker
+
+        tmp = tempfile.mkdtemp(prefix=f".{job.name}.partial-", dir=out_dir)
+        with skb.run_pipeline(job.sketch, joints=job.joints, fit_options=fit_options) as result, \
+                result.mesh() as mesh:
+            mesh.write_glb(os.path.join(tmp, "body.glb"), export_options)
+            mesh.write_obj(os.path.join(tmp, "body.obj"), posed=True)
+            mesh.write_obj(os.path.join(tmp, "body_rest.obj"), posed=False)
+            if preview_size:
+                mesh.write_preview(os.path.join(tmp, "preview.png"), preview_size)
+            result.joints2d().to_json(os.path.join(tmp, "joints2d.json"))
+            cam = result.camera()
+            low, support = result.evidence()
+            value, confidence = result.gender_value()
+            summary = {
+                "format": "sketchbody-batch-result", "version": 1, "sketch": job.sketch, "joints": job.joints,
+                "gender": result.gender, "gender_fitted": result.gender_fitted, "gender_value": value,
+                "gender_confidence": confidence, "score": result.score, "low_evidence": low,
+                "edge_support": support, "library_version": skb.version(),
+                "camera": {"sx": cam.sx, "sy": cam.sy, "r": cam.r.tolist(), "t": cam.t.tolist()},
+                "joints3d_posed": result.joints3d("posed").tolist(),
+                "shape_weights": result.shape_weights().tolist(),
+            }
+        summary["seconds"] = time.perf_counter() - t0
+        _write_json(os.path.join(tmp, "result.json"), summary)
+        old = None
+        if os.path.lexists(final):
+            old = tempfile.mkdtemp(prefix=f".{job.name}.old-", dir=out_dir)
+            os.rename(final, os.path.join(old, job.name))
+        os.rename(tmp, final)
+        tmp = None
+        if old:
+            shutil.rmtree(old, ignore_errors=True)
+        return _record(job, ok=True, output=final, seconds=time.perf_counter() - t0, gender=summary["gender"],
+                       score=summary["score"])
+    except Exception as e:  # noqa: BLE001 - reported per sketch
+        status = getattr(e, "status", None)
+        name = getattr(e, "status_name", None) or type(e).__name__
+        return _record(job, status=status, status_name=name, message=getattr(e, "message", None) or str(e),
+                       seconds=time.perf_counter() - t0)
+    finally:
+        if tmp:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def clean_stale(out_dir):
+    """Removes the hidden temporary folders a killed task may have left in `out_dir`."""
+    removed = []
+    for pattern in (".*.partial-*", ".*.old-*"):
+        for p in glob.glob(os.path.join(glob.escape(out_dir), pattern)):
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
+    return removed
+
+
+def start_client(scheduler="local", workers=2, threads_per_worker=1, rayon_threads=None):
+    """A dask.distributed Client: a LocalCluster of `workers` processes for "local", else
+    the scheduler at `scheduler` (e.g. "tcp://10.0.0.5:8786"). `rayon_threads` sets
+    RAYON_NUM_THREADS in the local workers (default: the cores divided among the workers)."""
+    from distributed import Client, LocalCluster
+
+    if scheduler in (None, "", "local"):
+        if rayon_threads is None:
+            rayon_threads = max(1, (os.cpu_count() or 1) // max(1, workers * threads_per_worker))
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=threads_per_worker, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR,
+                               env={"RAYON_NUM_THREADS": str(rayon_threads)})
+        return Client(cluster)
+    return Client(scheduler)
+
+
+def run_batch(sketch_dir, out_dir, client=None, scheduler="local", workers=2, threads_per_worker=1,
+              rayon_threads=None, fit_options=None, export_options=None, skip_existing=False, preview_size=512,
+              on_result=None):
+    """Converts every sketch of `sketch_dir` into `out_dir`, one Dask task per sketch, on
+    `client` (None: start_client(scheduler, workers, ...), closed at the end). Calls
+    `on_result(record)` as each task finishes; writes all records to `out_dir/batch.json`;
+    returns them sorted by name. A task whose worker dies is reported with status_name
+    "WorkerError" (Dask reschedules it first, up to its allowed-failures)."""
+    from distributed import as_completed
+
+    out_dir = os.path.abspath(out_dir)
+    os.makedirs(out_dir, exist_ok=True)
+    clean_stale(out_dir)
+    jobs = find_sketches(sketch_dir)
+    own = client is None
+    if own:
+        client = start_client(scheduler, workers, threads_per_worker, rayon_threads)
+    records = []
+    try:
+        futures = {}
+        for job in jobs:
+            fut = client.submit(convert_sketch, job, out_dir, fit_options, export_options, skip_existing, preview_size,
+                                key=f"sketchbody-{job.name}-{uuid.uuid4().hex[:8]}", pure=False)
+            futures[fut] = job
+        for fut in as_completed(list(futures)):
+            job = futures[fut]
+            try:
+                rec = fut.result()
+            except Exception as e:  # noqa: BLE001 - the worker died or the task could not run
+                rec = _record(job, status_name="WorkerError", message=f"{type(e).__name__}: {e}")
+            records.append(rec)
+            if on_result:
+                on_result(rec)
+    finally:
+        if own:
+            cluster = getattr(client, "cluster", None)
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    records.sort(key=lambda r: r["name"])
+    tmp = os.path.join(out_dir, f".{RESULTS_FILE}.tmp-{os.getpid()}")
+    _write_json(tmp, {"format": "sketchbody-batch", "version": 1, "sketch_dir": os.path.abspath(sketch_dir),
+                      "results": records})
+    os.replace(tmp, os.path.join(out_dir, RESULTS_FILE))
+    return records
+
+
+def _line(rec):
+    if rec["ok"]:
+        what = "skipped (exists)" if rec["skipped"] else f"{rec.get('gender', '')}, score {rec.get('score', 0):.3f}"
+        return f"ok    {rec['name']}: {rec['seconds']:.1f} s, {what} -> {rec['output']}"
+    return f"FAIL  {rec['name']}: {rec['status_name']}: {rec['message']} ({rec['seconds']:.1f} s)"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python -m sketchbody.batch",
+                                 description="Convert a folder of sketches on a Dask cluster, one task per sketch.")
+    ap.add_argument("sketch_dir", metavar="SKETCH_DIR")
+    ap.add_argument("out_dir", metavar="OUT_DIR")
+    ap.add_argument("--scheduler", default="local", help="'local' (a LocalCluster in-process) or ADDRESS "
+                    "of a running scheduler (tcp://host:8786)")
+    ap.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    ap.add_argument("--threads-per-worker", type=int, default=1, help="tasks per local worker at once (default 1)")
+    ap.add_argument("--rayon-threads", type=int, default=None,
+                    help="the library's threads per local worker (default: cores / workers)")
+    ap.add_argument("--gender", choices=["f", "m", "auto"], default=None)
+    ap.add_argument("--height", type=float, default=None, help="the characters' rest height, metres")
+    ap.add_argument("--samples", type=int, default=None)
+    ap.add_argument("--iterations", type=int, default=None)
+    ap.add_argument("--seed", type=int, default=None)
+    ap.add_argument("--naming", choices=["project", "mixamo", "unreal"], default=None)
+    ap.add_argument("--rest-pose", choices=["a", "t"], default=None)
+    ap.add_argument("--origin", choices=["floor", "pelvis"], default=None)
+    ap.add_argument("--preview-size", type=int, default=512, help="preview.png size; 0: no preview")
+    ap.add_argument("--skip-existing", action="store_true", help="keep OUT_DIR/NAME folders already there")
+    ap.add_argument("--quiet", action="store_true")
+    a = ap.parse_args(argv)
+    if a.workers < 1 or a.threads_per_worker < 1:
+        ap.error("--workers and --threads-per-worker must be >= 1")
+    if not os.path.isdir(a.sketch_dir):
+        ap.error(f"{a.sketch_dir}: not a folder")
+
+    from .mesh import ExportOptions
+    from .pipeline import FitOptions
+
+    fit = FitOptions(gender=a.gender, height=a.height, samples=a.samples, iterations=a.iterations, seed=a.seed)
+    export = ExportOptions(naming=a.naming, rest_pose=a.rest_pose, origin=a.origin)
+    t0 = time.perf_counter()
+    show = None if a.quiet else (lambda r: print(_line(r), flush=True))
+    records = run_batch(a.sketch_dir, a.out_dir, scheduler=a.scheduler, workers=a.workers,
+                        threads_per_worker=a.threads_per_worker, rayon_threads=a.rayon_threads, fit_options=fit,
+                        export_options=export, skip_existing=a.skip_existing, preview_size=a.preview_size,
+                        on_result=show)
+    ok = sum(r["ok"] for r in records)
+    print(f"{len(records)} sketches: {ok} ok, {len(records) - ok} failed; wall {time.perf_counter() - t0:.1f} s; "
+          f"results in {os.path.join(os.path.abspath(a.out_dir), RESULTS_FILE)}")
+    return 0 if ok == len(records) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

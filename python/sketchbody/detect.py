@@ -1,0 +1,82 @@
+"""2-D figure detection: the context's embedded detector or a model file."""
+
+import ctypes
+import dataclasses
+from typing import Optional, Tuple
+
+import numpy as np
+
+from . import _arrays as A
+from . import _bindings as B
+from ._lib import Handle, NoFigure, error, lib, new_handle
+from ._options import OptionsBase, options_handle
+from .context import default_context
+from .images import as_image
+from .pose import Joints2D
+
+
+@dataclasses.dataclass
+class DetectOptions(OptionsBase):
+    """Options of detect() (None: the library default, the sketch search: figures from 1/2
+    of the shorter side to the longer side, 7 levels per octave). `threshold` (NaN: the
+    model's own); `figure_range` = (min_fraction, max_fraction); `scales` = (min_cell_px,
+    max_cell_px), replacing the figure range; `levels_per_octave` (0: the model's own)."""
+
+    threshold: Optional[float] = None
+    scales: Optional[Tuple[float, float]] = None
+    figure_range: Optional[Tuple[float, float]] = None
+    levels_per_octave: Optional[int] = None
+
+    _c_prefix = "skb_detect_options"
+
+
+@dataclasses.dataclass
+class Detection:
+    """The best figure: `joints` (Joints2D, all visible), `confidence` (15,) in (0, 1),
+    `score`."""
+
+    joints: Joints2D
+    confidence: np.ndarray
+    score: float
+
+
+def _detect(fn, first_args, view, keep, rest=()):
+    xy = np.empty((15, 2), dtype=np.float64)
+    conf = np.empty(15, dtype=np.float64)
+    score = ctypes.c_double(float("nan"))
+    st = getattr(lib, fn)(*first_args[:1], ctypes.byref(view), *first_args[1:], *rest, A.ptr(xy), xy.size,
+                          A.ptr(conf), conf.size, ctypes.byref(score))
+    del keep
+    if st != B.SKB_OK:
+        e = error(st, fn)
+        if isinstance(e, NoFigure):
+            e.score = score.value
+        raise e
+    return Detection(Joints2D(xy), conf, score.value)
+
+
+def detect(image, options=None, context=None):
+    """Detects the best figure in `image` (numpy uint8 image or a path) with the embedded
+    detector (trained on synthetic concept sketches). Raises NoFigure (with `.score`) when
+    nothing reaches the threshold. Thread-safe."""
+    ctx = context or default_context()
+    view, keep = as_image(image)
+    with options_handle(options, DetectOptions) as h:
+        return _detect("skb_detect", (ctx._p, h), view, keep)
+
+
+class Detector(Handle):
+    """A detector model loaded from a `.skbd` file or the PARSE model JSON. Immutable and
+    thread-safe."""
+
+    _free_fn = "skb_detector_free"
+
+    def __init__(self, path):
+        super().__init__(new_handle("skb_detector_new_from_file", B.skb_detector, A.path_arg(path)))
+
+    def detect(self, image, threshold=None, min_cell_px=0.0):
+        """As detect(), with this model; `threshold` None: the model's own; `min_cell_px`:
+        skip pyramid levels with smaller cells (0 searches every scale)."""
+        view, keep = as_image(image)
+        t = float("nan") if threshold is None else A.real(threshold, "threshold")
+        return _detect("skb_detector_detect", (self._p,), view, keep, (t, A.real(min_cell_px, "min_cell_px")))

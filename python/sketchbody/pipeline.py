@@ -1,0 +1,211 @@
+"""The main job (sketch + 2-D joints -> rigged, posed body) and the shape fit."""
+
+import ctypes
+import dataclasses
+from typing import Optional
+
+import numpy as np
+
+from . import _arrays as A
+from . import _bindings as B
+from ._lib import Handle, Progress, call, new_handle
+from ._options import OptionsBase, options_handle
+from .context import AUTO, FEMALE, MALE, default_context, gender_name
+from .images import as_image
+from .mesh import Mesh
+from .pose import Camera, Joints2D, PoseOptions, _dict_arg, joints2d_arg
+
+_WHICH = {"rest": B.SKB_JOINTS_REST, "posed": B.SKB_JOINTS_POSED, "estimated": B.SKB_JOINTS_ESTIMATED}
+
+
+@dataclasses.dataclass
+class FitOptions(OptionsBase):
+    """Options of the shape fit (None: the library default; docs/c-api.md "Shape fit").
+    gender: "female", "male" or "auto" (default: fitted as a continuous weight); height:
+    the character's rest height in metres (0.1..10); score: "paper", "filled_iou",
+    "chamfer" (default) or "two_sided_chamfer"; skinning: "linear" or "dual_quaternion"."""
+
+    samples: Optional[int] = None
+    iterations: Optional[int] = None
+    transition_scale: Optional[float] = None
+    score: Optional[str] = None
+    temperature: Optional[float] = None
+    joint_weight: Optional[float] = None
+    height: Optional[float] = None
+    sample_camera: Optional[bool] = None
+    proportion_sd: Optional[float] = None
+    estimate_proportions: Optional[bool] = None
+    raster_side: Optional[int] = None
+    tolerance: Optional[float] = None
+    seed: Optional[int] = None
+    skinning: Optional[str] = None
+    inside_cap: Optional[float] = None
+    dims: Optional[int] = None
+    gender: Optional[str] = None
+
+    _c_prefix = "skb_fit_options"
+    _enums = {
+        "score": {"paper": B.SKB_SCORE_PAPER, "filled_iou": B.SKB_SCORE_FILLED_IOU, "chamfer": B.SKB_SCORE_CHAMFER,
+                  "two_sided_chamfer": B.SKB_SCORE_TWO_SIDED_CHAMFER},
+        "skinning": {"linear": B.SKB_SKIN_LINEAR, "dual_quaternion": B.SKB_SKIN_DUAL_QUATERNION},
+        "gender": {"female": FEMALE, "f": FEMALE, "male": MALE, "m": MALE, "auto": AUTO},
+    }
+
+
+class Result(Handle):
+    """The result of run_pipeline: the fitted body posed to the sketch. Owns all its data;
+    read-only, so several threads may read it at once. Free with close() or `with`."""
+
+    _free_fn = "skb_result_free"
+
+    def _counts(self):
+        nv, nf = ctypes.c_size_t(), ctypes.c_size_t()
+        call("skb_result_counts", self._p, ctypes.byref(nv), ctypes.byref(nf))
+        return nv.value, nf.value
+
+    @property
+    def vertex_count(self):
+        return self._counts()[0]
+
+    @property
+    def face_count(self):
+        return self._counts()[1]
+
+    @property
+    def gender(self):
+        """"female" or "male" (given, or the nearer end of the fitted gender value)."""
+        g, by = ctypes.c_uint32(), ctypes.c_bool()
+        call("skb_result_gender", self._p, ctypes.byref(g), ctypes.byref(by))
+        return gender_name(g.value)
+
+    @property
+    def gender_fitted(self):
+        """True when the gender was fitted, False when given."""
+        g, by = ctypes.c_uint32(), ctypes.c_bool()
+        call("skb_result_gender", self._p, ctypes.byref(g), ctypes.byref(by))
+        return bool(by.value)
+
+    def gender_value(self):
+        """(value: 0 female mean .. 1 male mean, confidence 0.5..1)."""
+        v, c = ctypes.c_double(), ctypes.c_double()
+        call("skb_result_gender_value", self._p, ctypes.byref(v), ctypes.byref(c))
+        return v.value, c.value
+
+    @property
+    def score(self):
+        """The fit's best match score (higher is better)."""
+        g, s = ctypes.c_uint32(), ctypes.c_double()
+        call("skb_result_gender", self._p, ctypes.byref(g), None)
+        call("skb_result_score", self._p, g.value, ctypes.byref(s))
+        return s.value
+
+    def evidence(self):
+        """(low_evidence: bool, edge_support: fraction of the fitted outline near a stroke)."""
+        low, sup = ctypes.c_bool(), ctypes.c_double()
+        call("skb_result_evidence", self._p, ctypes.byref(low), ctypes.byref(sup))
+        return bool(low.value), sup.value
+
+    def vertices(self, posed=True):
+        """(N, 3) float32 vertices, metres, model frame: posed (default) or rest."""
+        out = np.empty((self.vertex_count, 3), dtype=np.float32)
+        call("skb_result_copy_vertices", self._p, bool(posed), A.ptr(out), out.size)
+        return out
+
+    def faces(self):
+        """(F, 4) uint32 quads (counter-clockwise from outside)."""
+        out = np.empty((self.face_count, 4), dtype=np.uint32)
+        call("skb_result_copy_faces", self._p, A.ptr(out), out.size)
+        return out
+
+    def joints2d(self):
+        """The 2-D joints used (Joints2D)."""
+        s = B.skb_joints2d()
+        call("skb_result_joints2d", self._p, ctypes.byref(s))
+        return Joints2D.from_struct(s)
+
+    def joints3d(self, which="posed"):
+        """(15, 3) float64 3-D joints, metres: "rest" (the fitted shape's), "posed" (the
+        mesh's) or "estimated" (the pose step's, a 1.75 m person)."""
+        if which not in _WHICH:
+            raise ValueError(f"which must be one of {sorted(_WHICH)}, not {which!r}")
+        out = np.empty((15, 3), dtype=np.float64)
+        call("skb_result_copy_joints3d", self._p, _WHICH[which], A.ptr(out), out.size)
+        return out
+
+    def camera(self):
+        """The estimated weak-perspective Camera (model metres -> sketch pixels)."""
+        c = B.skb_camera()
+        call("skb_result_camera", self._p, ctypes.byref(c))
+        return Camera.from_struct(c)
+
+    def skin_weights(self):
+        """(bones (N, 4) uint32 in 0..13, weights (N, 4) float32) to the 14 canonical bones.
+        The 53-bone rig's weights: result.mesh().rig()."""
+        n = self.vertex_count
+        bones = np.empty((n, 4), dtype=np.uint32)
+        weights = np.empty((n, 4), dtype=np.float32)
+        call("skb_result_copy_skin_weights", self._p, A.ptr(bones), A.ptr(weights), bones.size)
+        return bones, weights
+
+    def shape_weights(self):
+        """The fitted PCA shape weights (metres)."""
+        n = ctypes.c_size_t()
+        call("skb_result_shape_weights", self._p, None, 0, ctypes.byref(n))
+        out = np.empty(n.value, dtype=np.float64)
+        call("skb_result_shape_weights", self._p, A.ptr(out), out.size, None)
+        return out
+
+    def mesh(self):
+        """A new Mesh of the result (fitted rest shape, posed as in the result) for UVs,
+        normals, triangles, the rig and export (write_glb, write_obj, write_preview)."""
+        return Mesh(new_handle("skb_result_mesh", B.skb_mesh, self._p))
+
+
+def run_pipeline(sketch, joints=None, fit_options=None, pose_options=None, dictionary=None, progress=None,
+                 cancel=None, context=None):
+    """The main job: Canny edges of `sketch` (numpy uint8 image or a PNG/JPEG path), the 2-D
+    joints (`joints`: Joints2D, a sketchbody-joints2d JSON path, a dict or a (15, 2) array;
+    None: the embedded detector finds them), the 3-D pose and camera, the shape fit and the
+    fitted body posed to the estimate. Returns a Result.
+
+    `progress(fraction)` is called on the calling thread after each stage and fit iteration;
+    returning False cancels. `cancel` (e.g. a threading.Event, set from any thread) cancels
+    too. Cancelling raises Cancelled within one fit iteration; an exception raised by
+    `progress` cancels and is re-raised. The GIL is released while the library works."""
+    ctx = context or default_context()
+    view, keep = as_image(sketch, "sketch")
+    j = None if joints is None else joints2d_arg(joints).to_struct()
+    d = None if dictionary is None else _dict_arg(dictionary)
+    prog = Progress(progress, cancel)
+    out = ctypes.POINTER(B.skb_result)()
+    with options_handle(fit_options, FitOptions) as fh, options_handle(pose_options, PoseOptions) as ph:
+        try:
+            call("skb_run_pipeline", ctx._p, ctypes.byref(view), None if j is None else ctypes.byref(j),
+                 None if d is None else d._p, ph, fh, prog.fn, None, ctypes.byref(out))
+        finally:
+            prog.reraise()
+    del keep
+    return Result(out)
+
+
+def fit_shape(joints3d, camera, edges, options=None, progress=None, cancel=None, context=None):
+    """The shape fit alone (SIR, paper §II-C) for a known pose: `joints3d` (15, 3) metres
+    (e.g. Pose3D.joints), `camera` (Camera), `edges` an edge map (uint8 image, non-zero =
+    edge, e.g. canny(sketch)). Returns (Mesh posed to joints3d, score)."""
+    ctx = context or default_context()
+    j = A.numeric(joints3d, "joints3d", np.float64, (15, 3))
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera must be a Camera, not {type(camera).__name__}")
+    cam = camera.to_struct()
+    view, keep = as_image(edges, "edges")
+    prog = Progress(progress, cancel)
+    score = ctypes.c_double()
+    out = ctypes.POINTER(B.skb_mesh)()
+    with options_handle(options, FitOptions) as fh:
+        try:
+            call("skb_fit_shape", ctx._p, A.ptr(j), j.size, ctypes.byref(cam), ctypes.byref(view), fh, prog.fn,
+                 None, ctypes.byref(score), ctypes.byref(out))
+        finally:
+            prog.reraise()
+    del keep
+    return Mesh(out), score.value
