@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test of sketchbody on a fresh Debian 12 machine: installs the Debian packages it
 # needs when missing (blender and python3-numpy for the Blender import and add-on tests), then cargo tests,
-# the CMake/ctest harness (OpenCV, Ceres, Embree cross-checks, C and C++ API tests under
+# a short run of every fuzz target (scripts/fuzz.sh; installs cargo-fuzz when missing), the
+# CMake/ctest harness (OpenCV, Ceres, Embree cross-checks, C and C++ API tests under
 # sanitizers) and the Python package's tests (scripts/test-python.sh).
 # Set SKB_REQUIRE_SHARED_DATA=1 to turn "skipped: ../shared/data missing" into failures (CI does).
 set -euo pipefail
@@ -33,6 +34,9 @@ export SKB_MEDIAPIPE_PYTHON
 echo "== cargo test (release build, shared with the CMake build)"
 cargo test --release --workspace --all-targets "${features[@]}"
 cargo test --release --workspace --doc "${features[@]}"
+
+echo "== fuzz targets: 2000 executions each from the committed seeds (the long run: scripts/fuzz.sh 1000000)"
+scripts/fuzz.sh 2000
 
 echo "== CMake build + ctest (cargo's folder shared with the cargo tests above)"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSKB_CARGO_TARGET_DIR="$PWD/target"

@@ -190,20 +190,41 @@ impl StagingDir {
         &self.dest
     }
 
-    /// Moves every staged file into the destination. On error the files already moved are
-    /// removed again, so the destination holds none of this job's files.
+    /// Moves every staged file into the destination. Only regular files are replaced: when a
+    /// destination entry of the same name is a symlink, a folder, a device or a FIFO, the commit
+    /// fails ([`Error::Io`], "not a regular file") before anything is moved. When another job
+    /// created the destination folder after [`StagingDir::new`] (two runs to the same new
+    /// folder), the files are moved into it one by one like into any existing folder. On error
+    /// the files already moved are removed again, so the destination holds none of this job's
+    /// files.
     pub fn commit(mut self) -> Result<()> {
         let io = |path: &Path, source| Error::Io { path: path.to_path_buf(), source };
         if !self.dest_existed {
-            std::fs::rename(&self.tmp, &self.dest).map_err(|e| io(&self.dest, e))?;
-            self.committed = true;
-            return Ok(());
+            match std::fs::rename(&self.tmp, &self.dest) {
+                Ok(()) => {
+                    self.committed = true;
+                    return Ok(());
+                }
+                // Created meanwhile by another job: merge into it file by file.
+                Err(_) if std::fs::symlink_metadata(&self.dest).is_ok_and(|m| m.is_dir()) => {}
+                Err(e) => return Err(io(&self.dest, e)),
+            }
         }
         let mut names: Vec<std::ffi::OsString> = std::fs::read_dir(&self.tmp)
             .map_err(|e| io(&self.tmp, e))?
             .filter_map(|e| e.ok().map(|e| e.file_name()))
             .collect();
         names.sort();
+        for name in &names {
+            let target = self.dest.join(name);
+            if std::fs::symlink_metadata(&target).is_ok_and(|m| !m.file_type().is_file()) {
+                return Err(io_error(
+                    &target,
+                    std::io::ErrorKind::InvalidInput,
+                    "exists and is not a regular file (symlinks, devices and folders are never replaced)".into(),
+                ));
+            }
+        }
         let mut moved = Vec::new();
         for name in names {
             let target = self.dest.join(&name);
@@ -232,6 +253,41 @@ impl Drop for StagingDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Fault matrix (issue 20 item 5): a symlink where an output goes fails the commit before
+    /// anything moves (the link and its target stay as they were), and a destination folder
+    /// created by another job after `new` is merged into instead of failing the commit.
+    #[test]
+    fn commit_refuses_non_regular_targets_and_merges_into_a_folder_made_meanwhile() {
+        let root = scratch("commit");
+        let dest = root.join("out");
+        std::fs::create_dir(&dest).unwrap();
+        let target = root.join("elsewhere.glb");
+        std::fs::write(&target, b"keep").unwrap();
+        std::os::unix::fs::symlink(&target, dest.join("b.glb")).unwrap();
+        let s = StagingDir::new(&dest).unwrap();
+        write_atomic(&s.path("a.json"), b"1").unwrap();
+        write_atomic(&s.path("b.glb"), b"2").unwrap();
+        let e = s.commit().unwrap_err().to_string();
+        assert!(e.contains("not a regular file") && e.contains("b.glb"), "{e}");
+        assert!(std::fs::symlink_metadata(dest.join("b.glb")).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"keep");
+        let left: Vec<_> = std::fs::read_dir(&dest).unwrap().flatten().map(|e| e.file_name()).collect();
+        assert_eq!(left, ["b.glb"], "a.json was not moved in and the staging folder is gone");
+        // Two jobs staging the same new folder: both commit, the later one's files win.
+        let fresh = root.join("fresh");
+        let first = StagingDir::new(&fresh).unwrap();
+        let second = StagingDir::new(&fresh).unwrap();
+        write_atomic(&first.path("x.txt"), b"first").unwrap();
+        write_atomic(&second.path("x.txt"), b"second").unwrap();
+        write_atomic(&second.path("y.txt"), b"second").unwrap();
+        first.commit().unwrap();
+        second.commit().unwrap();
+        assert_eq!(std::fs::read(fresh.join("x.txt")).unwrap(), b"second");
+        assert_eq!(std::fs::read_dir(&fresh).unwrap().count(), 2);
+        assert_eq!(std::fs::read_dir(&root).unwrap().count(), 3, "out, elsewhere.glb, fresh: no staging left");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 
     #[test]
     fn staging_commits_whole_or_leaves_nothing() {

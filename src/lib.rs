@@ -15,6 +15,8 @@ pub mod eval;
 pub mod export;
 pub mod fit;
 pub mod fsutil;
+#[cfg(test)]
+mod fuzz_seeds;
 pub mod image;
 pub mod pipeline;
 pub mod pose;

@@ -200,10 +200,9 @@ pub unsafe extern "C" fn skb_pose_dictionary_basis(
             if k >= d.inner.num_bases() {
                 return out_of_range("basis index", format!("{k} is not below {}", d.inner.num_bases()));
             }
-            if len < POSE_DIM {
-                return fail(&sketchbody_core::Error::BufferTooSmall { name: "out", len, needed: POSE_DIM, unit: "elements" });
-            }
-            try_status!(try_slice_mut_of(out, POSE_DIM, "out")).copy_from_slice(d.inner.bases.column(k).as_slice());
+            // Short or absurd (over isize::MAX bytes) lengths are refused before anything is written.
+            let dst = try_status!(out_slice(out, len, POSE_DIM, "out"));
+            dst[..POSE_DIM].copy_from_slice(d.inner.bases.column(k).as_slice());
             write_opt(sigma, d.inner.sigma[k]);
             skb_status::SKB_OK
         }

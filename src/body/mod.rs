@@ -21,6 +21,9 @@ pub mod rig;
 pub mod skin;
 
 pub use blend::{BlendedSpace, BLEND_COMPONENTS, BLEND_DEFAULT_DIM, GENDER_LEVELS, LEVEL_WEIGHTS};
+/// A tiny valid body model (4 vertices) for crate-level tests (the fuzz seeds).
+#[cfg(test)]
+pub(crate) use format::tests::tiny_model as tiny_test_model;
 pub use format::{SKBM_MAGIC, SKBM_VERSION};
 pub use gender::Gender;
 pub use gmm::Gmm;

@@ -188,7 +188,17 @@ impl Model {
             let filter = r.ids(k, "filter id")?;
             let ndef = r.count("deformation id count", 4)?;
             let def = r.ids(ndef, "deformation id")?;
+            // One row per mixture of the parent: bounded here, because rows of zero columns take
+            // no bytes, so the byte check below cannot bound them (a 274-byte file claiming
+            // millions of empty rows took over 10 s and 1.9 GB before this check; found by the
+            // skbd fuzz target).
             let rows = r.count("bias rows", 0)?;
+            if rows > super::model::MAX_MIXTURES {
+                return Err(corrupt(format!(
+                    "detector model: {rows} bias rows (at most {})",
+                    super::model::MAX_MIXTURES
+                )));
+            }
             let cols = r.count("bias cols", 4)?;
             if rows.saturating_mul(cols).saturating_mul(4) > payload.len() - r.pos {
                 return Err(corrupt("detector model truncated in a bias matrix"));
@@ -236,6 +246,33 @@ impl Model {
 mod tests {
     use super::super::model::tests::tiny_model;
     use super::*;
+
+    /// Fuzz finding (skbd target): a part claiming 2^31 bias rows of zero columns is refused at
+    /// once instead of allocating 2^31 empty rows.
+    #[test]
+    fn absurd_empty_bias_matrix_is_refused_without_allocating() {
+        let mut p = Vec::new();
+        for v in [4u32, 5] {
+            p.extend_from_slice(&v.to_le_bytes());
+        }
+        p.extend_from_slice(&0f64.to_le_bytes());
+        for v in [0u32, 0, 0, 1] {
+            p.extend_from_slice(&v.to_le_bytes()); // no filters, deformations, biases; one part
+        }
+        p.extend_from_slice(&(-1i32).to_le_bytes());
+        for v in [0u32, 0, 0x7FFF_FFFF, 0] {
+            p.extend_from_slice(&v.to_le_bytes()); // 0 mixtures, 0 deformations, 2^31-1 x 0 bias
+        }
+        p.extend(std::iter::repeat_n(0u8, 4 * NUM_PARSE_JOINTS));
+        let mut b = MAGIC.to_vec();
+        b.extend_from_slice(&VERSION.to_le_bytes());
+        b.extend_from_slice(&(p.len() as u64).to_le_bytes());
+        b.extend_from_slice(&crc32fast::hash(&p).to_le_bytes());
+        b.extend_from_slice(&p);
+        // Without the bound this allocates 2^31 row vectors (48 GiB) and aborts.
+        let e = Model::from_bytes(&b).unwrap_err().to_string();
+        assert!(e.contains("2147483647 bias rows"), "{e}");
+    }
 
     fn msg(r: Result<Model>) -> String {
         match r {

@@ -16,6 +16,8 @@ pub const PARSE_JOINT_NAMES: [&str; NUM_PARSE_JOINTS] =
 pub const MAX_FILTER_CELLS: usize = 64;
 /// Largest accepted number of parts in a model.
 pub const MAX_PARTS: usize = 256;
+/// Largest accepted number of mixtures of one part (so also of rows of a bias matrix).
+pub const MAX_MIXTURES: usize = 255;
 
 /// A linear filter over `rows` x `cols` HOG cells, weights row-major (y, x, feature).
 #[derive(Clone, Debug, PartialEq)]
@@ -138,7 +140,7 @@ impl Model {
         }
         for (i, p) in self.parts.iter().enumerate() {
             let k = p.filter.len();
-            if k == 0 || k > 255 {
+            if k == 0 || k > MAX_MIXTURES {
                 return Err(corrupt(format!("part {i} has {k} mixtures")));
             }
             if let Some(&f) = p.filter.iter().find(|&&f| f >= self.filters.len()) {

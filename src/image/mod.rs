@@ -13,5 +13,5 @@ pub use blur::{gaussian_blur, gaussian_kernel_size};
 pub use canny::{canny, canny_into, CannyParams};
 pub use decode::{load_image, save_gray_png};
 pub use gray::to_gray;
-pub use rgb::{load_rgb_image, over_white, RgbImage};
+pub use rgb::{decode_rgb_image, load_rgb_image, over_white, RgbImage};
 pub use view::{GrayImage, ImageView};

@@ -4,6 +4,8 @@
 mod body;
 mod fit;
 mod header;
+mod misuse;
 mod pose;
 mod reliability;
+mod soak;
 mod thread_stress;

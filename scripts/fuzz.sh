@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Runs sketchbody's fuzz targets (fuzz/, cargo-fuzz's layout; docs/reliability.md, "Fuzzing").
+#
+#   scripts/fuzz.sh                 every target for 2000 executions (what scripts/test-all.sh runs)
+#   scripts/fuzz.sh 1000000         the long ("nightly") run: 10^6 executions per target
+#   scripts/fuzz.sh 50000 skbm      one target
+#
+# Each target starts from its committed seeds (fuzz/seeds/TARGET: small valid files of every
+# format and crafted bombs, rebuilt by `cargo test --lib fuzz_seeds`) plus the working corpus it
+# grew before (fuzz/corpus/TARGET, not committed), with libFuzzer's -rss_limit_mb=2048
+# -timeout=10. A crash, a timeout or an allocation past the limit fails the script and leaves
+# the input in fuzz/artifacts/TARGET/ (rerun it with `cargo fuzz run TARGET FILE`).
+#
+# Only the stable toolchain is installed: RUSTC_BOOTSTRAP=1 lets it take the nightly flags
+# cargo-fuzz passes (-Zsanitizer..., sancov passes). SKB_FUZZ_SANITIZER picks the sanitizer
+# (default `none`: libFuzzer coverage without ASan, which the parsers, safe Rust, do not need;
+# `address` for the C-API target's raw pointers). cargo-fuzz is installed when missing.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+runs=${1:-2000}
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(image skbm skbpd skbd parse_json joints_json capi_seq)
+sanitizer=${SKB_FUZZ_SANITIZER:-none}
+export RUSTC_BOOTSTRAP=1
+
+if ! command -v cargo-fuzz >/dev/null 2>&1; then
+  echo "== installing cargo-fuzz 0.13.2"
+  cargo install cargo-fuzz --version 0.13.2 --locked
+fi
+
+echo "== building the fuzz targets (sanitizer: $sanitizer)"
+cargo fuzz build --sanitizer "$sanitizer"
+
+for t in "${targets[@]}"; do
+  mkdir -p "fuzz/corpus/$t"
+  dirs=("fuzz/corpus/$t")
+  [ -d "fuzz/seeds/$t" ] && dirs+=("fuzz/seeds/$t")
+  start=$(date +%s)
+  log=$(mktemp)
+  if ! cargo fuzz run --sanitizer "$sanitizer" "$t" "${dirs[@]}" -- \
+      -runs="$runs" -rss_limit_mb=2048 -timeout=10 -max_len=65536 -seed=1 -print_final_stats=1 \
+      >"$log" 2>&1; then
+    tail -n 60 "$log"
+    rm -f "$log"
+    echo "== fuzz target $t FAILED (input in fuzz/artifacts/$t/)"
+    exit 1
+  fi
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
+  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -n 1 || true)
+  echo "fuzz $t: $execs executions, $cov, no crash ($(($(date +%s) - start)) s)"
+  rm -f "$log"
+done
