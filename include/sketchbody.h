@@ -135,6 +135,28 @@
 #define SKB_POSE_GROUPS 6
 
 /**
+ * Backend of `skb_detect`: both the sketch model and BlazePose, per image the candidate with the
+ * higher calibrated confidence (the default).
+ */
+#define SKB_DETECTOR_AUTO 0
+
+/**
+ * Backend of `skb_detect`: the flexible-mixture-of-parts sketch model alone.
+ */
+#define SKB_DETECTOR_FMP 1
+
+/**
+ * Backend of `skb_detect`: MediaPipe's BlazePose landmark model alone.
+ */
+#define SKB_DETECTOR_BLAZEPOSE 2
+
+/**
+ * A figure confidence under this is low: show the joints to the user for correction (the
+ * core's `detect::figure::LOW_CONFIDENCE`; a test keeps them equal).
+ */
+#define SKB_LOW_CONFIDENCE 0.75
+
+/**
  * `skb_fit_options_set_score`: the paper's eq. 7 (IoU of the silhouette with the edge map).
  */
 #define SKB_SCORE_PAPER 0
@@ -324,9 +346,10 @@ typedef uint32_t skb_status;
 typedef struct skb_context skb_context;
 
 /**
- * Options of [`skb_detect`]: score threshold and the searched scales. Create with
- * `skb_detect_options_new` (the model's threshold, the sketch search range: figures from
- * 1/2 of the shorter image side to the longer side, at 7 pyramid levels per octave), release with
+ * Options of [`skb_detect`]: backend, strictness, the sketch model's score threshold and
+ * searched scales. Create with `skb_detect_options_new` (backend `SKB_DETECTOR_AUTO`, not
+ * strict, the model's threshold, the sketch search range: figures from 1/2 of the shorter image
+ * side to the longer side, at 7 pyramid levels per octave), release with
  * `skb_detect_options_free`. Setters need exclusive use; a configured handle may be read by
  * several threads at once.
  */
@@ -567,6 +590,37 @@ typedef struct skb_pose_figure {
    */
   int32_t reserved;
 } skb_pose_figure;
+
+/**
+ * What `skb_detect_figure` and `skb_result_detection` report beside the joints.
+ */
+typedef struct skb_figure_info {
+  /**
+   * The backend whose joints were kept: `SKB_DETECTOR_FMP` or `SKB_DETECTOR_BLAZEPOSE`.
+   */
+  uint32_t backend;
+  /**
+   * 1 when `confidence` < `SKB_LOW_CONFIDENCE` (look at the joints, correct them), else 0.
+   */
+  uint32_t low_confidence;
+  /**
+   * Calibrated figure confidence in [0, 1]: the expected fraction of joints within 0.2 × the
+   * figure's size of the truth (the mean of the per-joint confidences).
+   */
+  double confidence;
+  /**
+   * Calibrated probability in [0, 1] that the image holds a figure.
+   */
+  double presence;
+  /**
+   * Further figures the sketch model found above its threshold.
+   */
+  uint32_t other_figures;
+  /**
+   * Zero.
+   */
+  uint32_t reserved;
+} skb_figure_info;
 
 /**
  * Progress callback: called from the calling thread with the fraction of the work done
@@ -1256,8 +1310,21 @@ skb_status skb_detect_options_new(struct skb_detect_options **out);
 void skb_detect_options_free(struct skb_detect_options *opts);
 
 /**
- * Sets the score threshold (NaN restores the model's own). Infinite values are
- * `SKB_ERR_NON_FINITE`.
+ * Sets the backend: `SKB_DETECTOR_AUTO` (default), `SKB_DETECTOR_FMP` or
+ * `SKB_DETECTOR_BLAZEPOSE`. Errors: `SKB_ERR_OUT_OF_RANGE` for another value.
+ */
+skb_status skb_detect_options_set_backend(struct skb_detect_options *opts, uint32_t backend);
+
+/**
+ * Sets strict detection (`strict` ≠ 0): "no figure" unless a backend passes its own hard
+ * threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (0)
+ * returns the best figure whenever the calibrated presence probability is at least 0.5.
+ */
+skb_status skb_detect_options_set_strict(struct skb_detect_options *opts, uint32_t strict);
+
+/**
+ * Sets the sketch model's score threshold (NaN restores the model's own), used when strict.
+ * Infinite values are `SKB_ERR_NON_FINITE`.
  */
 skb_status skb_detect_options_set_threshold(struct skb_detect_options *opts, double threshold);
 
@@ -1292,13 +1359,16 @@ skb_status skb_detect_options_set_levels_per_octave(struct skb_detect_options *o
                                                     uint32_t levels);
 
 /**
- * Detects the best-scoring figure in `image` with the embedded detector of `ctx` and `opts`
- * (NULL: defaults). Images whose longer side exceeds 1024 px are downscaled first (results are
- * in input pixels). Writes the 15 canonical joints as (x, y) pairs in pixels (origin top-left,
- * y down) to `joints_xy[0..30]`, their confidences in (0, 1) to `confidence[0..15]` and the
- * score to `*score`. When no figure reaches the threshold it returns `SKB_ERR_NO_FIGURE` and
- * writes only `*score` (the best score found, below the threshold). Other errors (nothing
- * written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
+ * Detects the best figure in `image` (1, 3 or 4 channels; colour helps BlazePose on painted
+ * drawings) with the embedded backends of `ctx` and `opts` (NULL: defaults, `SKB_DETECTOR_AUTO`).
+ * Writes the 15 canonical joints as (x, y) pairs in pixels (origin top-left, y down) to
+ * `joints_xy[0..30]`, their calibrated confidences in [0, 1] (each the estimated probability
+ * that the joint is within 0.2 × the figure's size of the truth) to `confidence[0..15]` and the
+ * figure's confidence (their mean) to `*score`. Large images are normalised first (results are
+ * in input pixels). When the image holds no figure (blank pages, text, clutter; or, when
+ * strict, no backend passes its threshold) it returns `SKB_ERR_NO_FIGURE` and writes only
+ * `*score` (the presence probability, or the best raw score when strict). Other errors
+ * (nothing written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
  * `SKB_ERR_NULL_POINTER`, image errors. Thread-safe.
  */
 skb_status skb_detect(const struct skb_context *ctx,
@@ -1309,6 +1379,20 @@ skb_status skb_detect(const struct skb_context *ctx,
                       double *confidence,
                       size_t confidence_len,
                       double *score);
+
+/**
+ * As `skb_detect`, with the backend kept, the confidences, the presence probability and the
+ * low-confidence flag in `*info` instead of a score. On `SKB_ERR_NO_FIGURE` and other errors
+ * nothing is written. Thread-safe.
+ */
+skb_status skb_detect_figure(const struct skb_context *ctx,
+                             const struct skb_image *image,
+                             const struct skb_detect_options *opts,
+                             double *joints_xy,
+                             size_t joints_len,
+                             double *confidence,
+                             size_t confidence_len,
+                             struct skb_figure_info *info);
 
 /**
  * Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
@@ -1519,6 +1603,14 @@ skb_status skb_result_gender(const struct skb_result *result, uint32_t *gender, 
 skb_status skb_result_gender_value(const struct skb_result *result,
                                    double *value,
                                    double *confidence);
+
+/**
+ * The detection behind the result's 2-D joints into `*info` (backend kept, calibrated
+ * confidence, presence, the low-confidence flag: show the joints to the user for correction).
+ * Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_run_pipeline`, not
+ * detected (nothing written); `SKB_ERR_NULL_POINTER`.
+ */
+skb_status skb_result_detection(const struct skb_result *result, struct skb_figure_info *info);
 
 /**
  * Whether the fit is low-evidence (1: the sketch's strokes support less than half of the

@@ -7,7 +7,7 @@
 use std::ffi::c_char;
 use std::path::PathBuf;
 
-use sketchbody_core::detect::figure::{detect_figure, Backend, Figure, FigureOptions, LOW_CONFIDENCE};
+use sketchbody_core::detect::figure::{detect_figure, Backend, Figure, FigureOptions};
 use sketchbody_core::detect::landmark::LandmarkNet;
 use sketchbody_core::detect::{detect, DetectOptions, Detection, Model, SearchScales};
 use sketchbody_core::skeleton::NUM_JOINTS;
@@ -99,8 +99,9 @@ pub const SKB_DETECTOR_AUTO: u32 = 0;
 pub const SKB_DETECTOR_FMP: u32 = 1;
 /// Backend of `skb_detect`: MediaPipe's BlazePose landmark model alone.
 pub const SKB_DETECTOR_BLAZEPOSE: u32 = 2;
-/// A figure confidence under this is low: show the joints to the user for correction.
-pub const SKB_LOW_CONFIDENCE: f64 = LOW_CONFIDENCE;
+/// A figure confidence under this is low: show the joints to the user for correction (the
+/// core's `detect::figure::LOW_CONFIDENCE`; a test keeps them equal).
+pub const SKB_LOW_CONFIDENCE: f64 = 0.75;
 
 /// What `skb_detect_figure` and `skb_result_detection` report beside the joints.
 #[repr(C)]
@@ -515,6 +516,7 @@ mod tests {
             assert!(info.backend == SKB_DETECTOR_FMP || info.backend == SKB_DETECTOR_BLAZEPOSE);
             assert_eq!(info.confidence, s);
             assert_eq!(info.low_confidence, u32::from(s < SKB_LOW_CONFIDENCE));
+            assert_eq!(SKB_LOW_CONFIDENCE, sketchbody_core::detect::figure::LOW_CONFIDENCE);
             assert!(info.presence >= 0.5 && info.presence <= 1.0, "{}", info.presence);
             assert_eq!(
                 skb_detect_figure(ctx, &img, null(), xy_f.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, null_mut()),

@@ -62,13 +62,16 @@ pub struct SetContext<'a> {
     pub net: &'a LandmarkNet,
 }
 
-/// Builds image `i` of `spec` with its canonical truth (continuous px).
+/// The true canonical joints of an image (continuous px), `None` for a page without a figure.
+type Truth = Option<[[f64; 2]; NUM_JOINTS]>;
+
+/// Builds image `i` of `spec` with its truth.
 fn image_of(
     spec: &SetSpec,
     i: usize,
     ctx: &SetContext<'_>,
     labels: &[sketchbody::detect::parse_eval::Labelled],
-) -> Result<(RgbImage, Option<[[f64; 2]; NUM_JOINTS]>), CliError> {
+) -> Result<(RgbImage, Truth), CliError> {
     Ok(match *spec {
         SetSpec::Synthetic { seed, size, hair, .. } => {
             let s = ctx.renderer.render(&held_out_request(seed, i as u64, size, hair))?;

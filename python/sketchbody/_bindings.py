@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "30e521645bb8fa173c860d5da4cabdb23c5cda1922cb0900c3e9a0bf20064bde"
+HEADER_SHA256 = "ee2afb2de37aa4358f7b9ebdb5a6e74ad4287e400393e922bfc9e73e2da7f5f3"
 
 # ---- constants (#define) ----
 
@@ -63,6 +63,16 @@ SKB_ALPHA_TARGET_IDENTITY = 0
 SKB_ALPHA_TARGET_LEVEL = 1
 # Number of proportion groups of `skb_pose_figure`.
 SKB_POSE_GROUPS = 6
+# Backend of `skb_detect`: both the sketch model and BlazePose, per image the candidate with the
+# higher calibrated confidence (the default).
+SKB_DETECTOR_AUTO = 0
+# Backend of `skb_detect`: the flexible-mixture-of-parts sketch model alone.
+SKB_DETECTOR_FMP = 1
+# Backend of `skb_detect`: MediaPipe's BlazePose landmark model alone.
+SKB_DETECTOR_BLAZEPOSE = 2
+# A figure confidence under this is low: show the joints to the user for correction (the
+# core's `detect::figure::LOW_CONFIDENCE`; a test keeps them equal).
+SKB_LOW_CONFIDENCE = 0.75
 # `skb_fit_options_set_score`: the paper's eq. 7 (IoU of the silhouette with the edge map).
 SKB_SCORE_PAPER = 0
 # `skb_fit_options_set_score`: IoU with the figure region filled from the closed strokes.
@@ -116,6 +126,10 @@ CONSTANTS = {
     "SKB_ALPHA_TARGET_IDENTITY": 0,
     "SKB_ALPHA_TARGET_LEVEL": 1,
     "SKB_POSE_GROUPS": 6,
+    "SKB_DETECTOR_AUTO": 0,
+    "SKB_DETECTOR_FMP": 1,
+    "SKB_DETECTOR_BLAZEPOSE": 2,
+    "SKB_LOW_CONFIDENCE": 0.75,
     "SKB_SCORE_PAPER": 0,
     "SKB_SCORE_FILLED_IOU": 1,
     "SKB_SCORE_CHAMFER": 2,
@@ -247,9 +261,10 @@ class skb_context(ctypes.Structure):
     pass
 
 
-# Options of [`skb_detect`]: score threshold and the searched scales. Create with
-# `skb_detect_options_new` (the model's threshold, the sketch search range: figures from
-# 1/2 of the shorter image side to the longer side, at 7 pyramid levels per octave), release with
+# Options of [`skb_detect`]: backend, strictness, the sketch model's score threshold and
+# searched scales. Create with `skb_detect_options_new` (backend `SKB_DETECTOR_AUTO`, not
+# strict, the model's threshold, the sketch search range: figures from 1/2 of the shorter image
+# side to the longer side, at 7 pyramid levels per octave), release with
 # `skb_detect_options_free`. Setters need exclusive use; a configured handle may be read by
 # several threads at once.
 class skb_detect_options(ctypes.Structure):
@@ -410,6 +425,18 @@ class skb_pose_figure(ctypes.Structure):
     ]
 
 
+# What `skb_detect_figure` and `skb_result_detection` report beside the joints.
+class skb_figure_info(ctypes.Structure):
+    _fields_ = [
+        ("backend", ctypes.c_uint32),  # The backend whose joints were kept: `SKB_DETECTOR_FMP` or `SKB_DETECTOR_BLAZEPOSE`.
+        ("low_confidence", ctypes.c_uint32),  # 1 when `confidence` < `SKB_LOW_CONFIDENCE` (look at the joints, correct them), else 0.
+        ("confidence", ctypes.c_double),  # Calibrated figure confidence in [0, 1]: the expected fraction of joints within 0.2 × the
+        ("presence", ctypes.c_double),  # Calibrated probability in [0, 1] that the image holds a figure.
+        ("other_figures", ctypes.c_uint32),  # Further figures the sketch model found above its threshold.
+        ("reserved", ctypes.c_uint32),  # Zero.
+    ]
+
+
 # C field types of each struct (the drift test compiles offsetof/sizeof checks from these).
 STRUCT_FIELDS = {
     "skb_image": (
@@ -448,6 +475,14 @@ STRUCT_FIELDS = {
         ("factors", "double[SKB_POSE_GROUPS]"),
         ("plausible", "int32_t"),
         ("reserved", "int32_t"),
+    ),
+    "skb_figure_info": (
+        ("backend", "uint32_t"),
+        ("low_confidence", "uint32_t"),
+        ("confidence", "double"),
+        ("presence", "double"),
+        ("other_figures", "uint32_t"),
+        ("reserved", "uint32_t"),
     ),
 }
 
@@ -1982,8 +2017,39 @@ FUNCTIONS["skb_detect_options_free"] = (
     ),
 )
 
-# Sets the score threshold (NaN restores the model's own). Infinite values are
-# `SKB_ERR_NON_FINITE`.
+# Sets the backend: `SKB_DETECTOR_AUTO` (default), `SKB_DETECTOR_FMP` or
+# `SKB_DETECTOR_BLAZEPOSE`. Errors: `SKB_ERR_OUT_OF_RANGE` for another value.
+FUNCTIONS["skb_detect_options_set_backend"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_detect_options),
+        ctypes.c_uint32,
+    ],
+    "skb_status",
+    (
+        ("opts", "struct skb_detect_options *"),
+        ("backend", "uint32_t"),
+    ),
+)
+
+# Sets strict detection (`strict` ≠ 0): "no figure" unless a backend passes its own hard
+# threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (0)
+# returns the best figure whenever the calibrated presence probability is at least 0.5.
+FUNCTIONS["skb_detect_options_set_strict"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_detect_options),
+        ctypes.c_uint32,
+    ],
+    "skb_status",
+    (
+        ("opts", "struct skb_detect_options *"),
+        ("strict", "uint32_t"),
+    ),
+)
+
+# Sets the sketch model's score threshold (NaN restores the model's own), used when strict.
+# Infinite values are `SKB_ERR_NON_FINITE`.
 FUNCTIONS["skb_detect_options_set_threshold"] = (
     ctypes.c_uint32,
     [
@@ -2053,13 +2119,16 @@ FUNCTIONS["skb_detect_options_set_levels_per_octave"] = (
     ),
 )
 
-# Detects the best-scoring figure in `image` with the embedded detector of `ctx` and `opts`
-# (NULL: defaults). Images whose longer side exceeds 1024 px are downscaled first (results are
-# in input pixels). Writes the 15 canonical joints as (x, y) pairs in pixels (origin top-left,
-# y down) to `joints_xy[0..30]`, their confidences in (0, 1) to `confidence[0..15]` and the
-# score to `*score`. When no figure reaches the threshold it returns `SKB_ERR_NO_FIGURE` and
-# writes only `*score` (the best score found, below the threshold). Other errors (nothing
-# written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
+# Detects the best figure in `image` (1, 3 or 4 channels; colour helps BlazePose on painted
+# drawings) with the embedded backends of `ctx` and `opts` (NULL: defaults, `SKB_DETECTOR_AUTO`).
+# Writes the 15 canonical joints as (x, y) pairs in pixels (origin top-left, y down) to
+# `joints_xy[0..30]`, their calibrated confidences in [0, 1] (each the estimated probability
+# that the joint is within 0.2 × the figure's size of the truth) to `confidence[0..15]` and the
+# figure's confidence (their mean) to `*score`. Large images are normalised first (results are
+# in input pixels). When the image holds no figure (blank pages, text, clutter; or, when
+# strict, no backend passes its threshold) it returns `SKB_ERR_NO_FIGURE` and writes only
+# `*score` (the presence probability, or the best raw score when strict). Other errors
+# (nothing written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
 # `SKB_ERR_NULL_POINTER`, image errors. Thread-safe.
 FUNCTIONS["skb_detect"] = (
     ctypes.c_uint32,
@@ -2083,6 +2152,34 @@ FUNCTIONS["skb_detect"] = (
         ("confidence", "double *"),
         ("confidence_len", "size_t"),
         ("score", "double *"),
+    ),
+)
+
+# As `skb_detect`, with the backend kept, the confidences, the presence probability and the
+# low-confidence flag in `*info` instead of a score. On `SKB_ERR_NO_FIGURE` and other errors
+# nothing is written. Thread-safe.
+FUNCTIONS["skb_detect_figure"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_context),
+        ctypes.POINTER(skb_image),
+        ctypes.POINTER(skb_detect_options),
+        ctypes.POINTER(ctypes.c_double),
+        ctypes.c_size_t,
+        ctypes.POINTER(ctypes.c_double),
+        ctypes.c_size_t,
+        ctypes.POINTER(skb_figure_info),
+    ],
+    "skb_status",
+    (
+        ("ctx", "const struct skb_context *"),
+        ("image", "const struct skb_image *"),
+        ("opts", "const struct skb_detect_options *"),
+        ("joints_xy", "double *"),
+        ("joints_len", "size_t"),
+        ("confidence", "double *"),
+        ("confidence_len", "size_t"),
+        ("info", "struct skb_figure_info *"),
     ),
 )
 
@@ -2543,6 +2640,23 @@ FUNCTIONS["skb_result_gender_value"] = (
         ("result", "const struct skb_result *"),
         ("value", "double *"),
         ("confidence", "double *"),
+    ),
+)
+
+# The detection behind the result's 2-D joints into `*info` (backend kept, calibrated
+# confidence, presence, the low-confidence flag: show the joints to the user for correction).
+# Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_run_pipeline`, not
+# detected (nothing written); `SKB_ERR_NULL_POINTER`.
+FUNCTIONS["skb_result_detection"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.POINTER(skb_figure_info),
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("info", "struct skb_figure_info *"),
     ),
 )
 

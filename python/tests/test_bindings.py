@@ -101,8 +101,11 @@ class BindingsTest(unittest.TestCase):
         if cc is None:
             self.skipTest("SKIPPED: no C compiler")
         src = ["#include <stdio.h>", "#include <stddef.h>", '#include "sketchbody.h"', "int main(void) {"]
-        for name in B.CONSTANTS:
-            src.append(f'  printf("const {name} %lld\\n", (long long){name});')
+        for name, v in B.CONSTANTS.items():
+            if isinstance(v, float):
+                src.append(f'  printf("const {name} %.17g\\n", (double){name});')
+            else:
+                src.append(f'  printf("const {name} %lld\\n", (long long){name});')
         for value, name in B.STATUS_NAMES.items():
             src.append(f'  printf("const {name} %lld\\n", (long long){name});')
         for sname, fields in B.STRUCT_FIELDS.items():
@@ -129,7 +132,8 @@ class BindingsTest(unittest.TestCase):
             kind, key, *vals = line.split()
             seen[kind] += 1
             if kind == "const":
-                self.assertEqual(getattr(B, key), int(vals[0]), key)
+                want = getattr(B, key)
+                self.assertEqual(want, type(want)(vals[0]) if isinstance(want, float) else int(vals[0]), key)
             elif kind == "size":
                 self.assertEqual(ctypes.sizeof(getattr(B, key)), int(vals[0]), key)
             elif kind == "offset":

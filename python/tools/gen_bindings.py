@@ -6,7 +6,7 @@ struct, constant and status code) from include/sketchbody.h.
     python3 python/tools/gen_bindings.py --check    # exit 1 when the committed file is stale
 
 The header is cbindgen's output (scripts/gen-header.sh), so its shape is regular: doc comments
-`/** ... */`, `#define NAME <integer>`, one `enum skb_status`, opaque `typedef struct X X;`,
+`/** ... */`, `#define NAME <integer>` or `<decimal>`, one `enum skb_status`, opaque `typedef struct X X;`,
 plain structs `typedef struct X { ... } X;`, one callback typedef and the prototypes inside
 `extern "C" { ... }`. Anything the parser does not recognise is an error, so a new kind of
 declaration in the header fails here instead of being skipped silently.
@@ -127,8 +127,11 @@ def parse(text):
             continue
         if line.startswith("#"):
             m = re.fullmatch(r"#define\s+(SKB_\w+)\s+(-?\d+)", line)
+            mf = re.fullmatch(r"#define\s+(SKB_\w+)\s+(-?\d+\.\d+)", line)
             if m:
                 out["constants"].append((m.group(1), int(m.group(2)), take_doc()))
+            elif mf:
+                out["constants"].append((mf.group(1), float(mf.group(2)), take_doc()))
             elif re.match(r"#define\s+SKB_(STRINGIFY_?|VERSION_STRING)\b", line) or \
                     re.match(r"#(ifndef|ifdef|endif|include|define SKETCHBODY_H\b)", line):
                 doc = "" if line.startswith("#define") else doc

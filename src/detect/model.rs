@@ -100,7 +100,7 @@ impl Model {
     }
 
     fn validate(&self) -> Result<()> {
-        if self.sbin < 2 || self.sbin % 2 != 0 || self.sbin > 64 {
+        if self.sbin < 2 || !self.sbin.is_multiple_of(2) || self.sbin > 64 {
             return Err(corrupt(format!("sbin {} must be even and in 2..=64", self.sbin)));
         }
         if self.interval == 0 || self.interval > 100 {

@@ -36,7 +36,7 @@ struct Bin {
 impl Bin {
     /// Appends `bytes` as a new buffer view and an accessor over it; returns the accessor index.
     fn add(&mut self, bytes: &[u8], target: Option<u32>, accessor: Value) -> usize {
-        while self.data.len() % 4 != 0 {
+        while !self.data.len().is_multiple_of(4) {
             self.data.push(0);
         }
         let mut view = json!({"buffer": 0, "byteOffset": self.data.len(), "byteLength": bytes.len()});
@@ -212,7 +212,7 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
     let mut material = json!({"name": "skin", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.7, 0.65, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}, "doubleSided": true});
     let mut extra = serde_json::Map::new();
     if let Some(png) = texture_png {
-        while bin.data.len() % 4 != 0 {
+        while !bin.data.len().is_multiple_of(4) {
             bin.data.push(0);
         }
         bin.views.push(json!({"buffer": 0, "byteOffset": bin.data.len(), "byteLength": png.len()}));
@@ -244,11 +244,11 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
         doc[k] = v;
     }
     let mut text = serde_json::to_vec(&doc).map_err(|e| Error::CorruptData(format!("glTF JSON: {e}")))?;
-    while text.len() % 4 != 0 {
+    while !text.len().is_multiple_of(4) {
         text.push(b' ');
     }
     let mut data = bin.data;
-    while data.len() % 4 != 0 {
+    while !data.len().is_multiple_of(4) {
         data.push(0);
     }
     let total = 12 + 8 + text.len() + 8 + data.len();

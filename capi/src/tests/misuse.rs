@@ -1355,6 +1355,61 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
     for (param, kind, want, got) in rows {
         t.check(e, param, kind, want, got, xy.intact() && cf.intact() && sc.intact());
     }
+    let o = fx.detect_opts as *const skb_detect_options;
+    let e = "skb_detect_figure";
+    #[allow(clippy::type_complexity)]
+    let call = |c: *const skb_context,
+                i: *const skb_image,
+                o: *const skb_detect_options,
+                xy: *mut f64,
+                xl: usize,
+                cf: *mut f64,
+                cl: usize,
+                info: *mut skb_figure_info| {
+        // SAFETY: as above.
+        unsafe { skb_detect_figure(c, i, o, xy, xl, cf, cl, info) }
+    };
+    let (mut xy, mut cf, mut inf) = (Canary::of::<f64>(30), Canary::of::<f64>(15), Canary::of::<skb_figure_info>(1));
+    let (xp, cp, ip) = (xy.ptr(), cf.ptr(), inf.ptr());
+    let rows: Vec<(&'static str, Kind, skb_status, skb_status)> = vec![
+        ("ctx", Kind::Null, SKB_ERR_NULL_POINTER, call(ptr::null(), &im, o, xp, 30, cp, 15, ip)),
+        ("image", Kind::Null, SKB_ERR_NULL_POINTER, call(ctx, ptr::null(), o, xp, 30, cp, 15, ip)),
+        ("joints_xy", Kind::Null, SKB_ERR_NULL_POINTER, call(ctx, &im, o, ptr::null_mut(), 30, cp, 15, ip)),
+        ("confidence", Kind::Null, SKB_ERR_NULL_POINTER, call(ctx, &im, o, xp, 30, ptr::null_mut(), 15, ip)),
+        ("info", Kind::Null, SKB_ERR_NULL_POINTER, call(ctx, &im, o, xp, 30, cp, 15, ptr::null_mut())),
+        ("joints_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, call(ctx, &im, o, xp, usize::MAX, cp, 15, ip)),
+        ("joints_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, call(ctx, &im, o, xp, 29, cp, 15, ip)),
+        ("confidence_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, call(ctx, &im, o, xp, 30, cp, usize::MAX, ip)),
+        ("confidence_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, call(ctx, &im, o, xp, 30, cp, 14, ip)),
+        ("image", Kind::Other, SKB_ERR_IMAGE_TOO_SMALL, call(ctx, &small_im, o, xp, 30, cp, 15, ip)),
+        ("opts", Kind::Null, SKB_ERR_IMAGE_TOO_SMALL, call(ctx, &small_im, ptr::null(), xp, 30, cp, 15, ip)),
+    ];
+    for (param, kind, want, got) in rows {
+        t.check(e, param, kind, want, got, xy.intact() && cf.intact() && inf.intact());
+    }
+    let e = "skb_result_detection";
+    let r = fx.result as *const skb_result;
+    let mut inf = Canary::of::<skb_figure_info>(1);
+    let ip = inf.ptr();
+    // SAFETY: live result or NULL; the canary holds one info struct.
+    unsafe {
+        t.check(e, "result", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_detection(ptr::null(), ip), inf.intact());
+        t.check(e, "info", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_detection(r, ptr::null_mut()), true);
+        // The fixture's result was run from given joints: there is no detection to report.
+        t.check(e, "result", Kind::Other, SKB_ERR_OUT_OF_RANGE, skb_result_detection(r, ip), inf.intact());
+    }
+    let o = fx.detect_opts;
+    t.set_int(
+        "skb_detect_options_set_backend",
+        "backend",
+        skb_detect_options_set_backend,
+        o,
+        u32::MAX,
+        SKB_ERR_OUT_OF_RANGE,
+        SKB_DETECTOR_AUTO,
+    );
+    // Documented: any non-zero value is strict.
+    t.set_int("skb_detect_options_set_strict", "strict", skb_detect_options_set_strict, o, u32::MAX, SKB_OK, 0);
     let o = fx.detect_opts;
     let e = "skb_detect_options_set_threshold";
     // SAFETY: live options or NULL.

@@ -110,7 +110,7 @@ impl TrainOptions {
         }
         if !(self.figure_px >= 16.0 && self.figure_px.is_finite())
             || self.sbin < 2
-            || self.sbin % 2 != 0
+            || !self.sbin.is_multiple_of(2)
             || !(3..=16).contains(&self.filter_side)
         {
             return bad(
