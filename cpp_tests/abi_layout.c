@@ -43,5 +43,12 @@ int main(void) {
     FIELD(skb_pose_figure, factors);
     FIELD(skb_pose_figure, plausible);
     FIELD(skb_pose_figure, reserved);
+    SIZE(skb_figure_info);
+    FIELD(skb_figure_info, backend);
+    FIELD(skb_figure_info, low_confidence);
+    FIELD(skb_figure_info, confidence);
+    FIELD(skb_figure_info, presence);
+    FIELD(skb_figure_info, other_figures);
+    FIELD(skb_figure_info, reserved);
     return 0;
 }

@@ -333,9 +333,8 @@ check("T-pose bind with Mixamo names: names and skinning as the library's",
       f"{arm3.data.bones[1].name}, ...; max {err3.max() * 1000:.3f} mm")
 st.rest_pose, st.naming = "A", "PROJECT"
 
-# The detector path (no joints file): markers get the detector's confidences, the low ones red.
-# When the library's detector fails on this sketch, the add-on must report it and keep the scene.
-before_objects = skb_objects()
+# The detector path (no joints file): markers get the detector's calibrated confidences, the low
+# ones red. The library's default detector finds the bundled example's figure, so this must work.
 st.joints = ""
 res, err = run_op(bpy.ops.sketchbody.sketch_to_body)
 if res == {"FINISHED"}:
@@ -351,8 +350,7 @@ if res == {"FINISHED"}:
     render(bpy.data.objects["SKB_Body"], with_suffix(out_png, "-detect"), with_suffix(docs_png, "-detect"))
 else:
     report["detector_error"] = err
-    check("detector path failed cleanly: an error report, the scene kept",
-          ("detection" in err.lower() or "no figure" in err.lower()) and skb_objects() == before_objects, err.strip())
+    check("detector path finds the bundled example's figure", False, err.strip())
 
 res, err = run_op(bpy.ops.sketchbody.clear)
 check("Clear removes everything", res == {"FINISHED"} and skb_objects() == []
