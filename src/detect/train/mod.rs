@@ -108,11 +108,12 @@ impl TrainOptions {
         if !(self.c.is_finite() && self.c > 0.0) {
             return bad("c", format!("{} must be finite and > 0", self.c));
         }
-        if !(self.figure_px >= 16.0 && self.figure_px.is_finite())
-            || self.sbin < 2
-            || !self.sbin.is_multiple_of(2)
-            || !(3..=16).contains(&self.filter_side)
-        {
+        let geometry_ok = self.figure_px >= 16.0
+            && self.figure_px.is_finite()
+            && self.sbin >= 2
+            && self.sbin.is_multiple_of(2)
+            && (3..=16).contains(&self.filter_side);
+        if !geometry_ok {
             return bad(
                 "geometry",
                 format!("figure {} px, sbin {}, filter {}", self.figure_px, self.sbin, self.filter_side),
