@@ -105,19 +105,26 @@ fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
     );
     assert!(j["confidence"]["head"].as_f64().is_some_and(|c| c > 0.0 && c < 1.0));
     assert!(image::open(&overlay).unwrap().width() == 512);
-    // A blank page has no figure above an absurd threshold: one line naming the score.
+    assert!(["fmp", "blazepose"].contains(&j["detection"]["backend"].as_str().unwrap()), "{}", j["detection"]);
+    let c = j["detection"]["confidence"].as_f64().unwrap();
+    assert_eq!(j["detection"]["low_confidence"].as_bool(), Some(c < 0.75));
+    // A blank page holds no figure by default: one line with the hint to give the joints.
     let blank = dir.join("blank.png");
     image::GrayImage::from_pixel(128, 128, image::Luma([255])).save(&blank).unwrap();
+    let err = one_line_failure(cli().arg("detect").arg(&blank).arg("--out").arg(dir.join("b0.json")));
+    assert!(err.contains("no figure") && err.contains("--joints"), "{err}");
+    // Strict, the sketch model alone, an absurd threshold: one line naming the score.
+    let strict = ["detect", "--detector", "fmp", "--strict"];
     let err =
-        one_line_failure(cli().args(["detect", "--threshold=1000"]).arg(&blank).arg("--out").arg(dir.join("b.json")));
+        one_line_failure(cli().args(strict).arg("--threshold=1000").arg(&blank).arg("--out").arg(dir.join("b.json")));
     assert!(err.contains("no figure") && err.contains("1000"), "{err}");
     assert!(!dir.join("b.json").exists());
     // The score it names is the best one on that page (what a threshold below it returns).
     let st =
-        cli().args(["detect", "--threshold=-1e9"]).arg(&blank).arg("--out").arg(dir.join("b2.json")).status().unwrap();
+        cli().args(strict).arg("--threshold=-1e9").arg(&blank).arg("--out").arg(dir.join("b2.json")).status().unwrap();
     assert!(st.success());
     let b2: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("b2.json")).unwrap()).unwrap();
-    let best = b2["score"].as_f64().unwrap();
+    let best = b2["detection"]["raw_score"].as_f64().unwrap();
     assert!(err.contains(&format!("best score {best:.3} is below the threshold 1000")), "{err} vs best {best}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -129,7 +136,7 @@ fn levels_per_octave_and_figure_flags_reach_the_search() {
     let score = |extra: &[&str], name: &str| {
         let out = dir.join(name);
         let res = cli()
-            .args(["detect", "--threshold=-1e9"])
+            .args(["detect", "--detector", "fmp", "--strict", "--threshold=-1e9"])
             .args(extra)
             .arg(&sketch)
             .arg("--out")
@@ -138,7 +145,7 @@ fn levels_per_octave_and_figure_flags_reach_the_search() {
             .unwrap();
         assert!(res.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&res.stderr));
         let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
-        j["score"].as_f64().unwrap()
+        j["detection"]["raw_score"].as_f64().unwrap()
     };
     // Ten levels per octave (the model's own, 0) score a superset of the levels of five.
     let (s5, s10) = (score(&["--levels-per-octave", "5"], "a.json"), score(&["--levels-per-octave", "0"], "b.json"));
