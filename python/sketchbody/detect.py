@@ -17,27 +17,47 @@ from .pose import Joints2D
 
 @dataclasses.dataclass
 class DetectOptions(OptionsBase):
-    """Options of detect() (None: the library default, the sketch search: figures from 1/2
-    of the shorter side to the longer side, 7 levels per octave). `threshold` (NaN: the
-    model's own); `figure_range` = (min_fraction, max_fraction); `scales` = (min_cell_px,
-    max_cell_px), replacing the figure range; `levels_per_octave` (0: the model's own)."""
+    """Options of detect() (None: the library default). `backend`: "auto" (default: the sketch
+    model and BlazePose, the candidate with the higher calibrated confidence), "fmp" (the sketch
+    model) or "blazepose"; `strict`: hard thresholds instead of the calibrated presence;
+    `threshold`: the sketch model's score threshold when strict (NaN: the model's own); the
+    sketch model's search: `figure_range` = (min_fraction, max_fraction) (default figures from
+    1/2 of the shorter side to the longer side); `scales` = (min_cell_px, max_cell_px),
+    replacing the figure range; `levels_per_octave` (0: the model's own; default 7)."""
 
+    backend: Optional[str] = None
+    strict: Optional[bool] = None
     threshold: Optional[float] = None
     scales: Optional[Tuple[float, float]] = None
     figure_range: Optional[Tuple[float, float]] = None
     levels_per_octave: Optional[int] = None
 
+    def __post_init__(self):
+        if isinstance(self.strict, bool):  # the C setter takes 0 / 1
+            self.strict = int(self.strict)
+
     _c_prefix = "skb_detect_options"
+    _enums = {"backend": {"auto": B.SKB_DETECTOR_AUTO, "fmp": B.SKB_DETECTOR_FMP,
+                          "blazepose": B.SKB_DETECTOR_BLAZEPOSE}}
 
 
 @dataclasses.dataclass
 class Detection:
-    """The best figure: `joints` (Joints2D, all visible), `confidence` (15,) in (0, 1),
-    `score`."""
+    """The best figure: `joints` (Joints2D, all visible), `confidence` (15,) in [0, 1], `score`.
+    From detect(): calibrated confidences (each the probability that the joint is within 0.2 x
+    the figure's size of the truth), `score` their mean (the expected fraction of correct
+    joints), `backend` kept ("fmp", "blazepose"), `presence` (probability that the image holds a
+    figure), `low_confidence` (score < 0.75: show the joints to the user for correction). From
+    Detector.detect(): the model's raw confidences and score; the other fields None."""
 
     joints: Joints2D
     confidence: np.ndarray
     score: float
+    backend: Optional[str] = None
+    presence: Optional[float] = None
+    low_confidence: Optional[bool] = None
+
+_BACKEND_NAMES = {B.SKB_DETECTOR_AUTO: "auto", B.SKB_DETECTOR_FMP: "fmp", B.SKB_DETECTOR_BLAZEPOSE: "blazepose"}
 
 
 def _detect(fn, first_args, view, keep, rest=()):
@@ -57,12 +77,21 @@ def _detect(fn, first_args, view, keep, rest=()):
 
 def detect(image, options=None, context=None):
     """Detects the best figure in `image` (numpy uint8 image or a path) with the embedded
-    detector (trained on synthetic concept sketches). Raises NoFigure (with `.score`) when
-    nothing reaches the threshold. Thread-safe."""
+    backends (see DetectOptions). Raises NoFigure when the image holds no figure (blank pages,
+    text, clutter; or, when strict, nothing passes a backend's threshold). Thread-safe."""
     ctx = context or default_context()
     view, keep = as_image(image)
     with options_handle(options, DetectOptions) as h:
-        return _detect("skb_detect", (ctx._p, h), view, keep)
+        xy = np.empty((15, 2), dtype=np.float64)
+        conf = np.empty(15, dtype=np.float64)
+        info = B.skb_figure_info()
+        st = lib.skb_detect_figure(ctx._p, ctypes.byref(view), h, A.ptr(xy), xy.size, A.ptr(conf), conf.size,
+                                   ctypes.byref(info))
+        del keep
+        if st != B.SKB_OK:
+            raise error(st, "skb_detect_figure")
+        return Detection(Joints2D(xy), conf, info.confidence, _BACKEND_NAMES.get(info.backend, "?"),
+                         info.presence, bool(info.low_confidence))
 
 
 class Detector(Handle):

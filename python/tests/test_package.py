@@ -391,24 +391,30 @@ class PoseTest(unittest.TestCase):
 
 class DetectTest(unittest.TestCase):
     def test_detect_example(self):
-        try:
-            d = skb.detect(SKETCH)
-        except skb.NoFigure as e:   # the embedded detector may miss real drawings (README)
-            self.assertEqual(e.status_name, "SKB_ERR_NO_FIGURE")
-            self.assertFalse(np.isnan(e.score))
-            return
+        d = skb.detect(SKETCH)
         self.assertEqual(d.joints.xy.shape, (15, 2))
         self.assertTrue(((d.confidence > 0) & (d.confidence < 1)).all())
+        self.assertAlmostEqual(d.score, float(d.confidence.mean()), places=12)
+        self.assertIn(d.backend, ("fmp", "blazepose"))
+        self.assertEqual(d.low_confidence, d.score < 0.75)
+        self.assertGreaterEqual(d.presence, 0.5)
         truth = skb.Joints2D.from_json(SKETCH_JOINTS).xy
-        self.assertLess(np.median(np.linalg.norm(d.joints.xy - truth, axis=1)), 60)
+        self.assertLess(np.median(np.linalg.norm(d.joints.xy - truth, axis=1)), 20)
+        for backend in ("fmp", "blazepose"):
+            b = skb.detect(SKETCH, skb.DetectOptions(backend=backend))
+            self.assertEqual(b.backend, backend)
+            self.assertLess(np.median(np.linalg.norm(b.joints.xy - truth, axis=1)), 20)
+        with self.assertRaises(ValueError):
+            skb.DetectOptions(backend="openpose").handle()
 
     def test_detect_errors(self):
         with self.assertRaises(skb.SketchbodyError) as cm:
             skb.detect(np.full((16, 16), 255, np.uint8))
         self.assertEqual(cm.exception.status_name, "SKB_ERR_IMAGE_TOO_SMALL")
-        with self.assertRaises(skb.NoFigure) as cm:
+        with self.assertRaises(skb.NoFigure):
             skb.detect(np.full((64, 64), 255, np.uint8), skb.DetectOptions(levels_per_octave=3))
-        self.assertIsInstance(cm.exception.score, float)
+        with self.assertRaises(skb.NoFigure):
+            skb.detect(np.full((64, 64), 255, np.uint8), skb.DetectOptions(backend="fmp", strict=True, threshold=1e6))
         with self.assertRaises(skb.SketchbodyError) as cm:
             skb.DetectOptions(figure_range=(0.9, 0.1)).handle()
         self.assertEqual(cm.exception.status_name, "SKB_ERR_OUT_OF_RANGE")
