@@ -1,0 +1,74 @@
+//! The single-figure front end (`detect::figure`) and its evaluation (`eval::backends`) on
+//! rendered sketches and blank pages: per-limb fusion takes each limb whole from one backend
+//! and never lowers the figure's confidence below the per-image choice; a blank page is "no
+//! figure" by the calibrated presence and by the hard thresholds; the set scores agree with the
+//! metrics computed directly; a calibration cannot be fitted from one-sided outcomes.
+
+use std::sync::Arc;
+
+use sketchbody::body::BodyModel;
+use sketchbody::detect::calibration::Calibration;
+use sketchbody::detect::figure::{decide, gather, Backend, FigureOptions, Fusion, LIMB_GROUPS};
+use sketchbody::detect::landmark::LandmarkNet;
+use sketchbody::detect::Model;
+use sketchbody::error::Error;
+use sketchbody::eval::backends::{fit_calibration, gather_sample, reliability, score_set};
+use sketchbody::eval::metrics::pck;
+use sketchbody::image::ImageView;
+use sketchbody::render::sketch::{SketchRenderer, SketchRequest};
+
+#[test]
+fn fusion_presence_and_set_scores() {
+    let model = Model::embedded().unwrap();
+    let net = LandmarkNet::embedded().unwrap();
+    let cal = Calibration::embedded().unwrap();
+    let renderer = SketchRenderer::new(Arc::new(BodyModel::embedded().unwrap()), None).unwrap();
+    let options = FigureOptions::default();
+    let mut samples = Vec::new();
+    for seed in [31, 32, 33] {
+        let s = renderer.render(&SketchRequest::random(seed, 384)).unwrap();
+        let view = ImageView::gray(&s.pixels, 384, 384).unwrap();
+        let truth: [[f64; 2]; 15] = s.truth.joints2d.as_slice().try_into().unwrap();
+        let e = gather(&view, &model, &net, Backend::Auto, &options).unwrap();
+        let (fmp, bp) = (e.sketch.as_ref().unwrap()[0].joints, e.blazepose.as_ref().unwrap().joints);
+        let image = decide(&e, cal, &options).unwrap();
+        let limb = decide(&e, cal, &FigureOptions { fusion: Fusion::PerLimb, ..options.clone() }).unwrap();
+        assert!(limb.confidence >= image.confidence - 1e-12, "{} < {}", limb.confidence, image.confidence);
+        for g in LIMB_GROUPS {
+            let from_fmp = g.iter().all(|&j| limb.joints.xy[j] == fmp.xy[j]);
+            let from_bp = g.iter().all(|&j| limb.joints.xy[j] == bp.xy[j]);
+            assert!(from_fmp || from_bp, "limb {g:?} mixes the backends");
+        }
+        assert!((image.confidence - image.joint_confidence.iter().sum::<f64>() / 15.0).abs() < 1e-12);
+        assert_eq!(image.low_confidence, image.confidence < 0.75);
+        assert!(pck(&truth, &image.joints.xy, 0.2).unwrap() >= 0.6, "seed {seed}");
+        samples.push(gather_sample(&view, Some(truth), &model, &net, &options).unwrap());
+    }
+    let blank = vec![255u8; 256 * 256];
+    let page = ImageView::gray(&blank, 256, 256).unwrap();
+    let e = gather(&page, &model, &net, Backend::Auto, &options).unwrap();
+    match decide(&e, cal, &options) {
+        Err(Error::NoFigure { score, threshold }) => assert!(score < threshold && threshold == 0.5, "{score}"),
+        other => panic!("blank page: {other:?}"),
+    }
+    let strict = FigureOptions { strict: true, ..options.clone() };
+    assert!(matches!(decide(&e, cal, &strict), Err(Error::NoFigure { .. })));
+    samples.push(gather_sample(&page, None, &model, &net, &options).unwrap());
+
+    // Set scores: PCK of the decided figures, the blank page as the one "no figure".
+    let s = score_set(&samples, cal, &options).unwrap();
+    let mut want = 0.0;
+    for x in &samples[..3] {
+        let f = decide(&x.evidence, cal, &options).unwrap();
+        want += pck(x.truth.as_ref().unwrap(), &f.joints.xy, 0.2).unwrap() / 3.0;
+    }
+    assert!((s.pck[1] - want).abs() < 1e-12, "{} vs {want}", s.pck[1]);
+    assert_eq!((s.n, s.no_figure), (4, 0.25));
+    let table = reliability(&samples, cal, &options, 10).unwrap();
+    assert_eq!(table.iter().map(|b| b.n).sum::<usize>(), 3);
+    // Every image here holds a figure but the blank page: presence models see one outcome only
+    // for pages with BlazePose evidence, so the fit must refuse rather than extrapolate.
+    assert!(matches!(fit_calibration(&samples[..3], 1e-2, "test"), Err(Error::OutOfRange { .. })));
+    assert_eq!("blazepose".parse::<Backend>().unwrap(), Backend::BlazePose);
+    assert!(matches!("openpose".parse::<Backend>(), Err(Error::OutOfRange { .. })));
+}
