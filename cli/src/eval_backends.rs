@@ -90,6 +90,14 @@ pub fn run_sets(
             100.0 * limb.chosen[1],
             100.0 * limb.chosen[2]
         );
+        let sweep: Vec<String> = [0.5, 0.2, 0.1, 0.05]
+            .iter()
+            .map(|&m| {
+                let o = FigureOptions { min_presence: m, ..FigureOptions::default() };
+                score_set(&samples, cal, &o).map(|s| format!("{m}: {:.3} / {:.1}%", s.pck[1], 100.0 * s.no_figure))
+            })
+            .collect::<Result<_, _>>()?;
+        println!("{:<26}       auto by min presence (PCK@0.2 / no figure): {}", "", sweep.join(", "));
         positives.extend(samples.into_iter().filter(|s| s.truth.is_some()));
     }
     for b in [Backend::Auto, Backend::Fmp, Backend::BlazePose] {
