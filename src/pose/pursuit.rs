@@ -299,3 +299,269 @@ fn pursue(
     }
     Ok(est)
 }
+
+#[cfg(test)]
+pub(crate) mod tests {
+    //! A fixed problem whose right answer is known: a hand-made dictionary of four bases over a
+    //! 3-D mean pose, 2-D joints projected from the mean plus known weights of two of them.
+    use super::*;
+    use crate::pose::dictionary::{pose_to_vec, Action, POSE_DIM};
+    use crate::pose::options::RotationTarget;
+    use crate::skeleton::BONES;
+    use nalgebra::{DMatrix, Matrix3};
+
+    /// 0.6 of ARM's sideways part and 0.8 of LEG (its image correlates with both true bases).
+    pub(crate) const DECOY: usize = 0;
+    /// Right wrist out and elbow in, right wrist down and left wrist up, right wrist toward the
+    /// viewer (its image is 0.6 of its length).
+    pub(crate) const ARM: usize = 1;
+    /// Left ankle out, left hip in.
+    pub(crate) const LEG: usize = 2;
+    /// Head toward the viewer: invisible to a camera with R = I.
+    pub(crate) const DEPTH: usize = 3;
+    /// Right wrist down, left wrist up: an image along v only.
+    pub(crate) const SHRUG: usize = 4;
+
+    /// The true weights of the observations, metres.
+    pub(crate) const W_ARM: f64 = 0.15;
+    pub(crate) const W_LEG: f64 = 0.05;
+
+    /// A standing figure with depth (so the camera's rotation is observable). The joints each
+    /// basis moves in pairs share the coordinate they move along (right wrist and elbow x,
+    /// both wrists y, left ankle and hip x), and each pair moves by opposite amounts: no basis
+    /// moves the figure's centroid or changes its spread, so the camera fitted to the mean pose
+    /// is already the true one and the pursuit's weights are exact.
+    pub(crate) fn mean_pose() -> Joints3 {
+        [
+            [0.0, 1.6, 0.05],
+            [0.0, 1.45, 0.0],
+            [-0.18, 1.45, 0.06],
+            [-0.24, 1.17, -0.08],
+            [-0.24, 0.92, 0.1],
+            [0.18, 1.45, -0.06],
+            [0.21, 1.17, 0.07],
+            [0.23, 0.92, -0.09],
+            [0.0, 0.95, 0.0],
+            [-0.1, 0.9, -0.05],
+            [-0.11, 0.5, 0.08],
+            [-0.1, 0.08, -0.03],
+            [0.1, 0.9, 0.05],
+            [0.11, 0.5, -0.06],
+            [0.1, 0.08, 0.04],
+        ]
+    }
+
+    /// The dictionary: the mean above (meeting the length constraint exactly) and five bases.
+    pub(crate) fn fixture() -> Dictionary {
+        let unit = |entries: &[(usize, usize, f64)]| {
+            let mut v = DVector::zeros(POSE_DIM);
+            for &(j, a, x) in entries {
+                v[3 * j + a] = x;
+            }
+            v.normalize()
+        };
+        // Orthonormal pair moves: right wrist out / elbow in, right wrist down / left wrist up,
+        // left ankle out / hip in.
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let (wrist_out, wrists_y, ankle_out) =
+            ([(4, 0, -h), (3, 0, h)], [(4, 1, -h), (7, 1, h)], [(14, 0, h), (12, 0, -h)]);
+        let scaled = |parts: &[(&[(usize, usize, f64)], f64)]| -> Vec<(usize, usize, f64)> {
+            parts.iter().flat_map(|(p, s)| p.iter().map(move |&(j, a, x)| (j, a, x * s))).collect()
+        };
+        let cols = [
+            unit(&scaled(&[(&wrist_out, 0.6), (&ankle_out, 0.8)])),
+            unit(&scaled(&[(&wrist_out, 0.48), (&wrists_y, 0.36), (&[(4, 2, 1.0)], 0.8)])),
+            unit(&ankle_out),
+            unit(&[(0, 2, 1.0)]),
+            unit(&wrists_y),
+        ];
+        let x = mean_pose();
+        let bone_lengths = std::array::from_fn(|b| {
+            let (p, c) = BONES[b];
+            (Vector3::from(x[c]) - Vector3::from(x[p])).norm()
+        });
+        Dictionary {
+            mean: pose_to_vec(&x),
+            bases: DMatrix::from_columns(&cols),
+            sigma: DVector::from_element(5, 0.1),
+            bone_lengths,
+            actions: vec![Action { name: "fixture".into(), first: 0, count: 5 }],
+            exemplars: DMatrix::zeros(POSE_DIM, 0),
+            provenance: "test fixture".into(),
+            frame_cache: Default::default(),
+        }
+    }
+
+    /// The camera of the observations: R = I, 250 px/m.
+    pub(crate) fn true_camera() -> WeakPerspective {
+        WeakPerspective { sx: 250.0, sy: 250.0, r: Matrix3::identity(), t: [200.0, 450.0] }
+    }
+
+    /// 2-D joints of the mean plus `w` (basis, weight) under [`true_camera`], with the head moved
+    /// `noise` px right and the neck as much left: a residual no basis and no camera explains
+    /// (zero mean, and head and neck share their x, so no scale absorbs it).
+    pub(crate) fn observe(d: &Dictionary, w: &[(usize, f64)], noise: f64) -> Joints2 {
+        let cam = true_camera();
+        let mut v = d.mean.clone();
+        for &(b, wb) in w {
+            v.axpy(wb, &d.bases.column(b), 1.0);
+        }
+        let mut j = Joints2 {
+            xy: std::array::from_fn(|p| cam.project(&Vector3::new(v[3 * p], v[3 * p + 1], v[3 * p + 2]))),
+            visible: [true; NUM_JOINTS],
+        };
+        j.xy[0][0] += noise;
+        j.xy[1][0] -= noise;
+        j
+    }
+
+    /// The paper's pursuit alone from μ, the camera rotation held at I (α = 1 toward identity),
+    /// κ loose enough for the true weights.
+    pub(crate) fn options() -> PoseOptions {
+        PoseOptions {
+            kappa: 0.5,
+            alpha: 1.0,
+            alpha_target: RotationTarget::Identity,
+            equal_scales: true,
+            max_bases: 4,
+            tolerance: 0.0,
+            refine: false,
+            prior: 0.0,
+            starts: 0,
+            limb_candidates: 0,
+            blend: 0.0,
+            joint_noise: 0.0,
+            proportions: false,
+            standing_prior: false,
+            knee_limits: false,
+        }
+    }
+
+    fn truth() -> [(usize, f64); 2] {
+        [(ARM, W_ARM), (LEG, W_LEG)]
+    }
+
+    #[test]
+    fn picks_the_most_correlated_basis_and_recovers_the_weights() {
+        let d = fixture();
+        d.validate().unwrap();
+        let j = observe(&d, &truth(), 1.0);
+        let est = estimate_pose(&d, &j, &options()).unwrap();
+        // ARM first: its correlation |aᵀr| / ‖a‖ (22.5 px) beats the decoy's (20.8 px), SHRUG's
+        // (13.5 px) and LEG's (12.5 px), although the decoy's |aᵀr| is larger (its image is
+        // longer); then LEG. Nothing lowers the objective further (the head/neck residual is
+        // orthogonal to every basis) and DEPTH has no image, so the pursuit stops with two.
+        assert_eq!(est.bases, [ARM, LEG], "{est:?}");
+        assert!((est.weights[0] - W_ARM).abs() < 1e-6 && (est.weights[1] - W_LEG).abs() < 1e-6, "{:?}", est.weights);
+        // What is left is the head/neck residual: 2 px² over 15 joints.
+        let floor = (2.0f64 / 15.0).sqrt();
+        assert!((est.rms - floor).abs() < 1e-6, "rms {} vs {floor}", est.rms);
+        assert!(est.length_excess.abs() <= 0.5, "{}", est.length_excess);
+        let cam = true_camera();
+        assert!((est.camera.r - cam.r).norm() < 1e-12 && (est.camera.sx - 250.0).abs() < 1e-6, "{:?}", est.camera);
+        assert!((est.camera.t[0] - cam.t[0]).abs() < 1e-6 && (est.camera.t[1] - cam.t[1]).abs() < 1e-6);
+        // The joints are the mean plus the chosen bases.
+        let x = fixture().mean.clone() + d.bases.column(ARM) * est.weights[0] + d.bases.column(LEG) * est.weights[1];
+        for p in 0..NUM_JOINTS {
+            for a in 0..3 {
+                assert!((est.joints[p][a] - x[3 * p + a]).abs() < 1e-12, "joint {p} axis {a}");
+            }
+        }
+        // Without noise the fit is exact (the tolerance keeps a third basis from fitting
+        // rounding errors).
+        let exact =
+            estimate_pose(&d, &observe(&d, &truth(), 0.0), &PoseOptions { tolerance: 1e-6, ..options() }).unwrap();
+        assert_eq!(exact.bases, [ARM, LEG]);
+        assert!(exact.rms < 1e-6, "{}", exact.rms);
+        // A motion along v only is found as such (its image norm counts v as much as u).
+        let shrug = estimate_pose(&d, &observe(&d, &[(SHRUG, 0.1)], 1.0), &options()).unwrap();
+        assert_eq!(shrug.bases, [SHRUG]);
+        assert!((shrug.weights[0] - 0.1).abs() < 1e-9 && (shrug.rms - floor).abs() < 1e-9, "{shrug:?}");
+        // DEPTH is invisible at R = I: never chosen, even when it is the truth.
+        let depth = estimate_pose(&d, &observe(&d, &[(DEPTH, 0.1)], 1.0), &options()).unwrap();
+        assert!(!depth.bases.contains(&DEPTH), "{depth:?}");
+    }
+
+    #[test]
+    fn weights_stay_within_the_length_bound() {
+        // With κ = 0.02 the true weights lengthen the bones too much (g/Σl² = 0.043): the
+        // pursuit's weights stay within the bound, using most of it (more bases are taken to
+        // fit the image within it).
+        let d = fixture();
+        let j = observe(&d, &truth(), 0.0);
+        let est = estimate_pose(&d, &j, &PoseOptions { kappa: 0.02, ..options() }).unwrap();
+        assert_eq!(est.bases[0], ARM, "{est:?}");
+        assert!(est.length_excess <= 0.02 + 1e-12 && est.length_excess > 0.018, "{}", est.length_excess);
+        let loose = estimate_pose(&d, &j, &options()).unwrap();
+        assert!(loose.length_excess > 0.04 && loose.length_excess < 0.5, "{}", loose.length_excess);
+    }
+
+    #[test]
+    fn refinement_runs_after_the_pursuit_when_enabled() {
+        // The pursuit holds R = I (α = 1); the refinement frees it and uses it on the head/neck
+        // residual (the head has depth), from the pursuit's own result.
+        let d = fixture();
+        let j = observe(&d, &truth(), 1.0);
+        let plain = estimate_pose(&d, &j, &options()).unwrap();
+        let refined = estimate_pose(&d, &j, &PoseOptions { refine: true, ..options() }).unwrap();
+        assert_eq!(
+            refined,
+            crate::pose::refine_pose(&d, &j, &PoseOptions { refine: true, ..options() }, &plain).unwrap()
+        );
+        assert!(refined.rms < plain.rms - 1e-4, "{} vs {}", refined.rms, plain.rms);
+        // Nothing to refine without bases.
+        let mean = estimate_pose(&d, &j, &PoseOptions { refine: true, max_bases: 0, ..options() }).unwrap();
+        assert!(mean.bases.is_empty());
+        assert_eq!(mean.camera.r, Matrix3::identity());
+    }
+
+    #[test]
+    fn stops_at_max_bases_and_at_the_tolerance() {
+        let d = fixture();
+        let j = observe(&d, &truth(), 1.0);
+        let one = estimate_pose(&d, &j, &PoseOptions { max_bases: 1, ..options() }).unwrap();
+        assert_eq!(one.bases, [ARM]);
+        assert!(one.rms > 1.0, "LEG's 12.5 px are left: {}", one.rms);
+        let none = estimate_pose(&d, &j, &PoseOptions { max_bases: 0, ..options() }).unwrap();
+        assert!(none.bases.is_empty() && none.weights.is_empty());
+        assert!(none.rms > one.rms);
+        // RMS ≤ tolerance stops: at exactly the RMS reached with one basis the pursuit stops
+        // there; a hair below it, it goes on to LEG.
+        let at = estimate_pose(&d, &j, &PoseOptions { tolerance: one.rms, ..options() }).unwrap();
+        assert_eq!(at.bases, [ARM]);
+        assert_eq!(at.rms, one.rms);
+        let below = estimate_pose(&d, &j, &PoseOptions { tolerance: one.rms * (1.0 - 1e-9), ..options() }).unwrap();
+        assert_eq!(below.bases, [ARM, LEG]);
+        // Already within tolerance at the mean: no basis at all.
+        let mean_only = estimate_pose(&d, &j, &PoseOptions { tolerance: none.rms, ..options() }).unwrap();
+        assert!(mean_only.bases.is_empty());
+    }
+
+    #[test]
+    fn a_step_gaining_less_than_the_threshold_is_undone() {
+        // A little of the decoy in the observations: the part of its image outside ARM's and
+        // LEG's (0.36 of it, 90 px per metre of weight) is all a third basis can still explain,
+        // out of the 2 px² head/neck residual. About 0.03 % of the objective is below the
+        // 0.2 % threshold (two bases); about 2 % is above it (a third basis is added).
+        let d = fixture();
+        let gain = |eps: f64| {
+            let x = (90.0 * eps).powi(2);
+            x / (2.0 + x)
+        };
+        let (small, large) = (2.5e-4, 2.3e-3);
+        assert!(gain(small) < 1e-3 && gain(large) > 4e-3, "{} {}", gain(small), gain(large));
+        let with = |eps: f64| {
+            let mut w = truth().to_vec();
+            w.push((DECOY, eps));
+            estimate_pose(&d, &observe(&d, &w, 1.0), &options()).unwrap()
+        };
+        let kept = with(small);
+        assert_eq!(kept.bases, [ARM, LEG], "{kept:?}");
+        // The third basis is SHRUG, not the decoy: the decoy's leftover image is mostly along
+        // v (0.8 of it), and ARM with SHRUG spans it.
+        let added = with(large);
+        assert_eq!(added.bases, [ARM, LEG, SHRUG], "{added:?}");
+        let floor = (2.0f64 / 15.0).sqrt();
+        assert!((added.rms - floor).abs() < 1e-9 && kept.rms > floor + 1e-6, "{} {}", added.rms, kept.rms);
+    }
+}

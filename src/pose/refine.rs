@@ -229,3 +229,128 @@ pub(crate) fn refine_problem(prob: &Problem, opts: &PoseOptions, start: &PoseEst
     cam.r = super::camera_fit::project_so3(&cam.r)?;
     Ok(PoseEstimate { base_parts: start.base_parts, ..finish(prob, cam, bases, w.iter().copied().collect()) })
 }
+
+#[cfg(test)]
+mod tests {
+    //! The refinement on the fixed problem of the pursuit's tests (a hand-made dictionary whose
+    //! right answer is known).
+    use super::*;
+    use crate::pose::pursuit::tests::{fixture, observe, options, true_camera, ARM, LEG, W_ARM, W_LEG};
+
+    /// A poor start: both true bases at weight 0 under a camera turned by 0.3 rad and scaled
+    /// wrongly.
+    fn poor_start(d: &Dictionary, j: &Joints2) -> PoseEstimate {
+        let prob = Problem::new(d, j, 0.0).unwrap();
+        let cam = WeakPerspective {
+            sx: 190.0,
+            sy: 210.0,
+            r: Rotation3::new(Vector3::new(0.12, -0.25, 0.1)).into_inner(),
+            t: [185.0, 470.0],
+        };
+        finish(&prob, cam, vec![ARM, LEG], vec![0.0, 0.0])
+    }
+
+    #[test]
+    fn tangent_basis_is_orthonormal_and_orthogonal_to_the_normal() {
+        for n in [vec![3.0, -4.0], vec![-1.0, 2.0, 0.5], vec![0.0, 0.0, 2.0, 1.0], vec![-2.0, 0.0, 0.0]] {
+            let n = DVector::from_vec(n);
+            let t = tangent_basis(&n);
+            assert_eq!((t.nrows(), t.ncols()), (n.len(), n.len() - 1));
+            let gram = t.transpose() * &t;
+            assert!((gram - DMatrix::identity(n.len() - 1, n.len() - 1)).norm() < 1e-14, "{n}");
+            assert!((t.transpose() * &n).norm() < 1e-14 * n.norm(), "{n}");
+        }
+    }
+
+    #[test]
+    fn reaches_the_exact_solution_from_a_poor_start() {
+        let d = fixture();
+        let j = observe(&d, &[(ARM, W_ARM), (LEG, W_LEG)], 0.0);
+        let opts = PoseOptions { refine: true, equal_scales: false, ..options() };
+        let start = PoseEstimate { base_parts: Some([1, 2, 3, 4, 5]), ..poor_start(&d, &j) };
+        assert!(start.rms > 10.0, "{}", start.rms);
+        let est = refine_pose(&d, &j, &opts, &start).unwrap();
+        assert_eq!(est.bases, [ARM, LEG]);
+        assert_eq!(est.base_parts, start.base_parts);
+        assert!(est.rms < 1e-7, "rms {}", est.rms);
+        assert!((est.weights[0] - W_ARM).abs() < 1e-8 && (est.weights[1] - W_LEG).abs() < 1e-8, "{:?}", est.weights);
+        let c = true_camera();
+        assert!((est.camera.r - c.r).norm() < 1e-8, "{}", est.camera.r);
+        assert!((est.camera.sx - c.sx).abs() < 1e-6 && (est.camera.sy - c.sy).abs() < 1e-6, "{:?}", est.camera);
+        assert!((est.camera.t[0] - c.t[0]).abs() < 1e-6 && (est.camera.t[1] - c.t[1]).abs() < 1e-6);
+        // The rotation is a rotation.
+        assert!((est.camera.r * est.camera.r.transpose() - Matrix3::identity()).norm() < 1e-12);
+        // With equal scales the two scales stay one (from the mean of the start's).
+        let eq = refine_pose(&d, &j, &PoseOptions { equal_scales: true, ..opts }, &start).unwrap();
+        assert_eq!(eq.camera.sx, eq.camera.sy);
+        assert!(eq.rms < 1e-7 && (eq.camera.sx - 250.0).abs() < 1e-6, "{:?}", eq);
+    }
+
+    #[test]
+    fn a_start_outside_the_length_bound_is_projected_and_the_bound_kept() {
+        // With κ = 0.02 the true weights lengthen the bones beyond the bound: the best pose
+        // lies on it (g = κ Σl²), the start (the true weights, camera off) is outside.
+        let d = fixture();
+        let j = observe(&d, &[(ARM, W_ARM), (LEG, W_LEG)], 0.0);
+        let opts = PoseOptions { refine: true, equal_scales: false, kappa: 0.02, ..options() };
+        let prob = Problem::new(&d, &j, 0.0).unwrap();
+        let mut cam = true_camera();
+        cam.sx = 240.0;
+        cam.r = Rotation3::new(Vector3::new(0.0, 0.1, 0.0)).into_inner();
+        let start = finish(&prob, cam, vec![ARM, LEG], vec![W_ARM, W_LEG]);
+        assert!(start.length_excess > 0.04, "{}", start.length_excess);
+        let est = refine_pose(&d, &j, &opts, &start).unwrap();
+        assert_eq!(est.bases, [ARM, LEG]);
+        assert!(
+            est.length_excess <= 0.02 + 1e-12 && est.length_excess > 0.02 - 1e-9,
+            "the bound is active and kept: {}",
+            est.length_excess
+        );
+        assert!(est.rms > 0.01, "the bound costs some fit: {}", est.rms);
+        // Better than the start moved onto the bound with its own camera (the weights re-solved
+        // under the constraint).
+        let con = prob.constraint(&est.bases);
+        let (a, r0) = prob.linear_system(&cam, &est.bases);
+        let projected = qcls::solve(&a, &r0, &con, -0.02 * con.sum_sq, 0.02 * con.sum_sq);
+        assert!(projected.feasible);
+        let f_proj = prob.total_objective(&cam, &est.bases, projected.w.as_slice());
+        let f = prob.total_objective(&est.camera, &est.bases, &est.weights);
+        assert!(f < 0.5 * f_proj, "{f} vs {f_proj}");
+        // A constrained minimum: no move along the bound (weights moved in its tangent and
+        // retracted onto it) nor of the camera lowers the objective.
+        let w = DVector::from_column_slice(&est.weights);
+        let n = con.gradient(&w);
+        let t = tangent_basis(&n);
+        for s in [1e-4, -1e-4, 1e-3, -1e-3] {
+            let nw = con.retract(&(&w + t.column(0) * s), &n, 0.02 * con.sum_sq).unwrap();
+            assert!(prob.total_objective(&est.camera, &est.bases, nw.as_slice()) >= f * (1.0 - 1e-9), "tangent {s}");
+            for k in 0..7 {
+                let mut d7 = [0.0; 7];
+                d7[k] = s * if k < 3 { 0.1 } else { 10.0 };
+                let c = apply(&est.camera, &d7, false).unwrap();
+                assert!(prob.total_objective(&c, &est.bases, &est.weights) >= f * (1.0 - 1e-9), "camera {k} {s}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_weight_on_the_bound_takes_camera_only_steps() {
+        // One basis, whose true weight is outside the bound: the weight sits on the bound (the
+        // tangent space is empty) and the camera is still refined.
+        let d = fixture();
+        let j = observe(&d, &[(ARM, W_ARM)], 0.0);
+        let opts = PoseOptions { refine: true, equal_scales: false, kappa: 0.02, ..options() };
+        let prob = Problem::new(&d, &j, 0.0).unwrap();
+        let mut cam = true_camera();
+        cam.t = [190.0, 455.0];
+        let start = finish(&prob, cam, vec![ARM], vec![W_ARM]);
+        let est = refine_pose(&d, &j, &opts, &start).unwrap();
+        assert!((est.length_excess - 0.02).abs() < 1e-9, "{}", est.length_excess);
+        assert!(est.weights[0] > 0.0 && est.weights[0] < W_ARM, "{:?}", est.weights);
+        let con = prob.constraint(&est.bases);
+        let (a, r0) = prob.linear_system(&cam, &est.bases);
+        let projected = qcls::solve(&a, &r0, &con, -0.02 * con.sum_sq, 0.02 * con.sum_sq);
+        let f_proj = prob.total_objective(&cam, &est.bases, projected.w.as_slice());
+        assert!(prob.total_objective(&est.camera, &est.bases, &est.weights) < 0.5 * f_proj);
+    }
+}
