@@ -408,4 +408,91 @@ mod tests {
         }
         assert!(multi > n / 10, "blended skin weights are present: {multi} of {n}");
     }
+
+    /// The container as the glTF 2.0 spec lays it out: chunk lengths and every buffer view's
+    /// offset multiples of 4, the buffer no longer than its chunk; the node tree is the rig's;
+    /// `TEXCOORD_0` is each corner's UV with v flipped (glTF's v runs down); the texture's
+    /// bytes are the PNG given; `write_glb` writes exactly these bytes; a scene for another
+    /// vertex count is refused.
+    #[test]
+    fn layout_tree_uvs_and_texture_read_back() {
+        let model = BodyModel::embedded().unwrap();
+        let mesh = RiggedMesh::from_model(&model, Gender::Male, &[]).unwrap();
+        let pose = crate::body::ik::Pose::rest(&mesh.joints);
+        let scene = RigScene::build(model.rig(), &mesh, &pose, &RigOptions::default()).unwrap();
+        let png = [0x89, b'P', b'N', b'G', 13, 10, 26]; // 7 bytes: the views after it need padding
+        let glb = glb_bytes(&mesh, &scene, Some(&png)).unwrap();
+        let jlen = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        assert_eq!(&glb[16..20], b"JSON");
+        assert_eq!(jlen % 4, 0, "JSON chunk length");
+        let blen = u32::from_le_bytes(glb[20 + jlen..24 + jlen].try_into().unwrap()) as usize;
+        assert_eq!(&glb[24 + jlen..28 + jlen], b"BIN\0");
+        assert_eq!(blen % 4, 0, "BIN chunk length");
+        assert_eq!(28 + jlen + blen, glb.len());
+        let doc = parse(&glb);
+        let buffer_len = doc["buffers"][0]["byteLength"].as_u64().unwrap() as usize;
+        assert!(buffer_len <= blen && blen - buffer_len < 4, "buffer {buffer_len} in a chunk of {blen}");
+        for (i, v) in doc["bufferViews"].as_array().unwrap().iter().enumerate() {
+            let off = v["byteOffset"].as_u64().unwrap() as usize;
+            assert_eq!(off % 4, 0, "buffer view {i} offset {off}");
+            assert!(off + v["byteLength"].as_u64().unwrap() as usize <= buffer_len);
+        }
+        // The node tree.
+        for b in 0..NUM_RIG_BONES {
+            let want: Vec<usize> = (0..NUM_RIG_BONES).filter(|&c| RIG_BONES[c].parent == Some(b)).collect();
+            let got: Vec<usize> = match doc["nodes"][b].get("children") {
+                Some(c) => serde_json::from_value(c.clone()).unwrap(),
+                None => Vec::new(),
+            };
+            assert_eq!(got, want, "children of node {b}");
+        }
+        // The texture.
+        let image = &doc["images"][0];
+        assert_eq!(image["mimeType"], "image/png");
+        let view = &doc["bufferViews"][image["bufferView"].as_u64().unwrap() as usize];
+        let off = view["byteOffset"].as_u64().unwrap() as usize;
+        assert_eq!(&glb[28 + jlen + off..28 + jlen + off + view["byteLength"].as_u64().unwrap() as usize], &png);
+        assert_eq!(doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["index"], 0);
+        // UVs per triangle corner, in the writer's triangle order (quads split along 0-2).
+        let uvs = mesh.uvs.as_ref().expect("the body model has UVs");
+        let prim = &doc["meshes"][0]["primitives"][0];
+        let idx: Vec<u32> = accessor_bytes(&glb, &doc, prim["indices"].as_u64().unwrap() as usize)
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        let tex: Vec<f32> = accessor_bytes(&glb, &doc, prim["attributes"]["TEXCOORD_0"].as_u64().unwrap() as usize)
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        let mut t = 0;
+        for (f, q) in mesh.quads.iter().enumerate() {
+            let corners: &[[usize; 3]] = if q[3] == q[2] { &[[0, 1, 2]] } else { &[[0, 1, 2], [0, 2, 3]] };
+            for tri in corners {
+                for (k, &c) in tri.iter().enumerate() {
+                    let g = idx[3 * t + k] as usize;
+                    let uv = uvs.coords[uvs.quads[f][c] as usize];
+                    assert_eq!([tex[2 * g], tex[2 * g + 1]], [uv[0], 1.0 - uv[1]], "UV of corner {c} of face {f}");
+                }
+                t += 1;
+            }
+        }
+        assert_eq!(3 * t, idx.len());
+        // The file is the bytes.
+        let dir = std::env::temp_dir().join(format!("skb-gltf-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("body.glb");
+        write_glb(&path, &mesh, &scene, Some(&png)).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), glb);
+        std::fs::remove_dir_all(&dir).unwrap();
+        // A scene whose vertex or skin count is not the mesh's.
+        let mut short = scene.clone();
+        short.rest_vertices.pop();
+        assert!(matches!(glb_bytes(&mesh, &short, None), Err(Error::OutOfRange { name: "rig scene", .. })));
+        let mut short = scene.clone();
+        short.skin.pop();
+        assert!(matches!(glb_bytes(&mesh, &short, None), Err(Error::OutOfRange { name: "rig scene", .. })));
+        let mut bad = scene;
+        bad.rest_vertices[7][1] = f32::NAN;
+        assert!(matches!(glb_bytes(&mesh, &bad, None), Err(Error::NonFinite { .. })));
+    }
 }
