@@ -345,6 +345,15 @@ mod tests {
         &bin[off..off + view["byteLength"].as_u64().unwrap() as usize]
     }
 
+    /// Little-endian `u32`s / `f32`s of accessor bytes.
+    fn u32s(b: &[u8]) -> Vec<u32> {
+        b.chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().unwrap())).collect()
+    }
+
+    fn f32s(b: &[u8]) -> Vec<f32> {
+        b.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect()
+    }
+
     /// Reads the binary chunk back as a viewer does: every quad is two triangles (a triangle
     /// one), each index points at the right rest position, and `JOINTS_0` / `WEIGHTS_0` carry each
     /// vertex's skin (bone 0 where the weight is 0, weights summing to 1).
@@ -358,19 +367,14 @@ mod tests {
         let doc = parse(&glb);
         let prim = &doc["meshes"][0]["primitives"][0];
         let attr = |name: &str| prim["attributes"][name].as_u64().unwrap() as usize;
-        let idx: Vec<u32> = accessor_bytes(&glb, &doc, prim["indices"].as_u64().unwrap() as usize)
-            .chunks_exact(4)
-            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
-            .collect();
+        let idx = u32s(accessor_bytes(&glb, &doc, prim["indices"].as_u64().unwrap() as usize));
         let tris = mesh.triangles();
         let quads = mesh.quads.iter().filter(|q| q[3] != q[2]).count();
         assert!(quads > 0 && quads < tris.len(), "the body has quads and triangles");
         assert_eq!(tris.len(), quads * 2 + (mesh.quads.len() - quads));
         assert_eq!(idx.len(), 3 * tris.len(), "index count");
         assert_eq!(doc["accessors"][prim["indices"].as_u64().unwrap() as usize]["count"], idx.len());
-        let floats = |a: usize| -> Vec<f32> {
-            accessor_bytes(&glb, &doc, a).chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect()
-        };
+        let floats = |a: usize| f32s(accessor_bytes(&glb, &doc, a));
         let pos = floats(attr("POSITION"));
         let weights = floats(attr("WEIGHTS_0"));
         let joints = accessor_bytes(&glb, &doc, attr("JOINTS_0"));
@@ -456,14 +460,8 @@ mod tests {
         // UVs per triangle corner, in the writer's triangle order (quads split along 0-2).
         let uvs = mesh.uvs.as_ref().expect("the body model has UVs");
         let prim = &doc["meshes"][0]["primitives"][0];
-        let idx: Vec<u32> = accessor_bytes(&glb, &doc, prim["indices"].as_u64().unwrap() as usize)
-            .chunks_exact(4)
-            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
-            .collect();
-        let tex: Vec<f32> = accessor_bytes(&glb, &doc, prim["attributes"]["TEXCOORD_0"].as_u64().unwrap() as usize)
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
-            .collect();
+        let idx = u32s(accessor_bytes(&glb, &doc, prim["indices"].as_u64().unwrap() as usize));
+        let tex = f32s(accessor_bytes(&glb, &doc, prim["attributes"]["TEXCOORD_0"].as_u64().unwrap() as usize));
         let mut t = 0;
         for (f, q) in mesh.quads.iter().enumerate() {
             let corners: &[[usize; 3]] = if q[3] == q[2] { &[[0, 1, 2]] } else { &[[0, 1, 2], [0, 2, 3]] };
