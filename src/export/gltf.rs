@@ -416,8 +416,8 @@ mod tests {
     /// The container as the glTF 2.0 spec lays it out: chunk lengths and every buffer view's
     /// offset multiples of 4, the buffer no longer than its chunk; the node tree is the rig's;
     /// `TEXCOORD_0` is each corner's UV with v flipped (glTF's v runs down); the texture's
-    /// bytes are the PNG given; `write_glb` writes exactly these bytes; a scene for another
-    /// vertex count is refused.
+    /// bytes are the PNG given; `write_glb` writes exactly these bytes; an unused influence slot
+    /// is joint 0; a scene for another vertex count is refused.
     #[test]
     fn layout_tree_uvs_and_texture_read_back() {
         let model = BodyModel::embedded().unwrap();
@@ -489,6 +489,21 @@ mod tests {
         let mut short = scene.clone();
         short.skin.pop();
         assert!(matches!(glb_bytes(&mesh, &short, None), Err(Error::OutOfRange { name: "rig scene", .. })));
+        // An unused influence slot (weight 0) is written as joint 0 whatever bone it names
+        // (the embedded model already stores 0 there, so name another): the first corner of
+        // the first face is glTF vertex 0.
+        let mut other = scene.clone();
+        let v0 = mesh.quads[0][0] as usize;
+        let k = other.skin[v0].weights.iter().position(|&w| w == 0.0).expect("vertex 0 has an unused slot");
+        other.skin[v0].bones[k] = 3;
+        let glb = glb_bytes(&mesh, &other, None).unwrap();
+        let doc = parse(&glb);
+        let joints = accessor_bytes(
+            &glb,
+            &doc,
+            doc["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"].as_u64().unwrap() as usize,
+        );
+        assert_eq!(joints[k], 0, "unused slot {k} of {:?}", other.skin[v0]);
         let mut bad = scene;
         bad.rest_vertices[7][1] = f32::NAN;
         assert!(matches!(glb_bytes(&mesh, &bad, None), Err(Error::NonFinite { .. })));
