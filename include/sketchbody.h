@@ -1559,7 +1559,9 @@ void skb_gray_image_free(struct skb_gray_image *img);
  * Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
  * edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
  * context's embedded detector finds them, as `skb_detect` with default options), the 3-D
- * pose and camera, the shape fit, and the fitted shape posed to the estimate.
+ * pose and camera (with detected joints, BlazePose's relative joint depths weigh the solver's
+ * choices), the shape fit (with detected joints: half the joint weight, no bone-factor
+ * search), and the fitted shape posed to the estimate.
  * `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
  * fit options' gender defaults to automatic: the both-sexes space, gender fitted) are
  * only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return

@@ -42,6 +42,16 @@ fn fusion_presence_and_set_scores() {
         assert!((image.confidence - image.joint_confidence.iter().sum::<f64>() / 15.0).abs() < 1e-12);
         assert_eq!(image.low_confidence, image.confidence < 0.75);
         assert!(pck(&truth, &image.joints.xy, 0.2).unwrap() >= 0.6, "seed {seed}");
+        // BlazePose's depths ride along for the joints it agrees with, whichever backend won.
+        let known = image.landmark_depth.iter().flatten().count();
+        assert!(image.landmark_depth.iter().flatten().all(|d| d.is_finite()));
+        if image.backend == Backend::BlazePose {
+            assert_eq!(known, 15, "seed {seed}: BlazePose's own joints all agree with themselves");
+        }
+        assert!(known >= 8, "seed {seed}: {known} joints with a depth");
+        let sketch_only = gather(&view, &model, &net, Backend::Fmp, &options).unwrap();
+        let f = decide(&sketch_only, cal, &options).unwrap();
+        assert!(f.landmark_depth.iter().all(Option::is_none), "no BlazePose, no depth");
         samples.push(gather_sample(&view, Some(truth), &model, &net, &options).unwrap());
     }
     let blank = vec![255u8; 256 * 256];

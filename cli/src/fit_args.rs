@@ -2,6 +2,7 @@
 
 use sketchbody::body::skin::SkinMethod;
 use sketchbody::fit::{FitOptions, MatchScore};
+use sketchbody::pipeline::{DetectedJointsFit, PipelineOptions};
 
 use crate::CliError;
 
@@ -70,6 +71,17 @@ pub struct FitArgs {
     /// gender's mean skeleton before the fit.
     #[arg(long)]
     pub keep_pose_scale: bool,
+    /// Weight of BlazePose's relative joint depths in the 3-D pose step's choices when the joints
+    /// are detected (px² of depth residual per px² of reprojection; 0 = off).
+    #[arg(long, default_value_t = PipelineOptions::default().depth_hint, value_parser = crate::ranges::real(0.0, 100.0, false))]
+    pub depth_hint: f64,
+    /// With detected joints, the fit's joint weight is multiplied by this (0..=1).
+    #[arg(long, default_value_t = DetectedJointsFit::default().joint_weight_scale, value_parser = crate::ranges::real(0.0, 1.0, false))]
+    pub detected_joint_weight_scale: f64,
+    /// With detected joints, search bone-length factors in the fit too (`--proportion-sd`);
+    /// default: the fit keeps the pose step's proportions.
+    #[arg(long, default_value_t = DetectedJointsFit::default().proportions, action = clap::ArgAction::Set)]
+    pub detected_proportions: bool,
 }
 
 /// Parses a match-score name.
@@ -94,6 +106,14 @@ pub fn score_name(s: MatchScore) -> &'static str {
 }
 
 impl FitArgs {
+    /// The fit's adjustments for detected joints these arguments describe.
+    pub fn detected(&self) -> DetectedJointsFit {
+        DetectedJointsFit {
+            joint_weight_scale: self.detected_joint_weight_scale,
+            proportions: self.detected_proportions,
+        }
+    }
+
     /// The fit options these arguments describe.
     pub fn options(&self) -> Result<FitOptions, CliError> {
         Ok(FitOptions {

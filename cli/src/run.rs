@@ -287,6 +287,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         gender: parse_gender(a.gender.as_deref())?,
         mean_shape: a.mean_shape,
         keep_pose_scale: a.fit.keep_pose_scale,
+        depth_hint: a.fit.depth_hint,
+        detected: a.fit.detected(),
         ..PipelineOptions::default()
     };
     let sketch_rgb = load_rgb_image(&a.sketch)?;

@@ -15,12 +15,14 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde_json::json;
 use sketchbody::body::{BodyModel, Gender};
-use sketchbody::detect::{DetectOptions, Model};
+use sketchbody::detect::figure::{Backend, FigureOptions};
+use sketchbody::detect::landmark::LandmarkNet;
+use sketchbody::detect::Model;
 use sketchbody::eval::score::dataset_samples;
 use sketchbody::export::obj::write_obj;
 use sketchbody::fsutil::write_atomic;
 use sketchbody::image::load_image;
-use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions};
+use sketchbody::pipeline::{run_pipeline, FigureJoints, GivenJoints, JointsSource, PipelineOptions};
 use sketchbody::pose::{dict_io, Dictionary, PoseEstimate};
 use sketchbody::render::sketch::truth::GroundTruth;
 use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
@@ -43,10 +45,14 @@ pub struct Args {
     /// The mean-shape baseline: the gender's mean shape posed the same way (no fit).
     #[arg(long)]
     mean_shape: bool,
-    /// Take the 2-D joints from the embedded detector instead of the ground truth (measures what
-    /// detection costs the fit).
+    /// Take the 2-D joints from the embedded single-figure detector instead of the ground truth,
+    /// as `run` without `--joints` does (measures what detection costs the fit).
     #[arg(long)]
     detect: bool,
+    /// Detector backend with --detect: auto (the default of `run`), fmp (the sketch model) or
+    /// blazepose.
+    #[arg(long, default_value = "auto", value_parser = crate::detect::parse_backend, requires = "detect")]
+    detector: Backend,
     /// Give the fit each sample's true rest height (`height_m` of the ground truth), as an
     /// artist with a character sheet would: measures the fit when the size is known.
     #[arg(long, conflicts_with = "height")]
@@ -87,8 +93,9 @@ struct Shared<'a> {
     dict: &'a Dictionary,
     base: PipelineOptions,
     mode: GenderMode,
-    /// The detector when the joints come from detection, with its options.
-    detector: Option<(Model, DetectOptions)>,
+    /// The sketch model, the landmark network and the figure options when the joints come from
+    /// detection.
+    detector: Option<(Model, LandmarkNet, FigureOptions)>,
     /// `--true-height`.
     true_height: bool,
     /// `--oracle-pose`.
@@ -135,7 +142,7 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         opts.given_pose = Some(truth_pose(&truth, stem)?);
     }
     let source: Box<dyn JointsSource + '_> = match &s.detector {
-        Some((model, options)) => Box::new(DetectedJoints { model, options }),
+        Some((model, net, options)) => Box::new(FigureJoints { model, net, options, colour: None }),
         None => Box::new(GivenJoints(truth_joints(&truth))),
     };
     let r =
@@ -161,6 +168,7 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         "shape_weights": r.weights,
         "proportions": r.fits.first().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportions),
         "proportion_estimate": r.fits.first().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportion_estimate),
+        "landmark_depth": r.detection.as_ref().map(|f| f.landmark_depth),
         "seconds": r.timings.total,
     });
     write_atomic(&out.join(format!("{stem}.json")), doc.to_string().as_bytes())?;
@@ -189,14 +197,19 @@ pub fn run(a: Args) -> Result<(), CliError> {
         .map_err(|e| CliError(format!("{}: cannot create the results folder: {e}", a.out.display())))?;
     let manifest = json!({
         "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
-        "gender": a.gender, "mean_shape": a.mean_shape, "score": score_name(fit.score), "seed": fit.seed,
+        "gender": a.gender, "mean_shape": a.mean_shape, "detector": if a.detect { Some(a.detector.name()) } else { None }, "depth_hint": a.fit.depth_hint, "detected_joint_weight_scale": a.fit.detected_joint_weight_scale, "detected_proportions": a.fit.detected_proportions, "score": score_name(fit.score), "seed": fit.seed,
         "fit_samples": fit.samples, "iterations": fit.max_iterations, "transition_scale": fit.transition_scale,
         "temperature": fit.temperature, "joint_weight": fit.joint_weight, "sample_camera": fit.sample_camera, "proportion_sd": fit.proportion_sd, "estimate_proportions": fit.estimate_proportions, "height": fit.height, "true_height": a.true_height, "oracle_pose": a.oracle_pose, "keep_pose_scale": a.fit.keep_pose_scale, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
     });
     write_atomic(&a.out.join("run.json"), manifest.to_string().as_bytes())?;
     let model = BodyModel::embedded()?;
     let dict = dict_io::embedded()?;
-    let detector = if a.detect { Some((Model::embedded()?, DetectOptions::default())) } else { None };
+    let detector = if a.detect {
+        let options = FigureOptions { backend: a.detector, ..FigureOptions::default() };
+        Some((Model::embedded()?, LandmarkNet::embedded()?, options))
+    } else {
+        None
+    };
     let shared = Shared {
         model: &model,
         dict: &dict,
@@ -204,6 +217,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
             fit,
             mean_shape: a.mean_shape,
             keep_pose_scale: a.fit.keep_pose_scale,
+            depth_hint: a.fit.depth_hint,
+            detected: a.fit.detected(),
             ..PipelineOptions::default()
         },
         mode,

@@ -75,6 +75,12 @@ fn results_are_scored_by_eval_and_deterministic() {
         assert_ne!(res["joints2d"], truth["joints2d"], "{stem}: joints come from the detector");
     }
     assert!(close * 5 >= total * 4, "{close} of {total} detected joints within 0.2 figure heights");
+    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("run.json")).unwrap()).unwrap();
+    assert_eq!(manifest["detector"], "auto", "--detect runs the product's default single-figure detector");
+    let plain: serde_json::Value = serde_json::from_slice(&std::fs::read(a.join("run.json")).unwrap()).unwrap();
+    assert!(plain["detector"].is_null(), "ground-truth joints name no detector");
+    let bad = skb(&["run-dataset", s(&ds), "--out", s(&dir.join("bad")), "--detector", "fmp"]);
+    assert!(!bad.status.success(), "--detector without --detect is refused");
     // Resuming skips finished samples.
     let again = skb(&[&["run-dataset", s(&ds), "--out", s(&a)][..], &fast].concat());
     ok(&again);

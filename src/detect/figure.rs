@@ -129,26 +129,32 @@ pub fn gather(
     backend: Backend,
     options: &FigureOptions,
 ) -> Result<Evidence> {
-    let sketch = if backend != Backend::BlazePose {
+    // The two backends are independent: BlazePose (one thread) runs beside the sketch model
+    // (which spreads over the pool), so `auto` costs little more wall time than the slower one.
+    let run_sketch = || -> Result<Option<Vec<Detection>>> {
+        if backend == Backend::BlazePose {
+            return Ok(None);
+        }
         let o = DetectOptions { threshold: Some(f64::MIN), ..options.sketch.clone() };
         match detect(image, model, &o) {
-            Ok(d) => Some(d.all),
-            Err(Error::NoFigure { .. }) => None,
-            Err(e) => return Err(e),
+            Ok(d) => Ok(Some(d.all)),
+            Err(Error::NoFigure { .. }) => Ok(None),
+            Err(e) => Err(e),
         }
-    } else {
-        None
     };
-    let blazepose = if backend != Backend::Fmp {
+    let run_blazepose = || -> Result<Option<BlazePoseDetection>> {
+        if backend == Backend::Fmp {
+            return Ok(None);
+        }
         let o = BlazePoseOptions { min_pose_flag: 0.0, ..options.blazepose };
         match detect_blazepose(net, image, &o) {
-            Ok(d) => Some(d),
-            Err(Error::NoFigure { .. } | Error::Degenerate(_)) => None,
-            Err(e) => return Err(e),
+            Ok(d) => Ok(Some(d)),
+            Err(Error::NoFigure { .. } | Error::Degenerate(_)) => Ok(None),
+            Err(e) => Err(e),
         }
-    } else {
-        None
     };
+    let (sketch, blazepose) = rayon::join(run_sketch, run_blazepose);
+    let (sketch, blazepose) = (sketch?, blazepose?);
     Ok(Evidence { sketch, sketch_threshold: model.thresh, blazepose })
 }
 
@@ -175,6 +181,28 @@ pub struct Figure {
     /// Other figures the sketch model found above its threshold (its NMS list after its best,
     /// which is the figure itself or overlaps it), best first.
     pub others: Vec<Detection>,
+    /// BlazePose's relative depth of each joint (px at the image's scale, smaller is nearer the
+    /// camera, relative to the hips) where its 2-D joint lies within [`DEPTH_AGREEMENT`] of the
+    /// figure's size from the chosen joint (`None` at the others), whichever backend's joints
+    /// were chosen; all `None` when BlazePose did not run. A cue for the pose step
+    /// ([`crate::pose::DepthHint`]).
+    pub landmark_depth: [Option<f64>; NUM_JOINTS],
+}
+
+/// Largest distance, as a fraction of the figure's size, between BlazePose's 2-D joint and the
+/// chosen joint for BlazePose's depth of that joint to count ([`Figure::landmark_depth`]).
+pub const DEPTH_AGREEMENT: f64 = 0.1;
+
+/// BlazePose's depths of the joints of `chosen` it agrees with (see [`Figure::landmark_depth`]).
+fn landmark_depth(evidence: &Evidence, chosen: &Joints2) -> [Option<f64>; NUM_JOINTS] {
+    let Some(b) = &evidence.blazepose else { return [None; NUM_JOINTS] };
+    let z: Vec<f64> = b.pass.landmarks.iter().map(|l| l.z).collect();
+    if z.len() < super::landmark::NUM_POSE_LANDMARKS {
+        return [None; NUM_JOINTS];
+    }
+    let depth = super::landmark::joints::canonical_depth(&z);
+    let (dist, _) = agreement(chosen, &b.joints);
+    std::array::from_fn(|j| (dist[j] <= DEPTH_AGREEMENT && depth[j].is_finite()).then_some(depth[j]))
 }
 
 /// Distances between the two backends' joints over the figure's size (the longer side of the
@@ -353,6 +381,7 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
     };
     let others = evidence.sketch.iter().flatten().skip(1).filter(|d| d.score >= sketch_threshold).cloned().collect();
     let confidence = mean(&best.conf);
+    let landmark_depth = landmark_depth(evidence, &best.joints);
     Ok(Figure {
         backend: best.backend,
         joints: best.joints,
@@ -362,6 +391,7 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
         low_confidence: confidence < LOW_CONFIDENCE,
         raw_score: best.raw_score,
         others,
+        landmark_depth,
     })
 }
 

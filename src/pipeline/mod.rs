@@ -13,6 +13,7 @@
 //! space is fitted.
 
 pub mod body_fit;
+mod detected;
 pub mod joints;
 pub mod overlay;
 
@@ -24,10 +25,11 @@ use crate::body::{BodyModel, Gender, ShapeChoice};
 use crate::error::{Error, Result};
 use crate::fit::FitOptions;
 use crate::image::{canny, CannyParams, GrayImage};
-use crate::pose::{estimate_pose, Dictionary, PoseEstimate, PoseOptions};
+use crate::pose::{estimate_pose_hinted, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::Joints2;
 
 pub use body_fit::{fit_body, refit_camera, BodyChoice, FittedBody, GenderFit};
+pub use detected::{DetectedJointsFit, DEFAULT_DEPTH_HINT};
 pub use joints::{DetectedJoints, FigureJoints, GivenJoints, JointsSource};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
@@ -35,7 +37,7 @@ pub const MIN_SKETCH_SIDE: usize = 32;
 
 /// Options of [`run_pipeline`]. `Default` gives the library defaults of every stage and
 /// automatic gender.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct PipelineOptions {
     /// Edge detector settings (default: 50/150, aperture 3, L1).
     pub canny: CannyParams,
@@ -57,6 +59,32 @@ pub struct PipelineOptions {
     /// `--oracle-pose` passes the ground truth to show what the fit reaches when the pose is
     /// right). Default `None` (estimate the pose).
     pub given_pose: Option<PoseEstimate>,
+    /// Weight of the landmark network's relative joint depths in the pose step's choices
+    /// ([`crate::pose::DepthHint::weight`]; px² of depth residual per px² of reprojection), used
+    /// when the joints come from the single-figure detector and BlazePose agrees with them
+    /// ([`crate::detect::figure::Figure::landmark_depth`]); 0 = off. Given joints carry no
+    /// depth. Default [`DEFAULT_DEPTH_HINT`].
+    pub depth_hint: f64,
+    /// How the shape fit treats joints that came from the detector rather than from the user
+    /// (a detector's joints are a few percent of the figure off, enough to skew the bone
+    /// lengths the fit would read proportions from). Given joints use `fit` as is.
+    pub detected: DetectedJointsFit,
+}
+
+impl Default for PipelineOptions {
+    fn default() -> Self {
+        Self {
+            canny: CannyParams::default(),
+            pose: PoseOptions::default(),
+            fit: FitOptions::default(),
+            gender: None,
+            mean_shape: false,
+            keep_pose_scale: false,
+            given_pose: None,
+            depth_hint: DEFAULT_DEPTH_HINT,
+            detected: DetectedJointsFit::default(),
+        }
+    }
 }
 
 /// Wall-clock seconds of each stage.
@@ -184,7 +212,10 @@ pub fn run_pipeline(
     let t = Instant::now();
     let pose = match &options.given_pose {
         Some(given) => given.clone(),
-        None => estimate_pose(dict, &joints2d, &options.pose)?,
+        None => {
+            let hint = detection.as_ref().and_then(|f| detected::depth_hint(f, options.depth_hint));
+            estimate_pose_hinted(dict, &joints2d, &options.pose, hint.as_ref())?
+        }
     };
     timings.pose = t.elapsed().as_secs_f64();
     p.report(0.06)?;
@@ -192,7 +223,11 @@ pub fn run_pipeline(
     let choice =
         BodyChoice { gender: options.gender, mean_shape: options.mean_shape, keep_pose_scale: options.keep_pose_scale };
     let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
-    let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &options.fit, &choice, &mut cb)?;
+    let fit = match &detection {
+        Some(_) => options.detected.apply(&options.fit)?,
+        None => options.fit.clone(),
+    };
+    let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &choice, &mut cb)?;
     timings.fit = body.fit_seconds;
     timings.posing = body.posing_seconds;
     let mesh = RiggedMesh::from_rest(model, &body.rest);

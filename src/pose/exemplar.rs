@@ -22,6 +22,7 @@ use std::sync::OnceLock;
 use nalgebra::{DVector, Matrix3, Matrix3x2, SMatrix, Vector3};
 
 use super::camera_fit::{fit_camera, CameraPrior};
+use super::depth_hint::{hint_cost, DepthHint};
 use super::problem::Problem;
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
@@ -161,7 +162,14 @@ pub fn shortlist_len(count: usize) -> usize {
 /// The `count` best starts from an [`affine_ranking`] (see the module doc, step 2), best first;
 /// fewer when fewer exemplars admit a camera. Errors: `OutOfRange` when the ranking is empty
 /// (no exemplars), `Degenerate` when no shortlisted exemplar admits a camera.
-pub fn nearest(prob: &Problem, ranking: &[(usize, f64)], count: usize, prior: &CameraPrior) -> Result<Vec<Start>> {
+/// With a depth `hint`, its cost ([`DepthHint::cost`]) is added to each start's objective.
+pub fn nearest(
+    prob: &Problem,
+    ranking: &[(usize, f64)],
+    count: usize,
+    prior: &CameraPrior,
+    hint: Option<&DepthHint>,
+) -> Result<Vec<Start>> {
     if ranking.is_empty() {
         return Err(Error::OutOfRange {
             name: "starts",
@@ -174,7 +182,8 @@ pub fn nearest(prob: &Problem, ranking: &[(usize, f64)], count: usize, prior: &C
         let e = ex.column(k);
         let x: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|p| Vector3::new(e[3 * p], e[3 * p + 1], e[3 * p + 2]));
         if let Ok(camera) = fit_camera(&x, &prob.uv, &prob.vis, prior) {
-            starts.push(Start { index: k, camera, objective: prob.objective(&camera, &x) });
+            let objective = prob.objective(&camera, &x) + hint_cost(hint, &camera, &x);
+            starts.push(Start { index: k, camera, objective });
         }
     }
     if starts.is_empty() {
@@ -187,8 +196,15 @@ pub fn nearest(prob: &Problem, ranking: &[(usize, f64)], count: usize, prior: &C
 
 /// Recomposes `start` limb by limb from `candidates` (exemplar columns; see the module doc,
 /// step 3). Returns the 45-vector and the exemplar of each part: torso, then the limbs in
-/// [`LIMBS`] order (a limb keeps the torso's exemplar when no candidate does better).
-pub fn compose(prob: &Problem, start: &Start, candidates: &[usize]) -> (DVector<f64>, [usize; 5]) {
+/// [`LIMBS`] order (a limb keeps the torso's exemplar when no candidate does better). With a
+/// depth `hint`, a candidate limb's cost also holds the hint's cost of its two joints about the
+/// limb's root ([`DepthHint::cost_about`]).
+pub fn compose(
+    prob: &Problem,
+    start: &Start,
+    candidates: &[usize],
+    hint: Option<&DepthHint>,
+) -> (DVector<f64>, [usize; 5]) {
     let ex = &prob.dict.exemplars;
     let mut out = ex.column(start.index).into_owned();
     let mut parts = [start.index; 5];
@@ -199,14 +215,16 @@ pub fn compose(prob: &Problem, start: &Start, candidates: &[usize]) -> (DVector<
             let e = ex.column(k);
             let mid = root + at(e.as_slice(), limb[1]) - at(e.as_slice(), limb[0]);
             let end = mid + at(e.as_slice(), limb[2]) - at(e.as_slice(), limb[1]);
-            [(limb[1], mid), (limb[2], end)]
+            let ends = [(limb[1], mid), (limb[2], end)];
+            let reprojection: f64 = ends
                 .iter()
                 .filter(|(j, _)| prob.vis.contains(j))
                 .map(|(j, x)| {
                     let q = start.camera.project(x);
                     (q[0] - prob.uv[*j][0]).powi(2) + (q[1] - prob.uv[*j][1]).powi(2)
                 })
-                .sum()
+                .sum();
+            reprojection + hint.map_or(0.0, |h| h.cost_about(&start.camera, limb[0], &root, &ends))
         };
         let mut best = (cost(start.index), start.index);
         for &k in candidates {
@@ -260,12 +278,12 @@ mod tests {
         let ranking = affine_ranking(&prob, usize::MAX);
         assert_eq!(ranking.len(), d.exemplars.ncols());
         assert!(ranking[0].1 < 1e-9, "{}", ranking[0].1);
-        let s = nearest(&prob, &ranking, 3, &NO_PRIOR).unwrap();
+        let s = nearest(&prob, &ranking, 3, &NO_PRIOR, None).unwrap();
         assert_eq!(s.len(), 3);
         assert!(s[0].objective < 1e-12, "{}", s[0].objective);
         assert!(s[1].objective >= s[0].objective && s[2].objective >= s[1].objective);
         // The best start reproduces the view, so composing keeps every limb of it.
-        let (pose, parts) = compose(&prob, &s[0], &(0..d.exemplars.ncols()).collect::<Vec<_>>());
+        let (pose, parts) = compose(&prob, &s[0], &(0..d.exemplars.ncols()).collect::<Vec<_>>(), None);
         let x: [Vector3<f64>; NUM_JOINTS] =
             std::array::from_fn(|p| Vector3::new(pose[3 * p], pose[3 * p + 1], pose[3 * p + 2]));
         assert!(prob.objective(&s[0].camera, &x) < 1e-12);
@@ -281,13 +299,13 @@ mod tests {
         }
         let start = Start { index: a, camera: cam, objective: 0.0 };
         let prob = Problem::new(&d, &view(mixed.as_slice(), &cam), 0.0).unwrap();
-        let (pose, parts) = compose(&prob, &start, &[b]);
+        let (pose, parts) = compose(&prob, &start, &[b], None);
         assert_eq!(parts, [a, b, a, a, a]);
         assert!((pose - mixed).norm() < 1e-12);
         let empty = Dictionary { exemplars: nalgebra::DMatrix::zeros(45, 0), ..d.clone() };
         let prob = Problem::new(&empty, &j, 0.0).unwrap();
         assert!(matches!(
-            nearest(&prob, &affine_ranking(&prob, usize::MAX), 1, &NO_PRIOR),
+            nearest(&prob, &affine_ranking(&prob, usize::MAX), 1, &NO_PRIOR, None),
             Err(Error::OutOfRange { name: "starts", .. })
         ));
     }

@@ -4,6 +4,7 @@
 //! - [`motion`]: motion tables (canonical-joint CSV), pose normalisation, mirroring.
 //! - [`blend`]: posterior-mean blend of the exemplar starts' hypotheses.
 //! - [`bvh`]: BVH reader with a joint-name mapping for CMU-, Mixamo- and Rokoko-style rigs.
+//! - [`depth_hint`]: relative joint depths from an image cue, weighing the solver's choices.
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
 //! - [`exemplar`]: the nearest-neighbour starts (exemplar poses ranked by an affine camera fit).
 //! - [`figure`]: drawn proportions as unknowns (per-group bone-length factors).
@@ -25,6 +26,7 @@
 pub mod blend;
 pub mod bvh;
 pub mod camera_fit;
+pub mod depth_hint;
 pub mod dict_io;
 pub mod dictionary;
 pub mod exemplar;
@@ -42,5 +44,6 @@ pub mod refine;
 
 pub use dictionary::{Dictionary, LearnParams};
 pub use options::PoseOptions;
-pub use pursuit::{estimate_pose, PoseEstimate};
+pub use depth_hint::DepthHint;
+pub use pursuit::{estimate_pose, estimate_pose_hinted, PoseEstimate};
 pub use refine::refine_pose;

@@ -15,6 +15,7 @@
 use nalgebra::{DVector, Vector3};
 
 use super::camera_fit::{fit_camera, CameraPrior};
+use super::depth_hint::{hint_cost, DepthHint};
 use super::dictionary::Dictionary;
 use super::figure::{estimate_factors, BodyFactors, FACTOR_MAX, FACTOR_MIN};
 use super::options::PoseOptions;
@@ -103,20 +104,42 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
 /// (the first estimate is kept when that second solve fails or fits the image worse). Every
 /// estimate is flagged for plausibility ([`PoseEstimate::plausible`]).
 pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
+    estimate_pose_hinted(dict, joints, opts, None)
+}
+
+/// [`estimate_pose`] with relative joint depths from an image cue ([`DepthHint`]): its cost is
+/// added where the solver chooses between readings (the exemplar starts, each recomposed limb,
+/// the blend of the hypotheses; see [`super::depth_hint`]). `None` is [`estimate_pose`].
+/// Errors: those of [`estimate_pose`], and the hint's ([`DepthHint::validate`]).
+pub fn estimate_pose_hinted(
+    dict: &Dictionary,
+    joints: &Joints2,
+    opts: &PoseOptions,
+    hint: Option<&DepthHint>,
+) -> Result<PoseEstimate> {
     opts.validate()?;
-    let first = estimate_fixed(dict, joints, opts)?;
-    let est = if opts.proportions { with_proportions(dict, joints, opts, first) } else { first };
+    if let Some(h) = hint {
+        h.validate()?;
+    }
+    let first = estimate_fixed(dict, joints, opts, hint)?;
+    let est = if opts.proportions { with_proportions(dict, joints, opts, first, hint) } else { first };
     Ok(flag_plausibility(joints, est))
 }
 
 /// The second solve of [`estimate_pose`] with estimated factors (see there).
-fn with_proportions(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions, first: PoseEstimate) -> PoseEstimate {
+fn with_proportions(
+    dict: &Dictionary,
+    joints: &Joints2,
+    opts: &PoseOptions,
+    first: PoseEstimate,
+    hint: Option<&DepthHint>,
+) -> PoseEstimate {
     let c = &first.camera;
     let f = estimate_factors(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy);
     if f.k.iter().all(|k| (k - 1.0).abs() < 1e-3) {
         return first;
     }
-    let Ok(second) = estimate_fixed(dict, &f.unstylise_2d(joints), opts) else { return first };
+    let Ok(second) = estimate_fixed(dict, &f.unstylise_2d(joints), opts, hint) else { return first };
     let x = f.apply(&second.joints);
     let xs: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(x[j]));
     let Ok(prob) = Problem::new(dict, joints, 0.0) else { return first };
@@ -141,7 +164,12 @@ fn flag_plausibility(joints: &Joints2, est: PoseEstimate) -> PoseEstimate {
 }
 
 /// [`estimate_pose`] with the dictionary's proportions (no factors, no plausibility flag).
-fn estimate_fixed(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
+fn estimate_fixed(
+    dict: &Dictionary,
+    joints: &Joints2,
+    opts: &PoseOptions,
+    hint: Option<&DepthHint>,
+) -> Result<PoseEstimate> {
     let prob = Problem::new(dict, joints, opts.prior)?;
     if opts.starts == 0 || dict.exemplars.ncols() == 0 {
         let cam = fit_camera(&prob.pose(&[], &[]), &prob.uv, &prob.vis, &CameraPrior::of(opts))?;
@@ -152,11 +180,11 @@ fn estimate_fixed(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Re
     let candidates: Vec<usize> = ranking.iter().take(opts.limb_candidates).map(|r| r.0).collect();
     let mut hyps: Vec<(f64, PoseEstimate)> = Vec::new();
     let mut last_err = None;
-    for s in super::exemplar::nearest(&prob, &ranking, opts.starts, &CameraPrior::of(opts))? {
+    for s in super::exemplar::nearest(&prob, &ranking, opts.starts, &CameraPrior::of(opts), hint)? {
         let (p, cam, parts) = if candidates.is_empty() {
             (prob.with_base(dict.exemplars.column(s.index).into_owned()), s.camera, [s.index; 5])
         } else {
-            let (base, parts) = super::exemplar::compose(&prob, &s, &candidates);
+            let (base, parts) = super::exemplar::compose(&prob, &s, &candidates, hint);
             let p = prob.with_base(base);
             match fit_camera(&p.pose(&[], &[]), &p.uv, &p.vis, &CameraPrior::of(opts)) {
                 Ok(cam) => (p, cam, parts),
@@ -168,7 +196,9 @@ fn estimate_fixed(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Re
         };
         match pursue(&p, opts, cam, Some(parts)) {
             Ok(est) => {
-                hyps.push((p.total_objective(&est.camera, &est.bases, &est.weights), est));
+                let x: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(est.joints[j]));
+                let f = p.total_objective(&est.camera, &est.bases, &est.weights) + hint_cost(hint, &est.camera, &x);
+                hyps.push((f, est));
             }
             Err(e) => last_err = Some(e),
         }
@@ -365,7 +395,9 @@ pub(crate) mod tests {
         let h = std::f64::consts::FRAC_1_SQRT_2;
         let (wrist_out, wrists_y, ankle_out) =
             ([(4, 0, -h), (3, 0, h)], [(4, 1, -h), (7, 1, h)], [(14, 0, h), (12, 0, -h)]);
-        let scaled = |parts: &[(&[(usize, usize, f64)], f64)]| -> Vec<(usize, usize, f64)> {
+        // (joint, axis, amount) entries of a move, and moves with their factors.
+        type Move<'a> = &'a [(usize, usize, f64)];
+        let scaled = |parts: &[(Move, f64)]| -> Vec<(usize, usize, f64)> {
             parts.iter().flat_map(|(p, s)| p.iter().map(move |&(j, a, x)| (j, a, x * s))).collect()
         };
         let cols = [

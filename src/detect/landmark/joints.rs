@@ -73,6 +73,15 @@ pub fn to_canonical(xy: &[[f64; 2]], conf: &[f64]) -> (Joints2, [f64; NUM_JOINTS
     (out, c)
 }
 
+/// The canonical joints' depths from the landmarks' depths `z` (at least the 33 pose
+/// landmarks; px, smaller is nearer the camera): the same mapping as [`to_canonical`] (direct
+/// joints take their landmark's depth, derived joints the same midpoints and interpolations).
+pub fn canonical_depth(z: &[f64]) -> [f64; NUM_JOINTS] {
+    let as_xy: Vec<[f64; 2]> = z.iter().map(|&d| [d, 0.0]).collect();
+    let (j, _) = to_canonical(&as_xy, &vec![0.0; z.len()]);
+    std::array::from_fn(|k| j.xy[k][0])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,5 +99,10 @@ mod tests {
         assert_eq!(j.xy[at("neck")], [0.5 * 11.5 + 0.5 * 9.5, 0.5 * 23.0 + 0.5 * 19.0]);
         assert!((c[at("pelvis")] - 0.235).abs() < 1e-12);
         assert!(j.visible.iter().all(|&v| v));
+        let z: Vec<f64> = (0..33).map(|i| -(i as f64)).collect();
+        let d = canonical_depth(&z);
+        assert_eq!(d[at("r_wrist")], -16.0);
+        assert_eq!(d[at("pelvis")], -23.5);
+        assert_eq!(d[at("neck")], -(0.5 * 11.5 + 0.5 * 9.5));
     }
 }

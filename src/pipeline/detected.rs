@@ -1,0 +1,105 @@
+//! How joints from the detector, rather than the user, are treated downstream: BlazePose's
+//! relative depths become the pose step's depth hint ([`crate::pose::DepthHint`]), and the shape
+//! fit trusts the joints less ([`DetectedJointsFit`]). Given joints use the options as they are.
+
+use crate::detect::figure::Figure;
+use crate::error::{Error, Result};
+use crate::fit::FitOptions;
+use crate::pose::DepthHint;
+
+/// Default [`super::PipelineOptions::depth_hint`]. Chosen on `make-dataset 60 --seed 78` (six held-out
+/// clips) with detected joints and automatic gender, weights 0, 0.1, 0.3, 1: 0.1 lowers the
+/// posed AED from 0.0963 to 0.0885 and PA-MPJPE from 89.5 to 88.7 mm and leaves the rest AED
+/// (centred 0.0362 → 0.0363); larger weights make all three worse (docs/benchmarks.md).
+pub const DEFAULT_DEPTH_HINT: f64 = 0.1;
+
+/// The shape fit's adjustments for detected joints ([`super::PipelineOptions::detected`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DetectedJointsFit {
+    /// Factor on [`FitOptions::joint_weight`], in 0..=1 (default 0.5).
+    pub joint_weight_scale: f64,
+    /// Search bone-length factors in the fit ([`FitOptions::proportion_sd`]) with detected joints
+    /// too (default `false`: the fit keeps the pose step's proportions).
+    pub proportions: bool,
+}
+
+impl Default for DetectedJointsFit {
+    /// Chosen on `make-dataset 60 --seed 78` with detected joints and automatic gender (rest AED
+    /// centred, mean shape 0.0275): as for given joints 0.0363; without the proportion search
+    /// 0.0334; joint-weight factor 0.1 / 0.3 / 0.5 then 0.0303 / 0.0309 / 0.0285, posed AED
+    /// 0.0885 → 0.0856 (docs/benchmarks.md).
+    fn default() -> Self {
+        Self { joint_weight_scale: 0.5, proportions: false }
+    }
+}
+
+impl DetectedJointsFit {
+    /// `fit` adjusted for detected joints. Errors: `OutOfRange` for a scale outside 0..=1.
+    pub fn apply(&self, fit: &FitOptions) -> Result<FitOptions> {
+        if !(0.0..=1.0).contains(&self.joint_weight_scale) {
+            return Err(Error::OutOfRange {
+                name: "detected.joint_weight_scale",
+                detail: format!("{} not in [0, 1]", self.joint_weight_scale),
+            });
+        }
+        let mut f = fit.clone();
+        f.joint_weight *= self.joint_weight_scale;
+        if !self.proportions {
+            f.proportion_sd = 0.0;
+        }
+        Ok(f)
+    }
+}
+
+/// The pose step's depth hint from a detected figure's landmark depths with `weight`
+/// ([`super::PipelineOptions::depth_hint`]); `None` when the weight is 0 or the figure has no depth.
+pub(crate) fn depth_hint(figure: &Figure, weight: f64) -> Option<DepthHint> {
+    if !(weight > 0.0) || figure.landmark_depth.iter().all(Option::is_none) {
+        return None;
+    }
+    let z = figure.landmark_depth.map(|d| d.unwrap_or(0.0));
+    let known = figure.landmark_depth.map(|d| d.is_some());
+    Some(DepthHint::from_landmark_depth(&z, known, weight))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::skeleton::NUM_JOINTS;
+
+    #[test]
+    fn detected_joints_lower_the_joint_weight_and_keep_the_pose_proportions() {
+        let fit = FitOptions { joint_weight: 2.0, proportion_sd: 0.1, ..FitOptions::default() };
+        let d = DetectedJointsFit::default().apply(&fit).unwrap();
+        assert_eq!((d.joint_weight, d.proportion_sd), (1.0, 0.0));
+        assert_eq!(FitOptions { joint_weight: 2.0, proportion_sd: 0.1, ..d.clone() }, fit, "nothing else changes");
+        let keep = DetectedJointsFit { joint_weight_scale: 1.0, proportions: true }.apply(&fit).unwrap();
+        assert_eq!(keep, fit);
+        for bad in [-0.1, 1.5, f64::NAN] {
+            let e = DetectedJointsFit { joint_weight_scale: bad, proportions: false }.apply(&fit);
+            assert!(matches!(e, Err(Error::OutOfRange { .. })), "{bad}");
+        }
+    }
+
+    #[test]
+    fn a_figure_gives_a_hint_only_with_depths_and_a_weight() {
+        let mut f = Figure {
+            backend: crate::detect::figure::Backend::BlazePose,
+            joints: crate::skeleton::Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] },
+            joint_confidence: [1.0; NUM_JOINTS],
+            confidence: 1.0,
+            presence: 1.0,
+            low_confidence: false,
+            raw_score: 1.0,
+            others: Vec::new(),
+            landmark_depth: [None; NUM_JOINTS],
+        };
+        assert!(depth_hint(&f, 0.1).is_none(), "no depths");
+        f.landmark_depth[3] = Some(-10.0);
+        assert!(depth_hint(&f, 0.0).is_none(), "zero weight");
+        let h = depth_hint(&f, 0.1).unwrap();
+        assert_eq!(h.known.iter().filter(|k| **k).count(), 1);
+        assert!(h.depth[3] > 0.0, "smaller landmark depth = nearer = larger hint depth");
+        assert_eq!(h.weight, 0.1);
+    }
+}
