@@ -113,11 +113,13 @@ pub enum Error {
         min: usize,
     },
     /// The detector found no figure scoring at least the threshold.
-    #[error("no figure found: best score {score:.3} is below the threshold {threshold:.3}")]
+    #[error("no figure found: score {score:.3} is below the threshold {threshold:.3}")]
     NoFigure {
-        /// The best figure's score.
+        /// The best figure's score: the calibrated probability that the image holds a figure
+        /// for the single-figure detector's default, the backend's raw score when strict or
+        /// for the sketch model alone.
         score: f64,
-        /// The score threshold.
+        /// The threshold `score` had to reach.
         threshold: f64,
     },
     /// The operation was cancelled by the caller's progress callback.

@@ -104,8 +104,9 @@ class Cancelled(SketchbodyError):
 
 
 class NoFigure(SketchbodyError):
-    """SKB_ERR_NO_FIGURE: the detector found no figure; `score` is the best score found
-    (below the threshold; -inf when no scale was searched)."""
+    """SKB_ERR_NO_FIGURE: the detector found no figure; `score` is what fell below the
+    threshold: the calibrated probability that the image holds a figure (the default), or the
+    backend's raw score when strict (-inf when no scale was searched)."""
 
     score = float("nan")
 

@@ -240,7 +240,7 @@ class SKETCHBODY_OT_sketch_to_body(_Reporting, bpy.types.Operator):
                 det = skb.detect(image_path)
             except skb.NoFigure as e:
                 raise UserError(
-                    f"The detector found no figure in the sketch (best score {e.score:.2f}); give a joints file "
+                    f"The detector found no figure in the sketch (score {e.score:.2f}); give a joints file "
                     "(sketchbody-joints2d JSON) and correct the joints on the sketch")
             except skb.SketchbodyError as e:
                 raise UserError(f"Joint detection failed: {e.message} ({e.status_name}); give a joints file "
