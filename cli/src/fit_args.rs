@@ -82,6 +82,10 @@ pub struct FitArgs {
     /// default: the fit keeps the pose step's proportions.
     #[arg(long, default_value_t = DetectedJointsFit::default().proportions, action = clap::ArgAction::Set)]
     pub detected_proportions: bool,
+    /// With detected joints, the pose step reads BlazePose's own joints and depths when they
+    /// agree with the chosen figure.
+    #[arg(long, default_value_t = DetectedJointsFit::default().landmark_pose, action = clap::ArgAction::Set)]
+    pub landmark_pose: bool,
 }
 
 /// Parses a match-score name.
@@ -111,6 +115,7 @@ impl FitArgs {
         DetectedJointsFit {
             joint_weight_scale: self.detected_joint_weight_scale,
             proportions: self.detected_proportions,
+            landmark_pose: self.landmark_pose,
         }
     }
 

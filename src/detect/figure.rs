@@ -187,11 +187,27 @@ pub struct Figure {
     /// were chosen; all `None` when BlazePose did not run. A cue for the pose step
     /// ([`crate::pose::DepthHint`]).
     pub landmark_depth: [Option<f64>; NUM_JOINTS],
+    /// BlazePose's own 15 joints (px) with all their depths, when it ran and its joints agree
+    /// with the chosen ones (median distance ≤ [`DEPTH_AGREEMENT`] of the figure's size); `None`
+    /// otherwise. The same figure as `joints`, read by the network that also gives depths.
+    pub landmark_joints: Option<(Joints2, [f64; NUM_JOINTS])>,
 }
 
 /// Largest distance, as a fraction of the figure's size, between BlazePose's 2-D joint and the
 /// chosen joint for BlazePose's depth of that joint to count ([`Figure::landmark_depth`]).
 pub const DEPTH_AGREEMENT: f64 = 0.1;
+
+/// BlazePose's joints and depths when they agree with `chosen` (see [`Figure::landmark_joints`]).
+fn landmark_joints(evidence: &Evidence, chosen: &Joints2) -> Option<(Joints2, [f64; NUM_JOINTS])> {
+    let b = evidence.blazepose.as_ref()?;
+    let z: Vec<f64> = b.pass.landmarks.iter().map(|l| l.z).collect();
+    if z.len() < super::landmark::NUM_POSE_LANDMARKS {
+        return None;
+    }
+    let depth = super::landmark::joints::canonical_depth(&z);
+    let (_, median) = agreement(chosen, &b.joints);
+    (median <= DEPTH_AGREEMENT && depth.iter().all(|d| d.is_finite())).then_some((b.joints, depth))
+}
 
 /// BlazePose's depths of the joints of `chosen` it agrees with (see [`Figure::landmark_depth`]).
 fn landmark_depth(evidence: &Evidence, chosen: &Joints2) -> [Option<f64>; NUM_JOINTS] {
@@ -382,6 +398,7 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
     let others = evidence.sketch.iter().flatten().skip(1).filter(|d| d.score >= sketch_threshold).cloned().collect();
     let confidence = mean(&best.conf);
     let landmark_depth = landmark_depth(evidence, &best.joints);
+    let landmark_joints = landmark_joints(evidence, &best.joints);
     Ok(Figure {
         backend: best.backend,
         joints: best.joints,
@@ -392,6 +409,7 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
         raw_score: best.raw_score,
         others,
         landmark_depth,
+        landmark_joints,
     })
 }
 

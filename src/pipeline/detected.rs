@@ -21,6 +21,9 @@ pub struct DetectedJointsFit {
     /// Search bone-length factors in the fit ([`FitOptions::proportion_sd`]) with detected joints
     /// too (default `false`: the fit keeps the pose step's proportions).
     pub proportions: bool,
+    /// The pose step reads BlazePose's own joints and all their depths when they agree with the
+    /// chosen figure ([`Figure::landmark_joints`]); the fit keeps the chosen joints.
+    pub landmark_pose: bool,
 }
 
 impl Default for DetectedJointsFit {
@@ -29,7 +32,7 @@ impl Default for DetectedJointsFit {
     /// 0.0334; joint-weight factor 0.1 / 0.3 / 0.5 then 0.0303 / 0.0309 / 0.0285, posed AED
     /// 0.0885 → 0.0856 (docs/benchmarks.md).
     fn default() -> Self {
-        Self { joint_weight_scale: 0.5, proportions: false }
+        Self { joint_weight_scale: 0.5, proportions: false, landmark_pose: false }
     }
 }
 
@@ -48,6 +51,25 @@ impl DetectedJointsFit {
             f.proportion_sd = 0.0;
         }
         Ok(f)
+    }
+}
+
+/// The joints and depth hint of the pose step for a detected figure: BlazePose's own joints with
+/// all their depths when `fit.landmark_pose` and they agree, else `joints` with the depths of
+/// the agreeing joints ([`depth_hint`]).
+pub(crate) fn pose_input(
+    figure: &Figure,
+    joints: &crate::skeleton::Joints2,
+    weight: f64,
+    fit: &DetectedJointsFit,
+) -> (crate::skeleton::Joints2, Option<DepthHint>) {
+    match &figure.landmark_joints {
+        Some((j, z)) if fit.landmark_pose => {
+            let hint =
+                (weight > 0.0).then(|| DepthHint::from_landmark_depth(z, [true; crate::skeleton::NUM_JOINTS], weight));
+            (*j, hint)
+        }
+        _ => (*joints, depth_hint(figure, weight)),
     }
 }
 
@@ -73,10 +95,11 @@ mod tests {
         let d = DetectedJointsFit::default().apply(&fit).unwrap();
         assert_eq!((d.joint_weight, d.proportion_sd), (1.0, 0.0));
         assert_eq!(FitOptions { joint_weight: 2.0, proportion_sd: 0.1, ..d.clone() }, fit, "nothing else changes");
-        let keep = DetectedJointsFit { joint_weight_scale: 1.0, proportions: true }.apply(&fit).unwrap();
+        let keep =
+            DetectedJointsFit { joint_weight_scale: 1.0, proportions: true, ..Default::default() }.apply(&fit).unwrap();
         assert_eq!(keep, fit);
         for bad in [-0.1, 1.5, f64::NAN] {
-            let e = DetectedJointsFit { joint_weight_scale: bad, proportions: false }.apply(&fit);
+            let e = DetectedJointsFit { joint_weight_scale: bad, ..Default::default() }.apply(&fit);
             assert!(matches!(e, Err(Error::OutOfRange { .. })), "{bad}");
         }
     }
@@ -93,6 +116,7 @@ mod tests {
             raw_score: 1.0,
             others: Vec::new(),
             landmark_depth: [None; NUM_JOINTS],
+            landmark_joints: None,
         };
         assert!(depth_hint(&f, 0.1).is_none(), "no depths");
         f.landmark_depth[3] = Some(-10.0);
@@ -101,5 +125,22 @@ mod tests {
         assert_eq!(h.known.iter().filter(|k| **k).count(), 1);
         assert!(h.depth[3] > 0.0, "smaller landmark depth = nearer = larger hint depth");
         assert_eq!(h.weight, 0.1);
+        // The pose step's input: the chosen joints with the agreeing depths, or with
+        // `landmark_pose` BlazePose's own joints with all their depths.
+        let chosen = f.joints;
+        let mut theirs = chosen;
+        theirs.xy[4] = [7.0, 9.0];
+        f.landmark_joints = Some((theirs, [-2.0; NUM_JOINTS]));
+        let off = DetectedJointsFit::default();
+        let (j, h) = pose_input(&f, &chosen, 0.1, &off);
+        assert_eq!(j, chosen);
+        assert_eq!(h.unwrap().known.iter().filter(|k| **k).count(), 1);
+        let on = DetectedJointsFit { landmark_pose: true, ..off };
+        let (j, h) = pose_input(&f, &chosen, 0.1, &on);
+        assert_eq!(j, theirs);
+        assert!(h.unwrap().known.iter().all(|k| *k));
+        assert!(pose_input(&f, &chosen, 0.0, &on).1.is_none(), "zero weight: no hint");
+        f.landmark_joints = None;
+        assert_eq!(pose_input(&f, &chosen, 0.1, &on).0, chosen, "no agreeing BlazePose figure");
     }
 }

@@ -213,8 +213,11 @@ pub fn run_pipeline(
     let pose = match &options.given_pose {
         Some(given) => given.clone(),
         None => {
-            let hint = detection.as_ref().and_then(|f| detected::depth_hint(f, options.depth_hint));
-            estimate_pose_hinted(dict, &joints2d, &options.pose, hint.as_ref())?
+            let (pose_joints, hint) = match &detection {
+                Some(f) => detected::pose_input(f, &joints2d, options.depth_hint, &options.detected),
+                None => (joints2d, None),
+            };
+            estimate_pose_hinted(dict, &pose_joints, &options.pose, hint.as_ref())?
         }
     };
     timings.pose = t.elapsed().as_secs_f64();
