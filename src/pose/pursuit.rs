@@ -529,6 +529,57 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn drawn_proportions_are_estimated_applied_and_reported() {
+        // Legs drawn 30 % long: the factors find longer legs, the joints carry them, and the
+        // reported RMS is that of the reported joints on the drawn 2-D joints.
+        let d = fixture();
+        let drawn = BodyFactors { k: [1.0, 1.0, 1.0, 1.0, 1.0, 1.3] }.apply(&mean_pose());
+        let cam = true_camera();
+        let mut j =
+            Joints2 { xy: std::array::from_fn(|p| cam.project(&Vector3::from(drawn[p]))), visible: [true; NUM_JOINTS] };
+        j.xy[0][0] += 1.0;
+        j.xy[1][0] -= 1.0;
+        let plain = estimate_pose(&d, &j, &options()).unwrap();
+        let est = estimate_pose(&d, &j, &PoseOptions { proportions: true, ..options() }).unwrap();
+        // Relative to the arms (the figure's scale takes up a common factor).
+        assert!(est.factors.k[5] > 1.2 * est.factors.k[3], "{:?}", est.factors);
+        assert!(est.rms < plain.rms, "{} vs {}", est.rms, plain.rms);
+        let x: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|p| Vector3::from(est.joints[p]));
+        let prob = Problem::new(&d, &j, 0.0).unwrap();
+        assert!((prob.rms(&est.camera, &x) - est.rms).abs() < 1e-9, "{} vs {}", prob.rms(&est.camera, &x), est.rms);
+        let bone = |x: &Joints3, a: usize, b: usize| (Vector3::from(x[a]) - Vector3::from(x[b])).norm();
+        let shin_to_forearm = |x: &Joints3| bone(x, 13, 14) / bone(x, 3, 4);
+        assert!(
+            shin_to_forearm(&est.joints) > 1.2 * shin_to_forearm(&mean_pose()),
+            "{} vs {}",
+            shin_to_forearm(&est.joints),
+            shin_to_forearm(&mean_pose())
+        );
+    }
+
+    #[test]
+    fn an_exemplar_start_is_reported() {
+        // One exemplar (the mean itself): a start from it names it as every part.
+        let mut d = fixture();
+        d.exemplars = d.mean.clone().reshape_generic(nalgebra::Dyn(POSE_DIM), nalgebra::Dyn(1));
+        let j = observe(&d, &truth(), 1.0);
+        let est = estimate_pose(&d, &j, &PoseOptions { starts: 1, ..options() }).unwrap();
+        assert_eq!(est.base_parts, Some([0; 5]));
+        assert_eq!(est.bases, [ARM, LEG]);
+    }
+
+    #[test]
+    fn an_estimate_far_from_the_joints_is_flagged_implausible() {
+        // The RMS limit is 5 % of the visible joints' diagonal (about 19 px here): 1 px of
+        // head/neck residual is plausible, 60 px is not.
+        let d = fixture();
+        let ok = estimate_pose(&d, &observe(&d, &truth(), 1.0), &options()).unwrap();
+        assert!(ok.plausible, "{ok:?}");
+        let far = estimate_pose(&d, &observe(&d, &truth(), 60.0), &options()).unwrap();
+        assert!(far.rms > 20.0 && !far.plausible, "{far:?}");
+    }
+
+    #[test]
     fn refinement_runs_after_the_pursuit_when_enabled() {
         // The pursuit holds R = I (α = 1); the refinement frees it and uses it on the head/neck
         // residual (the head has depth), from the pursuit's own result.

@@ -299,6 +299,11 @@ mod tests {
         cam.r = Rotation3::new(Vector3::new(0.0, 0.1, 0.0)).into_inner();
         let start = finish(&prob, cam, vec![ARM, LEG], vec![W_ARM, W_LEG]);
         assert!(start.length_excess > 0.04, "{}", start.length_excess);
+        // The exact truth outside the bound fits better than anything within it: only the
+        // projection of the start brings it inside.
+        let exact = finish(&prob, true_camera(), vec![ARM, LEG], vec![W_ARM, W_LEG]);
+        let inside = refine_pose(&d, &j, &opts, &exact).unwrap();
+        assert!((inside.length_excess - 0.02).abs() < 1e-9, "{}", inside.length_excess);
         let est = refine_pose(&d, &j, &opts, &start).unwrap();
         assert_eq!(est.bases, [ARM, LEG]);
         assert!(
