@@ -42,8 +42,8 @@ pub mod pursuit;
 pub mod qcls;
 pub mod refine;
 
+pub use depth_hint::DepthHint;
 pub use dictionary::{Dictionary, LearnParams};
 pub use options::PoseOptions;
-pub use depth_hint::DepthHint;
 pub use pursuit::{estimate_pose, estimate_pose_hinted, PoseEstimate};
 pub use refine::refine_pose;
