@@ -125,7 +125,7 @@ fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
     assert!(st.success());
     let b2: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("b2.json")).unwrap()).unwrap();
     let best = b2["detection"]["raw_score"].as_f64().unwrap();
-    assert!(err.contains(&format!("best score {best:.3} is below the threshold 1000")), "{err} vs best {best}");
+    assert!(err.contains(&format!("score {best:.3} is below the threshold 1000")), "{err} vs best {best}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
