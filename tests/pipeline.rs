@@ -123,6 +123,18 @@ fn bad_input_gives_specific_errors() {
     let mut nan = j;
     nan.xy[joint::NECK] = [f64::NAN, 100.0];
     assert!(matches!(go(&sketch, nan), Err(Error::NonFinite { .. })));
+    // The detected-joints options are checked even when the joints are given.
+    for w in [-0.1, f64::NAN, f64::INFINITY] {
+        let bad = PipelineOptions { depth_hint: w, ..o.clone() };
+        let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad, &mut |_| true);
+        assert!(matches!(r, Err(Error::OutOfRange { name: "depth_hint", .. })), "{w}");
+    }
+    let bad = PipelineOptions {
+        detected: sketchbody::pipeline::DetectedJointsFit { joint_weight_scale: 2.0, ..Default::default() },
+        ..o.clone()
+    };
+    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad, &mut |_| true);
+    assert!(matches!(r, Err(Error::OutOfRange { name: "detected.joint_weight_scale", .. })));
     // A joint marked missing may lie anywhere (it is only a guess).
     let mut hidden = outside;
     hidden.visible[joint::R_ANKLE] = false;

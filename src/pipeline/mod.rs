@@ -177,7 +177,8 @@ impl Progress<'_> {
 /// ([`Error::BlankImage`]); the joints source's error ([`Error::NoFigure`] for
 /// [`DetectedJoints`] on a sketch without a figure); a visible joint non-finite or outside the image
 /// ([`Error::NonFinite`], [`Error::JointOutsideImage`]); the pose solver's and the fit's
-/// errors; `mean_shape` without a gender ([`Error::OutOfRange`]).
+/// errors; `mean_shape` without a gender, a `depth_hint` weight that is not finite and ≥ 0 or a
+/// `detected.joint_weight_scale` outside 0..=1 ([`Error::OutOfRange`]).
 pub fn run_pipeline(
     model: &BodyModel,
     dict: &Dictionary,
@@ -189,6 +190,13 @@ pub fn run_pipeline(
     let t0 = Instant::now();
     let mut p = Progress { callback: progress };
     let mut timings = Timings::default();
+    if !(options.depth_hint.is_finite() && options.depth_hint >= 0.0) {
+        return Err(Error::OutOfRange {
+            name: "depth_hint",
+            detail: format!("{} is not a finite weight ≥ 0", options.depth_hint),
+        });
+    }
+    options.detected.apply(&options.fit)?;
     let (w, h) = (sketch.width(), sketch.height());
     if w < MIN_SKETCH_SIDE || h < MIN_SKETCH_SIDE {
         return Err(Error::ImageTooSmall { width: w, height: h, min: MIN_SKETCH_SIDE });
