@@ -197,28 +197,25 @@ pub struct Figure {
 /// chosen joint for BlazePose's depth of that joint to count ([`Figure::landmark_depth`]).
 pub const DEPTH_AGREEMENT: f64 = 0.1;
 
-/// BlazePose's joints and depths when they agree with `chosen` (see [`Figure::landmark_joints`]).
-fn landmark_joints(evidence: &Evidence, chosen: &Joints2) -> Option<(Joints2, [f64; NUM_JOINTS])> {
-    let b = evidence.blazepose.as_ref()?;
+/// BlazePose's depths as seen from `chosen`: per joint where its 2-D joint agrees
+/// ([`Figure::landmark_depth`]) and its whole figure when most joints do
+/// ([`Figure::landmark_joints`]). Both empty without a BlazePose pass.
+#[allow(clippy::type_complexity)]
+fn landmark_view(
+    evidence: &Evidence,
+    chosen: &Joints2,
+) -> ([Option<f64>; NUM_JOINTS], Option<(Joints2, [f64; NUM_JOINTS])>) {
+    let none = ([None; NUM_JOINTS], None);
+    let Some(b) = &evidence.blazepose else { return none };
     let z: Vec<f64> = b.pass.landmarks.iter().map(|l| l.z).collect();
     if z.len() < super::landmark::NUM_POSE_LANDMARKS {
-        return None;
+        return none;
     }
     let depth = super::landmark::joints::canonical_depth(&z);
-    let (_, median) = agreement(chosen, &b.joints);
-    (median <= DEPTH_AGREEMENT && depth.iter().all(|d| d.is_finite())).then_some((b.joints, depth))
-}
-
-/// BlazePose's depths of the joints of `chosen` it agrees with (see [`Figure::landmark_depth`]).
-fn landmark_depth(evidence: &Evidence, chosen: &Joints2) -> [Option<f64>; NUM_JOINTS] {
-    let Some(b) = &evidence.blazepose else { return [None; NUM_JOINTS] };
-    let z: Vec<f64> = b.pass.landmarks.iter().map(|l| l.z).collect();
-    if z.len() < super::landmark::NUM_POSE_LANDMARKS {
-        return [None; NUM_JOINTS];
-    }
-    let depth = super::landmark::joints::canonical_depth(&z);
-    let (dist, _) = agreement(chosen, &b.joints);
-    std::array::from_fn(|j| (dist[j] <= DEPTH_AGREEMENT && depth[j].is_finite()).then_some(depth[j]))
+    let (dist, median) = agreement(chosen, &b.joints);
+    let per_joint = std::array::from_fn(|j| (dist[j] <= DEPTH_AGREEMENT && depth[j].is_finite()).then_some(depth[j]));
+    let whole = (median <= DEPTH_AGREEMENT && depth.iter().all(|d| d.is_finite())).then_some((b.joints, depth));
+    (per_joint, whole)
 }
 
 /// Distances between the two backends' joints over the figure's size (the longer side of the
@@ -397,8 +394,7 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
     };
     let others = evidence.sketch.iter().flatten().skip(1).filter(|d| d.score >= sketch_threshold).cloned().collect();
     let confidence = mean(&best.conf);
-    let landmark_depth = landmark_depth(evidence, &best.joints);
-    let landmark_joints = landmark_joints(evidence, &best.joints);
+    let (landmark_depth, landmark_joints) = landmark_view(evidence, &best.joints);
     Ok(Figure {
         backend: best.backend,
         joints: best.joints,

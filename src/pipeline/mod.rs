@@ -196,7 +196,7 @@ pub fn run_pipeline(
             detail: format!("{} is not a finite weight ≥ 0", options.depth_hint),
         });
     }
-    options.detected.apply(&options.fit)?;
+    let detected_fit = options.detected.apply(&options.fit)?;
     let (w, h) = (sketch.width(), sketch.height());
     if w < MIN_SKETCH_SIDE || h < MIN_SKETCH_SIDE {
         return Err(Error::ImageTooSmall { width: w, height: h, min: MIN_SKETCH_SIDE });
@@ -234,10 +234,7 @@ pub fn run_pipeline(
     let choice =
         BodyChoice { gender: options.gender, mean_shape: options.mean_shape, keep_pose_scale: options.keep_pose_scale };
     let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
-    let fit = match &detection {
-        Some(_) => options.detected.apply(&options.fit)?,
-        None => options.fit.clone(),
-    };
+    let fit = if detection.is_some() { detected_fit } else { options.fit.clone() };
     let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &choice, &mut cb)?;
     timings.fit = body.fit_seconds;
     timings.posing = body.posing_seconds;
