@@ -2,7 +2,7 @@
 # Creates (once) the Python venv target/convert-venv with MediaPipe's wheel (the BlazePose
 # .tflite models), TensorFlow's TFLite interpreter, the ONNX converter and OpenCV, pinned to
 # versions that work together, and prints its python's path. Quick when already installed.
-# Used by scripts/convert-blazepose.sh and, for the BlazePose cross-check, by scripts/test-all.sh.
+# Used by scripts/convert-blazepose.sh (the tests use the smaller scripts/reference-venv.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 venv=target/convert-venv

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test of sketchbody on a fresh Debian 12 machine: installs the Debian packages it
-# needs when missing (blender and python3-numpy for the Blender import and add-on tests), then cargo tests,
+# needs when missing (blender and python3-numpy for the Blender import and add-on tests,
+# python3-opencv for the BlazePose reference), a small Python venv for that reference
+# (scripts/reference-venv.sh), then cargo tests,
 # a short run of every fuzz target (scripts/fuzz.sh; installs cargo-fuzz when missing), the
 # CMake/ctest harness (OpenCV, Ceres, Embree cross-checks, C and C++ API tests under
 # sanitizers) and the Python package's tests (scripts/test-python.sh).
@@ -8,13 +10,17 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(cmake g++ pkg-config python3 libopencv-dev libceres-dev libembree-dev blender python3-numpy)
+# step MESSAGE: announces a step with the time elapsed since the start (m:ss), so a slow CI run
+# shows where its time went.
+step() { printf '== [%d:%02d] %s\n' $((SECONDS / 60)) $((SECONDS % 60)) "$*"; }
+
+packages=(cmake g++ pkg-config python3 libopencv-dev libceres-dev libembree-dev blender python3-numpy python3-opencv)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
 done
 if [ ${#missing[@]} -gt 0 ]; then
-  echo "== installing Debian packages: ${missing[*]}"
+  step "installing Debian packages: ${missing[*]}"
   sudo_cmd=()
   [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   "${sudo_cmd[@]}" apt-get update -qq
@@ -22,31 +28,31 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 jobs=$(nproc)
-echo "== lint gates: cargo fmt --check, cargo clippy -D warnings"
+step "lint gates: cargo fmt --check, cargo clippy -D warnings"
 cargo fmt --all --check
 features=(--features sketchbody/model-builder,sketchbody/test-fixtures)
 cargo clippy --release --workspace --all-targets "${features[@]}" -- -D warnings
 
-echo "== MediaPipe reference venv (the BlazePose cross-check, tests/blazepose_reference.rs)"
-SKB_MEDIAPIPE_PYTHON="$(scripts/mediapipe-venv.sh)"
+step "MediaPipe reference venv (the BlazePose cross-check, tests/blazepose_reference.rs)"
+SKB_MEDIAPIPE_PYTHON="$(scripts/reference-venv.sh)"
 export SKB_MEDIAPIPE_PYTHON
 
-echo "== cargo test (release build, shared with the CMake build)"
+step "cargo test (release build, shared with the CMake build)"
 cargo test --release --workspace --all-targets "${features[@]}"
 cargo test --release --workspace --doc "${features[@]}"
 
-echo "== fuzz targets: 2000 executions each from the committed seeds (the long run: scripts/fuzz.sh 1000000)"
+step "fuzz targets: 2000 executions each from the committed seeds (the long run: scripts/fuzz.sh 1000000)"
 scripts/fuzz.sh 2000
 
-echo "== CMake build + ctest (cargo's folder shared with the cargo tests above)"
+step "CMake build + ctest (cargo's folder shared with the cargo tests above)"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSKB_CARGO_TARGET_DIR="$PWD/target"
 cmake --build build -j "$jobs"
 (cd build && ctest --output-on-failure -j 1)
 
-echo "== Python package (python/tests: bindings drift, the pipeline, the Dask batch)"
+step "Python package (python/tests: bindings drift, the pipeline, the Dask batch)"
 scripts/test-python.sh
 
-echo "== Blender add-on (integrations/blender, headless Blender 3.4; renders docs/img/blender-addon.png)"
+step "Blender add-on (integrations/blender, headless Blender 3.4; renders docs/img/blender-addon.png)"
 scripts/test-blender-addon.sh
 
-echo "== all tests passed"
+step "all tests passed"

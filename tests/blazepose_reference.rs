@@ -3,8 +3,9 @@
 //! TensorFlow's TFLite interpreter and an independent OpenCV crop on the same ROIs as ours, on
 //! 20 PARSE test photos and 12 rendered sketches, for both passes (the ink-box ROI and the ROI
 //! from our first pass's landmarks). Python comes from `$SKB_MEDIAPIPE_PYTHON` or
-//! `target/convert-venv` (`scripts/mediapipe-venv.sh`, which `scripts/test-all.sh` runs); without
-//! it the test prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
+//! `target/reference-venv` (`scripts/reference-venv.sh`, which `scripts/test-all.sh` runs: the
+//! wheel's model file, tflite-runtime, Debian's OpenCV and NumPy); without it the test prints
+//! SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
 //!
 //! Tolerance: the mean distance over the 33 pose landmarks, in px of the 256² crop, at most
 //! 0.05 on every image and 0.01 on average (measured: 0.0005 worst, 0.0002 mean over 64 cases);
@@ -29,9 +30,14 @@ use sketchbody::render::stylise::save_rgb_png;
 fn python() -> Option<PathBuf> {
     let p = std::env::var_os("SKB_MEDIAPIPE_PYTHON")
         .map(PathBuf::from)
-        .unwrap_or_else(|| common::repo_root().join("target/convert-venv/bin/python"));
+        .unwrap_or_else(|| common::repo_root().join("target/reference-venv/bin/python"));
+    // What the reference script needs: OpenCV, NumPy, a TFLite interpreter and the wheel's model.
+    let check = "import importlib.util, cv2, numpy\n\
+                 try:\n    import tflite_runtime.interpreter\n\
+                 except ImportError:\n    import tensorflow\n\
+                 assert importlib.util.find_spec('mediapipe')";
     let ok = Command::new(&p)
-        .args(["-c", "import mediapipe, tensorflow, cv2"])
+        .args(["-c", check])
         .output()
         .map(|o| o.status.success())
         .unwrap_or(false);
@@ -47,9 +53,9 @@ fn landmarks_match_mediapipe_on_photos_and_sketches() {
     let Some(data) = common::shared_data("blazepose_reference") else { return };
     let Some(py) = python() else {
         if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
-            panic!("the mediapipe venv is missing (scripts/mediapipe-venv.sh) but SKB_REQUIRE_SHARED_DATA is set");
+            panic!("the reference venv is missing (scripts/reference-venv.sh) but SKB_REQUIRE_SHARED_DATA is set");
         }
-        eprintln!("SKIPPED blazepose_reference: no python with mediapipe and tensorflow (scripts/mediapipe-venv.sh)");
+        eprintln!("SKIPPED blazepose_reference: no python with the mediapipe wheel, a TFLite interpreter and OpenCV (scripts/reference-venv.sh)");
         return;
     };
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("blazepose-{}", std::process::id()));

@@ -1,7 +1,7 @@
 """Reference landmarks for the BlazePose cross-check (tests/blazepose_reference.rs).
 
 Runs MediaPipe's own landmark model (the pose_landmark_full.tflite inside the mediapipe wheel,
-with TensorFlow's TFLite interpreter) on the crop of each image given by the ROI the Rust side
+with the TFLite interpreter: tflite-runtime's, or TensorFlow's when that is what is installed) on the crop of each image given by the ROI the Rust side
 chose, with MediaPipe's pre- and post-processing written independently of the Rust code: OpenCV
 warpAffine (bilinear, white border) mapping the ROI's corners to the 256x256 tensor's corners,
 RGB in [0, 1], landmarks x / 256, y / 256 rotated and scaled back into the image, sigmoid of the
@@ -12,15 +12,21 @@ CASES.json: [{"image": path, "roi": {"cx", "cy", "size", "rotation"}}] in contin
 coordinates (pixel i covers [i, i + 1)). OUT.json: [{"image", "landmarks": [[x, y, vis, pres]
 x 39], "pose_flag"}].
 """
+import importlib.util
 import json
 import math
 import os
 import sys
 
 import cv2
-import mediapipe
 import numpy as np
-import tensorflow as tf
+
+try:
+    from tflite_runtime.interpreter import Interpreter
+except ImportError:
+    import tensorflow as tf
+
+    Interpreter = tf.lite.Interpreter
 
 SIDE = 256
 
@@ -40,8 +46,11 @@ def crop(rgb, roi):
 
 def main():
     cases = json.load(open(sys.argv[1]))
-    model = os.path.join(os.path.dirname(mediapipe.__file__), "modules/pose_landmark/pose_landmark_full.tflite")
-    interp = tf.lite.Interpreter(model_path=model)
+    # The wheel's model file; the package itself is not imported (its dependencies need not be
+    # installed: scripts/reference-venv.sh installs it without them).
+    package = importlib.util.find_spec("mediapipe").submodule_search_locations[0]
+    model = os.path.join(package, "modules/pose_landmark/pose_landmark_full.tflite")
+    interp = Interpreter(model_path=model)
     interp.allocate_tensors()
     inp = interp.get_input_details()[0]
     outs = interp.get_output_details()
