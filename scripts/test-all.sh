@@ -30,7 +30,8 @@ fi
 jobs=$(nproc)
 step "lint gates: cargo fmt --check, cargo clippy -D warnings"
 cargo fmt --all --check
-features=(--features sketchbody/model-builder,sketchbody/test-fixtures)
+feature_list=sketchbody/model-builder,sketchbody/test-fixtures
+features=(--features "$feature_list")
 cargo clippy --release --workspace --all-targets "${features[@]}" -- -D warnings
 
 step "MediaPipe reference venv (the BlazePose cross-check, tests/blazepose_reference.rs)"
@@ -45,7 +46,10 @@ step "fuzz targets: 2000 executions each from the committed seeds (the long run:
 scripts/fuzz.sh 2000
 
 step "CMake build + ctest (cargo's folder shared with the cargo tests above)"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSKB_CARGO_TARGET_DIR="$PWD/target"
+# The library is built with the cargo test run's selection, so cargo reuses that build (CMakeLists.txt,
+# SKB_CARGO_SELECTION) instead of compiling every crate again with other features.
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSKB_CARGO_TARGET_DIR="$PWD/target" \
+  -DSKB_CARGO_SELECTION="--workspace;--lib;--tests;--features;$feature_list"
 cmake --build build -j "$jobs"
 (cd build && ctest --output-on-failure -j 1)
 

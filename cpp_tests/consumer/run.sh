@@ -4,15 +4,17 @@
 # builds and runs cpp_tests/consumer three ways, shared and static each:
 #   1. find_package(sketchbody) from the prefix (plus examples/plugin_host.cpp, run on the example),
 #   2. pkg-config (sketchbody.pc; Libs.private for the static link),
-#   3. add_subdirectory of the source tree, sharing cargo's folder (no cargo rebuild), checking
+#   3. add_subdirectory of the source tree, sharing cargo's folder and the parent build's cargo
+#      selection (SKB_CARGO_SELECTION, so cargo has nothing to rebuild), checking
 #      that it writes nothing into the source tree (no new files, Cargo.lock untouched: what a
 #      read-only checkout needs) and that the tests default to OFF.
-# Usage: run.sh SOURCE_DIR BUILD_DIR CARGO_TARGET_DIR BUILD_TYPE
+# Usage: run.sh SOURCE_DIR BUILD_DIR CARGO_TARGET_DIR BUILD_TYPE [CARGO_SELECTION]
 set -euo pipefail
 src=$(cd "$1" && pwd)
 build=$(cd "$2" && pwd)
 cargo_dir=$3
 build_type=${4:-Release}
+selection=${5:--p;sketchbody-capi}
 here="$src/cpp_tests/consumer"
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/skb-consumer.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
@@ -96,7 +98,8 @@ untracked() { git -C "$src" status --porcelain --untracked-files=all 2>/dev/null
 untracked >"$tmp/untracked.before"
 touch "$tmp/stamp"
 cmake -S "$here" -B "$tmp/sub" -DCMAKE_BUILD_TYPE="$build_type" -DSKB_CONSUMER_MODE=subdir \
-  -DSKETCHBODY_SOURCE_DIR="$src" -DSKB_CARGO_TARGET_DIR="$cargo_dir" >"$tmp/sub.log" \
+  -DSKETCHBODY_SOURCE_DIR="$src" -DSKB_CARGO_TARGET_DIR="$cargo_dir" \
+  -DSKB_CARGO_SELECTION="$selection" >"$tmp/sub.log" \
   || { cat "$tmp/sub.log"; fail "add_subdirectory configure"; }
 grep -q '^SKB_BUILD_TESTS:BOOL=OFF$' "$tmp/sub/CMakeCache.txt" || fail "SKB_BUILD_TESTS is not OFF under add_subdirectory"
 cmake --build "$tmp/sub" >>"$tmp/sub.log" 2>&1 || { cat "$tmp/sub.log"; fail "add_subdirectory build"; }
