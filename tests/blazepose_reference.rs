@@ -36,11 +36,7 @@ fn python() -> Option<PathBuf> {
                  try:\n    import tflite_runtime.interpreter\n\
                  except ImportError:\n    import tensorflow\n\
                  assert importlib.util.find_spec('mediapipe')";
-    let ok = Command::new(&p)
-        .args(["-c", check])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
+    let ok = Command::new(&p).args(["-c", check]).output().map(|o| o.status.success()).unwrap_or(false);
     ok.then_some(p)
 }
 

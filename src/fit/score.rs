@@ -423,6 +423,106 @@ mod tests {
         assert_eq!(ev.score(&good, MatchScore::Chamfer), 0.0);
     }
 
+    /// The boundary of a mask is its pixels with a 4-neighbour outside it, and a mask pixel on
+    /// the raster's edge is always boundary (the raster ends there): a mask filling the whole
+    /// raster has exactly the raster's outer ring as boundary, a rectangle inside it its own ring.
+    #[test]
+    fn boundary_pixels_are_the_mask_edge_and_the_raster_edge() {
+        let (w, h) = (9, 6);
+        let mut img = vec![0u8; w * h];
+        img[2 * w + 4] = 255;
+        let ev = SketchEvidence::new(&GrayImage::from_vec(w, h, img).unwrap(), w, h, &[]).unwrap();
+        let boundary = |mask: &[u8], bounds: Option<[usize; 4]>| {
+            let mut got = Vec::new();
+            ev.for_each_boundary(mask, bounds, |i| got.push(i));
+            got
+        };
+        let ring = |x0: usize, y0: usize, x1: usize, y1: usize| -> Vec<usize> {
+            (0..w * h)
+                .filter(|&i| {
+                    let (x, y) = (i % w, i / w);
+                    (x0..=x1).contains(&x) && (y0..=y1).contains(&y) && (x == x0 || x == x1 || y == y0 || y == y1)
+                })
+                .collect()
+        };
+        assert_eq!(boundary(&vec![1u8; w * h], Some([0, 0, w - 1, h - 1])), ring(0, 0, w - 1, h - 1));
+        let rect: Vec<u8> =
+            (0..w * h).map(|i| ((2..=6).contains(&(i % w)) && (1..=4).contains(&(i / w))) as u8).collect();
+        assert_eq!(boundary(&rect, Some([2, 1, 6, 4])), ring(2, 1, 6, 4));
+        assert!(boundary(&rect, None).is_empty(), "no box: the mask is empty by contract");
+    }
+
+    /// Edge support is the fraction of the mask's boundary within the radius of a stroke: 1 for
+    /// the drawn square itself, the exact share for a shifted square (its left and right sides
+    /// away from the strokes), 0 for an empty mask.
+    #[test]
+    fn edge_support_is_the_share_of_the_boundary_near_strokes() {
+        let n = 40;
+        let mut img = vec![0u8; n * n];
+        for i in 10..30 {
+            for &(x, y) in &[(i, 10), (i, 29), (10, i), (29, i)] {
+                img[y * n + x] = 255;
+            }
+        }
+        let ev = SketchEvidence::new(&GrayImage::from_vec(n, n, img).unwrap(), n, n, &[[20.0, 20.0]]).unwrap();
+        let square = |ox: usize| -> Vec<u8> {
+            (0..n * n).map(|k| ((10 + ox..30 + ox).contains(&(k % n)) && (10..30).contains(&(k / n))) as u8).collect()
+        };
+        let full = Some([0, 0, n - 1, n - 1]);
+        assert_eq!(ev.edge_support(&square(0), full, 0.5), 1.0);
+        // Shifted by 6 (x 16..=35): 76 boundary pixels. At radius 0.5 only the top and bottom
+        // rows' x 16..=29 lie on strokes (2 × 14); x 30..=35 there are 1..=6 from a stroke's end,
+        // the left column (x 16) 1..=6 from the strokes, the right column (x 35) 6 from x = 29.
+        let shifted = square(6);
+        let support = |r: f64| ev.edge_support(&shifted, full, r);
+        assert!((support(0.5) - 28.0 / 76.0).abs() < 1e-12, "{}", support(0.5));
+        // Radius 5.5: add the rows' x 30..=34 (2 × 5) and the left column's 5 pixels nearest
+        // each corner (2 × 5): 48 of 76. Radius 6 (inclusive) reaches every boundary pixel.
+        assert!((support(5.5) - 48.0 / 76.0).abs() < 1e-12, "{}", support(5.5));
+        assert_eq!(support(6.0), 1.0);
+        assert_eq!(ev.edge_support(&vec![0u8; n * n], full, 3.0), 0.0);
+    }
+
+    /// An edge raster of `n`×`n` with the given strokes (inclusive pixel rectangles).
+    fn strokes(n: usize, rects: &[[usize; 4]]) -> GrayImage {
+        let img = (0..n * n)
+            .map(|i| {
+                let (x, y) = (i % n, i / n);
+                let on = rects.iter().any(|&[x0, y0, x1, y1]| (x0..=x1).contains(&x) && (y0..=y1).contains(&y));
+                on as u8 * 255
+            })
+            .collect();
+        GrayImage::from_vec(n, n, img).unwrap()
+    }
+
+    /// Two outlined squares: the figure is the one a skeleton point falls in (with its strokes),
+    /// not the other, though both are inside the outline; skeleton points off the raster are
+    /// ignored, and with none inside a region every enclosed region is kept.
+    #[test]
+    fn the_figure_is_the_enclosed_region_holding_the_skeleton() {
+        let n = 30;
+        let square = |a: usize, b: usize| [[a, a, b, a], [a, b, b, b], [a, a, a, b], [b, a, b, b]];
+        let rects: Vec<[usize; 4]> = square(3, 12).into_iter().chain(square(17, 26)).collect();
+        let edges = strokes(n, &rects);
+        let at = |v: &[u8], x: usize, y: usize| v[y * n + x];
+        let ev = SketchEvidence::new(&edges, n, n, &[[7.5, 7.5], [-4.0, 20.0], [35.0, 20.0]]).unwrap();
+        assert_eq!((at(ev.figure(), 7, 7), at(ev.figure(), 3, 7), at(ev.figure(), 21, 21)), (1, 1, 0));
+        assert_eq!((at(&ev.inside, 7, 7), at(&ev.inside, 21, 21), at(&ev.inside, 15, 15)), (1, 1, 0));
+        let ev = SketchEvidence::new(&edges, n, n, &[[-4.0, 20.0], [35.0, 20.0]]).unwrap();
+        assert_eq!((at(ev.figure(), 7, 7), at(ev.figure(), 21, 21), at(ev.figure(), 15, 15)), (1, 1, 0));
+    }
+
+    /// A pocket closed at the top, bottom and right but open to the raster's left edge is
+    /// background reached from that edge: not inside the outline, not figure.
+    #[test]
+    fn a_pocket_open_to_the_left_edge_is_background() {
+        let n = 20;
+        let edges = strokes(n, &[[0, 5, 14, 5], [0, 14, 14, 14], [14, 5, 14, 14]]);
+        let ev = SketchEvidence::new(&edges, n, n, &[[7.0, 9.0]]).unwrap();
+        assert_eq!(ev.inside[9 * n + 7], 0);
+        assert!(ev.figure().iter().all(|&f| f == 0));
+    }
+
     #[test]
     fn blank_sketch_is_rejected() {
         let blank = GrayImage::filled(10, 10, 0).unwrap();

@@ -490,8 +490,17 @@ mod tests {
                 mag[y as usize * w + x as usize]
             }
         };
-        let t = p.int_thresholds().unwrap();
-        let (low, high) = (t.low as i64, t.high as i64);
+        // OpenCV's threshold handling, written out here again (not `int_thresholds`): ordered,
+        // divided by 16 for aperture 7, for L2 capped at 32767 and squared when positive, floored.
+        let (mut low, mut high) = (p.threshold1.min(p.threshold2), p.threshold1.max(p.threshold2));
+        if k == 7 {
+            (low, high) = (low / 16.0, high / 16.0);
+        }
+        if p.l2_gradient {
+            let square = |t: f64| if t > 0.0 { t.min(32767.0).powi(2) } else { t };
+            (low, high) = (square(low), square(high));
+        }
+        let (low, high) = (low.floor() as i64, high.floor() as i64);
         // 0: not an edge, 1: weak, 2: strong.
         let mut class = vec![0u8; w * h];
         const TG22: i64 = 13573;
