@@ -369,6 +369,23 @@ fn filled_figure(edges: &[u8], w: usize, h: usize, skeleton_px: &[[f64; 2]]) -> 
 mod tests {
     use super::*;
 
+    /// An edge raster of `n`×`n` with the given strokes (inclusive pixel rectangles).
+    fn strokes(n: usize, rects: &[[usize; 4]]) -> GrayImage {
+        let img = (0..n * n)
+            .map(|i| {
+                let (x, y) = (i % n, i / n);
+                let on = rects.iter().any(|&[x0, y0, x1, y1]| (x0..=x1).contains(&x) && (y0..=y1).contains(&y));
+                on as u8 * 255
+            })
+            .collect();
+        GrayImage::from_vec(n, n, img).unwrap()
+    }
+
+    /// The outline of the square 10..=29 on an `n`×`n` raster.
+    fn square_outline(n: usize) -> GrayImage {
+        strokes(n, &[[10, 10, 29, 10], [10, 29, 29, 29], [10, 10, 10, 29], [29, 10, 29, 29]])
+    }
+
     #[test]
     fn distance_transform_is_exact_on_a_point() {
         let (w, h) = (7, 5);
@@ -389,14 +406,7 @@ mod tests {
     #[test]
     fn scores_prefer_the_aligned_mask() {
         let n = 40;
-        let mut img = vec![0u8; n * n];
-        for i in 10..30 {
-            for &(x, y) in &[(i, 10), (i, 29), (10, i), (29, i)] {
-                img[y * n + x] = 255;
-            }
-        }
-        let edge_map = GrayImage::from_vec(n, n, img).unwrap();
-        let ev = SketchEvidence::new(&edge_map, n, n, &[[20.0, 20.0]]).unwrap();
+        let ev = SketchEvidence::new(&square_outline(n), n, n, &[[20.0, 20.0]]).unwrap();
         let square = |ox: usize| {
             let mut m = vec![0u8; n * n];
             for y in 10..30 {
@@ -458,13 +468,7 @@ mod tests {
     #[test]
     fn edge_support_is_the_share_of_the_boundary_near_strokes() {
         let n = 40;
-        let mut img = vec![0u8; n * n];
-        for i in 10..30 {
-            for &(x, y) in &[(i, 10), (i, 29), (10, i), (29, i)] {
-                img[y * n + x] = 255;
-            }
-        }
-        let ev = SketchEvidence::new(&GrayImage::from_vec(n, n, img).unwrap(), n, n, &[[20.0, 20.0]]).unwrap();
+        let ev = SketchEvidence::new(&square_outline(n), n, n, &[[20.0, 20.0]]).unwrap();
         let square = |ox: usize| -> Vec<u8> {
             (0..n * n).map(|k| ((10 + ox..30 + ox).contains(&(k % n)) && (10..30).contains(&(k / n))) as u8).collect()
         };
@@ -481,18 +485,6 @@ mod tests {
         assert!((support(5.5) - 48.0 / 76.0).abs() < 1e-12, "{}", support(5.5));
         assert_eq!(support(6.0), 1.0);
         assert_eq!(ev.edge_support(&vec![0u8; n * n], full, 3.0), 0.0);
-    }
-
-    /// An edge raster of `n`×`n` with the given strokes (inclusive pixel rectangles).
-    fn strokes(n: usize, rects: &[[usize; 4]]) -> GrayImage {
-        let img = (0..n * n)
-            .map(|i| {
-                let (x, y) = (i % n, i / n);
-                let on = rects.iter().any(|&[x0, y0, x1, y1]| (x0..=x1).contains(&x) && (y0..=y1).contains(&y));
-                on as u8 * 255
-            })
-            .collect();
-        GrayImage::from_vec(n, n, img).unwrap()
     }
 
     /// Two outlined squares: the figure is the one a skeleton point falls in (with its strokes),
