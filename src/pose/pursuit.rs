@@ -579,6 +579,23 @@ pub(crate) mod tests {
         assert!(far.rms > 20.0 && !far.plausible, "{far:?}");
     }
 
+    /// A group factor at either end of its range means the evidence wanted more than the prior
+    /// allows: flagged implausible, however well the joints fit; just inside the range it is not.
+    #[test]
+    fn a_factor_at_its_bound_is_flagged_implausible() {
+        let d = fixture();
+        let j = observe(&d, &truth(), 1.0);
+        let est = estimate_pose(&d, &j, &options()).unwrap();
+        assert!(est.plausible, "{est:?}");
+        let with_factor = |k: f64| {
+            let mut factors = est.factors;
+            factors.k[2] = k;
+            flag_plausibility(&j, PoseEstimate { factors, ..est.clone() }).plausible
+        };
+        assert!(!with_factor(FACTOR_MIN) && !with_factor(FACTOR_MAX));
+        assert!(with_factor(FACTOR_MIN + 1e-6) && with_factor(FACTOR_MAX - 1e-6) && with_factor(1.0));
+    }
+
     #[test]
     fn refinement_runs_after_the_pursuit_when_enabled() {
         // The pursuit holds R = I (α = 1); the refinement frees it and uses it on the head/neck
