@@ -97,12 +97,17 @@ echo "== 3. add_subdirectory(sketchbody source tree)"
 untracked() { git -C "$src" status --porcelain --untracked-files=all 2>/dev/null | grep '^??' | sort || true; }
 untracked >"$tmp/untracked.before"
 touch "$tmp/stamp"
-cmake -S "$here" -B "$tmp/sub" -DCMAKE_BUILD_TYPE="$build_type" -DSKB_CONSUMER_MODE=subdir \
+# CC and CXX stay out of this build's environment (the compilers go in as cache variables): the
+# cc crate's build scripts (tract-linalg's) rerun when CC changes, and cargo then recompiles
+# tract and everything above it instead of reusing the parent build.
+nocc=(env -u CC -u CXX)
+"${nocc[@]}" cmake -S "$here" -B "$tmp/sub" -DCMAKE_BUILD_TYPE="$build_type" -DSKB_CONSUMER_MODE=subdir \
+  -DCMAKE_C_COMPILER="${CC:-cc}" -DCMAKE_CXX_COMPILER="${CXX:-c++}" \
   -DSKETCHBODY_SOURCE_DIR="$src" -DSKB_CARGO_TARGET_DIR="$cargo_dir" \
   -DSKB_CARGO_SELECTION="$selection" >"$tmp/sub.log" \
   || { cat "$tmp/sub.log"; fail "add_subdirectory configure"; }
 grep -q '^SKB_BUILD_TESTS:BOOL=OFF$' "$tmp/sub/CMakeCache.txt" || fail "SKB_BUILD_TESTS is not OFF under add_subdirectory"
-cmake --build "$tmp/sub" >>"$tmp/sub.log" 2>&1 || { cat "$tmp/sub.log"; fail "add_subdirectory build"; }
+"${nocc[@]}" cmake --build "$tmp/sub" >>"$tmp/sub.log" 2>&1 || { cat "$tmp/sub.log"; fail "add_subdirectory build"; }
 grep -E '^ *(Finished|Compiling)' "$tmp/sub.log" | sed 's/^ */cargo: /'
 cargo_abs=$(cd "$cargo_dir" && pwd)
 written=$(comm -13 "$tmp/untracked.before" <(untracked) | grep -v -e "^?? ${build#"$src"/}/" -e "^?? ${cargo_abs#"$src"/}/" || true)

@@ -653,6 +653,20 @@ mod tests {
             let alone = canny(&src, &strong_only).unwrap();
             assert!(alone.as_bytes()[..10 * w].iter().all(|&v| v == 0), "rows < 10 hold weak pixels only");
             assert!(alone.as_bytes().contains(&255), "the lower rows hold strong pixels");
+            // Aperture 7 divides both thresholds by 16 (OpenCV): the weak one, too, cuts the
+            // chain's faint end, which a weak threshold of 0 would keep. The first setting
+            // (thresholds multiples of 16) where it does is compared with the reference.
+            let p7 = |t1: f64, t2: f64| CannyParams { threshold1: t1, threshold2: t2, aperture: 7, l2_gradient: false };
+            let setting = [(1000.0, 5000.0), (2000.0, 5000.0), (2000.0, 8000.0), (4000.0, 8000.0)]
+                .into_iter()
+                .map(|(a, b)| (16.0 * a, 16.0 * b))
+                .find(|&(t1, t2)| {
+                    let cut = reference_canny(&px, w, h, &p7(t1, t2));
+                    cut.contains(&255) && cut != reference_canny(&px, w, h, &p7(0.0, t2))
+                });
+            let (t1, t2) = setting.expect("a setting where aperture 7's weak threshold cuts the chain");
+            let got = canny(&src, &p7(t1, t2)).unwrap();
+            assert_eq!(got.as_bytes(), &reference_canny(&px, w, h, &p7(t1, t2))[..], "aperture 7, flip {flip}");
         }
     }
 
