@@ -1,7 +1,7 @@
 //! Cross-check of the BlazePose backend against MediaPipe's own model: `tests/python/
 //! blazepose_reference.py` runs the `pose_landmark_full.tflite` of the mediapipe wheel with
-//! the TFLite interpreter (tflite-runtime's, or TensorFlow's) and an independent OpenCV crop on the same ROIs as ours, on
-//! 20 PARSE test photos and 12 rendered sketches, for both passes (the ink-box ROI and the ROI
+//! the TFLite interpreter (tflite-runtime's, or TensorFlow's) and an independent OpenCV crop on
+//! the same ROIs as ours, on 20 PARSE test photos and 12 rendered sketches, for both passes (the ink-box ROI and the ROI
 //! from our first pass's landmarks). Python comes from `$SKB_MEDIAPIPE_PYTHON` or
 //! `target/reference-venv` (`scripts/reference-venv.sh`, which `scripts/test-all.sh` runs: the
 //! wheel's model file, tflite-runtime, Debian's OpenCV and NumPy); without it the test prints
