@@ -1,11 +1,11 @@
 //! Cross-check of the BlazePose backend against MediaPipe's own model: `tests/python/
-//! blazepose_reference.py` runs the `pose_landmark_full.tflite` of the mediapipe wheel with
-//! the TFLite interpreter (tflite-runtime's, or TensorFlow's) and an independent OpenCV crop on
-//! the same ROIs as ours, on 20 PARSE test photos and 12 rendered sketches, for both passes (the ink-box ROI and the ROI
-//! from our first pass's landmarks). Python comes from `$SKB_MEDIAPIPE_PYTHON` or
-//! `target/reference-venv` (`scripts/reference-venv.sh`, which `scripts/test-all.sh` runs: the
-//! wheel's model file, tflite-runtime, Debian's OpenCV and NumPy); without it the test prints
-//! SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
+//! blazepose_reference.py` runs the `pose_landmark_full.tflite` of the mediapipe wheel with the
+//! TFLite interpreter (tflite-runtime's, or TensorFlow's) and an independent OpenCV crop on the
+//! same ROIs as ours, on 20 PARSE test photos and 12 rendered sketches, for both passes (the
+//! ink-box ROI and the ROI from our first pass's landmarks). Python comes from
+//! `$SKB_MEDIAPIPE_PYTHON` or `target/reference-venv` (`scripts/reference-venv.sh`, which
+//! `scripts/test-all.sh` runs: the wheel's model file, tflite-runtime, Debian's OpenCV and NumPy);
+//! without it the test prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
 //!
 //! Tolerance: the mean distance over the 33 pose landmarks, in px of the 256² crop, at most
 //! 0.05 on every image and 0.01 on average (measured: 0.0005 worst, 0.0002 mean over 64 cases);

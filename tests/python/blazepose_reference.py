@@ -3,9 +3,10 @@
 Runs MediaPipe's own landmark model (the pose_landmark_full.tflite inside the mediapipe wheel,
 with the TFLite interpreter: tflite-runtime's, or TensorFlow's when that is what is installed)
 on the crop of each image given by the ROI the Rust side chose, with MediaPipe's pre- and
-post-processing written independently of the Rust code: OpenCV warpAffine (bilinear, white border) mapping the ROI's corners to the 256x256 tensor's corners,
-RGB in [0, 1], landmarks x / 256, y / 256 rotated and scaled back into the image, sigmoid of the
-visibility and presence logits.
+post-processing written independently of the Rust code: OpenCV warpAffine (bilinear, white
+border) mapping the ROI's corners to the 256x256 tensor's corners, RGB in [0, 1], landmarks x /
+256, y / 256 rotated and scaled back into the image, sigmoid of the visibility and presence
+logits.
 
 Usage: blazepose_reference.py CASES.json OUT.json
 CASES.json: [{"image": path, "roi": {"cx", "cy", "size", "rotation"}}] in continuous pixel
