@@ -4,6 +4,8 @@
 #   scripts/fuzz.sh                 every target for 2000 executions (what scripts/test-all.sh runs)
 #   scripts/fuzz.sh 1000000         the long ("nightly") run: 10^6 executions per target
 #   scripts/fuzz.sh 50000 skbm      one target
+#   scripts/fuzz.sh build           only build the targets (scripts/test-all.sh starts this early,
+#                                   in the background)
 #
 # Each target starts from its committed seeds (fuzz/seeds/TARGET: small valid files of every
 # format and crafted bombs, rebuilt by `cargo test --lib fuzz_seeds`) plus the working corpus it
@@ -15,6 +17,9 @@
 # cargo-fuzz passes (-Zsanitizer..., sancov passes). SKB_FUZZ_SANITIZER picks the sanitizer
 # (default `none`: libFuzzer coverage without ASan, which the parsers, safe Rust, do not need;
 # `address` for the C-API target's raw pointers). cargo-fuzz is installed when missing.
+# The targets are built with 16 codegen units instead of cargo-fuzz's 1: the instrumented build
+# of every dependency (tract above all) is most of the test command's fuzz step on a fresh
+# machine, and 16 units let both cores work on one crate.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -24,6 +29,9 @@ targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(image skbm skbpd skbd parse_json joints_json capi_seq)
 sanitizer=${SKB_FUZZ_SANITIZER:-none}
 export RUSTC_BOOTSTRAP=1
+# tract (the landmark model's inference) is built without coverage instrumentation (the
+# wrapper says why); builds with and without the wrapper do not share artifacts.
+export RUSTC_WRAPPER="$PWD/fuzz/rustc-wrapper.sh"
 
 if ! command -v cargo-fuzz >/dev/null 2>&1; then
   echo "== installing cargo-fuzz 0.13.2"
@@ -31,7 +39,8 @@ if ! command -v cargo-fuzz >/dev/null 2>&1; then
 fi
 
 echo "== building the fuzz targets (sanitizer: $sanitizer)"
-cargo fuzz build --sanitizer "$sanitizer"
+cargo fuzz build --sanitizer "$sanitizer" --codegen-units 16
+[ "$runs" != build ] || exit 0
 
 for t in "${targets[@]}"; do
   mkdir -p "fuzz/corpus/$t"
@@ -39,7 +48,7 @@ for t in "${targets[@]}"; do
   [ -d "fuzz/seeds/$t" ] && dirs+=("fuzz/seeds/$t")
   start=$(date +%s)
   log=$(mktemp)
-  if ! cargo fuzz run --sanitizer "$sanitizer" "$t" "${dirs[@]}" -- \
+  if ! cargo fuzz run --sanitizer "$sanitizer" --codegen-units 16 "$t" "${dirs[@]}" -- \
       -runs="$runs" -rss_limit_mb=2048 -timeout=10 -max_len=65536 -seed=1 -print_final_stats=1 \
       >"$log" 2>&1; then
     tail -n 60 "$log"

@@ -2,10 +2,10 @@
 # Runs every test of sketchbody on a fresh Debian 12 machine: installs the Debian packages it
 # needs when missing (blender and python3-numpy for the Blender import and add-on tests,
 # python3-opencv for the BlazePose reference), a small Python venv for that reference
-# (scripts/reference-venv.sh), then cargo tests,
-# a short run of every fuzz target (scripts/fuzz.sh; installs cargo-fuzz when missing), the
-# CMake/ctest harness (OpenCV, Ceres, Embree cross-checks, C and C++ API tests under
-# sanitizers) and the Python package's tests (scripts/test-python.sh).
+# (scripts/reference-venv.sh), then cargo tests, the CMake/ctest harness (OpenCV, Ceres, Embree
+# cross-checks, C and C++ API tests under sanitizers), the Python package's tests
+# (scripts/test-python.sh), the Blender add-on's, and last a short run of every fuzz target
+# (scripts/fuzz.sh; installs cargo-fuzz when missing; built in the background meanwhile).
 # Set SKB_REQUIRE_SHARED_DATA=1 to turn "skipped: ../shared/data missing" into failures (CI does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -28,35 +28,60 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 jobs=$(nproc)
+# The fuzz targets' instrumented build (every dependency again, with libFuzzer's flags: the
+# longest build here) runs in the background at the lowest CPU priority, on the core time the
+# steps below leave idle (downloads, serial test programs); it is joined before the targets run.
+mkdir -p target
+fuzz_build_log=target/fuzz-build.log
+step "fuzz targets: building in the background (scripts/fuzz.sh build, log $fuzz_build_log)"
+# setsid: a process group of its own, so that a failing step stops the build with all its children.
+setsid nice -n 19 scripts/fuzz.sh build >"$fuzz_build_log" 2>&1 &
+fuzz_build_pid=$!
+trap 'kill -- -"$fuzz_build_pid" 2>/dev/null || true' EXIT
+
 step "lint gates: cargo fmt --check, cargo clippy -D warnings"
 cargo fmt --all --check
 feature_list=sketchbody/model-builder,sketchbody/test-fixtures
 features=(--features "$feature_list")
 cargo clippy --release --workspace --all-targets "${features[@]}" -- -D warnings
+# Every test below runs on one build, cargo's `sanitize` profile (Cargo.toml: release code with
+# overflow checks and debug assertions in sketchbody's own crates): the cargo tests, the CMake
+# harness (whose ASan/UBSan C tests need that profile), the Python package and the Blender add-on.
+# Two profiles would compile every dependency, tract above all, twice.
+profile=sanitize
+lib_dir="$PWD/target/$profile"
 
 step "MediaPipe reference venv (the BlazePose cross-check, tests/blazepose_reference.rs)"
 SKB_MEDIAPIPE_PYTHON="$(scripts/reference-venv.sh)"
 export SKB_MEDIAPIPE_PYTHON
 
-step "cargo test (release build, shared with the CMake build)"
-cargo test --release --workspace --all-targets "${features[@]}"
-cargo test --release --workspace --doc "${features[@]}"
+step "cargo test (profile $profile, shared with the CMake build)"
+cargo test --profile "$profile" --workspace --all-targets "${features[@]}"
+cargo test --profile "$profile" --workspace --doc "${features[@]}"
 
-step "fuzz targets: 2000 executions each from the committed seeds (the long run: scripts/fuzz.sh 1000000)"
-scripts/fuzz.sh 2000
 
 step "CMake build + ctest (cargo's folder shared with the cargo tests above)"
-# The library is built with the cargo test run's selection, so cargo reuses that build (CMakeLists.txt,
-# SKB_CARGO_SELECTION) instead of compiling every crate again with other features.
+# The library is built with the cargo test run's profile and selection, so cargo reuses that build
+# (CMakeLists.txt, SKB_CARGO_PROFILE, SKB_CARGO_SELECTION) instead of compiling every crate again.
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSKB_CARGO_TARGET_DIR="$PWD/target" \
-  -DSKB_CARGO_SELECTION="--workspace;--lib;--tests;--features;$feature_list"
+  -DSKB_CARGO_PROFILE="$profile" -DSKB_CARGO_SELECTION="--workspace;--lib;--tests;--features;$feature_list"
 cmake --build build -j "$jobs"
 (cd build && ctest --output-on-failure -j 1)
 
+export SKETCHBODY_LIBRARY="$lib_dir/libsketchbody.so" SKB_CLI="$lib_dir/sketchbody"
 step "Python package (python/tests: bindings drift, the pipeline, the Dask batch)"
 scripts/test-python.sh
 
 step "Blender add-on (integrations/blender, headless Blender 3.4; renders docs/img/blender-addon.png)"
 scripts/test-blender-addon.sh
+
+step "fuzz targets: joining the background build"
+if ! wait "$fuzz_build_pid"; then
+  tail -n 60 "$fuzz_build_log"
+  echo "== the fuzz targets' build FAILED (log: $fuzz_build_log)"
+  exit 1
+fi
+step "fuzz targets: 2000 executions each from the committed seeds (the long run: scripts/fuzz.sh 1000000)"
+scripts/fuzz.sh 2000
 
 step "all tests passed"

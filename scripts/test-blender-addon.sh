@@ -6,7 +6,8 @@
 # sketch to target/blender-addon/blender-addon.png, copied to docs/img/blender-addon.png when it
 # differs visibly (integrations/blender/tests/test_addon.py).
 # The add-on finds the package in python/ of this checkout and the package finds
-# target/release/libsketchbody.so (built here when missing). Without Blender it prints SKIPPED,
+# target/release/libsketchbody.so (built here when missing), or the library SKETCHBODY_LIBRARY
+# names (scripts/test-all.sh's build). Without Blender it prints SKIPPED,
 # or fails when SKB_REQUIRE_SHARED_DATA is set (as tests/blender_import.rs). Called by
 # scripts/test-all.sh.
 set -euo pipefail
@@ -20,15 +21,18 @@ if ! blender --version >/dev/null 2>&1; then
   echo "SKIPPED Blender add-on: blender is not installed (apt-get install blender)"
   exit 0
 fi
-lib=target/release/libsketchbody.so
-[ -f "$lib" ] || cargo build --release -p sketchbody-capi
+if [ -n "${SKETCHBODY_LIBRARY:-}" ]; then
+  [ -f "$SKETCHBODY_LIBRARY" ] || { echo "test-blender-addon: $SKETCHBODY_LIBRARY missing" >&2; exit 1; }
+else
+  [ -f target/release/libsketchbody.so ] || cargo build --release -p sketchbody-capi
+fi
 
 out=target/blender-addon
 rm -rf "$out" && mkdir -p "$out"
 # No user add-ons or preferences (--factory-startup); the package comes from python/ of this
 # checkout (SKETCHBODY_PYTHON_PATH unset on purpose: the add-on's checkout default is tested).
 status=0
-env -u SKETCHBODY_PYTHON_PATH -u SKETCHBODY_LIBRARY blender -b --factory-startup --python-exit-code 1 \
+env -u SKETCHBODY_PYTHON_PATH blender -b --factory-startup --python-exit-code 1 \
   --python integrations/blender/tests/test_addon.py -- \
   assets/examples/sketch.png assets/examples/sketch_joints.json "$out/blender-addon.png" "$out/report.json" \
   docs/img/blender-addon.png \

@@ -5,16 +5,18 @@
 #   1. find_package(sketchbody) from the prefix (plus examples/plugin_host.cpp, run on the example),
 #   2. pkg-config (sketchbody.pc; Libs.private for the static link),
 #   3. add_subdirectory of the source tree, sharing cargo's folder and the parent build's cargo
-#      selection (SKB_CARGO_SELECTION, so cargo has nothing to rebuild), checking
+#      selection and profile (SKB_CARGO_SELECTION, SKB_CARGO_PROFILE: cargo has nothing to
+#      rebuild), checking
 #      that it writes nothing into the source tree (no new files, Cargo.lock untouched: what a
 #      read-only checkout needs) and that the tests default to OFF.
-# Usage: run.sh SOURCE_DIR BUILD_DIR CARGO_TARGET_DIR BUILD_TYPE [CARGO_SELECTION]
+# Usage: run.sh SOURCE_DIR BUILD_DIR CARGO_TARGET_DIR BUILD_TYPE [CARGO_SELECTION [CARGO_PROFILE]]
 set -euo pipefail
 src=$(cd "$1" && pwd)
 build=$(cd "$2" && pwd)
 cargo_dir=$3
 build_type=${4:-Release}
 selection=${5:--p;sketchbody-capi}
+profile=${6:-}
 here="$src/cpp_tests/consumer"
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/skb-consumer.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
@@ -104,7 +106,7 @@ nocc=(env -u CC -u CXX)
 "${nocc[@]}" cmake -S "$here" -B "$tmp/sub" -DCMAKE_BUILD_TYPE="$build_type" -DSKB_CONSUMER_MODE=subdir \
   -DCMAKE_C_COMPILER="${CC:-cc}" -DCMAKE_CXX_COMPILER="${CXX:-c++}" \
   -DSKETCHBODY_SOURCE_DIR="$src" -DSKB_CARGO_TARGET_DIR="$cargo_dir" \
-  -DSKB_CARGO_SELECTION="$selection" >"$tmp/sub.log" \
+  -DSKB_CARGO_SELECTION="$selection" -DSKB_CARGO_PROFILE="$profile" >"$tmp/sub.log" \
   || { cat "$tmp/sub.log"; fail "add_subdirectory configure"; }
 grep -q '^SKB_BUILD_TESTS:BOOL=OFF$' "$tmp/sub/CMakeCache.txt" || fail "SKB_BUILD_TESTS is not OFF under add_subdirectory"
 "${nocc[@]}" cmake --build "$tmp/sub" >>"$tmp/sub.log" 2>&1 || { cat "$tmp/sub.log"; fail "add_subdirectory build"; }

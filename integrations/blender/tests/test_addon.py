@@ -75,11 +75,16 @@ scene = bpy.context.scene
 st = scene.sketchbody
 
 # Error path 1: the library is missing -> an error report with the install hint, nothing made.
+# The library chosen by the caller (SKETCHBODY_LIBRARY, or else the checkout's) comes back after.
+caller_library = os.environ.get("SKETCHBODY_LIBRARY")
 os.environ["SKETCHBODY_LIBRARY"] = "/nonexistent/libsketchbody.so"
 package.forget()
 st.image, st.joints = sketch, joints_file
 res, err = run_op(bpy.ops.sketchbody.sketch_to_body)
-del os.environ["SKETCHBODY_LIBRARY"]
+if caller_library is None:
+    del os.environ["SKETCHBODY_LIBRARY"]
+else:
+    os.environ["SKETCHBODY_LIBRARY"] = caller_library
 package.forget()
 check("missing library reports an install hint and makes nothing",
       res == {"CANCELLED"} and "pip install ./python" in err and skb_objects() == [], err[:160] + "...")
