@@ -235,7 +235,8 @@ mod tests {
     //! The refinement on the fixed problem of the pursuit's tests (a hand-made dictionary whose
     //! right answer is known).
     use super::*;
-    use crate::pose::pursuit::tests::{fixture, observe, options, true_camera, ARM, LEG, W_ARM, W_LEG};
+    use crate::pose::dictionary::POSE_DIM;
+    use crate::pose::pursuit::tests::{fixture, observe, options, true_camera, ARM, LEG, SHRUG, W_ARM, W_LEG};
 
     /// A poor start: both true bases at weight 0 under a camera turned by 0.3 rad and scaled
     /// wrongly.
@@ -300,6 +301,29 @@ mod tests {
         assert!((est.weights[0] - W_ARM).abs() < 0.05 && (est.weights[1] - W_LEG).abs() < 0.05, "{:?}", est.weights);
         let again = refine_pose(&d, &j, &opts, &est).unwrap();
         assert!(again.rms <= est.rms && est.rms - again.rms <= 1e-9 * est.rms, "{} then {}", est.rms, again.rms);
+    }
+
+    /// The lower side of the length bound. The fixture's bases barely change the bone lengths,
+    /// so SHRUG is replaced by "right wrist up" (toward its elbow: it shortens the forearm), and
+    /// the truth (weight 0.1 on it, none on ARM) is shorter than κ Σl² allows. Steps that would cross below
+    /// −κ Σl² are moved back onto that side, and the refinement ends on it.
+    #[test]
+    fn the_lower_side_of_the_length_bound_is_kept() {
+        let mut d = fixture();
+        let mut wrist_up = DVector::zeros(POSE_DIM);
+        wrist_up[3 * 4 + 1] = 1.0;
+        d.bases.set_column(SHRUG, &wrist_up);
+        let j = observe(&d, &[(SHRUG, 0.1)], 0.0);
+        let prob = Problem::new(&d, &j, 0.0).unwrap();
+        let sum = d.sum_sq_lengths();
+        let g_true = prob.constraint(&[ARM, SHRUG]).value(&DVector::from_vec(vec![0.0, 0.1]));
+        assert!(g_true < -0.02 * sum, "the truth is below the bound: {}", g_true / sum);
+        let opts = PoseOptions { refine: true, equal_scales: false, kappa: 0.01, ..options() };
+        let start = finish(&prob, true_camera(), vec![ARM, SHRUG], vec![0.0, 0.0]);
+        let est = refine_pose(&d, &j, &opts, &start).unwrap();
+        assert!((est.length_excess + 0.01).abs() < 1e-9, "ends on the lower side: {}", est.length_excess);
+        assert!(est.rms < start.rms, "{} from {}", est.rms, start.rms);
+        assert!(est.weights[1] > 0.02, "toward the truth: {:?}", est.weights);
     }
 
     #[test]
