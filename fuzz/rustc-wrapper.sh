@@ -6,8 +6,8 @@
 # Why: with the instrumentation, comparison tracing inside tract's convolution loops took 60 % of
 # the C-API target's time (perf, 2026-12-03: __sanitizer_cov_trace_cmp8 and _const_cmp8, mostly
 # under tract_linalg's depthwise kernel), and its coverage, the loop counters of a neural
-# network's kernels, tells the fuzzer nothing about sketchbody's code. The code under test (our
-# crates, the image decoders, serde_json) stays instrumented.
+# network's kernels, tells the fuzzer nothing about sketchbody's code. Every other crate (ours,
+# the image decoders, serde_json, nalgebra, ...) stays instrumented.
 #
 # Called by cargo as: rustc-wrapper.sh RUSTC ARGS...
 set -euo pipefail

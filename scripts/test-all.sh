@@ -43,13 +43,14 @@ step "lint gates: cargo fmt --check, cargo clippy -D warnings"
 cargo fmt --all --check
 feature_list=sketchbody/model-builder,sketchbody/test-fixtures
 features=(--features "$feature_list")
-cargo clippy --release --workspace --all-targets "${features[@]}" -- -D warnings
 # Every test below runs on one build, cargo's `sanitize` profile (Cargo.toml: release code with
 # overflow checks and debug assertions in sketchbody's own crates): the cargo tests, the CMake
 # harness (whose ASan/UBSan C tests need that profile), the Python package and the Blender add-on.
-# Two profiles would compile every dependency, tract above all, twice.
+# Two profiles would compile every dependency, tract above all, twice. Clippy takes the same
+# profile, so the build scripts and proc-macros it compiles are the test build's.
 profile=sanitize
 lib_dir="$PWD/target/$profile"
+cargo clippy --profile "$profile" --workspace --all-targets "${features[@]}" -- -D warnings
 
 step "MediaPipe reference venv (the BlazePose cross-check, tests/blazepose_reference.rs)"
 SKB_MEDIAPIPE_PYTHON="$(scripts/reference-venv.sh)"
@@ -81,6 +82,7 @@ if ! wait "$fuzz_build_pid"; then
   echo "== the fuzz targets' build FAILED (log: $fuzz_build_log)"
   exit 1
 fi
+trap - EXIT
 step "fuzz targets: 2000 executions each from the committed seeds (the long run: scripts/fuzz.sh 1000000)"
 scripts/fuzz.sh 2000
 

@@ -2,8 +2,9 @@
 # Tests the Python package (python/): installs it with the freshly built library into a venv
 # under target/ and runs python/tests (the ctypes drift test against include/sketchbody.h, the
 # Pythonic layer on the bundled example, the Dask batch on a local two-worker cluster).
-# Needs target/release/libsketchbody.so (`cargo build --release -p sketchbody-capi`; the CMake
-# build of scripts/test-all.sh makes it). Called by scripts/test-all.sh.
+# Needs target/release/libsketchbody.so (`cargo build --release -p sketchbody-capi`), or the
+# library SKETCHBODY_LIBRARY names (scripts/test-all.sh passes its target/sanitize build). The
+# tests load the copy the package bundled, as a user's install does. Called by scripts/test-all.sh.
 #
 # The venv (target/py-venv) is made from Debian's /usr/bin/python3 with --system-site-packages,
 # so python3-numpy is used as installed (Debian 12's system Python is externally managed: no
@@ -34,6 +35,6 @@ echo "== pip install ./python (bundles $lib)"
 "$py" -m pip install -q --no-build-isolation --no-deps ./python
 rm -rf python/build python/sketchbody.egg-info
 
-echo "== python/tests (installed package: $("$py" -c 'import sketchbody; print(sketchbody.__file__, sketchbody.library_path())' 2>&1))"
+echo "== python/tests (installed package: $(env -u SKETCHBODY_LIBRARY "$py" -c 'import sketchbody; print(sketchbody.__file__, sketchbody.library_path())' 2>&1))"
 cd python/tests
-"../../$py" -m unittest discover -s . -p 'test_*.py' -v
+env -u SKETCHBODY_LIBRARY "../../$py" -m unittest discover -s . -p 'test_*.py' -v

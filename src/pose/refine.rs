@@ -287,9 +287,9 @@ mod tests {
         assert!(eq.rms < 1e-7 && (eq.camera.sx - 250.0).abs() < 1e-6, "{:?}", eq);
     }
 
-    /// With noisy joints the minimum is not zero, so the refinement ends on its convergence rule
-    /// (three accepted steps in a row gaining less than 1e-12 of the objective) rather than on
-    /// f = 0: at a stationary point near the truth, which a second refinement cannot improve.
+    /// With noisy joints the minimum is not zero, so the refinement cannot end on f = 0: it ends
+    /// when no step lowers the objective (here after two steps gaining less than 1e-12 of it) at
+    /// a stationary point near the truth, which a second refinement cannot improve.
     #[test]
     fn stops_at_a_noisy_minimum_after_small_gains() {
         let d = fixture();
