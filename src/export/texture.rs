@@ -159,7 +159,7 @@ pub fn project_sketch(
                         && a < size as i64
                         && b < size as i64
                         && before[b as usize * size + a as usize] == 2)
-                        .then_some(b as usize * size + a as usize)
+                        .then(|| b as usize * size + a as usize)
                 });
                 if let Some(src) = near {
                     state[j * size + i] = 2;
