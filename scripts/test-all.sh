@@ -34,9 +34,13 @@ jobs=$(nproc)
 mkdir -p target
 fuzz_build_log=target/fuzz-build.log
 step "fuzz targets: building in the background (scripts/fuzz.sh build, log $fuzz_build_log)"
-# setsid: a process group of its own, so that a failing step stops the build with all its children.
-setsid nice -n 19 scripts/fuzz.sh build >"$fuzz_build_log" 2>&1 &
+# Job control on for this one job: it gets a process group of its own, so that a failing step
+# stops the build with all its children. (Not setsid: a new session is a new scheduler autogroup,
+# in which nice 19 counts for nothing against this script's processes.)
+set -m
+nice -n 19 scripts/fuzz.sh build >"$fuzz_build_log" 2>&1 &
 fuzz_build_pid=$!
+set +m
 trap 'kill -- -"$fuzz_build_pid" 2>/dev/null || true' EXIT
 
 step "lint gates: cargo fmt --check, cargo clippy -D warnings"
