@@ -5,7 +5,7 @@
 # (scripts/reference-venv.sh), then cargo tests, the CMake/ctest harness (OpenCV, Ceres, Embree
 # cross-checks, C and C++ API tests under sanitizers), the Python package's tests
 # (scripts/test-python.sh), the Blender add-on's, and last a short run of every fuzz target
-# (scripts/fuzz.sh; installs cargo-fuzz when missing; built in the background meanwhile).
+# (scripts/fuzz.sh; cargo-fuzz's flags with plain cargo; built in the background meanwhile).
 # Set SKB_REQUIRE_SHARED_DATA=1 to turn "skipped: ../shared/data missing" into failures (CI does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
