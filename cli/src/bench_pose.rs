@@ -29,7 +29,8 @@ pub struct Args {
     /// Dictionary file (default: the embedded one).
     #[arg(long)]
     dictionary: Option<PathBuf>,
-    /// Clips to measure on (comma-separated); default: the dictionary's held-out clips.
+    /// Clips to measure on (comma-separated; with `--suite` also `SS_*`, a whole CMU subject);
+    /// default: the dictionary's held-out clips (with `--suite`, also the library's list).
     #[arg(long, value_delimiter = ',')]
     clips: Option<Vec<String>>,
     /// Frames per clip (evenly spaced).
@@ -109,6 +110,10 @@ pub struct Args {
     /// With `--dataset`: only the first N samples.
     #[arg(long)]
     first: Option<usize>,
+    /// With `--suite`: write one CSV line per case (set, proportions, view, σ, case, whether
+    /// the 2-D joints look standing, the eight limb errors, the estimated and true factors).
+    #[arg(long)]
+    dump: Option<PathBuf>,
 }
 
 /// CPU time of the calling thread, seconds (CLOCK_THREAD_CPUTIME_ID).
@@ -221,7 +226,16 @@ pub fn run(a: Args) -> Result<(), CliError> {
         ..def
     };
     if a.suite {
-        return crate::bench_pose_suite::run(&dict, &ours, &a.mocap, a.cmu.as_ref(), a.cases, &a.sigma, a.seed);
+        let suite = crate::bench_pose_suite::Suite {
+            mocap: &a.mocap,
+            cmu: a.cmu.as_ref(),
+            clips: a.clips.as_deref(),
+            cases: a.cases,
+            sigmas: &a.sigma,
+            seed: a.seed,
+            dump: a.dump.as_deref(),
+        };
+        return crate::bench_pose_suite::run(&dict, &ours, &suite);
     }
     if let Some(ds) = &a.dataset {
         return crate::bench_pose_dataset::run(ds, &a.mocap, &dict, &ours, a.first);

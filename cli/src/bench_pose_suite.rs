@@ -7,6 +7,7 @@
 //! alignment: mean degrees and % of limbs > 30° off), torso lean error (pelvis→neck, each pose
 //! in its own camera frame, degrees), share of estimates flagged implausible, CPU ms per call.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
@@ -14,12 +15,13 @@ use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 use sketchbody::body::BodyModel;
 use sketchbody::camera::WeakPerspective;
-use sketchbody::pose::figure::{BodyFactors, NUM_GROUPS};
+use sketchbody::pose::figure::{BodyFactors, GROUP_NAMES, NUM_GROUPS};
 use sketchbody::pose::learn::{
     body_model_skeletons, clip_matches, default_held_out, held_out_of, motion_files, retarget_frames,
 };
 use sketchbody::pose::metrics::{limb_direction_errors, pa_mpjpe, torso_lean_error_deg};
 use sketchbody::pose::motion::{normalize_pose, read_motion_csv, REF_STATURE};
+use sketchbody::pose::plausibility::standing_in_image;
 use sketchbody::pose::{estimate_pose, Dictionary, PoseOptions};
 use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
 
@@ -89,18 +91,55 @@ fn camera<R: Rng>(rng: &mut R, side: bool) -> WeakPerspective {
     WeakPerspective { sx: scale, sy: scale, r, t: [256.0, 300.0] }
 }
 
-/// Runs the suite with options `opts`; `mocap` is the DeepMimic folder, `cmu` the CMU one.
-pub fn run(
-    dict: &Dictionary,
-    opts: &PoseOptions,
-    mocap: &Path,
-    cmu: Option<&PathBuf>,
-    cases: usize,
-    sigmas: &[f64],
-    seed: u64,
-) -> Result<(), CliError> {
-    let mut entries = held_out_of(dict);
-    entries.extend(default_held_out());
+fn dump_err(e: std::io::Error) -> CliError {
+    CliError(format!("bench-pose --dump: {e}"))
+}
+
+/// What the suite measures on.
+pub struct Suite<'a> {
+    /// The DeepMimic folder.
+    pub mocap: &'a Path,
+    /// The CMU folder.
+    pub cmu: Option<&'a PathBuf>,
+    /// Clips to measure on (names, or `SS_*` for a CMU subject) instead of the dictionary's
+    /// held-out clips and the library's list (a validation split learned without them).
+    pub clips: Option<&'a [String]>,
+    /// Cases per set.
+    pub cases: usize,
+    /// Noise levels, px.
+    pub sigmas: &'a [f64],
+    /// Seed of the cameras, proportions and noise.
+    pub seed: u64,
+    /// Per-case CSV output.
+    pub dump: Option<&'a Path>,
+}
+
+/// Runs the suite with options `opts` (see [`Suite`]).
+pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), CliError> {
+    let (mocap, cmu, cases, sigmas, seed) = (suite.mocap, suite.cmu, suite.cases, suite.sigmas, suite.seed);
+    let entries = match suite.clips {
+        Some(c) => c.to_vec(),
+        None => {
+            let mut e = held_out_of(dict);
+            e.extend(default_held_out());
+            e
+        }
+    };
+    let mut dump = match suite.dump {
+        Some(p) => {
+            let mut f = std::io::BufWriter::new(std::fs::File::create(p).map_err(dump_err)?);
+            writeln!(
+                f,
+                "set,props,view,sigma,case,standing_2d,{},{},{}",
+                (0..8).map(|i| format!("limb{i}")).collect::<Vec<_>>().join(","),
+                GROUP_NAMES.map(|g| format!("est_{g}")).join(","),
+                GROUP_NAMES.map(|g| format!("true_{g}")).join(",")
+            )
+            .map_err(dump_err)?;
+            Some(f)
+        }
+        None => None,
+    };
     let skeletons = body_model_skeletons(&BodyModel::embedded()?);
     let mut sets = vec![load_set("deepmimic", mocap, &entries, &skeletons, cases)?];
     if let Some(c) = cmu {
@@ -140,7 +179,7 @@ pub fn run(
                     let (mut pa, mut limb, mut over, mut lean) = (0.0, 0.0, 0usize, 0.0);
                     let (mut n, mut failed, mut implausible) = (0usize, 0usize, 0usize);
                     let mut cpu = 0.0;
-                    for f in &set.frames {
+                    for (case, f) in set.frames.iter().enumerate() {
                         let factors = stylised(&mut rng);
                         let gt = if pi == 1 { factors.apply(f) } else { *f };
                         let cam = camera(&mut rng, vi == 1);
@@ -161,6 +200,20 @@ pub fn run(
                             failed += 1;
                             continue;
                         };
+                        if let Some(out) = dump.as_mut() {
+                            let truth = if pi == 1 { factors } else { BodyFactors::default() };
+                            let vis = [true; NUM_JOINTS];
+                            writeln!(
+                                out,
+                                "{},{props},{view},{sigma},{case},{},{},{},{}",
+                                set.name,
+                                u8::from(standing_in_image(&j2.xy, &vis)),
+                                errs.iter().map(|e| format!("{e:.2}")).collect::<Vec<_>>().join(","),
+                                est.factors.k.map(|k| format!("{k:.3}")).join(","),
+                                truth.k.map(|k| format!("{k:.3}")).join(",")
+                            )
+                            .map_err(dump_err)?;
+                        }
                         pa += pa_mpjpe(&est.joints, &gt);
                         limb += errs.iter().sum::<f64>() / errs.len() as f64;
                         over += errs.iter().filter(|e| **e > 30.0).count();
@@ -186,6 +239,9 @@ pub fn run(
                 }
             }
         }
+    }
+    if let Some(mut out) = dump {
+        out.flush().map_err(dump_err)?;
     }
     Ok(())
 }

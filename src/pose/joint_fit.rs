@@ -8,8 +8,9 @@
 //! `Σ_visible ‖π(Y_j) − u_j‖² / σ_px² + Σ_j ‖Y_j − Ŷ_j‖² / σ_3d² + Σ_bones (‖Y_c − Y_p‖ − l̂_cp)² / σ_len²`
 //!
 //! plus, with the plausibility priors ([`Priors`], [`super::plausibility`]) for a standing
-//! figure, its linear standing residuals, the depth part of the second term then at
-//! [`SIGMA_DEPTH_STANDING`]; knees left bent backwards are flipped in depth at the end.
+//! figure, its linear standing residuals (the ankles under the pelvis only when the estimate's
+//! stride in depth is at most [`STANDING_MAX_STRIDE`]), the depth part of the second term then
+//! at [`SIGMA_DEPTH_STANDING`]; knees left bent backwards are flipped in depth at the end.
 //!
 //! with Ŷ and l̂ the estimate's joints and bone lengths, σ_px = `joint_noise` × the camera's
 //! scale (so the trade-off does not depend on the image size), σ_3d = [`SIGMA_3D`] and
@@ -23,7 +24,10 @@
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use super::dictionary::{pose_to_vec, vec_to_pose, with_bone_lengths};
-use super::plausibility::{standing_in_image, standing_residuals, unbend_knees, LinearResidual, SIGMA_DEPTH_STANDING};
+use super::plausibility::{
+    standing_in_image, standing_residuals, stride_in_depth, unbend_knees, LinearResidual, SIGMA_DEPTH_STANDING,
+    STANDING_MAX_STRIDE,
+};
 use super::problem::Problem;
 use super::pursuit::PoseEstimate;
 use crate::camera::WeakPerspective;
@@ -157,7 +161,11 @@ pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64, priors: &Pri
         wd: 1.0 / (SIGMA_3D * SIGMA_3D),
         wl: 1.0 / (SIGMA_LEN * SIGMA_LEN),
         wz: if standing { 1.0 / (SIGMA_DEPTH_STANDING * SIGMA_DEPTH_STANDING) } else { 1.0 / (SIGMA_3D * SIGMA_3D) },
-        linear: if standing { standing_residuals(&cam.r) } else { Vec::new() },
+        linear: if standing {
+            standing_residuals(&cam.r, stride_in_depth(&y0, &cam.r) <= STANDING_MAX_STRIDE)
+        } else {
+            Vec::new()
+        },
     };
     let mut y = y0;
     let mut f = jp.cost(&y);

@@ -6,7 +6,11 @@
 //!   residuals in the model frame — an upright torso (pelvis→neck without horizontal
 //!   components), the head over the neck, both ankles under the pelvis in depth and at one
 //!   height (a common ground plane) — and relaxes its pull toward the dictionary pose in depth,
-//!   so that depth follows these priors instead of the dictionary's guess.
+//!   so that depth follows these priors instead of the dictionary's guess. The two ankle-depth
+//!   residuals apply only when the dictionary estimate itself has the ankles within
+//!   [`STANDING_MAX_STRIDE`] of each other in depth ([`stride_in_depth`]): from the front a
+//!   walking stride looks like standing in the image (legs straight and vertical, feet level),
+//!   and the dictionary's stride is then evidence the image does not contradict.
 //! - **Knee limits** ([`unbend_knees`]): a knee bent backwards (the shin swung forward of the
 //!   thigh, against the body's facing) gets the depth flip of its thigh, shin or whole leg that
 //!   bends it forward: under weak perspective the image and every bone length are unchanged. (Elbows are left alone: their bending plane depends on the upper arm's
@@ -24,6 +28,14 @@ pub const STANDING_MIN_KNEE_DEG: f64 = 170.0;
 /// Largest height difference of the two ankles in the image, as a fraction of the leg's image
 /// length, for a figure standing on both feet.
 pub const STANDING_MAX_ANKLE_STEP: f64 = 0.05;
+
+/// Largest depth difference of the two ankles, metres (model frame, along the body's facing),
+/// in the dictionary estimate for which the standing prior still puts both ankles under the
+/// pelvis ([`stride_in_depth`]). Chosen on a validation split of training motion (held-out
+/// DeepMimic walk, run, dance_a, punch, jump, long_long_walk1 and CMU subjects 02, 07, 09, 14,
+/// learned without them): 0.2 m lost nothing against no ankle residuals at all there, while the
+/// bundled example (0.13–0.18 m) keeps them (docs/benchmarks.md, issue 16).
+pub const STANDING_MAX_STRIDE: f64 = 0.2;
 
 /// Spread of the standing residuals, metres: the torso's horizontal offset (3° of lean on a
 /// 0.5 m torso is 2.6 cm), the head's depth over the neck, each ankle's depth from the pelvis,
@@ -91,20 +103,32 @@ pub fn standing_in_image(uv: &[[f64; 2]; NUM_JOINTS], visible: &[bool; NUM_JOINT
     (uv[R_ANKLE][1] - uv[L_ANKLE][1]).abs() <= STANDING_MAX_ANKLE_STEP * legs
 }
 
+/// Depth difference of the two ankles, metres, of the camera-frame joints `y` under the camera
+/// rotation `r` (model → camera): the model-frame z (the body's facing) of right ankle − left
+/// ankle, absolute.
+pub fn stride_in_depth(y: &[Vector3<f64>; NUM_JOINTS], r: &Matrix3<f64>) -> f64 {
+    r.column(2).dot(&(y[joint::R_ANKLE] - y[joint::L_ANKLE])).abs()
+}
+
 /// The standing residuals (module doc) for the camera rotation `r` (model → camera): model
-/// component `k` of a camera-frame vector `v` is `r.column(k) · v`.
-pub fn standing_residuals(r: &Matrix3<f64>) -> Vec<LinearResidual> {
+/// component `k` of a camera-frame vector `v` is `r.column(k) · v`. `feet`: with the two
+/// ankle-depth residuals (both ankles under the pelvis), which [`super::joint_fit`] leaves out
+/// when the estimate's [`stride_in_depth`] exceeds [`STANDING_MAX_STRIDE`].
+pub fn standing_residuals(r: &Matrix3<f64>, feet: bool) -> Vec<LinearResidual> {
     use joint::*;
     let (x, y, z) = (r.column(0).into_owned(), r.column(1).into_owned(), r.column(2).into_owned());
     let w = |s: f64| 1.0 / (s * s);
-    vec![
+    let mut out = vec![
         LinearResidual { a: NECK, b: PELVIS, c: x, w: w(SIGMA_UPRIGHT) },
         LinearResidual { a: NECK, b: PELVIS, c: z, w: w(SIGMA_UPRIGHT) },
         LinearResidual { a: HEAD, b: NECK, c: z, w: w(SIGMA_HEAD) },
-        LinearResidual { a: R_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET) },
-        LinearResidual { a: L_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET) },
         LinearResidual { a: R_ANKLE, b: L_ANKLE, c: y, w: w(SIGMA_GROUND) },
-    ]
+    ];
+    if feet {
+        out.push(LinearResidual { a: R_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET) });
+        out.push(LinearResidual { a: L_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET) });
+    }
+    out
 }
 
 /// Bend of a knee: `(knee − hip) × (ankle − knee)` along the body's left, over the two bones'
@@ -199,6 +223,23 @@ mod tests {
         assert!(!standing_in_image(&uv, &hidden));
         let lying: [[f64; 2]; NUM_JOINTS] = std::array::from_fn(|j| [uv[j][1], uv[j][0]]);
         assert!(!standing_in_image(&lying, &vis));
+    }
+
+    #[test]
+    fn the_ankle_depth_residuals_follow_the_estimates_stride() {
+        use joint::*;
+        // A quarter turn: the model's facing (z) is the camera's x.
+        let r = *nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2).matrix();
+        let mut y = [Vector3::zeros(); NUM_JOINTS];
+        y[R_ANKLE] = r * Vector3::new(-0.1, -0.9, 0.15);
+        y[L_ANKLE] = r * Vector3::new(0.1, -0.9, -0.15);
+        assert!((stride_in_depth(&y, &r) - 0.3).abs() < 1e-12);
+        let feet =
+            |v: &[LinearResidual]| v.iter().filter(|q| q.b == PELVIS && (q.a == R_ANKLE || q.a == L_ANKLE)).count();
+        assert_eq!(feet(&standing_residuals(&r, true)), 2);
+        assert_eq!(feet(&standing_residuals(&r, false)), 0);
+        // The torso, head and ground residuals stay either way.
+        assert_eq!(standing_residuals(&r, false).len(), 4);
     }
 
     #[test]
