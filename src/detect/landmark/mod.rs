@@ -5,7 +5,9 @@
 //! visibility and presence logits through a sigmoid) and back-projection to image pixels, then
 //! a second pass on the ROI from the first pass's own alignment landmarks (hips' midpoint →
 //! scale point, rotated upright, 1.25 × twice their distance), and the map to the canonical
-//! joints ([`joints`]).
+//! joints ([`joints`]). Crops that are mostly paper have their strokes lightened first
+//! ([`prep`]); when the ink box's ROI leaves the network unsure (pose flag under
+//! [`BlazePoseOptions::retry_below`]), other ROI scales are tried ([`roi::retry_rois`]).
 
 pub mod crop;
 pub mod joints;
