@@ -62,6 +62,22 @@ impl Roi {
     }
 }
 
+/// Sides of the retry ROIs ([`retry_rois`]) over the ink box's larger side. The ink box's own ROI
+/// ([`ROI_SCALE`]) misses when the ink is not the figure: a photo's or a stylised photo's
+/// background fills the page, so the figure is smaller or off the page's centre, or light
+/// strokes leave the network unsure at that framing. Chosen on PARSE training photos 1–100 through
+/// the proxy benchmark's stylisations (`examples/landmark_roi.rs`; docs/benchmarks.md, "Detector
+/// backends").
+pub const RETRY_SCALES: [f64; 3] = [0.8, 1.0, 1.6];
+
+/// The upright square ROIs tried when the ink box's ROI leaves the network unsure: centred on
+/// ink box `b` (px), sides [`RETRY_SCALES`] × its larger side.
+pub fn retry_rois(b: [f64; 4]) -> Vec<Roi> {
+    let side = (b[2] - b[0]).max(b[3] - b[1]);
+    let (cx, cy) = (0.5 * (b[0] + b[2]), 0.5 * (b[1] + b[3]));
+    RETRY_SCALES.iter().map(|&k| Roi { cx, cy, size: k * side, rotation: 0.0 }).collect()
+}
+
 /// An angle wrapped to [-π, π).
 fn normalize_angle(a: f64) -> f64 {
     use std::f64::consts::PI;
