@@ -1591,16 +1591,21 @@ void skb_result_free(struct skb_result *result);
 
 /**
  * The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
- * or with automatic gender the nearer end of the fitted gender value (`skb_result_gender_value`);
+ * or with automatic gender the classifier's choice between the two gendered fits (given
+ * joints) or the nearer end of the fitted gender value (detected joints; `skb_result_gender_value`);
  * whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
  */
-skb_status skb_result_gender(const struct skb_result *result, uint32_t *gender, bool *by_score);
+skb_status skb_result_gender(const struct skb_result *result,
+                             uint32_t *gender,
+                             bool *by_score);
 
 /**
  * The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
- * when the gender was given) and into `*confidence` (may be NULL) the probability, under the
- * fit's posterior, that the gender value is on `skb_result_gender`'s side of 0.5 (0.5..=1;
- * 1 when the gender was given).
+ * when the gender was given or chosen between the two gendered fits) and into `*confidence`
+ * (may be NULL) the probability that `skb_result_gender` is right (0.5..=1; 1 when the gender
+ * was given): with given joints, the gender classifier's (the sketch's joint and outline
+ * widths and the score margin of the two gendered fits); with detected joints, the
+ * both-sexes fit's posterior mass on that side of 0.5, its prior set by the classifier.
  */
 skb_status skb_result_gender_value(const struct skb_result *result,
                                    double *value,
@@ -1623,9 +1628,9 @@ skb_status skb_result_detection(const struct skb_result *result, struct skb_figu
 skb_status skb_result_evidence(const struct skb_result *result, bool *low, double *edge_support);
 
 /**
- * The best match score (higher is better) of the fit into `*score`; `gender` must be the
- * result's gender (`skb_result_gender`: one space is fitted, the given gender's or the
- * both-sexes one). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
+ * The best match score (higher is better) of the chosen fit into `*score`; `gender` must be
+ * the result's gender (`skb_result_gender`: the given gender's space, the both-sexes one, or
+ * the gendered fit the classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
  */
 skb_status skb_result_score(const struct skb_result *result, uint32_t gender, double *score);
 

@@ -60,3 +60,27 @@ fn blended_space_holds_gendered_shapes_and_its_prior_covers_the_in_between() {
     assert!(tlo < 0.0 && thi > 1.0 && tlo > -5.0 && thi < 6.0, "gender value range {tlo}..{thi}");
     assert!((b.gender_value(&[b.gender_weight(0.3)]) - 0.3).abs() < 1e-12);
 }
+
+#[test]
+fn a_per_sketch_male_mass_moves_the_prior_to_that_end() {
+    use rand::SeedableRng;
+    let model = BodyModel::embedded().unwrap();
+    let b = model.blended().unwrap();
+    let male_share = |p: f64| {
+        let gmm = b.prior_with_male_mass(p).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        (0..4000).filter(|_| b.gender_value(&gmm.sample(&mut rng)) > 0.5).count() as f64 / 4000.0
+    };
+    // Each end's population spreads across 0.5 (about 30 % of the other side's), so the shares
+    // of samples above 0.5 move less than the masses.
+    let (low, even, high) = (male_share(0.1), male_share(0.5), male_share(0.9));
+    assert!(low < 0.35 && (0.4..0.6).contains(&even) && high > 0.62, "male shares {low} {even} {high}");
+    // 0.5 is the space's own prior.
+    let same = b.prior_with_male_mass(0.5).unwrap();
+    for (a, w) in same.weights().iter().zip(b.space().gmm().weights()) {
+        assert!((a - w).abs() < 1e-12);
+    }
+    assert!(b.prior_with_male_mass(f64::NAN).is_err());
+    // Out-of-range masses are clamped so neither end is ruled out.
+    assert!(b.prior_with_male_mass(1.0).unwrap().weights().iter().all(|&w| w > 0.0));
+}

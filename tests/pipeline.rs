@@ -35,13 +35,16 @@ fn fast(gender: Option<Gender>) -> PipelineOptions {
 fn fits_gender_as_a_continuous_weight_and_is_deterministic() {
     let (model, dict, sketch, j) = inputs();
     let mut fractions = Vec::new();
-    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &fast(None), &mut |f| {
+    let blended = PipelineOptions { classify_gender: false, ..fast(None) };
+    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &blended, &mut |f| {
         fractions.push(f);
         true
     })
     .unwrap();
     assert_eq!(r.fits.len(), 1);
     assert!(r.gender_fitted && r.space == ShapeChoice::Blended);
+    // The prior's mass on the male end is the gender classifier's probability.
+    assert_eq!(r.male_prior, Some(r.gender_evidence.male_probability));
     let best = &r.fits[0];
     assert_eq!(r.score, best.score);
     // The reported gender is the nearer end of the fitted value; the confidence is the
@@ -67,10 +70,35 @@ fn fits_gender_as_a_continuous_weight_and_is_deterministic() {
     assert_eq!(r.posed_vertices.len(), 13380);
     // Same seed on 1 and 2 threads: the same result.
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let r1 = one.install(|| run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &fast(None), &mut |_| true).unwrap());
+    let r1 = one.install(|| run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &blended, &mut |_| true).unwrap());
     assert_eq!(r1.weights, r.weights);
     assert_eq!(r1.gender, r.gender);
     assert_eq!(r1.posed_vertices, r.posed_vertices);
+}
+
+#[test]
+fn default_automatic_gender_chooses_between_both_gendered_fits() {
+    let (model, dict, sketch, j) = inputs();
+    let mut fractions = Vec::new();
+    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &fast(None), &mut |f| {
+        fractions.push(f);
+        true
+    })
+    .unwrap();
+    assert!(r.gender_fitted && r.male_prior.is_none());
+    assert_eq!(r.fits.len(), 2);
+    assert_eq!(r.space, ShapeChoice::Gendered(r.gender));
+    let chosen = r.fits.iter().find(|g| g.space == r.space).unwrap();
+    assert_eq!(r.score, chosen.score);
+    assert_eq!(r.gender_value, r.gender.index() as f64);
+    assert!((0.5..=1.0).contains(&r.gender_confidence));
+    // The confidence is the combination's probability of the chosen gender.
+    let margin = r.fits[1].score - r.fits[0].score;
+    let male = sketchbody::fit::MarginCombination::SHIPPED
+        .male_probability(sketchbody::fit::GenderClassifier::SHIPPED.log_odds(&r.gender_evidence.features), margin);
+    assert_eq!(r.gender, if male > 0.5 { Gender::Male } else { Gender::Female });
+    assert!((r.gender_confidence - male.max(1.0 - male)).abs() < 1e-12);
+    assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");
 }
 
 #[test]

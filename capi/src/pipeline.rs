@@ -171,7 +171,8 @@ pub unsafe extern "C" fn skb_result_free(result: *mut skb_result) {
 }
 
 /// The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
-/// or with automatic gender the nearer end of the fitted gender value (`skb_result_gender_value`);
+/// or with automatic gender the classifier's choice between the two gendered fits (given
+/// joints) or the nearer end of the fitted gender value (detected joints; `skb_result_gender_value`);
 /// whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_gender(
@@ -193,9 +194,11 @@ pub unsafe extern "C" fn skb_result_gender(
 }
 
 /// The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
-/// when the gender was given) and into `*confidence` (may be NULL) the probability, under the
-/// fit's posterior, that the gender value is on `skb_result_gender`'s side of 0.5 (0.5..=1;
-/// 1 when the gender was given).
+/// when the gender was given or chosen between the two gendered fits) and into `*confidence`
+/// (may be NULL) the probability that `skb_result_gender` is right (0.5..=1; 1 when the gender
+/// was given): with given joints, the gender classifier's (the sketch's joint and outline
+/// widths and the score margin of the two gendered fits); with detected joints, the
+/// both-sexes fit's posterior mass on that side of 0.5, its prior set by the classifier.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_gender_value(
     result: *const skb_result,
@@ -261,9 +264,9 @@ pub unsafe extern "C" fn skb_result_evidence(
     }
 }
 
-/// The best match score (higher is better) of the fit into `*score`; `gender` must be the
-/// result's gender (`skb_result_gender`: one space is fitted, the given gender's or the
-/// both-sexes one). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
+/// The best match score (higher is better) of the chosen fit into `*score`; `gender` must be
+/// the result's gender (`skb_result_gender`: the given gender's space, the both-sexes one, or
+/// the gendered fit the classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32, score: *mut f64) -> skb_status {
     // SAFETY: the header contract of `skb_result_score` (lib.rs § Safety): `result`, `score` are NULL or valid for
@@ -271,7 +274,8 @@ pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
-            let Some(g) = r.fits.first().filter(|_| r.gender as u32 == gender) else {
+            let chosen = r.fits.iter().find(|g| g.space == r.space);
+            let Some(g) = chosen.filter(|_| r.gender as u32 == gender) else {
                 return super::error::fail(&Error::OutOfRange { name: "gender", detail: format!("{gender} was not fitted") });
             };
             try_status!(write_out(score, g.score, "score"));

@@ -86,6 +86,19 @@ pub struct FitArgs {
     /// agree with the chosen figure.
     #[arg(long, default_value_t = DetectedJointsFit::default().landmark_pose, action = clap::ArgAction::Set)]
     pub landmark_pose: bool,
+    /// With automatic gender, the fit's prior mass on the male end is the gender classifier's
+    /// probability from the sketch's joints and outline (`--gender-evidence true|false`; false:
+    /// 0.5 on each end).
+    #[arg(long, default_value_t = PipelineOptions::default().gender_evidence, action = clap::ArgAction::Set)]
+    pub gender_evidence: bool,
+    /// With automatic gender, a fixed prior mass on the male end (0..=1; overrides
+    /// --gender-evidence).
+    #[arg(long, value_parser = crate::ranges::real(0.0, 1.0, false))]
+    pub male_prior: Option<f64>,
+    /// With automatic gender, choose the gender by the classifier (hard choice) and fit that
+    /// gender's space (`--classify-gender true|false`).
+    #[arg(long, default_value_t = PipelineOptions::default().classify_gender, action = clap::ArgAction::Set)]
+    pub classify_gender: bool,
 }
 
 /// Parses a match-score name.
@@ -139,6 +152,7 @@ impl FitArgs {
             proportion_sd: self.proportion_sd,
             inside_cap: self.inside_cap,
             estimate_proportions: self.estimate_proportions,
+            male_prior: self.male_prior,
         })
     }
 }

@@ -29,6 +29,7 @@ mod run_dataset;
 mod search_args;
 mod stylise;
 mod train_detector;
+mod train_gender;
 
 use std::process::ExitCode;
 
@@ -84,6 +85,8 @@ enum Command {
     CalibrateDetector(calibrate_detector::Args),
     /// Train a detector on synthetic concept sketches and write it as .skbd.
     TrainDetector(train_detector::Args),
+    /// Train the gender classifier on run-dataset's gender features; confusion and calibration.
+    TrainGender(train_gender::Args),
     /// Render a dataset of N synthetic sketches in parallel (resumable; see docs/dataset.md).
     MakeDataset(make_dataset::Args),
     /// A photo as an ink drawing, pencil sketch or flat-colour design (real-drawing proxy set).
@@ -132,6 +135,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(a) => run::run(a),
         Command::RunDataset(a) => run_dataset::run(a),
+        Command::TrainGender(a) => train_gender::run(a),
         Command::Body(a) => body::run(a),
         Command::Edges(a) => edges::run(a),
         Command::LearnPoses(a) => learn_poses::run(a),

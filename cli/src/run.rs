@@ -218,14 +218,27 @@ fn report(
             g.seconds
         );
     }
-    if r.gender_fitted {
+    let evidence = format!(
+        "the gender classifier gives P(male) {:.2} from the sketch's joints and outline",
+        r.gender_evidence.male_probability
+    );
+    if r.gender_fitted && r.male_prior.is_none() {
+        let _ = writeln!(
+            s,
+            "- gender: {} chosen by the gender classifier with probability {:.2} ({evidence}), then that \
+             gender's shape space fitted",
+            r.gender.name(),
+            r.gender_confidence
+        );
+    } else if r.gender_fitted {
         let _ = writeln!(
             s,
             "- gender: fitted as a continuous shape weight (both-sexes space): value {:.2} (0 female … 1 male), \
-             nearer {} with posterior probability {:.2}",
+             nearer {} with posterior probability {:.2}; prior mass on the male end {:.2} ({evidence})",
             r.gender_value,
             r.gender.name(),
-            r.gender_confidence
+            r.gender_confidence,
+            r.male_prior.unwrap_or(0.5)
         );
     } else {
         let _ = writeln!(s, "- gender: {} (given)", r.gender.name());
@@ -289,6 +302,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         keep_pose_scale: a.fit.keep_pose_scale,
         depth_hint: a.fit.depth_hint,
         detected: a.fit.detected(),
+        gender_evidence: a.fit.gender_evidence,
+        classify_gender: a.fit.classify_gender,
         ..PipelineOptions::default()
     };
     let sketch_rgb = load_rgb_image(&a.sketch)?;
@@ -363,7 +378,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
     staging.commit()?;
     let scores: Vec<String> = r.fits.iter().map(|g| format!("{} {:.4}", g.space.name(), g.score)).collect();
     let gender = if r.gender_fitted {
-        format!("gender {:.2} fitted, {} p={:.2}", r.gender_value, r.gender.name(), r.gender_confidence)
+        match r.male_prior {
+            Some(prior) => format!(
+                "gender {:.2} fitted, {} p={:.2} (prior {prior:.2})",
+                r.gender_value,
+                r.gender.name(),
+                r.gender_confidence
+            ),
+            None => format!("{} by the gender classifier, p={:.2}", r.gender.name(), r.gender_confidence),
+        }
     } else {
         format!("{} given", r.gender.name())
     };

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "b735c19c08d3b033b21ef76d7273320046f55669edaed67a6ff65a7e7448fc0b"
+HEADER_SHA256 = "4b1dfb09ac050915cce57da281ee2d9bfa52d20db29232ec1a2c556a1bdce63f"
 
 # ---- constants (#define) ----
 
@@ -2609,7 +2609,8 @@ FUNCTIONS["skb_result_free"] = (
 )
 
 # The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
-# or with automatic gender the nearer end of the fitted gender value (`skb_result_gender_value`);
+# or with automatic gender the classifier's choice between the two gendered fits (given
+# joints) or the nearer end of the fitted gender value (detected joints; `skb_result_gender_value`);
 # whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
 FUNCTIONS["skb_result_gender"] = (
     ctypes.c_uint32,
@@ -2627,9 +2628,11 @@ FUNCTIONS["skb_result_gender"] = (
 )
 
 # The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
-# when the gender was given) and into `*confidence` (may be NULL) the probability, under the
-# fit's posterior, that the gender value is on `skb_result_gender`'s side of 0.5 (0.5..=1;
-# 1 when the gender was given).
+# when the gender was given or chosen between the two gendered fits) and into `*confidence`
+# (may be NULL) the probability that `skb_result_gender` is right (0.5..=1; 1 when the gender
+# was given): with given joints, the gender classifier's (the sketch's joint and outline
+# widths and the score margin of the two gendered fits); with detected joints, the
+# both-sexes fit's posterior mass on that side of 0.5, its prior set by the classifier.
 FUNCTIONS["skb_result_gender_value"] = (
     ctypes.c_uint32,
     [
@@ -2681,9 +2684,9 @@ FUNCTIONS["skb_result_evidence"] = (
     ),
 )
 
-# The best match score (higher is better) of the fit into `*score`; `gender` must be the
-# result's gender (`skb_result_gender`: one space is fitted, the given gender's or the
-# both-sexes one). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
+# The best match score (higher is better) of the chosen fit into `*score`; `gender` must be
+# the result's gender (`skb_result_gender`: the given gender's space, the both-sexes one, or
+# the gendered fit the classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
 FUNCTIONS["skb_result_score"] = (
     ctypes.c_uint32,
     [

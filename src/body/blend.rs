@@ -57,6 +57,8 @@ pub struct BlendedSpace {
     space: ShapeSpace,
     /// Weight 0 of the female and the male mean shape.
     ends: [f64; 2],
+    /// Gender level ([`GENDER_LEVELS`]) each prior component represents.
+    levels: Vec<f64>,
 }
 
 impl BlendedSpace {
@@ -76,6 +78,23 @@ impl BlendedSpace {
     /// Weight 0 of the shape at gender value `t` (the inverse of [`BlendedSpace::gender_value`]).
     pub fn gender_weight(&self, t: f64) -> f64 {
         self.ends[0] + t * (self.ends[1] - self.ends[0])
+    }
+
+    /// The prior with mass `male` on the male end and `1 − male` on the female end (a
+    /// per-sketch [`LEVEL_WEIGHTS`], e.g. from [`crate::fit::GenderClassifier`]): every
+    /// component of level `t` is reweighted by `(1 − t)(1 − male) + t · male` relative to the
+    /// default ends-only prior, then the weights are renormalised; means and covariances are
+    /// unchanged. `male` is clamped to 0.001..=0.999 so neither end is ruled out. Errors:
+    /// non-finite `male` ([`Error::NonFinite`]).
+    pub fn prior_with_male_mass(&self, male: f64) -> Result<Gmm> {
+        crate::error::ensure_finite("male prior", male)?;
+        let m = male.clamp(0.001, 0.999);
+        let gmm = self.space.gmm();
+        let mut weights: Vec<f64> =
+            gmm.weights().iter().zip(&self.levels).map(|(w, t)| w * ((1.0 - t) * (1.0 - m) + t * m)).collect();
+        let total: f64 = weights.iter().sum();
+        weights.iter_mut().for_each(|w| *w /= total);
+        Gmm::new(weights, gmm.means().to_vec(), gmm.covariances().to_vec())
     }
 
     /// Builds the space from a model's two gendered spaces (module documentation). Errors:
@@ -180,7 +199,7 @@ impl BlendedSpace {
         // 3. The exact prior in blended weights.
         let to_blend = |g: usize, x: &DVector<f64>| -> DVector<f64> { u.transpose() * (&offsets[g] + x - &mean) };
         let ridge: Vec<f64> = variances.iter().map(|v| 1e-3 * v).collect();
-        let (mut weights, mut gmeans, mut gcovs) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut weights, mut gmeans, mut gcovs, mut levels) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (g, s) in spaces.iter().enumerate() {
             let gmm = s.gmm();
             let d = gmm.dims();
@@ -201,6 +220,7 @@ impl BlendedSpace {
                     }
                     cv = 0.5 * (&cv + cv.transpose());
                     weights.push(share * gmm.weights()[c]);
+                    levels.push(t);
                     gmeans.push(to_blend(g, &x));
                     gcovs.push(cv);
                 }
@@ -224,7 +244,7 @@ impl BlendedSpace {
             default_dim: BLEND_DEFAULT_DIM.min(kept),
             gmm,
         };
-        Ok(BlendedSpace { space, ends })
+        Ok(BlendedSpace { space, ends, levels })
     }
 }
 

@@ -1,12 +1,16 @@
 //! Fitting the body shape to the sketch (paper §II-C): the SIR of eqs. 5–9 and match scores.
 
 pub mod bone_estimate;
+pub mod gender_evidence;
 pub mod proportions;
 mod score;
 mod sir;
 mod transition;
 
 pub use bone_estimate::{estimate_proportions, EstimateOptions, ProportionEstimate};
+pub use gender_evidence::{
+    gender_evidence, gender_features, GenderClassifier, GenderEvidence, GenderFeatures, MarginCombination,
+};
 pub use score::{distance_transform, MatchScore, SketchEvidence, CHAMFER_CAP};
 pub use sir::{
     fit_shape, FitOptions, FitProblem, FitResult, IterationStats, EDGE_SUPPORT_RADIUS, LOW_EVIDENCE_SUPPORT,

@@ -105,6 +105,11 @@ pub struct FitOptions {
     /// body crossing the outline is still penalised. [`super::CHAMFER_CAP`] (12) turns it off.
     /// Only the chamfer scores use it. Default 4.0, the best on the tuning set (docs/benchmarks.md, "How the fit's defaults were chosen"). Finite, > 0.
     pub inside_cap: f64,
+    /// Blended space only: the prior's mass on the male end (a per-sketch
+    /// [`crate::body::LEVEL_WEIGHTS`], [`crate::body::BlendedSpace::prior_with_male_mass`]),
+    /// e.g. [`super::GenderClassifier`]'s probability. `None` (default): the space's own prior,
+    /// 0.5 on each end. Ignored for a gendered space. In 0..=1.
+    pub male_prior: Option<f64>,
 }
 
 /// Every PCA weight the fit returns or scores lies within this many standard deviations of some
@@ -140,6 +145,7 @@ impl Default for FitOptions {
             proportion_sd: 0.1,
             estimate_proportions: true,
             inside_cap: 4.0,
+            male_prior: None,
         }
     }
 }
@@ -253,6 +259,12 @@ impl FitOptions {
             ensure_finite("height", h)?;
             if !(0.1..=10.0).contains(&h) {
                 return Err(Error::OutOfRange { name: "height", detail: format!("{h} m not in 0.1..=10") });
+            }
+        }
+        if let Some(p) = self.male_prior {
+            ensure_finite("male prior", p)?;
+            if !(0.0..=1.0).contains(&p) {
+                return Err(Error::OutOfRange { name: "male prior", detail: format!("{p} not in 0..=1") });
             }
         }
         ensure_finite("proportion sd", self.proportion_sd)?;
@@ -391,7 +403,11 @@ pub fn fit_shape(
     let proxy = problem.model.fit_proxy()?;
     let proxy_space = proxy.shape_space(problem.model, problem.gender)?;
     let dims = options.dims.unwrap_or(space.default_dim());
-    let prior_full = space.gmm();
+    let reweighted = match (problem.gender, options.male_prior) {
+        (ShapeChoice::Blended, Some(p)) => Some(problem.model.blended()?.prior_with_male_mass(p)?),
+        _ => None,
+    };
+    let prior_full = reweighted.as_ref().unwrap_or(space.gmm());
     if dims == 0 || dims > prior_full.dims() {
         return Err(Error::OutOfRange {
             name: "fit dimensions",

@@ -23,7 +23,7 @@ use crate::body::ik::Pose;
 use crate::body::rig::RiggedMesh;
 use crate::body::{BodyModel, Gender, ShapeChoice};
 use crate::error::{Error, Result};
-use crate::fit::FitOptions;
+use crate::fit::{gender_evidence, FitOptions, GenderClassifier, GenderEvidence, MarginCombination};
 use crate::image::{canny, CannyParams, GrayImage};
 use crate::pose::{estimate_pose_hinted, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::Joints2;
@@ -69,6 +69,20 @@ pub struct PipelineOptions {
     /// (a detector's joints are a few percent of the figure off, enough to skew the bone
     /// lengths the fit would read proportions from). Given joints use `fit` as is.
     pub detected: DetectedJointsFit,
+    /// With automatic gender, set the both-sexes fit's prior mass on the male end
+    /// ([`FitOptions::male_prior`]) to the gender classifier's probability
+    /// ([`crate::fit::GenderClassifier::SHIPPED`], or `SHIPPED_DETECTED` for detected joints, on
+    /// the sketch's joints and outline, [`crate::fit::gender_evidence`]) instead of 0.5. Ignored when `fit.male_prior` is set,
+    /// a gender is given, the joints were detected (measured worse there, docs/benchmarks.md)
+    /// or [`PipelineOptions::classify_gender`] applies. Default `true`.
+    pub gender_evidence: bool,
+    /// With automatic gender and given (not detected) joints, fit both gendered spaces instead
+    /// of the both-sexes space and keep the one [`MarginCombination::SHIPPED`] chooses from the
+    /// gender classifier's log-odds and the two fits' score margin; the result's confidence is
+    /// then that combination's probability of the chosen gender. With detected joints the
+    /// margin misleads (measured, docs/benchmarks.md) and the both-sexes fit with the
+    /// classifier's prior is used. Default `true`.
+    pub classify_gender: bool,
 }
 
 impl Default for PipelineOptions {
@@ -83,6 +97,8 @@ impl Default for PipelineOptions {
             given_pose: None,
             depth_hint: DEFAULT_DEPTH_HINT,
             detected: DetectedJointsFit::default(),
+            gender_evidence: true,
+            classify_gender: true,
         }
     }
 }
@@ -121,18 +137,27 @@ pub struct PipelineResult {
     /// `fit.height` when given; unless `keep_pose_scale`), and with `fit.sample_camera` then to
     /// the chosen body's own skeleton.
     pub pose: PoseEstimate,
-    /// The fit (one: the given gender's space, or the blended one).
+    /// The fits: one (the given gender's space, or the blended one), or with
+    /// [`PipelineOptions::classify_gender`] both gendered ones (female first).
     pub fits: Vec<GenderFit>,
-    /// The space fitted.
+    /// The space of the result (the chosen fit's).
     pub space: ShapeChoice,
-    /// The chosen shape space.
+    /// The chosen gender.
     pub gender: Gender,
     /// Gender value, 0 = female mean … 1 = male mean ([`FittedBody::gender_value`]).
     pub gender_value: f64,
-    /// Probability that [`PipelineResult::gender`] is the right half ([`FittedBody::gender_confidence`]).
+    /// Probability that [`PipelineResult::gender`] is right: 1 when given; with
+    /// [`PipelineOptions::classify_gender`] the [`MarginCombination`]'s; else the blended fit's
+    /// posterior mass of that half ([`FittedBody::gender_confidence`]).
     pub gender_confidence: f64,
     /// `true` when the gender was fitted, `false` when the caller gave it.
     pub gender_fitted: bool,
+    /// The sketch's geometric gender evidence and the classifier's probability (measured
+    /// whether or not it was used; see [`PipelineOptions::gender_evidence`]).
+    pub gender_evidence: GenderEvidence,
+    /// The prior mass on the male end the fit used (`None` when a gender was given or the
+    /// mean shape was used; 0.5 without the classifier).
+    pub male_prior: Option<f64>,
     /// Fraction of the fitted outline the sketch supports ([`FittedBody::edge_support`]).
     pub edge_support: f64,
     /// The fit is low-evidence ([`FittedBody::low_evidence`]).
@@ -231,11 +256,44 @@ pub fn run_pipeline(
     timings.pose = t.elapsed().as_secs_f64();
     p.report(0.06)?;
 
+    let mut fit = if detection.is_some() { detected_fit } else { options.fit.clone() };
+    let classifier = if detection.is_some() { GenderClassifier::SHIPPED_DETECTED } else { GenderClassifier::SHIPPED };
+    let evidence = gender_evidence(&joints2d, &edges, &pose.joints, &pose.camera, &classifier)?;
+    // The score margin decides well only with the user's joints (docs/benchmarks.md).
+    let classify = options.gender.is_none() && options.classify_gender && !options.mean_shape && detection.is_none();
+    // With detected joints the classifier's prior measured worse than none (docs/benchmarks.md).
+    if options.gender.is_none()
+        && !classify
+        && options.gender_evidence
+        && detection.is_none()
+        && fit.male_prior.is_none()
+    {
+        fit.male_prior = Some(evidence.male_probability);
+    }
+    let male_prior = (options.gender.is_none() && !classify).then(|| fit.male_prior.unwrap_or(0.5));
     let choice =
         BodyChoice { gender: options.gender, mean_shape: options.mean_shape, keep_pose_scale: options.keep_pose_scale };
-    let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
-    let fit = if detection.is_some() { detected_fit } else { options.fit.clone() };
-    let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &choice, &mut cb)?;
+    let (body, classified) = if classify {
+        // Both gendered fits; the classifier's log-odds and the score margin choose.
+        let mut bodies = Vec::with_capacity(2);
+        for (i, g) in Gender::ALL.into_iter().enumerate() {
+            let mut cb = |f: f32| (p.callback)((0.06 + 0.45 * (i as f32 + f)).clamp(0.0, 1.0));
+            let c = BodyChoice { gender: Some(g), ..choice };
+            bodies.push(fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &c, &mut cb)?);
+        }
+        let margin = bodies[1].score - bodies[0].score;
+        let log_odds = classifier.log_odds(&evidence.features);
+        let male = MarginCombination::SHIPPED.male_probability(log_odds, margin);
+        let seconds: f64 = bodies.iter().map(|b| b.fit_seconds).sum();
+        let fits: Vec<GenderFit> = bodies.iter().flat_map(|b| b.fits.iter().cloned()).collect();
+        let mut body = bodies.swap_remove(usize::from(male > 0.5));
+        body.fits = fits;
+        body.fit_seconds = seconds;
+        (body, Some(male.max(1.0 - male)))
+    } else {
+        let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
+        (fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &choice, &mut cb)?, None)
+    };
     timings.fit = body.fit_seconds;
     timings.posing = body.posing_seconds;
     let mesh = RiggedMesh::from_rest(model, &body.rest);
@@ -251,8 +309,10 @@ pub fn run_pipeline(
         space: body.space,
         gender: body.gender,
         gender_value: body.gender_value,
-        gender_confidence: body.gender_confidence,
+        gender_confidence: classified.unwrap_or(body.gender_confidence),
         gender_fitted: options.gender.is_none(),
+        gender_evidence: evidence,
+        male_prior,
         edge_support: body.edge_support,
         low_evidence: body.low_evidence,
         weights: body.weights,
