@@ -124,17 +124,23 @@ fn run_writes_every_output() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-#[test]
-fn without_gender_the_classifier_picks_a_gendered_fit_and_reports_its_confidence() {
-    let dir = scratch("auto");
+/// `run` on the example with its joints and no `--gender` (plus `extra`): the report and stdout.
+fn run_without_gender(name: &str, extra: &[&str]) -> (String, String) {
+    let dir = scratch(name);
     let o = dir.join("out");
-    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o.to_str().unwrap()]
-        .iter()
-        .chain(&FAST)
-        .copied()
-        .collect::<Vec<_>>());
+    let mut args = vec![SKETCH, "--joints", JOINTS, "--out", o.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&FAST);
+    let out = run(&args);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report = std::fs::read_to_string(o.join("report.md")).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    (report, String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+#[test]
+fn without_gender_the_classifier_picks_a_gendered_fit_and_reports_its_confidence() {
+    let (report, stdout) = run_without_gender("auto", &[]);
     assert!(report.contains("- female fit: best score -") && report.contains("- male fit: best score -"), "{report}");
     assert!(
         report.contains("chosen by the gender classifier with probability 0.")
@@ -143,34 +149,22 @@ fn without_gender_the_classifier_picks_a_gendered_fit_and_reports_its_confidence
     );
     assert!(report.contains("the gender classifier gives P(male) "), "{report}");
     assert!(report.contains("- evidence: "), "{report}");
-    let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout.contains("by the gender classifier, p=")
             && stdout.contains("score female -")
             && stdout.contains("male -"),
         "{stdout}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn without_the_classifier_the_gender_is_fitted_and_reported_with_its_confidence() {
-    let dir = scratch("blended");
-    let o = dir.join("out");
-    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o.to_str().unwrap(), "--classify-gender", "false"]
-        .iter()
-        .chain(&FAST)
-        .copied()
-        .collect::<Vec<_>>());
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let report = std::fs::read_to_string(o.join("report.md")).unwrap();
+    let (report, stdout) = run_without_gender("blended", &["--classify-gender", "false"]);
     assert!(report.contains("- blended fit: best score -"), "{report}");
     assert!(report.contains("- gender: fitted as a continuous shape weight"), "{report}");
     assert!(report.contains("with posterior probability 0.") || report.contains("with posterior probability 1.00"));
     assert!(!report.contains("chosen by the gender classifier"), "{report}");
-    let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("fitted") && stdout.contains(" p=") && stdout.contains("blended -"), "{stdout}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
