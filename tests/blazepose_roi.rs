@@ -8,24 +8,9 @@ use sketchbody::detect::landmark::{detect_blazepose, BlazePoseOptions, LandmarkN
 use sketchbody::error::Error;
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::image::{load_image, GrayImage, ImageView};
-use sketchbody::skeleton::JOINT_NAMES;
 
 #[path = "common/mod.rs"]
 mod common;
-
-/// Mean and worst distance (px) between two joint sets, with the worst joint's name.
-fn errors(got: &[[f64; 2]; 15], want: &[[f64; 2]; 15]) -> (f64, f64, &'static str) {
-    let mut sum = 0.0;
-    let mut worst = (0.0f64, "");
-    for (k, name) in JOINT_NAMES.iter().enumerate() {
-        let d = (got[k][0] - want[k][0]).hypot(got[k][1] - want[k][1]);
-        sum += d;
-        if d > worst.0 {
-            worst = (d, name);
-        }
-    }
-    (sum / 15.0, worst.0, worst.1)
-}
 
 /// `img` with its ink lightened: darkness (255 − gray) scaled by `k`.
 fn lighter(img: &GrayImage, k: f64) -> GrayImage {
@@ -43,12 +28,12 @@ fn a_light_pencil_copy_of_the_example_gives_the_same_joints() {
     let dark = detect_blazepose(&net, &sketch.view(), &opts).unwrap();
     let light_img = lighter(&sketch, 0.35);
     let light = detect_blazepose(&net, &light_img.view(), &opts).unwrap();
-    let (m0, w0, n0) = errors(&dark.joints.xy, &truth);
-    let (m1, w1, n1) = errors(&light.joints.xy, &truth);
-    let (mv, wv, nv) = errors(&light.joints.xy, &dark.joints.xy);
+    let (m0, w0, n0) = common::joint_errors(&dark.joints.xy, &truth);
+    let (m1, w1, n1) = common::joint_errors(&light.joints.xy, &truth);
+    let (mv, wv, nv) = common::joint_errors(&light.joints.xy, &dark.joints.xy);
     let before = BlazePoseOptions { lighten_drawings: false, retry_below: 0.0, min_pose_flag: 0.0, ..opts };
     let plain = detect_blazepose(&net, &light_img.view(), &before).unwrap();
-    let (mp, wp, np) = errors(&plain.joints.xy, &truth);
+    let (mp, wp, np) = common::joint_errors(&plain.joints.xy, &truth);
     println!(
         "original: pose flag {:.3}, mean {m0:.1} px, worst {w0:.1} px ({n0}); light copy: pose flag {:.3}, mean {m1:.1} px, worst {w1:.1} px ({n1}), vs original mean {mv:.1} px, worst {wv:.1} px ({nv}); light copy without lightening or retries: pose flag {:.3}, mean {mp:.1} px, worst {wp:.1} px ({np})",
         dark.score, light.score, plain.score

@@ -4,7 +4,6 @@
 use sketchbody::detect::{detect, DetectOptions, Model};
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::image::{load_image, GrayImage};
-use sketchbody::skeleton::JOINT_NAMES;
 
 #[path = "common/mod.rs"]
 mod common;
@@ -35,17 +34,7 @@ fn enlarge_onto(img: &GrayImage, (fx, fy): (f64, f64), (w, h): (usize, usize), (
 
 /// Mean and worst distance (px, 512² frame) of `got` (mapped back by `f` and `x0`) to `truth`.
 fn errors(got: &[[f64; 2]; 15], truth: &[[f64; 2]; 15], f: f64, x0: f64) -> (f64, f64, &'static str) {
-    let mut sum = 0.0;
-    let mut worst = (0.0f64, "");
-    for (k, name) in JOINT_NAMES.iter().enumerate() {
-        let back = [(got[k][0] - x0) / f, got[k][1] / f];
-        let d = ((back[0] - truth[k][0]).powi(2) + (back[1] - truth[k][1]).powi(2)).sqrt();
-        sum += d;
-        if d > worst.0 {
-            worst = (d, name);
-        }
-    }
-    (sum / 15.0, worst.0, worst.1)
+    common::joint_errors(&got.map(|p| [(p[0] - x0) / f, p[1] / f]), truth)
 }
 
 #[test]

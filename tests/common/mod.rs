@@ -29,3 +29,18 @@ pub fn shared_data(what: &str) -> Option<PathBuf> {
     eprintln!("SKIPPED {what}: reference data not found at {}", dir.display());
     None
 }
+
+/// Mean and worst distance (px) between two sets of the 15 canonical joints, with the worst
+/// joint's name.
+pub fn joint_errors(got: &[[f64; 2]; 15], want: &[[f64; 2]; 15]) -> (f64, f64, &'static str) {
+    let mut sum = 0.0;
+    let mut worst = (0.0f64, "");
+    for (k, name) in sketchbody::skeleton::JOINT_NAMES.iter().enumerate() {
+        let d = (got[k][0] - want[k][0]).hypot(got[k][1] - want[k][1]);
+        sum += d;
+        if d > worst.0 {
+            worst = (d, name);
+        }
+    }
+    (sum / 15.0, worst.0, worst.1)
+}
