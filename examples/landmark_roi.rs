@@ -6,7 +6,8 @@
 //!
 //! Usage: cargo run --release --example landmark_roi -- PARSE_DIR VARIANT[,VARIANT...] [LAST]
 //! Variants: `default` (the library's `detect_blazepose`), `onepass`, `noretry`, `nolight`,
-//! `before` (neither retry nor lightening), `noprep` (two passes by hand), `plain3` (a third
+//! `nofill`, `before` (neither retry, lightening nor filling), `pickACC@T/D/C` (the shipped
+//! retries, then a filled try kept at a flag ≥ ACC), `noprep` (two passes by hand), `plain3` (a third
 //! pass), and `PREP[+PREP][:ROIS]` built here (see [`generic`]).
 
 use std::path::Path;
@@ -15,7 +16,7 @@ use rayon::prelude::*;
 use sketchbody::body::BodyModel;
 use sketchbody::detect::joints::parse_to_canonical;
 use sketchbody::detect::landmark::{
-    crop, joints, landmarks_of_tensor, LandmarkNet, Roi, RoiLandmarks, NUM_POSE_LANDMARKS,
+    crop, joints, landmarks_of_tensor, prep, LandmarkNet, Roi, RoiLandmarks, NUM_POSE_LANDMARKS,
 };
 use sketchbody::detect::landmark::{
     detect_blazepose, landmarks_in_roi, roi, roi_from_landmarks, BlazePoseOptions, DEFAULT_RETRY_BELOW,
@@ -122,12 +123,13 @@ fn run_variant(v: &str, net: &LandmarkNet, image: &ImageView<'_>) -> Option<RoiL
         "default" => detect_blazepose(net, image, &BlazePoseOptions { min_pose_flag: 0.0, ..Default::default() })
             .ok()
             .map(|d| d.pass),
-        "onepass" | "noretry" | "nolight" | "before" => {
+        "onepass" | "noretry" | "nolight" | "before" | "nofill" => {
             let o = BlazePoseOptions {
                 min_pose_flag: 0.0,
                 passes: if v == "onepass" { 1 } else { 2 },
                 retry_below: if v == "noretry" || v == "before" { 0.0 } else { DEFAULT_RETRY_BELOW },
                 lighten_drawings: !(v == "nolight" || v == "before"),
+                fill_drawings: !(v == "before" || v == "nofill"),
             };
             detect_blazepose(net, image, &o).ok().map(|d| d.pass)
         }
@@ -142,7 +144,22 @@ fn run_variant(v: &str, net: &LandmarkNet, image: &ImageView<'_>) -> Option<RoiL
             }
             Some(p)
         }
-        other => generic(other, net, image),
+        other => match other.strip_prefix("pick").and_then(|x| x.split_once('@')) {
+            // `pickACC@FILL`: the shipped path, then, when its flag is under 0.5, the lightened
+            // crop with `fillFILL` at the ink box; the filled pass wins with a higher flag ≥ ACC.
+            Some((acc, fill)) => {
+                let base = generic("pgamma0.4:multiA0.5r0.9", net, image)?;
+                if base.pose_flag >= 0.5 {
+                    return Some(base);
+                }
+                let acc: f64 = acc.parse().unwrap();
+                match generic(&format!("pgamma0.4+fill{fill}"), net, image) {
+                    Some(alt) if alt.pose_flag > base.pose_flag && alt.pose_flag >= acc => Some(alt),
+                    _ => Some(base),
+                }
+            }
+            None => generic(other, net, image),
+        },
     }
 }
 
@@ -232,6 +249,9 @@ fn apply(step: &str, t: &mut [f32]) {
                 *v = v.powf(g);
             }
         }
+    } else if let Some(x) = step.strip_prefix("fill") {
+        let v: Vec<f32> = x.split('/').map(|p| p.parse().unwrap()).collect();
+        prep::fill_enclosed_with(t, crop::INPUT_SIDE, v[0], v[1] as usize, v[2]);
     } else if let Some(x) = step.strip_prefix("gamma") {
         let g: f32 = x.parse().unwrap();
         for v in t.iter_mut() {

@@ -1,10 +1,11 @@
 //! The BlazePose backend's input preprocessing and ROI retries (issue 15): a light-pencil copy of
 //! the bundled example (strokes at most 35 % dark, lighter than the pencil benchmark's outlines)
 //! is found with the same joints as the original; a pass that leaves the network unsure tries the
-//! retry ROIs and keeps the surest, while a clean sketch costs no extra pass.
+//! retry ROIs and then the filled drawing, keeping the surest, while a clean sketch costs no
+//! extra pass.
 
 use sketchbody::detect::landmark::roi::RETRY_SCALES;
-use sketchbody::detect::landmark::{detect_blazepose, BlazePoseOptions, LandmarkNet, RETRY_ACCEPT};
+use sketchbody::detect::landmark::{detect_blazepose, BlazePoseOptions, LandmarkNet, FILL_ACCEPT, RETRY_ACCEPT};
 use sketchbody::error::Error;
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::image::{load_image, GrayImage, ImageView};
@@ -67,13 +68,31 @@ fn an_unsure_pass_tries_the_retry_rois_and_a_clean_sketch_does_not() {
     let page = ImageView::gray(&px, w, h).unwrap();
     let any = BlazePoseOptions { min_pose_flag: 0.0, ..opts };
     let once = detect_blazepose(&net, &page, &BlazePoseOptions { retry_below: 0.0, ..any }).unwrap();
-    let retried = detect_blazepose(&net, &page, &BlazePoseOptions { retry_below: 1.0, ..any }).unwrap();
-    println!("scribbles: pose flag {:.3} from the ink box's ROI, {:.3} after retries", once.score, retried.score);
+    let retried =
+        detect_blazepose(&net, &page, &BlazePoseOptions { retry_below: 1.0, fill_drawings: false, ..any }).unwrap();
+    let filled = detect_blazepose(&net, &page, &BlazePoseOptions { retry_below: 1.0, ..any }).unwrap();
+    println!(
+        "scribbles: pose flag {:.3} from the ink box's ROI, {:.3} after retries, {:.3} after the filled try",
+        once.score, retried.score, filled.score
+    );
     assert_eq!(once.rois_tried, 1);
+    assert!(!once.filled && !retried.filled);
     assert_eq!(retried.rois_tried, 1 + RETRY_SCALES.len());
     assert!(retried.score == once.score || (retried.score > once.score && retried.score >= RETRY_ACCEPT));
+    assert_eq!(filled.rois_tried, 2 + RETRY_SCALES.len());
+    if filled.filled {
+        assert!(filled.score > retried.score && filled.score >= FILL_ACCEPT);
+    } else {
+        assert_eq!(filled.score, retried.score);
+    }
     let default = detect_blazepose(&net, &page, &any).unwrap();
-    assert_eq!(default.rois_tried, if once.score < opts.retry_below { 1 + RETRY_SCALES.len() } else { 1 });
+    let after_retries = if once.score < opts.retry_below { retried.score } else { once.score };
+    let expected = match (once.score < opts.retry_below, after_retries < opts.retry_below) {
+        (false, _) => 1,
+        (true, false) => 1 + RETRY_SCALES.len(),
+        (true, true) => 2 + RETRY_SCALES.len(),
+    };
+    assert_eq!(default.rois_tried, expected);
     let bad = BlazePoseOptions { retry_below: 1.5, ..opts };
     assert!(matches!(detect_blazepose(&net, &page, &bad), Err(Error::OutOfRange { name: "retry_below", .. })));
 }
