@@ -117,9 +117,10 @@ pub struct BlazePoseOptions {
 
 /// The filled pass ([`BlazePoseOptions::fill_drawings`]) replaces the others with a pose flag of
 /// at least this (and higher than theirs). On PARSE training photos 1–100 (`examples/landmark_roi.rs`,
-/// `pick0.5@0.8/3/0.6` against `pick0.9@…`): PCK@0.2 pencil 0.428 → 0.529 (0.454 with 0.9), XDoG
-/// 0.664 → 0.680, photos, flat colour and rendered sketches unchanged; the network's flag ≥ 0.5
-/// on clutter pages 7.5 → 17.5 % (the calibrated figure confidence decides "no figure").
+/// `pick0.5@0.8/3/0.75` against `nofill`): PCK@0.2 pencil 0.428 → 0.546, XDoG 0.664 → 0.681,
+/// photos, flat colour and rendered sketches unchanged; the network's flag ≥ 0.5 on clutter
+/// pages 7.5 → 10 % (the calibrated figure confidence decides "no figure"); keeping the filled
+/// pass only at ≥ 0.9 left pencil at 0.454.
 pub const FILL_ACCEPT: f64 = 0.5;
 
 /// A retry ROI's pass replaces the first only with a pose flag of at least this (and higher than

@@ -48,7 +48,7 @@ pub const FILL_INK: f32 = 0.8;
 pub const FILL_CLOSE_PX: usize = 3;
 
 /// [`fill_enclosed`]: the gray the figure's inside is painted (channels are capped at it).
-pub const FILL_TONE: f32 = 0.6;
+pub const FILL_TONE: f32 = 0.75;
 
 /// Paints the enclosed paper of a crop that is mostly paper ([`is_paper`]) gray: values under
 /// [`FILL_INK`] are ink; paper that cannot be reached from the crop's border without crossing
