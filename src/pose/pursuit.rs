@@ -17,7 +17,8 @@ use nalgebra::{DVector, Vector3};
 use super::camera_fit::{fit_camera, CameraPrior};
 use super::depth_hint::{hint_cost, DepthHint};
 use super::dictionary::Dictionary;
-use super::figure::{estimate_factors, BodyFactors, FACTOR_MAX, FACTOR_MIN};
+use super::factor_prior::FactorPrior;
+use super::figure::{estimate_factors_with_prior, BodyFactors, FACTOR_MAX, FACTOR_MIN, NUM_GROUPS};
 use super::options::PoseOptions;
 use super::problem::Problem;
 use super::qcls;
@@ -117,12 +118,27 @@ pub fn estimate_pose_hinted(
     opts: &PoseOptions,
     hint: Option<&DepthHint>,
 ) -> Result<PoseEstimate> {
+    let prior = if opts.factor_prior { FactorPrior::embedded().ok() } else { None };
+    estimate_pose_with_factor_prior(dict, joints, opts, hint, prior)
+}
+
+/// [`estimate_pose_hinted`] with the learned factor prior `prior` instead of the embedded one
+/// (e.g. one trained without a validation split; `None` = the fixed prior of
+/// [`super::figure::estimate_factors`]). [`PoseOptions::factor_prior`] is not consulted.
+/// Errors: those of [`estimate_pose_hinted`].
+pub fn estimate_pose_with_factor_prior(
+    dict: &Dictionary,
+    joints: &Joints2,
+    opts: &PoseOptions,
+    hint: Option<&DepthHint>,
+    prior: Option<&FactorPrior>,
+) -> Result<PoseEstimate> {
     opts.validate()?;
     if let Some(h) = hint {
         h.validate()?;
     }
     let first = estimate_fixed(dict, joints, opts, hint)?;
-    let est = if opts.proportions { with_proportions(dict, joints, opts, first, hint) } else { first };
+    let est = if opts.proportions { with_proportions(dict, joints, opts, first, hint, prior) } else { first };
     Ok(flag_plausibility(joints, est))
 }
 
@@ -133,9 +149,25 @@ fn with_proportions(
     opts: &PoseOptions,
     first: PoseEstimate,
     hint: Option<&DepthHint>,
+    prior: Option<&FactorPrior>,
 ) -> PoseEstimate {
     let c = &first.camera;
-    let f = estimate_factors(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy);
+    // The learned prior's image scales, relative to the first solve's camera scale (the
+    // convention of the factor estimate).
+    let learned: Option<[(f64, f64); NUM_GROUPS]> =
+        prior.and_then(|p| p.predict(joints, &dict.bone_lengths)).map(|p| {
+            let ls = 0.5 * (c.sx * c.sy).ln();
+            std::array::from_fn(|g| (p.log_scale[g] - ls, p.sd[g]))
+        });
+    let variant = std::env::var("SKB_FP_VARIANT").unwrap_or_default();
+    let f = match (learned, variant.as_str()) {
+        (Some(l), "alone") => BodyFactors { k: l.map(|(m, _)| m.exp()) }.clamped(),
+        (Some(l), "wide") => {
+            let w = l.map(|(m, sd)| (m, 2.0 * sd));
+            estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, Some(&w))
+        }
+        (l, _) => estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, l.as_ref()),
+    };
     if f.k.iter().all(|k| (k - 1.0).abs() < 1e-3) {
         return first;
     }
