@@ -208,3 +208,81 @@ pub fn train(frames: &[Joints3], lengths: &[f64; NUM_BONES], p: &TrainParams, pr
     // Round-trip through the checks of the file format.
     FactorPrior::from_json(&prior.to_json())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pose::dict_io;
+    use crate::pose::dictionary::vec_to_pose;
+    use crate::pose::figure::estimate_factors;
+
+    /// Training poses for the tests: every 40th exemplar of the embedded dictionary.
+    fn poses() -> (Vec<Joints3>, [f64; NUM_BONES]) {
+        let d = dict_io::embedded().unwrap();
+        let frames = d.exemplars.column_iter().step_by(40).map(|c| vec_to_pose(c.as_slice())).collect();
+        (frames, d.bone_lengths)
+    }
+
+    #[test]
+    fn training_is_deterministic_and_checks_its_input() {
+        let (frames, lengths) = poses();
+        let p = TrainParams { samples: 2 * NUM_FEATURES + 200, ..TrainParams::default() };
+        let a = train(&frames, &lengths, &p, "test").unwrap();
+        let b = train(&frames, &lengths, &p, "test").unwrap();
+        assert_eq!(a.to_json(), b.to_json());
+        let c = train(&frames, &lengths, &TrainParams { seed: 2, ..p }, "test").unwrap();
+        assert_ne!(a.weights, c.weights);
+        assert!(a.provenance.starts_with("test\nparams: seed=1"));
+        assert!(matches!(train(&[], &lengths, &p, "t"), Err(Error::OutOfRange { name: "frames", .. })));
+        let few = TrainParams { samples: 100, ..p };
+        assert!(matches!(train(&frames, &lengths, &few, "t"), Err(Error::OutOfRange { name: "samples", .. })));
+    }
+
+    /// On stylised figures (frontal and side views, exact joints) the embedded learned prior
+    /// recovers the group factors (up to the common scale the image cannot show) better than
+    /// the fixed bound of `figure::estimate_factors` given the true first estimate.
+    #[test]
+    fn the_learned_prior_recovers_stylised_factors_better_than_the_bound() {
+        let prior = FactorPrior::embedded().unwrap();
+        let (frames, lengths) = poses();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let s = 500.0 / REF_STATURE;
+        let (mut err_learned, mut err_bound) = (0.0, 0.0);
+        for i in 0..200 {
+            let f = frames[(i * 37) % frames.len()];
+            let mut k = [1.0; NUM_GROUPS];
+            k[0] = rng.random_range(1.0..=1.8);
+            for v in k.iter_mut().skip(1) {
+                *v = rng.random_range(0.75..=1.35);
+            }
+            let yaw: f64 = if i % 2 == 0 { rng.random_range(-30.0..=30.0) } else { rng.random_range(60.0..=90.0) };
+            let r: Matrix3<f64> = *Rotation3::from_axis_angle(&Vector3::y_axis(), yaw.to_radians()).matrix();
+            let x3 = BodyFactors { k }.apply(&f);
+            let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
+            for (q, x) in j.xy.iter_mut().zip(&x3) {
+                let y = r * Vector3::from(*x);
+                *q = [s * y.x + 250.0, -s * y.y + 300.0];
+            }
+            // The true effective factors relative to the reference lengths, as logs.
+            let mut len = [0.0; NUM_GROUPS];
+            for (b, &(p, c)) in BONES.iter().enumerate() {
+                len[BONE_GROUP[b]] += (Vector3::from(x3[c]) - Vector3::from(x3[p])).norm();
+            }
+            let refl = group_lengths(&lengths);
+            let truth: [f64; NUM_GROUPS] = std::array::from_fn(|g| (len[g] / refl[g]).ln());
+            let pred = prior.predict(&j, &lengths).unwrap();
+            let learned: [f64; NUM_GROUPS] = std::array::from_fn(|g| pred.log_scale[g] - s.ln());
+            let bound = estimate_factors(&j, &lengths, &f, &r, s, s).k.map(f64::ln);
+            // RMS over the groups after removing the common offset.
+            let rms = |e: &[f64; NUM_GROUPS]| {
+                let d: Vec<f64> = (0..NUM_GROUPS).map(|g| e[g] - truth[g]).collect();
+                let m = d.iter().sum::<f64>() / NUM_GROUPS as f64;
+                (d.iter().map(|v| (v - m).powi(2)).sum::<f64>() / NUM_GROUPS as f64).sqrt()
+            };
+            err_learned += rms(&learned) / 200.0;
+            err_bound += rms(&bound) / 200.0;
+        }
+        assert!(err_learned < 0.7 * err_bound, "learned {err_learned:.3}, bound {err_bound:.3}");
+        assert!(err_learned < 0.08, "learned {err_learned:.3}");
+    }
+}

@@ -159,27 +159,40 @@ fn with_proportions(
             let ls = 0.5 * (c.sx * c.sy).ln();
             std::array::from_fn(|g| (p.log_scale[g] - ls, p.sd[g]))
         });
-    let variant = std::env::var("SKB_FP_VARIANT").unwrap_or_default();
-    let f = match (learned, variant.as_str()) {
-        (Some(l), "alone") => BodyFactors { k: l.map(|(m, _)| m.exp()) }.clamped(),
-        (Some(l), "wide") => {
-            let w = l.map(|(m, sd)| (m, 2.0 * sd));
-            estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, Some(&w))
-        }
-        (l, _) => estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, l.as_ref()),
-    };
-    if f.k.iter().all(|k| (k - 1.0).abs() < 1e-3) {
-        return first;
+    let fixed = || estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, None);
+    let Some(l) = learned else { return second_solve(dict, joints, opts, &first, hint, fixed()).unwrap_or(first) };
+    // The factors under the learned prior; when that solve fits the image worse than the first
+    // estimate, the fixed prior's factors are tried (docs/benchmarks.md, issue 16).
+    let f = estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, Some(&l));
+    match second_solve(dict, joints, opts, &first, hint, f) {
+        Some(e) => e,
+        None => second_solve(dict, joints, opts, &first, hint, fixed()).unwrap_or(first),
     }
-    let Ok(second) = estimate_fixed(dict, &f.unstylise_2d(joints), opts, hint) else { return first };
+}
+
+/// The solve on the 2-D joints unstylised by the factors `f`, with the factors applied to its
+/// joints; `None` when the factors are all 1, the solve fails, or it fits the 2-D joints worse
+/// than the first estimate (and above the tolerance).
+fn second_solve(
+    dict: &Dictionary,
+    joints: &Joints2,
+    opts: &PoseOptions,
+    first: &PoseEstimate,
+    hint: Option<&DepthHint>,
+    f: BodyFactors,
+) -> Option<PoseEstimate> {
+    if f.k.iter().all(|k| (k - 1.0).abs() < 1e-3) {
+        return None;
+    }
+    let second = estimate_fixed(dict, &f.unstylise_2d(joints), opts, hint).ok()?;
     let x = f.apply(&second.joints);
     let xs: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(x[j]));
-    let Ok(prob) = Problem::new(dict, joints, 0.0) else { return first };
+    let prob = Problem::new(dict, joints, 0.0).ok()?;
     let rms = prob.rms(&second.camera, &xs);
     if !(rms <= first.rms) && rms > opts.tolerance {
-        return first;
+        return None;
     }
-    PoseEstimate { joints: x, rms, factors: f, ..second }
+    Some(PoseEstimate { joints: x, rms, factors: f, ..second })
 }
 
 /// Sets [`PoseEstimate::plausible`].
