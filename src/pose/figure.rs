@@ -17,6 +17,9 @@
 //! corrected by the first estimate's foreshortening, [`CORRECTED`]), then shrunk toward 0 by a Gaussian prior whose
 //! spread spans realistic to heroic to chibi characters ([`PRIOR_SD`]), and clamped to
 //! [[`FACTOR_MIN`], [`FACTOR_MAX`]]. The figure scale is the one the dictionary fit found.
+//! With [`crate::pose::PoseOptions::factor_prior`] the prior is the learned one instead
+//! ([`super::factor_prior`]: mean and spread predicted from the 2-D joints,
+//! [`estimate_factors_with_prior`]), and the bound is combined with it as a Gaussian product.
 
 use nalgebra::{Matrix3, Vector3};
 

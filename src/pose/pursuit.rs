@@ -102,8 +102,11 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
 /// With [`PoseOptions::proportions`], the drawn proportions are unknowns too: the factors are
 /// estimated from that first estimate ([`super::figure::estimate_factors`]), the whole solve
 /// runs again on the 2-D joints unstylised by them, and the factors are applied to its joints
-/// (the first estimate is kept when that second solve fails or fits the image worse). Every
-/// estimate is flagged for plausibility ([`PoseEstimate::plausible`]).
+/// (the first estimate is kept when that second solve fails or fits the image worse). With
+/// [`PoseOptions::factor_prior`] the factors' prior is the learned one
+/// ([`super::factor_prior`]); when the solve with those factors fits the image worse than the
+/// first estimate, the fixed prior's factors are tried before falling back to the first
+/// estimate. Every estimate is flagged for plausibility ([`PoseEstimate::plausible`]).
 pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
     estimate_pose_hinted(dict, joints, opts, None)
 }
