@@ -6,9 +6,8 @@ use std::time::Instant;
 
 use sketchbody::body::BodyModel;
 use sketchbody::pose::dict_io;
-use sketchbody::pose::factor_train::{train, TrainParams};
-use sketchbody::pose::learn::{body_model_skeletons, clip_matches, default_held_out, motion_files, retarget_frames};
-use sketchbody::pose::motion::{normalize_pose, read_motion_csv};
+use sketchbody::pose::factor_train::{train_from_mocap, TrainParams};
+use sketchbody::pose::learn::{body_model_skeletons, default_held_out};
 
 use crate::CliError;
 
@@ -55,17 +54,6 @@ pub fn run(a: Args) -> Result<(), CliError> {
     };
     let held_out = a.holdout.clone().unwrap_or_else(default_held_out);
     let skeletons = body_model_skeletons(&BodyModel::embedded()?);
-    let (mut frames, mut clips) = (Vec::new(), Vec::new());
-    for dir in &a.mocap {
-        for f in motion_files(dir)? {
-            let name = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-            if held_out.iter().any(|h| clip_matches(h, &name)) {
-                continue;
-            }
-            frames.extend(retarget_frames(&name, read_motion_csv(&f)?, &skeletons)?.iter().filter_map(normalize_pose));
-            clips.push(name);
-        }
-    }
     let params = TrainParams {
         seed: a.seed,
         samples: a.samples,
@@ -73,29 +61,14 @@ pub fn run(a: Args) -> Result<(), CliError> {
         standard_share: a.standard_share,
         ..TrainParams::default()
     };
-    let dirs: Vec<String> = a.mocap.iter().map(|d| d.display().to_string()).collect();
-    let provenance = format!(
-        "sketchbody train-factor-prior --mocap {} (held out: {}; bone lengths of {}), deterministic. \
-         Data: DeepMimic clips (MIT licence) and CMU Graphics Lab clips (mocap.cs.cmu.edu, created \
-         with funding from NSF EIA-0196217), retargeted onto the body model's mean skeletons and \
-         normalised to 1.75 m; the file holds regression weights only, no motion data.\n\
-         clips ({}, {} frames): {}\nheld_out: {}",
-        dirs.join(" --mocap "),
-        held_out.join(","),
-        a.dictionary.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "the embedded dictionary".into()),
-        clips.len(),
-        frames.len(),
-        clips.join(","),
-        held_out.join(",")
-    );
-    let prior = train(&frames, &dict.bone_lengths, &params, &provenance)?;
+    let lengths_of =
+        a.dictionary.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "the embedded dictionary".into());
+    let prior = train_from_mocap(&a.mocap, &held_out, &skeletons, &dict.bone_lengths, &lengths_of, &params)?;
     std::fs::write(&a.out, prior.to_json() + "\n")
         .map_err(|e| CliError(format!("train-factor-prior: {}: {e}", a.out.display())))?;
     println!(
-        "{}: {} clips, {} frames, {} samples; predictive spread of ln factor {:?}; {:.1} s",
+        "{}: {} samples; predictive spread of ln factor {:?}; {:.1} s",
         a.out.display(),
-        clips.len(),
-        frames.len(),
         params.samples,
         prior.sd.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>(),
         t0.elapsed().as_secs_f64()

@@ -8,13 +8,16 @@
 //! from the last [`TrainParams::spread_share`] of the samples, left out of the fit.
 //! Deterministic for a seed.
 
+use std::path::PathBuf;
+
 use nalgebra::{DMatrix, Matrix3, Rotation3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
 use super::factor_prior::{features, group_lengths, inputs, FactorPrior, FORMAT, NUM_FEATURES, NUM_INPUTS, VERSION};
 use super::figure::{BodyFactors, BONE_GROUP, NUM_GROUPS};
-use super::motion::{mirror_pose, REF_STATURE};
+use super::learn::{clip_matches, motion_files, retarget_frames};
+use super::motion::{mirror_pose, normalize_pose, read_motion_csv, REF_STATURE};
 use crate::error::{Error, Result};
 use crate::skeleton::{Joints2, Joints3, BONES, NUM_BONES, NUM_JOINTS};
 
@@ -207,6 +210,53 @@ pub fn train(frames: &[Joints3], lengths: &[f64; NUM_BONES], p: &TrainParams, pr
     };
     // Round-trip through the checks of the file format.
     FactorPrior::from_json(&prior.to_json())
+}
+
+/// Trains the prior as `sketchbody train-factor-prior` does: the clips of the `mocap` folders
+/// of motion tables not matching `held_out` ([`clip_matches`]), retargeted onto `skeletons`
+/// (the body model's mean skeletons for the library's prior) and normalised, for the reference
+/// lengths `lengths` (named `lengths_of` in the provenance). The provenance records the folder
+/// names (not their paths, so that the asset does not depend on where the data lives), the
+/// clips, the held-out names and the licences of the library's data. Errors: reading the
+/// clips, and those of [`train`].
+pub fn train_from_mocap(
+    mocap: &[PathBuf],
+    held_out: &[String],
+    skeletons: &[(String, Joints3)],
+    lengths: &[f64; NUM_BONES],
+    lengths_of: &str,
+    p: &TrainParams,
+) -> Result<FactorPrior> {
+    let (mut frames, mut clips) = (Vec::new(), Vec::new());
+    for dir in mocap {
+        for f in motion_files(dir)? {
+            let name = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            if held_out.iter().any(|h| clip_matches(h, &name)) {
+                continue;
+            }
+            frames.extend(retarget_frames(&name, read_motion_csv(&f)?, skeletons)?.iter().filter_map(normalize_pose));
+            clips.push(name);
+        }
+    }
+    let folders: Vec<String> =
+        mocap.iter().map(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()).collect();
+    let provenance = format!(
+        "sketchbody train-factor-prior, motion folders {} (../shared/data/mocap/<folder> for the library's prior), \
+         bone lengths of {lengths_of}, deterministic. Data: DeepMimic clips (MIT licence) and CMU Graphics Lab \
+         clips (mocap.cs.cmu.edu, created with funding from NSF EIA-0196217), retargeted onto {} and normalised \
+         to 1.75 m; the file holds regression weights only, no motion data.\nclips ({}, {} frames): {}\nheld_out: {}",
+        folders.join(", "),
+        if skeletons.is_empty() {
+            "nothing (their own skeletons)".to_string()
+        } else {
+            skeletons.iter().map(|s| s.0.as_str()).collect::<Vec<_>>().join(", ")
+        },
+        clips.len(),
+        frames.len(),
+        clips.join(","),
+        held_out.join(",")
+    );
+    train(&frames, lengths, p, &provenance)
 }
 
 #[cfg(test)]

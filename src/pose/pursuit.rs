@@ -514,6 +514,7 @@ pub(crate) mod tests {
             proportions: false,
             standing_prior: false,
             knee_limits: false,
+            factor_prior: false,
         }
     }
 
