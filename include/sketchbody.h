@@ -1224,6 +1224,13 @@ skb_status skb_pose_options_set_standing_prior(struct skb_pose_options *opts, bo
 skb_status skb_pose_options_set_knee_limits(struct skb_pose_options *opts, bool on);
 
 /**
+ * Sets the learned factor prior (default on): the prior on the drawn proportions is predicted
+ * from the 2-D joints by the embedded regression (`assets/factor_prior.json`) instead of a
+ * fixed spread about the dictionary's proportions. Acts only with the proportions estimated.
+ */
+skb_status skb_pose_options_set_factor_prior(struct skb_pose_options *opts, bool on);
+
+/**
  * `skb_estimate_pose` that also writes the drawn proportions and the plausibility flag to
  * `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
  */

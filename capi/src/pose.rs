@@ -449,6 +449,19 @@ pub unsafe extern "C" fn skb_pose_options_set_knee_limits(opts: *mut skb_pose_op
     }
 }
 
+/// Sets the learned factor prior (default on): the prior on the drawn proportions is predicted
+/// from the 2-D joints by the embedded regression (`assets/factor_prior.json`) instead of a
+/// fixed spread about the dictionary's proportions. Acts only with the proportions estimated.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_factor_prior(opts: *mut skb_pose_options, on: bool) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_options_set_factor_prior` (lib.rs § Safety): `opts` is NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.factor_prior = on) }
+    }
+}
+
 /// Number of proportion groups of `skb_pose_figure`.
 pub const SKB_POSE_GROUPS: u32 = 6;
 
@@ -680,6 +693,9 @@ mod tests {
             assert_eq!(skb_pose_options_set_standing_prior(o, false), skb_status::SKB_OK);
             assert_eq!(skb_pose_options_set_knee_limits(o, false), skb_status::SKB_OK);
             assert!(!(*o).inner.standing_prior && !(*o).inner.knee_limits);
+            assert!((*o).inner.factor_prior);
+            assert_eq!(skb_pose_options_set_factor_prior(o, false), skb_status::SKB_OK);
+            assert!(!(*o).inner.factor_prior);
             // The free-joint refinement (on by default) follows the 2-D joints more closely.
             assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
             let free_rms = p.rms_px;

@@ -11,6 +11,7 @@ use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 use sketchbody::body::BodyModel;
 use sketchbody::camera::WeakPerspective;
+use sketchbody::pose::factor_prior::FactorPrior;
 use sketchbody::pose::learn::{body_model_skeletons, held_out_of, motion_files, retarget_frames, retarget_of};
 use sketchbody::pose::metrics::{mpjpe, pa_mpjpe};
 use sketchbody::pose::motion::{normalize_pose, read_motion_csv, REF_STATURE};
@@ -84,6 +85,13 @@ pub struct Args {
     /// Switch off the knee limits in configuration (d).
     #[arg(long)]
     no_knee_limits: bool,
+    /// The fixed factor prior instead of the learned one in configuration (d).
+    #[arg(long)]
+    no_factor_prior: bool,
+    /// With `--suite`: this learned factor prior file instead of the embedded one (e.g. one
+    /// trained without a validation split; `train-factor-prior`).
+    #[arg(long)]
+    factor_prior: Option<PathBuf>,
     /// Run configuration (d) only.
     #[arg(long)]
     only_default: bool,
@@ -223,6 +231,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         proportions: def.proportions && !a.fixed_proportions,
         standing_prior: def.standing_prior && !a.no_standing_prior,
         knee_limits: def.knee_limits && !a.no_knee_limits,
+        factor_prior: def.factor_prior && !a.no_factor_prior,
         ..def
     };
     if a.suite {
@@ -234,6 +243,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
             sigmas: &a.sigma,
             seed: a.seed,
             dump: a.dump.as_deref(),
+            factor_prior: a.factor_prior.as_deref().map(FactorPrior::read).transpose()?,
         };
         return crate::bench_pose_suite::run(&dict, &ours, &suite);
     }
@@ -260,6 +270,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         proportions: false,
         standing_prior: false,
         knee_limits: false,
+        factor_prior: false,
     };
     let configs = [
         ("(a) mean pose, camera fitted", PoseOptions { max_bases: 0, alpha: 0.0, refine: false, ..paper }),

@@ -15,6 +15,7 @@ use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 use sketchbody::body::BodyModel;
 use sketchbody::camera::WeakPerspective;
+use sketchbody::pose::factor_prior::FactorPrior;
 use sketchbody::pose::figure::{BodyFactors, GROUP_NAMES, NUM_GROUPS};
 use sketchbody::pose::learn::{
     body_model_skeletons, clip_matches, default_held_out, held_out_of, motion_files, retarget_frames,
@@ -22,7 +23,7 @@ use sketchbody::pose::learn::{
 use sketchbody::pose::metrics::{limb_direction_errors, pa_mpjpe, torso_lean_error_deg};
 use sketchbody::pose::motion::{normalize_pose, read_motion_csv, REF_STATURE};
 use sketchbody::pose::plausibility::standing_in_image;
-use sketchbody::pose::{estimate_pose, Dictionary, PoseOptions};
+use sketchbody::pose::{estimate_pose, estimate_pose_with_factor_prior, Dictionary, PoseOptions};
 use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
 
 use crate::bench_pose::thread_cpu_s;
@@ -112,6 +113,8 @@ pub struct Suite<'a> {
     pub seed: u64,
     /// Per-case CSV output.
     pub dump: Option<&'a Path>,
+    /// A learned factor prior replacing the embedded one (when `PoseOptions::factor_prior`).
+    pub factor_prior: Option<FactorPrior>,
 }
 
 /// Runs the suite with options `opts` (see [`Suite`]).
@@ -190,7 +193,10 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
                             j2.xy[p] = [q[0] + sigma * a, q[1] + sigma * b];
                         }
                         let c0 = thread_cpu_s();
-                        let res = estimate_pose(dict, &j2, opts);
+                        let res = match (&suite.factor_prior, opts.factor_prior) {
+                            (Some(p), true) => estimate_pose_with_factor_prior(dict, &j2, opts, None, Some(p)),
+                            _ => estimate_pose(dict, &j2, opts),
+                        };
                         cpu += thread_cpu_s() - c0;
                         let Ok(est) = res else {
                             failed += 1;

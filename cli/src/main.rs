@@ -18,6 +18,7 @@ mod eval_detector;
 mod eval_parse;
 mod fit_args;
 mod learn_poses;
+mod train_factor_prior;
 mod make_dataset;
 mod negative_page;
 mod pose;
@@ -61,6 +62,8 @@ enum Command {
     Edges(edges::Args),
     /// Learn the 3-D basis-pose dictionary from motion tables and BVH files.
     LearnPoses(learn_poses::Args),
+    /// Train the learned prior on drawn proportions (assets/factor_prior.json) from motion tables.
+    TrainFactorPrior(train_factor_prior::Args),
     /// 3-D pose and weak-perspective camera from 2-D joints (JSON in, JSON out).
     Pose(pose::Args),
     /// Measure the 3-D pose step on held-out motion clips (accuracy table and speed).
@@ -139,6 +142,7 @@ fn main() -> ExitCode {
         Command::Body(a) => body::run(a),
         Command::Edges(a) => edges::run(a),
         Command::LearnPoses(a) => learn_poses::run(a),
+        Command::TrainFactorPrior(a) => train_factor_prior::run(a),
         Command::BenchPose(a) => bench_pose::run(a),
         Command::Pose(a) => pose::run(a),
         Command::BuildModel(a) => build_model::run(a),

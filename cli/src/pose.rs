@@ -67,6 +67,9 @@ pub struct Args {
     /// Switch off the knee limits (knees bent backwards flipped in depth).
     #[arg(long)]
     no_knee_limits: bool,
+    /// The fixed prior on the drawn proportions instead of the learned one (assets/factor_prior.json).
+    #[arg(long)]
+    no_factor_prior: bool,
 }
 
 /// Runs the command.
@@ -92,6 +95,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         proportions: !a.fixed_proportions,
         standing_prior: !a.no_standing_prior,
         knee_limits: !a.no_knee_limits,
+        factor_prior: !a.no_factor_prior,
     };
     let est = estimate_pose(&dict, &joints, &opts)?;
     let doc = pose3d_json(&est, &dict, &opts);

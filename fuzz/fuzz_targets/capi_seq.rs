@@ -452,7 +452,7 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
             },
             8 => {
                 let o = pick(u, &st.pose_opts)?;
-                let s = match u.int_in_range(0..=14u8)? {
+                let s = match u.int_in_range(0..=15u8)? {
                     0 => skb_pose_options_set_kappa(o, float(u)?),
                     1 => skb_pose_options_set_alpha(o, float(u)?),
                     2 => skb_pose_options_set_alpha_target(o, enum_value(u)?),
@@ -467,7 +467,8 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                     11 => skb_pose_options_set_joint_noise(o, float(u)?),
                     12 => skb_pose_options_set_proportions(o, u.arbitrary()?),
                     13 => skb_pose_options_set_standing_prior(o, u.arbitrary()?),
-                    _ => skb_pose_options_set_knee_limits(o, u.arbitrary()?),
+                    14 => skb_pose_options_set_knee_limits(o, u.arbitrary()?),
+                    _ => skb_pose_options_set_factor_prior(o, u.arbitrary()?),
                 };
                 check(s, "pose option setter");
             }

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "4b1dfb09ac050915cce57da281ee2d9bfa52d20db29232ec1a2c556a1bdce63f"
+HEADER_SHA256 = "ccfb882550720317971f4e1c66d67d52e8fe1c4ba2da12f1627f9d1ec06fab54"
 
 # ---- constants (#define) ----
 
@@ -1842,6 +1842,22 @@ FUNCTIONS["skb_pose_options_set_standing_prior"] = (
 # Sets the knee limits of the free-joint refinement (default on): knees bent backwards are
 # flipped in depth (image and bone lengths unchanged). Acts only with joint noise > 0.
 FUNCTIONS["skb_pose_options_set_knee_limits"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_pose_options),
+        ctypes.c_bool,
+    ],
+    "skb_status",
+    (
+        ("opts", "struct skb_pose_options *"),
+        ("on", "bool"),
+    ),
+)
+
+# Sets the learned factor prior (default on): the prior on the drawn proportions is predicted
+# from the 2-D joints by the embedded regression (`assets/factor_prior.json`) instead of a
+# fixed spread about the dictionary's proportions. Acts only with the proportions estimated.
+FUNCTIONS["skb_pose_options_set_factor_prior"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_options),

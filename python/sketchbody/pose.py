@@ -149,6 +149,7 @@ class PoseOptions(OptionsBase):
     proportions: Optional[bool] = None
     standing_prior: Optional[bool] = None
     knee_limits: Optional[bool] = None
+    factor_prior: Optional[bool] = None
 
     _c_prefix = "skb_pose_options"
     _enums = {"alpha_target": {"level": B.SKB_ALPHA_TARGET_LEVEL, "identity": B.SKB_ALPHA_TARGET_IDENTITY}}

@@ -17,6 +17,9 @@
 //! corrected by the first estimate's foreshortening, [`CORRECTED`]), then shrunk toward 0 by a Gaussian prior whose
 //! spread spans realistic to heroic to chibi characters ([`PRIOR_SD`]), and clamped to
 //! [[`FACTOR_MIN`], [`FACTOR_MAX`]]. The figure scale is the one the dictionary fit found.
+//! With [`crate::pose::PoseOptions::factor_prior`] the prior is the learned one instead
+//! ([`super::factor_prior`]: mean and spread predicted from the 2-D joints,
+//! [`estimate_factors_with_prior`]), and the bound is combined with it as a Gaussian product.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -157,6 +160,22 @@ pub fn estimate_factors(
     sx: f64,
     sy: f64,
 ) -> BodyFactors {
+    estimate_factors_with_prior(j, lengths, x, r, sx, sy, None)
+}
+
+/// [`estimate_factors`] with another prior on each group's log factor than 0 ± [`PRIOR_SD`]:
+/// `prior[g]` = (mean, spread), e.g. the learned prior's ([`super::factor_prior`]); a group
+/// without evidence takes the prior's mean. Non-finite or non-positive entries fall back to
+/// the fixed prior. Always finite and in range.
+pub fn estimate_factors_with_prior(
+    j: &Joints2,
+    lengths: &[f64; NUM_BONES],
+    x: &Joints3,
+    r: &Matrix3<f64>,
+    sx: f64,
+    sy: f64,
+    prior: Option<&[(f64, f64); NUM_GROUPS]>,
+) -> BodyFactors {
     let mut best = [f64::NEG_INFINITY; NUM_GROUPS];
     for (b, &(p, c)) in BONES.iter().enumerate() {
         if !j.visible[p] || !j.visible[c] || !(lengths[b] > 0.0) {
@@ -180,12 +199,16 @@ pub fn estimate_factors(
         }
     }
     let k = std::array::from_fn(|g| {
+        let (m, sd) = match prior.map(|p| p[g]) {
+            Some((m, sd)) if m.is_finite() && sd.is_finite() && sd > 0.0 => (m, sd),
+            _ => (0.0, PRIOR_SD[g]),
+        };
         if !best[g].is_finite() {
-            return 1.0;
+            return m.exp();
         }
-        // Posterior mean of the log factor: evidence best[g] ± EVIDENCE_SD, prior 0 ± PRIOR_SD.
-        let (ve, vp) = (EVIDENCE_SD[g].powi(2), PRIOR_SD[g].powi(2));
-        (best[g] * vp / (vp + ve)).exp()
+        // Posterior mean of the log factor: evidence best[g] ± EVIDENCE_SD, prior m ± sd.
+        let (ve, vp) = (EVIDENCE_SD[g].powi(2), sd * sd);
+        ((best[g] * vp + m * ve) / (vp + ve)).exp()
     });
     BodyFactors { k }.clamped()
 }

@@ -8,6 +8,8 @@
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
 //! - [`exemplar`]: the nearest-neighbour starts (exemplar poses ranked by an affine camera fit).
 //! - [`figure`]: drawn proportions as unknowns (per-group bone-length factors).
+//! - [`factor_prior`]: the learned prior on the factors (a regression from the 2-D joints).
+//! - [`factor_train`]: its training on projected mocap with random cameras and proportions.
 //! - [`learn`]: clip selection and provenance for learning from folders and BVH files.
 //! - [`dict_io`]: the dictionary's binary file format and the embedded default.
 //! - [`plausibility`]: the standing prior and the knee limits of the free-joint step.
@@ -30,6 +32,8 @@ pub mod depth_hint;
 pub mod dict_io;
 pub mod dictionary;
 pub mod exemplar;
+pub mod factor_prior;
+pub mod factor_train;
 pub mod figure;
 pub mod joint_fit;
 pub mod learn;
@@ -45,5 +49,5 @@ pub mod refine;
 pub use depth_hint::DepthHint;
 pub use dictionary::{Dictionary, LearnParams};
 pub use options::PoseOptions;
-pub use pursuit::{estimate_pose, estimate_pose_hinted, PoseEstimate};
+pub use pursuit::{estimate_pose, estimate_pose_hinted, estimate_pose_with_factor_prior, PoseEstimate};
 pub use refine::refine_pose;

@@ -125,6 +125,10 @@ pub struct PoseOptions {
     /// Knee limits of the free-joint step ([`super::plausibility::unbend_knees`]): knees bent
     /// backwards are flipped in depth. Needs `joint_noise` > 0.
     pub knee_limits: bool,
+    /// The learned factor prior ([`super::factor_prior`], `assets/factor_prior.json`): the
+    /// factors' prior is predicted from the 2-D joints instead of 0 ± a fixed spread. Needs
+    /// `proportions`; `false` = the fixed prior ([`super::figure::PRIOR_SD`]).
+    pub factor_prior: bool,
 }
 
 impl Default for PoseOptions {
@@ -151,6 +155,7 @@ impl Default for PoseOptions {
             proportions: true,
             standing_prior: true,
             knee_limits: true,
+            factor_prior: true,
         }
     }
 }

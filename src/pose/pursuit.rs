@@ -17,7 +17,8 @@ use nalgebra::{DVector, Vector3};
 use super::camera_fit::{fit_camera, CameraPrior};
 use super::depth_hint::{hint_cost, DepthHint};
 use super::dictionary::Dictionary;
-use super::figure::{estimate_factors, BodyFactors, FACTOR_MAX, FACTOR_MIN};
+use super::factor_prior::FactorPrior;
+use super::figure::{estimate_factors_with_prior, BodyFactors, FACTOR_MAX, FACTOR_MIN, NUM_GROUPS};
 use super::options::PoseOptions;
 use super::problem::Problem;
 use super::qcls;
@@ -101,8 +102,11 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
 /// With [`PoseOptions::proportions`], the drawn proportions are unknowns too: the factors are
 /// estimated from that first estimate ([`super::figure::estimate_factors`]), the whole solve
 /// runs again on the 2-D joints unstylised by them, and the factors are applied to its joints
-/// (the first estimate is kept when that second solve fails or fits the image worse). Every
-/// estimate is flagged for plausibility ([`PoseEstimate::plausible`]).
+/// (the first estimate is kept when that second solve fails or fits the image worse). With
+/// [`PoseOptions::factor_prior`] the factors' prior is the learned one
+/// ([`super::factor_prior`]); when the solve with those factors fits the image worse than the
+/// first estimate, the fixed prior's factors are tried before falling back to the first
+/// estimate. Every estimate is flagged for plausibility ([`PoseEstimate::plausible`]).
 pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
     estimate_pose_hinted(dict, joints, opts, None)
 }
@@ -117,12 +121,27 @@ pub fn estimate_pose_hinted(
     opts: &PoseOptions,
     hint: Option<&DepthHint>,
 ) -> Result<PoseEstimate> {
+    let prior = if opts.factor_prior { FactorPrior::embedded().ok() } else { None };
+    estimate_pose_with_factor_prior(dict, joints, opts, hint, prior)
+}
+
+/// [`estimate_pose_hinted`] with the learned factor prior `prior` instead of the embedded one
+/// (e.g. one trained without a validation split; `None` = the fixed prior of
+/// [`super::figure::estimate_factors`]). [`PoseOptions::factor_prior`] is not consulted.
+/// Errors: those of [`estimate_pose_hinted`].
+pub fn estimate_pose_with_factor_prior(
+    dict: &Dictionary,
+    joints: &Joints2,
+    opts: &PoseOptions,
+    hint: Option<&DepthHint>,
+    prior: Option<&FactorPrior>,
+) -> Result<PoseEstimate> {
     opts.validate()?;
     if let Some(h) = hint {
         h.validate()?;
     }
     let first = estimate_fixed(dict, joints, opts, hint)?;
-    let est = if opts.proportions { with_proportions(dict, joints, opts, first, hint) } else { first };
+    let est = if opts.proportions { with_proportions(dict, joints, opts, first, hint, prior) } else { first };
     Ok(flag_plausibility(joints, est))
 }
 
@@ -133,21 +152,50 @@ fn with_proportions(
     opts: &PoseOptions,
     first: PoseEstimate,
     hint: Option<&DepthHint>,
+    prior: Option<&FactorPrior>,
 ) -> PoseEstimate {
     let c = &first.camera;
-    let f = estimate_factors(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy);
-    if f.k.iter().all(|k| (k - 1.0).abs() < 1e-3) {
-        return first;
+    // The learned prior's image scales, relative to the first solve's camera scale (the
+    // convention of the factor estimate).
+    let learned: Option<[(f64, f64); NUM_GROUPS]> =
+        prior.and_then(|p| p.predict(joints, &dict.bone_lengths)).map(|p| {
+            let ls = 0.5 * (c.sx * c.sy).ln();
+            std::array::from_fn(|g| (p.log_scale[g] - ls, p.sd[g]))
+        });
+    let fixed = || estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, None);
+    let Some(l) = learned else { return second_solve(dict, joints, opts, &first, hint, fixed()).unwrap_or(first) };
+    // The factors under the learned prior; when that solve fits the image worse than the first
+    // estimate, the fixed prior's factors are tried (docs/benchmarks.md, issue 16).
+    let f = estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, Some(&l));
+    match second_solve(dict, joints, opts, &first, hint, f) {
+        Some(e) => e,
+        None => second_solve(dict, joints, opts, &first, hint, fixed()).unwrap_or(first),
     }
-    let Ok(second) = estimate_fixed(dict, &f.unstylise_2d(joints), opts, hint) else { return first };
+}
+
+/// The solve on the 2-D joints unstylised by the factors `f`, with the factors applied to its
+/// joints; `None` when the factors are all 1, the solve fails, or it fits the 2-D joints worse
+/// than the first estimate (and above the tolerance).
+fn second_solve(
+    dict: &Dictionary,
+    joints: &Joints2,
+    opts: &PoseOptions,
+    first: &PoseEstimate,
+    hint: Option<&DepthHint>,
+    f: BodyFactors,
+) -> Option<PoseEstimate> {
+    if f.k.iter().all(|k| (k - 1.0).abs() < 1e-3) {
+        return None;
+    }
+    let second = estimate_fixed(dict, &f.unstylise_2d(joints), opts, hint).ok()?;
     let x = f.apply(&second.joints);
     let xs: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(x[j]));
-    let Ok(prob) = Problem::new(dict, joints, 0.0) else { return first };
+    let prob = Problem::new(dict, joints, 0.0).ok()?;
     let rms = prob.rms(&second.camera, &xs);
     if !(rms <= first.rms) && rms > opts.tolerance {
-        return first;
+        return None;
     }
-    PoseEstimate { joints: x, rms, factors: f, ..second }
+    Some(PoseEstimate { joints: x, rms, factors: f, ..second })
 }
 
 /// Sets [`PoseEstimate::plausible`].
@@ -466,6 +514,7 @@ pub(crate) mod tests {
             proportions: false,
             standing_prior: false,
             knee_limits: false,
+            factor_prior: false,
         }
     }
 

@@ -1,0 +1,246 @@
+//! A learned prior on the drawn proportions ([`super::figure`]): a regressor from the 2-D joints
+//! to each group's log factor, with its predictive spread, trained on projected training motion
+//! with random cameras and random proportions ([`super::factor_train`], `sketchbody
+//! train-factor-prior`) and embedded from `assets/factor_prior.json`.
+//!
+//! **Inputs.** With `d_b` the 2-D vector of bone `b` and `L_b` its reference length, the figure's
+//! 2-D scale is `s₂ = √(Σ|d_b|² / Σ L_b²)` (px per metre) and each bone gives three inputs: the
+//! components of `d_b / (s₂ L_b)` (its image direction and relative length) and the log of that
+//! relative length (floored at [`MIN_RATIO`]). The 42 inputs are standardised and expanded to
+//! all their products of degree ≤ 2 ([`NUM_FEATURES`]); a ridge regression per group predicts
+//! `ln(s k_g / s₂)` (`s` the true figure scale, `k_g` the group's factor relative to the
+//! reference lengths). [`FactorPrior::predict`] returns `ln(s k_g)`, so that the caller can
+//! express it relative to any scale estimate (the pose step: the first solve's camera scale,
+//! the convention of [`super::figure::estimate_factors`]).
+
+use std::sync::OnceLock;
+
+use serde::{Deserialize, Serialize};
+
+use super::figure::{BONE_GROUP, NUM_GROUPS};
+use crate::error::{Error, Result};
+use crate::skeleton::{Joints2, BONES, NUM_BONES};
+
+/// The embedded prior (`assets/factor_prior.json`).
+pub static EMBEDDED_FACTOR_PRIOR: &str = include_str!("../../assets/factor_prior.json");
+
+/// Format tag of the JSON file.
+pub const FORMAT: &str = "sketchbody-factor-prior";
+/// Format version.
+pub const VERSION: u32 = 1;
+/// Raw inputs: three per bone (module doc).
+pub const NUM_INPUTS: usize = 3 * NUM_BONES;
+/// Regression features: 1, the standardised inputs, and their products of degree 2.
+pub const NUM_FEATURES: usize = 1 + NUM_INPUTS + NUM_INPUTS * (NUM_INPUTS + 1) / 2;
+/// Floor of a bone's relative image length before its log is taken.
+pub const MIN_RATIO: f64 = 0.05;
+/// Bound of the predicted log factor relative to the 2-D scale (|ln(s k_g / s₂)|), so that
+/// absurd input cannot give absurd factors (the caller clamps the factors too).
+const MAX_LOG: f64 = 2.0;
+
+/// The learned factor prior, as stored in `assets/factor_prior.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FactorPrior {
+    /// Format tag, [`FORMAT`].
+    pub format: String,
+    /// Format version, [`VERSION`].
+    pub version: u32,
+    /// How it was made: command, data (clips, held-out clips, licences), parameters, fit figures.
+    pub provenance: String,
+    /// Reference bone lengths the inputs and factors refer to (metres, canonical bone order).
+    pub lengths: Vec<f64>,
+    /// Mean of each raw input over the training samples.
+    pub mean: Vec<f64>,
+    /// Spread of each raw input over the training samples (> 0).
+    pub scale: Vec<f64>,
+    /// Regression weights: one row of [`NUM_FEATURES`] per group.
+    pub weights: Vec<Vec<f64>>,
+    /// Predictive spread of each group's log factor (RMS residual on samples not fitted), > 0.
+    pub sd: Vec<f64>,
+}
+
+/// A prediction of [`FactorPrior::predict`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prediction {
+    /// `ln(s k_g)`: the log of each group's image scale (px per metre of reference length).
+    pub log_scale: [f64; NUM_GROUPS],
+    /// Predictive spread of each value.
+    pub sd: [f64; NUM_GROUPS],
+}
+
+/// The 2-D scale `s₂` and the raw inputs of a joint set (module doc); `None` when a joint is
+/// invisible or not finite, or the figure has no extent.
+pub fn inputs(j: &Joints2, lengths: &[f64; NUM_BONES]) -> Option<(f64, [f64; NUM_INPUTS])> {
+    if j.visible.iter().any(|v| !v) || j.xy.iter().flatten().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let d: [[f64; 2]; NUM_BONES] = BONES.map(|(p, c)| [j.xy[c][0] - j.xy[p][0], j.xy[c][1] - j.xy[p][1]]);
+    let num: f64 = d.iter().map(|v| v[0] * v[0] + v[1] * v[1]).sum();
+    let den: f64 = lengths.iter().map(|l| l * l).sum();
+    let s2 = (num / den).sqrt();
+    if !(s2 > 0.0) || !s2.is_finite() || lengths.iter().any(|l| !(*l > 0.0)) {
+        return None;
+    }
+    let mut x = [0.0; NUM_INPUTS];
+    for b in 0..NUM_BONES {
+        let (u, v) = (d[b][0] / (s2 * lengths[b]), d[b][1] / (s2 * lengths[b]));
+        x[3 * b] = u;
+        x[3 * b + 1] = v;
+        x[3 * b + 2] = u.hypot(v).max(MIN_RATIO).ln();
+    }
+    Some((s2, x))
+}
+
+/// The regression features of standardised inputs `z`: 1, `z`, then `z_i z_j` for i ≤ j.
+pub fn features(z: &[f64; NUM_INPUTS], out: &mut Vec<f64>) {
+    out.clear();
+    out.push(1.0);
+    out.extend_from_slice(z);
+    for i in 0..NUM_INPUTS {
+        for k in i..NUM_INPUTS {
+            out.push(z[i] * z[k]);
+        }
+    }
+}
+
+/// Summed reference length of each group.
+pub(crate) fn group_lengths(lengths: &[f64]) -> [f64; NUM_GROUPS] {
+    let mut g = [0.0; NUM_GROUPS];
+    for (b, l) in lengths.iter().enumerate().take(NUM_BONES) {
+        g[BONE_GROUP[b]] += l;
+    }
+    g
+}
+
+impl FactorPrior {
+    /// Parses and checks a prior. Errors: [`Error::CorruptData`] for bad JSON, another format
+    /// or version, arrays of the wrong size, non-finite values, or spreads / lengths ≤ 0.
+    pub fn from_json(text: &str) -> Result<FactorPrior> {
+        let p: FactorPrior =
+            serde_json::from_str(text).map_err(|e| Error::CorruptData(format!("factor prior: {e}")))?;
+        if p.format != FORMAT || p.version != VERSION {
+            return Err(Error::CorruptData(format!("factor prior: format {:?} version {}", p.format, p.version)));
+        }
+        let sizes_ok = p.lengths.len() == NUM_BONES
+            && p.mean.len() == NUM_INPUTS
+            && p.scale.len() == NUM_INPUTS
+            && p.weights.len() == NUM_GROUPS
+            && p.weights.iter().all(|w| w.len() == NUM_FEATURES)
+            && p.sd.len() == NUM_GROUPS;
+        if !sizes_ok {
+            return Err(Error::CorruptData("factor prior: arrays of the wrong size".into()));
+        }
+        let finite = p.mean.iter().chain(p.weights.iter().flatten()).all(|v| v.is_finite());
+        let positive = p.lengths.iter().chain(&p.scale).chain(&p.sd).all(|v| v.is_finite() && *v > 0.0);
+        if !finite || !positive {
+            return Err(Error::CorruptData("factor prior: non-finite values or non-positive spreads".into()));
+        }
+        Ok(p)
+    }
+
+    /// The embedded prior, parsed once per process.
+    pub fn embedded() -> Result<&'static FactorPrior> {
+        static PRIOR: OnceLock<std::result::Result<FactorPrior, String>> = OnceLock::new();
+        PRIOR
+            .get_or_init(|| FactorPrior::from_json(EMBEDDED_FACTOR_PRIOR).map_err(|e| e.to_string()))
+            .as_ref()
+            .map_err(|e| Error::CorruptData(e.clone()))
+    }
+
+    /// Reads and checks a prior file. Errors: [`Error::Io`], and those of [`Self::from_json`].
+    pub fn read(path: &std::path::Path) -> Result<FactorPrior> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        FactorPrior::from_json(&text)
+    }
+
+    /// The prior as JSON (one line per array).
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_default()
+    }
+
+    fn lengths_array(&self) -> [f64; NUM_BONES] {
+        std::array::from_fn(|b| self.lengths[b])
+    }
+
+    /// `ln(s₂)` and `ln(s k_g / s₂)` by group (the regression's output, bounded).
+    pub(crate) fn regress(&self, j: &Joints2) -> Option<(f64, [f64; NUM_GROUPS])> {
+        let (s2, x) = inputs(j, &self.lengths_array())?;
+        let z: [f64; NUM_INPUTS] = std::array::from_fn(|i| ((x[i] - self.mean[i]) / self.scale[i]).clamp(-8.0, 8.0));
+        let mut phi = Vec::with_capacity(NUM_FEATURES);
+        features(&z, &mut phi);
+        let mut out = [0.0; NUM_GROUPS];
+        for (o, w) in out.iter_mut().zip(&self.weights) {
+            let v: f64 = w.iter().zip(&phi).map(|(a, b)| a * b).sum();
+            *o = if v.is_finite() { v.clamp(-MAX_LOG, MAX_LOG) } else { 0.0 };
+        }
+        Some((s2.ln(), out))
+    }
+
+    /// Predicts each group's image scale `ln(s k_g)` from the 2-D joints `j`, for factors
+    /// relative to the reference lengths `lengths` (those of the dictionary in use; the
+    /// prediction is converted from the prior's own [`FactorPrior::lengths`] group by group).
+    /// `None` when a joint is invisible or not finite, or the figure has no extent (the caller
+    /// then falls back to the fixed prior). Always finite otherwise.
+    pub fn predict(&self, j: &Joints2, lengths: &[f64; NUM_BONES]) -> Option<Prediction> {
+        let (ls2, u) = self.regress(j)?;
+        let (own, theirs) = (group_lengths(&self.lengths), group_lengths(lengths));
+        let log_scale = std::array::from_fn(|g| {
+            let conv = if theirs[g] > 0.0 && own[g] > 0.0 { (own[g] / theirs[g]).ln() } else { 0.0 };
+            ls2 + u[g] + conv
+        });
+        let sd = std::array::from_fn(|g| self.sd[g]);
+        if !log_scale.iter().all(|v: &f64| v.is_finite()) {
+            return None;
+        }
+        Some(Prediction { log_scale, sd })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::Error;
+
+    #[test]
+    fn the_embedded_prior_loads_and_corrupt_files_are_rejected() {
+        let p = FactorPrior::embedded().unwrap();
+        assert!(p.provenance.contains("train-factor-prior"));
+        let mut bad = p.clone();
+        bad.weights[2].pop();
+        assert!(
+            matches!(FactorPrior::from_json(&bad.to_json()), Err(Error::CorruptData(m)) if m.contains("wrong size"))
+        );
+        let mut bad = p.clone();
+        bad.sd[0] = 0.0;
+        assert!(
+            matches!(FactorPrior::from_json(&bad.to_json()), Err(Error::CorruptData(m)) if m.contains("non-positive"))
+        );
+        let mut bad = p.clone();
+        bad.version = 9;
+        assert!(
+            matches!(FactorPrior::from_json(&bad.to_json()), Err(Error::CorruptData(m)) if m.contains("version 9"))
+        );
+        let text = p.to_json();
+        assert!(matches!(FactorPrior::from_json(&text[..text.len() / 2]), Err(Error::CorruptData(_))));
+        assert_eq!(&FactorPrior::from_json(&text).unwrap(), p);
+    }
+
+    #[test]
+    fn predictions_are_finite_or_none_on_bad_input() {
+        let p = FactorPrior::embedded().unwrap();
+        let lengths: [f64; NUM_BONES] = std::array::from_fn(|b| p.lengths[b]);
+        let mut j =
+            Joints2 { xy: [[0.0; 2]; crate::skeleton::NUM_JOINTS], visible: [true; crate::skeleton::NUM_JOINTS] };
+        assert!(p.predict(&j, &lengths).is_none(), "all joints at one point");
+        for (i, q) in j.xy.iter_mut().enumerate() {
+            *q = [(i * 37 % 11) as f64 * 1e7, (i * 13 % 7) as f64 * -3.0];
+        }
+        let e = p.predict(&j, &lengths).unwrap();
+        assert!(e.log_scale.iter().chain(&e.sd).all(|v| v.is_finite()));
+        j.visible[3] = false;
+        assert!(p.predict(&j, &lengths).is_none());
+        j.visible[3] = true;
+        j.xy[4][0] = f64::NAN;
+        assert!(p.predict(&j, &lengths).is_none());
+    }
+}
