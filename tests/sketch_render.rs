@@ -80,3 +80,51 @@ fn a_wrist_behind_the_back_is_hidden_and_bad_input_is_rejected() {
     assert!(bad(SketchRequest { camera: Some(CameraAngles { yaw_deg: 200.0, ..Default::default() }), ..req })
         .contains("yaw"));
 }
+
+#[test]
+fn art_styles_render_valid_distinct_images_deterministically() {
+    use sketchbody::render::sketch::art::{ArtStyle, Build, Fill};
+    let r = renderer();
+    let req = SketchRequest::random(7, 160);
+    let plain = r.render(&req).unwrap();
+    let styles: Vec<ArtStyle> = Fill::ALL
+        .iter()
+        .enumerate()
+        .map(|(i, &fill)| ArtStyle {
+            fill,
+            thick_ink: fill == Fill::Lines,
+            masses: i % 2 == 0,
+            build: Build::Natural,
+            textured_paper: i == 3,
+        })
+        .chain([
+            ArtStyle { fill: Fill::Flat, thick_ink: true, masses: false, build: Build::Chibi, textured_paper: false },
+            ArtStyle { fill: Fill::Cel, thick_ink: false, masses: false, build: Build::Heroic, textured_paper: true },
+        ])
+        .collect();
+    let mut seen: Vec<Vec<u8>> = vec![plain.pixels.clone()];
+    for s in &styles {
+        let a = r.render_art(&req, s).unwrap();
+        let b = r.render_art(&req, s).unwrap();
+        assert_eq!(a.pixels, b.pixels, "{s:?}: same seed, same image");
+        assert_eq!(a.pixels.len(), 160 * 160);
+        let dark = a.pixels.iter().filter(|&&p| p < 200).count();
+        assert!(dark > 150 && dark < 160 * 160 * 3 / 4, "{s:?}: {dark} dark pixels");
+        assert!(seen.iter().all(|o| *o != a.pixels), "{s:?} looks like an earlier style");
+        let c = r.render_art(&SketchRequest::random(8, 160), s).unwrap();
+        assert_ne!(a.pixels, c.pixels, "{s:?}: another seed, another image");
+        if s.build == Build::Natural {
+            // Same figure: the art changes the paint, not the pose or the proportions.
+            assert_eq!(a.truth.joints2d, plain.truth.joints2d, "{s:?}");
+        } else {
+            assert_ne!(a.truth.style.proportions, plain.truth.style.proportions, "{s:?}");
+        }
+        seen.push(a.pixels);
+    }
+    // The fills darken the figure's inside; lines alone leave it paper.
+    let fill = r.render_art(&req, &styles[1]).unwrap();
+    let mean = |p: &[u8]| p.iter().map(|&v| v as f64).sum::<f64>() / p.len() as f64;
+    assert!(mean(&fill.pixels) < mean(&plain.pixels) - 2.0, "{} vs {}", mean(&fill.pixels), mean(&plain.pixels));
+    // The plain renderer is untouched by the art module.
+    assert_eq!(r.render(&req).unwrap().pixels, plain.pixels);
+}

@@ -14,6 +14,7 @@ use sketchbody::detect::Model;
 use sketchbody::eval::backends::{gather_sample, Sample};
 use sketchbody::eval::detector::held_out_request;
 use sketchbody::image::{load_rgb_image, ImageView, RgbImage};
+use sketchbody::render::photo_npr::{photo_npr, PhotoNpr};
 use sketchbody::render::sketch::{Hair, SketchRenderer};
 use sketchbody::render::stylise::{negative_page, stylise, NegativePage, Stylisation};
 use sketchbody::skeleton::NUM_JOINTS;
@@ -25,8 +26,9 @@ use crate::CliError;
 pub enum SetSpec {
     /// `n` rendered sketches of `seed` (`size`² px), hair forced to `hair` (None: random).
     Synthetic { seed: u64, n: usize, size: usize, hair: Option<Hair> },
-    /// PARSE images `first..=last`, plain or through a stylisation (seeded by the image number).
-    Parse { first: usize, last: usize, style: Option<Stylisation> },
+    /// PARSE images `first..=last`, plain or through a benchmark stylisation or a training
+    /// filter (`npr`; at most one of the two), seeded by the image number.
+    Parse { first: usize, last: usize, style: Option<Stylisation>, npr: Option<PhotoNpr> },
     /// `n` pages without a figure of `kind` (512² px), seeds from `seed`.
     Negative { kind: NegativePage, n: usize, seed: u64 },
 }
@@ -36,8 +38,9 @@ impl SetSpec {
     pub fn label(&self) -> String {
         match self {
             SetSpec::Synthetic { seed, .. } => format!("synthetic (seed {seed})"),
-            SetSpec::Parse { first, last, style: None } => format!("PARSE {first}-{last}"),
-            SetSpec::Parse { first, last, style: Some(s) } => format!("PARSE {first}-{last} {}", s.name()),
+            SetSpec::Parse { first, last, style: Some(s), .. } => format!("PARSE {first}-{last} {}", s.name()),
+            SetSpec::Parse { first, last, npr: Some(f), .. } => format!("PARSE {first}-{last} npr {}", f.name()),
+            SetSpec::Parse { first, last, .. } => format!("PARSE {first}-{last}"),
             SetSpec::Negative { kind, .. } => format!("no figure: {}", kind.name()),
         }
     }
@@ -84,16 +87,20 @@ fn image_of(
                 .map_err(|_| CliError(format!("sketch {i}: {} true joints", s.truth.joints2d.len())))?;
             (RgbImage::from_vec(size, size, rgb)?, Some(truth))
         }
-        SetSpec::Parse { first, style, .. } => {
+        SetSpec::Parse { first, style, npr, .. } => {
             let name = format!("im{:04}.jpg", first + i);
             let l = labels
                 .iter()
                 .find(|l| l.image == name)
                 .ok_or_else(|| CliError(format!("PARSE labels have no {name}")))?;
             let img = load_rgb_image(&ctx.parse_dir.join("images").join(&name))?;
-            let img = match style {
-                Some(st) => stylise(&img.view(), st, (first + i) as u64)?,
-                None => img,
+            let img = match (style, npr) {
+                (Some(st), _) => stylise(&img.view(), st, (first + i) as u64)?,
+                (None, Some(f)) => {
+                    let g = photo_npr(&img.view(), f, (first + i) as u64)?;
+                    RgbImage::from_vec(img.width(), img.height(), g.iter().flat_map(|&v| [v; 3]).collect())?
+                }
+                (None, None) => img,
             };
             let (j, _) = parse_to_canonical(&l.joints, &[1.0; 14]);
             // PARSE labels are pixel indices (centres at integers); the library's frame is continuous.

@@ -44,6 +44,10 @@ pub struct Args {
     /// L2 penalty of the logistic fits.
     #[arg(long, default_value_t = 1e-2)]
     ridge: f64,
+    /// The sketch model calibrated as the fmp backend instead of the embedded one (.skbd or
+    /// PARSE JSON), e.g. a retraining candidate.
+    #[arg(long)]
+    fmp_model: Option<PathBuf>,
     /// Folder of mocap clips for the renderer (default as in render-sketch).
     #[arg(long)]
     mocap: Option<PathBuf>,
@@ -51,15 +55,18 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(a: Args) -> Result<(), CliError> {
-    let model = Model::embedded()?;
+    let model = match &a.fmp_model {
+        Some(p) => Model::load_any(p)?,
+        None => Model::embedded()?,
+    };
     let net = LandmarkNet::embedded()?;
     let r = renderer(a.mocap.as_deref())?;
     let ctx = SetContext { renderer: &r, parse_dir: &a.parse, model: &model, net: &net };
     let mut specs = vec![SetSpec::Synthetic { seed: a.seed, n: a.synthetic, size: 512, hair: None }];
-    specs.push(SetSpec::Parse { first: 1, last: a.parse_last, style: None });
+    specs.push(SetSpec::Parse { first: 1, last: a.parse_last, style: None, npr: None });
     if a.stylised {
         for s in Stylisation::ALL {
-            specs.push(SetSpec::Parse { first: 1, last: a.parse_last, style: Some(s) });
+            specs.push(SetSpec::Parse { first: 1, last: a.parse_last, style: Some(s), npr: None });
         }
     }
     for kind in NegativePage::ALL {

@@ -11,6 +11,7 @@ use sketchbody::detect::figure::{Backend, FigureOptions, Fusion};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
 use sketchbody::eval::backends::{expected_calibration_error, reliability, score_set, Sample};
+use sketchbody::render::photo_npr::PhotoNpr;
 use sketchbody::render::sketch::{Hair, SketchRenderer};
 use sketchbody::render::stylise::{NegativePage, Stylisation};
 
@@ -18,25 +19,30 @@ use crate::backend_sets::{gather_set, SetContext, SetSpec};
 use crate::CliError;
 
 /// The set names `--sets` takes.
-pub const SET_NAMES: &str = "synthetic, parse, xdog, pencil, flat, negatives";
+pub const SET_NAMES: &str =
+    "synthetic, parse, xdog, pencil, flat, negatives, and the training filters npr-sobel, npr-charcoal, npr-marker";
 
-/// The benchmark sets named in `names` (comma separated, from [`SET_NAMES`]).
+/// The benchmark sets named in `names` (comma separated, from [`SET_NAMES`]); the PARSE sets
+/// take photos `photos` (the test split 101-305 for the benchmark).
 pub fn benchmark_sets(
     names: &str,
     n: usize,
     seed: u64,
     size: usize,
     hair: Option<Hair>,
+    photos: (usize, usize),
 ) -> Result<Vec<SetSpec>, CliError> {
+    let (first, last) = photos;
     let mut out = Vec::new();
     for name in names.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         match name {
             "synthetic" => out.push(SetSpec::Synthetic { seed, n, size, hair }),
-            "parse" => out.push(SetSpec::Parse { first: 101, last: 305, style: None }),
+            "parse" => out.push(SetSpec::Parse { first, last, style: None, npr: None }),
             "negatives" => out.extend(NegativePage::ALL.map(|kind| SetSpec::Negative { kind, n: 60, seed })),
-            other => match other.parse::<Stylisation>() {
-                Ok(s) => out.push(SetSpec::Parse { first: 101, last: 305, style: Some(s) }),
-                Err(_) => return Err(CliError(format!("--sets: unknown set {other:?}; expected {SET_NAMES}"))),
+            other => match (other.parse::<Stylisation>(), other.strip_prefix("npr-").and_then(PhotoNpr::from_name)) {
+                (Ok(s), _) => out.push(SetSpec::Parse { first, last, style: Some(s), npr: None }),
+                (_, Some(f)) => out.push(SetSpec::Parse { first, last, style: None, npr: Some(f) }),
+                _ => return Err(CliError(format!("--sets: unknown set {other:?}; expected {SET_NAMES}"))),
             },
         }
     }
@@ -49,10 +55,10 @@ pub fn run_sets(
     renderer: &SketchRenderer,
     parse_dir: &Path,
     cal: &Calibration,
+    model: &Model,
 ) -> Result<(), CliError> {
-    let model = Model::embedded()?;
     let net = LandmarkNet::embedded()?;
-    let ctx = SetContext { renderer, parse_dir, model: &model, net: &net };
+    let ctx = SetContext { renderer, parse_dir, model, net: &net };
     let options = FigureOptions::default();
     let configs = [
         (Backend::Fmp, false, Fusion::PerImage, "fmp"),

@@ -58,6 +58,29 @@ pub struct Args {
     /// embedded one.
     #[arg(long)]
     calibration: Option<PathBuf>,
+    /// The sketch model `--sets` runs as the fmp backend (and inside auto) instead of the
+    /// embedded one (.skbd or PARSE JSON), e.g. a retraining candidate.
+    #[arg(long)]
+    fmp_model: Option<PathBuf>,
+    /// PARSE photos of the `--sets` PARSE sets, A-B within 1-305: the test split 101-305 for the
+    /// benchmark; a part of 1-100 (e.g. 81-100) to choose between candidates on photos no
+    /// training used.
+    #[arg(long, default_value = "101-305", value_parser = parse_range)]
+    parse_range: (usize, usize),
+}
+
+/// Parses "A-B" with 1 ≤ A ≤ B ≤ 305.
+fn parse_range(s: &str) -> Result<(usize, usize), String> {
+    let (a, b) = s.split_once('-').ok_or_else(|| format!("`{s}` is not A-B"))?;
+    let (a, b): (usize, usize) = (
+        a.trim().parse().map_err(|_| format!("`{a}` is not a photo number"))?,
+        b.trim().parse().map_err(|_| format!("`{b}` is not a photo number"))?,
+    );
+    if (1..=b).contains(&a) && b <= 305 {
+        Ok((a, b))
+    } else {
+        Err(format!("{a}-{b} is not a range within 1-305"))
+    }
 }
 
 /// Runs the command.
@@ -68,14 +91,18 @@ pub fn run(a: Args) -> Result<(), CliError> {
         return Err(CliError("--n must be ≥ 1".into()));
     }
     if let Some(sets) = &a.sets {
-        let specs = crate::eval_backends::benchmark_sets(sets, a.n, a.seed, w, hair)?;
+        let specs = crate::eval_backends::benchmark_sets(sets, a.n, a.seed, w, hair, a.parse_range)?;
+        let model = match &a.fmp_model {
+            Some(p) => Model::load_any(p)?,
+            None => Model::embedded()?,
+        };
         let cal = match &a.calibration {
             Some(p) => sketchbody::detect::calibration::Calibration::from_json(
                 &std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?,
             )?,
             None => sketchbody::detect::calibration::Calibration::embedded()?.clone(),
         };
-        return crate::eval_backends::run_sets(&specs, &renderer(a.mocap.as_deref())?, &a.parse, &cal);
+        return crate::eval_backends::run_sets(&specs, &renderer(a.mocap.as_deref())?, &a.parse, &cal, &model);
     }
     let mut names = vec![a.model.as_ref().map_or("embedded".to_string(), |p| p.display().to_string())];
     let mut models = vec![match &a.model {

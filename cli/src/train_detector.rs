@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use sketchbody::detect::train::mine::SearchRange;
+use sketchbody::detect::train::parse_positives::ParseSource;
 use sketchbody::detect::train::{train, TrainOptions};
 use sketchbody::render::sketch::Hair;
 
@@ -43,8 +44,26 @@ pub struct Args {
     #[arg(long, default_value = "ponytail")]
     hold_out_hair: String,
     /// Fraction of the positives drawn as capsule mannequins around the same joints (0..=1).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::ranges::real(0.0, 1.0, false))]
     mannequins: f64,
+    /// Fraction of the positives rendered in a random art style (flat, cel, screen tone,
+    /// watercolour, thick ink, masses, chibi/heroic, textured paper); with --mannequins at most
+    /// 1 in all.
+    #[arg(long, default_value_t = 0.0, value_parser = crate::ranges::real(0.0, 1.0, false))]
+    art_styles: f64,
+    /// PARSE folder (images/, labels.csv): add its training photos 1..=--parse-last through the
+    /// drawing-like training filters (sobel, charcoal, marker) as positives.
+    #[arg(long)]
+    parse_positives: Option<PathBuf>,
+    /// Last PARSE photo used with --parse-positives (1..=100; 101-305 are the test split).
+    #[arg(long, default_value_t = 80, value_parser = crate::ranges::count(1..=100))]
+    parse_last: usize,
+    /// Filtered copies of each PARSE photo (1..=8).
+    #[arg(long, default_value_t = 2, value_parser = crate::ranges::count(1..=8))]
+    parse_variants: usize,
+    /// Coordinate-descent passes per solve, at most (1..=100000).
+    #[arg(long, default_value_t = 60, value_parser = crate::ranges::count(1..=100_000))]
+    max_passes: usize,
     /// Smallest and largest cell searched when mining negatives, px.
     #[arg(long, default_value_t = 4.0)]
     min_cell: f64,
@@ -82,6 +101,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if a.out.extension().is_none_or(|e| e != "skbd") {
         return Err(CliError(format!("--out {}: must end in .skbd", a.out.display())));
     }
+    if a.art_styles + a.mannequins > 1.0 {
+        return Err(CliError(format!(
+            "--art-styles {} with --mannequins {}: together at most 1",
+            a.art_styles, a.mannequins
+        )));
+    }
     let o = TrainOptions {
         seed: a.seed,
         positives: a.positives,
@@ -92,6 +117,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         image_size: a.size,
         held_out_hair: parse_hair(&a.hold_out_hair)?,
         mannequins: a.mannequins,
+        art_styles: a.art_styles,
+        parse: a.parse_positives.map(|dir| ParseSource { dir, last: a.parse_last, variants: a.parse_variants }),
+        max_passes: a.max_passes,
         search: SearchRange { min_cell_px: a.min_cell, max_cell_px: a.max_cell },
         ..TrainOptions::default()
     };

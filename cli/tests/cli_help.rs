@@ -38,7 +38,7 @@ fn help_groups_the_artist_commands_first() {
 
 #[test]
 fn bad_numeric_options_fail_at_once_naming_the_option() {
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 14] = [
         (&["run", "missing.png", "--out", "/nonexistent/o", "--preview-size", "0"], "--preview-size"),
         (&["run", "missing.png", "--out", "/nonexistent/o", "--texture-size", "5000"], "--texture-size"),
         (&["run", "missing.png", "--out", "/nonexistent/o", "--samples", "1"], "--samples"),
@@ -47,6 +47,12 @@ fn bad_numeric_options_fail_at_once_naming_the_option() {
         (&["detect", "missing.png", "--out", "/nonexistent/o.json", "--threshold=nan"], "--threshold"),
         (&["pose", "missing.json", "--out", "/nonexistent/o.json", "--alpha", "1.5"], "--alpha"),
         (&["pose", "missing.json", "--out", "/nonexistent/o.json", "--max-bases", "33"], "--max-bases"),
+        (&["train-detector", "--out", "/nonexistent/m.skbd", "--art-styles", "1.5"], "--art-styles"),
+        (&["train-detector", "--out", "/nonexistent/m.skbd", "--parse-last", "101"], "--parse-last"),
+        (&["train-detector", "--out", "/nonexistent/m.skbd", "--parse-variants", "0"], "--parse-variants"),
+        (&["train-detector", "--out", "/nonexistent/m.skbd", "--max-passes", "0"], "--max-passes"),
+        (&["eval-detector", "--sets", "parse", "--parse-range", "90-80"], "--parse-range"),
+        (&["eval-detector", "--sets", "parse", "--parse-range", "0-80"], "--parse-range"),
     ];
     for (args, option) in cases {
         let out = sketchbody(args);

@@ -2,6 +2,8 @@
 //! canonical height, plus their mirror images with left/right swapped) with every part's cell
 //! position, and negative pages without a figure.
 
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::detect::hog::{hog, FeatureMap, Planes};
@@ -10,7 +12,7 @@ use crate::error::Result;
 use crate::render::sketch::background::render_background;
 use crate::render::sketch::mannequin::render_mannequin;
 use crate::render::sketch::truth::sample_seed;
-use crate::render::sketch::{Hair, SketchRenderer, SketchRequest};
+use crate::render::sketch::{ArtStyle, Hair, SketchRenderer, SketchRequest};
 use crate::skeleton::NUM_JOINTS;
 
 use super::layout::{mirror_joints, part_points, NUM_PARTS};
@@ -95,11 +97,30 @@ pub fn gray_planes(px: &[u8], width: usize, height: usize) -> Planes {
 
 /// Seed tag of the mannequin choice and drawing of a positive.
 const MANNEQUIN_STREAM: u64 = 0x4D41_4E4E;
+/// Seed tag of the art-style choice of a positive.
+const ART_STREAM: u64 = 0x4152_5453;
+
+/// How the positives are drawn: fractions of all positives (each in [0, 1], sum ≤ 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drawing {
+    /// Capsule mannequins around the same 2-D joints.
+    pub mannequins: f64,
+    /// Art styles ([`crate::render::sketch::art`]), chosen among the positives that are not
+    /// mannequins.
+    pub art: f64,
+}
+
+/// Uniform in [0, 1) from the top 53 bits of `v`.
+fn unit_of(v: u64) -> f64 {
+    (v >> 11) as f64 / (1u64 << 53) as f64
+}
 
 /// Renders positives `0..n` of `seed` at `size`² (sample seeds as `make-dataset`), skipping
-/// figures with hair `held_out`; a fraction `mannequins` of them (chosen per index from its
-/// own stream) is redrawn as a capsule mannequin around the same 2-D joints. Returns the
-/// positives (each with its mirror) and the number of sketches skipped. Parallel,
+/// figures with hair `held_out`; a fraction `drawing.mannequins` of them (chosen per index from
+/// its own stream) is redrawn as a capsule mannequin around the same 2-D joints, and a fraction
+/// `drawing.art` (from another stream, among the others) is rendered in a random art style
+/// ([`SketchRenderer::render_art`]). With both fractions 0 the positives are the plain sketches.
+/// Returns the positives (each with its mirror) and the number of sketches skipped. Parallel,
 /// order-preserving. Errors: the renderer's.
 pub fn render_positives(
     renderer: &SketchRenderer,
@@ -108,23 +129,28 @@ pub fn render_positives(
     n: usize,
     size: usize,
     held_out: Option<Hair>,
-    mannequins: f64,
+    drawing: Drawing,
 ) -> Result<(Vec<Positive>, usize)> {
+    let art_share = if drawing.mannequins < 1.0 { drawing.art / (1.0 - drawing.mannequins) } else { 0.0 };
     let got: Vec<Option<[Positive; 2]>> = (0..n)
         .into_par_iter()
         .map(|i| {
-            let s = renderer.render(&SketchRequest::random(sample_seed(seed, i as u64), size))?;
+            let draw = sample_seed(seed ^ MANNEQUIN_STREAM, i as u64);
+            let mannequin = unit_of(draw) < drawing.mannequins;
+            let art_draw = sample_seed(seed ^ ART_STREAM, i as u64);
+            let req = SketchRequest::random(sample_seed(seed, i as u64), size);
+            let s = if !mannequin && unit_of(art_draw) < art_share {
+                let style = ArtStyle::random(&mut ChaCha8Rng::seed_from_u64(art_draw));
+                renderer.render_art(&req, &style)?
+            } else {
+                renderer.render(&req)?
+            };
             if Some(s.truth.style.hair) == held_out {
                 return Ok(None);
             }
             let j: [[f64; 2]; NUM_JOINTS] = std::array::from_fn(|k| s.truth.joints2d[k]);
             let height_px = s.truth.height_m * s.truth.camera.sx;
-            let draw = sample_seed(seed ^ MANNEQUIN_STREAM, i as u64);
-            let pixels = if ((draw >> 11) as f64 / (1u64 << 53) as f64) < mannequins {
-                render_mannequin(&j, height_px, size, size, draw)
-            } else {
-                s.pixels
-            };
+            let pixels = if mannequin { render_mannequin(&j, height_px, size, size, draw) } else { s.pixels };
             Ok(geo.positive_pair(&gray_planes(&pixels, size, size), &j, height_px))
         })
         .collect::<Result<_>>()?;

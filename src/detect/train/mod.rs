@@ -11,16 +11,18 @@ pub mod examples;
 pub mod features;
 pub mod layout;
 pub mod mine;
+pub mod parse_positives;
 pub mod qp;
 
 use crate::detect::model::Model;
 use crate::error::{Error, Result};
 use crate::render::sketch::{Hair, SketchRenderer};
 
-use examples::{gray_planes, render_negatives, render_positives, Geometry, Positive};
+use examples::{gray_planes, render_negatives, render_positives, Drawing, Geometry, Positive};
 use features::{Structure, DEF_LOWER_BOUND};
 use layout::{NUM_PARTS, PARENT};
 use mine::SearchRange;
+use parse_positives::{parse_positives, ParseSource};
 use qp::{Example, Qp};
 
 /// Training options. `Default` is the shipped run's geometry with small counts.
@@ -43,6 +45,12 @@ pub struct TrainOptions {
     /// Fraction of the positives, in [0, 1], drawn as capsule mannequins around the same 2-D
     /// joints instead of the body's contours ([`crate::render::sketch::mannequin`]).
     pub mannequins: f64,
+    /// Fraction of the positives, in [0, 1] with `mannequins + art_styles ≤ 1`, rendered in a
+    /// random art style ([`crate::render::sketch::art`]).
+    pub art_styles: f64,
+    /// PARSE training photos through the training filters as extra positives
+    /// ([`parse_positives`]); `None` for none.
+    pub parse: Option<ParseSource>,
     /// SVM C.
     pub c: f64,
     /// HOG cell, px.
@@ -76,6 +84,8 @@ impl Default for TrainOptions {
             image_size: 512,
             held_out_hair: Some(Hair::Ponytail),
             mannequins: 0.0,
+            art_styles: 0.0,
+            parse: None,
             c: 0.01,
             sbin: 4,
             filter_side: 5,
@@ -104,6 +114,15 @@ impl TrainOptions {
         }
         if !(0.0..=1.0).contains(&self.mannequins) {
             return bad("mannequins", format!("{} not in [0, 1]", self.mannequins));
+        }
+        if !((0.0..=1.0).contains(&self.art_styles) && self.art_styles + self.mannequins <= 1.0) {
+            return bad(
+                "art_styles",
+                format!("{} not in [0, 1 - mannequins] (mannequins {})", self.art_styles, self.mannequins),
+            );
+        }
+        if !(1..=100_000).contains(&self.max_passes) {
+            return bad("max_passes", format!("{} not in 1..=100000", self.max_passes));
         }
         if !(self.c.is_finite() && self.c > 0.0) {
             return bad("c", format!("{} must be finite and > 0", self.c));
@@ -180,8 +199,19 @@ pub fn train(renderer: &SketchRenderer, o: &TrainOptions, progress: &mut dyn FnM
     let t0 = std::time::Instant::now();
     let el = || t0.elapsed().as_secs_f64();
     let geo = Geometry { sbin: o.sbin, side: o.filter_side, figure_px: o.figure_px };
-    let (pos, skipped) =
-        render_positives(renderer, &geo, o.seed, o.positives, o.image_size, o.held_out_hair, o.mannequins)?;
+    let drawing = Drawing { mannequins: o.mannequins, art: o.art_styles };
+    let (mut pos, skipped) =
+        render_positives(renderer, &geo, o.seed, o.positives, o.image_size, o.held_out_hair, drawing)?;
+    if let Some(src) = &o.parse {
+        let (extra, photos) = parse_positives(src, &geo, o.seed)?;
+        progress(&format!(
+            "[{:7.1} s] PARSE photos 1-{}: {photos} photos, {} positives (mirrors included)",
+            el(),
+            src.last,
+            extra.len()
+        ));
+        pos.extend(extra);
+    }
     if pos.is_empty() {
         return Err(Error::Degenerate("no usable training positive".into()));
     }

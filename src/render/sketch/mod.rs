@@ -7,9 +7,11 @@
 //! a fixed order, so a request always gives the same image and ground truth.
 //!
 //! Files: `scene` (shape, proportions, pose, camera), `contours` (line extraction and
-//! visibility), `canvas` (strokes), `costume` (costume and hair), `paper` (hatching, paper,
+//! visibility), `canvas` (strokes), `art` (flat, cel, screen-tone and watercolour fills, thick
+//! ink, masses, stylised proportions, textured paper: [`SketchRenderer::render_art`]), `costume` (costume and hair), `paper` (hatching, paper,
 //! clutter), `style` ([`SketchStyle`]), `mocap` (pose clips), `truth` (ground truth and files).
 
+pub mod art;
 pub mod background;
 pub mod canvas;
 pub mod contours;
@@ -28,6 +30,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 pub use crate::body::proportions::Proportions;
+pub use art::ArtStyle;
 pub use costume::{Costume, Hair};
 pub use mocap::MocapLibrary;
 pub use scene::CameraAngles;
@@ -165,16 +168,32 @@ impl SketchRenderer {
     /// (too many, non-finite), non-finite joints or zero-length bones, invalid style or camera
     /// angles.
     pub fn render(&self, req: &SketchRequest) -> Result<Sketch> {
+        self.render_with(req, None)
+    }
+
+    /// Renders one sketch in an art style ([`art`]): the figure, pose, camera and lines of
+    /// [`SketchRenderer::render`] for the same request (proportions replaced for a chibi or
+    /// heroic build), painted. The art's own random choices come from a second generator seeded
+    /// from `req.seed`, so the request's stream is unchanged. Errors: as `render`.
+    pub fn render_art(&self, req: &SketchRequest, art: &ArtStyle) -> Result<Sketch> {
+        self.render_with(req, Some(art))
+    }
+
+    fn render_with(&self, req: &SketchRequest, art: Option<&ArtStyle>) -> Result<Sketch> {
         check_size(req.width, req.height)?;
         let mut rng = ChaCha8Rng::seed_from_u64(req.seed);
+        let mut art_rng = ChaCha8Rng::seed_from_u64(req.seed ^ 0x4152_5453_5459_4C45);
         let gender = match req.gender {
             Some(g) => g,
             None => Gender::ALL[rng.random_range(0..2)],
         };
-        let style = match &req.style {
+        let mut style = match &req.style {
             Some(s) => s.clone(),
             None => SketchStyle::random(&mut rng),
         };
+        if let Some(p) = art.and_then(|a| a.proportions(&mut art_rng)) {
+            style.proportions = p;
+        }
         style.validate()?;
         let space = self.model.space(gender);
         let weights = match &req.shape_weights {
@@ -284,9 +303,15 @@ impl SketchRenderer {
             ground,
             &mut rng,
         );
-        let pixels = paper::compose(&canvas, style.paper_tone, style.paper_noise, 1.0, &mut rng);
-
         let joints2d = self.joints2d(&pose.joints, &posed, &cam, &depth);
+        let pixels = match art {
+            None => paper::compose(&canvas, style.paper_tone, style.paper_noise, 1.0, &mut rng),
+            Some(a) => {
+                let fig = art::FigureView { depth, scale: cam.sx, joints: &joints2d.xy, unit };
+                let layer = art::paint(&mut canvas, &fig, a, &extra_pen, &mut art_rng);
+                art::compose(&canvas, &layer, style.paper_tone, style.paper_noise, a.textured_paper, &mut art_rng)
+            }
+        };
         let height_m = {
             let (lo, hi) =
                 rest_v.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| (lo.min(v[1]), hi.max(v[1])));

@@ -8,6 +8,30 @@ use std::f64::consts::TAU;
 use super::canvas::{Canvas, Pen};
 use super::contours::DepthView;
 
+/// Shade `1 − max(0, n·L)` of the body at pixel (x, y) for a unit light `l` (+y up, +z toward
+/// the viewer): the normal comes from the depth gradient (`scale` pixels per metre). `None` off
+/// the body, at the image border and across depth jumps.
+pub fn shade_at(depth: &DepthView<'_>, scale: f64, x: usize, y: usize, l: [f64; 3]) -> Option<f64> {
+    let w = depth.width;
+    if x == 0 || y == 0 || x + 1 >= w || y + 1 >= depth.height {
+        return None;
+    }
+    let d = |i: usize, j: usize| depth.depth[j * w + i];
+    let c = d(x, y);
+    if c == f32::NEG_INFINITY {
+        return None;
+    }
+    let (l_, r_, u_, b_) = (d(x - 1, y), d(x + 1, y), d(x, y - 1), d(x, y + 1));
+    if [l_, r_, u_, b_].iter().any(|&v| v == f32::NEG_INFINITY || (v - c).abs() as f64 * scale > 4.0) {
+        return None;
+    }
+    let dzdx = (r_ - l_) as f64 * 0.5 * scale; // per metre in x
+    let dzdy = -(b_ - u_) as f64 * 0.5 * scale; // per metre up
+    let nl = (dzdx * dzdx + dzdy * dzdy + 1.0).sqrt();
+    let n = [-dzdx / nl, -dzdy / nl, 1.0 / nl];
+    Some(1.0 - (n[0] * l[0] + n[1] * l[1] + n[2] * l[2]).max(0.0))
+}
+
 /// Hatches the body where it faces away from a light at the upper left: the normal at each
 /// covered pixel comes from the depth gradient (`scale` pixels per metre); pixels whose shade
 /// `1 − max(0, n·L)` exceeds `1 − amount` get diagonal lines every `spacing` pixels, and the
@@ -35,20 +59,9 @@ pub fn hatch<R: Rng + ?Sized>(
     let thr = 1.0 - amount;
     for y in 1..h.saturating_sub(1) {
         for x in 1..w.saturating_sub(1) {
-            let d = |i: usize, j: usize| depth.depth[j * w + i];
-            let c = d(x, y);
-            if c == f32::NEG_INFINITY {
+            let Some(shade) = shade_at(depth, scale, x, y, l) else {
                 continue;
-            }
-            let (l_, r_, u_, b_) = (d(x - 1, y), d(x + 1, y), d(x, y - 1), d(x, y + 1));
-            if [l_, r_, u_, b_].iter().any(|&v| v == f32::NEG_INFINITY || (v - c).abs() as f64 * scale > 4.0) {
-                continue;
-            }
-            let dzdx = (r_ - l_) as f64 * 0.5 * scale; // per metre in x
-            let dzdy = -(b_ - u_) as f64 * 0.5 * scale; // per metre up
-            let nl = (dzdx * dzdx + dzdy * dzdy + 1.0).sqrt();
-            let n = [-dzdx / nl, -dzdy / nl, 1.0 / nl];
-            let shade = 1.0 - (n[0] * l[0] + n[1] * l[1] + n[2] * l[2]).max(0.0);
+            };
             if shade <= thr {
                 continue;
             }

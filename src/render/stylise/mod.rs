@@ -12,7 +12,7 @@
 //!
 //! Files: `filters` (float blur, bilateral, k-means), `pencil`, `flat`, `negative`.
 
-mod filters;
+pub(crate) mod filters;
 mod flat;
 mod negative;
 mod pencil;
@@ -162,6 +162,28 @@ fn xdog(rgb: &[Rgb], w: usize, h: usize) -> Vec<Rgb> {
         }
     }
     e.into_iter().map(|v| [v; 3]).collect()
+}
+
+/// A contact sheet for people to look at: `rows` of images, each centred (and cropped) in a
+/// `tile`² cell, `gap` px apart on a gray background, stored with 5 bits a channel so that the
+/// PNG stays small (paper grain compresses badly).
+pub fn contact_sheet(rows: &[Vec<RgbImage>], tile: usize, gap: usize) -> Result<RgbImage> {
+    let cols = rows.iter().map(Vec::len).max().unwrap_or(1);
+    let (w, h) = (cols * (tile + gap) + gap, rows.len() * (tile + gap) + gap);
+    let mut data = vec![200u8; w * h * 3];
+    for (r, row) in rows.iter().enumerate() {
+        for (c, img) in row.iter().enumerate() {
+            let (iw, ih) = (img.width().min(tile), img.height().min(tile));
+            let x0 = gap + c * (tile + gap) + (tile - iw) / 2;
+            let y0 = gap + r * (tile + gap) + (tile - ih) / 2;
+            for y in 0..ih {
+                let src = &img.as_bytes()[y * img.width() * 3..][..iw * 3];
+                data[((y0 + y) * w + x0) * 3..][..iw * 3].copy_from_slice(src);
+            }
+        }
+    }
+    data.iter_mut().for_each(|v| *v = (*v & !7) | (*v >> 5));
+    RgbImage::from_vec(w, h, data)
 }
 
 /// Writes an RGB image as PNG (best compression, adaptive filters), atomically: through a
