@@ -114,14 +114,15 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
 /// [`estimate_pose`] with relative joint depths from an image cue ([`DepthHint`]): its cost is
 /// added where the solver chooses between readings (the exemplar starts, each recomposed limb,
 /// the blend of the hypotheses; see [`super::depth_hint`]). `None` is [`estimate_pose`].
-/// Errors: those of [`estimate_pose`], and the hint's ([`DepthHint::validate`]).
+/// Errors: those of [`estimate_pose`], the hint's ([`DepthHint::validate`]), and `CorruptData`
+/// when [`PoseOptions::factor_prior`] is on and the embedded prior does not parse (a build fault).
 pub fn estimate_pose_hinted(
     dict: &Dictionary,
     joints: &Joints2,
     opts: &PoseOptions,
     hint: Option<&DepthHint>,
 ) -> Result<PoseEstimate> {
-    let prior = if opts.factor_prior { FactorPrior::embedded().ok() } else { None };
+    let prior = if opts.factor_prior { Some(FactorPrior::embedded()?) } else { None };
     estimate_pose_with_factor_prior(dict, joints, opts, hint, prior)
 }
 
