@@ -1,7 +1,8 @@
 //! `sketchbody calibrate-detector --out assets/detector_calibration.json`: fits the detector
 //! backends' calibration (`detect::calibration`) on a calibration set disjoint from every
 //! benchmark set: rendered sketches of another seed than the held-out set's, PARSE *training*
-//! photos (1–100; with `--stylised` also through each stylisation), and pages without a figure.
+//! photos (1–100; with `--stylised` also through each stylisation, with `--npr` through each
+//! training filter), and pages without a figure.
 
 use std::path::PathBuf;
 
@@ -9,6 +10,7 @@ use sketchbody::detect::figure::FigureOptions;
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
 use sketchbody::eval::backends::fit_calibration;
+use sketchbody::render::photo_npr::PhotoNpr;
 use sketchbody::render::stylise::{NegativePage, Stylisation};
 
 use crate::backend_sets::{gather_set, SetContext, SetSpec};
@@ -38,6 +40,11 @@ pub struct Args {
     /// never seen.
     #[arg(long)]
     stylised: bool,
+    /// Also calibrate on the PARSE training photos through each training filter
+    /// (`render::photo_npr`: Sobel ink, charcoal, marker), drawing-like images of real poses
+    /// whose styles differ from the benchmark's stylisations.
+    #[arg(long)]
+    npr: bool,
     /// Pages of each kind without a figure (blank, text, clutter).
     #[arg(long, default_value_t = 40)]
     negatives: usize,
@@ -69,6 +76,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
             specs.push(SetSpec::Parse { first: 1, last: a.parse_last, style: Some(s), npr: None });
         }
     }
+    if a.npr {
+        for f in PhotoNpr::ALL {
+            specs.push(SetSpec::Parse { first: 1, last: a.parse_last, style: None, npr: Some(f) });
+        }
+    }
     for kind in NegativePage::ALL {
         specs.push(SetSpec::Negative { kind, n: a.negatives, seed: a.seed });
     }
@@ -79,11 +91,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
     }
     let labels: Vec<String> = specs.iter().map(SetSpec::label).collect();
     let provenance = format!(
-        "sketchbody calibrate-detector --synthetic {} --seed {} --parse-last {}{} --negatives {} --ridge {}; sets: {}; {} images",
+        "sketchbody calibrate-detector --synthetic {} --seed {} --parse-last {}{}{} --negatives {} --ridge {}; sets: {}; {} images",
         a.synthetic,
         a.seed,
         a.parse_last,
         if a.stylised { " --stylised" } else { "" },
+        if a.npr { " --npr" } else { "" },
         a.negatives,
         a.ridge,
         labels.join(", "),

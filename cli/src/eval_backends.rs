@@ -49,12 +49,14 @@ pub fn benchmark_sets(
     Ok(out)
 }
 
-/// Runs the evaluation on `specs` and prints the tables.
+/// Runs the evaluation on `specs` and prints the tables; each of `others` (name, calibration)
+/// adds an `auto` row per set, scored on the same detections.
 pub fn run_sets(
     specs: &[SetSpec],
     renderer: &SketchRenderer,
     parse_dir: &Path,
     cal: &Calibration,
+    others: &[(String, Calibration)],
     model: &Model,
 ) -> Result<(), CliError> {
     let net = LandmarkNet::embedded()?;
@@ -104,6 +106,16 @@ pub fn run_sets(
             })
             .collect::<Result<_, _>>()?;
         println!("{:<26}       auto by min presence (PCK@0.2 / no figure): {}", "", sweep.join(", "));
+        for (name, other) in others {
+            let s = score_set(&samples, other, &FigureOptions::default())?;
+            println!(
+                "{:<26}       auto with {name}: {:.3} / {:.3} {:>5.1}%",
+                "",
+                s.pck[0],
+                s.pck[1],
+                100.0 * s.no_figure
+            );
+        }
         positives.extend(samples.into_iter().filter(|s| s.truth.is_some()));
     }
     for b in [Backend::Auto, Backend::Fmp, Backend::BlazePose] {

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use rayon::prelude::*;
+use sketchbody::detect::calibration::Calibration;
 use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::eval::detector::{held_out_request, score_sketch, style_breakdown, SketchResult};
 
@@ -58,6 +59,11 @@ pub struct Args {
     /// embedded one.
     #[arg(long)]
     calibration: Option<PathBuf>,
+    /// Further calibration JSONs for `--sets` (repeatable): each adds an `auto` row per set
+    /// (PCK, no-figure rate) scored on the same detections, so calibrations are compared
+    /// without running the backends again.
+    #[arg(long)]
+    compare_calibration: Vec<PathBuf>,
     /// The sketch model `--sets` runs as the fmp backend (and inside auto) instead of the
     /// embedded one (.skbd or PARSE JSON), e.g. a retraining candidate.
     #[arg(long)]
@@ -67,6 +73,12 @@ pub struct Args {
     /// training used.
     #[arg(long, default_value = "101-305", value_parser = parse_range)]
     parse_range: (usize, usize),
+}
+
+/// Reads a calibration JSON written by `calibrate-detector`.
+fn read_calibration(p: &std::path::Path) -> Result<Calibration, CliError> {
+    let text = std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
+    Ok(Calibration::from_json(&text)?)
 }
 
 /// Parses "A-B" with 1 ≤ A ≤ B ≤ 305.
@@ -97,12 +109,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
             None => Model::embedded()?,
         };
         let cal = match &a.calibration {
-            Some(p) => sketchbody::detect::calibration::Calibration::from_json(
-                &std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?,
-            )?,
-            None => sketchbody::detect::calibration::Calibration::embedded()?.clone(),
+            Some(p) => read_calibration(p)?,
+            None => Calibration::embedded()?.clone(),
         };
-        return crate::eval_backends::run_sets(&specs, &renderer(a.mocap.as_deref())?, &a.parse, &cal, &model);
+        let others: Vec<(String, Calibration)> = a
+            .compare_calibration
+            .iter()
+            .map(|p| Ok((p.display().to_string(), read_calibration(p)?)))
+            .collect::<Result<_, CliError>>()?;
+        return crate::eval_backends::run_sets(&specs, &renderer(a.mocap.as_deref())?, &a.parse, &cal, &others, &model);
     }
     let mut names = vec![a.model.as_ref().map_or("embedded".to_string(), |p| p.display().to_string())];
     let mut models = vec![match &a.model {
