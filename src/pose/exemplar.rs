@@ -83,11 +83,22 @@ fn frame(e: &[f64]) -> Frame {
     Some(std::array::from_fn(|i| qt[(i % 3, i / 3)]))
 }
 
-/// The dictionary's exemplar frames ([`frame`]), computed on first use. A clone starts empty
+/// Exemplars per block of [`Frames`].
+const LANES: usize = 4;
+
+/// The exemplar frames ([`frame`]) in blocks of [`LANES`] exemplars, coordinate-major within
+/// a block (`q[i][l]`: coordinate i of the l-th exemplar), so that the ranking computes several
+/// exemplars side by side; `usable[k]` is false for a degenerate exemplar (its entries are 0).
+struct Frames {
+    blocks: Vec<[[f64; LANES]; 3 * NUM_JOINTS]>,
+    usable: Vec<bool>,
+}
+
+/// The dictionary's exemplar frames ([`Frames`]), computed on first use. A clone starts empty
 /// (so a dictionary rebuilt from another with `..d.clone()` never sees stale frames) and
 /// equality ignores it: it is derived from [`super::Dictionary::exemplars`] alone.
 #[derive(Default)]
-pub struct FrameCache(OnceLock<Vec<Frame>>);
+pub struct FrameCache(OnceLock<Frames>);
 
 impl Clone for FrameCache {
     fn clone(&self) -> Self {
@@ -107,9 +118,40 @@ impl std::fmt::Debug for FrameCache {
     }
 }
 
-fn frames<'a>(prob: &Problem<'a>) -> &'a [Frame] {
+fn frames<'a>(prob: &Problem<'a>) -> &'a Frames {
     let ex = &prob.dict.exemplars;
-    prob.dict.frame_cache.0.get_or_init(|| (0..ex.ncols()).map(|k| frame(ex.column(k).as_slice())).collect())
+    prob.dict.frame_cache.0.get_or_init(|| {
+        let n = ex.ncols();
+        let mut blocks = vec![[[0.0; LANES]; 3 * NUM_JOINTS]; n.div_ceil(LANES)];
+        let mut usable = vec![false; n];
+        for (k, ok) in usable.iter_mut().enumerate() {
+            if let Some(q) = frame(ex.column(k).as_slice()) {
+                for (i, v) in q.iter().enumerate() {
+                    blocks[k / LANES][i][k % LANES] = *v;
+                }
+                *ok = true;
+            }
+        }
+        Frames { blocks, usable }
+    })
+}
+
+/// An exemplar and its residual, ordered by residual, then index (the ranking's order).
+#[derive(Clone, Copy, PartialEq)]
+struct Ranked(f64, usize);
+
+impl Eq for Ranked {}
+
+impl PartialOrd for Ranked {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Ranked {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0).then(self.1.cmp(&other.1))
+    }
 }
 
 /// The `keep` best usable exemplars of `prob.dict` with their affine-camera residuals (px²),
@@ -122,36 +164,50 @@ pub fn affine_ranking(prob: &Problem, keep: usize) -> Vec<(usize, f64)> {
     let cv = prob.vis.iter().map(|&p| prob.uv[p][1]).sum::<f64>() / n;
     let w: Vec<[f64; 2]> = prob.vis.iter().map(|&p| [prob.uv[p][0] - cu, prob.uv[p][1] - cv]).collect();
     let ww: f64 = w.iter().map(|q| q[0] * q[0] + q[1] * q[1]).sum();
-    let mut scored: Vec<(usize, f64)> = if prob.vis.len() == NUM_JOINTS {
-        frames(prob)
-            .iter()
-            .enumerate()
-            .filter_map(|(k, f)| {
-                let q = f.as_ref()?;
+    // The `keep` best so far, the worst on top.
+    let mut best = std::collections::BinaryHeap::with_capacity(keep.min(ex.ncols()) + 1);
+    let mut offer = |r: Ranked| {
+        if best.len() < keep {
+            best.push(r);
+        } else if let Some(mut worst) = best.peek_mut() {
+            if r < *worst {
+                *worst = r;
+            }
+        }
+    };
+    if prob.vis.len() == NUM_JOINTS {
+        let f = frames(prob);
+        for (b, q) in f.blocks.iter().enumerate() {
+            // The six sums QᵀW of each exemplar, in joint order, for LANES exemplars at once.
+            let (mut pu, mut pv) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+            for (qp, wp) in q.chunks_exact(3).zip(&w) {
+                for a in 0..3 {
+                    for l in 0..LANES {
+                        pu[a][l] += qp[a][l] * wp[0];
+                        pv[a][l] += qp[a][l] * wp[1];
+                    }
+                }
+            }
+            for l in 0..LANES {
+                let k = b * LANES + l;
+                if !f.usable.get(k).copied().unwrap_or(false) {
+                    continue;
+                }
                 let mut proj = 0.0;
                 for a in 0..3 {
-                    let (mut pu, mut pv) = (0.0, 0.0);
-                    for (p, wp) in w.iter().enumerate() {
-                        pu += q[3 * p + a] * wp[0];
-                        pv += q[3 * p + a] * wp[1];
-                    }
-                    proj += pu * pu + pv * pv;
+                    proj += pu[a][l] * pu[a][l] + pv[a][l] * pv[a][l];
                 }
-                Some((k, (ww - proj).max(0.0)))
-            })
-            .collect()
+                offer(Ranked((ww - proj).max(0.0), k));
+            }
+        }
     } else {
-        (0..ex.ncols())
-            .filter_map(|k| affine_residual(ex.column(k).as_slice(), &prob.vis, &w, ww).map(|r| (k, r)))
-            .collect()
-    };
-    let order = |a: &(usize, f64), b: &(usize, f64)| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0));
-    if keep < scored.len() {
-        scored.select_nth_unstable_by(keep, order);
-        scored.truncate(keep);
+        for k in 0..ex.ncols() {
+            if let Some(r) = affine_residual(ex.column(k).as_slice(), &prob.vis, &w, ww) {
+                offer(Ranked(r, k));
+            }
+        }
     }
-    scored.sort_unstable_by(order);
-    scored
+    best.into_sorted_vec().into_iter().map(|Ranked(r, k)| (k, r)).collect()
 }
 
 /// How many exemplars of the [`affine_ranking`] [`nearest`] refits for `count` starts.

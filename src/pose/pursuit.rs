@@ -275,6 +275,30 @@ fn with_joint_fit(prob: &Problem, opts: &PoseOptions, est: PoseEstimate) -> Pose
     }
 }
 
+/// `B_bᵀ z` for every basis b, each summed in joint-coordinate order. Eight columns at a time
+/// with their own sums: the additions of one column form a chain, and interleaving eight
+/// chains keeps the adder busy (the sums are those of a plain loop, bit for bit).
+fn basis_dots(dict: &Dictionary, z: &[f64; 3 * NUM_JOINTS]) -> Vec<f64> {
+    const LANES: usize = 8;
+    let n = 3 * NUM_JOINTS;
+    let data = dict.bases.as_slice();
+    let mut out = Vec::with_capacity(dict.num_bases());
+    let mut blocks = data.chunks_exact(LANES * n);
+    for block in blocks.by_ref() {
+        let mut acc = [0.0; LANES];
+        for (i, zi) in z.iter().enumerate() {
+            for (l, a) in acc.iter_mut().enumerate() {
+                *a += block[l * n + i] * zi;
+            }
+        }
+        out.extend_from_slice(&acc);
+    }
+    for col in blocks.remainder().chunks_exact(n) {
+        out.push(col.iter().zip(z).map(|(x, y)| x * y).sum());
+    }
+    out
+}
+
 /// The pursuit (and refinement, if enabled) from the base pose of `prob` with camera `cam`.
 fn pursue(
     prob: &Problem,
@@ -304,26 +328,25 @@ fn pursue(
         }
         let m = pu * pu.transpose() + pv * pv.transpose();
         let mw = [m[(0, 0)], 2.0 * m[(0, 1)], 2.0 * m[(0, 2)], m[(1, 1)], 2.0 * m[(1, 2)], m[(2, 2)]];
-        let mut scored: Vec<(usize, f64)> = Vec::with_capacity(dict.num_bases());
-        for (b, (col, c)) in dict.bases.column_iter().zip(prob.basis_gram.iter()).enumerate() {
-            if bases.contains(&b) {
-                continue;
-            }
-            let dot: f64 = col.as_slice().iter().zip(&z).map(|(x, y)| x * y).sum();
-            let norm2: f64 = mw.iter().zip(c).map(|(x, y)| x * y).sum();
-            if norm2 > 0.0 {
-                scored.push((b, dot.abs() / norm2.sqrt()));
-            }
-        }
         // The CANDIDATES most correlated with the residual are tried with the constrained weight
         // solve for the current camera; the one leaving the smallest objective is added (ties
         // by column, so the choice does not depend on the selection algorithm).
         let order = |a: &(usize, f64), b: &(usize, f64)| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0));
-        if CANDIDATES < scored.len() {
-            scored.select_nth_unstable_by(CANDIDATES, order);
-            scored.truncate(CANDIDATES);
+        let mut scored: Vec<(usize, f64)> = Vec::with_capacity(CANDIDATES + 1);
+        for (b, (dot, c)) in basis_dots(dict, &z).iter().zip(prob.basis_gram.iter()).enumerate() {
+            if bases.contains(&b) {
+                continue;
+            }
+            let norm2: f64 = mw.iter().zip(c).map(|(x, y)| x * y).sum();
+            if norm2 > 0.0 {
+                let s = (b, dot.abs() / norm2.sqrt());
+                if scored.len() < CANDIDATES || scored.last().is_some_and(|l| order(&s, l).is_lt()) {
+                    let at = scored.partition_point(|x| order(x, &s).is_lt());
+                    scored.insert(at, s);
+                    scored.truncate(CANDIDATES);
+                }
+            }
         }
-        scored.sort_unstable_by(order);
         let mut best: Option<(usize, f64)> = None;
         for &(b, _) in scored.iter().take(CANDIDATES) {
             let mut nb = bases.clone();

@@ -56,6 +56,16 @@ pub fn solve(a: &DMatrix<f64>, r: &DVector<f64>, con: &LengthConstraint, lo: f64
     };
     let g_of =
         |z: &DVector<f64>| -> f64 { (0..k).map(|i| lam[i] * z[i] * z[i] + 2.0 * gamma[i] * z[i]).sum::<f64>() + c0 };
+    // g(z(μ)) without building z(μ) (the same arithmetic as `g_of(&z_of(μ))`).
+    let g_at = |mu: f64| -> f64 {
+        (0..k)
+            .map(|i| {
+                let z = (beta[i] - mu * gamma[i]) / (1.0 + mu * lam[i]);
+                lam[i] * z * z + 2.0 * gamma[i] * z
+            })
+            .sum::<f64>()
+            + c0
+    };
     let back = |z: &DVector<f64>| -> DVector<f64> {
         l.transpose().solve_upper_triangular(&(&v * z)).unwrap_or_else(|| DVector::zeros(k))
     };
@@ -73,7 +83,7 @@ pub fn solve(a: &DMatrix<f64>, r: &DVector<f64>, con: &LengthConstraint, lo: f64
         // λ > 0: bracket then bisect.
         let (mut a_l, mut b_l) = (0.0, 1.0 / lmax);
         let mut n = 0;
-        while g_of(&z_of(b_l)) > hi {
+        while g_at(b_l) > hi {
             a_l = b_l;
             b_l *= 4.0;
             n += 1;
@@ -81,7 +91,7 @@ pub fn solve(a: &DMatrix<f64>, r: &DVector<f64>, con: &LengthConstraint, lo: f64
                 return QclsSolution { w: back(&z_of(b_l)), feasible: false };
             }
         }
-        let mu = bisect(a_l, b_l, |mu| g_of(&z_of(mu)) - hi);
+        let mu = bisect(a_l, b_l, |mu| g_at(mu) - hi);
         return QclsSolution { w: back(&z_of(mu)), feasible: true };
     }
     // g0 < lo: λ in (−1/Λmax, 0).
@@ -89,8 +99,8 @@ pub fn solve(a: &DMatrix<f64>, r: &DVector<f64>, con: &LengthConstraint, lo: f64
     let mut inner = 0.0;
     for n in 1..=60 {
         let mu = lower * (1.0 - 0.5f64.powi(n));
-        if g_of(&z_of(mu)) >= lo {
-            let mu = bisect(inner, mu, |mu| g_of(&z_of(mu)) - lo);
+        if g_at(mu) >= lo {
+            let mu = bisect(inner, mu, |mu| g_at(mu) - lo);
             return QclsSolution { w: back(&z_of(mu)), feasible: true };
         }
         inner = mu;
