@@ -327,3 +327,31 @@ fn a_cloak_to_the_ground_gives_a_plausible_body_flagged_low_evidence() {
     let height = sketchbody::body::rig::y_extent(&r.mesh.vertices);
     assert!((1.4..2.1).contains(&height), "height {height} m");
 }
+
+#[test]
+fn detected_joints_fit_the_gendered_space_the_classifier_picks() {
+    use sketchbody::detect::figure::FigureOptions;
+    use sketchbody::detect::landmark::LandmarkNet;
+    use sketchbody::pipeline::{DetectedJointsFit, FigureJoints};
+    let (model, dict, sketch, _) = inputs();
+    let (detector, net) = (Model::embedded().unwrap(), LandmarkNet::embedded().unwrap());
+    let figure_options = FigureOptions::default();
+    let source = FigureJoints { model: &detector, net: &net, options: &figure_options, colour: None };
+    let r = run_pipeline(&model, &dict, &sketch, &source, &fast(None), &mut |_| true).unwrap();
+    assert!(r.detection.is_some() && r.gender_fitted);
+    let p = r.gender_evidence.male_probability;
+    let picked = if p > 0.5 { Gender::Male } else { Gender::Female };
+    assert_eq!((r.gender, r.space, r.fits.len()), (picked, ShapeChoice::Gendered(picked), 1));
+    assert_eq!((r.gender_value, r.gender_confidence, r.male_prior), (picked.index() as f64, p.max(1.0 - p), None));
+    // Switched off: the both-sexes fit with an even prior, as before.
+    let blended = PipelineOptions {
+        detected: DetectedJointsFit { classifier_gender: false, ..Default::default() },
+        ..fast(None)
+    };
+    let b = run_pipeline(&model, &dict, &sketch, &source, &blended, &mut |_| true).unwrap();
+    assert_eq!((b.space, b.male_prior), (ShapeChoice::Blended, Some(0.5)));
+    // A given gender wins over the classifier.
+    let given = Gender::ALL.into_iter().find(|&g| g != picked).unwrap();
+    let g = run_pipeline(&model, &dict, &sketch, &source, &fast(Some(given)), &mut |_| true).unwrap();
+    assert_eq!((g.gender, g.gender_fitted, g.gender_confidence), (given, false, 1.0));
+}

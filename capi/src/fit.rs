@@ -40,7 +40,7 @@ pub const SKB_SCORE_TWO_SIDED_CHAMFER: u32 = 3;
 pub const SKB_SKIN_LINEAR: u32 = 0;
 /// `skb_fit_options_set_skinning`: dual-quaternion skinning.
 pub const SKB_SKIN_DUAL_QUATERNION: u32 = 1;
-/// `skb_fit_options_set_gender`: fit the both-sexes space with gender as a continuous weight (default).
+/// `skb_fit_options_set_gender`: the gender is the fit's or the classifier's (default).
 pub const SKB_GENDER_AUTO: u32 = 2;
 
 /// Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
@@ -291,7 +291,9 @@ pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, di
 }
 
 /// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
-/// fit the both-sexes space, gender a continuous weight; `skb_result_gender_value` reads it).
+/// `skb_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_run_pipeline`
+/// fits the gendered space the gender classifier picks, see `skb_result_gender`;
+/// `skb_result_gender_value` reads it).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_gender(opts: *mut skb_fit_options, gender: u32) -> skb_status {
     // SAFETY: the header contract of `skb_fit_options_set_gender` (lib.rs § Safety): `opts` is NULL or valid for

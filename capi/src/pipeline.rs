@@ -92,9 +92,11 @@ pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
 /// context's embedded detector finds them, as `skb_detect` with default options), the 3-D
 /// pose and camera (with detected joints, BlazePose's relative joint depths weigh the solver's
 /// choices), the shape fit (with detected joints: half the joint weight, no bone-factor
-/// search), and the fitted shape posed to the estimate.
+/// search, and with automatic gender the gendered space the detected-joints gender classifier
+/// picks), and the fitted shape posed to the estimate.
 /// `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
-/// fit options' gender defaults to automatic: the both-sexes space, gender fitted) are
+/// fit options' gender defaults to automatic: chosen by the gender classifier, see
+/// `skb_result_gender`) are
 /// only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
 /// cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
 /// `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
@@ -172,7 +174,8 @@ pub unsafe extern "C" fn skb_result_free(result: *mut skb_result) {
 
 /// The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
 /// or with automatic gender the classifier's choice between the two gendered fits (given
-/// joints) or the nearer end of the fitted gender value (detected joints; `skb_result_gender_value`);
+/// joints) or the detected-joints classifier's choice of the one gendered space fitted
+/// (detected joints);
 /// whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_gender(
@@ -194,11 +197,11 @@ pub unsafe extern "C" fn skb_result_gender(
 }
 
 /// The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
-/// when the gender was given or chosen between the two gendered fits) and into `*confidence`
-/// (may be NULL) the probability that `skb_result_gender` is right (0.5..=1; 1 when the gender
-/// was given): with given joints, the gender classifier's (the sketch's joint and outline
-/// widths and the score margin of the two gendered fits); with detected joints, the
-/// both-sexes fit's posterior mass on that side of 0.5, its prior set by the classifier.
+/// when a gendered space was fitted, as by default) and into `*confidence` (may be NULL) the
+/// probability that `skb_result_gender` is right (0.5..=1; 1 when the gender was given): with
+/// given joints, the gender classifier's (the sketch's joint and outline widths and the score
+/// margin of the two gendered fits); with detected joints, the detected-joints classifier's
+/// (the same widths).
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_gender_value(
     result: *const skb_result,
@@ -265,8 +268,8 @@ pub unsafe extern "C" fn skb_result_evidence(
 }
 
 /// The best match score (higher is better) of the chosen fit into `*score`; `gender` must be
-/// the result's gender (`skb_result_gender`: the given gender's space, the both-sexes one, or
-/// the gendered fit the classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
+/// the result's gender (`skb_result_gender`: the given gender's space or the gendered fit the
+/// classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32, score: *mut f64) -> skb_status {
     // SAFETY: the header contract of `skb_result_score` (lib.rs § Safety): `result`, `score` are NULL or valid for

@@ -86,6 +86,10 @@ pub struct FitArgs {
     /// agree with the chosen figure.
     #[arg(long, default_value_t = DetectedJointsFit::default().landmark_pose, action = clap::ArgAction::Set)]
     pub landmark_pose: bool,
+    /// With detected joints and automatic gender, fit the gendered space the detected-joints
+    /// gender classifier picks (`--detected-classifier-gender false`: the both-sexes fit).
+    #[arg(long, default_value_t = DetectedJointsFit::default().classifier_gender, action = clap::ArgAction::Set)]
+    pub detected_classifier_gender: bool,
     /// With automatic gender, the fit's prior mass on the male end is the gender classifier's
     /// probability from the sketch's joints and outline (`--gender-evidence true|false`; false:
     /// 0.5 on each end).
@@ -129,6 +133,7 @@ impl FitArgs {
             joint_weight_scale: self.detected_joint_weight_scale,
             proportions: self.detected_proportions,
             landmark_pose: self.landmark_pose,
+            classifier_gender: self.detected_classifier_gender,
         }
     }
 

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "ccfb882550720317971f4e1c66d67d52e8fe1c4ba2da12f1627f9d1ec06fab54"
+HEADER_SHA256 = "a227830682497cdcdb80e454ea8d28c0310a612aa15412f8fc888711e3eff889"
 
 # ---- constants (#define) ----
 
@@ -86,7 +86,7 @@ SKB_SCORE_TWO_SIDED_CHAMFER = 3
 SKB_SKIN_LINEAR = 0
 # `skb_fit_options_set_skinning`: dual-quaternion skinning.
 SKB_SKIN_DUAL_QUATERNION = 1
-# `skb_fit_options_set_gender`: fit the both-sexes space with gender as a continuous weight (default).
+# `skb_fit_options_set_gender`: the gender is the fit's or the classifier's (default).
 SKB_GENDER_AUTO = 2
 # `skb_result_copy_joints3d`: the rest joints of the fitted shape.
 SKB_JOINTS_REST = 0
@@ -2466,7 +2466,9 @@ FUNCTIONS["skb_fit_options_set_dims"] = (
 )
 
 # Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
-# fit the both-sexes space, gender a continuous weight; `skb_result_gender_value` reads it).
+# `skb_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_run_pipeline`
+# fits the gendered space the gender classifier picks, see `skb_result_gender`;
+# `skb_result_gender_value` reads it).
 FUNCTIONS["skb_fit_options_set_gender"] = (
     ctypes.c_uint32,
     [
@@ -2573,9 +2575,11 @@ FUNCTIONS["skb_gray_image_free"] = (
 # context's embedded detector finds them, as `skb_detect` with default options), the 3-D
 # pose and camera (with detected joints, BlazePose's relative joint depths weigh the solver's
 # choices), the shape fit (with detected joints: half the joint weight, no bone-factor
-# search), and the fitted shape posed to the estimate.
+# search, and with automatic gender the gendered space the detected-joints gender classifier
+# picks), and the fitted shape posed to the estimate.
 # `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
-# fit options' gender defaults to automatic: the both-sexes space, gender fitted) are
+# fit options' gender defaults to automatic: chosen by the gender classifier, see
+# `skb_result_gender`) are
 # only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
 # cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
 # `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
@@ -2626,7 +2630,8 @@ FUNCTIONS["skb_result_free"] = (
 
 # The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
 # or with automatic gender the classifier's choice between the two gendered fits (given
-# joints) or the nearer end of the fitted gender value (detected joints; `skb_result_gender_value`);
+# joints) or the detected-joints classifier's choice of the one gendered space fitted
+# (detected joints);
 # whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
 FUNCTIONS["skb_result_gender"] = (
     ctypes.c_uint32,
@@ -2644,11 +2649,11 @@ FUNCTIONS["skb_result_gender"] = (
 )
 
 # The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
-# when the gender was given or chosen between the two gendered fits) and into `*confidence`
-# (may be NULL) the probability that `skb_result_gender` is right (0.5..=1; 1 when the gender
-# was given): with given joints, the gender classifier's (the sketch's joint and outline
-# widths and the score margin of the two gendered fits); with detected joints, the
-# both-sexes fit's posterior mass on that side of 0.5, its prior set by the classifier.
+# when a gendered space was fitted, as by default) and into `*confidence` (may be NULL) the
+# probability that `skb_result_gender` is right (0.5..=1; 1 when the gender was given): with
+# given joints, the gender classifier's (the sketch's joint and outline widths and the score
+# margin of the two gendered fits); with detected joints, the detected-joints classifier's
+# (the same widths).
 FUNCTIONS["skb_result_gender_value"] = (
     ctypes.c_uint32,
     [
@@ -2701,8 +2706,8 @@ FUNCTIONS["skb_result_evidence"] = (
 )
 
 # The best match score (higher is better) of the chosen fit into `*score`; `gender` must be
-# the result's gender (`skb_result_gender`: the given gender's space, the both-sexes one, or
-# the gendered fit the classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
+# the result's gender (`skb_result_gender`: the given gender's space or the gendered fit the
+# classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
 FUNCTIONS["skb_result_score"] = (
     ctypes.c_uint32,
     [

@@ -24,19 +24,34 @@ pub struct DetectedJointsFit {
     /// The pose step reads BlazePose's own joints and all their depths when they agree with the
     /// chosen figure ([`Figure::landmark_joints`]); the fit keeps the chosen joints.
     pub landmark_pose: bool,
+    /// With automatic gender, fit the gendered space the detected-joints gender classifier
+    /// ([`crate::fit::GenderClassifier::SHIPPED_DETECTED`]) picks (`P(male) > 0.5`) instead of the
+    /// both-sexes space, whose fitted gender value is no better than chance with detected joints
+    /// (33/60 right on the tuning set against the classifier's 44/60). Default `true`.
+    pub classifier_gender: bool,
 }
 
 impl Default for DetectedJointsFit {
     /// Chosen on `make-dataset 60 --seed 78` with detected joints and automatic gender (rest AED
     /// centred, mean shape 0.0275): as for given joints 0.0363; without the proportion search
     /// 0.0334; joint-weight factor 0.1 / 0.3 / 0.5 then 0.0303 / 0.0309 / 0.0285, posed AED
-    /// 0.0885 → 0.0856 (docs/benchmarks.md).
+    /// 0.0885 → 0.0856 (docs/benchmarks.md). `classifier_gender`: on `make-dataset 60 --seed 78`,
+    /// first 60, detected joints, rest AED centred 0.0304 with the both-sexes fit, 0.0288 with the
+    /// classifier's gendered fit (mean shape of the true gender 0.0275).
     fn default() -> Self {
-        Self { joint_weight_scale: 0.5, proportions: false, landmark_pose: false }
+        Self { joint_weight_scale: 0.5, proportions: false, landmark_pose: false, classifier_gender: true }
     }
 }
 
 impl DetectedJointsFit {
+    /// The gender to fit for a detected figure when none was given: the classifier's choice from
+    /// its `male_probability` ([`crate::fit::GenderEvidence::male_probability`]) when
+    /// [`DetectedJointsFit::classifier_gender`], else `None` (the both-sexes fit).
+    pub fn gender(&self, male_probability: f64) -> Option<crate::body::Gender> {
+        use crate::body::Gender;
+        self.classifier_gender.then_some(if male_probability > 0.5 { Gender::Male } else { Gender::Female })
+    }
+
     /// `fit` adjusted for detected joints. Errors: `OutOfRange` for a scale outside 0..=1.
     pub fn apply(&self, fit: &FitOptions) -> Result<FitOptions> {
         if !(0.0..=1.0).contains(&self.joint_weight_scale) {
@@ -104,12 +119,11 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_figure_gives_a_hint_only_with_depths_and_a_weight() {
-        let mut f = Figure {
+    fn figure(joint_confidence: [f64; NUM_JOINTS]) -> Figure {
+        Figure {
             backend: crate::detect::figure::Backend::BlazePose,
             joints: crate::skeleton::Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] },
-            joint_confidence: [1.0; NUM_JOINTS],
+            joint_confidence,
             confidence: 1.0,
             presence: 1.0,
             low_confidence: false,
@@ -117,7 +131,24 @@ mod tests {
             others: Vec::new(),
             landmark_depth: [None; NUM_JOINTS],
             landmark_joints: None,
-        };
+        }
+    }
+
+    #[test]
+    fn the_classifier_picks_the_gender_only_when_asked() {
+        use crate::body::Gender;
+        let on = DetectedJointsFit::default();
+        assert!(on.classifier_gender, "the default");
+        assert_eq!(on.gender(0.7), Some(Gender::Male));
+        assert_eq!(on.gender(0.3), Some(Gender::Female));
+        assert_eq!(on.gender(0.5), Some(Gender::Female), "a tie is not male");
+        let off = DetectedJointsFit { classifier_gender: false, ..on };
+        assert_eq!(off.gender(0.9), None, "the both-sexes fit");
+    }
+
+    #[test]
+    fn a_figure_gives_a_hint_only_with_depths_and_a_weight() {
+        let mut f = figure([1.0; NUM_JOINTS]);
         assert!(depth_hint(&f, 0.1).is_none(), "no depths");
         f.landmark_depth[3] = Some(-10.0);
         assert!(depth_hint(&f, 0.0).is_none(), "zero weight");

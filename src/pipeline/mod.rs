@@ -10,7 +10,9 @@
 //! ([`crate::body::BlendedSpace`]: gender is a continuous shape weight, 0 female … 1 male, fitted
 //! with the others), so there is no hard gender choice to get wrong; the result reports the
 //! fitted gender value and the posterior probability of its half. Given a gender, that gender's
-//! space is fitted.
+//! space is fitted. With given joints the default fits both gendered spaces and chooses
+//! ([`PipelineOptions::classify_gender`]); with detected joints it fits the space the
+//! detected-joints gender classifier picks ([`DetectedJointsFit::classifier_gender`]).
 
 pub mod body_fit;
 mod detected;
@@ -80,8 +82,8 @@ pub struct PipelineOptions {
     /// of the both-sexes space and keep the one [`MarginCombination::SHIPPED`] chooses from the
     /// gender classifier's log-odds and the two fits' score margin; the result's confidence is
     /// then that combination's probability of the chosen gender. With detected joints the
-    /// margin misleads (measured, docs/benchmarks.md) and the both-sexes fit with the
-    /// classifier's prior is used. Default `true`.
+    /// margin misleads (measured, docs/benchmarks.md) and [`DetectedJointsFit::classifier_gender`]
+    /// applies instead. Default `true`.
     pub classify_gender: bool,
 }
 
@@ -144,19 +146,21 @@ pub struct PipelineResult {
     pub space: ShapeChoice,
     /// The chosen gender.
     pub gender: Gender,
-    /// Gender value, 0 = female mean … 1 = male mean ([`FittedBody::gender_value`]).
+    /// Gender value, 0 = female mean … 1 = male mean ([`FittedBody::gender_value`]; 0 or 1 when a
+    /// gendered space was fitted).
     pub gender_value: f64,
     /// Probability that [`PipelineResult::gender`] is right: 1 when given; with
-    /// [`PipelineOptions::classify_gender`] the [`MarginCombination`]'s; else the blended fit's
-    /// posterior mass of that half ([`FittedBody::gender_confidence`]).
+    /// [`PipelineOptions::classify_gender`] the [`MarginCombination`]'s; with detected joints and
+    /// [`DetectedJointsFit::classifier_gender`] the detected-joints classifier's; else the blended
+    /// fit's posterior mass of that half ([`FittedBody::gender_confidence`]).
     pub gender_confidence: f64,
     /// `true` when the gender was fitted, `false` when the caller gave it.
     pub gender_fitted: bool,
     /// The sketch's geometric gender evidence and the classifier's probability (measured
     /// whether or not it was used; see [`PipelineOptions::gender_evidence`]).
     pub gender_evidence: GenderEvidence,
-    /// The prior mass on the male end the fit used (`None` when a gender was given or the
-    /// mean shape was used; 0.5 without the classifier).
+    /// The prior mass on the male end the both-sexes fit used (`None` when a gendered space was
+    /// fitted or the mean shape was used; 0.5 without the classifier).
     pub male_prior: Option<f64>,
     /// Fraction of the fitted outline the sketch supports ([`FittedBody::edge_support`]).
     pub edge_support: f64,
@@ -270,9 +274,19 @@ pub fn run_pipeline(
     {
         fit.male_prior = Some(evidence.male_probability);
     }
-    let male_prior = (options.gender.is_none() && !classify).then(|| fit.male_prior.unwrap_or(0.5));
-    let choice =
-        BodyChoice { gender: options.gender, mean_shape: options.mean_shape, keep_pose_scale: options.keep_pose_scale };
+    // With detected joints the both-sexes fit's gender is no better than chance; the
+    // detected-joints classifier picks the gendered space instead (docs/benchmarks.md).
+    let detected_gender = match (&detection, options.gender) {
+        (Some(_), None) if !options.mean_shape => options.detected.gender(evidence.male_probability),
+        _ => None,
+    };
+    let male_prior =
+        (options.gender.is_none() && !classify && detected_gender.is_none()).then(|| fit.male_prior.unwrap_or(0.5));
+    let choice = BodyChoice {
+        gender: options.gender.or(detected_gender),
+        mean_shape: options.mean_shape,
+        keep_pose_scale: options.keep_pose_scale,
+    };
     let (body, classified) = if classify {
         // Both gendered fits; the classifier's log-odds and the score margin choose.
         let mut bodies = Vec::with_capacity(2);
@@ -292,7 +306,9 @@ pub fn run_pipeline(
         (body, Some(male.max(1.0 - male)))
     } else {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
-        (fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &choice, &mut cb)?, None)
+        let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &choice, &mut cb)?;
+        let male = evidence.male_probability;
+        (body, detected_gender.map(|_| male.max(1.0 - male)))
     };
     timings.fit = body.fit_seconds;
     timings.posing = body.posing_seconds;
