@@ -1607,9 +1607,7 @@ void skb_result_free(struct skb_result *result);
  * (detected joints);
  * whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
  */
-skb_status skb_result_gender(const struct skb_result *result,
-                             uint32_t *gender,
-                             bool *by_score);
+skb_status skb_result_gender(const struct skb_result *result, uint32_t *gender, bool *by_score);
 
 /**
  * The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1

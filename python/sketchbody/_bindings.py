@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "a227830682497cdcdb80e454ea8d28c0310a612aa15412f8fc888711e3eff889"
+HEADER_SHA256 = "e4403feae31b6af0a2b7bc95c0969c1fbece5a140ad2e46108976f490f08ed8f"
 
 # ---- constants (#define) ----
 
