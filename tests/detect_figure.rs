@@ -2,7 +2,8 @@
 //! rendered sketches and blank pages: per-limb fusion takes each limb whole from one backend
 //! and never lowers the figure's confidence below the per-image choice; a blank page is "no
 //! figure" by the calibrated presence and by the hard thresholds; the set scores agree with the
-//! metrics computed directly; a calibration cannot be fitted from one-sided outcomes.
+//! metrics computed directly; a calibration cannot be fitted from one-sided outcomes; refusing
+//! a fraction of negative pages lowers only the presence intercepts, enough and no more.
 
 use std::sync::Arc;
 
@@ -12,7 +13,7 @@ use sketchbody::detect::figure::{decide, gather, Backend, FigureOptions, Fusion,
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
 use sketchbody::error::Error;
-use sketchbody::eval::backends::{fit_calibration, gather_sample, reliability, score_set};
+use sketchbody::eval::backends::{fit_calibration, gather_sample, refuse_negatives, reliability, score_set};
 use sketchbody::eval::metrics::pck;
 use sketchbody::image::ImageView;
 use sketchbody::render::sketch::{SketchRenderer, SketchRequest};
@@ -79,6 +80,20 @@ fn fusion_presence_and_set_scores() {
     // Every image here holds a figure but the blank page: presence models see one outcome only
     // for pages with BlazePose evidence, so the fit must refuse rather than extrapolate.
     assert!(matches!(fit_calibration(&samples[..3], 1e-2, "test"), Err(Error::OutOfRange { .. })));
+    // Refusing negatives: treat the three figures as pages to refuse; at most ⌊(1 − q) · 3⌋ of
+    // them may still be answered, and the joint models are untouched.
+    for (q, allowed) in [(1.0, 0), (0.6, 1), (0.0, 3)] {
+        let mut strict_cal = cal.clone();
+        let d = refuse_negatives(&mut strict_cal, &[&samples[..3]], q).unwrap();
+        assert!(d <= 0.0, "{d}");
+        assert_eq!(strict_cal.joints, cal.joints);
+        let answered = samples[..3].iter().filter(|x| decide(&x.evidence, &strict_cal, &options).is_ok()).count();
+        assert!(answered <= allowed, "q {q}: {answered} answered");
+        if q == 0.0 {
+            assert_eq!((d, &strict_cal), (0.0, cal), "nothing to refuse, nothing changed");
+        }
+    }
+    assert!(matches!(refuse_negatives(&mut cal.clone(), &[], 1.5), Err(Error::OutOfRange { .. })));
     assert_eq!("blazepose".parse::<Backend>().unwrap(), Backend::BlazePose);
     assert!(matches!("openpose".parse::<Backend>(), Err(Error::OutOfRange { .. })));
 }

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use sketchbody::detect::figure::FigureOptions;
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
-use sketchbody::eval::backends::fit_calibration;
+use sketchbody::eval::backends::{fit_calibration, refuse_negatives, Sample};
 use sketchbody::render::photo_npr::PhotoNpr;
 use sketchbody::render::stylise::{NegativePage, Stylisation};
 
@@ -48,6 +48,11 @@ pub struct Args {
     /// Pages of each kind without a figure (blank, text, clutter).
     #[arg(long, default_value_t = 40)]
     negatives: usize,
+    /// Make the presence models refuse at least this fraction of each kind of page without a
+    /// figure in the calibration set (`eval::backends::refuse_negatives`; e.g. 0.975). Off by
+    /// default: the presence models stay calibrated probabilities.
+    #[arg(long, value_parser = crate::ranges::real(0.0, 1.0, false))]
+    refuse: Option<f64>,
     /// L2 penalty of the logistic fits.
     #[arg(long, default_value_t = 1e-2)]
     ridge: f64,
@@ -86,23 +91,34 @@ pub fn run(a: Args) -> Result<(), CliError> {
     }
     let options = FigureOptions::default();
     let mut samples = Vec::new();
+    let mut negative_ranges = Vec::new();
     for s in &specs {
+        let start = samples.len();
         samples.extend(gather_set(s, &ctx, &options)?);
+        if matches!(s, SetSpec::Negative { .. }) {
+            negative_ranges.push(start..samples.len());
+        }
     }
     let labels: Vec<String> = specs.iter().map(SetSpec::label).collect();
     let provenance = format!(
-        "sketchbody calibrate-detector --synthetic {} --seed {} --parse-last {}{}{} --negatives {} --ridge {}; sets: {}; {} images",
+        "sketchbody calibrate-detector --synthetic {} --seed {} --parse-last {}{}{} --negatives {}{} --ridge {}; sets: {}; {} images",
         a.synthetic,
         a.seed,
         a.parse_last,
         if a.stylised { " --stylised" } else { "" },
         if a.npr { " --npr" } else { "" },
         a.negatives,
+        a.refuse.map(|q| format!(" --refuse {q}")).unwrap_or_default(),
         a.ridge,
         labels.join(", "),
         samples.len()
     );
-    let cal = fit_calibration(&samples, a.ridge, &provenance)?;
+    let mut cal = fit_calibration(&samples, a.ridge, &provenance)?;
+    if let Some(q) = a.refuse {
+        let sets: Vec<&[Sample]> = negative_ranges.iter().map(|r| &samples[r.clone()]).collect();
+        let d = refuse_negatives(&mut cal, &sets, q)?;
+        println!("presence intercepts lowered by {:.3} to refuse {q} of each negative set", -d);
+    }
     sketchbody::fsutil::write_atomic(&a.out, (cal.to_json() + "\n").as_bytes())?;
     println!("calibration of {} images written to {}", samples.len(), a.out.display());
     println!("{}", cal.to_json());

@@ -108,12 +108,20 @@ pub fn run_sets(
         println!("{:<26}       auto by min presence (PCK@0.2 / no figure): {}", "", sweep.join(", "));
         for (name, other) in others {
             let s = score_set(&samples, other, &FigureOptions::default())?;
+            let stricter: Vec<String> = [0.6, 0.7, 0.8, 0.9]
+                .iter()
+                .map(|&m| {
+                    let o = FigureOptions { min_presence: m, ..FigureOptions::default() };
+                    score_set(&samples, other, &o).map(|s| format!("{m}: {:.3} / {:.1}%", s.pck[1], 100.0 * s.no_figure))
+                })
+                .collect::<Result<_, _>>()?;
             println!(
-                "{:<26}       auto with {name}: {:.3} / {:.3} {:>5.1}%",
+                "{:<26}       auto with {name}: {:.3} / {:.3} {:>5.1}%; by min presence (PCK@0.2 / no figure): {}",
                 "",
                 s.pck[0],
                 s.pck[1],
-                100.0 * s.no_figure
+                100.0 * s.no_figure,
+                stricter.join(", ")
             );
         }
         positives.extend(samples.into_iter().filter(|s| s.truth.is_some()));

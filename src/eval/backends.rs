@@ -128,6 +128,54 @@ pub fn fit_calibration(samples: &[Sample], ridge: f64, provenance: &str) -> Resu
     })
 }
 
+/// Makes the presence models of `cal` stricter, if needed, so that the default decision
+/// (`auto`, [`decide`] with `min_presence` 0.5) refuses at least a fraction `refuse` of every set
+/// in `negative_sets` (pages without a figure, one set per kind): the three presence intercepts
+/// are lowered by one amount until at most `⌊(1 − refuse) · n⌋` pages of each set reach
+/// presence ≥ 0.5 with the model `decide` uses for the page. The presence models then give a
+/// decision score rather than a calibrated probability of a figure (the joint confidences are
+/// untouched). Returns the change of the intercepts (≤ 0). Errors: `OutOfRange` for `refuse`
+/// outside [0, 1]; `CorruptData` for a calibration whose models do not fit the features.
+pub fn refuse_negatives(cal: &mut Calibration, negative_sets: &[&[Sample]], refuse: f64) -> Result<f64> {
+    if !(0.0..=1.0).contains(&refuse) {
+        return Err(Error::OutOfRange { name: "refuse", detail: format!("{refuse} not in [0, 1]") });
+    }
+    let mut shift: f64 = 0.0;
+    for set in negative_sets {
+        // The presence logit of each page with evidence, from the model `decide` would use.
+        let mut z = Vec::new();
+        for sample in set.iter() {
+            let f = features(&sample.evidence);
+            let (w, x) = match (&f.presence_auto, &f.presence_fmp, &f.presence_blazepose) {
+                (Some(x), _, _) => (&cal.presence.auto, x),
+                (None, Some(x), _) => (&cal.presence.fmp, x),
+                (None, None, Some(x)) => (&cal.presence.blazepose, x),
+                (None, None, None) => continue,
+            };
+            if w.len() != x.len() {
+                return Err(Error::CorruptData(format!(
+                    "presence model of {} coefficients for {} features",
+                    w.len(),
+                    x.len()
+                )));
+            }
+            z.push(w.iter().zip(x).map(|(a, b)| a * b).sum::<f64>());
+        }
+        z.sort_by(|a, b| b.total_cmp(a));
+        let allowed = ((1.0 - refuse) * set.len() as f64 + 1e-9).floor() as usize;
+        if let Some(&kth) = z.get(allowed) {
+            // Pages z[..allowed] may stay at or above 0; z[allowed] must fall below it.
+            shift = shift.min(-kth - 1e-6);
+        }
+    }
+    for w in [&mut cal.presence.fmp, &mut cal.presence.blazepose, &mut cal.presence.auto] {
+        if let Some(w0) = w.first_mut() {
+            *w0 += shift;
+        }
+    }
+    Ok(shift)
+}
+
 /// One backend's score on one set.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SetScore {
