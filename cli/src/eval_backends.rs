@@ -49,6 +49,19 @@ pub fn benchmark_sets(
     Ok(out)
 }
 
+/// `auto`'s PCK@0.2 and no-figure rate on `samples` with `cal` at each presence threshold of
+/// `thresholds`, as "threshold: PCK / rate%" joined by commas.
+fn presence_sweep(samples: &[Sample], cal: &Calibration, thresholds: &[f64]) -> Result<String, CliError> {
+    let cells: Vec<String> = thresholds
+        .iter()
+        .map(|&m| {
+            let o = FigureOptions { min_presence: m, ..FigureOptions::default() };
+            score_set(samples, cal, &o).map(|s| format!("{m}: {:.3} / {:.1}%", s.pck[1], 100.0 * s.no_figure))
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(cells.join(", "))
+}
+
 /// Runs the evaluation on `specs` and prints the tables; each of `others` (name, calibration)
 /// adds an `auto` row per set, scored on the same detections.
 pub fn run_sets(
@@ -98,30 +111,18 @@ pub fn run_sets(
             100.0 * limb.chosen[1],
             100.0 * limb.chosen[2]
         );
-        let sweep: Vec<String> = [0.5, 0.2, 0.1, 0.05]
-            .iter()
-            .map(|&m| {
-                let o = FigureOptions { min_presence: m, ..FigureOptions::default() };
-                score_set(&samples, cal, &o).map(|s| format!("{m}: {:.3} / {:.1}%", s.pck[1], 100.0 * s.no_figure))
-            })
-            .collect::<Result<_, _>>()?;
-        println!("{:<26}       auto by min presence (PCK@0.2 / no figure): {}", "", sweep.join(", "));
+        let sweep = presence_sweep(&samples, cal, &[0.5, 0.2, 0.1, 0.05])?;
+        println!("{:<26}       auto by min presence (PCK@0.2 / no figure): {sweep}", "");
         for (name, other) in others {
             let s = score_set(&samples, other, &FigureOptions::default())?;
-            let stricter: Vec<String> = [0.6, 0.7, 0.8, 0.9]
-                .iter()
-                .map(|&m| {
-                    let o = FigureOptions { min_presence: m, ..FigureOptions::default() };
-                    score_set(&samples, other, &o).map(|s| format!("{m}: {:.3} / {:.1}%", s.pck[1], 100.0 * s.no_figure))
-                })
-                .collect::<Result<_, _>>()?;
+            let stricter = presence_sweep(&samples, other, &[0.6, 0.7, 0.8, 0.9])?;
             println!(
                 "{:<26}       auto with {name}: {:.3} / {:.3} {:>5.1}%; by min presence (PCK@0.2 / no figure): {}",
                 "",
                 s.pck[0],
                 s.pck[1],
                 100.0 * s.no_figure,
-                stricter.join(", ")
+                stricter
             );
         }
         positives.extend(samples.into_iter().filter(|s| s.truth.is_some()));
