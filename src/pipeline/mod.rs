@@ -6,13 +6,13 @@
 //! - [`joints`]: the 2-D joints source (the caller's joints, or the detector's).
 //! - [`overlay`]: the overlay picture (sketch, joints, bones, fitted silhouette outline).
 //!
-//! Gender: when [`PipelineOptions::gender`] is `None` the both-sexes space is fitted
-//! ([`crate::body::BlendedSpace`]: gender is a continuous shape weight, 0 female … 1 male, fitted
-//! with the others), so there is no hard gender choice to get wrong; the result reports the
-//! fitted gender value and the posterior probability of its half. Given a gender, that gender's
-//! space is fitted. With given joints the default fits both gendered spaces and chooses
+//! Gender: given a gender ([`PipelineOptions::gender`]), that gender's space is fitted. Without
+//! one, with given joints the default fits both gendered spaces and a classifier chooses
 //! ([`PipelineOptions::classify_gender`]); with detected joints it fits the space the
-//! detected-joints gender classifier picks ([`DetectedJointsFit::classifier_gender`]).
+//! detected-joints gender classifier picks ([`DetectedJointsFit::classifier_gender`]). With
+//! both switched off the both-sexes space is fitted ([`crate::body::BlendedSpace`]: gender is a
+//! continuous shape weight, 0 female … 1 male, fitted with the others) and the result reports
+//! the fitted gender value and the posterior probability of its half.
 
 pub mod body_fit;
 mod detected;
@@ -47,8 +47,9 @@ pub struct PipelineOptions {
     pub pose: PoseOptions,
     /// Shape-fit options (samples, iterations, score, seed, skinning, ...).
     pub fit: FitOptions,
-    /// The shape space to fit: a gender's, or with `None` (the default) the both-sexes space
-    /// with gender as a fitted continuous weight.
+    /// The shape space to fit: a gender's, or with `None` (the default) automatic: a classifier's
+    /// choice of gendered space, or the both-sexes space with gender as a fitted continuous
+    /// weight when the classifiers are switched off (module doc).
     pub gender: Option<Gender>,
     /// Skip the fit and use the gender's mean shape, posed the same way (the baseline of the
     /// benchmark). Needs `gender`.
