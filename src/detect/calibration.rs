@@ -103,8 +103,9 @@ pub fn presence_features(sketch_score: Option<f64>, pose_flag: Option<f64>, medi
     x
 }
 
-/// σ(w · x). Errors: `CorruptData` when the lengths differ (a calibration for other features).
-pub fn predict(w: &[f64], x: &[f64]) -> Result<f64> {
+/// w · x, the model's log-odds. Errors: `CorruptData` when the lengths differ (a calibration
+/// for other features).
+pub fn log_odds(w: &[f64], x: &[f64]) -> Result<f64> {
     if w.len() != x.len() {
         return Err(Error::CorruptData(format!(
             "calibration model of {} coefficients for {} features",
@@ -112,8 +113,17 @@ pub fn predict(w: &[f64], x: &[f64]) -> Result<f64> {
             x.len()
         )));
     }
-    let z: f64 = w.iter().zip(x).map(|(a, b)| a * b).sum();
-    Ok(1.0 / (1.0 + (-z).exp()))
+    Ok(w.iter().zip(x).map(|(a, b)| a * b).sum())
+}
+
+/// σ(w · x). Errors: as [`log_odds`].
+pub fn predict(w: &[f64], x: &[f64]) -> Result<f64> {
+    Ok(sigmoid(log_odds(w, x)?))
+}
+
+/// σ(z) = 1 / (1 + e^(−z)).
+pub fn sigmoid(z: f64) -> f64 {
+    1.0 / (1.0 + (-z).exp())
 }
 
 /// Fits a logistic model to rows `x` (each starting with 1) and outcomes `y` ∈ {0, 1} by Newton's

@@ -10,7 +10,7 @@
 //! confidence estimates the probability that it lies within 0.2 × the figure's size of the truth
 //! (PCK@0.2), and the figure's confidence is their mean, the expected fraction of correct joints.
 
-use super::calibration::{clamp_score, joint_features, predict, presence_features, Calibration};
+use super::calibration::{clamp_score, joint_features, log_odds, predict, presence_features, sigmoid, Calibration};
 use super::landmark::{detect_blazepose, BlazePoseDetection, BlazePoseOptions, LandmarkNet};
 use super::{detect, DetectOptions, Detection, Model};
 use crate::error::{Error, Result};
@@ -325,6 +325,19 @@ struct Scored {
     raw_score: f64,
 }
 
+/// The log-odds of a figure from the presence model [`decide`] uses for features `f`: both
+/// backends' when both found a candidate, else the one that did; `None` when neither did.
+/// Errors: `CorruptData` for a calibration of the wrong shape.
+pub fn presence_log_odds(f: &EvidenceFeatures, cal: &Calibration) -> Result<Option<f64>> {
+    let (w, x) = match (&f.presence_auto, &f.presence_fmp, &f.presence_blazepose) {
+        (Some(x), _, _) => (&cal.presence.auto, x),
+        (None, Some(x), _) => (&cal.presence.fmp, x),
+        (None, None, Some(x)) => (&cal.presence.blazepose, x),
+        (None, None, None) => return Ok(None),
+    };
+    log_odds(w, x).map(Some)
+}
+
 /// Decides the figure from `evidence` with calibration `cal`. Errors: `NoFigure` (with the
 /// presence probability as its score and `min_presence` as its threshold, or the backend's own
 /// score and threshold when strict) when no candidate counts as a figure; `CorruptData` for a
@@ -345,12 +358,7 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
         }
         cands.push(Scored { backend: c.backend, joints: c.joints, conf, raw_score: c.raw_score });
     }
-    let presence = match (&f.presence_auto, &f.presence_fmp, &f.presence_blazepose) {
-        (Some(x), _, _) => predict(&cal.presence.auto, x)?,
-        (None, Some(x), _) => predict(&cal.presence.fmp, x)?,
-        (None, None, Some(x)) => predict(&cal.presence.blazepose, x)?,
-        (None, None, None) => 0.0,
-    };
+    let presence = presence_log_odds(&f, cal)?.map_or(0.0, sigmoid);
     let sketch_threshold = options.sketch.threshold.unwrap_or(evidence.sketch_threshold);
     if options.strict {
         cands.retain(|c| match c.backend {

@@ -5,7 +5,7 @@
 //! and the reliability of the calibrated confidences.
 
 use crate::detect::calibration::{fit_logistic, Calibration, JointModels, PresenceModels};
-use crate::detect::figure::{decide, features, gather, Backend, Evidence, FigureOptions};
+use crate::detect::figure::{decide, features, gather, presence_log_odds, Backend, Evidence, FigureOptions};
 use crate::detect::landmark::LandmarkNet;
 use crate::detect::Model;
 use crate::error::{Error, Result};
@@ -142,24 +142,10 @@ pub fn refuse_negatives(cal: &mut Calibration, negative_sets: &[&[Sample]], refu
     }
     let mut shift: f64 = 0.0;
     for set in negative_sets {
-        // The presence logit of each page with evidence, from the model `decide` would use.
+        // The presence log-odds of each page with evidence, from the model `decide` uses.
         let mut z = Vec::new();
         for sample in set.iter() {
-            let f = features(&sample.evidence);
-            let (w, x) = match (&f.presence_auto, &f.presence_fmp, &f.presence_blazepose) {
-                (Some(x), _, _) => (&cal.presence.auto, x),
-                (None, Some(x), _) => (&cal.presence.fmp, x),
-                (None, None, Some(x)) => (&cal.presence.blazepose, x),
-                (None, None, None) => continue,
-            };
-            if w.len() != x.len() {
-                return Err(Error::CorruptData(format!(
-                    "presence model of {} coefficients for {} features",
-                    w.len(),
-                    x.len()
-                )));
-            }
-            z.push(w.iter().zip(x).map(|(a, b)| a * b).sum::<f64>());
+            z.extend(presence_log_odds(&features(&sample.evidence), cal)?);
         }
         z.sort_by(|a, b| b.total_cmp(a));
         let allowed = ((1.0 - refuse) * set.len() as f64 + 1e-9).floor() as usize;
