@@ -135,8 +135,10 @@
 #define SKB_POSE_GROUPS 6
 
 /**
- * Backend of `skb_detect`: both the sketch model and BlazePose, per image the candidate with the
- * higher calibrated confidence (the default).
+ * Backend of `skb_detect`: both the sketch model and BlazePose, one candidate per image (the
+ * default): on a drawing the sketch model recognises (its score above its own threshold), the
+ * one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
+ * higher calibrated confidence.
  */
 #define SKB_DETECTOR_AUTO 0
 

@@ -97,3 +97,49 @@ fn fusion_presence_and_set_scores() {
     assert_eq!("blazepose".parse::<Backend>().unwrap(), Backend::BlazePose);
     assert!(matches!("openpose".parse::<Backend>(), Err(Error::OutOfRange { .. })));
 }
+
+/// `Auto` per image lets the 3-D pose step referee a drawing the sketch model recognises: a
+/// BlazePose candidate with a misplaced wrist and confidences that would win (the sketch
+/// model's part confidences lowered) is passed over for the sketch model's figure, whose
+/// proportions the body model explains; by confidence
+/// alone (`Fusion::Confidence`) the misplaced one wins. When the sketch model's figure is
+/// below its own threshold, the confidences decide as before.
+#[test]
+fn the_pose_step_referees_recognised_drawings() {
+    use sketchbody::detect::figure::proportion_choice;
+    use sketchbody::skeleton::joint;
+    let model = Model::embedded().unwrap();
+    let net = LandmarkNet::embedded().unwrap();
+    let cal = Calibration::embedded().unwrap();
+    let renderer = SketchRenderer::new(Arc::new(BodyModel::embedded().unwrap()), None).unwrap();
+    let options = FigureOptions::default();
+    // The first of a few rendered sketches that the sketch model recognises (most are).
+    let mut e = (31..40)
+        .map(|seed| {
+            let s = renderer.render(&SketchRequest::random(seed, 384)).unwrap();
+            gather(&ImageView::gray(&s.pixels, 384, 384).unwrap(), &model, &net, Backend::Auto, &options).unwrap()
+        })
+        .find(|e| e.sketch.as_ref().is_some_and(|d| d[0].score >= e.sketch_threshold))
+        .expect("a recognised sketch");
+    e.sketch.as_mut().unwrap()[0].confidence = [0.05; 15];
+    let fmp = e.sketch.as_ref().unwrap()[0].clone();
+    // BlazePose's figure: the sketch model's joints with the right wrist thrown past the
+    // elbow's reach (a forearm three times too long), every confidence near 1.
+    let bp = e.blazepose.as_mut().unwrap();
+    bp.joints = fmp.joints;
+    let (el, wr) = (fmp.joints.xy[joint::R_ELBOW], fmp.joints.xy[joint::R_WRIST]);
+    bp.joints.xy[joint::R_WRIST] = [el[0] + 3.0 * (wr[0] - el[0]), el[1] + 3.0 * (wr[1] - el[1])];
+    bp.confidence = [0.999; 15];
+    bp.score = 1.0;
+    let bad = bp.joints;
+    assert_eq!(proportion_choice(&fmp.joints, &bad), Some(0));
+    assert_eq!(proportion_choice(&bad, &fmp.joints), Some(1));
+    let by_pose = decide(&e, cal, &options).unwrap();
+    assert_eq!(by_pose.backend, Backend::Fmp);
+    assert_eq!(by_pose.joints, fmp.joints);
+    let by_conf = decide(&e, cal, &FigureOptions { fusion: Fusion::Confidence, ..options.clone() }).unwrap();
+    assert_eq!((by_conf.backend, by_conf.joints), (Backend::BlazePose, bad));
+    // Below the sketch model's threshold the confidences decide.
+    e.sketch_threshold = fmp.score + 1.0;
+    assert_eq!(decide(&e, cal, &options).unwrap().backend, Backend::BlazePose);
+}

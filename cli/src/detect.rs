@@ -21,8 +21,10 @@ use crate::CliError;
 pub struct Args {
     /// Input sketch or photo (PNG or JPEG).
     input: PathBuf,
-    /// Backend: auto (the sketch model and BlazePose; per image the candidate with the higher
-    /// calibrated confidence), fmp (the sketch model), blazepose (MediaPipe's landmark model).
+    /// Backend: auto (the sketch model and BlazePose; one candidate per image: on a drawing the
+    /// sketch model recognises, the one whose proportions the 3-D pose step finds nearer a
+    /// body's, else the higher calibrated confidence), fmp (the sketch model), blazepose
+    /// (MediaPipe's landmark model).
     #[arg(long, default_value = "auto", value_parser = parse_backend)]
     detector: Backend,
     /// Hard thresholds: "no figure" unless a backend passes its own threshold (the sketch model's

@@ -79,6 +79,7 @@ pub fn run_sets(
         (Backend::Fmp, false, Fusion::PerImage, "fmp"),
         (Backend::BlazePose, false, Fusion::PerImage, "blazepose"),
         (Backend::Auto, false, Fusion::PerImage, "auto"),
+        (Backend::Auto, false, Fusion::Confidence, "auto by confidence"),
         (Backend::Auto, false, Fusion::PerLimb, "auto per limb"),
         (Backend::Fmp, true, Fusion::PerImage, "fmp strict"),
         (Backend::BlazePose, true, Fusion::PerImage, "blazepose strict"),

@@ -50,8 +50,10 @@ pub struct Args {
     /// omitted, the embedded detector finds them (see --detector).
     #[arg(long)]
     joints: Option<PathBuf>,
-    /// Detector backend without --joints: auto (the sketch model and BlazePose, the candidate
-    /// with the higher calibrated confidence), fmp (the sketch model), blazepose.
+    /// Detector backend without --joints: auto (the sketch model and BlazePose, one candidate per
+    /// image: on a drawing the sketch model recognises, the one whose proportions the 3-D pose
+    /// step finds nearer a body's, else the higher calibrated confidence), fmp (the sketch
+    /// model), blazepose.
     #[arg(long, default_value = "auto", value_parser = crate::detect::parse_backend)]
     detector: Backend,
     /// Hard detection thresholds: "no figure" unless a backend passes its own threshold (default:

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "e4403feae31b6af0a2b7bc95c0969c1fbece5a140ad2e46108976f490f08ed8f"
+HEADER_SHA256 = "4c7f2be5849874ed66e63fbbd51d3a3532bd67723dfab594a64c003a88213ab6"
 
 # ---- constants (#define) ----
 
@@ -63,8 +63,10 @@ SKB_ALPHA_TARGET_IDENTITY = 0
 SKB_ALPHA_TARGET_LEVEL = 1
 # Number of proportion groups of `skb_pose_figure`.
 SKB_POSE_GROUPS = 6
-# Backend of `skb_detect`: both the sketch model and BlazePose, per image the candidate with the
-# higher calibrated confidence (the default).
+# Backend of `skb_detect`: both the sketch model and BlazePose, one candidate per image (the
+# default): on a drawing the sketch model recognises (its score above its own threshold), the
+# one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
+# higher calibrated confidence.
 SKB_DETECTOR_AUTO = 0
 # Backend of `skb_detect`: the flexible-mixture-of-parts sketch model alone.
 SKB_DETECTOR_FMP = 1

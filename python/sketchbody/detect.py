@@ -18,7 +18,9 @@ from .pose import Joints2D
 @dataclasses.dataclass
 class DetectOptions(OptionsBase):
     """Options of detect() (None: the library default). `backend`: "auto" (default: the sketch
-    model and BlazePose, the candidate with the higher calibrated confidence), "fmp" (the sketch
+    model and BlazePose, one candidate per image: on a drawing the sketch model recognises the one
+    whose proportions the 3-D pose step finds nearer a body's, else the higher calibrated
+    confidence), "fmp" (the sketch
     model) or "blazepose"; `strict`: hard thresholds instead of the calibrated presence;
     `threshold`: the sketch model's score threshold when strict (NaN: the model's own); the
     sketch model's search: `figure_range` = (min_fraction, max_fraction) (default figures from

@@ -1,7 +1,9 @@
 //! Single-figure detection, the product's default: the best figure in a drawing with calibrated
 //! confidences, from the sketch model ([`super::detect`], trained on concept sketches), the
 //! BlazePose landmark backend ([`super::landmark`], trained on photos) or both (`Auto`, which
-//! keeps per image the candidate whose calibrated joint confidences are higher).
+//! keeps per image one candidate: the one whose proportions the 3-D pose step finds nearer the
+//! body model's when the sketch model recognises the drawing, else the one whose calibrated
+//! joint confidences are higher; [`Fusion`]).
 //!
 //! Semantics: the best figure is returned whenever the evidence says the image plausibly holds
 //! one (presence probability ≥ [`FigureOptions::min_presence`]); "no figure" is left for blank
@@ -20,7 +22,7 @@ use crate::skeleton::{Joints2, NUM_JOINTS};
 /// Which 2-D joint detector runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Backend {
-    /// Both backends; per image the candidate with the higher calibrated confidence (default).
+    /// Both backends; per image one candidate chosen as [`Fusion::PerImage`] says (default).
     #[default]
     Auto,
     /// The flexible-mixture-of-parts sketch model (the embedded or a given `.skbd`).
@@ -63,9 +65,16 @@ pub const LOW_CONFIDENCE: f64 = 0.75;
 /// How `Auto` combines the two backends' candidates.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Fusion {
-    /// The whole candidate with the higher mean calibrated confidence (default).
+    /// One whole candidate per image (default): when both backends answered and the sketch
+    /// model's figure passes the sketch model's own threshold (a drawing it recognises), the
+    /// candidate whose joints the 3-D pose step explains with drawn proportions nearest the
+    /// body model's ([`proportion_choice`]); otherwise, or when the pose step fails on either,
+    /// the one with the higher mean calibrated confidence.
     #[default]
     PerImage,
+    /// One whole candidate per image, always the one with the higher mean calibrated
+    /// confidence (the per-image rule before 2026-12-04).
+    Confidence,
     /// Per limb ([`LIMB_GROUPS`]), the candidate whose calibrated confidences over the limb are
     /// higher; the figure's backend is `Auto` when the limbs come from both.
     PerLimb,
@@ -316,6 +325,30 @@ fn mean(c: &[f64; NUM_JOINTS]) -> f64 {
     c.iter().sum::<f64>() / NUM_JOINTS as f64
 }
 
+/// Which of two candidate joint sets (0 or 1) the 3-D pose step ([`crate::pose::estimate_pose`],
+/// default options, the embedded dictionary) explains with drawn proportions nearer the body
+/// model's: the smaller Σ_g |ln k_g| of the estimated group factors
+/// ([`crate::pose::figure`]). A candidate with a misplaced joint needs a limb longer or shorter
+/// than any body has; both candidates come from the same drawing, so a stylised figure
+/// stylises both alike. `None` when the pose step fails on either candidate or they tie.
+/// Measured in docs/benchmarks.md ("The pose step as the backends' referee").
+pub fn proportion_choice(a: &Joints2, b: &Joints2) -> Option<usize> {
+    static DICT: std::sync::OnceLock<Option<crate::pose::Dictionary>> = std::sync::OnceLock::new();
+    let dict = DICT.get_or_init(|| crate::pose::dict_io::embedded().ok()).as_ref()?;
+    let opts = crate::pose::PoseOptions::default();
+    let deviation = |j: &Joints2| -> Option<f64> {
+        let est = crate::pose::estimate_pose(dict, j, &opts).ok()?;
+        let d: f64 = est.factors.k.iter().map(|k| k.ln().abs()).sum();
+        d.is_finite().then_some(d)
+    };
+    let (da, db) = (deviation(a)?, deviation(b)?);
+    match da.total_cmp(&db) {
+        std::cmp::Ordering::Less => Some(0),
+        std::cmp::Ordering::Greater => Some(1),
+        std::cmp::Ordering::Equal => None,
+    }
+}
+
 /// A candidate of one backend with its calibrated confidences.
 #[derive(Clone, Copy)]
 struct Scored {
@@ -388,7 +421,17 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
         }
         cands = vec![mixed];
     }
-    let Some(best) = cands.into_iter().max_by(|a, b| mean(&a.conf).total_cmp(&mean(&b.conf))) else {
+    let sketch_passes = cands.iter().any(|c| c.backend == Backend::Fmp && c.raw_score >= sketch_threshold);
+    let by_proportions = if options.fusion == Fusion::PerImage && cands.len() == 2 && sketch_passes {
+        proportion_choice(&cands[0].joints, &cands[1].joints)
+    } else {
+        None
+    };
+    let best = match by_proportions {
+        Some(k) => Some(cands.swap_remove(k)),
+        None => cands.into_iter().max_by(|a, b| mean(&a.conf).total_cmp(&mean(&b.conf))),
+    };
+    let Some(best) = best else {
         return Err(if options.strict {
             let sketch = evidence.sketch.as_ref().and_then(|v| v.first());
             match (sketch, &evidence.blazepose) {

@@ -62,7 +62,7 @@ impl JointsSource for DetectedJoints<'_> {
 }
 
 /// Joints from the single-figure detector ([`detect_figure`]; by default `auto`: the sketch model
-/// and BlazePose, the candidate with the higher calibrated confidence): the product's default
+/// and BlazePose, one candidate per image, [`crate::detect::figure::Fusion::PerImage`]): the product's default
 /// source. Runs on `colour` when given (a painted drawing's colours help the landmark model),
 /// else on the gray sketch. Coincident children are marked missing as in [`DetectedJoints`].
 /// Errors as [`detect_figure`], notably [`Error::NoFigure`] on a page without a figure.
