@@ -23,7 +23,9 @@ figure):
     binary cross-entropy to the shipped flag); weight `--distill-photo` on photos and pages
     without a figure, `--distill-drawing` on drawings;
   - pose flag on drawings with a figure: binary cross-entropy to 1, weight `--flag-drawing`.
-Deterministic given the seed (torch.use_deterministic_algorithms, 2 CPU threads).
+Deterministic given the seed and --steps (torch.use_deterministic_algorithms, 2 CPU threads); with
+the --minutes budget the number of steps depends on the machine's speed. Defaults: the best run of
+docs/benchmarks.md ("Fine-tuning the landmark model on drawings": run 1, 470 steps in 12 min).
 """
 import argparse
 import os
@@ -210,18 +212,29 @@ def train(args):
     say(f"{n} crops ({len(train_ids)} train, {len(val_ids)} held out), {len(params)} tensors, {len(convs)} weights, "
         f"first {args.freeze} frozen, {sum(p.numel() for p in trainable)} trainable values; args {vars(args)}")
     say("held out before: " + evaluate(net, crops, meta, val_ids))
-    opt = torch.optim.Adam(trainable, lr=args.lr)
+    if args.relative_lr:
+        # One step size per layer, relative to the scale of its weights (mean |w|): Adam's steps
+        # have one size for every value, and the weights' scales span 0.003 to 7.
+        scale = {name.rsplit(".", 1)[0]: prm.detach().abs().mean().item() for name, prm in params if name.endswith("weight")}
+        groups = [
+            {"params": [prm], "lr": args.relative_lr * scale[name.rsplit(".", 1)[0]], "base": args.relative_lr * scale[name.rsplit(".", 1)[0]]}
+            for name, prm in params
+            if prm.requires_grad
+        ]
+    else:
+        groups = [{"params": trainable, "lr": args.lr, "base": args.lr}]
+    opt = torch.optim.Adam(groups)
     t0 = time.time()
     step = 0
     train_seconds = 0.0
     budget = args.minutes * 60
     while True:
         el = train_seconds
-        if el > budget:
+        if (args.steps and step >= args.steps) or (not args.steps and el > budget):
             break
-        frac = el / budget
+        frac = step / args.steps if args.steps else el / budget
         for g in opt.param_groups:
-            g["lr"] = args.lr * (0.1 + 0.9 * 0.5 * (1 + np.cos(np.pi * frac)))
+            g["lr"] = g["base"] * (0.1 + 0.9 * 0.5 * (1 + np.cos(np.pi * frac)))
         ids = rng.choice(train_ids, size=args.batch, p=p)
         x, m = batch(crops, meta, ids)
         if args.augment:
@@ -257,19 +270,22 @@ def main():
     t = sub.add_parser("train")
     t.add_argument("data")
     t.add_argument("out")
-    t.add_argument("--minutes", type=float, default=12)
-    t.add_argument("--lr", type=float, default=1e-4)
+    t.add_argument("--minutes", type=float, default=12, help="training time budget (when --steps is 0)")
+    t.add_argument("--steps", type=int, default=0, help="a fixed number of steps instead (reproducible)")
+    t.add_argument("--lr", type=float, default=3e-5)
     t.add_argument("--seed", type=int, default=81)
     t.add_argument("--batch", type=int, default=16)
-    t.add_argument("--freeze", type=int, default=30, help="conv weights frozen, in graph order")
+    t.add_argument("--freeze", type=int, default=60, help="conv weights frozen, in graph order")
     t.add_argument("--distill-photo", type=float, default=1.0)
     t.add_argument("--distill-drawing", type=float, default=0.2)
-    t.add_argument("--flag-drawing", type=float, default=0.05)
+    t.add_argument("--flag-drawing", type=float, default=0.0)
     t.add_argument("--share-sketch", type=float, default=0.35)
     t.add_argument("--share-photo", type=float, default=0.2)
     t.add_argument("--share-filtered", type=float, default=0.35)
     t.add_argument("--share-negative", type=float, default=0.1)
     t.add_argument("--augment", action="store_true")
+    t.add_argument("--relative-lr", type=float, default=0.0,
+                   help="per-layer step size = this x the layer's mean |weight| (instead of --lr)")
     t.add_argument("--eval-every", type=int, default=0)
     a = ap.parse_args()
     if a.cmd == "export-identity":

@@ -91,8 +91,9 @@ fn read_calibration(p: &std::path::Path) -> Result<Calibration, CliError> {
 /// Largest landmark model file read by `--landmark-model` (the asset is 12.8 MB).
 const MAX_LANDMARK_MODEL_BYTES: u64 = 256 << 20;
 
-/// Reads and optimises a BlazePose landmark network from the ONNX file at `path`.
-fn read_landmark_model(path: &std::path::Path) -> Result<LandmarkNet, CliError> {
+/// Reads and optimises a BlazePose landmark network from the ONNX file at `path`
+/// (`--landmark-model` of `eval-detector` and `calibrate-detector`).
+pub fn read_landmark_model(path: &std::path::Path) -> Result<LandmarkNet, CliError> {
     let bytes = sketchbody::fsutil::read_capped(path, MAX_LANDMARK_MODEL_BYTES)?;
     LandmarkNet::from_onnx(&bytes).map_err(|e| CliError(format!("{}: {e}", path.display())))
 }
