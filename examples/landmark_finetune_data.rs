@@ -226,7 +226,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             return Ok(vec![Source { image: img, joints: Some(j), kind: if variant == 0 { 2 } else { 3 }, seed: s }]);
         }
         let k = i - n_sketches - n_photo_sources;
-        let kind = if k % 2 == 0 { NegativePage::Text } else { NegativePage::Clutter };
+        let kind = if k.is_multiple_of(2) { NegativePage::Text } else { NegativePage::Clutter };
         let page = negative_page(kind, 512, 512, seed.wrapping_mul(7919) + k as u64)?;
         Ok(vec![Source { image: page, joints: None, kind: 4, seed: s }])
     };
@@ -242,7 +242,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 meta.extend(m);
             }
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if d % 100 == 0 {
+            if d.is_multiple_of(100) {
                 eprintln!("{d}/{total} images, {:.0} s", t0.elapsed().as_secs_f64());
             }
             Ok((bytes, meta))

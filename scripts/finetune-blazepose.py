@@ -6,6 +6,9 @@ Subcommands:
       The asset converted to PyTorch (onnx2torch) and exported back unchanged: checks the
       export path against our loader (`cargo run --release --example landmark_model_diff --
       OUT.onnx IMAGES...` must report ~0 px).
+  drift DATA STATE.pt
+      How far a trained state's outputs moved from the shipped network's on 16 crops of each
+      photo kind and of the pages (mean |difference| of x, y, z, the logits, and the pose flag).
   train DATA OUT_DIR [--minutes M] [--lr LR] [--seed S] [--freeze K] [--batch B] ...
       DATA is the folder `examples/landmark_finetune_data.rs` writes (crops exactly as
       inference takes them, true joints in crop px, the shipped network's outputs on them).
@@ -171,6 +174,23 @@ def evaluate(net, crops, meta, ids, bs=16):
     )
 
 
+def drift(args):
+    crops, meta = load_data(args.data)
+    net = load_net(batched=True)
+    net.load_state_dict(torch.load(args.state))
+    net.eval()
+    rng = np.random.default_rng(0)
+    names = {2: "photo", 3: "filtered", 4: "pages"}
+    for k, name in names.items():
+        ids = rng.choice(np.nonzero(meta[:, 0] == k)[0], 16, replace=False)
+        x, m = batch(crops, meta, ids)
+        with torch.no_grad():
+            o = net(x)
+        d = (o[0].reshape(-1, 39, 5) - m[:, 47:242].reshape(-1, 39, 5)).abs().mean(dim=(0, 1))
+        print(f"{name}: x {d[0]:.2f} px, y {d[1]:.2f} px, z {d[2]:.2f}, visibility logit {d[3]:.2f}, "
+              f"presence logit {d[4]:.2f}; pose flag {o[1].reshape(-1).mean():.3f} (shipped {m[:, 242].mean():.3f})")
+
+
 def train(args):
     torch.manual_seed(args.seed)
     np.random.seed(args.seed)
@@ -267,6 +287,9 @@ def main():
     sub = ap.add_subparsers(dest="cmd", required=True)
     e = sub.add_parser("export-identity")
     e.add_argument("out")
+    dr = sub.add_parser("drift")
+    dr.add_argument("data")
+    dr.add_argument("state")
     t = sub.add_parser("train")
     t.add_argument("data")
     t.add_argument("out")
@@ -290,6 +313,8 @@ def main():
     a = ap.parse_args()
     if a.cmd == "export-identity":
         export(load_net(), a.out)
+    elif a.cmd == "drift":
+        drift(a)
     else:
         train(a)
 
