@@ -254,7 +254,8 @@ def train(args):
             break
         frac = step / args.steps if args.steps else el / budget
         for g in opt.param_groups:
-            g["lr"] = g["base"] * (0.1 + 0.9 * 0.5 * (1 + np.cos(np.pi * frac)))
+            warm = min(1.0, (step + 1) / args.warmup) if args.warmup else 1.0
+            g["lr"] = warm * g["base"] * (0.1 + 0.9 * 0.5 * (1 + np.cos(np.pi * frac)))
         ids = rng.choice(train_ids, size=args.batch, p=p)
         x, m = batch(crops, meta, ids)
         if args.augment:
@@ -307,6 +308,7 @@ def main():
     t.add_argument("--share-filtered", type=float, default=0.35)
     t.add_argument("--share-negative", type=float, default=0.1)
     t.add_argument("--augment", action="store_true")
+    t.add_argument("--warmup", type=int, default=0, help="steps of linear learning-rate warm-up")
     t.add_argument("--relative-lr", type=float, default=0.0,
                    help="per-layer step size = this x the layer's mean |weight| (instead of --lr)")
     t.add_argument("--eval-every", type=int, default=0)

@@ -10,7 +10,8 @@
 # never PARSE 81-100 (validation) or 101-305 (test), never the benchmark's stylisations.
 #
 # Usage: scripts/finetune-blazepose.sh [TRAIN ARGS...]   (run 1 of the write-up: --steps 470; the
-# defaults are its settings: --lr 3e-5 --freeze 60 --distill-drawing 0.2 --flag-drawing 0)
+# defaults are its settings: --lr 3e-5 --freeze 60 --distill-drawing 0.2 --flag-drawing 0; run 6:
+# --minutes 6 --freeze 30 --warmup 60)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 WORK=${WORK:-/tmp/ft}
