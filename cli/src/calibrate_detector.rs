@@ -60,6 +60,10 @@ pub struct Args {
     /// PARSE JSON), e.g. a retraining candidate.
     #[arg(long)]
     fmp_model: Option<PathBuf>,
+    /// The BlazePose landmark network calibrated as the blazepose backend instead of the
+    /// embedded one (an ONNX file with the asset's interface), e.g. a fine-tuning candidate.
+    #[arg(long)]
+    landmark_model: Option<PathBuf>,
     /// Folder of mocap clips for the renderer (default as in render-sketch).
     #[arg(long)]
     mocap: Option<PathBuf>,
@@ -71,7 +75,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
         Some(p) => Model::load_any(p)?,
         None => Model::embedded()?,
     };
-    let net = LandmarkNet::embedded()?;
+    let net = match &a.landmark_model {
+        Some(p) => crate::eval_detector::read_landmark_model(p)?,
+        None => LandmarkNet::embedded()?,
+    };
     let r = renderer(a.mocap.as_deref())?;
     let ctx = SetContext { renderer: &r, parse_dir: &a.parse, model: &model, net: &net };
     let mut specs = vec![SetSpec::Synthetic { seed: a.seed, n: a.synthetic, size: 512, hair: None }];

@@ -63,7 +63,8 @@ fn presence_sweep(samples: &[Sample], cal: &Calibration, thresholds: &[f64]) -> 
 }
 
 /// Runs the evaluation on `specs` and prints the tables; each of `others` (name, calibration)
-/// adds an `auto` row per set, scored on the same detections.
+/// adds an `auto` row per set, scored on the same detections; `net` is the landmark backend's
+/// network.
 pub fn run_sets(
     specs: &[SetSpec],
     renderer: &SketchRenderer,
@@ -71,9 +72,9 @@ pub fn run_sets(
     cal: &Calibration,
     others: &[(String, Calibration)],
     model: &Model,
+    net: &LandmarkNet,
 ) -> Result<(), CliError> {
-    let net = LandmarkNet::embedded()?;
-    let ctx = SetContext { renderer, parse_dir, model, net: &net };
+    let ctx = SetContext { renderer, parse_dir, model, net };
     let options = FigureOptions::default();
     let configs = [
         (Backend::Fmp, false, Fusion::PerImage, "fmp"),

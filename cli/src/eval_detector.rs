@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use sketchbody::detect::calibration::Calibration;
+use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::eval::detector::{held_out_request, score_sketch, style_breakdown, SketchResult};
 
@@ -68,6 +69,12 @@ pub struct Args {
     /// embedded one (.skbd or PARSE JSON), e.g. a retraining candidate.
     #[arg(long)]
     fmp_model: Option<PathBuf>,
+    /// The BlazePose landmark network `--sets` runs as the blazepose backend (and inside auto)
+    /// instead of the embedded one: an ONNX file with the asset's interface (a 1×256×256×3
+    /// input, the 195-value landmark output and the 1-value pose flag), e.g. a fine-tuning
+    /// candidate.
+    #[arg(long)]
+    landmark_model: Option<PathBuf>,
     /// PARSE photos of the `--sets` PARSE sets, A-B within 1-305: the test split 101-305 for the
     /// benchmark; a part of 1-100 (e.g. 81-100) to choose between candidates on photos no
     /// training used.
@@ -79,6 +86,16 @@ pub struct Args {
 fn read_calibration(p: &std::path::Path) -> Result<Calibration, CliError> {
     let text = std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
     Ok(Calibration::from_json(&text)?)
+}
+
+/// Largest landmark model file read by `--landmark-model` (the asset is 12.8 MB).
+const MAX_LANDMARK_MODEL_BYTES: u64 = 256 << 20;
+
+/// Reads and optimises a BlazePose landmark network from the ONNX file at `path`
+/// (`--landmark-model` of `eval-detector` and `calibrate-detector`).
+pub fn read_landmark_model(path: &std::path::Path) -> Result<LandmarkNet, CliError> {
+    let bytes = sketchbody::fsutil::read_capped(path, MAX_LANDMARK_MODEL_BYTES)?;
+    LandmarkNet::from_onnx(&bytes).map_err(|e| CliError(format!("{}: {e}", path.display())))
 }
 
 /// Parses "A-B" with 1 ≤ A ≤ B ≤ 305.
@@ -117,7 +134,19 @@ pub fn run(a: Args) -> Result<(), CliError> {
             .iter()
             .map(|p| Ok((p.display().to_string(), read_calibration(p)?)))
             .collect::<Result<_, CliError>>()?;
-        return crate::eval_backends::run_sets(&specs, &renderer(a.mocap.as_deref())?, &a.parse, &cal, &others, &model);
+        let net = match &a.landmark_model {
+            Some(p) => read_landmark_model(p)?,
+            None => LandmarkNet::embedded()?,
+        };
+        return crate::eval_backends::run_sets(
+            &specs,
+            &renderer(a.mocap.as_deref())?,
+            &a.parse,
+            &cal,
+            &others,
+            &model,
+            &net,
+        );
     }
     let mut names = vec![a.model.as_ref().map_or("embedded".to_string(), |p| p.display().to_string())];
     let mut models = vec![match &a.model {
