@@ -18,12 +18,15 @@ use sketchbody::eval::metrics::pck;
 use sketchbody::image::ImageView;
 use sketchbody::render::sketch::{SketchRenderer, SketchRequest};
 
+/// The embedded backends, calibration and a sketch renderer.
+fn backends() -> (Model, LandmarkNet, &'static Calibration, SketchRenderer) {
+    let renderer = SketchRenderer::new(Arc::new(BodyModel::embedded().unwrap()), None).unwrap();
+    (Model::embedded().unwrap(), LandmarkNet::embedded().unwrap(), Calibration::embedded().unwrap(), renderer)
+}
+
 #[test]
 fn fusion_presence_and_set_scores() {
-    let model = Model::embedded().unwrap();
-    let net = LandmarkNet::embedded().unwrap();
-    let cal = Calibration::embedded().unwrap();
-    let renderer = SketchRenderer::new(Arc::new(BodyModel::embedded().unwrap()), None).unwrap();
+    let (model, net, cal, renderer) = backends();
     let options = FigureOptions::default();
     let mut samples = Vec::new();
     for seed in [31, 32, 33] {
@@ -108,10 +111,7 @@ fn fusion_presence_and_set_scores() {
 fn the_pose_step_referees_recognised_drawings() {
     use sketchbody::detect::figure::proportion_choice;
     use sketchbody::skeleton::joint;
-    let model = Model::embedded().unwrap();
-    let net = LandmarkNet::embedded().unwrap();
-    let cal = Calibration::embedded().unwrap();
-    let renderer = SketchRenderer::new(Arc::new(BodyModel::embedded().unwrap()), None).unwrap();
+    let (model, net, cal, renderer) = backends();
     let options = FigureOptions::default();
     // The first of a few rendered sketches that the sketch model recognises (most are).
     let mut e = (31..40)
@@ -132,8 +132,8 @@ fn the_pose_step_referees_recognised_drawings() {
     bp.confidence = [0.999; 15];
     bp.score = 1.0;
     let bad = bp.joints;
-    assert_eq!(proportion_choice(&fmp.joints, &bad), Some(0));
-    assert_eq!(proportion_choice(&bad, &fmp.joints), Some(1));
+    assert_eq!(proportion_choice(&fmp.joints, &bad).unwrap(), Some(0));
+    assert_eq!(proportion_choice(&bad, &fmp.joints).unwrap(), Some(1));
     let by_pose = decide(&e, cal, &options).unwrap();
     assert_eq!(by_pose.backend, Backend::Fmp);
     assert_eq!(by_pose.joints, fmp.joints);

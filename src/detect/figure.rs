@@ -326,27 +326,32 @@ fn mean(c: &[f64; NUM_JOINTS]) -> f64 {
 }
 
 /// Which of two candidate joint sets (0 or 1) the 3-D pose step ([`crate::pose::estimate_pose`],
-/// default options, the embedded dictionary) explains with drawn proportions nearer the body
-/// model's: the smaller Σ_g |ln k_g| of the estimated group factors
+/// default options, the embedded dictionary, parsed once per process) explains with drawn
+/// proportions nearer the body model's: the smaller Σ_g |ln k_g| of the estimated group factors
 /// ([`crate::pose::figure`]). A candidate with a misplaced joint needs a limb longer or shorter
 /// than any body has; both candidates come from the same drawing, so a stylised figure
-/// stylises both alike. `None` when the pose step fails on either candidate or they tie.
-/// Measured in docs/benchmarks.md ("The pose step as the backends' referee").
-pub fn proportion_choice(a: &Joints2, b: &Joints2) -> Option<usize> {
-    static DICT: std::sync::OnceLock<Option<crate::pose::Dictionary>> = std::sync::OnceLock::new();
-    let dict = DICT.get_or_init(|| crate::pose::dict_io::embedded().ok()).as_ref()?;
+/// stylises both alike. `Ok(None)` when the pose step fails on either candidate or they tie.
+/// Errors: `CorruptData` when the embedded dictionary or factor prior does not parse (a build
+/// fault). Measured in docs/benchmarks.md ("The pose step as the backends' referee").
+pub fn proportion_choice(a: &Joints2, b: &Joints2) -> Result<Option<usize>> {
+    static DICT: std::sync::OnceLock<std::result::Result<crate::pose::Dictionary, String>> = std::sync::OnceLock::new();
+    let dict = DICT
+        .get_or_init(|| crate::pose::dict_io::embedded().map_err(|e| e.to_string()))
+        .as_ref()
+        .map_err(|e| Error::CorruptData(e.clone()))?;
     let opts = crate::pose::PoseOptions::default();
+    let prior = crate::pose::factor_prior::FactorPrior::embedded()?;
     let deviation = |j: &Joints2| -> Option<f64> {
-        let est = crate::pose::estimate_pose(dict, j, &opts).ok()?;
+        let est = crate::pose::estimate_pose_with_factor_prior(dict, j, &opts, None, Some(prior)).ok()?;
         let d: f64 = est.factors.k.iter().map(|k| k.ln().abs()).sum();
         d.is_finite().then_some(d)
     };
-    let (da, db) = (deviation(a)?, deviation(b)?);
-    match da.total_cmp(&db) {
+    let (Some(da), Some(db)) = (deviation(a), deviation(b)) else { return Ok(None) };
+    Ok(match da.total_cmp(&db) {
         std::cmp::Ordering::Less => Some(0),
         std::cmp::Ordering::Greater => Some(1),
         std::cmp::Ordering::Equal => None,
-    }
+    })
 }
 
 /// A candidate of one backend with its calibrated confidences.
@@ -423,7 +428,7 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
     }
     let sketch_passes = cands.iter().any(|c| c.backend == Backend::Fmp && c.raw_score >= sketch_threshold);
     let by_proportions = if options.fusion == Fusion::PerImage && cands.len() == 2 && sketch_passes {
-        proportion_choice(&cands[0].joints, &cands[1].joints)
+        proportion_choice(&cands[0].joints, &cands[1].joints)?
     } else {
         None
     };
