@@ -1506,8 +1506,11 @@ skb_status skb_fit_options_set_skinning(struct skb_fit_options *opts, uint32_t m
 skb_status skb_fit_options_set_inside_cap(struct skb_fit_options *opts, double cap);
 
 /**
- * Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
- * dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
+ * Sets the PCA dimensions searched; 0 restores the default (a gendered space: all 10 of its
+ * prior's dimensions; the both-sexes space: its default 5). `skb_run_pipeline` with automatic
+ * gender decides the gender with two fits in 4 dimensions and then fits the chosen gender
+ * with these. A value above the model's GMM dimension fails at fit time
+ * (`SKB_ERR_OUT_OF_RANGE`).
  */
 skb_status skb_fit_options_set_dims(struct skb_fit_options *opts, uint32_t dims);
 

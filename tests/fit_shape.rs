@@ -3,7 +3,7 @@
 //! thread count, and a cancelling progress callback must stop it.
 
 use nalgebra::Matrix3;
-use sketchbody::body::{BodyModel, Gender};
+use sketchbody::body::{BodyModel, Gender, ShapeChoice};
 use sketchbody::camera::WeakPerspective;
 use sketchbody::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
 use sketchbody::image::{canny, CannyParams, GrayImage};
@@ -40,7 +40,8 @@ fn case() -> Case {
 }
 
 fn options() -> FitOptions {
-    // The problem camera, PCA weights only, temperature 2 (the defaults before per-sample cameras).
+    // The problem camera, PCA weights only, temperature 2 (the defaults before per-sample
+    // cameras); a small budget in the 4 leading dimensions, where `case`'s truth lies.
     FitOptions {
         samples: 64,
         max_iterations: 6,
@@ -49,7 +50,28 @@ fn options() -> FitOptions {
         temperature: 2.0,
         sample_camera: false,
         proportion_sd: 0.0,
+        dims: Some(4),
         ..FitOptions::default()
+    }
+}
+
+#[test]
+fn default_dimensions_are_the_gendered_priors_all_and_the_blended_spaces_own() {
+    let c = case();
+    for (gender, dims) in [(ShapeChoice::Gendered(Gender::Male), 10), (ShapeChoice::Blended, 5)] {
+        let problem = FitProblem {
+            model: &c.model,
+            gender,
+            pose: &c.truth.joints,
+            camera: &c.camera,
+            edges: &c.edges,
+            joints2d: None,
+        };
+        let o = FitOptions { samples: 8, max_iterations: 1, raster_max_side: 64, ..FitOptions::default() };
+        let r = fit_shape(&problem, &o, &mut |_| true).unwrap();
+        assert_eq!(r.weights.len(), dims, "{gender:?}");
+        let too_many = FitOptions { dims: Some(100), ..o };
+        assert!(matches!(fit_shape(&problem, &too_many, &mut |_| true), Err(Error::OutOfRange { .. })));
     }
 }
 

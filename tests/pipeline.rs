@@ -86,10 +86,16 @@ fn default_automatic_gender_chooses_between_both_gendered_fits() {
     })
     .unwrap();
     assert!(r.gender_fitted && r.male_prior.is_none());
-    assert_eq!(r.fits.len(), 2);
+    // The two deciding fits in the spaces' 4 leading dimensions, then the chosen gender's in
+    // all 10 of its prior's.
+    let dims = |g: &sketchbody::pipeline::GenderFit| g.fit.as_ref().unwrap().weights.len();
+    assert_eq!(r.fits.len(), 3);
+    assert_eq!(r.fits.iter().map(dims).collect::<Vec<_>>(), [4, 4, 10]);
     assert_eq!(r.space, ShapeChoice::Gendered(r.gender));
-    let chosen = r.fits.iter().find(|g| g.space == r.space).unwrap();
-    assert_eq!(r.score, chosen.score);
+    assert_eq!(r.fits[2].space, r.space);
+    let chosen = r.chosen_fit().unwrap();
+    assert!(std::ptr::eq(chosen, &r.fits[2]));
+    assert_eq!((r.score, r.weights.len()), (chosen.score, 10));
     assert_eq!(r.gender_value, r.gender.index() as f64);
     assert!((0.5..=1.0).contains(&r.gender_confidence));
     // The confidence is the combination's probability of the chosen gender.
@@ -99,6 +105,18 @@ fn default_automatic_gender_chooses_between_both_gendered_fits() {
     assert_eq!(r.gender, if male > 0.5 { Gender::Male } else { Gender::Female });
     assert!((r.gender_confidence - male.max(1.0 - male)).abs() < 1e-12);
     assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");
+
+    // Deciding in the fit's own dimensions needs no refit, and decides as before.
+    let same = PipelineOptions {
+        gender_decision_dims: Some(4),
+        fit: FitOptions { dims: Some(4), ..fast(None).fit },
+        ..fast(None)
+    };
+    let r4 = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &same, &mut |_| true).unwrap();
+    assert_eq!(r4.fits.len(), 2);
+    assert_eq!((r4.gender, r4.fits[0].score, r4.fits[1].score), (r.gender, r.fits[0].score, r.fits[1].score));
+    assert_eq!(r4.chosen_fit().unwrap().space, r4.space);
+    assert_eq!(r4.weights.len(), 4);
 }
 
 #[test]

@@ -279,8 +279,11 @@ pub unsafe extern "C" fn skb_fit_options_set_inside_cap(opts: *mut skb_fit_optio
     }
 }
 
-/// Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
-/// dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
+/// Sets the PCA dimensions searched; 0 restores the default (a gendered space: all 10 of its
+/// prior's dimensions; the both-sexes space: its default 5). `skb_run_pipeline` with automatic
+/// gender decides the gender with two fits in 4 dimensions and then fits the chosen gender
+/// with these. A value above the model's GMM dimension fails at fit time
+/// (`SKB_ERR_OUT_OF_RANGE`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, dims: u32) -> skb_status {
     // SAFETY: the header contract of `skb_fit_options_set_dims` (lib.rs § Safety): `opts` is NULL or valid for the

@@ -277,7 +277,7 @@ pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
-            let chosen = r.fits.iter().find(|g| g.space == r.space);
+            let chosen = r.chosen_fit();
             let Some(g) = chosen.filter(|_| r.gender as u32 == gender) else {
                 return super::error::fail(&Error::OutOfRange { name: "gender", detail: format!("{gender} was not fitted") });
             };

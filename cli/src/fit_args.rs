@@ -36,7 +36,8 @@ pub struct FitArgs {
     /// Weight of the 2-D joint term (score loses this × mean projected-joint distance, raster px).
     #[arg(long, default_value_t = FitOptions::default().joint_weight, value_parser = crate::ranges::real(0.0, f64::MAX, false))]
     pub joint_weight: f64,
-    /// PCA dimensions searched (default: the shape space's 96%-energy dimension).
+    /// PCA dimensions searched (default: all 10 of a gendered space's prior, 5 for the both-sexes
+    /// space).
     #[arg(long)]
     pub dims: Option<usize>,
     /// Dual-quaternion skinning instead of linear blend skinning.
@@ -103,6 +104,11 @@ pub struct FitArgs {
     /// gender's space (`--classify-gender true|false`).
     #[arg(long, default_value_t = PipelineOptions::default().classify_gender, action = clap::ArgAction::Set)]
     pub classify_gender: bool,
+    /// PCA dimensions of the two gendered fits that decide the gender with --classify-gender
+    /// (default: the spaces' 96%-energy dimension, 4); the chosen gender is refitted with
+    /// --dims when those differ.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub gender_decision_dims: Option<u32>,
 }
 
 /// Parses a match-score name.

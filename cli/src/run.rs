@@ -212,9 +212,10 @@ fn report(
     for g in &r.fits {
         let it = g.fit.as_ref().map_or(0, |f| f.history.len());
         let ev = g.fit.as_ref().map_or(0, |f| f.evaluations);
+        let dims = g.fit.as_ref().map_or(0, |f| f.weights.len());
         let _ = writeln!(
             s,
-            "- {} fit: best score {:.5}, {it} iterations, {ev} sample evaluations, {:.2} s",
+            "- {} fit ({dims} PCA dimensions): best score {:.5}, {it} iterations, {ev} sample evaluations, {:.2} s",
             g.space.name(),
             g.score,
             g.seconds
@@ -259,7 +260,7 @@ fn report(
             sketchbody::fit::EDGE_SUPPORT_RADIUS
         );
     }
-    let chosen = r.fits.first().and_then(|g| g.fit.as_ref());
+    let chosen = r.chosen_fit().and_then(|g| g.fit.as_ref());
     let factors = |p: &sketchbody::body::proportions::Proportions| {
         format!(
             "legs {:.3}, arms {:.3}, shoulders {:.3}, head {:.3}, torso {:.3}",
@@ -306,6 +307,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         detected: a.fit.detected(),
         gender_evidence: a.fit.gender_evidence,
         classify_gender: a.fit.classify_gender,
+        gender_decision_dims: a.fit.gender_decision_dims.map(|d| d as usize),
         ..PipelineOptions::default()
     };
     let sketch_rgb = load_rgb_image(&a.sketch)?;
@@ -378,7 +380,16 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let text = report(&a, &opts, &r, (sketch.width(), sketch.height()), load_s, t_write.elapsed().as_secs_f64());
     write_atomic(&staging.path("report.md"), text.as_bytes())?;
     staging.commit()?;
-    let scores: Vec<String> = r.fits.iter().map(|g| format!("{} {:.4}", g.space.name(), g.score)).collect();
+    // With a refit after the gender decision, the decision fits' scores carry their dimensions.
+    let refit = r.fits.len() > 2;
+    let scores: Vec<String> = r
+        .fits
+        .iter()
+        .map(|g| match g.fit.as_ref().filter(|_| refit) {
+            Some(f) => format!("{} ({}-D) {:.4}", g.space.name(), f.weights.len(), g.score),
+            None => format!("{} {:.4}", g.space.name(), g.score),
+        })
+        .collect();
     let gender = if r.gender_fitted {
         match r.male_prior {
             Some(prior) => format!(

@@ -141,7 +141,13 @@ fn run_without_gender(name: &str, extra: &[&str]) -> (String, String) {
 #[test]
 fn without_gender_the_classifier_picks_a_gendered_fit_and_reports_its_confidence() {
     let (report, stdout) = run_without_gender("auto", &[]);
-    assert!(report.contains("- female fit: best score -") && report.contains("- male fit: best score -"), "{report}");
+    // The two deciding fits in 4 dimensions, then the chosen gender's in all 10.
+    assert!(
+        report.contains("- female fit (4 PCA dimensions): best score -")
+            && report.contains("- male fit (4 PCA dimensions): best score -")
+            && report.contains("male fit (10 PCA dimensions): best score -"),
+        "{report}"
+    );
     assert!(
         report.contains("chosen by the gender classifier with probability 0.")
             || report.contains("chosen by the gender classifier with probability 1.00"),
@@ -151,8 +157,9 @@ fn without_gender_the_classifier_picks_a_gendered_fit_and_reports_its_confidence
     assert!(report.contains("- evidence: "), "{report}");
     assert!(
         stdout.contains("by the gender classifier, p=")
-            && stdout.contains("score female -")
-            && stdout.contains("male -"),
+            && stdout.contains("score female (4-D) -")
+            && stdout.contains(", male (4-D) -")
+            && stdout.contains("male (10-D) -"),
         "{stdout}"
     );
 }
@@ -160,7 +167,7 @@ fn without_gender_the_classifier_picks_a_gendered_fit_and_reports_its_confidence
 #[test]
 fn without_the_classifier_the_gender_is_fitted_and_reported_with_its_confidence() {
     let (report, stdout) = run_without_gender("blended", &["--classify-gender", "false"]);
-    assert!(report.contains("- blended fit: best score -"), "{report}");
+    assert!(report.contains("- blended fit (5 PCA dimensions): best score -"), "{report}");
     assert!(report.contains("- gender: fitted as a continuous shape weight"), "{report}");
     assert!(report.contains("with posterior probability 0.") || report.contains("with posterior probability 1.00"));
     assert!(!report.contains("chosen by the gender classifier"), "{report}");

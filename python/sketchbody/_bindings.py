@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "4c7f2be5849874ed66e63fbbd51d3a3532bd67723dfab594a64c003a88213ab6"
+HEADER_SHA256 = "0481da3d3cfcdc67ae0531cd13c4cecb65474ba5a9b395e581881461ff33324f"
 
 # ---- constants (#define) ----
 
@@ -2452,8 +2452,11 @@ FUNCTIONS["skb_fit_options_set_inside_cap"] = (
     ),
 )
 
-# Sets the PCA dimensions searched; 0 restores the default (the shape space's 96%-energy
-# dimension). A value above the model's GMM dimension fails at fit time (`SKB_ERR_OUT_OF_RANGE`).
+# Sets the PCA dimensions searched; 0 restores the default (a gendered space: all 10 of its
+# prior's dimensions; the both-sexes space: its default 5). `skb_run_pipeline` with automatic
+# gender decides the gender with two fits in 4 dimensions and then fits the chosen gender
+# with these. A value above the model's GMM dimension fails at fit time
+# (`SKB_ERR_OUT_OF_RANGE`).
 FUNCTIONS["skb_fit_options_set_dims"] = (
     ctypes.c_uint32,
     [

@@ -42,7 +42,10 @@ pub struct FitOptions {
     pub samples: usize,
     /// Most iterations, T (default 8).
     pub max_iterations: usize,
-    /// PCA dimensions searched (default: the shape space's 96%-energy dimension).
+    /// PCA dimensions searched. Default: for a gendered space every dimension its prior covers
+    /// (10 in the shipped model; its 96%-energy dimension, 4, fits less of the sketch), for the
+    /// both-sexes space its own default dimension (5; 10 measured worse there). Measurements:
+    /// docs/benchmarks.md, "How the fit's defaults were chosen".
     pub dims: Option<usize>,
     /// Transition step `s` in standard deviations: Σ = diag(s² λ_k) (default 0.3).
     pub transition_scale: f64,
@@ -402,12 +405,15 @@ pub fn fit_shape(
     let space = problem.model.shape_space(problem.gender)?;
     let proxy = problem.model.fit_proxy()?;
     let proxy_space = proxy.shape_space(problem.model, problem.gender)?;
-    let dims = options.dims.unwrap_or(space.default_dim());
     let reweighted = match (problem.gender, options.male_prior) {
         (ShapeChoice::Blended, Some(p)) => Some(problem.model.blended()?.prior_with_male_mass(p)?),
         _ => None,
     };
     let prior_full = reweighted.as_ref().unwrap_or(space.gmm());
+    let dims = options.dims.unwrap_or(match problem.gender {
+        ShapeChoice::Gendered(_) => prior_full.dims(),
+        ShapeChoice::Blended => space.default_dim(),
+    });
     if dims == 0 || dims > prior_full.dims() {
         return Err(Error::OutOfRange {
             name: "fit dimensions",

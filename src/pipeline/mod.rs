@@ -86,6 +86,14 @@ pub struct PipelineOptions {
     /// margin misleads (measured, docs/benchmarks.md) and [`DetectedJointsFit::classifier_gender`]
     /// applies instead. Default `true`.
     pub classify_gender: bool,
+    /// PCA dimensions of the two gendered fits whose score margin decides the gender under
+    /// [`PipelineOptions::classify_gender`] (`None`: each space's 96%-energy dimension, 4 in
+    /// the shipped model, which [`MarginCombination::SHIPPED`] was trained on). When
+    /// `fit.dims` searches other dimensions, the chosen gender is fitted once more with them
+    /// (a third fit): fits of every dimension the prior covers follow the sketch more closely
+    /// but tell the genders apart less well (docs/benchmarks.md, "How the fit's defaults were
+    /// chosen").
+    pub gender_decision_dims: Option<usize>,
 }
 
 impl Default for PipelineOptions {
@@ -102,6 +110,7 @@ impl Default for PipelineOptions {
             detected: DetectedJointsFit::default(),
             gender_evidence: true,
             classify_gender: true,
+            gender_decision_dims: None,
         }
     }
 }
@@ -141,7 +150,9 @@ pub struct PipelineResult {
     /// the chosen body's own skeleton.
     pub pose: PoseEstimate,
     /// The fits: one (the given gender's space, or the blended one), or with
-    /// [`PipelineOptions::classify_gender`] both gendered ones (female first).
+    /// [`PipelineOptions::classify_gender`] both gendered ones (female first), followed by the
+    /// chosen gender's refit when [`PipelineOptions::gender_decision_dims`] differs from the
+    /// fit's dimensions. The result's fit is [`PipelineResult::chosen_fit`].
     pub fits: Vec<GenderFit>,
     /// The space of the result (the chosen fit's).
     pub space: ShapeChoice,
@@ -181,6 +192,14 @@ pub struct PipelineResult {
     pub posed_joints: crate::skeleton::Joints3,
     /// Stage timings.
     pub timings: Timings,
+}
+
+impl PipelineResult {
+    /// The fit behind the result: the last of [`PipelineResult::fits`] in the result's space
+    /// (`None` only for a result built without fits).
+    pub fn chosen_fit(&self) -> Option<&GenderFit> {
+        self.fits.iter().rev().find(|g| g.space == self.space)
+    }
 }
 
 /// Maps a stage's progress to the whole run's and forwards it; `false` from the caller cancels.
@@ -289,19 +308,40 @@ pub fn run_pipeline(
         keep_pose_scale: options.keep_pose_scale,
     };
     let (body, classified) = if classify {
-        // Both gendered fits; the classifier's log-odds and the score margin choose.
+        // Both gendered fits in the decision's dimensions; the classifier's log-odds and the
+        // score margin choose; the chosen gender is refitted when `fit` searches others.
+        let decision_dims = |g: Gender| -> Result<usize> {
+            Ok(options.gender_decision_dims.unwrap_or(model.shape_space(ShapeChoice::Gendered(g))?.default_dim()))
+        };
+        let final_dims = |g: Gender| -> Result<usize> {
+            Ok(fit.dims.unwrap_or(model.shape_space(ShapeChoice::Gendered(g))?.gmm().dims()))
+        };
+        let refit =
+            Gender::ALL.into_iter().map(|g| Ok(decision_dims(g)? != final_dims(g)?)).collect::<Result<Vec<_>>>()?;
+        let steps = if refit.contains(&true) { 3.0 } else { 2.0 };
         let mut bodies = Vec::with_capacity(2);
         for (i, g) in Gender::ALL.into_iter().enumerate() {
-            let mut cb = |f: f32| (p.callback)((0.06 + 0.45 * (i as f32 + f)).clamp(0.0, 1.0));
+            let mut cb = |f: f32| (p.callback)((0.06 + 0.9 / steps * (i as f32 + f)).clamp(0.0, 1.0));
             let c = BodyChoice { gender: Some(g), ..choice };
-            bodies.push(fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &c, &mut cb)?);
+            let decide = FitOptions { dims: Some(decision_dims(g)?), ..fit.clone() };
+            bodies.push(fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &decide, &c, &mut cb)?);
         }
         let margin = bodies[1].score - bodies[0].score;
         let log_odds = classifier.log_odds(&evidence.features);
         let male = MarginCombination::SHIPPED.male_probability(log_odds, margin);
-        let seconds: f64 = bodies.iter().map(|b| b.fit_seconds).sum();
-        let fits: Vec<GenderFit> = bodies.iter().flat_map(|b| b.fits.iter().cloned()).collect();
-        let mut body = bodies.swap_remove(usize::from(male > 0.5));
+        let mut seconds: f64 = bodies.iter().map(|b| b.fit_seconds).sum();
+        let mut fits: Vec<GenderFit> = bodies.iter().flat_map(|b| b.fits.iter().cloned()).collect();
+        let chosen = usize::from(male > 0.5);
+        let mut body = if refit[chosen] {
+            let mut cb = |f: f32| (p.callback)((0.06 + 0.9 / steps * (2.0 + f)).clamp(0.0, 1.0));
+            let c = BodyChoice { gender: Some(Gender::ALL[chosen]), ..choice };
+            let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &c, &mut cb)?;
+            fits.extend(body.fits.iter().cloned());
+            seconds += body.fit_seconds;
+            body
+        } else {
+            bodies.swap_remove(chosen)
+        };
         body.fits = fits;
         body.fit_seconds = seconds;
         (body, Some(male.max(1.0 - male)))
