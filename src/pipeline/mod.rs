@@ -308,42 +308,11 @@ pub fn run_pipeline(
         keep_pose_scale: options.keep_pose_scale,
     };
     let (body, classified) = if classify {
-        // Both gendered fits in the decision's dimensions; the classifier's log-odds and the
-        // score margin choose; the chosen gender is refitted when `fit` searches others.
-        let decision_dims = |g: Gender| -> Result<usize> {
-            Ok(options.gender_decision_dims.unwrap_or(model.shape_space(ShapeChoice::Gendered(g))?.default_dim()))
-        };
-        let final_dims = |g: Gender| -> Result<usize> {
-            Ok(fit.dims.unwrap_or(model.shape_space(ShapeChoice::Gendered(g))?.gmm().dims()))
-        };
-        let refit =
-            Gender::ALL.into_iter().map(|g| Ok(decision_dims(g)? != final_dims(g)?)).collect::<Result<Vec<_>>>()?;
-        let steps = if refit.contains(&true) { 3.0 } else { 2.0 };
-        let mut bodies = Vec::with_capacity(2);
-        for (i, g) in Gender::ALL.into_iter().enumerate() {
-            let mut cb = |f: f32| (p.callback)((0.06 + 0.9 / steps * (i as f32 + f)).clamp(0.0, 1.0));
-            let c = BodyChoice { gender: Some(g), ..choice };
-            let decide = FitOptions { dims: Some(decision_dims(g)?), ..fit.clone() };
-            bodies.push(fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &decide, &c, &mut cb)?);
-        }
-        let margin = bodies[1].score - bodies[0].score;
+        let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
+        let sketch = SketchInputs { pose: &pose, edges: &edges, joints2d: &joints2d };
         let log_odds = classifier.log_odds(&evidence.features);
-        let male = MarginCombination::SHIPPED.male_probability(log_odds, margin);
-        let mut seconds: f64 = bodies.iter().map(|b| b.fit_seconds).sum();
-        let mut fits: Vec<GenderFit> = bodies.iter().flat_map(|b| b.fits.iter().cloned()).collect();
-        let chosen = usize::from(male > 0.5);
-        let mut body = if refit[chosen] {
-            let mut cb = |f: f32| (p.callback)((0.06 + 0.9 / steps * (2.0 + f)).clamp(0.0, 1.0));
-            let c = BodyChoice { gender: Some(Gender::ALL[chosen]), ..choice };
-            let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &c, &mut cb)?;
-            fits.extend(body.fits.iter().cloned());
-            seconds += body.fit_seconds;
-            body
-        } else {
-            bodies.swap_remove(chosen)
-        };
-        body.fits = fits;
-        body.fit_seconds = seconds;
+        let (body, male) =
+            classify_and_fit(model, &sketch, &fit, &choice, options.gender_decision_dims, log_odds, &mut cb)?;
         (body, Some(male.max(1.0 - male)))
     } else {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
@@ -380,4 +349,57 @@ pub fn run_pipeline(
         posed_vertices: body.posed_vertices,
         timings,
     })
+}
+
+/// What the gender decision's fits read of the sketch: the estimated pose and camera, the
+/// edge map and the 2-D joints.
+struct SketchInputs<'a> {
+    pose: &'a PoseEstimate,
+    edges: &'a GrayImage,
+    joints2d: &'a Joints2,
+}
+
+/// [`PipelineOptions::classify_gender`]: both gendered fits in the decision's dimensions
+/// (`decision_dims`, `None` = each space's default), the [`MarginCombination::SHIPPED`] of the
+/// classifier's `log_odds` and their score margin choosing, then the chosen gender refitted
+/// with `fit` when that searches other dimensions. Returns the chosen body (its `fits`: the
+/// two deciding fits, female first, then the refit if any; `fit_seconds` their sum) and
+/// P(male). `progress` sees 0..=1 over all the fits.
+fn classify_and_fit(
+    model: &BodyModel,
+    sketch: &SketchInputs,
+    fit: &FitOptions,
+    choice: &BodyChoice,
+    decision_dims: Option<usize>,
+    log_odds: f64,
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<(FittedBody, f64)> {
+    let space = |g: Gender| model.shape_space(ShapeChoice::Gendered(g));
+    let decision_dims = |g: Gender| -> Result<usize> { Ok(decision_dims.unwrap_or(space(g)?.default_dim())) };
+    let refit = |g: Gender| -> Result<bool> { Ok(decision_dims(g)? != fit.dims.unwrap_or(space(g)?.gmm().dims())) };
+    let steps = if refit(Gender::Female)? || refit(Gender::Male)? { 3.0 } else { 2.0 };
+    let mut fit_one = |g: Gender, o: &FitOptions, step: f32| {
+        let c = BodyChoice { gender: Some(g), ..*choice };
+        let mut cb = |f: f32| progress((step + f) / steps);
+        fit_body(model, &sketch.pose.joints, &sketch.pose.camera, sketch.edges, Some(sketch.joints2d), o, &c, &mut cb)
+    };
+    let mut bodies = Vec::with_capacity(2);
+    for (i, g) in Gender::ALL.into_iter().enumerate() {
+        bodies.push(fit_one(g, &FitOptions { dims: Some(decision_dims(g)?), ..fit.clone() }, i as f32)?);
+    }
+    let male = MarginCombination::SHIPPED.male_probability(log_odds, bodies[1].score - bodies[0].score);
+    let mut seconds: f64 = bodies.iter().map(|b| b.fit_seconds).sum();
+    let mut fits: Vec<GenderFit> = bodies.iter().flat_map(|b| b.fits.iter().cloned()).collect();
+    let chosen = Gender::ALL[usize::from(male > 0.5)];
+    let mut body = if refit(chosen)? {
+        let body = fit_one(chosen, fit, 2.0)?;
+        fits.extend(body.fits.iter().cloned());
+        seconds += body.fit_seconds;
+        body
+    } else {
+        bodies.swap_remove(chosen.index())
+    };
+    body.fits = fits;
+    body.fit_seconds = seconds;
+    Ok((body, male))
 }
