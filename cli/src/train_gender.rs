@@ -41,7 +41,9 @@ pub struct Args {
     /// Test set of the combination, same form as --fits. Repeatable.
     #[arg(long, value_parser = parse_fits)]
     test_fits: Vec<(PathBuf, PathBuf, PathBuf)>,
-    /// With --shipped, evaluate the classifier for detected joints (`SHIPPED_DETECTED`).
+    /// Joints from the detector: with --shipped evaluate the classifier for detected joints
+    /// (`SHIPPED_DETECTED`); with --fits / --test-fits take its log-odds instead of the
+    /// given-joints classifier's.
     #[arg(long, requires = "shipped")]
     detected: bool,
     /// Use only the first N samples of each set.
@@ -62,7 +64,13 @@ fn parse_pair(s: &str) -> Result<(PathBuf, PathBuf), String> {
 }
 
 /// `(classifier log-odds, score margin male − female, is_male)` of every sample with both fits.
-fn load_fits(d: &Path, rf: &Path, rm: &Path, first: Option<usize>) -> Result<Vec<(f64, f64, bool)>, CliError> {
+fn load_fits(
+    d: &Path,
+    rf: &Path,
+    rm: &Path,
+    first: Option<usize>,
+    classifier: &GenderClassifier,
+) -> Result<Vec<(f64, f64, bool)>, CliError> {
     let f = load(d, rf, first)?;
     let mut out = Vec::new();
     let stems = dataset_samples(d)?;
@@ -77,7 +85,7 @@ fn load_fits(d: &Path, rf: &Path, rm: &Path, first: Option<usize>) -> Result<Vec
         stems.iter().take(first.unwrap_or(usize::MAX)).filter(|s| rf.join(format!("{s}.json")).is_file()).collect();
     for (stem, (features, male)) in done.into_iter().zip(f) {
         let margin = score(rm, stem, "male")? - score(rf, stem, "female")?;
-        out.push((GenderClassifier::SHIPPED.log_odds(&features), margin, male));
+        out.push((classifier.log_odds(&features), margin, male));
     }
     Ok(out)
 }
@@ -200,12 +208,13 @@ pub fn run(a: Args) -> Result<(), CliError> {
 
 /// `--fits`: trains (or with `--shipped` takes) the [`MarginCombination`] and reports it.
 fn run_fits(a: &Args) -> Result<(), CliError> {
+    let classifier = if a.detected { GenderClassifier::SHIPPED_DETECTED } else { GenderClassifier::SHIPPED };
     let combination = if a.shipped || a.fits.is_empty() {
         MarginCombination::SHIPPED
     } else {
         let mut train = Vec::new();
         for (d, f, m) in &a.fits {
-            train.extend(load_fits(d, f, m, a.first)?);
+            train.extend(load_fits(d, f, m, a.first, &classifier)?);
         }
         let c = MarginCombination::train(&train, a.ridge)?;
         let males = train.iter().filter(|s| s.2).count();
@@ -219,7 +228,7 @@ fn run_fits(a: &Args) -> Result<(), CliError> {
         c
     };
     for (d, f, m) in &a.test_fits {
-        let test = load_fits(d, f, m, a.first)?;
+        let test = load_fits(d, f, m, a.first, &classifier)?;
         let probs: Vec<(f64, bool)> =
             test.iter().map(|&(z, mg, male)| (combination.male_probability(z, mg), male)).collect();
         println!("test {} ({}, {}):\n{}", d.display(), f.display(), m.display(), report_probs(&probs));

@@ -124,3 +124,30 @@ fn errors_are_one_line() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
+    let dir = scratch("gender");
+    let ds = dir.join("ds");
+    ok(&skb(&["make-dataset", "6", "--seed", "5", "--size", "256", "--out", s(&ds)]));
+    let fast = ["--samples", "16", "--iterations", "2"];
+    for g in ["f", "m"] {
+        ok(&skb(&[&["run-dataset", s(&ds), "--out", s(&dir.join(g)), "--gender", g][..], &fast].concat()));
+    }
+    let fits = format!("{}={},{}", s(&ds), s(&dir.join("f")), s(&dir.join("m")));
+    // The first mean is that of the classifier's log-odds: the given-joints classifier's by
+    // default, the detected-joints one's with --detected; the margin's mean is the same.
+    let means = |extra: &[&str]| -> Vec<f64> {
+        let o = skb(&[&["train-gender", "--fits", &fits][..], extra].concat());
+        ok(&o);
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(out.contains("trained on 6 samples"), "{out}");
+        let line = out.lines().find(|l| l.trim_start().starts_with("means:")).unwrap().to_string();
+        line.split(['[', ']', ',']).filter_map(|t| t.trim().parse().ok()).collect()
+    };
+    let (given, detected) = (means(&[]), means(&["--detected"]));
+    assert_eq!(given.len(), 2);
+    assert_ne!(given[0], detected[0]);
+    assert_eq!(given[1], detected[1]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
