@@ -149,11 +149,12 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         run_pipeline(s.model, s.dict, &sketch, source.as_ref(), &opts, &mut |_| !INTERRUPTED.load(Ordering::SeqCst))
             .map_err(|e| CliError(format!("sample {stem}: {e}")))?;
     let rm = r.pose.camera.r;
-    let scores: serde_json::Map<String, serde_json::Value> = r
-        .fits
-        .iter()
-        .map(|g| (g.space.name().to_string(), json!(if g.score.is_finite() { Some(g.score) } else { None })))
-        .collect();
+    let finite = |x: f64| json!(if x.is_finite() { Some(x) } else { None });
+    // One score per fitted space: the deciding fit's when the chosen gender was refitted.
+    let mut scores = serde_json::Map::new();
+    for g in &r.fits {
+        scores.entry(g.space.name()).or_insert_with(|| finite(g.score));
+    }
     let doc = json!({
         "joints2d": r.joints2d.xy,
         "joints3d": r.posed_joints,
@@ -168,6 +169,7 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         "edge_support": if r.edge_support.is_finite() { Some(r.edge_support) } else { None },
         "low_evidence": r.low_evidence,
         "scores": scores,
+        "score": finite(r.score),
         "shape_weights": r.weights,
         "proportions": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportions),
         "proportion_estimate": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportion_estimate),

@@ -51,6 +51,8 @@ fn results_are_scored_by_eval_and_deterministic() {
         let res: serde_json::Value =
             serde_json::from_slice(&std::fs::read(a.join(format!("{stem}.json"))).unwrap()).unwrap();
         assert_eq!(res["gender"], truth["gender"], "gender comes from the ground truth by default");
+        let gender = res["gender"].as_str().unwrap();
+        assert!(res["score"].as_f64().is_some_and(|x| x < 0.0) && res["score"] == res["scores"][gender], "{res}");
         assert_eq!(res["joints2d"], truth["joints2d"]);
     }
     // Detected joints instead of the ground truth: results for every sample, near the truth.
