@@ -43,8 +43,8 @@ pub struct Args {
     test_fits: Vec<(PathBuf, PathBuf, PathBuf)>,
     /// Joints from the detector: with --shipped evaluate the classifier for detected joints
     /// (`SHIPPED_DETECTED`); with --fits / --test-fits take its log-odds instead of the
-    /// given-joints classifier's.
-    #[arg(long, requires = "shipped")]
+    /// given-joints classifier's. No effect when training a classifier (--train).
+    #[arg(long)]
     detected: bool,
     /// Use only the first N samples of each set.
     #[arg(long)]
