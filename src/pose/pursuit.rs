@@ -105,8 +105,9 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
 /// (the first estimate is kept when that second solve fails or fits the image worse). With
 /// [`PoseOptions::factor_prior`] the factors' prior is the learned one
 /// ([`super::factor_prior`]); when the solve with those factors fits the image worse than the
-/// first estimate, the fixed prior's factors are tried before falling back to the first
-/// estimate. Every estimate is flagged for plausibility ([`PoseEstimate::plausible`]).
+/// first estimate, the fixed prior's factors are tried (from half the exemplar starts) before
+/// falling back to the first estimate. Every estimate is flagged for plausibility
+/// ([`PoseEstimate::plausible`]).
 pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
     estimate_pose_hinted(dict, joints, opts, None)
 }
@@ -170,7 +171,12 @@ fn with_proportions(
     let f = estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, Some(&l));
     match second_solve(dict, joints, opts, &first, hint, f) {
         Some(e) => e,
-        None => second_solve(dict, joints, opts, &first, hint, fixed()).unwrap_or(first),
+        None => {
+            // From half the exemplar starts: as accurate on the validation split, less CPU on
+            // standard figures, where this fallback runs most (docs/benchmarks.md, issue 16).
+            let half = PoseOptions { starts: opts.starts.div_ceil(2), ..*opts };
+            second_solve(dict, joints, &half, &first, hint, fixed()).unwrap_or(first)
+        }
     }
 }
 
