@@ -380,13 +380,14 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let text = report(&a, &opts, &r, (sketch.width(), sketch.height()), load_s, t_write.elapsed().as_secs_f64());
     write_atomic(&staging.path("report.md"), text.as_bytes())?;
     staging.commit()?;
-    // With a refit after the gender decision, the decision fits' scores carry their dimensions.
-    let refit = r.fits.len() > 2;
+    // Fits in different dimensions (the gender decision's and the refit) carry their dimensions.
+    let dims = |g: &sketchbody::pipeline::GenderFit| g.fit.as_ref().map(|f| f.weights.len());
+    let mixed = r.fits.windows(2).any(|w| dims(&w[0]) != dims(&w[1]));
     let scores: Vec<String> = r
         .fits
         .iter()
-        .map(|g| match g.fit.as_ref().filter(|_| refit) {
-            Some(f) => format!("{} ({}-D) {:.4}", g.space.name(), f.weights.len(), g.score),
+        .map(|g| match dims(g).filter(|_| mixed) {
+            Some(d) => format!("{} ({d}-D) {:.4}", g.space.name(), g.score),
             None => format!("{} {:.4}", g.space.name(), g.score),
         })
         .collect();

@@ -334,11 +334,7 @@ fn mean(c: &[f64; NUM_JOINTS]) -> f64 {
 /// Errors: `CorruptData` when the embedded dictionary or factor prior does not parse (a build
 /// fault). Measured in docs/benchmarks.md ("The pose step as the backends' referee").
 pub fn proportion_choice(a: &Joints2, b: &Joints2) -> Result<Option<usize>> {
-    static DICT: std::sync::OnceLock<std::result::Result<crate::pose::Dictionary, String>> = std::sync::OnceLock::new();
-    let dict = DICT
-        .get_or_init(|| crate::pose::dict_io::embedded().map_err(|e| e.to_string()))
-        .as_ref()
-        .map_err(|e| Error::CorruptData(e.clone()))?;
+    let dict = crate::pose::dict_io::embedded_shared()?;
     let opts = crate::pose::PoseOptions::default();
     let prior = crate::pose::factor_prior::FactorPrior::embedded()?;
     let deviation = |j: &Joints2| -> Option<f64> {

@@ -173,6 +173,13 @@ pub fn embedded() -> Result<Dictionary> {
     from_bytes(EMBEDDED)
 }
 
+/// [`embedded`], parsed once per process and shared. Errors: those of [`embedded`] (a build
+/// fault), as `CorruptData`.
+pub fn embedded_shared() -> Result<&'static Dictionary> {
+    static DICT: std::sync::OnceLock<std::result::Result<Dictionary, String>> = std::sync::OnceLock::new();
+    DICT.get_or_init(|| embedded().map_err(|e| e.to_string())).as_ref().map_err(|e| Error::CorruptData(e.clone()))
+}
+
 /// The raw bytes of the embedded default dictionary file.
 pub fn embedded_bytes() -> &'static [u8] {
     EMBEDDED
