@@ -326,12 +326,22 @@ impl Evaluator<'_> {
     /// Score of one shape (higher is better); a shape that cannot be posed or lands outside the
     /// image scores −∞.
     fn score(&self, y: &[f64], s: &mut Scratch) -> Result<f64> {
-        Ok(self.evaluate(y, s)?.map_or(f64::NEG_INFINITY, |(score, _)| score))
+        Ok(self.draw_and_score(y, s)?.unwrap_or(f64::NEG_INFINITY))
     }
 
     /// Score and edge support of one shape; `None` when it cannot be posed or lands outside
     /// the image.
     fn evaluate(&self, y: &[f64], s: &mut Scratch) -> Result<Option<(f64, f64)>> {
+        Ok(self.draw_and_score(y, s)?.map(|score| {
+            let support = self.evidence.edge_support(s.raster.mask(), s.raster.covered_bounds(), EDGE_SUPPORT_RADIUS);
+            (score, support)
+        }))
+    }
+
+    /// Draws one shape's silhouette into `s.raster` and scores it; `None` when it cannot be
+    /// posed or lands outside the image. The edge support is left to [`Evaluator::evaluate`]:
+    /// only the fit's result needs it, and it costs a tenth of a sample.
+    fn draw_and_score(&self, y: &[f64], s: &mut Scratch) -> Result<Option<f64>> {
         let mut joints = self.proxy_space.synthesize_into(self.space, &y[..self.dims], &mut s.rest)?;
         if y.len() > self.dims {
             match apply_in_place(&mut s.rest, &mut joints, self.proxy.skin_weights(), &proportions_of(&y[self.dims..]))
@@ -363,9 +373,10 @@ impl Evaluator<'_> {
         match s.raster.rasterize_mask(&s.posed, self.proxy.triangles(), &camera, w, h, Facing::Front) {
             Ok(_) => {
                 let (mask, bounds) = (s.raster.mask(), s.raster.covered_bounds());
-                let score = self.evidence.score_in(mask, bounds, self.options.score)
-                    - self.joint_penalty(&pose.joints, &camera);
-                Ok(Some((score, self.evidence.edge_support(mask, bounds, EDGE_SUPPORT_RADIUS))))
+                Ok(Some(
+                    self.evidence.score_in(mask, bounds, self.options.score)
+                        - self.joint_penalty(&pose.joints, &camera),
+                ))
             }
             Err(Error::MeshOutsideImage { .. }) | Err(Error::OutOfRange { name: "projected vertex", .. }) => Ok(None),
             Err(e) => Err(e),
