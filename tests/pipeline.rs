@@ -307,6 +307,36 @@ fn known_height_per_sample_cameras_and_a_given_pose() {
     ));
 }
 
+/// With the height unknown the fitted body is scaled about its pelvis to the shipped
+/// calibration's height of its fitted height and gender; the shape is the same fit. A given
+/// height wins, and the mean shape is never calibrated.
+#[test]
+fn an_unknown_height_is_calibrated_and_a_known_one_wins() {
+    use sketchbody::fit::HeightCalibration;
+    let (model, dict, sketch, j) = inputs();
+    let run = |o: &PipelineOptions| run_pipeline(&model, &dict, &sketch, &GivenJoints(j), o, &mut |_| true).unwrap();
+    let on = fast(Some(Gender::Female));
+    assert!(on.calibrate_height, "the default");
+    let off = PipelineOptions { calibrate_height: false, ..on.clone() };
+    let (c, f) = (run(&on), run(&off));
+    assert_eq!(c.weights, f.weights, "the same fit");
+    assert_eq!(c.fit_height, f.fit_height);
+    assert!((f.mesh.height() - f.fit_height).abs() < 1e-6, "uncalibrated: the fitted height");
+    let want = HeightCalibration::SHIPPED.calibrated(f.fit_height, 0.0).unwrap();
+    assert!((c.mesh.height() - want).abs() < 1e-5, "{} vs {want}", c.mesh.height());
+    assert!((want / f.fit_height - 1.0).abs() > 1e-4, "the example's height moves");
+    let (cp, fp) = (c.mesh.joints[joint::PELVIS], f.mesh.joints[joint::PELVIS]);
+    assert!((0..3).all(|a| (cp[a] - fp[a]).abs() < 1e-6), "scaled about the pelvis: {cp:?} vs {fp:?}");
+    // The output camera follows the calibrated body: the image does not change.
+    let k = c.mesh.height() / f.mesh.height();
+    assert!((f.pose.camera.sx / c.pose.camera.sx - k).abs() < 1e-6 * k);
+    let known = PipelineOptions { fit: FitOptions { height: Some(1.9), ..on.fit.clone() }, ..on.clone() };
+    assert!((run(&known).mesh.height() - 1.9).abs() < 1e-5);
+    let mean = PipelineOptions { mean_shape: true, ..on };
+    let m = run(&mean);
+    assert_eq!(m.mesh.vertices, model.space(Gender::Female).synthesize(&[]).unwrap().vertices);
+}
+
 /// The example sketch under a cloak to the ground: everything below the shoulders is replaced
 /// by a wide trapezoid outline (no body stroke left inside it). The fit still returns a body of
 /// plausible size inside the prior's range and flags it as low-evidence.

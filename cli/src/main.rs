@@ -9,6 +9,7 @@ mod bench_pose_suite;
 mod body;
 mod build_model;
 mod calibrate_detector;
+mod calibrate_height;
 mod convert_detector;
 mod detect;
 mod edges;
@@ -90,6 +91,9 @@ enum Command {
     TrainDetector(train_detector::Args),
     /// Train the gender classifier on run-dataset's gender features; confusion and calibration.
     TrainGender(train_gender::Args),
+    /// Fit the height calibration of the fitted body (or evaluate the shipped one) from
+    /// run-dataset results: RMS error of ln height before and after.
+    CalibrateHeight(calibrate_height::Args),
     /// Render a dataset of N synthetic sketches in parallel (resumable; see docs/dataset.md).
     MakeDataset(make_dataset::Args),
     /// A photo as an ink drawing, pencil sketch or flat-colour design (real-drawing proxy set).
@@ -139,6 +143,7 @@ fn main() -> ExitCode {
         Command::Run(a) => run::run(a),
         Command::RunDataset(a) => run_dataset::run(a),
         Command::TrainGender(a) => train_gender::run(a),
+        Command::CalibrateHeight(a) => calibrate_height::run(a),
         Command::Body(a) => body::run(a),
         Command::Edges(a) => edges::run(a),
         Command::LearnPoses(a) => learn_poses::run(a),

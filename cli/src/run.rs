@@ -221,6 +221,18 @@ fn report(
             g.seconds
         );
     }
+    let height = r.mesh.height();
+    let _ = writeln!(
+        s,
+        "- rest height: {height:.3} m ({})",
+        match (opts.fit.height, opts.mean_shape, opts.calibrate_height, r.detection.is_some()) {
+            (Some(_), ..) => "given".to_string(),
+            (None, true, ..) => "the mean shape's".to_string(),
+            (None, false, true, false) => format!("fitted {:.3} m, calibrated", r.fit_height),
+            (None, false, true, true) => "fitted; detected joints are not calibrated".to_string(),
+            (None, false, false, _) => "fitted, not calibrated".to_string(),
+        }
+    );
     let evidence = format!(
         "the gender classifier gives P(male) {:.2} from the sketch's joints and outline",
         r.gender_evidence.male_probability
@@ -308,6 +320,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         gender_evidence: a.fit.gender_evidence,
         classify_gender: a.fit.classify_gender,
         gender_decision_dims: a.fit.gender_decision_dims.map(|d| d as usize),
+        calibrate_height: a.fit.calibrate_height,
         ..PipelineOptions::default()
     };
     let sketch_rgb = load_rgb_image(&a.sketch)?;

@@ -2,7 +2,7 @@
 //! the pipeline on every sample of a synthetic-sketch dataset with the sample's ground-truth
 //! 2-D joints (the user-correction path), writing the results layout `sketchbody eval` reads
 //! (docs/dataset.md): `STEM.json` (joints2d, joints3d = the fitted mesh's posed joints,
-//! camera_r, gender, scores), `STEM_rest.obj`, `STEM_posed.obj`, each atomically, the posed OBJ
+//! camera_r, gender, scores, fit_height_m / height_m), `STEM_rest.obj`, `STEM_posed.obj`, each atomically, the posed OBJ
 //! last. Samples whose `STEM_posed.obj` exists are skipped (resumable). Samples run in parallel
 //! (rayon); each fit's seed is the same `--seed`, so results do not depend on the thread count
 //! or the order. Ground-truth joints outside the image are marked missing.
@@ -171,6 +171,8 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         "scores": scores,
         "score": finite(r.score),
         "shape_weights": r.weights,
+        "fit_height_m": r.fit_height,
+        "height_m": sketchbody::body::rig::y_extent(&r.mesh.vertices),
         "proportions": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportions),
         "proportion_estimate": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportion_estimate),
         "landmark_depth": r.detection.as_ref().map(|f| f.landmark_depth),
@@ -202,7 +204,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         .map_err(|e| CliError(format!("{}: cannot create the results folder: {e}", a.out.display())))?;
     let manifest = json!({
         "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
-        "gender": a.gender, "mean_shape": a.mean_shape, "detector": if a.detect { Some(a.detector.name()) } else { None }, "depth_hint": a.fit.depth_hint, "detected_joint_weight_scale": a.fit.detected_joint_weight_scale, "detected_proportions": a.fit.detected_proportions, "landmark_pose": a.fit.landmark_pose, "detected_classifier_gender": a.fit.detected_classifier_gender, "gender_evidence": a.fit.gender_evidence, "classify_gender": a.fit.classify_gender, "gender_decision_dims": a.fit.gender_decision_dims, "male_prior": a.fit.male_prior, "score": score_name(fit.score), "seed": fit.seed,
+        "gender": a.gender, "mean_shape": a.mean_shape, "detector": if a.detect { Some(a.detector.name()) } else { None }, "depth_hint": a.fit.depth_hint, "detected_joint_weight_scale": a.fit.detected_joint_weight_scale, "detected_proportions": a.fit.detected_proportions, "landmark_pose": a.fit.landmark_pose, "detected_classifier_gender": a.fit.detected_classifier_gender, "gender_evidence": a.fit.gender_evidence, "classify_gender": a.fit.classify_gender, "gender_decision_dims": a.fit.gender_decision_dims, "calibrate_height": a.fit.calibrate_height, "male_prior": a.fit.male_prior, "score": score_name(fit.score), "seed": fit.seed,
         "fit_samples": fit.samples, "iterations": fit.max_iterations, "transition_scale": fit.transition_scale,
         "temperature": fit.temperature, "joint_weight": fit.joint_weight, "sample_camera": fit.sample_camera, "proportion_sd": fit.proportion_sd, "estimate_proportions": fit.estimate_proportions, "height": fit.height, "true_height": a.true_height, "oracle_pose": a.oracle_pose, "keep_pose_scale": a.fit.keep_pose_scale, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
     });
@@ -227,6 +229,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
             gender_evidence: a.fit.gender_evidence,
             classify_gender: a.fit.classify_gender,
             gender_decision_dims: a.fit.gender_decision_dims.map(|d| d as usize),
+            calibrate_height: a.fit.calibrate_height,
             ..PipelineOptions::default()
         },
         mode,

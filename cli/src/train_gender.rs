@@ -19,13 +19,10 @@ use crate::CliError;
 /// Arguments of `sketchbody train-gender`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Training set: DATASET=RESULTS (a make-dataset folder and a run-dataset results folder of
-    /// it; any gender mode, e.g. `--gender truth --mean-shape`, which is fast). Repeatable.
-    #[arg(long, value_parser = parse_pair)]
-    train: Vec<(PathBuf, PathBuf)>,
-    /// Test set, same form; reported, never trained on. Repeatable.
-    #[arg(long, value_parser = parse_pair)]
-    test: Vec<(PathBuf, PathBuf)>,
+    /// The classifier's training and test sets (any gender mode, e.g. `--gender truth
+    /// --mean-shape`, which is fast).
+    #[command(flatten)]
+    sets: Sets,
     /// L2 penalty on the standardised coefficients.
     #[arg(long, default_value_t = 1.0, value_parser = crate::ranges::real(0.0, 1e6, false))]
     ridge: f64,
@@ -58,6 +55,19 @@ fn parse_fits(s: &str) -> Result<(PathBuf, PathBuf, PathBuf), String> {
     Ok((d, PathBuf::from(f), PathBuf::from(m)))
 }
 
+/// Training and test sets of a model fitted to run-dataset results.
+#[derive(clap::Args)]
+pub struct Sets {
+    /// Training set: DATASET=RESULTS (a make-dataset folder and a run-dataset results folder of
+    /// it). Repeatable.
+    #[arg(long, value_parser = parse_pair)]
+    pub train: Vec<(PathBuf, PathBuf)>,
+    /// Test set, same form; reported, never trained on. Repeatable.
+    #[arg(long, value_parser = parse_pair)]
+    pub test: Vec<(PathBuf, PathBuf)>,
+}
+
+/// Parses DATASET=RESULTS.
 fn parse_pair(s: &str) -> Result<(PathBuf, PathBuf), String> {
     let (a, b) = s.split_once('=').ok_or_else(|| format!("{s:?}: expected DATASET=RESULTS"))?;
     Ok((PathBuf::from(a), PathBuf::from(b)))
@@ -181,7 +191,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
     } else {
         let mut train = Vec::new();
-        for (d, r) in &a.train {
+        for (d, r) in &a.sets.train {
             train.extend(load(d, r, a.first)?);
         }
         let c = GenderClassifier::train(&train, a.ridge)?;
@@ -199,7 +209,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         println!("training set:\n{}", report(&c, &train));
         c
     };
-    for (d, r) in &a.test {
+    for (d, r) in &a.sets.test {
         let test = load(d, r, a.first)?;
         println!("test {} ({}):\n{}", d.display(), r.display(), report(&classifier, &test));
     }

@@ -84,6 +84,8 @@ fn run_writes_every_output() {
     let report = std::fs::read_to_string(out_dir.join("report.md")).unwrap();
     assert!(report.contains("gender: female (given)"), "{report}");
     assert!(report.contains("samples 24"), "{report}");
+    let height = report.lines().find(|l| l.starts_with("- rest height: ")).expect(&report);
+    assert!(height.contains(" m, calibrated)"), "given joints, no --height: {height}");
     assert!(report.contains("bone factors sd 0.1 centred on their 2-D estimate"), "{report}");
     assert!(
         report.contains("- bone factors estimated from the 2-D joints: legs ")

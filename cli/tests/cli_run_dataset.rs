@@ -151,5 +151,30 @@ fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
     assert_eq!(given.len(), 2);
     assert_ne!(given[0], detected[0]);
     assert_eq!(given[1], detected[1]);
+    // The same fits calibrate the height: every result reports its fitted and its calibrated
+    // rest height, within the calibration's bound of each other.
+    for g in ["f", "m"] {
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join(g).join("000000.json")).unwrap()).unwrap();
+        let (fit, h) = (r["fit_height_m"].as_f64().unwrap(), r["height_m"].as_f64().unwrap());
+        assert!(fit > 1.0 && fit < 2.5 && (h / fit).ln().abs() <= 0.15 + 1e-9, "{fit} {h}");
+    }
+    let (rf, rm) = (format!("{}={}", s(&ds), s(&dir.join("f"))), format!("{}={}", s(&ds), s(&dir.join("m"))));
+    let o = skb(&["calibrate-height", "--train", &rf, "--train", &rm, "--test", &rf]);
+    ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(out.contains("HeightCalibration { intercept: "), "{out}");
+    // Least squares over a family holding the identity: no worse than the fitted heights.
+    let rms = |line: &str| -> (f64, f64) {
+        let v: Vec<f64> = line.split_whitespace().filter_map(|t| t.parse().ok()).collect();
+        (v[v.len() - 2], v[v.len() - 1])
+    };
+    let (before, after) = rms(out.lines().find(|l| l.starts_with("training: 12 samples")).expect(&out));
+    assert!(after <= before + 1e-9, "{out}");
+    let o = skb(&["calibrate-height", "--shipped", "--test", &rf]);
+    ok(&o);
+    assert!(String::from_utf8_lossy(&o.stdout).starts_with("test "), "{o:?}");
+    let o = skb(&["calibrate-height", "--train", &format!("{}={}", s(&ds), s(&dir.join("f")))]);
+    assert!(!o.status.success(), "one gender does not determine the male offset: {o:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

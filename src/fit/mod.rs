@@ -2,6 +2,7 @@
 
 pub mod bone_estimate;
 pub mod gender_evidence;
+pub mod height_calibration;
 pub mod proportions;
 mod score;
 mod sir;
@@ -11,6 +12,7 @@ pub use bone_estimate::{estimate_proportions, EstimateOptions, ProportionEstimat
 pub use gender_evidence::{
     gender_evidence, gender_features, GenderClassifier, GenderEvidence, GenderFeatures, MarginCombination,
 };
+pub use height_calibration::HeightCalibration;
 pub use score::{distance_transform, MatchScore, SketchEvidence, CHAMFER_CAP};
 pub use sir::{
     fit_shape, FitOptions, FitProblem, FitResult, IterationStats, EDGE_SUPPORT_RADIUS, LOW_EVIDENCE_SUPPORT,

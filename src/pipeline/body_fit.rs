@@ -10,7 +10,7 @@ use crate::body::skin::skin;
 use crate::body::{BodyModel, Gender, RestShape, ShapeChoice};
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
-use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult};
+use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult, HeightCalibration};
 use crate::image::GrayImage;
 use crate::pose::PoseEstimate;
 use crate::skeleton::{Joints2, Joints3};
@@ -78,6 +78,10 @@ pub struct BodyChoice {
     /// proportions) instead of refitting its scales and translation to each body's skeleton
     /// ([`refit_camera`]; only done when the 2-D joints are given).
     pub keep_pose_scale: bool,
+    /// Scale the fitted rest body about its pelvis to this calibration's height
+    /// ([`HeightCalibration`]) when [`FitOptions::height`] is unknown; `None` (the default)
+    /// keeps the fitted height. Never applied to the mean shape.
+    pub height_calibration: Option<HeightCalibration>,
 }
 
 /// What [`fit_body`] produces. Owns its data.
@@ -111,8 +115,12 @@ pub struct FittedBody {
     /// [`FitOptions::sample_camera`]), pixels.
     pub camera: WeakPerspective,
     /// The chosen rest shape with its bone-length factors applied and scaled to
-    /// [`FitOptions::height`] when given (model frame, metres).
+    /// [`FitOptions::height`] when given, else to [`BodyChoice::height_calibration`]'s height
+    /// when asked (model frame, metres).
     pub rest: RestShape,
+    /// Height of the fitted rest body before any scaling to a given or calibrated height,
+    /// metres ([`crate::body::rig::y_extent`] of its vertices).
+    pub fit_height: f64,
     /// The IK pose taking `rest.joints` to the estimated 3-D joints.
     pub ik_pose: Pose,
     /// The posed vertices (model frame, metres); project with `pose.camera`.
@@ -125,8 +133,8 @@ pub struct FittedBody {
 
 /// Fits the body to `edges` (255 edge, 0 not) under the 3-D `pose` (canonical joints, metres)
 /// seen through `camera`: the chosen shape space by SIR ([`fit_shape`]; without a gender the
-/// both-sexes space, so no hard gender choice), then bone-length factors, height, IK and
-/// skinning. With `joints2d` the camera is refitted to each body's skeleton (and,
+/// both-sexes space, so no hard gender choice), then bone-length factors, height (given, or
+/// calibrated with [`BodyChoice::height_calibration`]), IK and skinning. With `joints2d` the camera is refitted to each body's skeleton (and,
 /// with [`FitOptions::sample_camera`], to the chosen body's) and the fit uses the joints term.
 /// `progress(fraction)` (0..=1 over the fits, non-decreasing) returning `false` cancels.
 ///
@@ -187,8 +195,14 @@ pub fn fit_body(
     if let Some(props) = &proportions {
         crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, model.skin_weights(), props)?;
     }
-    if let Some(h) = options.height {
-        crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h)?;
+    let fit_height = crate::body::rig::y_extent(&rest.vertices);
+    match (options.height, choice.height_calibration) {
+        (Some(h), _) => crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h)?,
+        (None, Some(c)) if !choice.mean_shape => {
+            let h = c.calibrated(fit_height, gender_value)?;
+            crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h)?;
+        }
+        _ => {}
     }
     // With per-sample cameras the chosen body's own skeleton sets the image scale.
     let camera = match joints2d {
@@ -209,6 +223,7 @@ pub fn fit_body(
         score,
         camera,
         rest,
+        fit_height,
         ik_pose,
         posed_vertices,
         fit_seconds,

@@ -25,7 +25,7 @@ use crate::body::ik::Pose;
 use crate::body::rig::RiggedMesh;
 use crate::body::{BodyModel, Gender, ShapeChoice};
 use crate::error::{Error, Result};
-use crate::fit::{gender_evidence, FitOptions, GenderClassifier, GenderEvidence, MarginCombination};
+use crate::fit::{gender_evidence, FitOptions, GenderClassifier, GenderEvidence, HeightCalibration, MarginCombination};
 use crate::image::{canny, CannyParams, GrayImage};
 use crate::pose::{estimate_pose_hinted, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::Joints2;
@@ -94,6 +94,12 @@ pub struct PipelineOptions {
     /// but tell the genders apart less well (docs/benchmarks.md, "How the fit's defaults were
     /// chosen").
     pub gender_decision_dims: Option<usize>,
+    /// When the character's height is unknown (`fit.height` is `None`) and the 2-D joints are
+    /// given, scale the fitted rest body to the calibrated height of [`HeightCalibration::SHIPPED`]:
+    /// the fit alone draws heights toward the prior's mean (docs/benchmarks.md, "Height
+    /// calibration"). Not applied to detected joints (measured worse there) nor to the mean
+    /// shape. Default `true`.
+    pub calibrate_height: bool,
 }
 
 impl Default for PipelineOptions {
@@ -111,6 +117,7 @@ impl Default for PipelineOptions {
             gender_evidence: true,
             classify_gender: true,
             gender_decision_dims: None,
+            calibrate_height: true,
         }
     }
 }
@@ -184,6 +191,9 @@ pub struct PipelineResult {
     pub score: f64,
     /// The rest mesh with its joints, UVs and skin weights.
     pub mesh: RiggedMesh,
+    /// Height of the fitted rest body before it was scaled to a given or calibrated height,
+    /// metres ([`FittedBody::fit_height`]; for the mean shape, its own height).
+    pub fit_height: f64,
     /// The IK pose taking `mesh.joints` to the estimated 3-D joints.
     pub ik_pose: Pose,
     /// The posed vertices (model frame, metres); project with `pose.camera`.
@@ -302,10 +312,13 @@ pub fn run_pipeline(
     };
     let male_prior =
         (options.gender.is_none() && !classify && detected_gender.is_none()).then(|| fit.male_prior.unwrap_or(0.5));
+    // Detected joints keep the fitted height (a calibration measured worse there).
+    let height_calibration = (options.calibrate_height && detection.is_none()).then_some(HeightCalibration::SHIPPED);
     let choice = BodyChoice {
         gender: options.gender.or(detected_gender),
         mean_shape: options.mean_shape,
         keep_pose_scale: options.keep_pose_scale,
+        height_calibration,
     };
     let (body, classified) = if classify {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
@@ -345,6 +358,7 @@ pub fn run_pipeline(
         score: body.score,
         mesh,
         posed_joints: body.ik_pose.joints,
+        fit_height: body.fit_height,
         ik_pose: body.ik_pose,
         posed_vertices: body.posed_vertices,
         timings,
