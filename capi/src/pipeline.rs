@@ -93,7 +93,9 @@ pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
 /// pose and camera (with detected joints, BlazePose's relative joint depths weigh the solver's
 /// choices), the shape fit (with detected joints: half the joint weight, no bone-factor
 /// search, and with automatic gender the gendered space the detected-joints gender classifier
-/// picks), and the fitted shape posed to the estimate.
+/// picks), and the fitted shape posed to the estimate. Without a height in `fit_opts` and with
+/// `joints` given, the fitted body's height is calibrated (docs/benchmarks.md, "Height
+/// calibration"); detected joints keep the fitted height.
 /// `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
 /// fit options' gender defaults to automatic: chosen by the gender classifier, see
 /// `skb_result_gender`) are

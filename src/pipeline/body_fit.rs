@@ -134,8 +134,9 @@ pub struct FittedBody {
 /// Fits the body to `edges` (255 edge, 0 not) under the 3-D `pose` (canonical joints, metres)
 /// seen through `camera`: the chosen shape space by SIR ([`fit_shape`]; without a gender the
 /// both-sexes space, so no hard gender choice), then bone-length factors, height (given, or
-/// calibrated with [`BodyChoice::height_calibration`]), IK and skinning. With `joints2d` the camera is refitted to each body's skeleton (and,
-/// with [`FitOptions::sample_camera`], to the chosen body's) and the fit uses the joints term.
+/// calibrated with [`BodyChoice::height_calibration`]), IK and skinning. With `joints2d` the
+/// camera is refitted to each body's skeleton (and, with [`FitOptions::sample_camera`], to the
+/// chosen body's) and the fit uses the joints term.
 /// `progress(fraction)` (0..=1 over the fits, non-decreasing) returning `false` cancels.
 ///
 /// Errors: `mean_shape` without a gender ([`Error::OutOfRange`]); the camera refit's, the fit's,
