@@ -418,8 +418,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         format!("{} given", r.gender.name())
     };
     println!(
-        "{}: {gender}, score {}{}, {:.2} s",
+        "{}: {gender}, {:.2} m tall, score {}{}, {:.2} s",
         a.out.display(),
+        r.mesh.height(),
         scores.join(", "),
         if r.low_evidence { ", LOW EVIDENCE" } else { "" },
         t_all.elapsed().as_secs_f64()

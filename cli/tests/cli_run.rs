@@ -159,7 +159,7 @@ fn without_gender_the_classifier_picks_a_gendered_fit_and_reports_its_confidence
     assert!(report.contains("- evidence: "), "{report}");
     assert!(
         stdout.contains("by the gender classifier, p=")
-            && stdout.contains("score female (4-D) -")
+            && stdout.contains(" m tall, score female (4-D) -")
             && stdout.contains(", male (4-D) -")
             && stdout.contains("male (10-D) -"),
         "{stdout}"
