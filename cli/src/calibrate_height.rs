@@ -44,6 +44,9 @@ fn load(dataset: &Path, results: &Path, first: Option<usize>) -> Result<Vec<(f64
         let number = |v: &serde_json::Value, key: &str, p: &Path| {
             v[key].as_f64().ok_or_else(|| CliError(format!("{}: no number {key:?}", p.display())))
         };
+        if r["score"].is_null() {
+            return Err(CliError(format!("{}: mean-shape results have no fitted height", rp.display())));
+        }
         let fit = number(&r, "fit_height_m", &rp)
             .map_err(|e| CliError(format!("{} (run-dataset of this version writes fit_height_m)", e.0)))?;
         out.push((fit, number(&r, "gender_value", &rp)?, number(&truth, "height_m", &dataset.join(stem))?));

@@ -2,8 +2,8 @@
 //! the pipeline on every sample of a synthetic-sketch dataset with the sample's ground-truth
 //! 2-D joints (the user-correction path), writing the results layout `sketchbody eval` reads
 //! (docs/dataset.md): `STEM.json` (joints2d, joints3d = the fitted mesh's posed joints,
-//! camera_r, gender, scores, fit_height_m / height_m), `STEM_rest.obj`, `STEM_posed.obj`, each atomically, the posed OBJ
-//! last. Samples whose `STEM_posed.obj` exists are skipped (resumable). Samples run in parallel
+//! camera_r, gender, scores, fit_height_m / height_m), `STEM_rest.obj`, `STEM_posed.obj`, each
+//! atomically, the posed OBJ last. Samples whose `STEM_posed.obj` exists are skipped (resumable). Samples run in parallel
 //! (rayon); each fit's seed is the same `--seed`, so results do not depend on the thread count
 //! or the order. Ground-truth joints outside the image are marked missing.
 

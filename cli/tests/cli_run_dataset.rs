@@ -176,5 +176,9 @@ fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
     assert!(String::from_utf8_lossy(&o.stdout).starts_with("test "), "{o:?}");
     let o = skb(&["calibrate-height", "--train", &format!("{}={}", s(&ds), s(&dir.join("f")))]);
     assert!(!o.status.success(), "one gender does not determine the male offset: {o:?}");
+    let mean = dir.join("mean");
+    ok(&skb(&["run-dataset", s(&ds), "--out", s(&mean), "--mean-shape", "--first", "2"]));
+    let o = skb(&["calibrate-height", "--train", &format!("{}={}", s(&ds), s(&mean)), "--train", &rm]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("mean-shape results"), "{o:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
