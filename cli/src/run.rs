@@ -221,16 +221,16 @@ fn report(
             g.seconds
         );
     }
-    let height = r.mesh.height();
     let _ = writeln!(
         s,
-        "- rest height: {height:.3} m ({})",
-        match (opts.fit.height, opts.mean_shape, opts.calibrate_height, r.detection.is_some()) {
+        "- rest height: {:.3} m ({})",
+        r.mesh.height(),
+        match (opts.fit.height, opts.mean_shape, r.height_calibrated) {
             (Some(_), ..) => "given".to_string(),
-            (None, true, ..) => "the mean shape's".to_string(),
-            (None, false, true, false) => format!("fitted {:.3} m, calibrated", r.fit_height),
-            (None, false, true, true) => "fitted; detected joints are not calibrated".to_string(),
-            (None, false, false, _) => "fitted, not calibrated".to_string(),
+            (None, true, _) => "the mean shape's".to_string(),
+            (None, false, true) => format!("fitted {:.3} m, calibrated", r.fit_height),
+            (None, false, false) if r.detection.is_some() => "fitted; detected joints are not calibrated".to_string(),
+            (None, false, false) => "fitted, not calibrated".to_string(),
         }
     );
     let evidence = format!(

@@ -3,9 +3,9 @@
 //! 2-D joints (the user-correction path), writing the results layout `sketchbody eval` reads
 //! (docs/dataset.md): `STEM.json` (joints2d, joints3d = the fitted mesh's posed joints,
 //! camera_r, gender, scores, fit_height_m / height_m), `STEM_rest.obj`, `STEM_posed.obj`, each
-//! atomically, the posed OBJ last. Samples whose `STEM_posed.obj` exists are skipped (resumable). Samples run in parallel
-//! (rayon); each fit's seed is the same `--seed`, so results do not depend on the thread count
-//! or the order. Ground-truth joints outside the image are marked missing.
+//! atomically, the posed OBJ last. Samples whose `STEM_posed.obj` exists are skipped
+//! (resumable). Samples run in parallel (rayon); each fit's seed is the same `--seed`, so
+//! results do not depend on the thread count or the order. Ground-truth joints outside the image are marked missing.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -172,7 +172,7 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         "score": finite(r.score),
         "shape_weights": r.weights,
         "fit_height_m": r.fit_height,
-        "height_m": sketchbody::body::rig::y_extent(&r.mesh.vertices),
+        "height_m": r.mesh.height(),
         "proportions": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportions),
         "proportion_estimate": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportion_estimate),
         "landmark_depth": r.detection.as_ref().map(|f| f.landmark_depth),

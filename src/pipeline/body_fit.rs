@@ -121,6 +121,8 @@ pub struct FittedBody {
     /// Height of the fitted rest body before any scaling to a given or calibrated height,
     /// metres ([`crate::body::rig::y_extent`] of its vertices).
     pub fit_height: f64,
+    /// `true` when `rest` was scaled to [`BodyChoice::height_calibration`]'s height.
+    pub height_calibrated: bool,
     /// The IK pose taking `rest.joints` to the estimated 3-D joints.
     pub ik_pose: Pose,
     /// The posed vertices (model frame, metres); project with `pose.camera`.
@@ -197,13 +199,14 @@ pub fn fit_body(
         crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, model.skin_weights(), props)?;
     }
     let fit_height = crate::body::rig::y_extent(&rest.vertices);
-    match (options.height, choice.height_calibration) {
-        (Some(h), _) => crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h)?,
-        (None, Some(c)) if !choice.mean_shape => {
-            let h = c.calibrated(fit_height, gender_value)?;
-            crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h)?;
-        }
-        _ => {}
+    let calibration = choice.height_calibration.filter(|_| options.height.is_none() && !choice.mean_shape);
+    let height = match (options.height, calibration) {
+        (Some(h), _) => Some(h),
+        (None, Some(c)) => Some(c.calibrated(fit_height, gender_value)?),
+        (None, None) => None,
+    };
+    if let Some(h) = height {
+        crate::body::rig::scale_to_height(&mut rest.vertices, &mut rest.joints, h)?;
     }
     // With per-sample cameras the chosen body's own skeleton sets the image scale.
     let camera = match joints2d {
@@ -225,6 +228,7 @@ pub fn fit_body(
         camera,
         rest,
         fit_height,
+        height_calibrated: calibration.is_some(),
         ik_pose,
         posed_vertices,
         fit_seconds,

@@ -194,6 +194,9 @@ pub struct PipelineResult {
     /// Height of the fitted rest body before it was scaled to a given or calibrated height,
     /// metres ([`FittedBody::fit_height`]; for the mean shape, its own height).
     pub fit_height: f64,
+    /// `true` when the rest body was scaled to the calibrated height
+    /// ([`PipelineOptions::calibrate_height`]).
+    pub height_calibrated: bool,
     /// The IK pose taking `mesh.joints` to the estimated 3-D joints.
     pub ik_pose: Pose,
     /// The posed vertices (model frame, metres); project with `pose.camera`.
@@ -359,6 +362,7 @@ pub fn run_pipeline(
         mesh,
         posed_joints: body.ik_pose.joints,
         fit_height: body.fit_height,
+        height_calibrated: body.height_calibrated,
         ik_pose: body.ik_pose,
         posed_vertices: body.posed_vertices,
         timings,
