@@ -19,6 +19,7 @@ fn rebuilt_factor_prior_matches_the_committed_asset() {
         &dict_io::embedded().unwrap().bone_lengths,
         "the embedded dictionary",
         &TrainParams::default(),
+        |_, _| (),
     )
     .unwrap();
     let fresh = prior.to_json() + "\n";

@@ -31,9 +31,12 @@ pub struct Args {
     /// Number of projected samples.
     #[arg(long, default_value_t = TrainParams::default().samples)]
     samples: usize,
-    /// Ridge penalty per sample.
-    #[arg(long, default_value_t = TrainParams::default().ridge)]
-    ridge: f64,
+    /// Width of the network's two hidden layers.
+    #[arg(long, default_value_t = TrainParams::default().hidden)]
+    hidden: usize,
+    /// Passes of the training over the samples.
+    #[arg(long, default_value_t = TrainParams::default().epochs)]
+    epochs: usize,
     /// Share of samples with the reference proportions.
     #[arg(long, default_value_t = TrainParams::default().standard_share)]
     standard_share: f64,
@@ -57,13 +60,17 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let params = TrainParams {
         seed: a.seed,
         samples: a.samples,
-        ridge: a.ridge,
+        hidden: a.hidden,
+        epochs: a.epochs,
         standard_share: a.standard_share,
         ..TrainParams::default()
     };
     let lengths_of =
         a.dictionary.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "the embedded dictionary".into());
-    let prior = train_from_mocap(&a.mocap, &held_out, &skeletons, &dict.bone_lengths, &lengths_of, &params)?;
+    let progress = |epoch: usize, loss: f64| {
+        eprintln!("train-factor-prior: epoch {epoch}/{}: training loss {loss:.4} (standardised)", params.epochs)
+    };
+    let prior = train_from_mocap(&a.mocap, &held_out, &skeletons, &dict.bone_lengths, &lengths_of, &params, progress)?;
     std::fs::write(&a.out, prior.to_json() + "\n")
         .map_err(|e| CliError(format!("train-factor-prior: {}: {e}", a.out.display())))?;
     println!(

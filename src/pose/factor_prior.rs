@@ -6,18 +6,21 @@
 //! **Inputs.** With `d_b` the 2-D vector of bone `b` and `L_b` its reference length, the figure's
 //! 2-D scale is `s₂ = √(Σ|d_b|² / Σ L_b²)` (px per metre) and each bone gives three inputs: the
 //! components of `d_b / (s₂ L_b)` (its image direction and relative length) and the log of that
-//! relative length (floored at [`MIN_RATIO`]). The 42 inputs are standardised and expanded to
-//! all their products of degree ≤ 2 ([`NUM_FEATURES`]); a ridge regression per group predicts
-//! `ln(s k_g / s₂)` (`s` the true figure scale, `k_g` the group's factor relative to the
-//! reference lengths). [`FactorPrior::predict`] returns `ln(s k_g)`, so that the caller can
-//! express it relative to any scale estimate (the pose step: the first solve's camera scale,
-//! the convention of [`super::figure::estimate_factors`]).
+//! relative length (floored at [`MIN_RATIO`]). The 42 inputs are standardised and a small
+//! network ([`super::mlp`]: two tanh layers of 128) predicts `ln(s k_g / s₂)` for every group
+//! (`s` the true figure scale, `k_g` the group's factor relative to the reference lengths).
+//! [`FactorPrior::predict`] returns `ln(s k_g)`, so that the caller can express it relative to
+//! any scale estimate (the pose step: the first solve's camera scale, the convention of
+//! [`super::figure::estimate_factors`]). The network replaced a ridge regression on the inputs'
+//! products of degree ≤ 2 (format version 1), whose left-out spreads were 12–30 % larger
+//! (docs/benchmarks.md, issue 16).
 
 use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 
 use super::figure::{BONE_GROUP, NUM_GROUPS};
+use super::mlp::Mlp;
 use crate::error::{Error, Result};
 use crate::skeleton::{Joints2, BONES, NUM_BONES};
 
@@ -26,12 +29,10 @@ pub static EMBEDDED_FACTOR_PRIOR: &str = include_str!("../../assets/factor_prior
 
 /// Format tag of the JSON file.
 pub const FORMAT: &str = "sketchbody-factor-prior";
-/// Format version.
-pub const VERSION: u32 = 1;
+/// Format version (2: the network; 1 was a ridge regression, no longer read).
+pub const VERSION: u32 = 2;
 /// Raw inputs: three per bone (module doc).
 pub const NUM_INPUTS: usize = 3 * NUM_BONES;
-/// Regression features: 1, the standardised inputs, and their products of degree 2.
-pub const NUM_FEATURES: usize = 1 + NUM_INPUTS + NUM_INPUTS * (NUM_INPUTS + 1) / 2;
 /// Floor of a bone's relative image length before its log is taken.
 pub const MIN_RATIO: f64 = 0.05;
 /// Bound of the predicted log factor relative to the 2-D scale (|ln(s k_g / s₂)|), so that
@@ -53,8 +54,8 @@ pub struct FactorPrior {
     pub mean: Vec<f64>,
     /// Spread of each raw input over the training samples (> 0).
     pub scale: Vec<f64>,
-    /// Regression weights: one row of [`NUM_FEATURES`] per group.
-    pub weights: Vec<Vec<f64>>,
+    /// The regressor: [`NUM_INPUTS`] standardised inputs to [`NUM_GROUPS`] outputs.
+    pub network: Mlp,
     /// Predictive spread of each group's log factor (RMS residual on samples not fitted), > 0.
     pub sd: Vec<f64>,
 }
@@ -91,16 +92,9 @@ pub fn inputs(j: &Joints2, lengths: &[f64; NUM_BONES]) -> Option<(f64, [f64; NUM
     Some((s2, x))
 }
 
-/// The regression features of standardised inputs `z`: 1, `z`, then `z_i z_j` for i ≤ j.
-pub fn features(z: &[f64; NUM_INPUTS], out: &mut Vec<f64>) {
-    out.clear();
-    out.push(1.0);
-    out.extend_from_slice(z);
-    for i in 0..NUM_INPUTS {
-        for k in i..NUM_INPUTS {
-            out.push(z[i] * z[k]);
-        }
-    }
+/// A raw input standardised by its training mean and spread, bounded to ±8 spreads.
+pub(crate) fn standardise(x: f64, mean: f64, scale: f64) -> f64 {
+    ((x - mean) / scale).clamp(-8.0, 8.0)
 }
 
 /// Summed reference length of each group.
@@ -124,13 +118,14 @@ impl FactorPrior {
         let sizes_ok = p.lengths.len() == NUM_BONES
             && p.mean.len() == NUM_INPUTS
             && p.scale.len() == NUM_INPUTS
-            && p.weights.len() == NUM_GROUPS
-            && p.weights.iter().all(|w| w.len() == NUM_FEATURES)
+            && p.network.inputs() == NUM_INPUTS
+            && p.network.outputs() == NUM_GROUPS
             && p.sd.len() == NUM_GROUPS;
         if !sizes_ok {
             return Err(Error::CorruptData("factor prior: arrays of the wrong size".into()));
         }
-        let finite = p.mean.iter().chain(p.weights.iter().flatten()).all(|v| v.is_finite());
+        p.network.check("factor prior")?;
+        let finite = p.mean.iter().all(|v| v.is_finite());
         let positive = p.lengths.iter().chain(&p.scale).chain(&p.sd).all(|v| v.is_finite() && *v > 0.0);
         if !finite || !positive {
             return Err(Error::CorruptData("factor prior: non-finite values or non-positive spreads".into()));
@@ -162,17 +157,12 @@ impl FactorPrior {
         std::array::from_fn(|b| self.lengths[b])
     }
 
-    /// `ln(s₂)` and `ln(s k_g / s₂)` by group (the regression's output, bounded).
+    /// `ln(s₂)` and `ln(s k_g / s₂)` by group (the network's output, bounded).
     pub(crate) fn regress(&self, j: &Joints2) -> Option<(f64, [f64; NUM_GROUPS])> {
         let (s2, x) = inputs(j, &self.lengths_array())?;
-        let z: [f64; NUM_INPUTS] = std::array::from_fn(|i| ((x[i] - self.mean[i]) / self.scale[i]).clamp(-8.0, 8.0));
-        let mut phi = Vec::with_capacity(NUM_FEATURES);
-        features(&z, &mut phi);
-        let mut out = [0.0; NUM_GROUPS];
-        for (o, w) in out.iter_mut().zip(&self.weights) {
-            let v: f64 = w.iter().zip(&phi).map(|(a, b)| a * b).sum();
-            *o = if v.is_finite() { v.clamp(-MAX_LOG, MAX_LOG) } else { 0.0 };
-        }
+        let z: Vec<f64> = (0..NUM_INPUTS).map(|i| standardise(x[i], self.mean[i], self.scale[i])).collect();
+        let y = self.network.forward(&z)?;
+        let out = std::array::from_fn(|g| if y[g].is_finite() { y[g].clamp(-MAX_LOG, MAX_LOG) } else { 0.0 });
         Some((s2.ln(), out))
     }
 
@@ -206,7 +196,7 @@ mod tests {
         let p = FactorPrior::embedded().unwrap();
         assert!(p.provenance.contains("train-factor-prior"));
         let mut bad = p.clone();
-        bad.weights[2].pop();
+        bad.network.layers[1].weights.pop();
         assert!(
             matches!(FactorPrior::from_json(&bad.to_json()), Err(Error::CorruptData(m)) if m.contains("wrong size"))
         );

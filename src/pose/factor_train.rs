@@ -3,10 +3,9 @@
 //! with the reference proportions, the rest head ×U(1, 1.8) and each other group ×U(0.75,
 //! 1.35), the ranges of the stylised benchmark), seen by random weak-perspective cameras (yaw
 //! U(±30°) or |yaw| U(60°, 90°), pitch U(±10°), 500-px figures) with Gaussian 2-D noise of a
-//! random σ in [0, `max_noise_px`]; a ridge regression of the targets on the features
-//! ([`super::factor_prior::features`]), solved from its normal equations; the predictive spread
-//! from the last [`TrainParams::spread_share`] of the samples, left out of the fit.
-//! Deterministic for a seed.
+//! random σ in [0, `max_noise_px`]; a small network ([`super::mlp`]) from the standardised inputs
+//! to the standardised targets, trained by Adam; the predictive spread from the last
+//! [`TrainParams::spread_share`] of the samples, left out of the fit. Deterministic for a seed.
 
 use std::path::PathBuf;
 
@@ -14,9 +13,10 @@ use nalgebra::{DMatrix, Matrix3, Rotation3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
-use super::factor_prior::{features, group_lengths, inputs, FactorPrior, FORMAT, NUM_FEATURES, NUM_INPUTS, VERSION};
+use super::factor_prior::{group_lengths, inputs, standardise, FactorPrior, FORMAT, NUM_INPUTS, VERSION};
 use super::figure::{BodyFactors, BONE_GROUP, NUM_GROUPS};
 use super::learn::{clip_matches, motion_files, retarget_frames};
+use super::mlp::{self, MlpParams};
 use super::motion::{mirror_pose, normalize_pose, read_motion_csv, REF_STATURE};
 use crate::error::{Error, Result};
 use crate::skeleton::{Joints2, Joints3, BONES, NUM_BONES, NUM_JOINTS};
@@ -28,8 +28,10 @@ pub struct TrainParams {
     pub seed: u64,
     /// Number of projected samples.
     pub samples: usize,
-    /// Ridge penalty per sample on every standardised feature but the intercept.
-    pub ridge: f64,
+    /// Width of the network's two hidden layers.
+    pub hidden: usize,
+    /// Passes of the training over the samples.
+    pub epochs: usize,
     /// Share of samples with the reference proportions (all factors 1).
     pub standard_share: f64,
     /// Largest 2-D noise σ, px on a 500-px figure.
@@ -40,7 +42,15 @@ pub struct TrainParams {
 
 impl Default for TrainParams {
     fn default() -> Self {
-        TrainParams { seed: 1, samples: 30000, ridge: 1e-3, standard_share: 0.25, max_noise_px: 5.0, spread_share: 0.1 }
+        TrainParams {
+            seed: 1,
+            samples: 200_000,
+            hidden: 128,
+            epochs: 20,
+            standard_share: 0.25,
+            max_noise_px: 5.0,
+            spread_share: 0.1,
+        }
     }
 }
 
@@ -100,19 +110,30 @@ fn sample<R: Rng>(rng: &mut R, frames: &[Joints3], lengths: &[f64; NUM_BONES], p
     }
 }
 
+/// Smallest number of samples [`train`] accepts.
+pub const MIN_SAMPLES: usize = 200;
+
 /// Trains the prior on `frames` (normalised training poses) for the reference bone lengths
-/// `lengths` (module doc); `provenance` is stored with the fit's figures appended. Errors:
-/// [`Error::OutOfRange`] for no frames or too few samples, [`Error::Degenerate`] when the
-/// normal equations are singular.
-pub fn train(frames: &[Joints3], lengths: &[f64; NUM_BONES], p: &TrainParams, provenance: &str) -> Result<FactorPrior> {
+/// `lengths` (module doc); `provenance` is stored with the fit's figures appended; `progress`
+/// is called after each epoch with its number and the mean training loss (standardised
+/// targets). Errors: [`Error::OutOfRange`] for no frames, fewer than [`MIN_SAMPLES`] samples or
+/// bad network parameters, [`Error::Degenerate`] when too few samples are usable or the
+/// training diverges.
+pub fn train(
+    frames: &[Joints3],
+    lengths: &[f64; NUM_BONES],
+    p: &TrainParams,
+    provenance: &str,
+    progress: impl FnMut(usize, f64),
+) -> Result<FactorPrior> {
     if frames.is_empty() {
         return Err(Error::OutOfRange { name: "frames", detail: "no training frames".into() });
     }
     let held = ((p.samples as f64) * p.spread_share.clamp(0.0, 0.5)).round() as usize;
-    if p.samples < 2 * NUM_FEATURES || held == 0 {
+    if p.samples < MIN_SAMPLES || held == 0 {
         return Err(Error::OutOfRange {
             name: "samples",
-            detail: format!("{} (at least {} with a non-empty spread share)", p.samples, 2 * NUM_FEATURES),
+            detail: format!("{} (at least {MIN_SAMPLES} with a non-empty spread share)", p.samples),
         });
     }
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(p.seed);
@@ -142,56 +163,45 @@ pub fn train(frames: &[Joints3], lengths: &[f64; NUM_BONES], p: &TrainParams, pr
         }
     }
     let scale = scale.map(|v| v.sqrt().max(1e-6));
-    let phi_of = |s: &Sample, out: &mut Vec<f64>| {
-        let z: [f64; NUM_INPUTS] = std::array::from_fn(|i| ((s.x[i] - mean[i]) / scale[i]).clamp(-8.0, 8.0));
-        features(&z, out);
-    };
-    // Normal equations, accumulated by blocks of samples (matrix products).
-    const BLOCK: usize = 1024;
-    let mut gram = DMatrix::<f64>::zeros(NUM_FEATURES, NUM_FEATURES);
-    let mut rhs = DMatrix::<f64>::zeros(NUM_FEATURES, NUM_GROUPS);
-    let mut phi = Vec::with_capacity(NUM_FEATURES);
-    for chunk in fit.chunks(BLOCK) {
-        let mut xt = DMatrix::<f64>::zeros(NUM_FEATURES, chunk.len());
-        let mut t = DMatrix::<f64>::zeros(chunk.len(), NUM_GROUPS);
-        for (c, s) in chunk.iter().enumerate() {
-            phi_of(s, &mut phi);
-            xt.column_mut(c).copy_from_slice(&phi);
-            for g in 0..NUM_GROUPS {
-                t[(c, g)] = s.t[g];
+    let mean_t: [f64; NUM_GROUPS] = std::array::from_fn(|g| fit.iter().map(|f| f.t[g]).sum::<f64>() / n);
+    let sd_t: [f64; NUM_GROUPS] =
+        std::array::from_fn(|g| (fit.iter().map(|f| (f.t[g] - mean_t[g]).powi(2)).sum::<f64>() / n).sqrt().max(1e-6));
+    let x = DMatrix::from_fn(NUM_INPUTS, fit.len(), |i, c| standardise(fit[c].x[i], mean[i], scale[i]) as f32);
+    let t = DMatrix::from_fn(NUM_GROUPS, fit.len(), |g, c| ((fit[c].t[g] - mean_t[g]) / sd_t[g]) as f32);
+    let net_params = MlpParams { hidden: p.hidden, epochs: p.epochs, seed: p.seed, ..MlpParams::default() };
+    let mut network = mlp::train(&x, &t, &net_params, progress)?;
+    // The network's outputs in the targets' own units: the last layer absorbs their scale.
+    if let Some(last) = network.layers.last_mut() {
+        for g in 0..NUM_GROUPS {
+            for w in &mut last.weights[g * last.inputs..(g + 1) * last.inputs] {
+                *w = (*w as f64 * sd_t[g]) as f32;
             }
+            last.bias[g] = (last.bias[g] as f64 * sd_t[g] + mean_t[g]) as f32;
         }
-        gram += &xt * xt.transpose();
-        rhs += &xt * t;
     }
-    for i in 1..NUM_FEATURES {
-        gram[(i, i)] += p.ridge * n;
-    }
-    let chol = gram.cholesky().ok_or_else(|| Error::Degenerate("factor prior: singular normal equations".into()))?;
-    let w = chol.solve(&rhs);
-    let weights: Vec<Vec<f64>> = (0..NUM_GROUPS).map(|g| w.column(g).iter().copied().collect()).collect();
     // Predictive spread on the samples left out.
     let mut sq = [0.0; NUM_GROUPS];
-    let mut sq_fit = [0.0; NUM_GROUPS];
-    let mean_t: [f64; NUM_GROUPS] = std::array::from_fn(|g| fit.iter().map(|f| f.t[g]).sum::<f64>() / n);
+    let mut sq_const = [0.0; NUM_GROUPS];
     for s in test {
-        phi_of(s, &mut phi);
+        let z: Vec<f64> = (0..NUM_INPUTS).map(|i| standardise(s.x[i], mean[i], scale[i])).collect();
+        let y = network.forward(&z).ok_or_else(|| Error::Degenerate("factor prior: network shape".into()))?;
         for g in 0..NUM_GROUPS {
-            let y: f64 = weights[g].iter().zip(&phi).map(|(a, b)| a * b).sum();
-            sq[g] += (y - s.t[g]).powi(2);
-            sq_fit[g] += (mean_t[g] - s.t[g]).powi(2);
+            sq[g] += (y[g] - s.t[g]).powi(2);
+            sq_const[g] += (mean_t[g] - s.t[g]).powi(2);
         }
     }
     let m = test.len() as f64;
     let sd: Vec<f64> = sq.iter().map(|v| (v / m).sqrt().max(1e-3)).collect();
-    let base: Vec<f64> = sq_fit.iter().map(|v| (v / m).sqrt()).collect();
+    let base: Vec<f64> = sq_const.iter().map(|v| (v / m).sqrt()).collect();
     let fmt = |v: &[f64]| v.iter().map(|x| format!("{x:.3}")).collect::<Vec<_>>().join(", ");
     let provenance = format!(
-        "{provenance}\nparams: seed={} samples={} ridge={} standard_share={} max_noise_px={} spread_share={}\n\
-         left-out RMS of ln factor by group (head, torso, shoulders, arms, hips, legs): {} (constant: {})",
+        "{provenance}\nparams: seed={} samples={} hidden={} epochs={} standard_share={} max_noise_px={} \
+         spread_share={}\nleft-out RMS of ln factor by group (head, torso, shoulders, arms, hips, legs): {} \
+         (constant: {})",
         p.seed,
         p.samples,
-        p.ridge,
+        p.hidden,
+        p.epochs,
         p.standard_share,
         p.max_noise_px,
         p.spread_share,
@@ -205,7 +215,7 @@ pub fn train(frames: &[Joints3], lengths: &[f64; NUM_BONES], p: &TrainParams, pr
         lengths: lengths.to_vec(),
         mean: mean.to_vec(),
         scale: scale.to_vec(),
-        weights,
+        network,
         sd,
     };
     // Round-trip through the checks of the file format.
@@ -217,8 +227,8 @@ pub fn train(frames: &[Joints3], lengths: &[f64; NUM_BONES], p: &TrainParams, pr
 /// (the body model's mean skeletons for the library's prior) and normalised, for the reference
 /// lengths `lengths` (named `lengths_of` in the provenance). The provenance records the folder
 /// names (not their paths, so that the asset does not depend on where the data lives), the
-/// clips, the held-out names and the licences of the library's data. Errors: reading the
-/// clips, and those of [`train`].
+/// clips, the held-out names and the licences of the library's data; `progress` as in
+/// [`train`]. Errors: reading the clips, and those of [`train`].
 pub fn train_from_mocap(
     mocap: &[PathBuf],
     held_out: &[String],
@@ -226,6 +236,7 @@ pub fn train_from_mocap(
     lengths: &[f64; NUM_BONES],
     lengths_of: &str,
     p: &TrainParams,
+    progress: impl FnMut(usize, f64),
 ) -> Result<FactorPrior> {
     let (mut frames, mut clips) = (Vec::new(), Vec::new());
     for dir in mocap {
@@ -244,7 +255,7 @@ pub fn train_from_mocap(
         "sketchbody train-factor-prior, motion folders {} (../shared/data/mocap/<folder> for the library's prior), \
          bone lengths of {lengths_of}, deterministic. Data: DeepMimic clips (MIT licence) and CMU Graphics Lab \
          clips (mocap.cs.cmu.edu, created with funding from NSF EIA-0196217), retargeted onto {} and normalised \
-         to 1.75 m; the file holds regression weights only, no motion data.\nclips ({}, {} frames): {}\nheld_out: {}",
+         to 1.75 m; the file holds network weights only, no motion data.\nclips ({}, {} frames): {}\nheld_out: {}",
         folders.join(", "),
         if skeletons.is_empty() {
             "nothing (their own skeletons)".to_string()
@@ -256,7 +267,7 @@ pub fn train_from_mocap(
         clips.join(","),
         held_out.join(",")
     );
-    train(&frames, lengths, p, &provenance)
+    train(&frames, lengths, p, &provenance, progress)
 }
 
 #[cfg(test)]
@@ -276,16 +287,21 @@ mod tests {
     #[test]
     fn training_is_deterministic_and_checks_its_input() {
         let (frames, lengths) = poses();
-        let p = TrainParams { samples: 2 * NUM_FEATURES + 200, ..TrainParams::default() };
-        let a = train(&frames, &lengths, &p, "test").unwrap();
-        let b = train(&frames, &lengths, &p, "test").unwrap();
+        let p = TrainParams { samples: 2000, hidden: 16, epochs: 3, ..TrainParams::default() };
+        let mut epochs = Vec::new();
+        let a = train(&frames, &lengths, &p, "test", |e, _| epochs.push(e)).unwrap();
+        assert_eq!(epochs, [1, 2, 3]);
+        let b = train(&frames, &lengths, &p, "test", |_, _| ()).unwrap();
         assert_eq!(a.to_json(), b.to_json());
-        let c = train(&frames, &lengths, &TrainParams { seed: 2, ..p }, "test").unwrap();
-        assert_ne!(a.weights, c.weights);
+        let c = train(&frames, &lengths, &TrainParams { seed: 2, ..p }, "test", |_, _| ()).unwrap();
+        assert_ne!(a.network, c.network);
         assert!(a.provenance.starts_with("test\nparams: seed=1"));
-        assert!(matches!(train(&[], &lengths, &p, "t"), Err(Error::OutOfRange { name: "frames", .. })));
+        assert!(matches!(train(&[], &lengths, &p, "t", |_, _| ()), Err(Error::OutOfRange { name: "frames", .. })));
         let few = TrainParams { samples: 100, ..p };
-        assert!(matches!(train(&frames, &lengths, &few, "t"), Err(Error::OutOfRange { name: "samples", .. })));
+        assert!(matches!(
+            train(&frames, &lengths, &few, "t", |_, _| ()),
+            Err(Error::OutOfRange { name: "samples", .. })
+        ));
     }
 
     /// On stylised figures (frontal and side views, exact joints) the factor estimate under the

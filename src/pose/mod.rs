@@ -8,8 +8,9 @@
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
 //! - [`exemplar`]: the nearest-neighbour starts (exemplar poses ranked by an affine camera fit).
 //! - [`figure`]: drawn proportions as unknowns (per-group bone-length factors).
-//! - [`factor_prior`]: the learned prior on the factors (a regression from the 2-D joints).
+//! - [`factor_prior`]: the learned prior on the factors (a network from the 2-D joints).
 //! - [`factor_train`]: its training on projected mocap with random cameras and proportions.
+//! - [`mlp`]: the small network the learned prior uses, and its training (Adam).
 //! - [`learn`]: clip selection and provenance for learning from folders and BVH files.
 //! - [`dict_io`]: the dictionary's binary file format and the embedded default.
 //! - [`plausibility`]: the standing prior and the knee limits of the free-joint step.
@@ -34,6 +35,7 @@ pub mod dictionary;
 pub mod exemplar;
 pub mod factor_prior;
 pub mod factor_train;
+pub mod mlp;
 pub mod figure;
 pub mod joint_fit;
 pub mod learn;
