@@ -1233,6 +1233,16 @@ skb_status skb_pose_options_set_knee_limits(struct skb_pose_options *opts, bool 
 skb_status skb_pose_options_set_factor_prior(struct skb_pose_options *opts, bool on);
 
 /**
+ * Sets the weight of the learned joints' depths (default 0.05; 0 = off; at most 10): where the
+ * solver chooses between readings of a near-frontal figure (a limb toward or away from the
+ * viewer), the depths predicted from the 2-D joints by the embedded network
+ * (`assets/factor_prior.json`) add this many px² of cost per px² of depth disagreement.
+ * `skb_estimate_pose` always uses them when on; the pipeline replaces them by BlazePose's own
+ * depths when it detected the joints with BlazePose. `SKB_ERR_OUT_OF_RANGE` outside [0, 10].
+ */
+skb_status skb_pose_options_set_depth_prior(struct skb_pose_options *opts, double weight);
+
+/**
  * `skb_estimate_pose` that also writes the drawn proportions and the plausibility flag to
  * `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
  */

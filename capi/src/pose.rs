@@ -462,6 +462,22 @@ pub unsafe extern "C" fn skb_pose_options_set_factor_prior(opts: *mut skb_pose_o
     }
 }
 
+/// Sets the weight of the learned joints' depths (default 0.05; 0 = off; at most 10): where the
+/// solver chooses between readings of a near-frontal figure (a limb toward or away from the
+/// viewer), the depths predicted from the 2-D joints by the embedded network
+/// (`assets/factor_prior.json`) add this many px² of cost per px² of depth disagreement.
+/// `skb_estimate_pose` always uses them when on; the pipeline replaces them by BlazePose's own
+/// depths when it detected the joints with BlazePose. `SKB_ERR_OUT_OF_RANGE` outside [0, 10].
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_depth_prior(opts: *mut skb_pose_options, weight: f64) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_options_set_depth_prior` (lib.rs § Safety): `opts` is NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.depth_prior = weight) }
+    }
+}
+
 /// Number of proportion groups of `skb_pose_figure`.
 pub const SKB_POSE_GROUPS: u32 = 6;
 
@@ -696,6 +712,11 @@ mod tests {
             assert!((*o).inner.factor_prior);
             assert_eq!(skb_pose_options_set_factor_prior(o, false), skb_status::SKB_OK);
             assert!(!(*o).inner.factor_prior);
+            assert_eq!((*o).inner.depth_prior, 0.05);
+            assert_eq!(skb_pose_options_set_depth_prior(o, -1.0), skb_status::SKB_ERR_OUT_OF_RANGE);
+            assert_eq!((*o).inner.depth_prior, 0.05);
+            assert_eq!(skb_pose_options_set_depth_prior(o, 0.0), skb_status::SKB_OK);
+            assert_eq!((*o).inner.depth_prior, 0.0);
             // The free-joint refinement (on by default) follows the 2-D joints more closely.
             assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
             let free_rms = p.rms_px;

@@ -88,8 +88,12 @@ pub struct Args {
     /// The fixed factor prior instead of the learned one in configuration (d).
     #[arg(long)]
     no_factor_prior: bool,
-    /// With `--suite`: this learned factor prior file instead of the embedded one (e.g. one
-    /// trained without a validation split; `train-factor-prior`).
+    /// Weight of the learned joints' depths in configuration (d) (default: the library's; 0 =
+    /// off).
+    #[arg(long)]
+    depth_prior: Option<f64>,
+    /// With `--suite`: this learned prior file (factors and depths) instead of the embedded one
+    /// (e.g. one trained without a validation split; `train-factor-prior`).
     #[arg(long)]
     factor_prior: Option<PathBuf>,
     /// Run configuration (d) only.
@@ -232,6 +236,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         standing_prior: def.standing_prior && !a.no_standing_prior,
         knee_limits: def.knee_limits && !a.no_knee_limits,
         factor_prior: def.factor_prior && !a.no_factor_prior,
+        depth_prior: a.depth_prior.unwrap_or(def.depth_prior),
         ..def
     };
     if a.suite {
@@ -271,6 +276,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         standing_prior: false,
         knee_limits: false,
         factor_prior: false,
+        depth_prior: 0.0,
     };
     let configs = [
         ("(a) mean pose, camera fitted", PoseOptions { max_bases: 0, alpha: 0.0, refine: false, ..paper }),

@@ -113,7 +113,8 @@ pub struct Suite<'a> {
     pub seed: u64,
     /// Per-case CSV output.
     pub dump: Option<&'a Path>,
-    /// A learned factor prior replacing the embedded one (when `PoseOptions::factor_prior`).
+    /// Learned priors (factors and depths) replacing the embedded ones, each used as
+    /// `PoseOptions::factor_prior` and `PoseOptions::depth_prior` say.
     pub factor_prior: Option<FactorPrior>,
 }
 
@@ -193,9 +194,9 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
                             j2.xy[p] = [q[0] + sigma * a, q[1] + sigma * b];
                         }
                         let c0 = thread_cpu_s();
-                        let res = match (&suite.factor_prior, opts.factor_prior) {
-                            (Some(p), true) => estimate_pose_with_factor_prior(dict, &j2, opts, None, Some(p)),
-                            _ => estimate_pose(dict, &j2, opts),
+                        let res = match &suite.factor_prior {
+                            Some(p) => estimate_pose_with_factor_prior(dict, &j2, opts, None, Some(p)),
+                            None => estimate_pose(dict, &j2, opts),
                         };
                         cpu += thread_cpu_s() - c0;
                         let Ok(est) = res else {

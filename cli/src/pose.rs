@@ -70,6 +70,10 @@ pub struct Args {
     /// The fixed prior on the drawn proportions instead of the learned one (assets/factor_prior.json).
     #[arg(long)]
     no_factor_prior: bool,
+    /// Weight of the learned joints' depths (assets/factor_prior.json) where the solver chooses
+    /// between readings; 0 = off.
+    #[arg(long, default_value_t = PoseOptions::default().depth_prior)]
+    depth_prior: f64,
 }
 
 /// Runs the command.
@@ -96,6 +100,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         standing_prior: !a.no_standing_prior,
         knee_limits: !a.no_knee_limits,
         factor_prior: !a.no_factor_prior,
+        depth_prior: a.depth_prior,
     };
     let est = estimate_pose(&dict, &joints, &opts)?;
     let doc = pose3d_json(&est, &dict, &opts);

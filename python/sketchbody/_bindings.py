@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "7709fe767b7a4444a411a3f519bb36e3644729cb5a1a1e6c01f247d6ec90b06f"
+HEADER_SHA256 = "45eaae05c67f25c3600670d1129df8de0cc16e40f4b8066adb71363f97ba6edb"
 
 # ---- constants (#define) ----
 
@@ -1869,6 +1869,25 @@ FUNCTIONS["skb_pose_options_set_factor_prior"] = (
     (
         ("opts", "struct skb_pose_options *"),
         ("on", "bool"),
+    ),
+)
+
+# Sets the weight of the learned joints' depths (default 0.05; 0 = off; at most 10): where the
+# solver chooses between readings of a near-frontal figure (a limb toward or away from the
+# viewer), the depths predicted from the 2-D joints by the embedded network
+# (`assets/factor_prior.json`) add this many px² of cost per px² of depth disagreement.
+# `skb_estimate_pose` always uses them when on; the pipeline replaces them by BlazePose's own
+# depths when it detected the joints with BlazePose. `SKB_ERR_OUT_OF_RANGE` outside [0, 10].
+FUNCTIONS["skb_pose_options_set_depth_prior"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_pose_options),
+        ctypes.c_double,
+    ],
+    "skb_status",
+    (
+        ("opts", "struct skb_pose_options *"),
+        ("weight", "double"),
     ),
 )
 

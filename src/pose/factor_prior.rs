@@ -1,7 +1,9 @@
-//! A learned prior on the drawn proportions ([`super::figure`]): a regressor from the 2-D joints
-//! to each group's log factor, with its predictive spread, trained on projected training motion
-//! with random cameras and random proportions ([`super::factor_train`], `sketchbody
-//! train-factor-prior`) and embedded from `assets/factor_prior.json`.
+//! Learned priors from the 2-D joints alone, trained on projected training motion with random
+//! cameras and random proportions ([`super::factor_train`], `sketchbody train-factor-prior`) and
+//! embedded from `assets/factor_prior.json`: a regressor of each proportion group's log factor
+//! ([`super::figure`]), with its predictive spread, and a regressor of the joints' relative
+//! depths, which becomes the pose step's depth hint ([`FactorPrior::depth_hint`],
+//! [`super::DepthHint`]) when no image cue gives one.
 //!
 //! **Inputs.** With `d_b` the 2-D vector of bone `b` and `L_b` its reference length, the figure's
 //! 2-D scale is `s₂ = √(Σ|d_b|² / Σ L_b²)` (px per metre) and each bone gives three inputs: the
@@ -11,7 +13,9 @@
 //! (`s` the true figure scale, `k_g` the group's factor relative to the reference lengths).
 //! [`FactorPrior::predict`] returns `ln(s k_g)`, so that the caller can express it relative to
 //! any scale estimate (the pose step: the first solve's camera scale, the convention of
-//! [`super::figure::estimate_factors`]). The network replaced a ridge regression on the inputs'
+//! [`super::figure::estimate_factors`]). A second network of the same shape predicts each
+//! joint's depth toward the camera relative to the pelvis, over `s₂` (metres at the figure's
+//! 2-D scale). The factor network replaced a ridge regression on the inputs'
 //! products of degree ≤ 2 (format version 1), whose left-out spreads were 12–30 % larger
 //! (docs/benchmarks.md, issue 16).
 
@@ -19,10 +23,11 @@ use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 
+use super::depth_hint::DepthHint;
 use super::figure::{BONE_GROUP, NUM_GROUPS};
 use super::mlp::Mlp;
 use crate::error::{Error, Result};
-use crate::skeleton::{Joints2, BONES, NUM_BONES};
+use crate::skeleton::{Joints2, BONES, NUM_BONES, NUM_JOINTS};
 
 /// The embedded prior (`assets/factor_prior.json`).
 pub static EMBEDDED_FACTOR_PRIOR: &str = include_str!("../../assets/factor_prior.json");
@@ -54,8 +59,11 @@ pub struct FactorPrior {
     pub mean: Vec<f64>,
     /// Spread of each raw input over the training samples (> 0).
     pub scale: Vec<f64>,
-    /// The regressor: [`NUM_INPUTS`] standardised inputs to [`NUM_GROUPS`] outputs.
+    /// The factors' regressor: [`NUM_INPUTS`] standardised inputs to [`NUM_GROUPS`] outputs.
     pub network: Mlp,
+    /// The depths' regressor: [`NUM_INPUTS`] standardised inputs to one depth per joint
+    /// (canonical order), toward the camera relative to the pelvis, over `s₂`.
+    pub depth_network: Mlp,
     /// Predictive spread of each group's log factor (RMS residual on samples not fitted), > 0.
     pub sd: Vec<f64>,
 }
@@ -120,11 +128,14 @@ impl FactorPrior {
             && p.scale.len() == NUM_INPUTS
             && p.network.inputs() == NUM_INPUTS
             && p.network.outputs() == NUM_GROUPS
+            && p.depth_network.inputs() == NUM_INPUTS
+            && p.depth_network.outputs() == NUM_JOINTS
             && p.sd.len() == NUM_GROUPS;
         if !sizes_ok {
             return Err(Error::CorruptData("factor prior: arrays of the wrong size".into()));
         }
         p.network.check("factor prior")?;
+        p.depth_network.check("factor prior depths")?;
         let finite = p.mean.iter().all(|v| v.is_finite());
         let positive = p.lengths.iter().chain(&p.scale).chain(&p.sd).all(|v| v.is_finite() && *v > 0.0);
         if !finite || !positive {
@@ -164,6 +175,21 @@ impl FactorPrior {
         let y = self.network.forward(&z)?;
         let out = std::array::from_fn(|g| if y[g].is_finite() { y[g].clamp(-MAX_LOG, MAX_LOG) } else { 0.0 });
         Some((s2.ln(), out))
+    }
+
+    /// The depth hint of the 2-D joints `j` with `weight` ([`DepthHint::weight`]): each joint's
+    /// predicted depth toward the camera, px at the image's scale (the network's output times
+    /// `s₂`). `None` when a joint is invisible or not finite, the figure has no extent, or the
+    /// weight is not finite and > 0.
+    pub fn depth_hint(&self, j: &Joints2, weight: f64) -> Option<DepthHint> {
+        if !(weight.is_finite() && weight > 0.0) {
+            return None;
+        }
+        let (s2, x) = inputs(j, &self.lengths_array())?;
+        let z: Vec<f64> = (0..NUM_INPUTS).map(|i| standardise(x[i], self.mean[i], self.scale[i])).collect();
+        let y = self.depth_network.forward(&z)?;
+        let depth: [f64; NUM_JOINTS] = std::array::from_fn(|k| s2 * y[k]);
+        depth.iter().all(|v| v.is_finite()).then_some(DepthHint { depth, known: [true; NUM_JOINTS], weight })
     }
 
     /// Predicts each group's image scale `ln(s k_g)` from the 2-D joints `j`, for factors
@@ -227,10 +253,53 @@ mod tests {
         }
         let e = p.predict(&j, &lengths).unwrap();
         assert!(e.log_scale.iter().chain(&e.sd).all(|v| v.is_finite()));
+        let h = p.depth_hint(&j, 0.05).unwrap();
+        assert!(h.depth.iter().all(|v| v.is_finite()) && h.weight == 0.05);
+        assert!(p.depth_hint(&j, 0.0).is_none() && p.depth_hint(&j, f64::NAN).is_none());
         j.visible[3] = false;
         assert!(p.predict(&j, &lengths).is_none());
+        assert!(p.depth_hint(&j, 0.05).is_none());
         j.visible[3] = true;
         j.xy[4][0] = f64::NAN;
         assert!(p.predict(&j, &lengths).is_none());
+        assert!(p.depth_hint(&j, 0.05).is_none());
+    }
+
+    /// The embedded depth network orders the limbs in depth: on dictionary poses seen by
+    /// near-frontal cameras (the views where the image says least about depth), the limbs that
+    /// point more than 5 cm toward or away from the viewer get the sign of their depth change
+    /// right far more often than chance, and the hint's depths are px at the image's scale.
+    #[test]
+    fn the_depth_hint_orders_limbs_in_depth() {
+        use nalgebra::{Rotation3, Vector3};
+        use rand::{Rng, SeedableRng};
+        let p = FactorPrior::embedded().unwrap();
+        let d = crate::pose::dict_io::embedded().unwrap();
+        let limbs = crate::pose::metrics::LIMB_BONES.map(|b| BONES[b]);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (mut right, mut total, mut scale_err) = (0, 0, 0.0f64);
+        for c in d.exemplars.column_iter().step_by(97) {
+            let x = crate::pose::dictionary::vec_to_pose(c.as_slice());
+            let yaw: f64 = rng.random_range(-30.0..=30.0);
+            let r = Rotation3::from_axis_angle(&Vector3::y_axis(), yaw.to_radians());
+            let s = 300.0;
+            let cam: Vec<Vector3<f64>> = x.iter().map(|q| r * Vector3::from(*q)).collect();
+            let j = Joints2 {
+                xy: std::array::from_fn(|k| [s * cam[k].x + 250.0, -s * cam[k].y + 300.0]),
+                visible: [true; NUM_JOINTS],
+            };
+            let h = p.depth_hint(&j, 1.0).unwrap();
+            for &(a, b) in &limbs {
+                let truth = cam[b].z - cam[a].z;
+                if truth.abs() > 0.05 {
+                    total += 1;
+                    right += usize::from((h.depth[b] - h.depth[a]).signum() == truth.signum());
+                    scale_err = scale_err.max(((h.depth[b] - h.depth[a]) / (s * truth)).abs());
+                }
+            }
+        }
+        assert!(total > 100, "{total} limbs");
+        assert!(right as f64 > 0.85 * total as f64, "{right} of {total}");
+        assert!(scale_err < 10.0, "depths not in image px: ratio {scale_err}");
     }
 }

@@ -3,9 +3,11 @@
 //! with the reference proportions, the rest head ×U(1, 1.8) and each other group ×U(0.75,
 //! 1.35), the ranges of the stylised benchmark), seen by random weak-perspective cameras (yaw
 //! U(±30°) or |yaw| U(60°, 90°), pitch U(±10°), 500-px figures) with Gaussian 2-D noise of a
-//! random σ in [0, `max_noise_px`]; a small network ([`super::mlp`]) from the standardised inputs
-//! to the standardised targets, trained by Adam; the predictive spread from the last
-//! [`TrainParams::spread_share`] of the samples, left out of the fit. Deterministic for a seed.
+//! random σ in [0, `max_noise_px`]; two small networks ([`super::mlp`]) from the standardised
+//! inputs, trained by Adam: one to the standardised log factors, one to the joints' depths
+//! (camera frame, relative to the pelvis, over the figure's 2-D scale); the factors' predictive
+//! spread and the depths' figures from the last [`TrainParams::spread_share`] of the samples,
+//! left out of both fits. Deterministic for a seed.
 
 use std::path::PathBuf;
 
@@ -16,10 +18,11 @@ use rand_distr::{Distribution, Normal};
 use super::factor_prior::{group_lengths, inputs, standardise, FactorPrior, FORMAT, NUM_INPUTS, VERSION};
 use super::figure::{BodyFactors, BONE_GROUP, NUM_GROUPS};
 use super::learn::{clip_matches, motion_files, retarget_frames};
+use super::metrics::LIMB_BONES;
 use super::mlp::{self, MlpParams};
 use super::motion::{mirror_pose, normalize_pose, read_motion_csv, REF_STATURE};
 use crate::error::{Error, Result};
-use crate::skeleton::{Joints2, Joints3, BONES, NUM_BONES, NUM_JOINTS};
+use crate::skeleton::{joint, Joints2, Joints3, BONES, NUM_BONES, NUM_JOINTS};
 
 /// Parameters of [`train`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,10 +57,12 @@ impl Default for TrainParams {
     }
 }
 
-/// One training sample: the raw inputs and the targets `ln(s k_g / s₂)`.
+/// One training sample: the raw inputs, the targets `ln(s k_g / s₂)` and the joints' depths
+/// toward the camera relative to the pelvis, `s Δz / s₂`.
 struct Sample {
     x: [f64; NUM_INPUTS],
     t: [f64; NUM_GROUPS],
+    d: [f64; NUM_JOINTS],
 }
 
 fn sample<R: Rng>(rng: &mut R, frames: &[Joints3], lengths: &[f64; NUM_BONES], p: &TrainParams) -> Option<Sample> {
@@ -103,10 +108,28 @@ fn sample<R: Rng>(rng: &mut R, frames: &[Joints3], lengths: &[f64; NUM_BONES], p
     }
     let refl = group_lengths(lengths);
     let t = std::array::from_fn(|g| (s * true_len[g] / refl[g] / s2).ln());
-    if t.iter().chain(&x).all(|v: &f64| v.is_finite()) {
-        Some(Sample { x, t })
+    let pelvis = (r * Vector3::from(x3[joint::PELVIS])).z;
+    let d = std::array::from_fn(|k| s * ((r * Vector3::from(x3[k])).z - pelvis) / s2);
+    if t.iter().chain(&x).chain(&d).all(|v: &f64| v.is_finite()) {
+        Some(Sample { x, t, d })
     } else {
         None
+    }
+}
+
+/// Depth difference (metres at the figure's 2-D scale) from which a limb's depth order counts.
+const ORDER_MIN_DEPTH: f64 = 0.05;
+
+/// Folds the targets' standardisation (`mean`, `sd` per output) into the last layer, so that
+/// the network outputs the targets' own units.
+fn unstandardise_outputs(net: &mut mlp::Mlp, mean: &[f64], sd: &[f64]) {
+    if let Some(last) = net.layers.last_mut() {
+        for (o, (m, s)) in mean.iter().zip(sd).enumerate().take(last.outputs) {
+            for w in &mut last.weights[o * last.inputs..(o + 1) * last.inputs] {
+                *w = (*w as f64 * s) as f32;
+            }
+            last.bias[o] = (last.bias[o] as f64 * s + m) as f32;
+        }
     }
 }
 
@@ -115,8 +138,8 @@ pub const MIN_SAMPLES: usize = 200;
 
 /// Trains the prior on `frames` (normalised training poses) for the reference bone lengths
 /// `lengths` (module doc); `provenance` is stored with the fit's figures appended; `progress`
-/// is called after each epoch with its number and the mean training loss (standardised
-/// targets). Errors: [`Error::OutOfRange`] for no frames, fewer than [`MIN_SAMPLES`] samples or
+/// is called after each epoch with its number (the depth network's epochs follow the factor
+/// network's) and the mean training loss (standardised targets). Errors: [`Error::OutOfRange`] for no frames, fewer than [`MIN_SAMPLES`] samples or
 /// bad network parameters, [`Error::Degenerate`] when too few samples are usable or the
 /// training diverges.
 pub fn train(
@@ -169,35 +192,48 @@ pub fn train(
     let x = DMatrix::from_fn(NUM_INPUTS, fit.len(), |i, c| standardise(fit[c].x[i], mean[i], scale[i]) as f32);
     let t = DMatrix::from_fn(NUM_GROUPS, fit.len(), |g, c| ((fit[c].t[g] - mean_t[g]) / sd_t[g]) as f32);
     let net_params = MlpParams { hidden: p.hidden, epochs: p.epochs, seed: p.seed, ..MlpParams::default() };
-    let mut network = mlp::train(&x, &t, &net_params, progress)?;
-    // The network's outputs in the targets' own units: the last layer absorbs their scale.
-    if let Some(last) = network.layers.last_mut() {
-        for g in 0..NUM_GROUPS {
-            for w in &mut last.weights[g * last.inputs..(g + 1) * last.inputs] {
-                *w = (*w as f64 * sd_t[g]) as f32;
-            }
-            last.bias[g] = (last.bias[g] as f64 * sd_t[g] + mean_t[g]) as f32;
-        }
-    }
+    let mut progress = progress;
+    let mut network = mlp::train(&x, &t, &net_params, &mut progress)?;
+    unstandardise_outputs(&mut network, &mean_t, &sd_t);
+    let mean_d: [f64; NUM_JOINTS] = std::array::from_fn(|k| fit.iter().map(|f| f.d[k]).sum::<f64>() / n);
+    let sd_d: [f64; NUM_JOINTS] =
+        std::array::from_fn(|k| (fit.iter().map(|f| (f.d[k] - mean_d[k]).powi(2)).sum::<f64>() / n).sqrt().max(1e-6));
+    let d = DMatrix::from_fn(NUM_JOINTS, fit.len(), |k, c| ((fit[c].d[k] - mean_d[k]) / sd_d[k]) as f32);
+    let mut depth_network = mlp::train(&x, &d, &net_params, |e, l| progress(p.epochs + e, l))?;
+    unstandardise_outputs(&mut depth_network, &mean_d, &sd_d);
     // Predictive spread on the samples left out.
     let mut sq = [0.0; NUM_GROUPS];
     let mut sq_const = [0.0; NUM_GROUPS];
+    let (mut sq_depth, mut order_right, mut order_total) = (0.0, 0usize, 0usize);
     for s in test {
         let z: Vec<f64> = (0..NUM_INPUTS).map(|i| standardise(s.x[i], mean[i], scale[i])).collect();
-        let y = network.forward(&z).ok_or_else(|| Error::Degenerate("factor prior: network shape".into()))?;
+        let shape = || Error::Degenerate("factor prior: network shape".into());
+        let y = network.forward(&z).ok_or_else(shape)?;
         for g in 0..NUM_GROUPS {
             sq[g] += (y[g] - s.t[g]).powi(2);
             sq_const[g] += (mean_t[g] - s.t[g]).powi(2);
+        }
+        let dz = depth_network.forward(&z).ok_or_else(shape)?;
+        sq_depth += dz.iter().zip(&s.d).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        for (a, b) in LIMB_BONES.map(|b| BONES[b]) {
+            let truth = s.d[b] - s.d[a];
+            if truth.abs() > ORDER_MIN_DEPTH {
+                order_total += 1;
+                order_right += usize::from((dz[b] - dz[a]).signum() == truth.signum());
+            }
         }
     }
     let m = test.len() as f64;
     let sd: Vec<f64> = sq.iter().map(|v| (v / m).sqrt().max(1e-3)).collect();
     let base: Vec<f64> = sq_const.iter().map(|v| (v / m).sqrt()).collect();
+    let depth_rms = (sq_depth / (m * NUM_JOINTS as f64)).sqrt();
     let fmt = |v: &[f64]| v.iter().map(|x| format!("{x:.3}")).collect::<Vec<_>>().join(", ");
     let provenance = format!(
         "{provenance}\nparams: seed={} samples={} hidden={} epochs={} standard_share={} max_noise_px={} \
          spread_share={}\nleft-out RMS of ln factor by group (head, torso, shoulders, arms, hips, legs): {} \
-         (constant: {})",
+         (constant: {}); left-out joint depths: RMS {depth_rms:.4} (m at the figure's 2-D scale), the depth order \
+         of limbs (upper arms, forearms, thighs, shins) pointing more than {ORDER_MIN_DEPTH} m toward or away from the viewer right on {order_right} of \
+         {order_total}",
         p.seed,
         p.samples,
         p.hidden,
@@ -216,6 +252,7 @@ pub fn train(
         mean: mean.to_vec(),
         scale: scale.to_vec(),
         network,
+        depth_network,
         sd,
     };
     // Round-trip through the checks of the file format.
@@ -290,7 +327,7 @@ mod tests {
         let p = TrainParams { samples: 2000, hidden: 16, epochs: 3, ..TrainParams::default() };
         let mut epochs = Vec::new();
         let a = train(&frames, &lengths, &p, "test", |e, _| epochs.push(e)).unwrap();
-        assert_eq!(epochs, [1, 2, 3]);
+        assert_eq!(epochs, [1, 2, 3, 4, 5, 6]);
         let b = train(&frames, &lengths, &p, "test", |_, _| ()).unwrap();
         assert_eq!(a.to_json(), b.to_json());
         let c = train(&frames, &lengths, &TrainParams { seed: 2, ..p }, "test", |_, _| ()).unwrap();

@@ -129,7 +129,15 @@ pub struct PoseOptions {
     /// factors' prior is predicted from the 2-D joints instead of 0 ± a fixed spread. Needs
     /// `proportions`; `false` = the fixed prior ([`super::figure::PRIOR_SD`]).
     pub factor_prior: bool,
+    /// Weight of the learned joints' depths ([`super::factor_prior::FactorPrior::depth_hint`]),
+    /// in [0, [`MAX_DEPTH_PRIOR`]]: px² of depth residual per px² of reprojection residual where
+    /// the solver chooses between readings ([`super::depth_hint`]), used when the caller gives no
+    /// image cue's depths; 0 = off.
+    pub depth_prior: f64,
 }
+
+/// Largest [`PoseOptions::depth_prior`].
+pub const MAX_DEPTH_PRIOR: f64 = 10.0;
 
 impl Default for PoseOptions {
     /// The library default (docs/benchmarks.md, "3-D pose"): κ = 0.05, α = 0.8 (the paper's)
@@ -137,7 +145,7 @@ impl Default for PoseOptions {
     /// yaw too and measured worse), equal scales, up to 4 bases, 0.5 px, refined, prior 0.1 m,
     /// 12 exemplar starts recomposed from 64 limb candidates, blended at τ = 30 px² per joint,
     /// then the free-joint refinement at 0.014 m (4 px on a 500-px figure), with the proportions
-    /// estimated.
+    /// estimated under the learned factor prior and the learned depths weighted 0.05.
     fn default() -> Self {
         PoseOptions {
             kappa: 0.05,
@@ -156,6 +164,7 @@ impl Default for PoseOptions {
             standing_prior: true,
             knee_limits: true,
             factor_prior: true,
+            depth_prior: 0.05,
         }
     }
 }
@@ -169,6 +178,7 @@ impl PoseOptions {
         ensure_finite("prior", self.prior)?;
         ensure_finite("blend", self.blend)?;
         ensure_finite("joint_noise", self.joint_noise)?;
+        ensure_finite("depth_prior", self.depth_prior)?;
         let range = |name: &'static str, detail: String| Err(Error::OutOfRange { name, detail });
         if !(0.0..=MAX_KAPPA).contains(&self.kappa) {
             return range("kappa", format!("{} is not in [0, {MAX_KAPPA}]", self.kappa));
@@ -197,6 +207,9 @@ impl PoseOptions {
         if !(0.0..=1.0).contains(&self.joint_noise) {
             return range("joint_noise", format!("{} m is not in [0, 1]", self.joint_noise));
         }
+        if !(0.0..=MAX_DEPTH_PRIOR).contains(&self.depth_prior) {
+            return range("depth_prior", format!("{} is not in [0, {MAX_DEPTH_PRIOR}]", self.depth_prior));
+        }
         Ok(())
     }
 }
@@ -221,6 +234,9 @@ mod tests {
             PoseOptions { blend: f64::NAN, ..Default::default() },
             PoseOptions { joint_noise: -0.01, ..Default::default() },
             PoseOptions { joint_noise: f64::INFINITY, ..Default::default() },
+            PoseOptions { depth_prior: -0.1, ..Default::default() },
+            PoseOptions { depth_prior: f64::NAN, ..Default::default() },
+            PoseOptions { depth_prior: 11.0, ..Default::default() },
         ];
         for o in bad {
             assert!(o.validate().is_err(), "{o:?}");

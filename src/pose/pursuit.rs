@@ -106,31 +106,37 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
 /// [`PoseOptions::factor_prior`] the factors' prior is the learned one
 /// ([`super::factor_prior`]); when the solve with those factors fits the image worse than the
 /// first estimate, the fixed prior's factors are tried (from half the exemplar starts) before
-/// falling back to the first estimate. Every estimate is flagged for plausibility
-/// ([`PoseEstimate::plausible`]).
+/// falling back to the first estimate. With [`PoseOptions::depth_prior`] > 0 the learned
+/// joints' depths ([`FactorPrior::depth_hint`]) weigh the solver's choices as an image cue's
+/// would ([`estimate_pose_hinted`]), predicted from the 2-D joints each solve sees, except for a
+/// figure the standing prior takes as standing ([`super::plausibility::standing_in_image`]).
+/// Every estimate is flagged for plausibility ([`PoseEstimate::plausible`]).
 pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) -> Result<PoseEstimate> {
     estimate_pose_hinted(dict, joints, opts, None)
 }
 
 /// [`estimate_pose`] with relative joint depths from an image cue ([`DepthHint`]): its cost is
 /// added where the solver chooses between readings (the exemplar starts, each recomposed limb,
-/// the blend of the hypotheses; see [`super::depth_hint`]). `None` is [`estimate_pose`].
-/// Errors: those of [`estimate_pose`], the hint's ([`DepthHint::validate`]), and `CorruptData`
-/// when [`PoseOptions::factor_prior`] is on and the embedded prior does not parse (a build fault).
+/// the blend of the hypotheses; see [`super::depth_hint`]); it replaces the learned depths of
+/// [`PoseOptions::depth_prior`]. `None` is [`estimate_pose`]. Errors: those of
+/// [`estimate_pose`], the hint's ([`DepthHint::validate`]), and `CorruptData` when
+/// [`PoseOptions::factor_prior`] or [`PoseOptions::depth_prior`] is on and the embedded prior
+/// does not parse (a build fault).
 pub fn estimate_pose_hinted(
     dict: &Dictionary,
     joints: &Joints2,
     opts: &PoseOptions,
     hint: Option<&DepthHint>,
 ) -> Result<PoseEstimate> {
-    let prior = if opts.factor_prior { Some(FactorPrior::embedded()?) } else { None };
+    let prior = if opts.factor_prior || opts.depth_prior > 0.0 { Some(FactorPrior::embedded()?) } else { None };
     estimate_pose_with_factor_prior(dict, joints, opts, hint, prior)
 }
 
-/// [`estimate_pose_hinted`] with the learned factor prior `prior` instead of the embedded one
-/// (e.g. one trained without a validation split; `None` = the fixed prior of
-/// [`super::figure::estimate_factors`]). [`PoseOptions::factor_prior`] is not consulted.
-/// Errors: those of [`estimate_pose_hinted`].
+/// [`estimate_pose_hinted`] with the learned priors `prior` instead of the embedded ones (e.g.
+/// ones trained without a validation split): its factors when [`PoseOptions::factor_prior`] is
+/// on, its depths when [`PoseOptions::depth_prior`] > 0; `None` = neither (the fixed prior of
+/// [`super::figure::estimate_factors`], no learned depths). Errors: those of
+/// [`estimate_pose_hinted`].
 pub fn estimate_pose_with_factor_prior(
     dict: &Dictionary,
     joints: &Joints2,
@@ -142,9 +148,36 @@ pub fn estimate_pose_with_factor_prior(
     if let Some(h) = hint {
         h.validate()?;
     }
-    let first = estimate_fixed(dict, joints, opts, hint)?;
-    let est = if opts.proportions { with_proportions(dict, joints, opts, first, hint, prior) } else { first };
+    // A figure the image shows standing takes the standing prior's depths instead of the
+    // learned ones, which read the bundled example's short drawn legs as a lean with the feet
+    // behind (docs/benchmarks.md, issue 16).
+    let standing = opts.standing_prior
+        && opts.joint_noise > 0.0
+        && super::plausibility::standing_in_image(&joints.xy, &joints.visible);
+    let hints =
+        Hints { given: hint, prior: prior.filter(|_| opts.depth_prior > 0.0 && !standing), weight: opts.depth_prior };
+    let factor_prior = prior.filter(|_| opts.factor_prior);
+    let first = estimate_fixed(dict, joints, opts, hints.of(joints).as_ref())?;
+    let est = if opts.proportions { with_proportions(dict, joints, opts, first, &hints, factor_prior) } else { first };
     Ok(flag_plausibility(joints, est))
+}
+
+/// Where a solve's depth hint comes from: the caller's image cue, else the learned depths of
+/// the 2-D joints that solve sees.
+struct Hints<'a> {
+    given: Option<&'a DepthHint>,
+    prior: Option<&'a FactorPrior>,
+    weight: f64,
+}
+
+impl Hints<'_> {
+    /// The hint for a solve on the 2-D joints `joints`.
+    fn of(&self, joints: &Joints2) -> Option<DepthHint> {
+        match self.given {
+            Some(h) => Some(*h),
+            None => self.prior.and_then(|p| p.depth_hint(joints, self.weight)),
+        }
+    }
 }
 
 /// The second solve of [`estimate_pose`] with estimated factors (see there).
@@ -153,7 +186,7 @@ fn with_proportions(
     joints: &Joints2,
     opts: &PoseOptions,
     first: PoseEstimate,
-    hint: Option<&DepthHint>,
+    hints: &Hints,
     prior: Option<&FactorPrior>,
 ) -> PoseEstimate {
     let c = &first.camera;
@@ -165,17 +198,17 @@ fn with_proportions(
             std::array::from_fn(|g| (p.log_scale[g] - ls, p.sd[g]))
         });
     let fixed = || estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, None);
-    let Some(l) = learned else { return second_solve(dict, joints, opts, &first, hint, fixed()).unwrap_or(first) };
+    let Some(l) = learned else { return second_solve(dict, joints, opts, &first, hints, fixed()).unwrap_or(first) };
     // The factors under the learned prior; when that solve fits the image worse than the first
     // estimate, the fixed prior's factors are tried (docs/benchmarks.md, issue 16).
     let f = estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, Some(&l));
-    match second_solve(dict, joints, opts, &first, hint, f) {
+    match second_solve(dict, joints, opts, &first, hints, f) {
         Some(e) => e,
         None => {
             // From half the exemplar starts: as accurate on the validation split, less CPU on
             // standard figures, where this fallback runs most (docs/benchmarks.md, issue 16).
             let half = PoseOptions { starts: opts.starts.div_ceil(2), ..*opts };
-            second_solve(dict, joints, &half, &first, hint, fixed()).unwrap_or(first)
+            second_solve(dict, joints, &half, &first, hints, fixed()).unwrap_or(first)
         }
     }
 }
@@ -188,13 +221,14 @@ fn second_solve(
     joints: &Joints2,
     opts: &PoseOptions,
     first: &PoseEstimate,
-    hint: Option<&DepthHint>,
+    hints: &Hints,
     f: BodyFactors,
 ) -> Option<PoseEstimate> {
     if f.k.iter().all(|k| (k - 1.0).abs() < 1e-3) {
         return None;
     }
-    let second = estimate_fixed(dict, &f.unstylise_2d(joints), opts, hint).ok()?;
+    let plain = f.unstylise_2d(joints);
+    let second = estimate_fixed(dict, &plain, opts, hints.of(&plain).as_ref()).ok()?;
     let x = f.apply(&second.joints);
     let xs: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(x[j]));
     let prob = Problem::new(dict, joints, 0.0).ok()?;
@@ -545,6 +579,7 @@ pub(crate) mod tests {
             standing_prior: false,
             knee_limits: false,
             factor_prior: false,
+            depth_prior: 0.0,
         }
     }
 
