@@ -50,7 +50,10 @@ fn a_depth_hint_decides_which_leg_is_forward_in_a_frontal_stride() {
         stride(&gt)
     );
     assert!(with_mirror * stride(&gt) < 0.0, "mirrored depths put the other leg forward: {with_mirror}");
-    // No hint and a zero weight are the plain solver, bit for bit.
+    // Without an image cue the learned depths take the right leg forward too.
+    let learned = forward(None);
+    assert!(learned * stride(&gt) > 0.0, "the learned depths put the right leg forward: {learned}");
+    // No hint and a zero weight are the plain solver (with its learned depths), bit for bit.
     let plain = estimate_pose(&dict, &j, &opts).unwrap();
     let inert = DepthHint { weight: 0.0, ..right };
     assert_eq!(estimate_pose_hinted(&dict, &j, &opts, None).unwrap(), plain);

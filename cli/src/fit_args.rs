@@ -73,7 +73,8 @@ pub struct FitArgs {
     #[arg(long)]
     pub keep_pose_scale: bool,
     /// Weight of BlazePose's relative joint depths in the 3-D pose step's choices when the joints
-    /// are detected (px² of depth residual per px² of reprojection; 0 = off).
+    /// are detected (px² of depth residual per px² of reprojection; 0 = off: the pose step's
+    /// learned depths instead, as for given joints).
     #[arg(long, default_value_t = PipelineOptions::default().depth_hint, value_parser = crate::ranges::real(0.0, 100.0, false))]
     pub depth_hint: f64,
     /// With detected joints, the fit's joint weight is multiplied by this (0..=1).

@@ -65,8 +65,9 @@ pub struct PipelineOptions {
     /// Weight of the landmark network's relative joint depths in the pose step's choices
     /// ([`crate::pose::DepthHint::weight`]; px² of depth residual per px² of reprojection), used
     /// when the joints come from the single-figure detector and BlazePose agrees with them
-    /// ([`crate::detect::figure::Figure::landmark_depth`]); 0 = off. Given joints carry no
-    /// depth. Default [`DEFAULT_DEPTH_HINT`].
+    /// ([`crate::detect::figure::Figure::landmark_depth`]); 0 = off. It replaces the pose
+    /// step's learned depths ([`crate::pose::PoseOptions::depth_prior`], which given joints and
+    /// joints without BlazePose's depths get). Default [`DEFAULT_DEPTH_HINT`].
     pub depth_hint: f64,
     /// How the shape fit treats joints that came from the detector rather than from the user
     /// (a detector's joints are a few percent of the figure off, enough to skew the bone

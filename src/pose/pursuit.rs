@@ -118,7 +118,7 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
 /// [`estimate_pose`] with relative joint depths from an image cue ([`DepthHint`]): its cost is
 /// added where the solver chooses between readings (the exemplar starts, each recomposed limb,
 /// the blend of the hypotheses; see [`super::depth_hint`]); it replaces the learned depths of
-/// [`PoseOptions::depth_prior`]. `None` is [`estimate_pose`]. Errors: those of
+/// [`PoseOptions::depth_prior`]. `None`, or a hint of weight 0, is [`estimate_pose`]. Errors: those of
 /// [`estimate_pose`], the hint's ([`DepthHint::validate`]), and `CorruptData` when
 /// [`PoseOptions::factor_prior`] or [`PoseOptions::depth_prior`] is on and the embedded prior
 /// does not parse (a build fault).
@@ -171,11 +171,11 @@ struct Hints<'a> {
 }
 
 impl Hints<'_> {
-    /// The hint for a solve on the 2-D joints `joints`.
+    /// The hint for a solve on the 2-D joints `joints` (a given hint of weight 0 counts as none).
     fn of(&self, joints: &Joints2) -> Option<DepthHint> {
         match self.given {
-            Some(h) => Some(*h),
-            None => self.prior.and_then(|p| p.depth_hint(joints, self.weight)),
+            Some(h) if h.weight > 0.0 => Some(*h),
+            _ => self.prior.and_then(|p| p.depth_hint(joints, self.weight)),
         }
     }
 }
