@@ -452,7 +452,7 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
             },
             8 => {
                 let o = pick(u, &st.pose_opts)?;
-                let s = match u.int_in_range(0..=15u8)? {
+                let s = match u.int_in_range(0..=16u8)? {
                     0 => skb_pose_options_set_kappa(o, float(u)?),
                     1 => skb_pose_options_set_alpha(o, float(u)?),
                     2 => skb_pose_options_set_alpha_target(o, enum_value(u)?),
@@ -468,7 +468,8 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                     12 => skb_pose_options_set_proportions(o, u.arbitrary()?),
                     13 => skb_pose_options_set_standing_prior(o, u.arbitrary()?),
                     14 => skb_pose_options_set_knee_limits(o, u.arbitrary()?),
-                    _ => skb_pose_options_set_factor_prior(o, u.arbitrary()?),
+                    15 => skb_pose_options_set_factor_prior(o, u.arbitrary()?),
+                    _ => skb_pose_options_set_depth_prior(o, float(u)?),
                 };
                 check(s, "pose option setter");
             }
