@@ -139,9 +139,9 @@ pub const MIN_SAMPLES: usize = 200;
 /// Trains the prior on `frames` (normalised training poses) for the reference bone lengths
 /// `lengths` (module doc); `provenance` is stored with the fit's figures appended; `progress`
 /// is called after each epoch with its number (the depth network's epochs follow the factor
-/// network's) and the mean training loss (standardised targets). Errors: [`Error::OutOfRange`] for no frames, fewer than [`MIN_SAMPLES`] samples or
-/// bad network parameters, [`Error::Degenerate`] when too few samples are usable or the
-/// training diverges.
+/// network's) and the mean training loss (standardised targets). Errors: [`Error::OutOfRange`]
+/// for no frames, fewer than [`MIN_SAMPLES`] samples or bad network parameters,
+/// [`Error::Degenerate`] when too few samples are usable or the training diverges.
 pub fn train(
     frames: &[Joints3],
     lengths: &[f64; NUM_BONES],

@@ -118,8 +118,8 @@ pub fn estimate_pose(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions) ->
 /// [`estimate_pose`] with relative joint depths from an image cue ([`DepthHint`]): its cost is
 /// added where the solver chooses between readings (the exemplar starts, each recomposed limb,
 /// the blend of the hypotheses; see [`super::depth_hint`]); it replaces the learned depths of
-/// [`PoseOptions::depth_prior`]. `None`, or a hint of weight 0, is [`estimate_pose`]. Errors: those of
-/// [`estimate_pose`], the hint's ([`DepthHint::validate`]), and `CorruptData` when
+/// [`PoseOptions::depth_prior`]. `None`, or a hint of weight 0, is [`estimate_pose`]. Errors:
+/// those of [`estimate_pose`], the hint's ([`DepthHint::validate`]), and `CorruptData` when
 /// [`PoseOptions::factor_prior`] or [`PoseOptions::depth_prior`] is on and the embedded prior
 /// does not parse (a build fault).
 pub fn estimate_pose_hinted(
