@@ -5,7 +5,8 @@
 //! camera_r, gender, scores, fit_height_m / height_m), `STEM_rest.obj`, `STEM_posed.obj`, each
 //! atomically, the posed OBJ last. Samples whose `STEM_posed.obj` exists are skipped
 //! (resumable). Samples run in parallel (rayon); each fit's seed is the same `--seed`, so
-//! results do not depend on the thread count or the order. Ground-truth joints outside the image are marked missing.
+//! results do not depend on the thread count or the order. Ground-truth joints outside the
+//! image are marked missing.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};

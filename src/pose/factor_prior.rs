@@ -168,10 +168,15 @@ impl FactorPrior {
         std::array::from_fn(|b| self.lengths[b])
     }
 
+    /// `s₂` and the standardised inputs of the 2-D joints `j` (`None` as for [`inputs`]).
+    fn standardised_inputs(&self, j: &Joints2) -> Option<(f64, Vec<f64>)> {
+        let (s2, x) = inputs(j, &self.lengths_array())?;
+        Some((s2, (0..NUM_INPUTS).map(|i| standardise(x[i], self.mean[i], self.scale[i])).collect()))
+    }
+
     /// `ln(s₂)` and `ln(s k_g / s₂)` by group (the network's output, bounded).
     pub(crate) fn regress(&self, j: &Joints2) -> Option<(f64, [f64; NUM_GROUPS])> {
-        let (s2, x) = inputs(j, &self.lengths_array())?;
-        let z: Vec<f64> = (0..NUM_INPUTS).map(|i| standardise(x[i], self.mean[i], self.scale[i])).collect();
+        let (s2, z) = self.standardised_inputs(j)?;
         let y = self.network.forward(&z)?;
         let out = std::array::from_fn(|g| if y[g].is_finite() { y[g].clamp(-MAX_LOG, MAX_LOG) } else { 0.0 });
         Some((s2.ln(), out))
@@ -185,8 +190,7 @@ impl FactorPrior {
         if !(weight.is_finite() && weight > 0.0) {
             return None;
         }
-        let (s2, x) = inputs(j, &self.lengths_array())?;
-        let z: Vec<f64> = (0..NUM_INPUTS).map(|i| standardise(x[i], self.mean[i], self.scale[i])).collect();
+        let (s2, z) = self.standardised_inputs(j)?;
         let y = self.depth_network.forward(&z)?;
         let depth: [f64; NUM_JOINTS] = std::array::from_fn(|k| s2 * y[k]);
         depth.iter().all(|v| v.is_finite()).then_some(DepthHint { depth, known: [true; NUM_JOINTS], weight })

@@ -120,6 +120,16 @@ fn sample<R: Rng>(rng: &mut R, frames: &[Joints3], lengths: &[f64; NUM_BONES], p
 /// Depth difference (metres at the figure's 2-D scale) from which a limb's depth order counts.
 const ORDER_MIN_DEPTH: f64 = 0.05;
 
+/// Mean and spread (floored at 1e-6) of each target `get` returns, over `samples`.
+fn target_stats<const N: usize>(samples: &[Sample], get: impl Fn(&Sample) -> [f64; N]) -> ([f64; N], [f64; N]) {
+    let n = samples.len() as f64;
+    let mean: [f64; N] = std::array::from_fn(|k| samples.iter().map(|s| get(s)[k]).sum::<f64>() / n);
+    let sd = std::array::from_fn(|k| {
+        (samples.iter().map(|s| (get(s)[k] - mean[k]).powi(2)).sum::<f64>() / n).sqrt().max(1e-6)
+    });
+    (mean, sd)
+}
+
 /// Folds the targets' standardisation (`mean`, `sd` per output) into the last layer, so that
 /// the network outputs the targets' own units.
 fn unstandardise_outputs(net: &mut mlp::Mlp, mean: &[f64], sd: &[f64]) {
@@ -186,18 +196,14 @@ pub fn train(
         }
     }
     let scale = scale.map(|v| v.sqrt().max(1e-6));
-    let mean_t: [f64; NUM_GROUPS] = std::array::from_fn(|g| fit.iter().map(|f| f.t[g]).sum::<f64>() / n);
-    let sd_t: [f64; NUM_GROUPS] =
-        std::array::from_fn(|g| (fit.iter().map(|f| (f.t[g] - mean_t[g]).powi(2)).sum::<f64>() / n).sqrt().max(1e-6));
+    let (mean_t, sd_t) = target_stats(fit, |f| f.t);
     let x = DMatrix::from_fn(NUM_INPUTS, fit.len(), |i, c| standardise(fit[c].x[i], mean[i], scale[i]) as f32);
     let t = DMatrix::from_fn(NUM_GROUPS, fit.len(), |g, c| ((fit[c].t[g] - mean_t[g]) / sd_t[g]) as f32);
     let net_params = MlpParams { hidden: p.hidden, epochs: p.epochs, seed: p.seed, ..MlpParams::default() };
     let mut progress = progress;
     let mut network = mlp::train(&x, &t, &net_params, &mut progress)?;
     unstandardise_outputs(&mut network, &mean_t, &sd_t);
-    let mean_d: [f64; NUM_JOINTS] = std::array::from_fn(|k| fit.iter().map(|f| f.d[k]).sum::<f64>() / n);
-    let sd_d: [f64; NUM_JOINTS] =
-        std::array::from_fn(|k| (fit.iter().map(|f| (f.d[k] - mean_d[k]).powi(2)).sum::<f64>() / n).sqrt().max(1e-6));
+    let (mean_d, sd_d) = target_stats(fit, |f| f.d);
     let d = DMatrix::from_fn(NUM_JOINTS, fit.len(), |k, c| ((fit[c].d[k] - mean_d[k]) / sd_d[k]) as f32);
     let mut depth_network = mlp::train(&x, &d, &net_params, |e, l| progress(p.epochs + e, l))?;
     unstandardise_outputs(&mut depth_network, &mean_d, &sd_d);
