@@ -77,6 +77,9 @@ pub struct FitArgs {
     /// learned depths instead, as for given joints).
     #[arg(long, default_value_t = PipelineOptions::default().depth_hint, value_parser = crate::ranges::real(0.0, 100.0, false))]
     pub depth_hint: f64,
+    /// Weight of the pose step's learned joint depths (`PoseOptions::depth_prior`; 0 = off).
+    #[arg(long, default_value_t = sketchbody::pose::PoseOptions::default().depth_prior, value_parser = crate::ranges::real(0.0, sketchbody::pose::options::MAX_DEPTH_PRIOR, false))]
+    pub depth_prior: f64,
     /// With detected joints, the fit's joint weight is multiplied by this (0..=1).
     #[arg(long, default_value_t = DetectedJointsFit::default().joint_weight_scale, value_parser = crate::ranges::real(0.0, 1.0, false))]
     pub detected_joint_weight_scale: f64,
@@ -147,6 +150,12 @@ impl FitArgs {
             landmark_pose: self.landmark_pose,
             classifier_gender: self.detected_classifier_gender,
         }
+    }
+
+    /// The 3-D pose step's options these arguments describe (the defaults but the learned depths'
+    /// weight).
+    pub fn pose_options(&self) -> sketchbody::pose::PoseOptions {
+        sketchbody::pose::PoseOptions { depth_prior: self.depth_prior, ..sketchbody::pose::PoseOptions::default() }
     }
 
     /// The fit options these arguments describe.

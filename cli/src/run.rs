@@ -167,8 +167,8 @@ fn report(
     let p = &opts.pose;
     let _ = writeln!(
         s,
-        "- pose: κ {}, α {}, ≤ {} bases, tolerance {} px, refine {}, prior {} m",
-        p.kappa, p.alpha, p.max_bases, p.tolerance, p.refine, p.prior
+        "- pose: κ {}, α {}, ≤ {} bases, tolerance {} px, refine {}, prior {} m, learned depths {}",
+        p.kappa, p.alpha, p.max_bases, p.tolerance, p.refine, p.prior, p.depth_prior
     );
     let _ = writeln!(
         s,
@@ -316,6 +316,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         mean_shape: a.mean_shape,
         keep_pose_scale: a.fit.keep_pose_scale,
         depth_hint: a.fit.depth_hint,
+        pose: a.fit.pose_options(),
         detected: a.fit.detected(),
         gender_evidence: a.fit.gender_evidence,
         classify_gender: a.fit.classify_gender,

@@ -43,7 +43,7 @@ fn run_writes_every_output() {
     let dir = scratch("ok");
     let out_dir = dir.join("out");
     let o = out_dir.to_str().unwrap();
-    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o, "--gender", "f"]
+    let out = run(&[SKETCH, "--joints", JOINTS, "--out", o, "--gender", "f", "--depth-prior", "0.2"]
         .iter()
         .chain(&FAST)
         .copied()
@@ -84,6 +84,7 @@ fn run_writes_every_output() {
     let report = std::fs::read_to_string(out_dir.join("report.md")).unwrap();
     assert!(report.contains("gender: female (given)"), "{report}");
     assert!(report.contains("samples 24"), "{report}");
+    assert!(report.contains("learned depths 0.2\n"), "the pose step ran with --depth-prior: {report}");
     let height = report.lines().find(|l| l.starts_with("- rest height: ")).expect(&report);
     assert!(height.contains(" m, calibrated)"), "given joints, no --height: {height}");
     assert!(report.contains("bone factors sd 0.1 centred on their 2-D estimate"), "{report}");
