@@ -373,7 +373,7 @@ typedef struct skb_export_options skb_export_options;
 
 /**
  * Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
- * (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
+ * (200 samples after a first iteration of 1600 halved each iteration, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
  * weight 1.0 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
  * dimension, gender automatic, height unknown, per-sample cameras on, bone-length factors with
  * prior sd 0.1). Every setter validates its value and leaves the options

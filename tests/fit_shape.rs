@@ -312,3 +312,31 @@ fn inside_cap_limits_the_pull_of_an_outline_around_the_silhouette() {
     assert_eq!(robust.edge_support(&inner, Some([0, 0, w - 1, h - 1]), 2.0), 0.0);
     assert_eq!(robust.edge_support(&square(9, 55), Some([0, 0, w - 1, h - 1]), 2.0), 1.0);
 }
+
+#[test]
+fn the_population_starts_wide_and_halves_down_to_the_samples() {
+    let c = case();
+    let problem = FitProblem {
+        model: &c.model,
+        gender: Gender::Male.into(),
+        pose: &c.truth.joints,
+        camera: &c.camera,
+        edges: &c.edges,
+        joints2d: None,
+    };
+    let o = |initial_factor: usize| FitOptions {
+        samples: 8,
+        initial_factor,
+        max_iterations: 4,
+        tolerance: 1e-12,
+        raster_max_side: 64,
+        ..FitOptions::default()
+    };
+    let run = |f: usize| fit_shape(&problem, &o(f), &mut |_| true);
+    assert_eq!(run(4).unwrap().evaluations, 32 + 16 + 8 + 8, "4 × 8, halved each iteration down to 8");
+    assert_eq!(run(1).unwrap().evaluations, 4 * 8, "a flat population");
+    assert_ne!(run(4).unwrap().weights, run(1).unwrap().weights, "the schedule changes the search");
+    for bad in [0, 65] {
+        assert!(matches!(run(bad), Err(Error::OutOfRange { name: "initial factor", .. })), "{bad}");
+    }
+}

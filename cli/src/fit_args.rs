@@ -18,6 +18,10 @@ pub struct FitArgs {
     /// Samples per SIR iteration (S).
     #[arg(long, default_value_t = FitOptions::default().samples, value_parser = crate::ranges::count(2..=100_000))]
     pub samples: usize,
+    /// The first SIR iteration draws this many times `--samples`, halved at each resampling
+    /// down to `--samples` (1 = a flat population).
+    #[arg(long, default_value_t = FitOptions::default().initial_factor, value_parser = crate::ranges::count(1..=64))]
+    pub initial_factor: usize,
     /// Most SIR iterations (T).
     #[arg(long, default_value_t = FitOptions::default().max_iterations, value_parser = crate::ranges::count(1..=1000))]
     pub iterations: usize,
@@ -162,6 +166,7 @@ impl FitArgs {
     pub fn options(&self) -> Result<FitOptions, CliError> {
         Ok(FitOptions {
             samples: self.samples,
+            initial_factor: self.initial_factor,
             max_iterations: self.iterations,
             dims: self.dims,
             transition_scale: self.transition_scale,

@@ -172,8 +172,8 @@ fn report(
     );
     let _ = writeln!(
         s,
-        "- fit: score {}, samples {}, ≤ {} iterations, transition scale {}, temperature {}, raster side {} px, tolerance {}, dims {}, seed {}, skinning {:?}{}{}{}{}{}{}\n",
-        score_name(f.score), f.samples, f.max_iterations, f.transition_scale, f.temperature, f.raster_max_side, f.tolerance,
+        "- fit: score {}, samples {} (first iteration {}×), ≤ {} iterations, transition scale {}, temperature {}, raster side {} px, tolerance {}, dims {}, seed {}, skinning {:?}{}{}{}{}{}{}\n",
+        score_name(f.score), f.samples, f.initial_factor, f.max_iterations, f.transition_scale, f.temperature, f.raster_max_side, f.tolerance,
         f.dims.map_or("default".into(), |d| d.to_string()), f.seed, f.skinning,
         if f.retarget { ", retarget" } else { "" },
         if opts.keep_pose_scale { ", solver camera kept" } else { ", camera refitted to the mean skeleton" },

@@ -83,7 +83,7 @@ fn run_writes_every_output() {
     assert_eq!((preview.width(), preview.height()), (3 * 128 + 256, 128));
     let report = std::fs::read_to_string(out_dir.join("report.md")).unwrap();
     assert!(report.contains("gender: female (given)"), "{report}");
-    assert!(report.contains("samples 24"), "{report}");
+    assert!(report.contains("samples 24 (first iteration 8×)"), "{report}");
     assert!(report.contains("learned depths 0.2\n"), "the pose step ran with --depth-prior: {report}");
     let height = report.lines().find(|l| l.starts_with("- rest height: ")).expect(&report);
     assert!(height.contains(" m, calibrated)"), "given joints, no --height: {height}");

@@ -82,6 +82,7 @@ fn results_are_scored_by_eval_and_deterministic() {
     let plain: serde_json::Value = serde_json::from_slice(&std::fs::read(a.join("run.json")).unwrap()).unwrap();
     assert!(plain["detector"].is_null(), "ground-truth joints name no detector");
     assert_eq!(plain["depth_prior"], 0.05, "the pose step's default weight of its learned depths is recorded");
+    assert_eq!(plain["initial_factor"], 8, "the fit's population schedule is recorded");
     let bad = skb(&["run-dataset", s(&ds), "--out", s(&dir.join("bad")), "--detector", "fmp"]);
     assert!(!bad.status.success(), "--detector without --detect is refused");
     // Resuming skips finished samples.

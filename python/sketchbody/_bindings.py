@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "45eaae05c67f25c3600670d1129df8de0cc16e40f4b8066adb71363f97ba6edb"
+HEADER_SHA256 = "2cda5bf3895a0dafd4f715265c6bf03ed97ce6eede17cd9a7743577451671c0f"
 
 # ---- constants (#define) ----
 
@@ -288,7 +288,7 @@ class skb_export_options(ctypes.Structure):
 
 
 # Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
-# (200 samples, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
+# (200 samples after a first iteration of 1600 halved each iteration, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
 # weight 1.0 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
 # dimension, gender automatic, height unknown, per-sample cameras on, bone-length factors with
 # prior sd 0.1). Every setter validates its value and leaves the options

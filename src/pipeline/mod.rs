@@ -160,7 +160,8 @@ pub struct PipelineResult {
     /// The fits: one (the given gender's space, or the blended one), or with
     /// [`PipelineOptions::classify_gender`] both gendered ones (female first), followed by the
     /// chosen gender's refit when [`PipelineOptions::gender_decision_dims`] differs from the
-    /// fit's dimensions. The result's fit is [`PipelineResult::chosen_fit`].
+    /// fit's dimensions or the fit's [`FitOptions::initial_factor`] is not 1 (the deciding fits
+    /// use a flat population). The result's fit is [`PipelineResult::chosen_fit`].
     pub fits: Vec<GenderFit>,
     /// The space of the result (the chosen fit's).
     pub space: ShapeChoice,
@@ -379,9 +380,10 @@ struct SketchInputs<'a> {
 }
 
 /// [`PipelineOptions::classify_gender`]: both gendered fits in the decision's dimensions
-/// (`decision_dims`, `None` = each space's default), the [`MarginCombination::SHIPPED`] of the
+/// (`decision_dims`, `None` = each space's default; a flat population,
+/// [`FitOptions::initial_factor`] 1, as the combination was trained with), the [`MarginCombination::SHIPPED`] of the
 /// classifier's `log_odds` and their score margin choosing, then the chosen gender refitted
-/// with `fit` when that searches other dimensions. Returns the chosen body (its `fits`: the
+/// with `fit` when that searches other dimensions or another population schedule. Returns the chosen body (its `fits`: the
 /// two deciding fits, female first, then the refit if any; `fit_seconds` their sum) and
 /// P(male). `progress` sees 0..=1 over all the fits.
 fn classify_and_fit(
@@ -395,7 +397,9 @@ fn classify_and_fit(
 ) -> Result<(FittedBody, f64)> {
     let space = |g: Gender| model.shape_space(ShapeChoice::Gendered(g));
     let decision_dims = |g: Gender| -> Result<usize> { Ok(decision_dims.unwrap_or(space(g)?.default_dim())) };
-    let refit = |g: Gender| -> Result<bool> { Ok(decision_dims(g)? != fit.dims.unwrap_or(space(g)?.gmm().dims())) };
+    let refit = |g: Gender| -> Result<bool> {
+        Ok(fit.initial_factor != 1 || decision_dims(g)? != fit.dims.unwrap_or(space(g)?.gmm().dims()))
+    };
     let steps = if refit(Gender::Female)? || refit(Gender::Male)? { 3.0 } else { 2.0 };
     let mut fit_one = |g: Gender, o: &FitOptions, step: f32| {
         let c = BodyChoice { gender: Some(g), ..*choice };
@@ -404,7 +408,8 @@ fn classify_and_fit(
     };
     let mut bodies = Vec::with_capacity(2);
     for (i, g) in Gender::ALL.into_iter().enumerate() {
-        bodies.push(fit_one(g, &FitOptions { dims: Some(decision_dims(g)?), ..fit.clone() }, i as f32)?);
+        let deciding = FitOptions { dims: Some(decision_dims(g)?), initial_factor: 1, ..fit.clone() };
+        bodies.push(fit_one(g, &deciding, i as f32)?);
     }
     let male = MarginCombination::SHIPPED.male_probability(log_odds, bodies[1].score - bodies[0].score);
     let mut seconds: f64 = bodies.iter().map(|b| b.fit_seconds).sum();
