@@ -106,10 +106,11 @@ fn default_automatic_gender_chooses_between_both_gendered_fits() {
     assert!((r.gender_confidence - male.max(1.0 - male)).abs() < 1e-12);
     assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");
 
-    // Deciding in the fit's own dimensions needs no refit, and decides as before.
+    // Deciding in the fit's own dimensions with a flat population needs no refit, and decides
+    // as before.
     let same = PipelineOptions {
         gender_decision_dims: Some(4),
-        fit: FitOptions { dims: Some(4), ..fast(None).fit },
+        fit: FitOptions { dims: Some(4), initial_factor: 1, ..fast(None).fit },
         ..fast(None)
     };
     let r4 = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &same, &mut |_| true).unwrap();
@@ -117,6 +118,13 @@ fn default_automatic_gender_chooses_between_both_gendered_fits() {
     assert_eq!((r4.gender, r4.fits[0].score, r4.fits[1].score), (r.gender, r.fits[0].score, r.fits[1].score));
     assert_eq!(r4.chosen_fit().unwrap().space, r4.space);
     assert_eq!(r4.weights.len(), 4);
+    // The deciding fits keep a flat population whatever the fit's schedule; a schedule alone
+    // makes the chosen gender's refit.
+    let scheduled = PipelineOptions { fit: FitOptions { initial_factor: 4, ..same.fit.clone() }, ..same.clone() };
+    let rs = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &scheduled, &mut |_| true).unwrap();
+    assert_eq!(rs.fits.len(), 3);
+    assert_eq!((rs.gender, rs.fits[0].score, rs.fits[1].score), (r.gender, r.fits[0].score, r.fits[1].score));
+    assert!(std::ptr::eq(rs.chosen_fit().unwrap(), &rs.fits[2]));
 }
 
 #[test]
