@@ -39,6 +39,18 @@ fn case() -> Case {
     Case { model, truth, camera, edges }
 }
 
+/// The fit problem of `c` in the male space without 2-D joints.
+fn male_problem(c: &Case) -> FitProblem<'_> {
+    FitProblem {
+        model: &c.model,
+        gender: Gender::Male.into(),
+        pose: &c.truth.joints,
+        camera: &c.camera,
+        edges: &c.edges,
+        joints2d: None,
+    }
+}
+
 fn options() -> FitOptions {
     // The problem camera, PCA weights only, temperature 2 (the defaults before per-sample
     // cameras); a small budget in the 4 leading dimensions, where `case`'s truth lies.
@@ -78,14 +90,7 @@ fn default_dimensions_are_the_gendered_priors_all_and_the_blended_spaces_own() {
 #[test]
 fn fit_beats_the_mean_shape_and_is_deterministic() {
     let c = case();
-    let problem = FitProblem {
-        model: &c.model,
-        gender: Gender::Male.into(),
-        pose: &c.truth.joints,
-        camera: &c.camera,
-        edges: &c.edges,
-        joints2d: None,
-    };
+    let problem = male_problem(&c);
     let space = c.model.space(Gender::Male);
     let mean_error = aed(&c.truth.vertices, &space.synthesize(&[]).unwrap().vertices);
     let mut calls = 0;
@@ -108,14 +113,7 @@ fn fit_beats_the_mean_shape_and_is_deterministic() {
 #[test]
 fn paper_score_and_cancellation() {
     let c = case();
-    let problem = FitProblem {
-        model: &c.model,
-        gender: Gender::Male.into(),
-        pose: &c.truth.joints,
-        camera: &c.camera,
-        edges: &c.edges,
-        joints2d: None,
-    };
+    let problem = male_problem(&c);
     let paper =
         fit_shape(&problem, &FitOptions { score: MatchScore::Paper, max_iterations: 2, ..options() }, &mut |_| true)
             .unwrap();
@@ -143,14 +141,7 @@ fn joint_term_penalises_off_joints_and_is_validated() {
     for (k, q) in truth_2d.iter().enumerate() {
         shifted.xy[k] = [q[0] + 40.0, q[1]];
     }
-    let base = FitProblem {
-        model: &c.model,
-        gender: Gender::Male.into(),
-        pose: &c.truth.joints,
-        camera: &c.camera,
-        edges: &c.edges,
-        joints2d: None,
-    };
+    let base = male_problem(&c);
     let with_joints = FitProblem { joints2d: Some(&shifted), ..base };
     let o = |w: f64| FitOptions { joint_weight: w, max_iterations: 2, ..options() };
     let off = fit_shape(&base, &o(1.0), &mut |_| true).unwrap();
@@ -316,14 +307,7 @@ fn inside_cap_limits_the_pull_of_an_outline_around_the_silhouette() {
 #[test]
 fn the_population_starts_wide_and_halves_down_to_the_samples() {
     let c = case();
-    let problem = FitProblem {
-        model: &c.model,
-        gender: Gender::Male.into(),
-        pose: &c.truth.joints,
-        camera: &c.camera,
-        edges: &c.edges,
-        joints2d: None,
-    };
+    let problem = male_problem(&c);
     let o = |initial_factor: usize| FitOptions {
         samples: 8,
         initial_factor,
