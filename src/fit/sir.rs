@@ -657,8 +657,8 @@ fn importance_weights(scores: &[f64], options: &FitOptions) -> Result<Vec<f64>> 
     Ok(raw.iter().map(|w| w / total).collect())
 }
 
-/// Systematic resampling: one uniform offset, `n` evenly spaced pointers into the CDF.
-/// `m` draws from `population` by systematic resampling with normalised `weights`.
+/// Systematic resampling: `m` draws from `population` with normalised `weights`, one uniform
+/// offset and `m` evenly spaced pointers into the CDF.
 fn systematic_resample(population: &[Vec<f64>], weights: &[f64], m: usize, rng: &mut ChaCha8Rng) -> Vec<Vec<f64>> {
     let n = population.len();
     let u0: f64 = rng.random::<f64>() / m as f64;

@@ -381,10 +381,11 @@ struct SketchInputs<'a> {
 
 /// [`PipelineOptions::classify_gender`]: both gendered fits in the decision's dimensions
 /// (`decision_dims`, `None` = each space's default; a flat population,
-/// [`FitOptions::initial_factor`] 1, as the combination was trained with), the [`MarginCombination::SHIPPED`] of the
-/// classifier's `log_odds` and their score margin choosing, then the chosen gender refitted
-/// with `fit` when that searches other dimensions or another population schedule. Returns the chosen body (its `fits`: the
-/// two deciding fits, female first, then the refit if any; `fit_seconds` their sum) and
+/// [`FitOptions::initial_factor`] 1, as the combination was trained with), the
+/// [`MarginCombination::SHIPPED`] of the classifier's `log_odds` and their score margin
+/// choosing, then the chosen gender refitted with `fit` when that searches other dimensions or
+/// another population schedule. Returns the chosen body (its `fits`: the two deciding fits,
+/// female first, then the refit if any; `fit_seconds` their sum) and
 /// P(male). `progress` sees 0..=1 over all the fits.
 fn classify_and_fit(
     model: &BodyModel,
