@@ -72,7 +72,7 @@ pub struct Args {
     no_factor_prior: bool,
     /// Weight of the learned joints' depths (assets/factor_prior.json) where the solver chooses
     /// between readings; 0 = off.
-    #[arg(long, default_value_t = PoseOptions::default().depth_prior)]
+    #[arg(long, default_value_t = PoseOptions::default().depth_prior, value_parser = crate::ranges::real(0.0, sketchbody::pose::options::MAX_DEPTH_PRIOR, false))]
     depth_prior: f64,
 }
 

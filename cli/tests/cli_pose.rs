@@ -92,3 +92,12 @@ fn pose_rejects_bad_joints_in_one_line_and_writes_nothing() {
         assert!(!dir.join("out.json").exists());
     }
 }
+
+#[test]
+fn an_out_of_range_depth_prior_is_refused_before_any_work() {
+    let dir = scratch("depth_prior");
+    let out = run_with(&joints_doc(), &dir, &["--depth-prior", "11"]);
+    assert_eq!(out.status.code(), Some(2), "a parse error");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--depth-prior"));
+    assert!(!dir.join("out.json").exists());
+}
