@@ -1544,8 +1544,8 @@ skb_status skb_fit_options_set_gender(struct skb_fit_options *opts, uint32_t gen
  * caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
  * weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
  * options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
- * when one is set, else the fitted height: `skb_run_pipeline` calibrates that when its 2-D joints
- * are given, this call has none); `*score` (may be NULL) receives
+ * when one is set, else the fitted height: `skb_run_pipeline` calibrates the fitted body when its
+ * 2-D joints are given, this call has none); `*score` (may be NULL) receives
  * the best sample's match score (higher is better). Errors: non-finite joints or camera
  * (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
  * without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with
@@ -1588,8 +1588,9 @@ void skb_gray_image_free(struct skb_gray_image *img);
  * choices), the shape fit (with detected joints: half the joint weight, no bone-factor
  * search, and with automatic gender the gendered space the detected-joints gender classifier
  * picks), and the fitted shape posed to the estimate. Without a height in `fit_opts` and with
- * `joints` given, the fitted body's height is calibrated (docs/benchmarks.md, "Height
- * calibration"); detected joints keep the fitted height.
+ * `joints` given, the fitted body is calibrated: a gendered fit's shape weights are mapped and
+ * its height calibrated (docs/benchmarks.md, "Shape calibration", "Height calibration");
+ * detected joints keep the fitted body.
  * `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
  * fit options' gender defaults to automatic: chosen by the gender classifier, see
  * `skb_result_gender`) are

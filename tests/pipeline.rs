@@ -315,29 +315,61 @@ fn known_height_per_sample_cameras_and_a_given_pose() {
     ));
 }
 
-/// With the height unknown the fitted body is scaled about its pelvis to the shipped
-/// calibration's height of its fitted height and gender; the shape is the same fit. A given
-/// height wins, and the mean shape is never calibrated.
+/// With the height unknown a gendered 10-dimension fit's weights are mapped by the shipped
+/// shape calibration (the lower dimensions kept, every weight inside the prior's box) and the
+/// body is scaled about its pelvis to the shipped height calibration's height of the mapped
+/// body; the fit itself is the same. A given height wins, and the mean shape is never calibrated.
 #[test]
 fn an_unknown_height_is_calibrated_and_a_known_one_wins() {
-    use sketchbody::fit::HeightCalibration;
+    use sketchbody::fit::{FitCalibration, PRIOR_RANGE_SD};
+    use sketchbody::pipeline::rest_body;
     let (model, dict, sketch, j) = inputs();
     let run = |o: &PipelineOptions| run_pipeline(&model, &dict, &sketch, &GivenJoints(j), o, &mut |_| true).unwrap();
     let on = fast(Some(Gender::Female));
-    assert!(on.calibrate_height, "the default");
-    let off = PipelineOptions { calibrate_height: false, ..on.clone() };
+    assert!(on.calibrate_fit, "the default");
+    let off = PipelineOptions { calibrate_fit: false, ..on.clone() };
     let (c, f) = (run(&on), run(&off));
-    assert_eq!(c.weights, f.weights, "the same fit");
-    assert_eq!(c.fit_height, f.fit_height);
+    let fit_weights =
+        |r: &sketchbody::pipeline::PipelineResult| r.chosen_fit().unwrap().fit.as_ref().unwrap().weights.clone();
+    assert_eq!(fit_weights(&c), fit_weights(&f), "the same fit");
+    assert_eq!(f.weights, fit_weights(&f), "uncalibrated: the fit's weights");
+    assert!(c.calibrated && !f.calibrated);
+    let shipped = FitCalibration::SHIPPED;
+    assert_eq!(c.weights.len(), 10);
+    assert_eq!(c.weights[..shipped.shape.first_dim], f.weights[..shipped.shape.first_dim], "lower dimensions kept");
+    let range = model.space(Gender::Female).gmm().range(PRIOR_RANGE_SD);
+    let mapped = shipped.shape.apply(Gender::Female, &f.weights).unwrap().unwrap();
+    for k in 0..10 {
+        let want = mapped[k].clamp(range[k].0, range[k].1);
+        assert!((c.weights[k] - want).abs() < 1e-12, "weight {k}: {} vs {want}", c.weights[k]);
+    }
+    assert!(c.weights.iter().zip(&f.weights).any(|(a, b)| (a - b).abs() > 1e-3), "the map moves the body");
+    let space = sketchbody::body::ShapeChoice::Gendered(Gender::Female);
+    let props = c.chosen_fit().unwrap().fit.as_ref().unwrap().proportions;
+    let mapped_body = rest_body(&model, space, &c.weights, props.as_ref()).unwrap();
+    assert!((c.fit_height - sketchbody::body::rig::y_extent(&mapped_body.vertices)).abs() < 1e-9);
     assert!((f.mesh.height() - f.fit_height).abs() < 1e-6, "uncalibrated: the fitted height");
-    let want = HeightCalibration::SHIPPED.calibrated(f.fit_height, 0.0).unwrap();
+    let want = shipped.height.calibrated(c.fit_height, 0.0).unwrap();
     assert!((c.mesh.height() - want).abs() < 1e-5, "{} vs {want}", c.mesh.height());
-    assert!((want / f.fit_height - 1.0).abs() > 1e-4, "the example's height moves");
-    let (cp, fp) = (c.mesh.joints[joint::PELVIS], f.mesh.joints[joint::PELVIS]);
-    assert!((0..3).all(|a| (cp[a] - fp[a]).abs() < 1e-6), "scaled about the pelvis: {cp:?} vs {fp:?}");
-    // The output camera follows the calibrated body: the image does not change.
-    let k = c.mesh.height() / f.mesh.height();
-    assert!((f.pose.camera.sx / c.pose.camera.sx - k).abs() < 1e-6 * k);
+    assert!((want / c.fit_height - 1.0).abs() > 1e-4, "the example's height moves");
+    // A 4-dimension fit is outside the map: only its height is calibrated.
+    let four = PipelineOptions { fit: FitOptions { dims: Some(4), ..on.fit.clone() }, ..on.clone() };
+    let r4 = run(&four);
+    assert_eq!(r4.weights, fit_weights(&r4));
+    assert!(r4.calibrated);
+    let (cp, mp) = (c.mesh.joints[joint::PELVIS], mapped_body.joints[joint::PELVIS]);
+    assert!((0..3).all(|a| (cp[a] - mp[a]).abs() < 1e-6), "scaled about the pelvis: {cp:?} vs {mp:?}");
+    // The output camera follows the calibrated body: its posed joints still land on the drawn ones.
+    let rms = |r: &sketchbody::pipeline::PipelineResult| {
+        let sq: f64 = (0..15)
+            .map(|k| {
+                let p = r.pose.camera.project(&nalgebra::Vector3::from(r.posed_joints[k]));
+                (p[0] - j.xy[k][0]).powi(2) + (p[1] - j.xy[k][1]).powi(2)
+            })
+            .sum();
+        (sq / 15.0).sqrt()
+    };
+    assert!(rms(&c) < 1.5 * rms(&f) + 2.0, "calibrated {} px, fitted {} px", rms(&c), rms(&f));
     let known = PipelineOptions { fit: FitOptions { height: Some(1.9), ..on.fit.clone() }, ..on.clone() };
     assert!((run(&known).mesh.height() - 1.9).abs() < 1e-5);
     let mean = PipelineOptions { mean_shape: true, ..on };

@@ -337,8 +337,8 @@ pub(crate) fn progress_closure(progress: skb_progress_fn, user: *mut c_void) -> 
 /// caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
 /// weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
 /// options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
-/// when one is set, else the fitted height: `skb_run_pipeline` calibrates that when its 2-D joints
-/// are given, this call has none); `*score` (may be NULL) receives
+/// when one is set, else the fitted height: `skb_run_pipeline` calibrates the fitted body when its
+/// 2-D joints are given, this call has none); `*score` (may be NULL) receives
 /// the best sample's match score (higher is better). Errors: non-finite joints or camera
 /// (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
 /// without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with

@@ -94,8 +94,9 @@ pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
 /// choices), the shape fit (with detected joints: half the joint weight, no bone-factor
 /// search, and with automatic gender the gendered space the detected-joints gender classifier
 /// picks), and the fitted shape posed to the estimate. Without a height in `fit_opts` and with
-/// `joints` given, the fitted body's height is calibrated (docs/benchmarks.md, "Height
-/// calibration"); detected joints keep the fitted height.
+/// `joints` given, the fitted body is calibrated: a gendered fit's shape weights are mapped and
+/// its height calibrated (docs/benchmarks.md, "Shape calibration", "Height calibration");
+/// detected joints keep the fitted body.
 /// `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
 /// fit options' gender defaults to automatic: chosen by the gender classifier, see
 /// `skb_result_gender`) are

@@ -117,11 +117,12 @@ pub struct FitArgs {
     /// --dims when those differ.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub gender_decision_dims: Option<u32>,
-    /// When the height is unknown (no --height) and the joints are given, scale the fitted body
-    /// to the calibrated height (the fit alone draws heights toward the prior's mean;
-    /// `--calibrate-height false` keeps the fitted height; detected joints keep it anyway).
-    #[arg(long, default_value_t = PipelineOptions::default().calibrate_height, action = clap::ArgAction::Set)]
-    pub calibrate_height: bool,
+    /// When the height is unknown (no --height) and the joints are given, calibrate the fitted
+    /// body: map a gendered fit's shape weights, then scale it to the calibrated height (the fit
+    /// alone draws the body toward the prior's mean; `--calibrate-fit false` keeps the fit's
+    /// weights and height; detected joints keep them anyway).
+    #[arg(long, default_value_t = PipelineOptions::default().calibrate_fit, action = clap::ArgAction::Set)]
+    pub calibrate_fit: bool,
 }
 
 /// Parses a match-score name.

@@ -9,7 +9,7 @@ mod bench_pose_suite;
 mod body;
 mod build_model;
 mod calibrate_detector;
-mod calibrate_height;
+mod calibrate_fit;
 mod convert_detector;
 mod detect;
 mod edges;
@@ -91,9 +91,9 @@ enum Command {
     TrainDetector(train_detector::Args),
     /// Train the gender classifier on run-dataset's gender features; confusion and calibration.
     TrainGender(train_gender::Args),
-    /// Fit the height calibration of the fitted body (or evaluate the shipped one) from
-    /// run-dataset results: RMS error of ln height before and after.
-    CalibrateHeight(calibrate_height::Args),
+    /// Fit the fitted body's calibration (shape map, then height; or evaluate the shipped one)
+    /// from run-dataset results: RMS error of ln height and rest AED before and after.
+    CalibrateFit(calibrate_fit::Args),
     /// Render a dataset of N synthetic sketches in parallel (resumable; see docs/dataset.md).
     MakeDataset(make_dataset::Args),
     /// A photo as an ink drawing, pencil sketch or flat-colour design (real-drawing proxy set).
@@ -143,7 +143,7 @@ fn main() -> ExitCode {
         Command::Run(a) => run::run(a),
         Command::RunDataset(a) => run_dataset::run(a),
         Command::TrainGender(a) => train_gender::run(a),
-        Command::CalibrateHeight(a) => calibrate_height::run(a),
+        Command::CalibrateFit(a) => calibrate_fit::run(a),
         Command::Body(a) => body::run(a),
         Command::Edges(a) => edges::run(a),
         Command::LearnPoses(a) => learn_poses::run(a),

@@ -225,7 +225,7 @@ fn report(
         s,
         "- rest height: {:.3} m ({})",
         r.mesh.height(),
-        match (opts.fit.height, opts.mean_shape, r.height_calibrated) {
+        match (opts.fit.height, opts.mean_shape, r.calibrated) {
             (Some(_), ..) => "given".to_string(),
             (None, true, _) => "the mean shape's".to_string(),
             (None, false, true) => format!("fitted {:.3} m, calibrated", r.fit_height),
@@ -286,7 +286,9 @@ fn report(
         let _ = writeln!(s, "- bone factors fitted (applied to the mesh): {}", factors(p));
     }
     let w: Vec<String> = r.weights.iter().map(|x| format!("{x:.4}")).collect();
-    let _ = writeln!(s, "- shape weights (m): [{}]\n", w.join(", "));
+    let mapped =
+        if r.calibrated && chosen.is_some_and(|f| f.weights != r.weights) { " (the fit's, calibrated)" } else { "" };
+    let _ = writeln!(s, "- shape weights (m){mapped}: [{}]\n", w.join(", "));
     let t = &r.timings;
     let _ = writeln!(s, "## Timings (wall clock, s)\n");
     let _ = writeln!(
@@ -321,7 +323,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         gender_evidence: a.fit.gender_evidence,
         classify_gender: a.fit.classify_gender,
         gender_decision_dims: a.fit.gender_decision_dims.map(|d| d as usize),
-        calibrate_height: a.fit.calibrate_height,
+        calibrate_fit: a.fit.calibrate_fit,
         ..PipelineOptions::default()
     };
     let sketch_rgb = load_rgb_image(&a.sketch)?;

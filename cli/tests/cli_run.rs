@@ -87,6 +87,7 @@ fn run_writes_every_output() {
     assert!(report.contains("learned depths 0.2\n"), "the pose step ran with --depth-prior: {report}");
     let height = report.lines().find(|l| l.starts_with("- rest height: ")).expect(&report);
     assert!(height.contains(" m, calibrated)"), "given joints, no --height: {height}");
+    assert!(report.contains("- shape weights (m) (the fit's, calibrated): ["), "{report}");
     assert!(report.contains("bone factors sd 0.1 centred on their 2-D estimate"), "{report}");
     assert!(
         report.contains("- bone factors estimated from the 2-D joints: legs ")

@@ -133,7 +133,7 @@ fn errors_are_one_line() {
 fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
     let dir = scratch("gender");
     let ds = dir.join("ds");
-    ok(&skb(&["make-dataset", "6", "--seed", "5", "--size", "256", "--out", s(&ds)]));
+    ok(&skb(&["make-dataset", "8", "--seed", "6", "--size", "256", "--out", s(&ds)]));
     let fast = ["--samples", "16", "--iterations", "2"];
     for g in ["f", "m"] {
         ok(&skb(&[&["run-dataset", s(&ds), "--out", s(&dir.join(g)), "--gender", g][..], &fast].concat()));
@@ -145,7 +145,7 @@ fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
         let o = skb(&[&["train-gender", "--fits", &fits][..], extra].concat());
         ok(&o);
         let out = String::from_utf8_lossy(&o.stdout).into_owned();
-        assert!(out.contains("trained on 6 samples"), "{out}");
+        assert!(out.contains("trained on 8 samples"), "{out}");
         let line = out.lines().find(|l| l.trim_start().starts_with("means:")).unwrap().to_string();
         line.split(['[', ']', ',']).filter_map(|t| t.trim().parse().ok()).collect()
     };
@@ -162,25 +162,36 @@ fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
         assert!(fit > 1.0 && fit < 2.5 && (h / fit).ln().abs() <= 0.15 + 1e-9, "{fit} {h}");
     }
     let (rf, rm) = (format!("{}={}", s(&ds), s(&dir.join("f"))), format!("{}={}", s(&ds), s(&dir.join("m"))));
-    let o = skb(&["calibrate-height", "--train", &rf, "--train", &rm, "--test", &rf]);
+    // The same fits train the fit's calibration: the shape map on the samples fitted in their
+    // true gender, then the height calibration on the mapped bodies.
+    let o = skb(&["calibrate-fit", "--train", &rf, "--train", &rm, "--test", &rf, "--cv", "2"]);
     ok(&o);
     let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(out.contains("ShapeCalibration { first_dim: 3, intercept: [["), "{out}");
     assert!(out.contains("HeightCalibration { intercept: "), "{out}");
-    // Least squares over a family holding the identity: no worse than the fitted heights.
-    let rms = |line: &str| -> (f64, f64) {
-        let v: Vec<f64> = line.split_whitespace().filter_map(|t| t.parse().ok()).collect();
-        (v[v.len() - 2], v[v.len() - 1])
+    assert_eq!(out.lines().filter(|l| l.starts_with("cv 2-fold, first dimension ")).count(), 11, "{out}");
+    assert!(out.contains("training: 16 samples (8 fitted in their true gender"), "{out}");
+    let numbers = |line: &str| -> Vec<f64> {
+        line.split([' ', ',']).filter_map(|t| t.parse().ok()).filter(|x: &f64| x.fract() != 0.0).collect()
     };
-    let (before, after) = rms(out.lines().find(|l| l.starts_with("training: 12 samples")).expect(&out));
-    assert!(after <= before + 1e-9, "{out}");
-    let o = skb(&["calibrate-height", "--shipped", "--test", &rf]);
+    let line = out.lines().find(|l| l.starts_with("test ")).expect(&out);
+    let v = numbers(line);
+    assert!(v.len() == 4 && v.iter().all(|x| x.is_finite() && *x >= 0.0 && *x < 0.5), "{line}");
+    // Without a shape map, least squares over a family holding the identity: the calibrated
+    // heights are no worse than the fitted ones.
+    let o = skb(&["calibrate-fit", "--train", &rf, "--train", &rm, "--first-dim", "10"]);
+    ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    let v = numbers(out.lines().find(|l| l.starts_with("training: 16 samples, RMS")).expect(&out));
+    assert!(v[1] <= v[0] + 1e-9, "{out}");
+    let o = skb(&["calibrate-fit", "--shipped", "--test", &rf]);
     ok(&o);
     assert!(String::from_utf8_lossy(&o.stdout).starts_with("test "), "{o:?}");
-    let o = skb(&["calibrate-height", "--train", &format!("{}={}", s(&ds), s(&dir.join("f")))]);
-    assert!(!o.status.success(), "one gender does not determine the male offset: {o:?}");
+    let o = skb(&["calibrate-fit", "--train", &format!("{}={}", s(&ds), s(&dir.join("f")))]);
+    assert!(!o.status.success(), "one gender does not train the male map: {o:?}");
     let mean = dir.join("mean");
     ok(&skb(&["run-dataset", s(&ds), "--out", s(&mean), "--mean-shape", "--first", "2"]));
-    let o = skb(&["calibrate-height", "--train", &format!("{}={}", s(&ds), s(&mean)), "--train", &rm]);
+    let o = skb(&["calibrate-fit", "--train", &format!("{}={}", s(&ds), s(&mean)), "--train", &rm]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("mean-shape results"), "{o:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "2cda5bf3895a0dafd4f715265c6bf03ed97ce6eede17cd9a7743577451671c0f"
+HEADER_SHA256 = "70137987bbc4cc434dfd8ab542b0fffeab321f5ac71695c5f47df610b2d35c27"
 
 # ---- constants (#define) ----
 
@@ -2517,8 +2517,8 @@ FUNCTIONS["skb_fit_options_set_gender"] = (
 # caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
 # weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
 # options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
-# when one is set, else the fitted height: `skb_run_pipeline` calibrates that when its 2-D joints
-# are given, this call has none); `*score` (may be NULL) receives
+# when one is set, else the fitted height: `skb_run_pipeline` calibrates the fitted body when its
+# 2-D joints are given, this call has none); `*score` (may be NULL) receives
 # the best sample's match score (higher is better). Errors: non-finite joints or camera
 # (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
 # without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with
@@ -2602,8 +2602,9 @@ FUNCTIONS["skb_gray_image_free"] = (
 # choices), the shape fit (with detected joints: half the joint weight, no bone-factor
 # search, and with automatic gender the gendered space the detected-joints gender classifier
 # picks), and the fitted shape posed to the estimate. Without a height in `fit_opts` and with
-# `joints` given, the fitted body's height is calibrated (docs/benchmarks.md, "Height
-# calibration"); detected joints keep the fitted height.
+# `joints` given, the fitted body is calibrated: a gendered fit's shape weights are mapped and
+# its height calibrated (docs/benchmarks.md, "Shape calibration", "Height calibration");
+# detected joints keep the fitted body.
 # `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
 # fit options' gender defaults to automatic: chosen by the gender classifier, see
 # `skb_result_gender`) are

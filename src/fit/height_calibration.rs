@@ -9,7 +9,8 @@
 //! (metres, [`crate::body::rig::y_extent`]) and `g` the fit's gender value (0 female … 1 male).
 //!
 //! The pipeline scales the fitted rest body about its pelvis to `h` when the character's height
-//! is unknown and the 2-D joints are given ([`crate::pipeline::PipelineOptions::calibrate_height`]);
+//! is unknown and the 2-D joints are given ([`crate::pipeline::PipelineOptions::calibrate_fit`]),
+//! after the shape map of [`crate::fit::ShapeCalibration`] ([`crate::fit::FitCalibration`]);
 //! the shape at a given height is untouched. With the detector's joints the fitted height says
 //! less (its error is near the spread of heights) and a calibration fitted the same way on
 //! detected-joint fits measured worse on the tuning set (docs/benchmarks.md, "Height
@@ -18,8 +19,8 @@
 
 use crate::error::{ensure_finite, Error, Result};
 
-/// Largest |ln(h / h_fit)| the calibration applies (about ±16 %); on the training sketches the
-/// calibrated change stays within about ±8 %.
+/// Largest |ln(h / h_fit)| the calibration applies (about ±16 %); with the shipped calibration
+/// the change stays within about ±5 % on a tuning set (`make-dataset 60 --seed 78`).
 pub const MAX_LOG_CHANGE: f64 = 0.15;
 
 /// A height calibration (module documentation). Plain data; `Send + Sync`.
@@ -34,12 +35,10 @@ pub struct HeightCalibration {
 }
 
 impl HeightCalibration {
-    /// For fits with the user's (or the ground truth's) 2-D joints, fitted on the first 300
-    /// sketches of `make-dataset 1200 --seed 79 --mocap DIR` (the classifiers' training set,
-    /// DIR: the DeepMimic clips other than the shape-fit benchmark's six):
-    /// `run-dataset DS --out R --first 300 --gender truth`, then
-    /// `sketchbody calibrate-height --train DS=R` (docs/benchmarks.md, "Height calibration").
-    pub const SHIPPED: HeightCalibration = HeightCalibration { intercept: -0.179148, slope: 1.365077, male: -0.034519 };
+    /// [`crate::fit::FitCalibration::SHIPPED`]'s height calibration, trained on the heights of
+    /// the bodies its shape map gives (`sketchbody calibrate-fit`; that constant's
+    /// documentation says on what).
+    pub const SHIPPED: HeightCalibration = HeightCalibration { intercept: -0.256763, slope: 1.519722, male: -0.037324 };
 
     /// The calibrated height (metres) for a fit `fit_height` metres tall with gender value
     /// `gender_value` (clamped to 0..=1), within [`MAX_LOG_CHANGE`] of `fit_height`.

@@ -1,6 +1,7 @@
 //! Fitting the body shape to the sketch (paper §II-C): the SIR of eqs. 5–9 and match scores.
 
 pub mod bone_estimate;
+pub mod calibration;
 pub mod gender_evidence;
 pub mod height_calibration;
 pub mod proportions;
@@ -9,6 +10,7 @@ mod sir;
 mod transition;
 
 pub use bone_estimate::{estimate_proportions, EstimateOptions, ProportionEstimate};
+pub use calibration::{FitCalibration, ShapeCalibration, CALIBRATED_DIMS};
 pub use gender_evidence::{
     gender_evidence, gender_features, GenderClassifier, GenderEvidence, GenderFeatures, MarginCombination,
 };

@@ -6,11 +6,12 @@
 use std::time::Instant;
 
 use crate::body::ik::{self, IkOptions, Pose};
+use crate::body::proportions::Proportions;
 use crate::body::skin::skin;
 use crate::body::{BodyModel, Gender, RestShape, ShapeChoice};
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
-use crate::fit::{fit_shape, FitOptions, FitProblem, FitResult, HeightCalibration};
+use crate::fit::{fit_shape, FitCalibration, FitOptions, FitProblem, FitResult, PRIOR_RANGE_SD};
 use crate::image::GrayImage;
 use crate::pose::PoseEstimate;
 use crate::skeleton::{Joints2, Joints3};
@@ -51,6 +52,40 @@ fn mean_skeleton(model: &BodyModel, choice: ShapeChoice, height: Option<f64>) ->
     Ok(joints)
 }
 
+/// The rest body of shape `weights` in `space` with the bone-length factors `proportions`
+/// applied (model frame, metres), before any scaling to a height: what [`fit_body`] poses, and
+/// what `sketchbody calibrate-fit` measures. Errors: the space's and the factors' errors.
+pub fn rest_body(
+    model: &BodyModel,
+    space: ShapeChoice,
+    weights: &[f64],
+    proportions: Option<&Proportions>,
+) -> Result<RestShape> {
+    let mut rest = model.shape_space(space)?.synthesize(weights)?;
+    if let Some(props) = proportions {
+        crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, model.skin_weights(), props)?;
+    }
+    Ok(rest)
+}
+
+/// `weights` (a `gender` fit in `space`) mapped by `calibration`'s shape map and clamped to the
+/// prior's [`PRIOR_RANGE_SD`] box; unchanged when the map does not apply (another number of
+/// dimensions). Errors: a non-finite weight; the space's.
+pub fn calibrated_weights(
+    model: &BodyModel,
+    space: ShapeChoice,
+    calibration: &FitCalibration,
+    gender: Gender,
+    weights: Vec<f64>,
+) -> Result<Vec<f64>> {
+    let Some(mut mapped) = calibration.shape.apply(gender, &weights)? else { return Ok(weights) };
+    let range = model.shape_space(space)?.gmm().marginal(mapped.len())?.range(PRIOR_RANGE_SD);
+    for (w, (lo, hi)) in mapped.iter_mut().zip(range) {
+        *w = w.clamp(lo, hi);
+    }
+    Ok(mapped)
+}
+
 /// One shape space's fit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GenderFit {
@@ -78,10 +113,12 @@ pub struct BodyChoice {
     /// proportions) instead of refitting its scales and translation to each body's skeleton
     /// ([`refit_camera`]; only done when the 2-D joints are given).
     pub keep_pose_scale: bool,
-    /// Scale the fitted rest body about its pelvis to this calibration's height
-    /// ([`HeightCalibration`]) when [`FitOptions::height`] is unknown; `None` (the default)
-    /// keeps the fitted height. Never applied to the mean shape.
-    pub height_calibration: Option<HeightCalibration>,
+    /// When [`FitOptions::height`] is unknown, map a gendered fit's shape weights by this
+    /// calibration's [`crate::fit::ShapeCalibration`] (clamped to the prior's
+    /// [`PRIOR_RANGE_SD`] box) and scale the rest body about its pelvis to its
+    /// [`crate::fit::HeightCalibration`]'s height (the both-sexes space: the height only);
+    /// `None` (the default) keeps the fit's weights and height. Never applied to the mean shape.
+    pub calibration: Option<FitCalibration>,
 }
 
 /// What [`fit_body`] produces. Owns its data.
@@ -100,8 +137,9 @@ pub struct FittedBody {
     /// Probability under the fit's posterior that [`FittedBody::gender`] is the right half
     /// (the gender value on its side of 0.5): 1 when the gender was given, 0.5..=1 when fitted.
     pub gender_confidence: f64,
-    /// PCA weights of the fitted shape in [`FittedBody::space`] (Y* of the SIR; empty for the
-    /// mean shape), metres; weight 0 of the blended space is its gender axis.
+    /// PCA weights of the body in [`FittedBody::space`] (Y* of the SIR, mapped by the shape
+    /// calibration when [`FittedBody::calibrated`]; empty for the mean shape), metres; weight 0
+    /// of the blended space is its gender axis. The SIR's own Y* is in [`FittedBody::fits`].
     pub weights: Vec<f64>,
     /// Fraction of the fitted silhouette's boundary the sketch's strokes support
     /// ([`FitResult::edge_support`]; NaN for the mean shape).
@@ -114,15 +152,16 @@ pub struct FittedBody {
     /// The camera refitted to the chosen body (see [`BodyChoice::keep_pose_scale`] and
     /// [`FitOptions::sample_camera`]), pixels.
     pub camera: WeakPerspective,
-    /// The chosen rest shape with its bone-length factors applied and scaled to
-    /// [`FitOptions::height`] when given, else to [`BodyChoice::height_calibration`]'s height
-    /// when asked (model frame, metres).
+    /// The rest shape of [`FittedBody::weights`] with its bone-length factors applied and scaled
+    /// to [`FitOptions::height`] when given, else to [`BodyChoice::calibration`]'s height when
+    /// asked (model frame, metres).
     pub rest: RestShape,
-    /// Height of the fitted rest body before any scaling to a given or calibrated height,
-    /// metres ([`crate::body::rig::y_extent`] of its vertices).
+    /// Height of the rest body of [`FittedBody::weights`] before any scaling to a given or
+    /// calibrated height, metres ([`crate::body::rig::y_extent`] of its vertices).
     pub fit_height: f64,
-    /// `true` when `rest` was scaled to [`BodyChoice::height_calibration`]'s height.
-    pub height_calibrated: bool,
+    /// `true` when [`BodyChoice::calibration`] was applied (weights mapped for a gendered
+    /// 10-dimension fit, height calibrated).
+    pub calibrated: bool,
     /// The IK pose taking `rest.joints` to the estimated 3-D joints.
     pub ik_pose: Pose,
     /// The posed vertices (model frame, metres); project with `pose.camera`.
@@ -135,10 +174,10 @@ pub struct FittedBody {
 
 /// Fits the body to `edges` (255 edge, 0 not) under the 3-D `pose` (canonical joints, metres)
 /// seen through `camera`: the chosen shape space by SIR ([`fit_shape`]; without a gender the
-/// both-sexes space, so no hard gender choice), then bone-length factors, height (given, or
-/// calibrated with [`BodyChoice::height_calibration`]), IK and skinning. With `joints2d` the
-/// camera is refitted to each body's skeleton (and, with [`FitOptions::sample_camera`], to the
-/// chosen body's) and the fit uses the joints term.
+/// both-sexes space, so no hard gender choice), then the calibration's shape map
+/// ([`BodyChoice::calibration`]), bone-length factors, height (given, or calibrated), IK and
+/// skinning. With `joints2d` the camera is refitted to each body's skeleton (and, with
+/// [`FitOptions::sample_camera`], to the chosen body's) and the fit uses the joints term.
 /// `progress(fraction)` (0..=1 over the fits, non-decreasing) returning `false` cancels.
 ///
 /// Errors: `mean_shape` without a gender ([`Error::OutOfRange`]); the camera refit's, the fit's,
@@ -194,15 +233,16 @@ pub fn fit_body(
     let fits = vec![fit];
 
     let t = Instant::now();
-    let mut rest = model.shape_space(space)?.synthesize(&weights)?;
-    if let Some(props) = &proportions {
-        crate::fit::proportions::apply_in_place(&mut rest.vertices, &mut rest.joints, model.skin_weights(), props)?;
-    }
+    let calibration = choice.calibration.filter(|_| options.height.is_none() && !choice.mean_shape);
+    let weights = match (calibration, choice.gender) {
+        (Some(c), Some(g)) => calibrated_weights(model, space, &c, g, weights)?,
+        _ => weights,
+    };
+    let mut rest = rest_body(model, space, &weights, proportions.as_ref())?;
     let fit_height = crate::body::rig::y_extent(&rest.vertices);
-    let calibration = choice.height_calibration.filter(|_| options.height.is_none() && !choice.mean_shape);
     let height = match (options.height, calibration) {
         (Some(h), _) => Some(h),
-        (None, Some(c)) => Some(c.calibrated(fit_height, gender_value)?),
+        (None, Some(c)) => Some(c.height.calibrated(fit_height, gender_value)?),
         (None, None) => None,
     };
     if let Some(h) = height {
@@ -228,7 +268,7 @@ pub fn fit_body(
         camera,
         rest,
         fit_height,
-        height_calibrated: calibration.is_some(),
+        calibrated: calibration.is_some(),
         ik_pose,
         posed_vertices,
         fit_seconds,

@@ -25,12 +25,12 @@ use crate::body::ik::Pose;
 use crate::body::rig::RiggedMesh;
 use crate::body::{BodyModel, Gender, ShapeChoice};
 use crate::error::{Error, Result};
-use crate::fit::{gender_evidence, FitOptions, GenderClassifier, GenderEvidence, HeightCalibration, MarginCombination};
+use crate::fit::{gender_evidence, FitCalibration, FitOptions, GenderClassifier, GenderEvidence, MarginCombination};
 use crate::image::{canny, CannyParams, GrayImage};
 use crate::pose::{estimate_pose_hinted, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::Joints2;
 
-pub use body_fit::{fit_body, refit_camera, BodyChoice, FittedBody, GenderFit};
+pub use body_fit::{calibrated_weights, fit_body, refit_camera, rest_body, BodyChoice, FittedBody, GenderFit};
 pub use detected::{DetectedJointsFit, DEFAULT_DEPTH_HINT};
 pub use joints::{DetectedJoints, FigureJoints, GivenJoints, JointsSource};
 
@@ -96,11 +96,12 @@ pub struct PipelineOptions {
     /// chosen").
     pub gender_decision_dims: Option<usize>,
     /// When the character's height is unknown (`fit.height` is `None`) and the 2-D joints are
-    /// given, scale the fitted rest body to the calibrated height of [`HeightCalibration::SHIPPED`]:
-    /// the fit alone draws heights toward the prior's mean (docs/benchmarks.md, "Height
-    /// calibration"). Not applied to detected joints (measured worse there) nor to the mean
-    /// shape. Default `true`.
-    pub calibrate_height: bool,
+    /// given, calibrate the fitted body with [`FitCalibration::SHIPPED`]: map a gendered fit's
+    /// shape weights, then scale the rest body to the calibrated height. The fit alone draws
+    /// the body toward the prior's mean (docs/benchmarks.md, "Shape calibration", "Height
+    /// calibration"). Not applied to detected joints (the height calibration measured worse
+    /// there) nor to the mean shape. Default `true`.
+    pub calibrate_fit: bool,
 }
 
 impl Default for PipelineOptions {
@@ -118,7 +119,7 @@ impl Default for PipelineOptions {
             gender_evidence: true,
             classify_gender: true,
             gender_decision_dims: None,
-            calibrate_height: true,
+            calibrate_fit: true,
         }
     }
 }
@@ -187,7 +188,8 @@ pub struct PipelineResult {
     pub edge_support: f64,
     /// The fit is low-evidence ([`FittedBody::low_evidence`]).
     pub low_evidence: bool,
-    /// PCA weights of the chosen shape (Y* of the SIR; empty for the mean shape), metres.
+    /// PCA weights of the chosen body ([`FittedBody::weights`]: Y* of the SIR, mapped when
+    /// [`PipelineResult::calibrated`]; empty for the mean shape), metres.
     pub weights: Vec<f64>,
     /// Best match score of the chosen fit (NaN for the mean shape).
     pub score: f64,
@@ -196,9 +198,9 @@ pub struct PipelineResult {
     /// Height of the fitted rest body before it was scaled to a given or calibrated height,
     /// metres ([`FittedBody::fit_height`]; for the mean shape, its own height).
     pub fit_height: f64,
-    /// `true` when the rest body was scaled to the calibrated height
-    /// ([`PipelineOptions::calibrate_height`]).
-    pub height_calibrated: bool,
+    /// `true` when the fitted body was calibrated ([`PipelineOptions::calibrate_fit`],
+    /// [`FittedBody::calibrated`]).
+    pub calibrated: bool,
     /// The IK pose taking `mesh.joints` to the estimated 3-D joints.
     pub ik_pose: Pose,
     /// The posed vertices (model frame, metres); project with `pose.camera`.
@@ -317,13 +319,13 @@ pub fn run_pipeline(
     };
     let male_prior =
         (options.gender.is_none() && !classify && detected_gender.is_none()).then(|| fit.male_prior.unwrap_or(0.5));
-    // Detected joints keep the fitted height (a calibration measured worse there).
-    let height_calibration = (options.calibrate_height && detection.is_none()).then_some(HeightCalibration::SHIPPED);
+    // Detected joints keep the fitted body (a height calibration measured worse there).
+    let calibration = (options.calibrate_fit && detection.is_none()).then_some(FitCalibration::SHIPPED);
     let choice = BodyChoice {
         gender: options.gender.or(detected_gender),
         mean_shape: options.mean_shape,
         keep_pose_scale: options.keep_pose_scale,
-        height_calibration,
+        calibration,
     };
     let (body, classified) = if classify {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
@@ -364,7 +366,7 @@ pub fn run_pipeline(
         mesh,
         posed_joints: body.ik_pose.joints,
         fit_height: body.fit_height,
-        height_calibrated: body.height_calibrated,
+        calibrated: body.calibrated,
         ik_pose: body.ik_pose,
         posed_vertices: body.posed_vertices,
         timings,
