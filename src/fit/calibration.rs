@@ -49,12 +49,12 @@ impl ShapeCalibration {
     pub const SHIPPED: ShapeCalibration = ShapeCalibration {
         first_dim: 3,
         intercept: [
-            [0.0, 0.0, 0.0, -0.236001, -0.042100, -0.087482, 0.163218, 0.087307, -0.107147, 0.276289],
-            [0.0, 0.0, 0.0, -0.261774, 0.026924, 0.140034, -0.218415, -0.022582, -0.046747, 0.105905],
+            [0.0, 0.0, 0.0, -0.098383, -0.062328, -0.059301, 0.089358, 0.060210, -0.081726, 0.270431],
+            [0.0, 0.0, 0.0, -0.228487, -0.021247, 0.126044, -0.156408, 0.035135, -0.053134, 0.063455],
         ],
         slope: [
-            [1.0, 1.0, 1.0, 2.664664, 0.463489, 2.403369, 2.335405, 2.452319, 2.003447, 3.648000],
-            [1.0, 1.0, 1.0, 1.379773, 1.719043, 1.675366, 2.642933, 0.873817, 1.799385, 2.885961],
+            [1.0, 1.0, 1.0, 2.550004, 0.869997, 2.576436, 1.999109, 2.255614, 2.411350, 3.451908],
+            [1.0, 1.0, 1.0, 1.543421, 1.498603, 1.601568, 2.690032, 2.175518, 1.975210, 2.737679],
         ],
     };
 
@@ -143,10 +143,10 @@ pub struct FitCalibration {
 }
 
 impl FitCalibration {
-    /// For fits with the user's (or the ground truth's) 2-D joints, fitted on the first 300
-    /// sketches of `make-dataset 1200 --seed 79 --mocap DIR` (the classifiers' training set,
-    /// DIR: the DeepMimic clips other than the shape-fit benchmark's six) fitted with the true
-    /// gender (`run-dataset DS --out R --first 300 --gender truth`), by
+    /// For fits with the user's (or the ground truth's) 2-D joints, fitted on the 1200 sketches
+    /// of `make-dataset 1200 --seed 79 --mocap DIR` (the classifiers' training set, DIR: the
+    /// DeepMimic clips other than the shape-fit benchmark's six) fitted with the true gender
+    /// (`run-dataset DS --out R --gender truth`), by
     /// `sketchbody calibrate-fit --train DS=R` (docs/benchmarks.md, "Shape calibration").
     pub const SHIPPED: FitCalibration =
         FitCalibration { shape: ShapeCalibration::SHIPPED, height: HeightCalibration::SHIPPED };

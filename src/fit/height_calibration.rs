@@ -38,7 +38,7 @@ impl HeightCalibration {
     /// [`crate::fit::FitCalibration::SHIPPED`]'s height calibration, trained on the heights of
     /// the bodies its shape map gives (`sketchbody calibrate-fit`; that constant's
     /// documentation says on what).
-    pub const SHIPPED: HeightCalibration = HeightCalibration { intercept: -0.256763, slope: 1.519722, male: -0.037324 };
+    pub const SHIPPED: HeightCalibration = HeightCalibration { intercept: -0.251905, slope: 1.505194, male: -0.042254 };
 
     /// The calibrated height (metres) for a fit `fit_height` metres tall with gender value
     /// `gender_value` (clamped to 0..=1), within [`MAX_LOG_CHANGE`] of `fit_height`.
