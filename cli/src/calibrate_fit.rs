@@ -11,7 +11,8 @@
 use std::path::Path;
 
 use sketchbody::body::proportions::Proportions;
-use sketchbody::body::{BodyModel, Gender, ShapeChoice};
+use sketchbody::body::rig::{scale_to_height, y_extent};
+use sketchbody::body::{BodyModel, Gender, RestShape, ShapeChoice};
 use sketchbody::eval::metrics::{aed, centred};
 use sketchbody::eval::score::dataset_samples;
 use sketchbody::fit::{FitCalibration, HeightCalibration, ShapeCalibration, CALIBRATED_DIMS};
@@ -19,7 +20,7 @@ use sketchbody::pipeline::{calibrated_weights, rest_body};
 use sketchbody::render::sketch::truth::parse_mesh;
 use sketchbody::render::sketch::GroundTruth;
 
-use crate::train_gender::Sets;
+use crate::train_gender::{read_json, Sets};
 use crate::CliError;
 
 /// Arguments of `sketchbody calibrate-fit`.
@@ -63,11 +64,6 @@ struct Sample {
     height: f64,
     /// The true rest mesh, centred.
     reference: Vec<[f64; 3]>,
-}
-
-fn read_json(p: &Path) -> Result<serde_json::Value, CliError> {
-    let text = std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
-    serde_json::from_str(&text).map_err(|e| CliError(format!("{}: {e}", p.display())))
 }
 
 /// Every sample of `dataset` with a results file in `results`.
@@ -119,16 +115,16 @@ fn load(dataset: &Path, results: &Path, first: Option<usize>) -> Result<Vec<Samp
 }
 
 /// A sample's rest body: its fitted weights mapped by `c` (or left as fitted), the fitted bone
-/// factors applied. Returns the vertices and their height (metres).
-fn body(model: &BodyModel, s: &Sample, c: Option<&FitCalibration>) -> Result<(Vec<[f32; 3]>, f64), CliError> {
+/// factors applied, and its height (metres).
+fn body(model: &BodyModel, s: &Sample, c: Option<&FitCalibration>) -> Result<(RestShape, f64), CliError> {
     let space = ShapeChoice::Gendered(s.gender);
     let w = match c {
         Some(c) => calibrated_weights(model, space, c, s.gender, s.fit.clone())?,
         None => s.fit.clone(),
     };
-    let v = rest_body(model, space, &w, s.proportions.as_ref())?.vertices;
-    let h = sketchbody::body::rig::y_extent(&v);
-    Ok((v, h))
+    let rest = rest_body(model, space, &w, s.proportions.as_ref())?;
+    let h = y_extent(&rest.vertices);
+    Ok((rest, h))
 }
 
 /// `(RMS ln height error, mean rest AED centred)` of `samples`' bodies, uncalibrated (`None`) or
@@ -136,13 +132,13 @@ fn body(model: &BodyModel, s: &Sample, c: Option<&FitCalibration>) -> Result<(Ve
 fn score(model: &BodyModel, samples: &[&Sample], c: Option<&FitCalibration>) -> Result<(f64, f64), CliError> {
     let (mut sq, mut sum) = (0.0, 0.0);
     for s in samples {
-        let (v, fit_height) = body(model, s, c)?;
+        let (mut rest, fit_height) = body(model, s, c)?;
         let h = match c {
             Some(c) => c.height.calibrated(fit_height, s.gender_value)?,
             None => fit_height,
         };
-        let k = (h / fit_height) as f32;
-        let scaled: Vec<[f64; 3]> = v.iter().map(|p| p.map(|x| (x * k) as f64)).collect();
+        scale_to_height(&mut rest.vertices, &mut rest.joints, h)?;
+        let scaled: Vec<[f64; 3]> = rest.vertices.iter().map(|p| p.map(f64::from)).collect();
         sq += (h / s.height).ln().powi(2);
         sum += aed(&s.reference, &centred(&scaled), s.height)?;
     }

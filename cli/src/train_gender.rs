@@ -67,6 +67,12 @@ pub struct Sets {
     pub test: Vec<(PathBuf, PathBuf)>,
 }
 
+/// Reads a JSON file; errors name the file.
+pub fn read_json(p: &Path) -> Result<serde_json::Value, CliError> {
+    let text = std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
+    serde_json::from_str(&text).map_err(|e| CliError(format!("{}: {e}", p.display())))
+}
+
 /// Parses DATASET=RESULTS.
 fn parse_pair(s: &str) -> Result<(PathBuf, PathBuf), String> {
     let (a, b) = s.split_once('=').ok_or_else(|| format!("{s:?}: expected DATASET=RESULTS"))?;
@@ -85,10 +91,7 @@ fn load_fits(
     let mut out = Vec::new();
     let stems = dataset_samples(d)?;
     let score = |r: &Path, stem: &str, key: &str| -> Result<f64, CliError> {
-        let p = r.join(format!("{stem}.json"));
-        let text = std::fs::read_to_string(&p).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
-        let v: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
+        let v = read_json(&r.join(format!("{stem}.json")))?;
         Ok(v["scores"][key].as_f64().unwrap_or(f64::NAN))
     };
     let done: Vec<&String> =
@@ -105,15 +108,11 @@ fn load(dataset: &Path, results: &Path, first: Option<usize>) -> Result<Vec<(Gen
     let mut out = Vec::new();
     let stems = dataset_samples(dataset)?;
     for stem in stems.iter().take(first.unwrap_or(usize::MAX)) {
-        let read = |p: PathBuf| -> Result<serde_json::Value, CliError> {
-            let text = std::fs::read_to_string(&p).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
-            serde_json::from_str(&text).map_err(|e| CliError(format!("{}: {e}", p.display())))
-        };
         let rp = results.join(format!("{stem}.json"));
         if !rp.is_file() {
             continue;
         }
-        let (truth, r) = (read(dataset.join(format!("{stem}.json")))?, read(rp.clone())?);
+        let (truth, r) = (read_json(&dataset.join(format!("{stem}.json")))?, read_json(&rp)?);
         let male = match truth["gender"].as_str() {
             Some("male") => true,
             Some("female") => false,
