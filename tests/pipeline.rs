@@ -323,7 +323,7 @@ fn known_height_per_sample_cameras_and_a_given_pose() {
 /// With the height unknown a gendered 10-dimension fit's weights are mapped by the shipped
 /// shape calibration (the lower dimensions kept, every weight inside the prior's box) and the
 /// body is scaled about its pelvis to the shipped height calibration's height of the mapped
-/// body; the fit itself is the same. A given height wins, and the mean shape is never calibrated.
+/// body, read with the fitted bone factors and the drawn widths; the fit itself is the same. A given height wins, and the mean shape is never calibrated.
 #[test]
 fn an_unknown_height_is_calibrated_and_a_known_one_wins() {
     use sketchbody::fit::{FitCalibration, PRIOR_RANGE_SD};
@@ -354,7 +354,10 @@ fn an_unknown_height_is_calibrated_and_a_known_one_wins() {
     let mapped_body = rest_body(&model, space, &c.weights, props.as_ref()).unwrap();
     assert!((c.fit_height - sketchbody::body::rig::y_extent(&mapped_body.vertices)).abs() < 1e-9);
     assert!((f.mesh.height() - f.fit_height).abs() < 1e-6, "uncalibrated: the fitted height");
-    let want = shipped.height.calibrated(c.fit_height, 0.0).unwrap();
+    let evidence = sketchbody::fit::HeightEvidence::new(props.as_ref(), Some(&c.gender_evidence.features));
+    let want = shipped.height.calibrated(c.fit_height, 0.0, &evidence).unwrap();
+    let without = shipped.height.calibrated(c.fit_height, 0.0, &sketchbody::fit::HeightEvidence::NONE).unwrap();
+    assert!((want / without - 1.0).abs() > 1e-4, "the drawing's evidence moves the height");
     assert!((c.mesh.height() - want).abs() < 1e-5, "{} vs {want}", c.mesh.height());
     assert!((want / c.fit_height - 1.0).abs() > 1e-4, "the example's height moves");
     // A 4-dimension fit is outside the map: only its height is calibrated.

@@ -3,10 +3,11 @@
 //! `run-dataset` results: the shape map (`ShapeCalibration`: per gender and dimension ≥ K, the
 //! true shape weight against the SIR's, least squares, on samples fitted in their true gender),
 //! then the height calibration (`HeightCalibration`: ln true height against the mapped body's
-//! ln height and the gender value). Prints the Rust constants to ship and, for every set, the
+//! ln height, the gender value and the `--height-evidence` values). Prints the Rust constants to ship and, for every set, the
 //! RMS error of ln height and the mean rest AED centred (docs/dataset.md) of the fit before and
 //! after calibration. `--cv F` first prints an F-fold cross-validation of that AED over the
-//! training samples for every K; `--shipped` evaluates the shipped calibration instead.
+//! training samples for every K (only for K = `--first-dim` when that is given); `--shipped`
+//! evaluates the shipped calibration instead.
 
 use std::path::Path;
 
@@ -15,7 +16,11 @@ use sketchbody::body::rig::{scale_to_height, y_extent};
 use sketchbody::body::{BodyModel, Gender, RestShape, ShapeChoice};
 use sketchbody::eval::metrics::{aed, centred};
 use sketchbody::eval::score::dataset_samples;
-use sketchbody::fit::{FitCalibration, HeightCalibration, ShapeCalibration, CALIBRATED_DIMS};
+use sketchbody::fit::gender_evidence::NUM_GENDER_FEATURES;
+use sketchbody::fit::{
+    FitCalibration, GenderFeatures, HeightCalibration, HeightEvidence, HeightSample, ShapeCalibration, CALIBRATED_DIMS,
+    HEIGHT_EVIDENCE_NAMES, NUM_HEIGHT_EVIDENCE,
+};
 use sketchbody::pipeline::{calibrated_weights, rest_body};
 use sketchbody::render::sketch::truth::parse_mesh;
 use sketchbody::render::sketch::GroundTruth;
@@ -36,14 +41,43 @@ pub struct Args {
     /// Use only the first N samples of each set.
     #[arg(long)]
     first: Option<usize>,
-    /// First shape dimension the map changes; lower ones keep the fit's weights.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=CALIBRATED_DIMS as i64))]
-    first_dim: u32,
+    /// First shape dimension the map changes; lower ones keep the fit's weights [default: 3].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=CALIBRATED_DIMS as i64))]
+    first_dim: Option<u32>,
+    /// The evidence the height calibration reads beyond the fitted height and gender:
+    /// comma-separated names (log_legs_factor … log_torso_factor, then the gender features'
+    /// names, see `sketchbody::fit::HEIGHT_EVIDENCE_NAMES`), `none` or `all`.
+    #[arg(long, default_value = DEFAULT_EVIDENCE, value_parser = parse_evidence)]
+    height_evidence: EvidenceSet,
     /// Before training, print an F-fold cross-validation (the k-th sample of each true gender in
     /// fold k mod F) of the calibrated rest AED centred over the training samples for every
     /// first dimension.
     #[arg(long, value_parser = clap::value_parser!(u32).range(2..=50))]
     cv: Option<u32>,
+}
+
+/// The evidence the shipped height calibration reads (docs/benchmarks.md, "Height evidence").
+const DEFAULT_EVIDENCE: &str = "all";
+
+/// Which [`HEIGHT_EVIDENCE_NAMES`] values the height calibration reads.
+#[derive(Clone, Copy, Debug)]
+struct EvidenceSet([bool; NUM_HEIGHT_EVIDENCE]);
+
+fn parse_evidence(s: &str) -> Result<EvidenceSet, String> {
+    let mut used = [false; NUM_HEIGHT_EVIDENCE];
+    match s.trim() {
+        "none" => {}
+        "all" => used = [true; NUM_HEIGHT_EVIDENCE],
+        list => {
+            for name in list.split(',').map(str::trim) {
+                let k = HEIGHT_EVIDENCE_NAMES.iter().position(|n| *n == name).ok_or_else(|| {
+                    format!("unknown height evidence {name:?}; one of {}, none, all", HEIGHT_EVIDENCE_NAMES.join(", "))
+                })?;
+                used[k] = true;
+            }
+        }
+    }
+    Ok(EvidenceSet(used))
 }
 
 /// One result with its ground truth.
@@ -56,6 +90,8 @@ struct Sample {
     fit: Vec<f64>,
     /// The fitted bone factors.
     proportions: Option<Proportions>,
+    /// The drawing's measured widths (`gender_features`).
+    widths: GenderFeatures,
     /// The true gender.
     true_gender: Gender,
     /// The true shape weights.
@@ -90,6 +126,11 @@ fn load(dataset: &Path, results: &Path, first: Option<usize>) -> Result<Vec<Samp
         let gender = Gender::parse(r["gender"].as_str().ok_or_else(|| bad("no gender"))?)?;
         let gender_value = r["gender_value"].as_f64().ok_or_else(|| bad("no gender_value"))?;
         let proportions = serde_json::from_value(r["proportions"].clone()).map_err(|e| bad(&e.to_string()))?;
+        let widths: Vec<Option<f64>> = serde_json::from_value(r["gender_features"].clone())
+            .map_err(|_| bad("no gender_features (run-dataset of this version writes them)"))?;
+        let widths = GenderFeatures {
+            values: widths.try_into().map_err(|_| bad(&format!("gender_features: need {NUM_GENDER_FEATURES}")))?,
+        };
         let tp = dataset.join(format!("{stem}.json"));
         let text = std::fs::read_to_string(&tp).map_err(|e| CliError(format!("{}: {e}", tp.display())))?;
         let t = GroundTruth::from_json(&text, &tp.display().to_string())?;
@@ -102,6 +143,7 @@ fn load(dataset: &Path, results: &Path, first: Option<usize>) -> Result<Vec<Samp
             gender_value,
             fit,
             proportions,
+            widths,
             true_gender: Gender::parse(&t.gender)?,
             truth: t.shape_weights,
             height: t.height_m,
@@ -112,6 +154,11 @@ fn load(dataset: &Path, results: &Path, first: Option<usize>) -> Result<Vec<Samp
         return Err(CliError(format!("{}: no results of {}", results.display(), dataset.display())));
     }
     Ok(out)
+}
+
+/// A sample's height evidence.
+fn evidence(s: &Sample) -> HeightEvidence {
+    HeightEvidence::new(s.proportions.as_ref(), Some(&s.widths))
 }
 
 /// A sample's rest body: its fitted weights mapped by `c` (or left as fitted), the fitted bone
@@ -134,7 +181,7 @@ fn score(model: &BodyModel, samples: &[&Sample], c: Option<&FitCalibration>) -> 
     for s in samples {
         let (mut rest, fit_height) = body(model, s, c)?;
         let h = match c {
-            Some(c) => c.height.calibrated(fit_height, s.gender_value)?,
+            Some(c) => c.height.calibrated(fit_height, s.gender_value, &evidence(s))?,
             None => fit_height,
         };
         scale_to_height(&mut rest.vertices, &mut rest.joints, h)?;
@@ -146,17 +193,28 @@ fn score(model: &BodyModel, samples: &[&Sample], c: Option<&FitCalibration>) -> 
     Ok(((sq / n).sqrt(), sum / n))
 }
 
-/// Trains the calibration on `samples` with the shape map from dimension `first_dim`.
-fn train(model: &BodyModel, samples: &[&Sample], first_dim: usize) -> Result<FitCalibration, CliError> {
+/// Trains the calibration on `samples` with the shape map from dimension `first_dim` and the
+/// height calibration reading `used`.
+fn train(
+    model: &BodyModel,
+    samples: &[&Sample],
+    first_dim: usize,
+    used: &EvidenceSet,
+) -> Result<FitCalibration, CliError> {
     let matched: Vec<(Gender, &[f64], &[f64])> =
         samples.iter().filter(|s| s.gender == s.true_gender).map(|s| (s.gender, &s.fit[..], &s.truth[..])).collect();
     let shape = ShapeCalibration::train(&matched, first_dim)?;
     let mapped = FitCalibration { shape, height: HeightCalibration::SHIPPED };
     let mut heights = Vec::with_capacity(samples.len());
     for s in samples {
-        heights.push((body(model, s, Some(&mapped))?.1, s.gender_value, s.height));
+        heights.push(HeightSample {
+            fit_height: body(model, s, Some(&mapped))?.1,
+            gender_value: s.gender_value,
+            evidence: evidence(s),
+            true_height: s.height,
+        });
     }
-    Ok(FitCalibration { shape, height: HeightCalibration::train(&heights)? })
+    Ok(FitCalibration { shape, height: HeightCalibration::train(&heights, &used.0)? })
 }
 
 fn print_calibration(c: &FitCalibration) {
@@ -171,7 +229,15 @@ fn print_calibration(c: &FitCalibration) {
         rows(&c.shape.slope)
     );
     let h = &c.height;
-    println!("HeightCalibration {{ intercept: {:.6}, slope: {:.6}, male: {:.6} }}", h.intercept, h.slope, h.male);
+    let row = |r: &[f64; NUM_HEIGHT_EVIDENCE]| r.iter().map(|x| format!("{x:.6}")).collect::<Vec<_>>().join(", ");
+    println!(
+        "HeightCalibration {{ intercept: {:.6}, slope: {:.6}, male: {:.6}, evidence_means: [{}], evidence_weights: [{}] }}",
+        h.intercept,
+        h.slope,
+        h.male,
+        row(&h.evidence_means),
+        row(&h.evidence_weights)
+    );
 }
 
 fn report(model: &BodyModel, what: &str, samples: &[&Sample], c: &FitCalibration) -> Result<(), CliError> {
@@ -212,7 +278,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
                     (*k - 1) % folds as usize
                 })
                 .collect();
-            for first_dim in 0..=CALIBRATED_DIMS {
+            let dims = match a.first_dim {
+                Some(k) => k as usize..=k as usize,
+                None => 0..=CALIBRATED_DIMS,
+            };
+            for first_dim in dims {
                 let mut sum = 0.0;
                 for f in 0..folds as usize {
                     let pick = |held: bool| -> Vec<&Sample> {
@@ -222,7 +292,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
                     if held.is_empty() {
                         continue;
                     }
-                    let c = train(&model, &rest, first_dim)?;
+                    let c = train(&model, &rest, first_dim, &a.height_evidence)?;
                     sum += score(&model, &held, Some(&c))?.1 * held.len() as f64;
                 }
                 println!(
@@ -231,7 +301,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
                 );
             }
         }
-        let c = train(&model, &all, a.first_dim as usize)?;
+        let c = train(&model, &all, a.first_dim.unwrap_or(3) as usize, &a.height_evidence)?;
         let matched = all.iter().filter(|s| s.gender == s.true_gender).count();
         println!("training: {} samples ({matched} fitted in their true gender train the shape map)", all.len());
         print_calibration(&c);

@@ -164,11 +164,23 @@ fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
     let (rf, rm) = (format!("{}={}", s(&ds), s(&dir.join("f"))), format!("{}={}", s(&ds), s(&dir.join("m"))));
     // The same fits train the fit's calibration: the shape map on the samples fitted in their
     // true gender, then the height calibration on the mapped bodies.
-    let o = skb(&["calibrate-fit", "--train", &rf, "--train", &rm, "--test", &rf, "--cv", "2"]);
+    // Two evidence values: 16 samples do not determine the default's fifteen.
+    let few = ["--height-evidence", "log_torso_factor,log_hip_width"];
+    let o = skb(&[&["calibrate-fit", "--train", &rf, "--train", &rm, "--test", &rf, "--cv", "2"], &few[..]].concat());
     ok(&o);
     let out = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(out.contains("ShapeCalibration { first_dim: 3, intercept: [["), "{out}");
-    assert!(out.contains("HeightCalibration { intercept: "), "{out}");
+    let line = out.lines().find(|l| l.starts_with("HeightCalibration { intercept: ")).expect(&out);
+    let weights: Vec<f64> = line
+        .split("evidence_weights: [")
+        .nth(1)
+        .expect(line)
+        .split([',', ']', ' '])
+        .filter_map(|t| t.parse().ok())
+        .collect();
+    assert_eq!(weights.len(), 15, "{line}");
+    let used: Vec<usize> = (0..15).filter(|&k| weights[k] != 0.0).collect();
+    assert_eq!(used, vec![4, 6], "only the named evidence is read: {line}");
     assert_eq!(out.lines().filter(|l| l.starts_with("cv 2-fold, first dimension ")).count(), 11, "{out}");
     assert!(out.contains("training: 16 samples (8 fitted in their true gender"), "{out}");
     let numbers = |line: &str| -> Vec<f64> {
@@ -179,11 +191,21 @@ fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
     assert!(v.len() == 4 && v.iter().all(|x| x.is_finite() && *x >= 0.0 && *x < 0.5), "{line}");
     // Without a shape map, least squares over a family holding the identity: the calibrated
     // heights are no worse than the fitted ones.
-    let o = skb(&["calibrate-fit", "--train", &rf, "--train", &rm, "--first-dim", "10"]);
+    let o =
+        skb(&[&["calibrate-fit", "--train", &rf, "--train", &rm, "--first-dim", "10", "--cv", "2"], &few[..]].concat());
     ok(&o);
     let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    let cv: Vec<&str> = out.lines().filter(|l| l.starts_with("cv 2-fold")).collect();
+    assert!(
+        cv.len() == 1 && cv[0].starts_with("cv 2-fold, first dimension 10:"),
+        "--first-dim: its own line only: {out}"
+    );
     let v = numbers(out.lines().find(|l| l.starts_with("training: 16 samples, RMS")).expect(&out));
     assert!(v[1] <= v[0] + 1e-9, "{out}");
+    let o = skb(&["calibrate-fit", "--train", &rf, "--train", &rm]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("need more than 18"), "all fifteen values: {o:?}");
+    let o = skb(&["calibrate-fit", "--train", &rf, "--height-evidence", "log_tail_factor"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown height evidence"), "{o:?}");
     let o = skb(&["calibrate-fit", "--shipped", "--test", &rf]);
     ok(&o);
     assert!(String::from_utf8_lossy(&o.stdout).starts_with("test "), "{o:?}");

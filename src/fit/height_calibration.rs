@@ -5,8 +5,15 @@
 //! out. A linear model in log height, fitted by least squares on held-apart training sketches,
 //! corrects that:
 //!
-//! `ln h = intercept + slope · ln h_fit + male · g`, with `h_fit` the fitted rest mesh's height
-//! (metres, [`crate::body::rig::y_extent`]) and `g` the fit's gender value (0 female … 1 male).
+//! `ln h = intercept + slope · ln h_fit + male · g + Σ_k w_k (x_k − m_k)`, with `h_fit` the fitted
+//! rest mesh's height (metres, [`crate::body::rig::y_extent`]), `g` the fit's gender value
+//! (0 female … 1 male) and `x` the drawing's [`HeightEvidence`]: the fitted bone-length factors
+//! and the drawn widths over the torso length ([`crate::fit::GenderFeatures`]). `m_k` is the
+//! training mean of `x_k`, so a missing value adds nothing. The fitted bone factors carry the
+//! most: a drawing the fit explained by a longer torso or broader shoulders was, on the training
+//! sketches, more often a shorter body than the fitted one. On the training sketches the
+//! evidence takes the RMS error of ln height from 0.054 to 0.048 (docs/benchmarks.md, "Height
+//! evidence").
 //!
 //! The pipeline scales the fitted rest body about its pelvis to `h` when the character's height
 //! is unknown and the 2-D joints are given ([`crate::pipeline::PipelineOptions::calibrate_fit`]),
@@ -17,69 +24,172 @@
 //! calibration"), so those fits keep their height. The change is bounded by [`MAX_LOG_CHANGE`], so a figure far outside
 //! the training bodies (a chibi, a giant) keeps its fitted height within that bound.
 
+use crate::body::proportions::Proportions;
 use crate::error::{ensure_finite, Error, Result};
+use crate::fit::gender_evidence::{GenderFeatures, GENDER_FEATURE_NAMES, NUM_GENDER_FEATURES};
 
 /// Largest |ln(h / h_fit)| the calibration applies (about ±16 %); with the shipped calibration
 /// the change stays within about ±5 % on a tuning set (`make-dataset 60 --seed 78`).
 pub const MAX_LOG_CHANGE: f64 = 0.15;
 
+/// Number of [`HeightEvidence`] values: the five bone-length factors, then the drawn widths.
+pub const NUM_HEIGHT_EVIDENCE: usize = 5 + NUM_GENDER_FEATURES;
+
+/// Names of the [`HeightEvidence`] values, in order: the natural logs of the fitted
+/// [`Proportions`] factors, then [`crate::fit::GENDER_FEATURE_NAMES`].
+pub const HEIGHT_EVIDENCE_NAMES: [&str; NUM_HEIGHT_EVIDENCE] = {
+    let factors = ["log_legs_factor", "log_arms_factor", "log_shoulders_factor", "log_head_factor", "log_torso_factor"];
+    let mut names = [""; NUM_HEIGHT_EVIDENCE];
+    let mut k = 0;
+    while k < NUM_HEIGHT_EVIDENCE {
+        names[k] = if k < factors.len() { factors[k] } else { GENDER_FEATURE_NAMES[k - factors.len()] };
+        k += 1;
+    }
+    names
+};
+
+/// What a drawing says about the body's size beyond its fitted height (module documentation),
+/// in the order of [`HEIGHT_EVIDENCE_NAMES`]; `None` = missing. Plain data.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeightEvidence {
+    /// The values (natural logs of ratios, dimensionless).
+    pub values: [Option<f64>; NUM_HEIGHT_EVIDENCE],
+}
+
+impl HeightEvidence {
+    /// No evidence: every value missing.
+    pub const NONE: HeightEvidence = HeightEvidence { values: [None; NUM_HEIGHT_EVIDENCE] };
+
+    /// The evidence of a fit: its bone-length factors (`None` = the standard proportions, every
+    /// factor 1) and the drawing's measured widths (`None` = all missing).
+    pub fn new(proportions: Option<&Proportions>, widths: Option<&GenderFeatures>) -> HeightEvidence {
+        let p = proportions.copied().unwrap_or_default();
+        let mut values = [None; NUM_HEIGHT_EVIDENCE];
+        for (v, f) in values.iter_mut().zip([p.legs, p.arms, p.shoulders, p.head, p.torso]) {
+            *v = (f > 0.0).then(|| f.ln());
+        }
+        if let Some(w) = widths {
+            values[5..].copy_from_slice(&w.values);
+        }
+        HeightEvidence { values }
+    }
+}
+
 /// A height calibration (module documentation). Plain data; `Send + Sync`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeightCalibration {
-    /// ln metres at `ln h_fit = 0` for a female fit.
+    /// ln metres at `ln h_fit = 0` for a female fit at the mean evidence.
     pub intercept: f64,
     /// Weight of `ln h_fit`.
     pub slope: f64,
     /// Added per unit gender value (male − female), ln metres.
     pub male: f64,
+    /// Training mean of each [`HeightEvidence`] value.
+    pub evidence_means: [f64; NUM_HEIGHT_EVIDENCE],
+    /// ln metres per unit of each evidence value's deviation from its mean; 0 = not used.
+    pub evidence_weights: [f64; NUM_HEIGHT_EVIDENCE],
+}
+
+/// One training sample of [`HeightCalibration::train`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeightSample {
+    /// The fitted rest body's height, metres.
+    pub fit_height: f64,
+    /// The fit's gender value (0 female … 1 male).
+    pub gender_value: f64,
+    /// The drawing's evidence.
+    pub evidence: HeightEvidence,
+    /// The true rest height, metres.
+    pub true_height: f64,
 }
 
 impl HeightCalibration {
     /// [`crate::fit::FitCalibration::SHIPPED`]'s height calibration, trained on the heights of
     /// the bodies its shape map gives (`sketchbody calibrate-fit`; that constant's
     /// documentation says on what).
-    pub const SHIPPED: HeightCalibration = HeightCalibration { intercept: -0.251905, slope: 1.505194, male: -0.042254 };
+    pub const SHIPPED: HeightCalibration = HeightCalibration {
+        intercept: -0.204955,
+        slope: 1.393547,
+        male: -0.012386,
+        evidence_means: [
+            0.031742, -0.009152, 0.042933, -0.024951, -0.011195, -0.349060, -0.958426, -0.429775, -0.839572, -0.714372,
+            -2.228744, -2.076896, -2.234390, -1.355721, -1.868242,
+        ],
+        evidence_weights: [
+            -0.149216, 0.056487, -0.165390, -0.116433, -0.634240, 0.078856, -0.457888, 0.013953, 0.019143, -0.012897,
+            -0.003495, 0.003395, -0.005007, 0.000013, -0.016880,
+        ],
+    };
 
     /// The calibrated height (metres) for a fit `fit_height` metres tall with gender value
-    /// `gender_value` (clamped to 0..=1), within [`MAX_LOG_CHANGE`] of `fit_height`.
+    /// `gender_value` (clamped to 0..=1) and the drawing's `evidence`, within
+    /// [`MAX_LOG_CHANGE`] of `fit_height`.
     /// Errors: a non-finite input or `fit_height` ≤ 0 ([`Error::OutOfRange`], [`Error::NonFinite`]).
-    pub fn calibrated(&self, fit_height: f64, gender_value: f64) -> Result<f64> {
+    pub fn calibrated(&self, fit_height: f64, gender_value: f64, evidence: &HeightEvidence) -> Result<f64> {
         ensure_finite("fit height", fit_height)?;
         ensure_finite("gender value", gender_value)?;
         if fit_height <= 0.0 {
             return Err(Error::OutOfRange { name: "fit height", detail: format!("{fit_height} m is not > 0") });
         }
         let ln_fit = fit_height.ln();
-        let ln_h = self.intercept + self.slope * ln_fit + self.male * gender_value.clamp(0.0, 1.0);
+        let mut ln_h = self.intercept + self.slope * ln_fit + self.male * gender_value.clamp(0.0, 1.0);
+        for ((v, m), w) in evidence.values.iter().zip(&self.evidence_means).zip(&self.evidence_weights) {
+            if let Some(x) = v {
+                ensure_finite("height evidence", *x)?;
+                ln_h += w * (x - m);
+            }
+        }
         Ok((ln_h - ln_fit).clamp(-MAX_LOG_CHANGE, MAX_LOG_CHANGE).exp() * fit_height)
     }
 
-    /// Least-squares fit to `(fitted height m, gender value, true height m)` triples.
-    /// Errors: fewer than 3 samples, a non-finite or non-positive height, or inputs that do not
-    /// determine the three coefficients (one gender only, all fitted heights equal) —
-    /// [`Error::OutOfRange`], [`Error::NonFinite`], [`Error::Degenerate`].
-    pub fn train(samples: &[(f64, f64, f64)]) -> Result<HeightCalibration> {
-        if samples.len() < 3 {
+    /// Least-squares fit to `samples`, the evidence values marked in `used` as regressors (the
+    /// others get weight 0; every mean is the training mean of the present values, 0 when none).
+    /// Errors: fewer samples than coefficients + 1, a non-finite value or non-positive height,
+    /// or inputs that do not determine the coefficients (one gender only, a constant regressor)
+    /// — [`Error::OutOfRange`], [`Error::NonFinite`], [`Error::Degenerate`].
+    pub fn train(samples: &[HeightSample], used: &[bool; NUM_HEIGHT_EVIDENCE]) -> Result<HeightCalibration> {
+        let cols: Vec<usize> = (0..NUM_HEIGHT_EVIDENCE).filter(|&k| used[k]).collect();
+        let n = 3 + cols.len();
+        if samples.len() <= n {
             return Err(Error::OutOfRange {
                 name: "height calibration set",
-                detail: format!("{} samples; need at least 3", samples.len()),
+                detail: format!("{} samples; need more than {n}", samples.len()),
             });
         }
-        let mut ata = nalgebra::Matrix3::<f64>::zeros();
-        let mut atb = nalgebra::Vector3::<f64>::zeros();
-        for &(fit, g, truth) in samples {
-            for (name, v) in [("fit height", fit), ("gender value", g), ("true height", truth)] {
+        let mut sums = [(0.0, 0usize); NUM_HEIGHT_EVIDENCE];
+        for s in samples {
+            for (name, v) in
+                [("fit height", s.fit_height), ("gender value", s.gender_value), ("true height", s.true_height)]
+            {
                 ensure_finite(name, v)?;
             }
-            if fit <= 0.0 || truth <= 0.0 {
+            if s.fit_height <= 0.0 || s.true_height <= 0.0 {
                 return Err(Error::OutOfRange {
                     name: "height calibration set",
-                    detail: format!("heights must be > 0 (fitted {fit} m, true {truth} m)"),
+                    detail: format!("heights must be > 0 (fitted {} m, true {} m)", s.fit_height, s.true_height),
                 });
             }
-            let row = nalgebra::Vector3::new(1.0, fit.ln(), g);
-            ata += row * row.transpose();
-            atb += row * truth.ln();
+            for (sum, v) in sums.iter_mut().zip(&s.evidence.values) {
+                if let Some(x) = v {
+                    ensure_finite("height evidence", *x)?;
+                    sum.0 += x;
+                    sum.1 += 1;
+                }
+            }
+        }
+        let means = sums.map(|(sum, count)| if count > 0 { sum / count as f64 } else { 0.0 });
+        let mut ata = nalgebra::DMatrix::<f64>::zeros(n, n);
+        let mut atb = nalgebra::DVector::<f64>::zeros(n);
+        for s in samples {
+            let mut row = nalgebra::DVector::<f64>::zeros(n);
+            row[0] = 1.0;
+            row[1] = s.fit_height.ln();
+            row[2] = s.gender_value;
+            for (i, &k) in cols.iter().enumerate() {
+                row[3 + i] = s.evidence.values[k].map_or(0.0, |x| x - means[k]);
+            }
+            ata += &row * row.transpose();
+            atb += &row * s.true_height.ln();
         }
         let x = ata
             .cholesky()
@@ -88,7 +198,11 @@ impl HeightCalibration {
                 Error::Degenerate("height calibration: the inputs do not determine the coefficients".into())
             })?
             .solve(&atb);
-        Ok(HeightCalibration { intercept: x[0], slope: x[1], male: x[2] })
+        let mut evidence_weights = [0.0; NUM_HEIGHT_EVIDENCE];
+        for (i, &k) in cols.iter().enumerate() {
+            evidence_weights[k] = x[3 + i];
+        }
+        Ok(HeightCalibration { intercept: x[0], slope: x[1], male: x[2], evidence_means: means, evidence_weights })
     }
 }
 
@@ -96,47 +210,140 @@ impl HeightCalibration {
 mod tests {
     use super::*;
 
+    const NO_WEIGHTS: [f64; NUM_HEIGHT_EVIDENCE] = [0.0; NUM_HEIGHT_EVIDENCE];
+
+    fn plain(intercept: f64, slope: f64, male: f64) -> HeightCalibration {
+        HeightCalibration { intercept, slope, male, evidence_means: NO_WEIGHTS, evidence_weights: NO_WEIGHTS }
+    }
+
+    fn sample(fit: f64, g: f64, evidence: HeightEvidence, c: &HeightCalibration) -> HeightSample {
+        let mut ln_h = c.intercept + c.slope * fit.ln() + c.male * g;
+        for k in 0..NUM_HEIGHT_EVIDENCE {
+            ln_h += evidence.values[k].map_or(0.0, |x| c.evidence_weights[k] * (x - c.evidence_means[k]));
+        }
+        HeightSample { fit_height: fit, gender_value: g, evidence, true_height: ln_h.exp() }
+    }
+
+    #[test]
+    fn the_evidence_names_follow_the_factors_then_the_widths() {
+        assert_eq!(HEIGHT_EVIDENCE_NAMES[..2], ["log_legs_factor", "log_arms_factor"]);
+        assert_eq!(HEIGHT_EVIDENCE_NAMES[4..7], ["log_torso_factor", "log_shoulder_width", "log_hip_width"]);
+        let p = Proportions { legs: 1.2, arms: 0.9, shoulders: 1.0, head: 1.5, torso: 1.1 };
+        let mut w = GenderFeatures { values: [Some(-0.5); NUM_GENDER_FEATURES] };
+        w.values[3] = None;
+        let e = HeightEvidence::new(Some(&p), Some(&w));
+        assert!((e.values[0].unwrap() - 1.2f64.ln()).abs() < 1e-15);
+        assert!((e.values[3].unwrap() - 1.5f64.ln()).abs() < 1e-15);
+        assert_eq!(e.values[5], Some(-0.5));
+        assert_eq!(e.values[8], None, "a missing width stays missing");
+        let standard = HeightEvidence::new(None, None);
+        assert!(standard.values[..5].iter().all(|v| *v == Some(0.0)), "standard proportions: ln 1");
+        assert!(standard.values[5..].iter().all(Option::is_none));
+    }
+
     #[test]
     fn training_recovers_a_known_calibration() {
-        let truth = HeightCalibration { intercept: -0.2, slope: 1.3, male: -0.03 };
-        let samples: Vec<(f64, f64, f64)> = (0..40)
-            .map(|i| {
-                let fit = 1.5 + 0.01 * i as f64;
-                let g = (i % 2) as f64;
-                (fit, g, (truth.intercept + truth.slope * fit.ln() + truth.male * g).exp())
-            })
-            .collect();
-        let got = HeightCalibration::train(&samples).unwrap();
+        let truth = plain(-0.2, 1.3, -0.03);
+        let samples: Vec<HeightSample> =
+            (0..40).map(|i| sample(1.5 + 0.01 * i as f64, (i % 2) as f64, HeightEvidence::NONE, &truth)).collect();
+        let got = HeightCalibration::train(&samples, &[false; NUM_HEIGHT_EVIDENCE]).unwrap();
         for (a, b) in [(got.intercept, truth.intercept), (got.slope, truth.slope), (got.male, truth.male)] {
             assert!((a - b).abs() < 1e-9, "{got:?}");
         }
+        assert_eq!(got.evidence_weights, NO_WEIGHTS);
+    }
+
+    #[test]
+    fn training_recovers_evidence_weights_and_a_missing_value_adds_nothing() {
+        let mut truth = plain(-0.25, 1.4, -0.04);
+        truth.evidence_weights[1] = 0.08;
+        truth.evidence_weights[7] = -0.05;
+        let mut used = [false; NUM_HEIGHT_EVIDENCE];
+        used[1] = true;
+        used[7] = true;
+        let evidence = |i: usize| {
+            let mut e = HeightEvidence::NONE;
+            e.values[1] = Some(((i * 7) % 13) as f64 * 0.02 - 0.1);
+            e.values[7] = (!i.is_multiple_of(9)).then(|| ((i * 5) % 11) as f64 * 0.05 - 0.4);
+            e.values[2] = Some(i as f64);
+            e
+        };
+        // The training means are the present values' means: put them into the truth first.
+        let raw: Vec<HeightEvidence> = (0..60).map(evidence).collect();
+        for k in [1, 7] {
+            let v: Vec<f64> = raw.iter().filter_map(|e| e.values[k]).collect();
+            truth.evidence_means[k] = v.iter().sum::<f64>() / v.len() as f64;
+        }
+        let samples: Vec<HeightSample> =
+            raw.iter().enumerate().map(|(i, e)| sample(1.5 + 0.007 * i as f64, (i % 2) as f64, *e, &truth)).collect();
+        let got = HeightCalibration::train(&samples, &used).unwrap();
+        for k in 0..NUM_HEIGHT_EVIDENCE {
+            assert!((got.evidence_weights[k] - truth.evidence_weights[k]).abs() < 1e-9, "{k}: {got:?}");
+        }
+        assert!((got.slope - truth.slope).abs() < 1e-9 && (got.male - truth.male).abs() < 1e-9);
+        assert_eq!(got.evidence_weights[2], 0.0, "an unused value gets no weight");
+        let mut at_mean = HeightEvidence::NONE;
+        at_mean.values[1] = Some(got.evidence_means[1]);
+        at_mean.values[7] = Some(got.evidence_means[7]);
+        let missing = HeightEvidence::NONE;
+        let (a, b) = (got.calibrated(1.7, 1.0, &at_mean).unwrap(), got.calibrated(1.7, 1.0, &missing).unwrap());
+        assert!((a - b).abs() < 1e-12, "a missing value is read as the training mean");
+        let mut taller = at_mean;
+        taller.values[1] = Some(got.evidence_means[1] + 0.1);
+        let want = (0.08f64 * 0.1).exp() * a;
+        assert!((got.calibrated(1.7, 1.0, &taller).unwrap() - want).abs() < 1e-9);
     }
 
     #[test]
     fn the_change_is_bounded_and_follows_the_model_inside_the_bound() {
-        let c = HeightCalibration { intercept: -0.18, slope: 1.37, male: -0.035 };
-        let h = c.calibrated(1.7, 0.0).unwrap();
+        let c = plain(-0.18, 1.37, -0.035);
+        let none = HeightEvidence::NONE;
+        let h = c.calibrated(1.7, 0.0, &none).unwrap();
         assert!((h.ln() - (-0.18 + 1.37 * 1.7f64.ln())).abs() < 1e-12);
-        assert!(c.calibrated(1.7, 1.0).unwrap() < h, "the male offset applies");
-        assert_eq!(c.calibrated(1.7, 7.0).unwrap(), c.calibrated(1.7, 1.0).unwrap(), "gender value clamped");
+        assert!(c.calibrated(1.7, 1.0, &none).unwrap() < h, "the male offset applies");
+        assert_eq!(c.calibrated(1.7, 7.0, &none).unwrap(), c.calibrated(1.7, 1.0, &none).unwrap(), "gender clamped");
         for fit in [0.3, 1.0, 3.0, 10.0] {
-            let r = (c.calibrated(fit, 0.5).unwrap() / fit).ln();
+            let r = (c.calibrated(fit, 0.5, &none).unwrap() / fit).ln();
             assert!(r.abs() <= MAX_LOG_CHANGE + 1e-12, "{fit}: {r}");
         }
-        let stretch = HeightCalibration { intercept: 0.0, slope: 2.0, male: 0.0 };
-        assert!((stretch.calibrated(3.0, 0.0).unwrap() / 3.0 - MAX_LOG_CHANGE.exp()).abs() < 1e-12);
+        let stretch = plain(0.0, 2.0, 0.0);
+        assert!((stretch.calibrated(3.0, 0.0, &none).unwrap() / 3.0 - MAX_LOG_CHANGE.exp()).abs() < 1e-12);
+        let mut heavy = c;
+        heavy.evidence_weights[0] = 10.0;
+        let mut e = none;
+        e.values[0] = Some(5.0);
+        let r = (heavy.calibrated(1.7, 0.0, &e).unwrap() / 1.7).ln();
+        assert!((r - MAX_LOG_CHANGE).abs() < 1e-12, "the evidence is bounded too: {r}");
     }
 
     #[test]
     fn bad_inputs_are_errors() {
         let c = HeightCalibration::SHIPPED;
-        assert!(matches!(c.calibrated(0.0, 0.0), Err(Error::OutOfRange { .. })));
-        assert!(matches!(c.calibrated(f64::NAN, 0.0), Err(Error::NonFinite { .. })));
-        assert!(matches!(c.calibrated(1.7, f64::INFINITY), Err(Error::NonFinite { .. })));
-        assert!(matches!(HeightCalibration::train(&[(1.7, 0.0, 1.7)]), Err(Error::OutOfRange { .. })));
-        let one_gender = [(1.6, 0.0, 1.6), (1.7, 0.0, 1.72), (1.8, 0.0, 1.79)];
-        assert!(matches!(HeightCalibration::train(&one_gender), Err(Error::Degenerate(_))));
-        let bad = [(1.6, 0.0, 1.6), (-1.7, 1.0, 1.72), (1.8, 0.0, 1.79)];
-        assert!(matches!(HeightCalibration::train(&bad), Err(Error::OutOfRange { .. })));
+        let none = HeightEvidence::NONE;
+        assert!(matches!(c.calibrated(0.0, 0.0, &none), Err(Error::OutOfRange { .. })));
+        assert!(matches!(c.calibrated(f64::NAN, 0.0, &none), Err(Error::NonFinite { .. })));
+        assert!(matches!(c.calibrated(1.7, f64::INFINITY, &none), Err(Error::NonFinite { .. })));
+        let mut nan = none;
+        nan.values[4] = Some(f64::NAN);
+        assert!(matches!(c.calibrated(1.7, 0.0, &nan), Err(Error::NonFinite { .. })));
+        let s = |fit: f64, g: f64, truth: f64| HeightSample {
+            fit_height: fit,
+            gender_value: g,
+            evidence: none,
+            true_height: truth,
+        };
+        let unused = [false; NUM_HEIGHT_EVIDENCE];
+        assert!(matches!(HeightCalibration::train(&[s(1.7, 0.0, 1.7)], &unused), Err(Error::OutOfRange { .. })));
+        let one_gender = [s(1.6, 0.0, 1.6), s(1.7, 0.0, 1.72), s(1.8, 0.0, 1.79), s(1.75, 0.0, 1.7)];
+        assert!(matches!(HeightCalibration::train(&one_gender, &unused), Err(Error::Degenerate(_))));
+        let bad = [s(1.6, 0.0, 1.6), s(-1.7, 1.0, 1.72), s(1.8, 0.0, 1.79), s(1.75, 1.0, 1.7)];
+        assert!(matches!(HeightCalibration::train(&bad, &unused), Err(Error::OutOfRange { .. })));
+        let mut used = unused;
+        used[0] = true;
+        let both = [s(1.6, 0.0, 1.6), s(1.7, 1.0, 1.72), s(1.8, 0.0, 1.79), s(1.75, 1.0, 1.7), s(1.65, 0.0, 1.7)];
+        assert!(
+            matches!(HeightCalibration::train(&both, &used), Err(Error::Degenerate(_))),
+            "an evidence value missing everywhere determines nothing"
+        );
     }
 }

@@ -11,7 +11,9 @@ use crate::body::skin::skin;
 use crate::body::{BodyModel, Gender, RestShape, ShapeChoice};
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
-use crate::fit::{fit_shape, FitCalibration, FitOptions, FitProblem, FitResult, PRIOR_RANGE_SD};
+use crate::fit::{
+    fit_shape, FitCalibration, FitOptions, FitProblem, FitResult, GenderFeatures, HeightEvidence, PRIOR_RANGE_SD,
+};
 use crate::image::GrayImage;
 use crate::pose::PoseEstimate;
 use crate::skeleton::{Joints2, Joints3};
@@ -119,6 +121,10 @@ pub struct BodyChoice {
     /// [`crate::fit::HeightCalibration`]'s height (the both-sexes space: the height only);
     /// `None` (the default) keeps the fit's weights and height. Never applied to the mean shape.
     pub calibration: Option<FitCalibration>,
+    /// The drawing's measured widths ([`crate::fit::gender_features`]), read by the height
+    /// calibration with the fitted bone factors ([`crate::fit::HeightEvidence`]); `None` (the
+    /// default) = not measured.
+    pub widths: Option<GenderFeatures>,
 }
 
 /// What [`fit_body`] produces. Owns its data.
@@ -242,7 +248,10 @@ pub fn fit_body(
     let fit_height = crate::body::rig::y_extent(&rest.vertices);
     let height = match (options.height, calibration) {
         (Some(h), _) => Some(h),
-        (None, Some(c)) => Some(c.height.calibrated(fit_height, gender_value)?),
+        (None, Some(c)) => {
+            let evidence = HeightEvidence::new(proportions.as_ref(), choice.widths.as_ref());
+            Some(c.height.calibrated(fit_height, gender_value, &evidence)?)
+        }
         (None, None) => None,
     };
     if let Some(h) = height {

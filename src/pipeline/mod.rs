@@ -326,6 +326,7 @@ pub fn run_pipeline(
         mean_shape: options.mean_shape,
         keep_pose_scale: options.keep_pose_scale,
         calibration,
+        widths: Some(evidence.features),
     };
     let (body, classified) = if classify {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
