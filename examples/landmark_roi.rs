@@ -130,6 +130,7 @@ fn run_variant(v: &str, net: &LandmarkNet, image: &ImageView<'_>) -> Option<RoiL
                 retry_below: if v == "noretry" || v == "before" { 0.0 } else { DEFAULT_RETRY_BELOW },
                 lighten_drawings: !(v == "nolight" || v == "before"),
                 fill_drawings: !(v == "before" || v == "nofill"),
+                ..Default::default()
             };
             detect_blazepose(net, image, &o).ok().map(|d| d.pass)
         }

@@ -96,3 +96,29 @@ fn an_unsure_pass_tries_the_retry_rois_and_a_clean_sketch_does_not() {
     let bad = BlazePoseOptions { retry_below: 1.5, ..opts };
     assert!(matches!(detect_blazepose(&net, &page, &bad), Err(Error::OutOfRange { name: "retry_below", .. })));
 }
+
+/// The joints mapped from the landmarks move to the body model's definitions by default: the
+/// same pass with [`JointDefinitions::IDENTITY`] gives the landmarks' own joints, which the
+/// shipped shifts move exactly (head up the torso, shoulders outward); out-of-range shifts are
+/// refused.
+#[test]
+fn blazepose_joints_move_to_the_body_models_definitions() {
+    use sketchbody::detect::landmark::JointDefinitions;
+    use sketchbody::skeleton::joint;
+    let root = common::repo_root();
+    let sketch = load_image(&root.join("assets/examples/sketch.png")).unwrap();
+    let net = LandmarkNet::embedded().unwrap();
+    let shipped = detect_blazepose(&net, &sketch.view(), &BlazePoseOptions::default()).unwrap();
+    let raw_opts = BlazePoseOptions { definitions: JointDefinitions::IDENTITY, ..BlazePoseOptions::default() };
+    let raw = detect_blazepose(&net, &sketch.view(), &raw_opts).unwrap();
+    assert_eq!(shipped.joints, JointDefinitions::SHIPPED.apply(&raw.joints));
+    assert_eq!(shipped.pass, raw.pass, "the landmarks themselves are the same");
+    let d = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    let h = joint::HEAD;
+    assert!(shipped.joints.xy[h][1] < raw.joints.xy[h][1], "the head moves up the (upright) figure");
+    let width = |j: &sketchbody::skeleton::Joints2| d(j.xy[joint::R_SHOULDER], j.xy[joint::L_SHOULDER]);
+    assert!(width(&shipped.joints) > width(&raw.joints), "the shoulders move outward");
+    let bad = JointDefinitions { outward: [2.0; 15], ..JointDefinitions::IDENTITY };
+    let bad_opts = BlazePoseOptions { definitions: bad, ..BlazePoseOptions::default() };
+    assert!(matches!(detect_blazepose(&net, &sketch.view(), &bad_opts), Err(Error::OutOfRange { .. })));
+}

@@ -10,6 +10,7 @@ mod body;
 mod build_model;
 mod calibrate_detector;
 mod calibrate_fit;
+mod fit_landmark_joints;
 mod convert_detector;
 mod detect;
 mod edges;
@@ -94,6 +95,10 @@ enum Command {
     /// Fit the fitted body's calibration (shape map, then height; or evaluate the shipped one)
     /// from run-dataset results: RMS error of ln height and rest AED before and after.
     CalibrateFit(calibrate_fit::Args),
+    /// Fit the shifts from BlazePose's landmarks to the body model's joints on rendered
+    /// sketches (or evaluate the shipped ones): the joints' distance to the true ones before
+    /// and after.
+    FitLandmarkJoints(fit_landmark_joints::Args),
     /// Render a dataset of N synthetic sketches in parallel (resumable; see docs/dataset.md).
     MakeDataset(make_dataset::Args),
     /// A photo as an ink drawing, pencil sketch or flat-colour design (real-drawing proxy set).
@@ -144,6 +149,7 @@ fn main() -> ExitCode {
         Command::RunDataset(a) => run_dataset::run(a),
         Command::TrainGender(a) => train_gender::run(a),
         Command::CalibrateFit(a) => calibrate_fit::run(a),
+        Command::FitLandmarkJoints(a) => fit_landmark_joints::run(a),
         Command::Body(a) => body::run(a),
         Command::Edges(a) => edges::run(a),
         Command::LearnPoses(a) => learn_poses::run(a),

@@ -217,3 +217,33 @@ fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("mean-shape results"), "{o:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `fit-landmark-joints` fits the shifts from BlazePose's mapped landmarks to the model's joints
+/// on rendered sketches: symmetric pairs, the head moved up the torso (the ears' midpoint sits
+/// below the model's head joint), and a report line per set; `--shipped` needs a test set.
+#[test]
+fn fit_landmark_joints_fits_symmetric_shifts_and_reports_each_set() {
+    let dir = scratch("landmarks");
+    let ds = dir.join("ds");
+    ok(&skb(&["make-dataset", "12", "--seed", "8", "--size", "384", "--out", s(&ds)]));
+    let o = skb(&["fit-landmark-joints", "--train", s(&ds), "--test", s(&ds)]);
+    ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    let line = out.lines().find(|l| l.starts_with("JointDefinitions { along_torso: [")).expect(&out);
+    let numbers = |key: &str| -> Vec<f64> {
+        let rest = line.split(key).nth(1).expect(line);
+        rest[..rest.find(']').unwrap()].split(',').map(|t| t.trim().parse().unwrap()).collect()
+    };
+    let (along, outward) = (numbers("along_torso: ["), numbers("outward: ["));
+    assert_eq!((along.len(), outward.len()), (15, 15), "{line}");
+    for (r, l) in [(2, 5), (3, 6), (4, 7), (9, 12), (10, 13), (11, 14)] {
+        assert_eq!((along[r], outward[r]), (along[l], outward[l]), "pair {r}/{l}: {line}");
+    }
+    assert_eq!((outward[0], outward[1], outward[8]), (0.0, 0.0, 0.0), "head, neck, pelvis have no side");
+    assert!(along[0] > 0.03, "the head moves up the torso: {line}");
+    assert!(out.lines().any(|l| l.starts_with("training: ") && l.contains("mapped ->")), "{out}");
+    assert_eq!(out.lines().filter(|l| l.starts_with("test ")).count(), 1, "{out}");
+    let o = skb(&["fit-landmark-joints", "--shipped"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--shipped needs"), "{o:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

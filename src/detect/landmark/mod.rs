@@ -12,11 +12,13 @@
 //! ([`prep::fill_enclosed`]).
 
 pub mod crop;
+pub mod definitions;
 pub mod joints;
 pub mod model;
 pub mod prep;
 pub mod roi;
 
+pub use definitions::JointDefinitions;
 pub use model::LandmarkNet;
 pub use roi::Roi;
 
@@ -113,6 +115,10 @@ pub struct BlazePoseOptions {
     /// crops' enclosed regions filled ([`prep::fill_enclosed`]); its pass is kept when its pose
     /// flag is higher and at least [`FILL_ACCEPT`]. Default true.
     pub fill_drawings: bool,
+    /// Shifts from the mapped landmarks to the body model's joints. Default
+    /// [`JointDefinitions::SHIPPED`]; [`JointDefinitions::IDENTITY`] keeps the landmarks'
+    /// positions (MediaPipe's definitions).
+    pub definitions: JointDefinitions,
 }
 
 /// The filled pass ([`BlazePoseOptions::fill_drawings`]) replaces the others with a pose flag of
@@ -140,6 +146,7 @@ impl Default for BlazePoseOptions {
             retry_below: DEFAULT_RETRY_BELOW,
             lighten_drawings: true,
             fill_drawings: true,
+            definitions: JointDefinitions::SHIPPED,
         }
     }
 }
@@ -149,7 +156,7 @@ impl Default for BlazePoseOptions {
 pub struct BlazePoseDetection {
     /// The last pass's pose flag in [0, 1].
     pub score: f64,
-    /// The canonical 15 joints (all marked visible), px.
+    /// The canonical 15 joints (all marked visible), px, on [`BlazePoseOptions::definitions`].
     pub joints: Joints2,
     /// Per canonical joint confidence (visibility × presence), in (0, 1).
     pub confidence: [f64; NUM_JOINTS],
@@ -202,7 +209,8 @@ fn passes_from(
 /// Finds the figure in `image`: first pass on the ink box's ROI, then (with `passes` = 2) a pass
 /// on the ROI from its own landmarks; when that pose flag is under `retry_below`, the same from
 /// each of [`roi::retry_rois`], keeping the highest pose flag if it reaches [`RETRY_ACCEPT`];
-/// still under it, the ink box's ROI with the enclosed regions filled (`fill_drawings`). Errors: `ImageTooSmall` (either
+/// still under it, the ink box's ROI with the enclosed regions filled (`fill_drawings`); the joints
+/// mapped from the landmarks are moved by `definitions`. Errors: `ImageTooSmall` (either
 /// side under `detect::MIN_DETECT_SIDE`), `OutOfRange` for bad options, `NoFigure` for a page
 /// without ink or a pose flag under `min_pose_flag`, and the network's errors.
 pub fn detect_blazepose(
@@ -218,6 +226,7 @@ pub fn detect_blazepose(
     if !(1..=2).contains(&opts.passes) {
         return Err(Error::OutOfRange { name: "passes", detail: format!("{} not in 1..=2", opts.passes) });
     }
+    opts.definitions.validate()?;
     for (name, v) in [("min_pose_flag", opts.min_pose_flag), ("retry_below", opts.retry_below)] {
         if !(0.0..=1.0).contains(&v) {
             return Err(Error::OutOfRange { name, detail: format!("{v} not in [0, 1]") });
@@ -251,6 +260,7 @@ pub fn detect_blazepose(
     }
     let xy: Vec<[f64; 2]> = pass.landmarks.iter().map(|l| [l.x, l.y]).collect();
     let conf: Vec<f64> = pass.landmarks.iter().map(|l| l.visibility * l.presence).collect();
-    let (joints, confidence) = joints::to_canonical(&xy[..NUM_POSE_LANDMARKS], &conf[..NUM_POSE_LANDMARKS]);
+    let (mapped, confidence) = joints::to_canonical(&xy[..NUM_POSE_LANDMARKS], &conf[..NUM_POSE_LANDMARKS]);
+    let joints = opts.definitions.apply(&mapped);
     Ok(BlazePoseDetection { score: pass.pose_flag, joints, confidence, pass, rois_tried, filled })
 }
