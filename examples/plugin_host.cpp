@@ -108,11 +108,12 @@ int main(int argc, char **argv) {
         expect(jf, "3-D joints are finite");
         // The posed mesh's pelvis sits on the estimated pelvis (the IK root).
         expect(std::fabs(pj[3 * 8] - ej[3 * 8]) < 1e-6 && std::fabs(pj[3 * 8 + 1] - ej[3 * 8 + 1]) < 1e-6, "pelvis on the estimate");
-        // The camera projects the estimated head near the given head joint.
+        // The result's camera is the posed body's: it projects the posed head near the given
+        // head joint (the estimated joints are at the pose step's 1.75 m scale).
         const skb_camera cam = r.camera();
-        const double hx = cam.sx * (cam.r[0] * ej[0] + cam.r[1] * ej[1] + cam.r[2] * ej[2]) + cam.t[0];
-        const double hy = -cam.sy * (cam.r[3] * ej[0] + cam.r[4] * ej[1] + cam.r[5] * ej[2]) + cam.t[1];
-        expect(std::hypot(hx - joints.xy[0][0], hy - joints.xy[0][1]) < 25.0, "camera reprojects the head");
+        const double hx = cam.sx * (cam.r[0] * pj[0] + cam.r[1] * pj[1] + cam.r[2] * pj[2]) + cam.t[0];
+        const double hy = -cam.sy * (cam.r[3] * pj[0] + cam.r[4] * pj[1] + cam.r[5] * pj[2]) + cam.t[1];
+        expect(std::hypot(hx - joints.xy[0][0], hy - joints.xy[0][1]) < 25.0, "camera reprojects the posed head");
 
         const sketchbody::SkinWeights skin = r.skin_weights();
         bool weights_ok = true;

@@ -1699,7 +1699,10 @@ skb_status skb_result_copy_joints3d(const struct skb_result *result,
                                     size_t dst_len);
 
 /**
- * The estimated weak-perspective camera (model metres → sketch pixels) into `*out`.
+ * The result's weak-perspective camera (model metres → sketch pixels) into `*out`: the posed
+ * body's, fitted to its skeleton, so it projects `SKB_JOINTS_POSED` and the posed vertices onto
+ * the sketch (`SKB_JOINTS_ESTIMATED` are at the pose step's 1.75 m scale and land on the drawn
+ * joints only for a body of that height).
  */
 skb_status skb_result_camera(const struct skb_result *result, struct skb_camera *out);
 

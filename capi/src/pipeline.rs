@@ -399,7 +399,10 @@ pub unsafe extern "C" fn skb_result_copy_joints3d(
     }
 }
 
-/// The estimated weak-perspective camera (model metres → sketch pixels) into `*out`.
+/// The result's weak-perspective camera (model metres → sketch pixels) into `*out`: the posed
+/// body's, fitted to its skeleton, so it projects `SKB_JOINTS_POSED` and the posed vertices onto
+/// the sketch (`SKB_JOINTS_ESTIMATED` are at the pose step's 1.75 m scale and land on the drawn
+/// joints only for a body of that height).
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_camera(result: *const skb_result, out: *mut skb_camera) -> skb_status {
     // SAFETY: the header contract of `skb_result_camera` (lib.rs § Safety): `result`, `out` are NULL or valid for

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "70137987bbc4cc434dfd8ab542b0fffeab321f5ac71695c5f47df610b2d35c27"
+HEADER_SHA256 = "c673935b411addd6f97c9b8a52a9c64c223561986a46920f38ee5ebc8724080f"
 
 # ---- constants (#define) ----
 
@@ -2837,7 +2837,10 @@ FUNCTIONS["skb_result_copy_joints3d"] = (
     ),
 )
 
-# The estimated weak-perspective camera (model metres → sketch pixels) into `*out`.
+# The result's weak-perspective camera (model metres → sketch pixels) into `*out`: the posed
+# body's, fitted to its skeleton, so it projects `SKB_JOINTS_POSED` and the posed vertices onto
+# the sketch (`SKB_JOINTS_ESTIMATED` are at the pose step's 1.75 m scale and land on the drawn
+# joints only for a body of that height).
 FUNCTIONS["skb_result_camera"] = (
     ctypes.c_uint32,
     [
