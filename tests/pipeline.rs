@@ -80,7 +80,8 @@ fn fits_gender_as_a_continuous_weight_and_is_deterministic() {
 fn default_automatic_gender_chooses_between_both_gendered_fits() {
     let (model, dict, sketch, j) = inputs();
     let mut fractions = Vec::new();
-    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &fast(None), &mut |f| {
+    let one = PipelineOptions { gender_decision_seeds: 1, ..fast(None) };
+    let r = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &one, &mut |f| {
         fractions.push(f);
         true
     })
@@ -111,7 +112,7 @@ fn default_automatic_gender_chooses_between_both_gendered_fits() {
     let same = PipelineOptions {
         gender_decision_dims: Some(4),
         fit: FitOptions { dims: Some(4), initial_factor: 1, ..fast(None).fit },
-        ..fast(None)
+        ..one.clone()
     };
     let r4 = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &same, &mut |_| true).unwrap();
     assert_eq!(r4.fits.len(), 2);
@@ -125,6 +126,30 @@ fn default_automatic_gender_chooses_between_both_gendered_fits() {
     assert_eq!(rs.fits.len(), 3);
     assert_eq!((rs.gender, rs.fits[0].score, rs.fits[1].score), (r.gender, r.fits[0].score, r.fits[1].score));
     assert!(std::ptr::eq(rs.chosen_fit().unwrap(), &rs.fits[2]));
+
+    // Two deciding seeds: the first pair is the one-seed decision's, the second pair runs with
+    // the next fit seed, and the mean of the two margins decides.
+    let two = PipelineOptions { gender_decision_seeds: 2, ..one.clone() };
+    let r2 = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &two, &mut |_| true).unwrap();
+    assert_eq!(r2.fits.iter().map(dims).collect::<Vec<_>>(), [4, 4, 4, 4, 10]);
+    assert_eq!((r2.fits[0].score, r2.fits[1].score), (r.fits[0].score, r.fits[1].score));
+    assert_ne!(r2.fits[2].score, r2.fits[0].score, "the second pair has its own seed");
+    let margin2 = 0.5 * ((r2.fits[1].score - r2.fits[0].score) + (r2.fits[3].score - r2.fits[2].score));
+    let male2 = sketchbody::fit::MarginCombination::SHIPPED
+        .male_probability(sketchbody::fit::GenderClassifier::SHIPPED.log_odds(&r2.gender_evidence.features), margin2);
+    assert_eq!(r2.gender, if male2 > 0.5 { Gender::Male } else { Gender::Female });
+    assert!((r2.gender_confidence - male2.max(1.0 - male2)).abs() < 1e-12);
+    assert!(std::ptr::eq(r2.chosen_fit().unwrap(), &r2.fits[4]));
+    // Without a refit the body is the last seed's fit of the chosen gender.
+    let same2 = PipelineOptions { gender_decision_seeds: 2, ..same.clone() };
+    let r42 = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &same2, &mut |_| true).unwrap();
+    assert_eq!(r42.fits.len(), 4);
+    let chosen = r42.chosen_fit().unwrap();
+    assert!(std::ptr::eq(chosen, &r42.fits[2 + r42.gender.index()]));
+    assert_eq!(r42.weights, chosen.fit.as_ref().unwrap().weights);
+    let none = PipelineOptions { gender_decision_seeds: 0, ..one };
+    let e = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &none, &mut |_| true).unwrap_err();
+    assert!(matches!(e, Error::OutOfRange { name: "gender decision seeds", .. }), "{e:?}");
 }
 
 #[test]

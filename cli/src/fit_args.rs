@@ -117,6 +117,10 @@ pub struct FitArgs {
     /// --dims when those differ.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub gender_decision_dims: Option<u32>,
+    /// Pairs of deciding fits (fit seeds --seed, --seed + 1, …) whose score margins are
+    /// averaged with --classify-gender.
+    #[arg(long, default_value_t = PipelineOptions::default().gender_decision_seeds as u32, value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub gender_decision_seeds: u32,
     /// When the height is unknown (no --height) and the joints are given, calibrate the fitted
     /// body: map a gendered fit's shape weights, then scale it to the calibrated height (the fit
     /// alone draws the body toward the prior's mean; `--calibrate-fit false` keeps the fit's

@@ -323,6 +323,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         gender_evidence: a.fit.gender_evidence,
         classify_gender: a.fit.classify_gender,
         gender_decision_dims: a.fit.gender_decision_dims.map(|d| d as usize),
+        gender_decision_seeds: a.fit.gender_decision_seeds as usize,
         calibrate_fit: a.fit.calibrate_fit,
         ..PipelineOptions::default()
     };

@@ -95,6 +95,13 @@ pub struct PipelineOptions {
     /// but tell the genders apart less well (docs/benchmarks.md, "How the fit's defaults were
     /// chosen").
     pub gender_decision_dims: Option<usize>,
+    /// Pairs of deciding fits under [`PipelineOptions::classify_gender`], with fit seeds
+    /// `fit.seed`, `fit.seed + 1`, …: their score margins are averaged (a best score is a noisy
+    /// maximum over the samples, and the margin of one pair flips the gender of a few sketches
+    /// between seeds). Default 2: on two tuning sets at two fit seeds each, gender right 59 /
+    /// 59 / 95 / 97 against 59 / 56 / 94 / 95 with one pair, for about 1.4 times the fitting
+    /// work (docs/benchmarks.md, "Two deciding seeds"). In 1..=16.
+    pub gender_decision_seeds: usize,
     /// When the character's height is unknown (`fit.height` is `None`) and the 2-D joints are
     /// given, calibrate the fitted body with [`FitCalibration::SHIPPED`]: map a gendered fit's
     /// shape weights, then scale the rest body to the calibrated height. The fit alone draws
@@ -119,6 +126,7 @@ impl Default for PipelineOptions {
             gender_evidence: true,
             classify_gender: true,
             gender_decision_dims: None,
+            gender_decision_seeds: 2,
             calibrate_fit: true,
         }
     }
@@ -159,7 +167,8 @@ pub struct PipelineResult {
     /// the chosen body's own skeleton.
     pub pose: PoseEstimate,
     /// The fits: one (the given gender's space, or the blended one), or with
-    /// [`PipelineOptions::classify_gender`] both gendered ones (female first), followed by the
+    /// [`PipelineOptions::classify_gender`] both gendered ones (female first) per deciding seed
+    /// ([`PipelineOptions::gender_decision_seeds`]), followed by the
     /// chosen gender's refit when [`PipelineOptions::gender_decision_dims`] differs from the
     /// fit's dimensions or the fit's [`FitOptions::initial_factor`] is not 1 (the deciding fits
     /// use a flat population). The result's fit is [`PipelineResult::chosen_fit`].
@@ -332,8 +341,8 @@ pub fn run_pipeline(
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
         let sketch = SketchInputs { pose: &pose, edges: &edges, joints2d: &joints2d };
         let log_odds = classifier.log_odds(&evidence.features);
-        let (body, male) =
-            classify_and_fit(model, &sketch, &fit, &choice, options.gender_decision_dims, log_odds, &mut cb)?;
+        let decision = Decision { dims: options.gender_decision_dims, seeds: options.gender_decision_seeds };
+        let (body, male) = classify_and_fit(model, &sketch, &fit, &choice, decision, log_odds, &mut cb)?;
         (body, Some(male.max(1.0 - male)))
     } else {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
@@ -382,50 +391,72 @@ struct SketchInputs<'a> {
     joints2d: &'a Joints2,
 }
 
+/// How [`classify_and_fit`] decides: the deciding fits' dimensions
+/// ([`PipelineOptions::gender_decision_dims`]) and seeds ([`PipelineOptions::gender_decision_seeds`]).
+#[derive(Clone, Copy)]
+struct Decision {
+    dims: Option<usize>,
+    seeds: usize,
+}
+
 /// [`PipelineOptions::classify_gender`]: both gendered fits in the decision's dimensions
-/// (`decision_dims`, `None` = each space's default; a flat population,
-/// [`FitOptions::initial_factor`] 1, as the combination was trained with), the
-/// [`MarginCombination::SHIPPED`] of the classifier's `log_odds` and their score margin
-/// choosing, then the chosen gender refitted with `fit` when that searches other dimensions or
-/// another population schedule. Returns the chosen body (its `fits`: the two deciding fits,
-/// female first, then the refit if any; `fit_seconds` their sum) and
-/// P(male). `progress` sees 0..=1 over all the fits.
+/// (`decision.dims`, `None` = each space's default; a flat population,
+/// [`FitOptions::initial_factor`] 1, as the combination was trained with) for each of
+/// `decision.seeds` fit seeds, the [`MarginCombination::SHIPPED`] of the classifier's `log_odds`
+/// and their mean score margin choosing, then the chosen gender refitted with `fit` when that
+/// searches other dimensions or another population schedule (else the last seed's fit is the
+/// body). Returns the chosen body (its `fits`: the deciding fits, female then male per seed,
+/// then the refit if any; `fit_seconds` their sum) and P(male). `progress` sees 0..=1 over all
+/// the fits. Errors: `decision.seeds` outside 1..=16 ([`Error::OutOfRange`]) and the fits'.
 fn classify_and_fit(
     model: &BodyModel,
     sketch: &SketchInputs,
     fit: &FitOptions,
     choice: &BodyChoice,
-    decision_dims: Option<usize>,
+    decision: Decision,
     log_odds: f64,
     progress: &mut dyn FnMut(f32) -> bool,
 ) -> Result<(FittedBody, f64)> {
+    if !(1..=16).contains(&decision.seeds) {
+        return Err(Error::OutOfRange {
+            name: "gender decision seeds",
+            detail: format!("{} not in 1..=16", decision.seeds),
+        });
+    }
     let space = |g: Gender| model.shape_space(ShapeChoice::Gendered(g));
-    let decision_dims = |g: Gender| -> Result<usize> { Ok(decision_dims.unwrap_or(space(g)?.default_dim())) };
+    let decision_dims = |g: Gender| -> Result<usize> { Ok(decision.dims.unwrap_or(space(g)?.default_dim())) };
     let refit = |g: Gender| -> Result<bool> {
         Ok(fit.initial_factor != 1 || decision_dims(g)? != fit.dims.unwrap_or(space(g)?.gmm().dims()))
     };
-    let steps = if refit(Gender::Female)? || refit(Gender::Male)? { 3.0 } else { 2.0 };
+    let deciding_fits = 2 * decision.seeds;
+    let steps = deciding_fits as f32 + if refit(Gender::Female)? || refit(Gender::Male)? { 1.0 } else { 0.0 };
     let mut fit_one = |g: Gender, o: &FitOptions, step: f32| {
         let c = BodyChoice { gender: Some(g), ..*choice };
         let mut cb = |f: f32| progress((step + f) / steps);
         fit_body(model, &sketch.pose.joints, &sketch.pose.camera, sketch.edges, Some(sketch.joints2d), o, &c, &mut cb)
     };
-    let mut bodies = Vec::with_capacity(2);
-    for (i, g) in Gender::ALL.into_iter().enumerate() {
-        let deciding = FitOptions { dims: Some(decision_dims(g)?), initial_factor: 1, ..fit.clone() };
-        bodies.push(fit_one(g, &deciding, i as f32)?);
+    let mut bodies = Vec::with_capacity(deciding_fits);
+    for k in 0..decision.seeds {
+        for (i, g) in Gender::ALL.into_iter().enumerate() {
+            let seed = fit.seed.wrapping_add(k as u64);
+            let deciding = FitOptions { dims: Some(decision_dims(g)?), initial_factor: 1, seed, ..fit.clone() };
+            bodies.push(fit_one(g, &deciding, (2 * k + i) as f32)?);
+        }
     }
-    let male = MarginCombination::SHIPPED.male_probability(log_odds, bodies[1].score - bodies[0].score);
+    let margin = bodies.chunks(2).map(|pair| pair[1].score - pair[0].score).sum::<f64>() / decision.seeds as f64;
+    let male = MarginCombination::SHIPPED.male_probability(log_odds, margin);
     let mut seconds: f64 = bodies.iter().map(|b| b.fit_seconds).sum();
     let mut fits: Vec<GenderFit> = bodies.iter().flat_map(|b| b.fits.iter().cloned()).collect();
     let chosen = Gender::ALL[usize::from(male > 0.5)];
+    // Without a refit the body is the last seed's fit (the last of its space in `fits`).
+    let mut last_pair = bodies.split_off(deciding_fits - 2);
     let mut body = if refit(chosen)? {
-        let body = fit_one(chosen, fit, 2.0)?;
+        let body = fit_one(chosen, fit, deciding_fits as f32)?;
         fits.extend(body.fits.iter().cloned());
         seconds += body.fit_seconds;
         body
     } else {
-        bodies.swap_remove(chosen.index())
+        last_pair.swap_remove(chosen.index())
     };
     body.fits = fits;
     body.fit_seconds = seconds;
