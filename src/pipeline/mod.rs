@@ -98,9 +98,10 @@ pub struct PipelineOptions {
     /// Pairs of deciding fits under [`PipelineOptions::classify_gender`], with fit seeds
     /// `fit.seed`, `fit.seed + 1`, …: their score margins are averaged (a best score is a noisy
     /// maximum over the samples, and the margin of one pair flips the gender of a few sketches
-    /// between seeds). Default 2: on two tuning sets at two fit seeds each, gender right 59 /
-    /// 59 / 95 / 97 against 59 / 56 / 94 / 95 with one pair, for about 1.4 times the fitting
-    /// work (docs/benchmarks.md, "Two deciding seeds"). In 1..=16.
+    /// between seeds). Default 1: two pairs got the gender right more often on two tuning sets
+    /// at two fit seeds each (59 / 59 / 95 / 97 against 59 / 56 / 94 / 95) but not on the
+    /// held-out sketches (53 / 53 of 60 against 55 / 53), for 1.35 times `run`'s time
+    /// (docs/benchmarks.md, "Two deciding seeds"). In 1..=16.
     pub gender_decision_seeds: usize,
     /// When the character's height is unknown (`fit.height` is `None`) and the 2-D joints are
     /// given, calibrate the fitted body with [`FitCalibration::SHIPPED`]: map a gendered fit's
@@ -126,7 +127,7 @@ impl Default for PipelineOptions {
             gender_evidence: true,
             classify_gender: true,
             gender_decision_dims: None,
-            gender_decision_seeds: 2,
+            gender_decision_seeds: 1,
             calibrate_fit: true,
         }
     }
