@@ -36,7 +36,7 @@ pub const MAX_LOG_CHANGE: f64 = 0.15;
 pub const NUM_HEIGHT_EVIDENCE: usize = 5 + NUM_GENDER_FEATURES;
 
 /// Names of the [`HeightEvidence`] values, in order: the natural logs of the fitted
-/// [`Proportions`] factors, then [`crate::fit::GENDER_FEATURE_NAMES`].
+/// [`Proportions`] factors, then [`GENDER_FEATURE_NAMES`].
 pub const HEIGHT_EVIDENCE_NAMES: [&str; NUM_HEIGHT_EVIDENCE] = {
     let factors = ["log_legs_factor", "log_arms_factor", "log_shoulders_factor", "log_head_factor", "log_torso_factor"];
     let mut names = [""; NUM_HEIGHT_EVIDENCE];
