@@ -43,6 +43,13 @@ pub struct Args {
     /// given-joints classifier's. No effect when training a classifier (--train).
     #[arg(long)]
     detected: bool,
+    /// Refit the combination's intercept (the shipped one's, or with --fits the trained one's)
+    /// to held-out sketches ([`MarginCombination::recalibrated`]): DATASET=RESULTS with RESULTS a
+    /// run-dataset of `--gender auto` with given joints and one deciding seed (the classifier's
+    /// features and the two deciding fits' scores of each results file). Repeatable; prints the
+    /// recalibrated constant and each set before and after.
+    #[arg(long, value_parser = parse_pair)]
+    recalibrate: Vec<(PathBuf, PathBuf)>,
     /// Use only the first N samples of each set.
     #[arg(long)]
     first: Option<usize>,
@@ -101,6 +108,67 @@ fn load_fits(
         out.push((classifier.log_odds(&features), margin, male));
     }
     Ok(out)
+}
+
+/// `(classifier log-odds, score margin male − female, is_male)` of every sample of an automatic
+/// gender run (`scores` holds the deciding fits' scores, `gender_features` the evidence).
+fn load_auto(
+    d: &Path,
+    r: &Path,
+    first: Option<usize>,
+    classifier: &GenderClassifier,
+) -> Result<Vec<(f64, f64, bool)>, CliError> {
+    let samples = load(d, r, first)?;
+    let stems = dataset_samples(d)?;
+    let done = stems.iter().take(first.unwrap_or(usize::MAX)).filter(|s| r.join(format!("{s}.json")).is_file());
+    let mut out = Vec::new();
+    for (stem, (features, male)) in done.zip(samples) {
+        let path = r.join(format!("{stem}.json"));
+        let v = read_json(&path)?;
+        let score = |key: &str| v["scores"][key].as_f64();
+        let (Some(f), Some(m)) = (score("female"), score("male")) else {
+            return Err(CliError(format!(
+                "{}: no score of both gendered fits (a run-dataset of --gender auto with given joints writes them)",
+                path.display()
+            )));
+        };
+        out.push((classifier.log_odds(&features), m - f, male));
+    }
+    Ok(out)
+}
+
+/// `--recalibrate`: `combination` with its intercept refitted to the automatic-gender runs,
+/// printed as the constant to ship, with each set before and after.
+fn recalibrate(
+    a: &Args,
+    classifier: &GenderClassifier,
+    combination: MarginCombination,
+) -> Result<MarginCombination, CliError> {
+    let mut sets = Vec::new();
+    for (d, r) in &a.recalibrate {
+        sets.push((d, r, load_auto(d, r, a.first, classifier)?));
+    }
+    let all: Vec<(f64, f64, bool)> = sets.iter().flat_map(|s| s.2.iter().copied()).collect();
+    let c = combination.recalibrated(&all)?;
+    println!(
+        "recalibrated on {} sketches: intercept {:.6} -> {:.6} (decides male above P(male) {:.3} of the combination before)",
+        all.len(),
+        combination.intercept,
+        c.intercept,
+        1.0 / (1.0 + (c.intercept - combination.intercept).exp())
+    );
+    println!(
+        "MarginCombination {{\n    means: [{:.6}, {:.6}],\n    scales: [{:.6}, {:.6}],\n    coefficients: [{:.6}, {:.6}],\n    intercept: {:.6},\n}}",
+        c.means[0], c.means[1], c.scales[0], c.scales[1], c.coefficients[0], c.coefficients[1], c.intercept
+    );
+    for (d, r, samples) in &sets {
+        let probs = |k: &MarginCombination| -> Vec<(f64, bool)> {
+            samples.iter().map(|&(z, m, male)| (k.male_probability(z, m), male)).collect()
+        };
+        println!("{} ({}) before:\n{}", d.display(), r.display(), report_probs(&probs(&combination)));
+        println!("{} ({}) recalibrated:\n{}", d.display(), r.display(), report_probs(&probs(&c)));
+    }
+    Ok(c)
 }
 
 /// `(features, is_male)` of every sample of `dataset` that has a results file.
@@ -179,7 +247,7 @@ fn report_probs(samples: &[(f64, bool)]) -> String {
 
 /// Runs the command.
 pub fn run(a: Args) -> Result<(), CliError> {
-    if !a.fits.is_empty() || !a.test_fits.is_empty() {
+    if !a.fits.is_empty() || !a.test_fits.is_empty() || !a.recalibrate.is_empty() {
         return run_fits(&a);
     }
     let classifier = if a.shipped {
@@ -236,6 +304,7 @@ fn run_fits(a: &Args) -> Result<(), CliError> {
         println!("training set:\n{}", report_probs(&probs));
         c
     };
+    let combination = if a.recalibrate.is_empty() { combination } else { recalibrate(a, &classifier, combination)? };
     for (d, f, m) in &a.test_fits {
         let test = load_fits(d, f, m, a.first, &classifier)?;
         let probs: Vec<(f64, bool)> =

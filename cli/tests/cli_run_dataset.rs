@@ -153,6 +153,19 @@ fn train_gender_fits_the_margin_combination_on_either_classifiers_log_odds() {
     assert_eq!(given.len(), 2);
     assert_ne!(given[0], detected[0]);
     assert_eq!(given[1], detected[1]);
+    // An automatic-gender run recalibrates the shipped combination's intercept; a run with a
+    // given gender has no pair of deciding fits and is refused.
+    let auto = dir.join("auto");
+    ok(&skb(&[&["run-dataset", s(&ds), "--out", s(&auto), "--gender", "auto"][..], &fast].concat()));
+    let o = skb(&["train-gender", "--shipped", "--recalibrate", &format!("{}={}", s(&ds), s(&auto))]);
+    ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    let line = out.lines().find(|l| l.starts_with("recalibrated on 8 sketches: intercept ")).expect(&out);
+    let v: Vec<f64> = line.split([' ', '(', ')']).filter_map(|t| t.parse().ok()).collect();
+    assert!(v.len() >= 3 && v[1] != v[2] && v[2].is_finite(), "shipped -> recalibrated intercept: {line}");
+    assert_eq!(out.matches("accuracy ").count(), 2, "the set before and after: {out}");
+    let o = skb(&["train-gender", "--shipped", "--recalibrate", &format!("{}={}", s(&ds), s(&dir.join("f")))]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("no score of both gendered fits"));
     // The same fits calibrate the height: every result reports its fitted and its calibrated
     // rest height, within the calibration's bound of each other.
     for g in ["f", "m"] {
