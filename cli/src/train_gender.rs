@@ -5,7 +5,9 @@
 //! coefficients as the Rust constant to ship, and for every test set the confusion table, the
 //! accuracy, the log loss and a calibration table (predicted vs observed share of males in
 //! five bins of the predicted probability). `--shipped` evaluates the shipped classifier instead
-//! of training one.
+//! of training one. `--fits` trains the final choice of the automatic gender (the classifier's
+//! log-odds with the two gendered fits' score margin); `--recalibrate` refits that combination's
+//! intercept to automatic-gender runs of sketches it was not trained on.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
