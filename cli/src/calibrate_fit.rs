@@ -301,7 +301,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
                 );
             }
         }
-        let c = train(&model, &all, a.first_dim.unwrap_or(3) as usize, &a.height_evidence)?;
+        let c = train(
+            &model,
+            &all,
+            a.first_dim.map_or(FitCalibration::SHIPPED.shape.first_dim, |k| k as usize),
+            &a.height_evidence,
+        )?;
         let matched = all.iter().filter(|s| s.gender == s.true_gender).count();
         println!("training: {} samples ({matched} fitted in their true gender train the shape map)", all.len());
         print_calibration(&c);

@@ -113,30 +113,22 @@ fn load_fits(
 }
 
 /// `(classifier log-odds, score margin male − female, is_male)` of every sample of an automatic
-/// gender run (`scores` holds the deciding fits' scores, `gender_features` the evidence).
+/// gender run: its `scores` hold both deciding fits' scores, so it is its own female and male
+/// run ([`load_fits`]). Errors when a sample lacks either score (a run with a given gender).
 fn load_auto(
     d: &Path,
     r: &Path,
     first: Option<usize>,
     classifier: &GenderClassifier,
 ) -> Result<Vec<(f64, f64, bool)>, CliError> {
-    let samples = load(d, r, first)?;
-    let stems = dataset_samples(d)?;
-    let done = stems.iter().take(first.unwrap_or(usize::MAX)).filter(|s| r.join(format!("{s}.json")).is_file());
-    let mut out = Vec::new();
-    for (stem, (features, male)) in done.zip(samples) {
-        let path = r.join(format!("{stem}.json"));
-        let v = read_json(&path)?;
-        let score = |key: &str| v["scores"][key].as_f64();
-        let (Some(f), Some(m)) = (score("female"), score("male")) else {
-            return Err(CliError(format!(
-                "{}: no score of both gendered fits (a run-dataset of --gender auto with given joints writes them)",
-                path.display()
-            )));
-        };
-        out.push((classifier.log_odds(&features), m - f, male));
+    let samples = load_fits(d, r, r, first, classifier)?;
+    if samples.iter().any(|s| !s.1.is_finite()) {
+        return Err(CliError(format!(
+            "{}: no score of both gendered fits (a run-dataset of --gender auto with given joints writes them)",
+            r.display()
+        )));
     }
-    Ok(out)
+    Ok(samples)
 }
 
 /// `--recalibrate`: `combination` with its intercept refitted to the automatic-gender runs,

@@ -27,18 +27,20 @@
 use crate::body::proportions::Proportions;
 use crate::error::{ensure_finite, Error, Result};
 use crate::fit::gender_evidence::{GenderFeatures, GENDER_FEATURE_NAMES, NUM_GENDER_FEATURES};
+use crate::fit::proportions::NUM_FACTORS;
 
 /// Largest |ln(h / h_fit)| the calibration applies (about ±16 %); with the shipped calibration
 /// the change stays within about ±5 % on a tuning set (`make-dataset 60 --seed 78`).
 pub const MAX_LOG_CHANGE: f64 = 0.15;
 
 /// Number of [`HeightEvidence`] values: the five bone-length factors, then the drawn widths.
-pub const NUM_HEIGHT_EVIDENCE: usize = 5 + NUM_GENDER_FEATURES;
+pub const NUM_HEIGHT_EVIDENCE: usize = NUM_FACTORS + NUM_GENDER_FEATURES;
 
 /// Names of the [`HeightEvidence`] values, in order: the natural logs of the fitted
 /// [`Proportions`] factors, then [`GENDER_FEATURE_NAMES`].
 pub const HEIGHT_EVIDENCE_NAMES: [&str; NUM_HEIGHT_EVIDENCE] = {
-    let factors = ["log_legs_factor", "log_arms_factor", "log_shoulders_factor", "log_head_factor", "log_torso_factor"];
+    let factors: [&str; NUM_FACTORS] =
+        ["log_legs_factor", "log_arms_factor", "log_shoulders_factor", "log_head_factor", "log_torso_factor"];
     let mut names = [""; NUM_HEIGHT_EVIDENCE];
     let mut k = 0;
     while k < NUM_HEIGHT_EVIDENCE {
@@ -69,7 +71,7 @@ impl HeightEvidence {
             *v = (f > 0.0).then(|| f.ln());
         }
         if let Some(w) = widths {
-            values[5..].copy_from_slice(&w.values);
+            values[NUM_FACTORS..].copy_from_slice(&w.values);
         }
         HeightEvidence { values }
     }

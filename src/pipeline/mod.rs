@@ -99,7 +99,8 @@ pub struct PipelineOptions {
     /// `fit.seed`, `fit.seed + 1`, …: their score margins are averaged (a best score is a noisy
     /// maximum over the samples, and the margin of one pair flips the gender of a few sketches
     /// between seeds). Default 1: two pairs got the gender right more often on two tuning sets
-    /// at two fit seeds each (59 / 59 / 95 / 97 against 59 / 56 / 94 / 95) but not on the
+    /// at two fit seeds each (59 / 59 / 95 / 97 against one pair's 59 / 56 / 94 / 95, measured
+    /// before the combination's recalibration, after which one pair gets 59 / 57 / 96 / 97) but not on the
     /// held-out sketches (53 / 53 of 60 against 55 / 53), for 1.35 times `run`'s time
     /// (docs/benchmarks.md, "Two deciding seeds"). In 1..=16.
     pub gender_decision_seeds: usize,

@@ -12,17 +12,13 @@
 //! (`sketchbody fit-landmark-joints`). Scale-free and rotation-free by construction.
 
 use crate::error::{ensure_finite, Error, Result};
-use crate::skeleton::{joint, Joints2, NUM_JOINTS};
+use crate::skeleton::{joint, Joints2, MIRROR, NUM_JOINTS};
 
-/// Left–right joint pairs (right first): shoulders, elbows, wrists, hips, knees, ankles.
-const PAIRS: [(usize, usize); 6] = [
-    (joint::R_SHOULDER, joint::L_SHOULDER),
-    (joint::R_ELBOW, joint::L_ELBOW),
-    (joint::R_WRIST, joint::L_WRIST),
-    (joint::R_HIP, joint::L_HIP),
-    (joint::R_KNEE, joint::L_KNEE),
-    (joint::R_ANKLE, joint::L_ANKLE),
-];
+/// Left–right joint pairs (right first, [`MIRROR`]'s pairs): shoulders, elbows, wrists, hips,
+/// knees, ankles.
+fn sides() -> impl Iterator<Item = (usize, usize)> {
+    (0..NUM_JOINTS).filter(|&j| MIRROR[j] > j).map(|j| (j, MIRROR[j]))
+}
 
 /// Fewest training figures [`JointDefinitions::fit`] accepts.
 pub const MIN_FIGURES: usize = 10;
@@ -53,7 +49,7 @@ fn frame(j: &Joints2) -> Option<([f64; 2], [f64; 2], f64)> {
 /// its partner) within `j`, zero for unpaired joints and pairs at one point across.
 fn outward_directions(j: &Joints2, across: [f64; 2]) -> [[f64; 2]; NUM_JOINTS] {
     let mut out = [[0.0; 2]; NUM_JOINTS];
-    for (r, l) in PAIRS {
+    for (r, l) in sides() {
         let d = (j.xy[r][0] - j.xy[l][0]) * across[0] + (j.xy[r][1] - j.xy[l][1]) * across[1];
         if d != 0.0 {
             let s = d.signum();
@@ -146,7 +142,7 @@ impl JointDefinitions {
                 d.outward[k] = median(&mut outward[k]);
             }
         }
-        for (r, l) in PAIRS {
+        for (r, l) in sides() {
             for v in [&mut d.along_torso, &mut d.outward] {
                 let m = 0.5 * (v[r] + v[l]);
                 v[r] = m;
@@ -205,7 +201,7 @@ mod tests {
         let mut d = JointDefinitions::IDENTITY;
         d.along_torso[joint::HEAD] = 0.1;
         d.along_torso[joint::PELVIS] = 0.05;
-        for (r, l) in PAIRS {
+        for (r, l) in sides() {
             d.along_torso[r] = -0.02;
             d.along_torso[l] = -0.02;
             d.outward[r] = 0.03;
