@@ -3,7 +3,8 @@
 //! and never lowers the figure's confidence below the per-image choice; a blank page is "no
 //! figure" by the calibrated presence and by the hard thresholds; the set scores agree with the
 //! metrics computed directly; a calibration cannot be fitted from one-sided outcomes; refusing
-//! a fraction of negative pages lowers only the presence intercepts, enough and no more.
+//! a fraction of negative pages lowers only the presence intercepts, enough and no more; joints
+//! both backends agree on are averaged.
 
 use std::sync::Arc;
 
@@ -112,7 +113,8 @@ fn the_pose_step_referees_recognised_drawings() {
     use sketchbody::detect::figure::proportion_choice;
     use sketchbody::skeleton::joint;
     let (model, net, cal, renderer) = backends();
-    let options = FigureOptions::default();
+    // The choice alone: no averaging of the joints both candidates share.
+    let options = FigureOptions { average_agreement: 0.0, ..FigureOptions::default() };
     // The first of a few rendered sketches that the sketch model recognises (most are).
     let mut e = (31..40)
         .map(|seed| {
@@ -142,4 +144,56 @@ fn the_pose_step_referees_recognised_drawings() {
     // Below the sketch model's threshold the confidences decide.
     e.sketch_threshold = fmp.score + 1.0;
     assert_eq!(decide(&e, cal, &options).unwrap().backend, Backend::BlazePose);
+}
+
+/// Where both backends answer, each chosen joint that the other backend puts within
+/// `average_agreement` of the figure's size becomes the two joints' mean, the others stay the
+/// chosen backend's; 0 turns it off, one backend alone averages nothing, and a negative or
+/// non-finite fraction is refused.
+#[test]
+fn agreeing_joints_are_averaged() {
+    use sketchbody::detect::figure::{detect_figure, AVERAGE_AGREEMENT};
+    use sketchbody::skeleton::{joint, NUM_JOINTS};
+    let (model, net, cal, renderer) = backends();
+    let options = FigureOptions::default();
+    assert_eq!(options.average_agreement, AVERAGE_AGREEMENT);
+    let s = renderer.render(&SketchRequest::random(31, 384)).unwrap();
+    let image = ImageView::gray(&s.pixels, 384, 384).unwrap();
+    let mut e = gather(&image, &model, &net, Backend::Auto, &options).unwrap();
+    let fmp = e.sketch.as_ref().expect("the sketch model's figure")[0].joints;
+    // BlazePose's figure: the sketch model's joints, each moved 4 px to the right, the right
+    // wrist moved by half the figure's height instead.
+    let bp = e.blazepose.as_mut().expect("BlazePose's figure");
+    bp.joints = fmp;
+    for p in bp.joints.xy.iter_mut() {
+        p[0] += 4.0;
+    }
+    let size = fmp.xy.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max)
+        - fmp.xy.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
+    bp.joints.xy[joint::R_WRIST][1] += 0.5 * size;
+    let blaze = bp.joints;
+    let f = decide(&e, cal, &options).unwrap();
+    let chosen = if f.backend == Backend::Fmp { fmp } else { blaze };
+    for j in 0..NUM_JOINTS {
+        if j == joint::R_WRIST {
+            assert!(!f.averaged[j], "a joint the backends disagree on is not averaged");
+            assert_eq!(f.joints.xy[j], chosen.xy[j]);
+        } else {
+            assert!(f.averaged[j], "joint {j}: the backends agree within 4 px");
+            assert!((f.joints.xy[j][0] - (fmp.xy[j][0] + 2.0)).abs() < 1e-9, "the mean of both");
+            assert_eq!(f.joints.xy[j][1], fmp.xy[j][1]);
+        }
+    }
+    let off = decide(&e, cal, &FigureOptions { average_agreement: 0.0, ..options.clone() }).unwrap();
+    assert_eq!(off.averaged, [false; NUM_JOINTS]);
+    assert_eq!(off.joints, if off.backend == Backend::Fmp { fmp } else { blaze });
+    let mut one = e.clone();
+    one.blazepose = None;
+    let alone = decide(&one, cal, &options).unwrap();
+    assert_eq!((alone.backend, alone.joints), (Backend::Fmp, fmp));
+    assert_eq!(alone.averaged, [false; NUM_JOINTS], "one backend: nothing to average");
+    for bad in [-0.1, f64::NAN, f64::INFINITY] {
+        let o = FigureOptions { average_agreement: bad, ..options.clone() };
+        assert!(matches!(detect_figure(&image, &model, &net, &o), Err(Error::OutOfRange { .. })), "{bad}");
+    }
 }

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 
 use serde_json::{json, Map, Value};
-use sketchbody::detect::figure::{detect_figure, Backend, FigureOptions};
+use sketchbody::detect::figure::{detect_figure, Backend, FigureOptions, AVERAGE_AGREEMENT};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::{detect, DetectOptions, Detection, Model, PARSE_JOINT_NAMES};
 use sketchbody::export::joints2d::{detection_json as figure_json, LOW_CONFIDENCE_HINT};
@@ -32,6 +32,10 @@ pub struct Args {
     /// plausibly holds one.
     #[arg(long)]
     strict: bool,
+    /// With both backends (auto): each joint the two put within this fraction of the figure's
+    /// size of each other becomes their mean (0 = keep the chosen backend's joints).
+    #[arg(long, default_value_t = AVERAGE_AGREEMENT, value_parser = parse_fraction)]
+    average_agreement: f64,
     /// Another sketch model, run alone with its raw scores and threshold (research): a binary
     /// `.skbd` model or the PARSE model JSON. Without it the embedded models run.
     #[arg(long)]
@@ -74,6 +78,14 @@ pub const NO_FIGURE_HINT: &str =
     "if the image does hold a figure, give its 2-D joints with --joints (a sketchbody-joints2d file, docs/formats.md)";
 
 /// Parses `--detector`.
+/// A finite fraction ≥ 0 (`--average-agreement`).
+pub fn parse_fraction(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(format!("{s:?} is not a finite number >= 0")),
+    }
+}
+
 pub fn parse_backend(s: &str) -> Result<Backend, String> {
     s.parse().map_err(|e: sketchbody::Error| e.to_string())
 }
@@ -173,7 +185,13 @@ pub fn run(a: Args) -> Result<(), CliError> {
     }
     let model = Model::embedded()?;
     let net = LandmarkNet::embedded()?;
-    let options = FigureOptions { backend: a.detector, strict: a.strict, sketch: search, ..FigureOptions::default() };
+    let options = FigureOptions {
+        backend: a.detector,
+        strict: a.strict,
+        sketch: search,
+        average_agreement: a.average_agreement,
+        ..FigureOptions::default()
+    };
     let f = detect_figure(&img.view(), &model, &net, &options).map_err(no_figure)?;
     let mut doc = header(&a, &img);
     let mut joints = Map::new();
@@ -188,8 +206,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
     doc["others"] = json!(f.others.iter().map(detection_json).collect::<Vec<_>>());
     write_outputs(&a, &img, &doc, &f.joints, &f.joint_confidence)?;
     println!(
-        "{} figure, confidence {:.2}, {} other figure(s); joints written to {}",
+        "{} figure ({} joint(s) averaged with the other backend's), confidence {:.2}, {} other figure(s); joints written to {}",
         f.backend.name(),
+        f.averaged.iter().filter(|a| **a).count(),
         f.confidence,
         f.others.len(),
         a.out.display()

@@ -76,23 +76,25 @@ pub fn run_sets(
 ) -> Result<(), CliError> {
     let ctx = SetContext { renderer, parse_dir, model, net };
     let options = FigureOptions::default();
+    let averaged = options.average_agreement;
     let configs = [
-        (Backend::Fmp, false, Fusion::PerImage, "fmp"),
-        (Backend::BlazePose, false, Fusion::PerImage, "blazepose"),
-        (Backend::Auto, false, Fusion::PerImage, "auto"),
-        (Backend::Auto, false, Fusion::Confidence, "auto by confidence"),
-        (Backend::Auto, false, Fusion::PerLimb, "auto per limb"),
-        (Backend::Fmp, true, Fusion::PerImage, "fmp strict"),
-        (Backend::BlazePose, true, Fusion::PerImage, "blazepose strict"),
+        (Backend::Fmp, false, Fusion::PerImage, averaged, "fmp"),
+        (Backend::BlazePose, false, Fusion::PerImage, averaged, "blazepose"),
+        (Backend::Auto, false, Fusion::PerImage, averaged, "auto"),
+        (Backend::Auto, false, Fusion::PerImage, 0.0, "auto unaveraged"),
+        (Backend::Auto, false, Fusion::Confidence, averaged, "auto by confidence"),
+        (Backend::Auto, false, Fusion::PerLimb, averaged, "auto per limb"),
+        (Backend::Fmp, true, Fusion::PerImage, averaged, "fmp strict"),
+        (Backend::BlazePose, true, Fusion::PerImage, averaged, "blazepose strict"),
     ];
     println!("PCK@0.1 / PCK@0.2, no-figure rate, mean ms per image (wall, images in parallel) per set and backend");
-    println!("{:<26} {:>4}  {}", "set", "n", configs.map(|c| format!("{:<30}", c.3)).join(""));
+    println!("{:<26} {:>4}  {}", "set", "n", configs.map(|c| format!("{:<30}", c.4)).join(""));
     let mut positives: Vec<Sample> = Vec::new();
     for spec in specs {
         let samples = gather_set(spec, &ctx, &options)?;
         let mut cells = Vec::new();
-        for &(backend, strict, fusion, _) in &configs {
-            let o = FigureOptions { backend, strict, fusion, ..FigureOptions::default() };
+        for &(backend, strict, fusion, average_agreement, _) in &configs {
+            let o = FigureOptions { backend, strict, fusion, average_agreement, ..FigureOptions::default() };
             let s = score_set(&samples, cal, &o)?;
             let pck = if s.pck[0].is_nan() {
                 "   -  /   -  ".to_string()

@@ -60,6 +60,10 @@ pub struct Args {
     /// the best figure whenever the image plausibly holds one).
     #[arg(long)]
     strict_detection: bool,
+    /// With both detector backends (auto): each joint the two put within this fraction of the
+    /// figure's size of each other becomes their mean (0 = keep the chosen backend's joints).
+    #[arg(long, default_value_t = sketchbody::detect::figure::AVERAGE_AGREEMENT, value_parser = crate::detect::parse_fraction)]
+    average_agreement: f64,
     /// Shape space: f or m; both are fitted and the better score is kept when omitted.
     #[arg(long)]
     gender: Option<String>,
@@ -150,8 +154,9 @@ fn report(
     if let Some(f) = &r.detection {
         let _ = writeln!(
             s,
-            "- detection: backend {}, confidence {:.2} (expected fraction of joints within 0.2 × the figure's size), presence {:.2}{}",
+            "- detection: backend {} ({} of 15 joints averaged with the other backend's, where the two agree), confidence {:.2} (expected fraction of joints within 0.2 × the figure's size), presence {:.2}{}",
             f.backend.name(),
+            f.averaged.iter().filter(|a| **a).count(),
             f.confidence,
             f.presence,
             if f.low_confidence { format!("; **{LOW_CONFIDENCE_HINT}**") } else { String::new() }
@@ -332,7 +337,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let rig_options = a.rig.options()?;
     let detector: Model;
     let net: LandmarkNet;
-    let figure_options = FigureOptions { backend: a.detector, strict: a.strict_detection, ..FigureOptions::default() };
+    let figure_options = FigureOptions {
+        backend: a.detector,
+        strict: a.strict_detection,
+        average_agreement: a.average_agreement,
+        ..FigureOptions::default()
+    };
     let source: Box<dyn JointsSource + '_> = match &a.joints {
         Some(p) => Box::new(GivenJoints(load_joints2d(p)?)),
         None => {

@@ -108,6 +108,19 @@ fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
     assert!(["fmp", "blazepose"].contains(&j["detection"]["backend"].as_str().unwrap()), "{}", j["detection"]);
     let c = j["detection"]["confidence"].as_f64().unwrap();
     assert_eq!(j["detection"]["low_confidence"].as_bool(), Some(c < 0.75));
+    // On the clean example both backends find every joint: all are their mean, unless asked not.
+    let averaged = j["detection"]["averaged_joints"].as_array().unwrap();
+    assert_eq!(averaged.len(), 15, "{}", j["detection"]);
+    let plain = dir.join("plain.json");
+    let mut plain_cmd = cli();
+    plain_cmd.args(["detect", "--min-cell", "4"]).arg(&sketch).arg("--out").arg(&plain);
+    assert!(plain_cmd.args(["--average-agreement", "0"]).status().unwrap().success());
+    let p: serde_json::Value = serde_json::from_slice(&std::fs::read(&plain).unwrap()).unwrap();
+    assert_eq!(p["detection"]["averaged_joints"].as_array().map(Vec::len), Some(0));
+    assert_ne!(p["joints"], j["joints"], "the chosen backend's own joints");
+    let bad = cli().arg("detect").arg(&sketch).arg("--out").arg(&plain).arg("--average-agreement=-1").output().unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("--average-agreement") && err.contains(">= 0"), "{err}");
     // A blank page holds no figure by default: one line with the hint to give the joints.
     let blank = dir.join("blank.png");
     image::GrayImage::from_pixel(128, 128, image::Luma([255])).save(&blank).unwrap();

@@ -101,6 +101,10 @@ pub struct FigureOptions {
     pub min_presence: f64,
     /// How `Auto` combines the backends.
     pub fusion: Fusion,
+    /// Where both backends answered: each joint of the chosen figure whose other-backend joint
+    /// lies within this fraction of the figure's size becomes the two joints' mean
+    /// ([`Figure::averaged`]); 0 = off. Default [`AVERAGE_AGREEMENT`].
+    pub average_agreement: f64,
 }
 
 impl Default for FigureOptions {
@@ -112,6 +116,7 @@ impl Default for FigureOptions {
             strict: false,
             min_presence: DEFAULT_MIN_PRESENCE,
             fusion: Fusion::PerImage,
+            average_agreement: AVERAGE_AGREEMENT,
         }
     }
 }
@@ -196,11 +201,20 @@ pub struct Figure {
     /// were chosen; all `None` when BlazePose did not run. A cue for the pose step
     /// ([`crate::pose::DepthHint`]).
     pub landmark_depth: [Option<f64>; NUM_JOINTS],
+    /// Joints that are the mean of both backends' ([`FigureOptions::average_agreement`]); all
+    /// `false` when one backend answered.
+    pub averaged: [bool; NUM_JOINTS],
     /// BlazePose's own 15 joints (px) with all their depths, when it ran and its joints agree
     /// with the chosen ones (median distance ≤ [`DEPTH_AGREEMENT`] of the figure's size); `None`
     /// otherwise. The same figure as `joints`, read by the network that also gives depths.
     pub landmark_joints: Option<(Joints2, [f64; NUM_JOINTS])>,
 }
+
+/// [`FigureOptions::average_agreement`]'s default: two backends' joints closer than this fraction
+/// of the figure's size are averaged. Where both find the same joint their errors are largely
+/// independent, so their mean is nearer the truth than either (docs/benchmarks.md, "Averaging
+/// the backends where they agree").
+pub const AVERAGE_AGREEMENT: f64 = 0.08;
 
 /// Largest distance, as a fraction of the figure's size, between BlazePose's 2-D joint and the
 /// chosen joint for BlazePose's depth of that joint to count ([`Figure::landmark_depth`]).
@@ -428,11 +442,13 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
     } else {
         None
     };
-    let best = match by_proportions {
-        Some(k) => Some(cands.swap_remove(k)),
-        None => cands.into_iter().max_by(|a, b| mean(&a.conf).total_cmp(&mean(&b.conf))),
+    let pick = match by_proportions {
+        Some(k) => Some(k),
+        None => (0..cands.len()).max_by(|&a, &b| mean(&cands[a].conf).total_cmp(&mean(&cands[b].conf))),
     };
-    let Some(best) = best else {
+    let other = pick.and_then(|k| cands.get(1 - k.min(1)).filter(|_| cands.len() == 2)).map(|c| (c.backend, c.joints));
+    let best = pick.map(|k| cands.swap_remove(k));
+    let Some(mut best) = best else {
         return Err(if options.strict {
             let sketch = evidence.sketch.as_ref().and_then(|v| v.first());
             match (sketch, &evidence.blazepose) {
@@ -445,6 +461,10 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
         });
     };
     let others = evidence.sketch.iter().flatten().skip(1).filter(|d| d.score >= sketch_threshold).cloned().collect();
+    let averaged = match other {
+        Some((backend, joints)) => average_agreeing(&mut best.joints, &joints, backend, options.average_agreement),
+        None => [false; NUM_JOINTS],
+    };
     let confidence = mean(&best.conf);
     let (landmark_depth, landmark_joints) = landmark_view(evidence, &best.joints);
     Ok(Figure {
@@ -456,9 +476,31 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
         low_confidence: confidence < LOW_CONFIDENCE,
         raw_score: best.raw_score,
         others,
+        averaged,
         landmark_depth,
         landmark_joints,
     })
+}
+
+/// Replaces each joint of `chosen` that lies within `within` of the figure's size (the BlazePose
+/// candidate's, as [`agreement`] measures it) from the same joint of `other` (the other
+/// backend's candidate, `other_backend`) by the two joints' mean; returns which joints were.
+fn average_agreeing(chosen: &mut Joints2, other: &Joints2, other_backend: Backend, within: f64) -> [bool; NUM_JOINTS] {
+    let mut averaged = [false; NUM_JOINTS];
+    if !(within > 0.0) {
+        return averaged;
+    }
+    let (dist, _) =
+        if other_backend == Backend::BlazePose { agreement(chosen, other) } else { agreement(other, chosen) };
+    for j in 0..NUM_JOINTS {
+        if dist[j] < within {
+            for k in 0..2 {
+                chosen.xy[j][k] = 0.5 * (chosen.xy[j][k] + other.xy[j][k]);
+            }
+            averaged[j] = true;
+        }
+    }
+    averaged
 }
 
 /// The best figure of `image` (1, 3 or 4 channels) by `options.backend`, with calibrated
@@ -474,6 +516,12 @@ pub fn detect_figure(
         return Err(Error::OutOfRange {
             name: "min_presence",
             detail: format!("{} not in [0, 1]", options.min_presence),
+        });
+    }
+    if !(options.average_agreement >= 0.0 && options.average_agreement.is_finite()) {
+        return Err(Error::OutOfRange {
+            name: "average_agreement",
+            detail: format!("{} is not a finite fraction >= 0", options.average_agreement),
         });
     }
     let evidence = gather(image, model, net, options.backend, options)?;

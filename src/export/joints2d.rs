@@ -87,7 +87,8 @@ pub const LOW_CONFIDENCE_HINT: &str =
 
 /// The `detection` object of a joints file: the backend, the calibrated figure confidence (the
 /// expected fraction of joints within 0.2 × the figure's size of the truth), the presence
-/// probability, the low-confidence flag with its hint, and each joint's calibrated confidence.
+/// probability, the low-confidence flag with its hint, each joint's calibrated confidence and the
+/// joints that are both backends' mean.
 pub fn detection_json(f: &Figure) -> Value {
     let conf: Map<String, Value> =
         JOINT_NAMES.iter().enumerate().map(|(k, n)| ((*n).to_string(), json!(f.joint_confidence[k]))).collect();
@@ -99,6 +100,7 @@ pub fn detection_json(f: &Figure) -> Value {
         "joint_confidence": conf,
         "raw_score": f.raw_score,
         "other_figures": f.others.len(),
+        "averaged_joints": JOINT_NAMES.iter().zip(&f.averaged).filter(|(_, a)| **a).map(|(n, _)| *n).collect::<Vec<_>>(),
     });
     if f.low_confidence {
         v["hint"] = json!(LOW_CONFIDENCE_HINT);

@@ -129,6 +129,7 @@ mod tests {
             low_confidence: false,
             raw_score: 1.0,
             others: Vec::new(),
+            averaged: [false; NUM_JOINTS],
             landmark_depth: [None; NUM_JOINTS],
             landmark_joints: None,
         }
