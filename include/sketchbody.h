@@ -138,7 +138,8 @@
  * Backend of `skb_detect`: both the sketch model and BlazePose, one candidate per image (the
  * default): on a drawing the sketch model recognises (its score above its own threshold), the
  * one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
- * higher calibrated confidence.
+ * higher calibrated confidence. Each joint the two backends put within 0.08 of the figure's
+ * size of each other is their mean.
  */
 #define SKB_DETECTOR_AUTO 0
 

@@ -77,8 +77,7 @@ fn detection_json(d: &Detection) -> Value {
 pub const NO_FIGURE_HINT: &str =
     "if the image does hold a figure, give its 2-D joints with --joints (a sketchbody-joints2d file, docs/formats.md)";
 
-/// Parses `--detector`.
-/// A finite fraction ≥ 0 (`--average-agreement`).
+/// Parses a finite fraction ≥ 0 (`--average-agreement`).
 pub fn parse_fraction(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
@@ -86,6 +85,7 @@ pub fn parse_fraction(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Parses `--detector`.
 pub fn parse_backend(s: &str) -> Result<Backend, String> {
     s.parse().map_err(|e: sketchbody::Error| e.to_string())
 }

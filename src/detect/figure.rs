@@ -103,7 +103,8 @@ pub struct FigureOptions {
     pub fusion: Fusion,
     /// Where both backends answered: each joint of the chosen figure whose other-backend joint
     /// lies within this fraction of the figure's size becomes the two joints' mean
-    /// ([`Figure::averaged`]); 0 = off. Default [`AVERAGE_AGREEMENT`].
+    /// ([`Figure::averaged`]); 0 = off ([`detect_figure`] refuses a negative or non-finite
+    /// value). Default [`AVERAGE_AGREEMENT`].
     pub average_agreement: f64,
 }
 
@@ -446,7 +447,10 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
         Some(k) => Some(k),
         None => (0..cands.len()).max_by(|&a, &b| mean(&cands[a].conf).total_cmp(&mean(&cands[b].conf))),
     };
-    let other = pick.and_then(|k| cands.get(1 - k.min(1)).filter(|_| cands.len() == 2)).map(|c| (c.backend, c.joints));
+    let other = match (pick, cands.len()) {
+        (Some(k), 2) => Some((cands[1 - k].backend, cands[1 - k].joints)),
+        _ => None,
+    };
     let best = pick.map(|k| cands.swap_remove(k));
     let Some(mut best) = best else {
         return Err(if options.strict {
