@@ -49,8 +49,9 @@ pub struct Args {
     /// The backends' proxy benchmark instead of the models' PCK: comma-separated sets from
     /// synthetic (the held-out sketches above), parse (PARSE test photos 101-305), xdog, pencil,
     /// flat (those photos stylised), negatives (blank, text and clutter pages); prints PCK, the
-    /// no-figure rate and time per set for fmp, blazepose, auto and the strict variants, and the
-    /// reliability table of the calibrated confidences.
+    /// no-figure rate and time per set for fmp, blazepose, auto (also without averaging the
+    /// joints the backends agree on, by confidence alone and per limb) and the strict variants,
+    /// and the reliability table of the calibrated confidences.
     #[arg(long)]
     sets: Option<String>,
     /// The PARSE folder for `--sets`.
