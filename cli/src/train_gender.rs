@@ -131,6 +131,14 @@ fn load_auto(
     Ok(samples)
 }
 
+/// Prints `c` as the Rust constant to ship.
+fn print_combination(c: &MarginCombination) {
+    println!(
+        "MarginCombination {{\n    means: [{:.6}, {:.6}],\n    scales: [{:.6}, {:.6}],\n    coefficients: [{:.6}, {:.6}],\n    intercept: {:.6},\n}}",
+        c.means[0], c.means[1], c.scales[0], c.scales[1], c.coefficients[0], c.coefficients[1], c.intercept
+    );
+}
+
 /// `--recalibrate`: `combination` with its intercept refitted to the automatic-gender runs,
 /// printed as the constant to ship, with each set before and after.
 fn recalibrate(
@@ -151,10 +159,7 @@ fn recalibrate(
         c.intercept,
         1.0 / (1.0 + (c.intercept - combination.intercept).exp())
     );
-    println!(
-        "MarginCombination {{\n    means: [{:.6}, {:.6}],\n    scales: [{:.6}, {:.6}],\n    coefficients: [{:.6}, {:.6}],\n    intercept: {:.6},\n}}",
-        c.means[0], c.means[1], c.scales[0], c.scales[1], c.coefficients[0], c.coefficients[1], c.intercept
-    );
+    print_combination(&c);
     for (d, r, samples) in &sets {
         let probs = |k: &MarginCombination| -> Vec<(f64, bool)> {
             samples.iter().map(|&(z, m, male)| (k.male_probability(z, m), male)).collect()
@@ -290,10 +295,7 @@ fn run_fits(a: &Args) -> Result<(), CliError> {
         let c = MarginCombination::train(&train, a.ridge)?;
         let males = train.iter().filter(|s| s.2).count();
         println!("trained on {} samples ({} f / {males} m), ridge {}", train.len(), train.len() - males, a.ridge);
-        println!(
-            "MarginCombination {{\n    means: [{:.6}, {:.6}],\n    scales: [{:.6}, {:.6}],\n    coefficients: [{:.6}, {:.6}],\n    intercept: {:.6},\n}}",
-            c.means[0], c.means[1], c.scales[0], c.scales[1], c.coefficients[0], c.coefficients[1], c.intercept
-        );
+        print_combination(&c);
         let probs: Vec<(f64, bool)> = train.iter().map(|&(z, m, male)| (c.male_probability(z, m), male)).collect();
         println!("training set:\n{}", report_probs(&probs));
         c

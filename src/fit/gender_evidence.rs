@@ -222,6 +222,11 @@ impl MarginCombination {
     /// `P(male)` from the classifier's log-odds and the score margin (male − female). A
     /// non-finite margin (a fit without a finite score) counts as no margin (the mean).
     pub fn male_probability(&self, log_odds: f64, margin: f64) -> f64 {
+        sigmoid(self.combined_log_odds(log_odds, margin))
+    }
+
+    /// The log-odds of male behind [`MarginCombination::male_probability`].
+    fn combined_log_odds(&self, log_odds: f64, margin: f64) -> f64 {
         let x = [log_odds, margin];
         let mut z = self.intercept;
         for k in 0..2 {
@@ -229,7 +234,7 @@ impl MarginCombination {
                 z += self.coefficients[k] * (x[k] - self.means[k]) / self.scales[k];
             }
         }
-        sigmoid(z)
+        z
     }
 
     /// Fits the combination to `(classifier log-odds, score margin, is_male)` as
@@ -256,7 +261,7 @@ impl MarginCombination {
         let z: Vec<(f64, bool)> = samples
             .iter()
             .filter(|(l, m, _)| l.is_finite() || m.is_finite())
-            .map(|&(l, m, male)| (logit(self.male_probability(l, m)), male))
+            .map(|&(l, m, male)| (self.combined_log_odds(l, m), male))
             .collect();
         let males = z.iter().filter(|s| s.1).count();
         if males == 0 || males == z.len() {
@@ -281,12 +286,6 @@ impl MarginCombination {
         }
         Ok(MarginCombination { intercept: self.intercept + shift, ..*self })
     }
-}
-
-/// The log-odds of a probability, bounded to ±27.6 (a probability within 1e-12 of 0 or 1).
-fn logit(p: f64) -> f64 {
-    let p = p.clamp(1e-12, 1.0 - 1e-12);
-    (p / (1.0 - p)).ln()
 }
 
 /// A fitted logistic regression on standardised inputs.
@@ -680,7 +679,7 @@ mod tests {
             .map(|_| {
                 let (l, m) =
                     (rand::Rng::random_range(&mut rng, -4.0..4.0), rand::Rng::random_range(&mut rng, -0.6..0.6));
-                let z = logit(base.male_probability(l, m));
+                let z = base.combined_log_odds(l, m);
                 (l, m, rand::Rng::random::<f64>(&mut rng) < sigmoid(z + 0.8))
             })
             .collect();

@@ -100,9 +100,9 @@ pub struct PipelineOptions {
     /// maximum over the samples, and the margin of one pair flips the gender of a few sketches
     /// between seeds). Default 1: two pairs got the gender right more often on two tuning sets
     /// at two fit seeds each (59 / 59 / 95 / 97 against one pair's 59 / 56 / 94 / 95, measured
-    /// before the combination's recalibration, after which one pair gets 59 / 57 / 96 / 97) but not on the
-    /// held-out sketches (53 / 53 of 60 against 55 / 53), for 1.35 times `run`'s time
-    /// (docs/benchmarks.md, "Two deciding seeds"). In 1..=16.
+    /// before the combination's recalibration, after which one pair gets 59 / 57 / 96 / 97)
+    /// but not on the held-out sketches (53 / 53 of 60 against 55 / 53), for 1.35 times
+    /// `run`'s time (docs/benchmarks.md, "Two deciding seeds"). In 1..=16.
     pub gender_decision_seeds: usize,
     /// When the character's height is unknown (`fit.height` is `None`) and the 2-D joints are
     /// given, calibrate the fitted body with [`FitCalibration::SHIPPED`]: map a gendered fit's
