@@ -26,8 +26,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for pass in 1..=2 {
             let mut t = crop_tensor(&img.view(), &roi);
             prep::lighten_drawing(&mut t);
-            let a = landmarks_of_tensor(&shipped, &roi, t.clone())?;
-            let o = landmarks_of_tensor(&other, &roi, t)?;
+            let a = landmarks_of_tensor(&shipped, &roi, t.clone(), false)?;
+            let o = landmarks_of_tensor(&other, &roi, t, false)?;
             let px = 256.0 / roi.size;
             let d = a
                 .landmarks

@@ -136,11 +136,11 @@ fn run_variant(v: &str, net: &LandmarkNet, image: &ImageView<'_>) -> Option<RoiL
         }
         "noprep" | "plain3" => {
             let ink = roi::ink_box(image)?;
-            let mut p = landmarks_in_roi(net, image, &roi::Roi::from_box(ink).ok()?).ok()?;
+            let mut p = landmarks_in_roi(net, image, &roi::Roi::from_box(ink).ok()?, true).ok()?;
             let n = if v == "plain3" { 2 } else { 1 };
             for _ in 0..n {
                 if let Ok(r) = roi_from_landmarks(&p) {
-                    p = landmarks_in_roi(net, image, &r).ok()?;
+                    p = landmarks_in_roi(net, image, &r, true).ok()?;
                 }
             }
             Some(p)
@@ -173,7 +173,7 @@ fn generic(v: &str, net: &LandmarkNet, image: &ImageView<'_>) -> Option<RoiLandm
         for step in prep.split('+') {
             apply(step, &mut t);
         }
-        landmarks_of_tensor(net, r, t).ok()
+        landmarks_of_tensor(net, r, t, true).ok()
     };
     let two = |r: &Roi| -> Option<RoiLandmarks> {
         let p = run(r)?;

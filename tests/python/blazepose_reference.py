@@ -6,12 +6,14 @@ on the crop of each image given by the ROI the Rust side chose, with MediaPipe's
 post-processing written independently of the Rust code: OpenCV warpAffine (bilinear, white
 border) mapping the ROI's corners to the 256x256 tensor's corners, RGB in [0, 1], landmarks x /
 256, y / 256 rotated and scaled back into the image, sigmoid of the visibility and presence
-logits.
+logits; and the landmarks refined from the model's heatmap output as MediaPipe's pose graph
+refines them (its RefineLandmarksFromHeatmapCalculator: kernel 7, confidence 0.5), written from
+the calculator's description with NumPy.
 
 Usage: blazepose_reference.py CASES.json OUT.json
 CASES.json: [{"image": path, "roi": {"cx", "cy", "size", "rotation"}}] in continuous pixel
 coordinates (pixel i covers [i, i + 1)). OUT.json: [{"image", "landmarks": [[x, y, vis, pres]
-x 39], "pose_flag"}].
+x 39], "refined": [[x, y] x 39], "pose_flag"}].
 """
 import importlib.util
 import json
@@ -30,6 +32,8 @@ except ImportError:
     Interpreter = tf.lite.Interpreter
 
 SIDE = 256
+KERNEL = 7
+MIN_CONFIDENCE = 0.5
 
 
 def crop(rgb, roi):
@@ -45,6 +49,31 @@ def crop(rgb, roi):
                           borderMode=cv2.BORDER_CONSTANT, borderValue=(1.0, 1.0, 1.0))
 
 
+def refine(raw, heatmap):
+    """Landmark x, y (tensor px) moved to the sigmoid-weighted mean cell index in a KERNEL-wide
+    window of their heatmap channel (the window centred on the truncated cell, cut at the
+    border; columns outside the map and rows above it skipped), when the window's largest
+    confidence is at least MIN_CONFIDENCE."""
+    hm_h, hm_w, _ = heatmap.shape
+    conf = 1.0 / (1.0 + np.exp(-heatmap.astype(np.float64)))
+    out = []
+    half = (KERNEL - 1) // 2
+    for k, (x, y) in enumerate(raw[:, :2]):
+        col, row = int(x / SIDE * hm_w), int(y / SIDE * hm_h)
+        if col < 0 or col >= hm_w or row < 0:
+            out.append([x, y])
+            continue
+        rows = np.arange(max(0, row - half), min(hm_h, row + half + 1))
+        cols = np.arange(max(0, col - half), min(hm_w, col + half + 1))
+        w = conf[rows[:, None], cols[None, :], k]
+        if w.size and w.max() >= MIN_CONFIDENCE and w.sum() > 0:
+            out.append([(w * cols[None, :]).sum() / w.sum() / hm_w * SIDE,
+                        (w * rows[:, None]).sum() / w.sum() / hm_h * SIDE])
+        else:
+            out.append([x, y])
+    return np.array(out)
+
+
 def main():
     cases = json.load(open(sys.argv[1]))
     # The wheel's model file; the package itself is not imported (its dependencies need not be
@@ -57,6 +86,7 @@ def main():
     outs = interp.get_output_details()
     lm_out = next(o for o in outs if int(np.prod(o["shape"])) == 195)
     flag_out = next(o for o in outs if int(np.prod(o["shape"])) == 1)
+    heat_out = next(o for o in outs if list(o["shape"]) == [1, 64, 64, 39])
     result = []
     for case in cases:
         bgr = cv2.imread(case["image"], cv2.IMREAD_UNCHANGED)
@@ -71,14 +101,18 @@ def main():
         interp.set_tensor(inp["index"], crop(rgb, roi)[None])
         interp.invoke()
         raw = interp.get_tensor(lm_out["index"]).reshape(39, 5).astype(np.float64)
+        refined = refine(raw, interp.get_tensor(heat_out["index"])[0])
         s, c = math.sin(roi["rotation"]), math.cos(roi["rotation"])
-        lms = []
-        for x, y, _z, vis, pres in raw:
+
+        def to_image(x, y):
             u, v = x / SIDE - 0.5, y / SIDE - 0.5
-            lms.append([roi["cx"] + roi["size"] * (c * u - s * v), roi["cy"] + roi["size"] * (s * u + c * v),
-                        1 / (1 + math.exp(-vis)), 1 / (1 + math.exp(-pres))])
+            return [roi["cx"] + roi["size"] * (c * u - s * v), roi["cy"] + roi["size"] * (s * u + c * v)]
+
+        lms = [to_image(x, y) + [1 / (1 + math.exp(-vis)), 1 / (1 + math.exp(-pres))]
+               for x, y, _z, vis, pres in raw]
         flag = float(interp.get_tensor(flag_out["index"]).reshape(-1)[0])
-        result.append({"image": case["image"], "landmarks": lms, "pose_flag": flag})
+        result.append({"image": case["image"], "landmarks": lms,
+                       "refined": [to_image(x, y) for x, y in refined], "pose_flag": flag})
     json.dump(result, open(sys.argv[2], "w"))
 
 

@@ -2,7 +2,8 @@
 //! and run in pure Rust by tract-onnx ([`model`]), with MediaPipe's pre- and post-processing:
 //! a square ROI ([`roi`]) from the ink's bounding box (1.25 × its larger side, no rotation),
 //! the affine 256×256 crop with white padding ([`crop`]), landmark decoding (x, y in crop px; z;
-//! visibility and presence logits through a sigmoid) and back-projection to image pixels, then
+//! visibility and presence logits through a sigmoid), the refinement of x and y from the
+//! network's heatmap ([`heatmap`]) and back-projection to image pixels, then
 //! a second pass on the ROI from the first pass's own alignment landmarks (hips' midpoint →
 //! scale point, rotated upright, 1.25 × twice their distance), and the map to the canonical
 //! joints ([`joints`]). Crops that are mostly paper have their strokes lightened first
@@ -13,6 +14,7 @@
 
 pub mod crop;
 pub mod definitions;
+pub mod heatmap;
 pub mod joints;
 pub mod model;
 pub mod prep;
@@ -64,15 +66,24 @@ fn sigmoid(v: f32) -> f64 {
 }
 
 /// Runs `net` on the crop of `image` (1, 3 or 4 channels) inside `roi` and maps the landmarks
-/// back to image px. Errors: those of [`LandmarkNet::run`].
-pub fn landmarks_in_roi(net: &LandmarkNet, image: &ImageView<'_>, roi: &Roi) -> Result<RoiLandmarks> {
-    landmarks_of_tensor(net, roi, crop::crop_tensor(image, roi))
+/// back to image px, refined from the heatmap first when `refine` ([`heatmap::refine`]).
+/// Errors: those of [`landmarks_of_tensor`].
+pub fn landmarks_in_roi(net: &LandmarkNet, image: &ImageView<'_>, roi: &Roi, refine: bool) -> Result<RoiLandmarks> {
+    landmarks_of_tensor(net, roi, crop::crop_tensor(image, roi), refine)
 }
 
-/// Runs `net` on `tensor`, a crop of `roi` ([`crop::crop_tensor`], possibly preprocessed), and
-/// maps the landmarks back to image px. Errors: those of [`LandmarkNet::run`].
-pub fn landmarks_of_tensor(net: &LandmarkNet, roi: &Roi, tensor: Vec<f32>) -> Result<RoiLandmarks> {
-    let raw = net.run(tensor)?;
+/// Runs `net` on `tensor`, a crop of `roi` ([`crop::crop_tensor`], possibly preprocessed),
+/// refines the landmarks from the network's heatmap when `refine` ([`heatmap::refine`], as
+/// MediaPipe's pose graph does), and maps them back to image px. Errors: those of
+/// [`LandmarkNet::run`]; `CorruptData` when `refine` and the model has no heatmap output.
+pub fn landmarks_of_tensor(net: &LandmarkNet, roi: &Roi, tensor: Vec<f32>, refine: bool) -> Result<RoiLandmarks> {
+    let mut raw = net.run(tensor)?;
+    if refine {
+        let Some(h) = &raw.heatmap else {
+            return Err(Error::CorruptData("BlazePose landmark model: no heatmap output to refine from".into()));
+        };
+        heatmap::refine(&mut raw.landmarks, h)?;
+    }
     let n = crop::INPUT_SIDE as f64;
     let landmarks = raw
         .landmarks
@@ -115,6 +126,9 @@ pub struct BlazePoseOptions {
     /// crops' enclosed regions filled ([`prep::fill_enclosed`]); its pass is kept when its pose
     /// flag is higher and at least [`FILL_ACCEPT`]. Default true.
     pub fill_drawings: bool,
+    /// Refine each pass's landmarks from the network's heatmap, as MediaPipe's pose graph does
+    /// ([`heatmap::refine`]). Default true.
+    pub refine_from_heatmap: bool,
     /// Shifts from the mapped landmarks to the body model's joints. Default
     /// [`JointDefinitions::SHIPPED`]; [`JointDefinitions::IDENTITY`] keeps the landmarks'
     /// positions (MediaPipe's definitions).
@@ -146,6 +160,7 @@ impl Default for BlazePoseOptions {
             retry_below: DEFAULT_RETRY_BELOW,
             lighten_drawings: true,
             fill_drawings: true,
+            refine_from_heatmap: true,
             definitions: JointDefinitions::SHIPPED,
         }
     }
@@ -185,7 +200,7 @@ fn pass_on(
     if fill {
         prep::fill_enclosed(&mut t, crop::INPUT_SIDE);
     }
-    landmarks_of_tensor(net, roi, t)
+    landmarks_of_tensor(net, roi, t, opts.refine_from_heatmap)
 }
 
 /// `opts.passes` passes from `start`: the first on `start`, a second on the ROI from its

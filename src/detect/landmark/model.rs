@@ -15,6 +15,9 @@ use crate::error::{Error, Result};
 pub const NUM_OUTPUT_LANDMARKS: usize = 39;
 /// Values per output landmark: x, y (px of the 256² crop), z, visibility logit, presence logit.
 pub const LANDMARK_VALUES: usize = 5;
+/// Side of the network's heatmap output (64 × 64 cells over the 256² crop, one channel per
+/// output landmark: [`NUM_OUTPUT_LANDMARKS`]).
+pub const HEATMAP_SIDE: usize = 64;
 
 /// MediaPipe's `pose_landmark_full` converted to ONNX (`scripts/convert-blazepose.sh`;
 /// provenance and licence in `assets/pose_landmark_full.LICENSE`).
@@ -27,6 +30,10 @@ pub struct RawOutput {
     pub landmarks: Vec<[f32; LANDMARK_VALUES]>,
     /// The pose-presence flag in [0, 1] (the network's own sigmoid output).
     pub pose_flag: f32,
+    /// The heatmap output, [`HEATMAP_SIDE`]² × [`NUM_OUTPUT_LANDMARKS`] logits in HWC order
+    /// (MediaPipe refines the landmarks from it: [`super::heatmap`]); `None` for a model
+    /// without it.
+    pub heatmap: Option<Vec<f32>>,
 }
 
 /// A loaded, optimised landmark network (cheap to share: clones share the plan).
@@ -48,7 +55,7 @@ fn corrupt(e: impl std::fmt::Display) -> Error {
 impl LandmarkNet {
     /// Parses and optimises an ONNX landmark model from its bytes. Errors: `CorruptData` when
     /// the bytes are not ONNX, or the model lacks a 1×256×256×3 input, a 195-value landmark output
-    /// or a 1-value pose flag.
+    /// or a 1-value pose flag. A 64×64×39 heatmap output is kept when the model has one.
     pub fn from_onnx(bytes: &[u8]) -> Result<Self> {
         Self::build(bytes, true)
     }
@@ -70,7 +77,9 @@ impl LandmarkNet {
         let (Some(lm), Some(flag)) = (find(NUM_OUTPUT_LANDMARKS * LANDMARK_VALUES), find(1)) else {
             return Err(corrupt("no 195-value landmark output or 1-value pose flag output"));
         };
-        typed.select_output_outlets(&[lm, flag]).map_err(corrupt)?;
+        let mut selected = vec![lm, flag];
+        selected.extend(find(HEATMAP_SIDE * HEATMAP_SIDE * NUM_OUTPUT_LANDMARKS));
+        typed.select_output_outlets(&selected).map_err(corrupt)?;
         let typed = if rewrite { rewrite_depthwise(typed).map_err(corrupt)? } else { typed };
         let plan = typed.into_optimized().map_err(corrupt)?.into_runnable().map_err(corrupt)?;
         Ok(Self { plan })
@@ -101,7 +110,11 @@ impl LandmarkNet {
             return Err(corrupt(format!("outputs of {} and {} values", lm.len(), flag.len())));
         }
         let landmarks = lm.chunks_exact(LANDMARK_VALUES).map(|c| [c[0], c[1], c[2], c[3], c[4]]).collect();
-        Ok(RawOutput { landmarks, pose_flag: flag.iter().next().copied().unwrap_or(0.0) })
+        let heatmap = match out.get(2) {
+            Some(h) => Some(h.to_plain_array_view::<f32>().map_err(corrupt)?.iter().copied().collect()),
+            None => None,
+        };
+        Ok(RawOutput { landmarks, pose_flag: flag.iter().next().copied().unwrap_or(0.0), heatmap })
     }
 }
 
@@ -380,6 +393,8 @@ mod tests {
         let out = net.run(vec![1.0; INPUT_SIDE * INPUT_SIDE * 3]).unwrap();
         assert_eq!(out.landmarks.len(), NUM_OUTPUT_LANDMARKS);
         assert!((0.0..=1.0).contains(&out.pose_flag));
+        let heatmap = out.heatmap.expect("the asset has MediaPipe's heatmap output");
+        assert_eq!(heatmap.len(), HEATMAP_SIDE * HEATMAP_SIDE * NUM_OUTPUT_LANDMARKS);
     }
 
     /// The rewritten plan (stride-2 depthwise convolutions split, padding made explicit) gives the
@@ -406,7 +421,8 @@ mod tests {
         for tensor in [vec![1.0; n], noise] {
             let (a, b) = (rewritten.run(tensor.clone()).unwrap(), plain.run(tensor).unwrap());
             let bits = |o: &RawOutput| -> Vec<u32> {
-                o.landmarks.iter().flatten().chain([&o.pose_flag]).map(|v| v.to_bits()).collect()
+                let heatmap = o.heatmap.iter().flatten();
+                o.landmarks.iter().flatten().chain([&o.pose_flag]).chain(heatmap).map(|v| v.to_bits()).collect()
             };
             assert_eq!(bits(&a), bits(&b));
         }
