@@ -20,18 +20,19 @@ fn sigmoid(v: f32) -> f32 {
     1.0 / (1.0 + (-v).exp())
 }
 
-/// Refines `landmarks` (x, y in px of the 256² crop, as [`super::model::RawOutput`] holds them)
-/// in place from `heatmap` ([`HEATMAP_SIDE`]² × [`NUM_OUTPUT_LANDMARKS`] logits, HWC). Follows
+/// Refines `landmarks` (x, y in px of the 256² crop, as [`super::model::RawOutput`] holds them;
+/// the first `landmarks.len()` of the network's, landmark k read from heatmap channel k) in
+/// place from `heatmap` ([`HEATMAP_SIDE`]² × [`NUM_OUTPUT_LANDMARKS`] logits, HWC). Follows
 /// MediaPipe's calculator to the cell: the window is centred on the cell the landmark's
 /// normalised position truncates to, cut at the heatmap's border, and the refined position is
 /// the weighted mean of the cells' indices over the side (so a cell's index, not its centre,
 /// is its position); landmarks whose column falls outside the heatmap, or whose row is above
 /// it, keep their position (as there, a row below it is not checked: its window is the border's
-/// rows when they are within reach). Errors: `OutOfRange` when the lengths are not the
-/// network's.
+/// rows when they are within reach). Errors: `OutOfRange` for more landmarks than channels or a
+/// heatmap of another length.
 pub fn refine(landmarks: &mut [[f32; LANDMARK_VALUES]], heatmap: &[f32]) -> Result<()> {
     let (side, channels) = (HEATMAP_SIDE, NUM_OUTPUT_LANDMARKS);
-    if landmarks.len() != channels || heatmap.len() != side * side * channels {
+    if landmarks.len() > channels || heatmap.len() != side * side * channels {
         return Err(Error::OutOfRange {
             name: "heatmap refinement",
             detail: format!("{} landmarks and {} heatmap values", landmarks.len(), heatmap.len()),
@@ -122,8 +123,12 @@ mod tests {
     fn wrong_lengths_are_errors() {
         let mut lm = vec![[0.0f32; LANDMARK_VALUES]; NUM_OUTPUT_LANDMARKS];
         assert!(matches!(refine(&mut lm, &[0.0; 10]), Err(Error::OutOfRange { .. })));
-        let mut short = vec![[0.0f32; LANDMARK_VALUES]; 3];
+        let mut many = vec![[0.0f32; LANDMARK_VALUES]; NUM_OUTPUT_LANDMARKS + 1];
         let h = heatmap_with(&[]);
-        assert!(matches!(refine(&mut short, &h), Err(Error::OutOfRange { .. })));
+        assert!(matches!(refine(&mut many, &h), Err(Error::OutOfRange { .. })));
+        let mut first_three = vec![[128.0f32, 128.0, 0.0, 0.0, 0.0]; 3];
+        refine(&mut first_three, &heatmap_with(&[(2, 33, 33, 6.0), (5, 33, 33, 6.0)])).unwrap();
+        assert_eq!(first_three[2][..2], [132.0, 132.0], "landmark k reads channel k");
+        assert_eq!(first_three[1][..2], [128.0, 128.0]);
     }
 }

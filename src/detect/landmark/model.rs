@@ -6,6 +6,8 @@ use std::sync::{Arc, OnceLock};
 
 use tract_onnx::prelude::*;
 use tract_onnx::tract_core::internal::*;
+use tract_onnx::tract_core::ops::nn::resize::AxisPlan;
+use tract_onnx::tract_core::ops::nn::{CoordTransformer, Interpolator, Resize};
 
 use super::crop::INPUT_SIDE;
 use crate::error::{Error, Result};
@@ -40,6 +42,10 @@ pub struct RawOutput {
 #[derive(Clone)]
 pub struct LandmarkNet {
     plan: Arc<TypedRunnableModel>,
+    /// For each node of the plan that only the heatmap output needs, placeholder outputs of its
+    /// facts (zeros, shared): [`LandmarkNet::run`] without the heatmap hands them on instead of
+    /// evaluating the node.
+    heatmap_only: Arc<std::collections::HashMap<usize, TVec<TValue>>>,
 }
 
 impl std::fmt::Debug for LandmarkNet {
@@ -80,9 +86,15 @@ impl LandmarkNet {
         let mut selected = vec![lm, flag];
         selected.extend(find(HEATMAP_SIDE * HEATMAP_SIDE * NUM_OUTPUT_LANDMARKS));
         typed.select_output_outlets(&selected).map_err(corrupt)?;
-        let typed = if rewrite { rewrite_depthwise(typed).map_err(corrupt)? } else { typed };
+        let typed = if rewrite {
+            let typed = rewrite_depthwise(typed).and_then(|t| t.into_decluttered()).map_err(corrupt)?;
+            rewrite_upsampling(typed).map_err(corrupt)?
+        } else {
+            typed
+        };
         let plan = typed.into_optimized().map_err(corrupt)?.into_runnable().map_err(corrupt)?;
-        Ok(Self { plan })
+        let heatmap_only = Arc::new(heatmap_only_nodes(plan.model()).map_err(corrupt)?);
+        Ok(Self { plan, heatmap_only })
     }
 
     /// The embedded model, parsed once per process (later calls clone the shared plan).
@@ -93,16 +105,26 @@ impl LandmarkNet {
             .map_err(Error::CorruptData)
     }
 
-    /// Runs the network on a 256×256×3 HWC tensor in [0, 1] ([`super::crop::crop_tensor`]).
-    /// Errors: `OutOfRange` for a wrong tensor length, `CorruptData` if inference fails.
-    pub fn run(&self, tensor: Vec<f32>) -> Result<RawOutput> {
+    /// Runs the network on a 256×256×3 HWC tensor in [0, 1] ([`super::crop::crop_tensor`]),
+    /// the heatmap output too when `heatmap` (it costs about a tenth of a pass; without it
+    /// [`RawOutput::heatmap`] is `None`). Errors: `OutOfRange` for a wrong tensor length,
+    /// `CorruptData` if inference fails.
+    pub fn run(&self, tensor: Vec<f32>, heatmap: bool) -> Result<RawOutput> {
         let want = INPUT_SIDE * INPUT_SIDE * 3;
         if tensor.len() != want {
             return Err(Error::OutOfRange { name: "tensor", detail: format!("{} values, need {want}", tensor.len()) });
         }
         let input: Tensor =
             tract_ndarray::Array4::from_shape_vec((1, INPUT_SIDE, INPUT_SIDE, 3), tensor).map_err(corrupt)?.into();
-        let out = self.plan.run(tvec!(input.into())).map_err(corrupt)?;
+        let mut state = self.plan.spawn().map_err(corrupt)?;
+        let out = state
+            .run_plan_with_eval(tvec!(input.into()), |session, op_state, node, inputs| {
+                match self.heatmap_only.get(&node.id) {
+                    Some(placeholder) if !heatmap => Ok(placeholder.clone()),
+                    _ => tract_onnx::tract_core::plan::eval(session, op_state, node, inputs),
+                }
+            })
+            .map_err(corrupt)?;
         let lm = out[0].to_plain_array_view::<f32>().map_err(corrupt)?;
         let flag = out[1].to_plain_array_view::<f32>().map_err(corrupt)?;
         let lm: Vec<f32> = lm.iter().copied().collect();
@@ -110,12 +132,41 @@ impl LandmarkNet {
             return Err(corrupt(format!("outputs of {} and {} values", lm.len(), flag.len())));
         }
         let landmarks = lm.chunks_exact(LANDMARK_VALUES).map(|c| [c[0], c[1], c[2], c[3], c[4]]).collect();
-        let heatmap = match out.get(2) {
+        let heatmap = match out.get(2).filter(|_| heatmap) {
             Some(h) => Some(h.to_plain_array_view::<f32>().map_err(corrupt)?.iter().copied().collect()),
             None => None,
         };
         Ok(RawOutput { landmarks, pose_flag: flag.iter().next().copied().unwrap_or(0.0), heatmap })
     }
+}
+
+/// The nodes of `model` that only its third output (the heatmap) depends on, each with zero
+/// tensors of its output facts.
+fn heatmap_only_nodes(model: &TypedModel) -> TractResult<std::collections::HashMap<usize, TVec<TValue>>> {
+    let outputs = model.output_outlets()?;
+    let ancestors = |outlets: &[OutletId]| -> std::collections::HashSet<usize> {
+        let mut seen = std::collections::HashSet::new();
+        let mut stack: Vec<usize> = outlets.iter().map(|o| o.node).collect();
+        while let Some(n) = stack.pop() {
+            if seen.insert(n) {
+                stack.extend(model.node(n).inputs.iter().map(|i| i.node));
+            }
+        }
+        seen
+    };
+    if outputs.len() < 3 {
+        return Ok(Default::default());
+    }
+    let needed = ancestors(&outputs[..2]);
+    let mut placeholders = std::collections::HashMap::new();
+    for n in ancestors(&outputs[2..3]).difference(&needed) {
+        let zeros = model.node(*n).outputs.iter().map(|o| {
+            let shape = o.fact.shape.as_concrete().ok_or_else(|| format_err!("symbolic heatmap shape"))?;
+            Ok(Tensor::zero_dt(o.fact.datum_type, shape)?.into_tvalue())
+        });
+        placeholders.insert(*n, zeros.collect::<TractResult<TVec<TValue>>>()?);
+    }
+    Ok(placeholders)
 }
 
 /// Smallest input side of a stride-2 depthwise convolution that [`rewrite_depthwise`] splits: on
@@ -202,6 +253,42 @@ fn rewrite_depthwise(mut model: TypedModel) -> TractResult<TypedModel> {
         if split {
             out = patch.wire_node(format!("{}.subsample", node.name), Subsample { axes: tvec![h, h + 1] }, &[out])?[0];
         }
+        patch.shunt_outside(&model, OutletId::new(id, 0), out)?;
+        patch.apply(&mut model)?;
+    }
+    Ok(model)
+}
+
+/// The 2× bilinear upsampling of two adjacent axes that `node` performs, when it is one: tract's
+/// `Resize` with linear interpolation, half-pixel coordinates and constant scales of 2 on two
+/// adjacent axes and 1 on the others. Returns the op and the two axes.
+fn bilinear_upsampling(model: &TypedModel, node: &TypedNode) -> TractResult<Option<(Resize, TVec<usize>)>> {
+    let Some(resize) = node.op_as::<Resize>() else { return Ok(None) };
+    if resize.interpolator != Interpolator::Linear || resize.coord_transformer != CoordTransformer::HalfPixel {
+        return Ok(None);
+    }
+    let Some(scales) = resize.optional_scales_input.and_then(|ix| node.inputs.get(ix)) else { return Ok(None) };
+    let Some(scales) = model.outlet_fact(*scales)?.konst.clone() else { return Ok(None) };
+    let scales: Vec<f32> = scales.cast_to::<f32>()?.try_as_plain_ram()?.as_slice::<f32>()?.to_vec();
+    let axes: TVec<usize> = (0..scales.len()).filter(|&a| scales[a] != 1.0).collect();
+    let fact = model.outlet_fact(node.inputs[0])?;
+    let doubled = axes.len() == 2 && axes[1] == axes[0] + 1 && axes.iter().all(|&a| scales[a] == 2.0);
+    Ok((doubled && fact.datum_type == f32::datum_type() && fact.rank() == scales.len()).then(|| (resize.clone(), axes)))
+}
+
+/// Replaces tract's 2× bilinear `Resize` nodes of a decluttered model (the ONNX `Resize` becomes
+/// tract's there; BlazePose's heatmap head has three, the 64² one the
+/// slowest node of the whole plan: 2.3 ms a pass on a busy host, against 1.4 ms for the largest
+/// convolution) by [`Upsample2x`], which sums the same taps with the same weights in the same order
+/// into the same intermediate tensor: bit-identical outputs.
+fn rewrite_upsampling(mut model: TypedModel) -> TractResult<TypedModel> {
+    let ids: Vec<usize> = model.nodes().iter().map(|n| n.id).collect();
+    for id in ids {
+        let node = model.node(id).clone();
+        let Some((resize, axes)) = bilinear_upsampling(&model, &node)? else { continue };
+        let mut patch = TypedModelPatch::default();
+        let input = patch.tap_model(&model, node.inputs[0])?;
+        let out = patch.wire_node(format!("{}.upsample2x", node.name), Upsample2x { resize, axes }, &[input])?[0];
         patch.shunt_outside(&model, OutletId::new(id, 0), out)?;
         patch.apply(&mut model)?;
     }
@@ -369,6 +456,84 @@ impl EvalOp for Subsample {
     tract_onnx::tract_core::op_out_of_plan!();
 }
 
+/// Doubles two adjacent axes by `resize`'s interpolation (tract's bilinear, half-pixel `Resize`,
+/// see [`rewrite_upsampling`]): the first axis, then the second, each output the sum from 0 of
+/// its taps' weight × value in tap order, skipping zero weights, as tract's `Resize` computes
+/// it, without its per-call copies and its generic inner loop.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+struct Upsample2x {
+    resize: Resize,
+    axes: TVec<usize>,
+}
+
+/// Resamples `src` seen as `[outer, len_in, inner]` along its middle axis by `plan` into `dst`
+/// (`[outer, len_out, inner]`), exactly as tract's `resample_axis` sums (extrapolated outputs
+/// 0).
+fn resample(src: &[f32], outer: usize, len_in: usize, inner: usize, plan: &AxisPlan, dst: &mut [f32]) {
+    let (len_out, window) = (plan.extrapolated.len(), plan.window);
+    for o in 0..outer {
+        let src = &src[o * len_in * inner..][..len_in * inner];
+        let dst = &mut dst[o * len_out * inner..][..len_out * inner];
+        for (x, out) in dst.chunks_exact_mut(inner).enumerate() {
+            let (indices, weights) = (&plan.indices[x * window..][..window], &plan.weights[x * window..][..window]);
+            if plan.extrapolated[x] {
+                out.fill(0.0);
+                continue;
+            }
+            for (j, d) in out.iter_mut().enumerate() {
+                let mut sum = 0f32;
+                for (&i, &w) in indices.iter().zip(weights) {
+                    if w != 0.0 {
+                        sum += w * src[i * inner + j];
+                    }
+                }
+                *d = sum;
+            }
+        }
+    }
+}
+
+impl Op for Upsample2x {
+    fn name(&self) -> StaticName {
+        "Upsample2x".into()
+    }
+
+    fn info(&self) -> TractResult<Vec<String>> {
+        Ok(vec![format!("axes {:?}, {:?}", self.axes, self.resize.interpolator)])
+    }
+
+    tract_onnx::tract_core::op_as_typed_op!();
+}
+
+impl EvalOp for Upsample2x {
+    fn eval(&self, _ctx: &EvalContext, inputs: TVec<TValue>) -> TractResult<TVec<TValue>> {
+        let input = args_1!(inputs);
+        let [outer, ih, iw, inner] = around_axes(input.shape(), &self.axes)?;
+        let (oh, ow) = (2 * ih, 2 * iw);
+        let mut shape: TVec<usize> = input.shape().into();
+        (shape[self.axes[0]], shape[self.axes[1]]) = (oh, ow);
+        let view = input.to_plain_array_view::<f32>()?;
+        let x = view.as_slice().ok_or_else(|| format_err!("Upsample2x input is not contiguous"))?;
+        let mut rows = vec![0f32; outer * oh * iw * inner];
+        resample(x, outer, ih, iw * inner, &self.resize.plan_axis(2.0, ih, oh), &mut rows);
+        let mut out = vec![0f32; outer * oh * ow * inner];
+        resample(&rows, outer * oh, iw, inner, &self.resize.plan_axis(2.0, iw, ow), &mut out);
+        f32_value(&shape, out)
+    }
+
+    tract_onnx::tract_core::op_out_of_plan!();
+}
+
+impl TypedOp for Upsample2x {
+    fn output_facts(&self, inputs: &[&TypedFact]) -> TractResult<TVec<TypedFact>> {
+        resized_fact("Upsample2x", inputs[0], &self.axes, |_, d| d * 2)
+    }
+
+    change_axes_keeping_op!();
+
+    tract_onnx::tract_core::as_op!();
+}
+
 impl TypedOp for Subsample {
     fn output_facts(&self, inputs: &[&TypedFact]) -> TractResult<TVec<TypedFact>> {
         resized_fact("Subsample", inputs[0], &self.axes, |_, d| d.div_ceil(2))
@@ -389,12 +554,17 @@ mod tests {
         let half = &EMBEDDED_ONNX[..EMBEDDED_ONNX.len() / 2];
         assert!(matches!(LandmarkNet::from_onnx(half), Err(Error::CorruptData(_))));
         let net = LandmarkNet::embedded().unwrap();
-        assert!(matches!(net.run(vec![0.5; 10]), Err(Error::OutOfRange { .. })));
-        let out = net.run(vec![1.0; INPUT_SIDE * INPUT_SIDE * 3]).unwrap();
+        assert!(matches!(net.run(vec![0.5; 10], true), Err(Error::OutOfRange { .. })));
+        let out = net.run(vec![1.0; INPUT_SIDE * INPUT_SIDE * 3], true).unwrap();
         assert_eq!(out.landmarks.len(), NUM_OUTPUT_LANDMARKS);
         assert!((0.0..=1.0).contains(&out.pose_flag));
-        let heatmap = out.heatmap.expect("the asset has MediaPipe's heatmap output");
+        let heatmap = out.heatmap.clone().expect("the asset has MediaPipe's heatmap output");
         assert_eq!(heatmap.len(), HEATMAP_SIDE * HEATMAP_SIDE * NUM_OUTPUT_LANDMARKS);
+        assert!(heatmap.iter().any(|&v| v != 0.0));
+        // Without the heatmap: the same landmarks and flag, its nodes skipped.
+        assert!(net.heatmap_only.len() >= 10, "{} heatmap-only nodes", net.heatmap_only.len());
+        let without = net.run(vec![1.0; INPUT_SIDE * INPUT_SIDE * 3], false).unwrap();
+        assert_eq!((without.heatmap, &without.landmarks, without.pose_flag), (None, &out.landmarks, out.pose_flag));
     }
 
     /// The rewritten plan (stride-2 depthwise convolutions split, padding made explicit) gives the
@@ -408,6 +578,8 @@ mod tests {
         assert_eq!(count(&plain, "Subsample") + count(&plain, "ZeroPad"), 0);
         assert!(count(&rewritten, "Subsample") >= 2, "the 128² and 64² stride-2 convolutions are split");
         assert!(count(&rewritten, "ZeroPad") >= 10);
+        assert_eq!(count(&plain, "Upsample2x"), 0);
+        assert_eq!(count(&rewritten, "Upsample2x"), 3, "the heatmap head's three bilinear upsamplings");
         let n = INPUT_SIDE * INPUT_SIDE * 3;
         let mut state = 0x2545_f491_4f6c_dd1d_u64;
         let noise: Vec<f32> = (0..n)
@@ -419,7 +591,7 @@ mod tests {
             })
             .collect();
         for tensor in [vec![1.0; n], noise] {
-            let (a, b) = (rewritten.run(tensor.clone()).unwrap(), plain.run(tensor).unwrap());
+            let (a, b) = (rewritten.run(tensor.clone(), true).unwrap(), plain.run(tensor, true).unwrap());
             let bits = |o: &RawOutput| -> Vec<u32> {
                 let heatmap = o.heatmap.iter().flatten();
                 o.landmarks.iter().flatten().chain([&o.pose_flag]).chain(heatmap).map(|v| v.to_bits()).collect()
