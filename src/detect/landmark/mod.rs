@@ -73,20 +73,17 @@ pub fn landmarks_in_roi(net: &LandmarkNet, image: &ImageView<'_>, roi: &Roi, ref
 }
 
 /// Runs `net` on `tensor`, a crop of `roi` ([`crop::crop_tensor`], possibly preprocessed),
-/// refines the 33 pose landmarks from the network's heatmap when `refine` ([`heatmap::refine`],
-/// as MediaPipe's pose graph does), and maps them back to image px. The auxiliary landmarks keep
-/// the regression head's positions (MediaPipe refines them too): they only place the second
-/// pass's ROI, and refined they moved it enough to change the pose flag, the retries and the
-/// presence on some drawings (docs/benchmarks.md, "Landmarks refined from the heatmap").
-/// Errors: those of [`LandmarkNet::run`]; `CorruptData` when `refine` and the model has no
-/// heatmap output.
+/// refines all 39 landmarks from the network's heatmap when `refine` ([`heatmap::refine`], as
+/// MediaPipe's pose graph does: the alignment landmarks that place a second pass too), and maps
+/// them back to image px. Errors: those of [`LandmarkNet::run`]; `CorruptData` when `refine` and
+/// the model has no heatmap output.
 pub fn landmarks_of_tensor(net: &LandmarkNet, roi: &Roi, tensor: Vec<f32>, refine: bool) -> Result<RoiLandmarks> {
     let mut raw = net.run(tensor, refine)?;
     if refine {
         let Some(h) = &raw.heatmap else {
             return Err(Error::CorruptData("BlazePose landmark model: no heatmap output to refine from".into()));
         };
-        heatmap::refine(&mut raw.landmarks[..NUM_POSE_LANDMARKS], h)?;
+        heatmap::refine(&mut raw.landmarks, h)?;
     }
     let n = crop::INPUT_SIDE as f64;
     let landmarks = raw
@@ -130,9 +127,8 @@ pub struct BlazePoseOptions {
     /// crops' enclosed regions filled ([`prep::fill_enclosed`]); its pass is kept when its pose
     /// flag is higher and at least [`FILL_ACCEPT`]. Default true.
     pub fill_drawings: bool,
-    /// Refine each pass's 33 pose landmarks from the network's heatmap, as MediaPipe's pose graph
-    /// does ([`heatmap::refine`]; the auxiliary ones that place the second pass keep their
-    /// positions, [`landmarks_of_tensor`]). Default true.
+    /// Refine each pass's landmarks from the network's heatmap, as MediaPipe's pose graph does
+    /// ([`heatmap::refine`]). Default true.
     pub refine_from_heatmap: bool,
     /// Shifts from the mapped landmarks to the body model's joints. Default
     /// [`JointDefinitions::SHIPPED`]; [`JointDefinitions::IDENTITY`] keeps the landmarks'
@@ -190,14 +186,13 @@ pub struct BlazePoseDetection {
 }
 
 /// One pass on `roi` with the preprocessing `opts` asks for, the enclosed regions filled when
-/// `fill`, the pose landmarks refined from the heatmap when `refine`.
+/// `fill`.
 fn pass_on(
     net: &LandmarkNet,
     image: &ImageView<'_>,
     roi: &Roi,
     opts: &BlazePoseOptions,
     fill: bool,
-    refine: bool,
 ) -> Result<RoiLandmarks> {
     let mut t = crop::crop_tensor(image, roi);
     if opts.lighten_drawings {
@@ -206,13 +201,11 @@ fn pass_on(
     if fill {
         prep::fill_enclosed(&mut t, crop::INPUT_SIDE);
     }
-    landmarks_of_tensor(net, roi, t, refine)
+    landmarks_of_tensor(net, roi, t, opts.refine_from_heatmap)
 }
 
 /// `opts.passes` passes from `start`: the first on `start`, a second on the ROI from its
-/// landmarks. With two passes the first only places the second (its alignment landmarks and
-/// pose flag), so it runs without the heatmap; when its alignment landmarks coincide it is run
-/// again with it.
+/// landmarks.
 fn passes_from(
     net: &LandmarkNet,
     image: &ImageView<'_>,
@@ -220,17 +213,13 @@ fn passes_from(
     opts: &BlazePoseOptions,
     fill: bool,
 ) -> Result<RoiLandmarks> {
-    let refine = opts.refine_from_heatmap;
-    let two = opts.passes == 2;
-    let first = pass_on(net, image, start, opts, fill, refine && !two)?;
-    if !two {
-        return Ok(first);
+    let mut pass = pass_on(net, image, start, opts, fill)?;
+    if opts.passes == 2 {
+        if let Ok(r) = roi_from_landmarks(&pass) {
+            pass = pass_on(net, image, &r, opts, fill)?;
+        }
     }
-    match roi_from_landmarks(&first) {
-        Ok(r) => pass_on(net, image, &r, opts, fill, refine),
-        Err(_) if refine => pass_on(net, image, start, opts, fill, true),
-        Err(_) => Ok(first),
-    }
+    Ok(pass)
 }
 
 /// Finds the figure in `image`: first pass on the ink box's ROI, then (with `passes` = 2) a pass
