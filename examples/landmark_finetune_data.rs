@@ -136,7 +136,7 @@ fn crops_of(net: &LandmarkNet, src: &Source, index: usize) -> Result<(Vec<u8>, V
         let mut t = crop_tensor(&src.image.view(), &roi);
         prep::lighten_drawing(&mut t);
         bytes.extend(t.iter().map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8));
-        let raw = net.run(t, false)?;
+        let raw = net.run(t)?;
         meta.push(src.kind as f32);
         meta.push(index as f32);
         let n = INPUT_SIDE as f64;

@@ -78,7 +78,7 @@ pub fn landmarks_in_roi(net: &LandmarkNet, image: &ImageView<'_>, roi: &Roi, ref
 /// them back to image px. Errors: those of [`LandmarkNet::run`]; `CorruptData` when `refine` and
 /// the model has no heatmap output.
 pub fn landmarks_of_tensor(net: &LandmarkNet, roi: &Roi, tensor: Vec<f32>, refine: bool) -> Result<RoiLandmarks> {
-    let mut raw = net.run(tensor, refine)?;
+    let mut raw = net.run(tensor)?;
     if refine {
         let Some(h) = &raw.heatmap else {
             return Err(Error::CorruptData("BlazePose landmark model: no heatmap output to refine from".into()));

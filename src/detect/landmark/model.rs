@@ -42,10 +42,6 @@ pub struct RawOutput {
 #[derive(Clone)]
 pub struct LandmarkNet {
     plan: Arc<TypedRunnableModel>,
-    /// For each node of the plan that only the heatmap output needs, placeholder outputs of its
-    /// facts (zeros, shared): [`LandmarkNet::run`] without the heatmap hands them on instead of
-    /// evaluating the node.
-    heatmap_only: Arc<std::collections::HashMap<usize, TVec<TValue>>>,
 }
 
 impl std::fmt::Debug for LandmarkNet {
@@ -93,8 +89,7 @@ impl LandmarkNet {
             typed
         };
         let plan = typed.into_optimized().map_err(corrupt)?.into_runnable().map_err(corrupt)?;
-        let heatmap_only = Arc::new(heatmap_only_nodes(plan.model()).map_err(corrupt)?);
-        Ok(Self { plan, heatmap_only })
+        Ok(Self { plan })
     }
 
     /// The embedded model, parsed once per process (later calls clone the shared plan).
@@ -105,26 +100,16 @@ impl LandmarkNet {
             .map_err(Error::CorruptData)
     }
 
-    /// Runs the network on a 256×256×3 HWC tensor in [0, 1] ([`super::crop::crop_tensor`]),
-    /// the heatmap output too when `heatmap` (it costs about a tenth of a pass; without it
-    /// [`RawOutput::heatmap`] is `None`). Errors: `OutOfRange` for a wrong tensor length,
-    /// `CorruptData` if inference fails.
-    pub fn run(&self, tensor: Vec<f32>, heatmap: bool) -> Result<RawOutput> {
+    /// Runs the network on a 256×256×3 HWC tensor in [0, 1] ([`super::crop::crop_tensor`]).
+    /// Errors: `OutOfRange` for a wrong tensor length, `CorruptData` if inference fails.
+    pub fn run(&self, tensor: Vec<f32>) -> Result<RawOutput> {
         let want = INPUT_SIDE * INPUT_SIDE * 3;
         if tensor.len() != want {
             return Err(Error::OutOfRange { name: "tensor", detail: format!("{} values, need {want}", tensor.len()) });
         }
         let input: Tensor =
             tract_ndarray::Array4::from_shape_vec((1, INPUT_SIDE, INPUT_SIDE, 3), tensor).map_err(corrupt)?.into();
-        let mut state = self.plan.spawn().map_err(corrupt)?;
-        let out = state
-            .run_plan_with_eval(tvec!(input.into()), |session, op_state, node, inputs| {
-                match self.heatmap_only.get(&node.id) {
-                    Some(placeholder) if !heatmap => Ok(placeholder.clone()),
-                    _ => tract_onnx::tract_core::plan::eval(session, op_state, node, inputs),
-                }
-            })
-            .map_err(corrupt)?;
+        let out = self.plan.run(tvec!(input.into())).map_err(corrupt)?;
         let lm = out[0].to_plain_array_view::<f32>().map_err(corrupt)?;
         let flag = out[1].to_plain_array_view::<f32>().map_err(corrupt)?;
         let lm: Vec<f32> = lm.iter().copied().collect();
@@ -132,41 +117,12 @@ impl LandmarkNet {
             return Err(corrupt(format!("outputs of {} and {} values", lm.len(), flag.len())));
         }
         let landmarks = lm.chunks_exact(LANDMARK_VALUES).map(|c| [c[0], c[1], c[2], c[3], c[4]]).collect();
-        let heatmap = match out.get(2).filter(|_| heatmap) {
+        let heatmap = match out.get(2) {
             Some(h) => Some(h.to_plain_array_view::<f32>().map_err(corrupt)?.iter().copied().collect()),
             None => None,
         };
         Ok(RawOutput { landmarks, pose_flag: flag.iter().next().copied().unwrap_or(0.0), heatmap })
     }
-}
-
-/// The nodes of `model` that only its third output (the heatmap) depends on, each with zero
-/// tensors of its output facts.
-fn heatmap_only_nodes(model: &TypedModel) -> TractResult<std::collections::HashMap<usize, TVec<TValue>>> {
-    let outputs = model.output_outlets()?;
-    let ancestors = |outlets: &[OutletId]| -> std::collections::HashSet<usize> {
-        let mut seen = std::collections::HashSet::new();
-        let mut stack: Vec<usize> = outlets.iter().map(|o| o.node).collect();
-        while let Some(n) = stack.pop() {
-            if seen.insert(n) {
-                stack.extend(model.node(n).inputs.iter().map(|i| i.node));
-            }
-        }
-        seen
-    };
-    if outputs.len() < 3 {
-        return Ok(Default::default());
-    }
-    let needed = ancestors(&outputs[..2]);
-    let mut placeholders = std::collections::HashMap::new();
-    for n in ancestors(&outputs[2..3]).difference(&needed) {
-        let zeros = model.node(*n).outputs.iter().map(|o| {
-            let shape = o.fact.shape.as_concrete().ok_or_else(|| format_err!("symbolic heatmap shape"))?;
-            Ok(Tensor::zero_dt(o.fact.datum_type, shape)?.into_tvalue())
-        });
-        placeholders.insert(*n, zeros.collect::<TractResult<TVec<TValue>>>()?);
-    }
-    Ok(placeholders)
 }
 
 /// Smallest input side of a stride-2 depthwise convolution that [`rewrite_depthwise`] splits: on
@@ -554,17 +510,13 @@ mod tests {
         let half = &EMBEDDED_ONNX[..EMBEDDED_ONNX.len() / 2];
         assert!(matches!(LandmarkNet::from_onnx(half), Err(Error::CorruptData(_))));
         let net = LandmarkNet::embedded().unwrap();
-        assert!(matches!(net.run(vec![0.5; 10], true), Err(Error::OutOfRange { .. })));
-        let out = net.run(vec![1.0; INPUT_SIDE * INPUT_SIDE * 3], true).unwrap();
+        assert!(matches!(net.run(vec![0.5; 10]), Err(Error::OutOfRange { .. })));
+        let out = net.run(vec![1.0; INPUT_SIDE * INPUT_SIDE * 3]).unwrap();
         assert_eq!(out.landmarks.len(), NUM_OUTPUT_LANDMARKS);
         assert!((0.0..=1.0).contains(&out.pose_flag));
-        let heatmap = out.heatmap.clone().expect("the asset has MediaPipe's heatmap output");
+        let heatmap = out.heatmap.expect("the asset has MediaPipe's heatmap output");
         assert_eq!(heatmap.len(), HEATMAP_SIDE * HEATMAP_SIDE * NUM_OUTPUT_LANDMARKS);
         assert!(heatmap.iter().any(|&v| v != 0.0));
-        // Without the heatmap: the same landmarks and flag, its nodes skipped.
-        assert!(net.heatmap_only.len() >= 10, "{} heatmap-only nodes", net.heatmap_only.len());
-        let without = net.run(vec![1.0; INPUT_SIDE * INPUT_SIDE * 3], false).unwrap();
-        assert_eq!((without.heatmap, &without.landmarks, without.pose_flag), (None, &out.landmarks, out.pose_flag));
     }
 
     /// The rewritten plan (stride-2 depthwise convolutions split, padding made explicit) gives the
@@ -591,7 +543,7 @@ mod tests {
             })
             .collect();
         for tensor in [vec![1.0; n], noise] {
-            let (a, b) = (rewritten.run(tensor.clone(), true).unwrap(), plain.run(tensor, true).unwrap());
+            let (a, b) = (rewritten.run(tensor.clone()).unwrap(), plain.run(tensor).unwrap());
             let bits = |o: &RawOutput| -> Vec<u32> {
                 let heatmap = o.heatmap.iter().flatten();
                 o.landmarks.iter().flatten().chain([&o.pose_flag]).chain(heatmap).map(|v| v.to_bits()).collect()
