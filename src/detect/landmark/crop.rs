@@ -50,30 +50,43 @@ fn fixed(v: f64) -> i64 {
 /// image read as white, so ROIs partly outside the image are padded.
 pub fn crop_tensor(image: &ImageView<'_>, roi: &Roi) -> Vec<f32> {
     let (w, h, ch) = (image.width() as i64, image.height() as i64, image.channels());
+    let unit: [f32; 256] = std::array::from_fn(|c| c as f32 / 255.0);
     let pixel = |x: i64, y: i64| -> [f32; 3] {
         if x < 0 || y < 0 || x >= w || y >= h {
             return [1.0; 3];
         }
         let row = image.row(y as usize);
-        rgb_of(&row[x as usize * ch..(x as usize + 1) * ch]).map(|c| c as f32 / 255.0)
+        rgb_of(&row[x as usize * ch..(x as usize + 1) * ch]).map(|c| unit[c as usize])
     };
     let m = inverse_map(roi);
     let round_delta = 1i64 << (AB_BITS - INTER_BITS - 1);
     let tab = (1i64 << INTER_BITS) as f32;
-    let mut out = Vec::with_capacity(INPUT_SIDE * INPUT_SIDE * 3);
-    for v in 0..INPUT_SIDE {
+    let mask = (1i64 << INTER_BITS) - 1;
+    // The column terms of the fixed-point map, the same for every row (OpenCV's `adelta`,
+    // `bdelta`).
+    let dx: Vec<i64> = (0..INPUT_SIDE).map(|u| fixed(m[0] * u as f64)).collect();
+    let dy: Vec<i64> = (0..INPUT_SIDE).map(|u| fixed(m[3] * u as f64)).collect();
+    let mut out = vec![0.0f32; INPUT_SIDE * INPUT_SIDE * 3];
+    for (v, out_row) in out.chunks_exact_mut(INPUT_SIDE * 3).enumerate() {
         let x0 = fixed(m[1] * v as f64 + m[2]) + round_delta;
         let y0 = fixed(m[4] * v as f64 + m[5]) + round_delta;
-        for u in 0..INPUT_SIDE {
-            let x = (x0 + fixed(m[0] * u as f64)) >> (AB_BITS - INTER_BITS);
-            let y = (y0 + fixed(m[3] * u as f64)) >> (AB_BITS - INTER_BITS);
+        for (u, o) in out_row.chunks_exact_mut(3).enumerate() {
+            let x = (x0 + dx[u]) >> (AB_BITS - INTER_BITS);
+            let y = (y0 + dy[u]) >> (AB_BITS - INTER_BITS);
             let (ix, iy) = (x >> INTER_BITS, y >> INTER_BITS);
-            let mask = (1i64 << INTER_BITS) - 1;
             let (fx, fy) = ((x & mask) as f32 / tab, (y & mask) as f32 / tab);
-            let (a, b, c, d) = (pixel(ix, iy), pixel(ix + 1, iy), pixel(ix, iy + 1), pixel(ix + 1, iy + 1));
+            let [a, b, c, d] = if ix >= 0 && iy >= 0 && ix + 1 < w && iy + 1 < h {
+                // All four taps inside: read the two rows directly.
+                let (r0, r1) = (image.row(iy as usize), image.row(iy as usize + 1));
+                let (s, t) = (ix as usize * ch, (ix as usize + 1) * ch);
+                let tap = |row: &[u8], at: usize| rgb_of(&row[at..at + ch]).map(|c| unit[c as usize]);
+                [tap(r0, s), tap(r0, t), tap(r1, s), tap(r1, t)]
+            } else {
+                [pixel(ix, iy), pixel(ix + 1, iy), pixel(ix, iy + 1), pixel(ix + 1, iy + 1)]
+            };
             let wts = [(1.0 - fy) * (1.0 - fx), (1.0 - fy) * fx, fy * (1.0 - fx), fy * fx];
             for k in 0..3 {
-                out.push(a[k] * wts[0] + b[k] * wts[1] + c[k] * wts[2] + d[k] * wts[3]);
+                o[k] = a[k] * wts[0] + b[k] * wts[1] + c[k] * wts[2] + d[k] * wts[3];
             }
         }
     }
@@ -104,6 +117,49 @@ mod tests {
         }
         let far = Roi { cx: -1000.0, cy: -1000.0, size: 10.0, rotation: 0.3 };
         assert!(crop_tensor(&img, &far).iter().all(|&v| v == 1.0));
+    }
+
+    /// The crop reads the four taps of every sample straight from the rows where they are all
+    /// inside the image; it equals, bit for bit, the per-tap definition (white outside) on gray,
+    /// RGB and RGBA images and rotated ROIs that cross every border.
+    #[test]
+    fn inner_samples_equal_the_per_tap_definition() {
+        let (w, h) = (37usize, 23usize);
+        for ch in [1usize, 3, 4] {
+            let px: Vec<u8> = (0..w * h * ch).map(|i| ((i * 7919 + 13) % 251) as u8).collect();
+            let img = ImageView::new(&px, w, h, ch, w * ch).unwrap();
+            for roi in [
+                Roi { cx: 18.0, cy: 11.0, size: 30.0, rotation: 0.4 },
+                Roi { cx: 5.0, cy: 20.0, size: 50.0, rotation: -2.0 },
+                Roi { cx: 18.5, cy: 11.5, size: 8.0, rotation: 0.0 },
+            ] {
+                let m = inverse_map(&roi);
+                let t = crop_tensor(&img, &roi);
+                let tap = |x: i64, y: i64, k: usize| -> f32 {
+                    if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
+                        return 1.0;
+                    }
+                    let at = (y as usize * w + x as usize) * ch;
+                    rgb_of(&px[at..at + ch])[k] as f32 / 255.0
+                };
+                for v in 0..INPUT_SIDE {
+                    for u in (0..INPUT_SIDE).step_by(3) {
+                        let q = |a: f64, b: f64, c: f64| {
+                            (fixed(a * u as f64) + fixed(b * v as f64 + c) + 16) >> (AB_BITS - INTER_BITS)
+                        };
+                        let (x, y) = (q(m[0], m[1], m[2]), q(m[3], m[4], m[5]));
+                        let (ix, iy, fx, fy) = (x >> 5, y >> 5, (x & 31) as f32 / 32.0, (y & 31) as f32 / 32.0);
+                        for k in 0..3 {
+                            let want = tap(ix, iy, k) * ((1.0 - fy) * (1.0 - fx))
+                                + tap(ix + 1, iy, k) * ((1.0 - fy) * fx)
+                                + tap(ix, iy + 1, k) * (fy * (1.0 - fx))
+                                + tap(ix + 1, iy + 1, k) * (fy * fx);
+                            assert_eq!(t[3 * (v * INPUT_SIDE + u) + k].to_bits(), want.to_bits(), "{ch} {u} {v} {k}");
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// Sample positions snap to the nearest 1/32 px, as in OpenCV's `warpAffine`: on a ramp

@@ -436,14 +436,18 @@ fn resample(src: &[f32], outer: usize, len_in: usize, inner: usize, plan: &AxisP
                 out.fill(0.0);
                 continue;
             }
-            for (j, d) in out.iter_mut().enumerate() {
-                let mut sum = 0f32;
-                for (&i, &w) in indices.iter().zip(weights) {
-                    if w != 0.0 {
-                        sum += w * src[i * inner + j];
-                    }
+            if inner == 1 {
+                out[0] =
+                    indices.iter().zip(weights).filter(|(_, &w)| w != 0.0).fold(0f32, |sum, (&i, &w)| sum + w * src[i]);
+                continue;
+            }
+            // Tap by tap over the whole inner row (vectorised); every output still sums its
+            // taps in window order from 0.
+            out.fill(0.0);
+            for (&i, &w) in indices.iter().zip(weights).filter(|(_, &w)| w != 0.0) {
+                for (d, &s) in out.iter_mut().zip(&src[i * inner..][..inner]) {
+                    *d += w * s;
                 }
-                *d = sum;
             }
         }
     }

@@ -34,7 +34,8 @@ pub fn lighten_drawing(tensor: &mut [f32]) -> bool {
     if !is_paper(tensor) {
         return false;
     }
-    for v in tensor.iter_mut() {
+    // Paper (exactly 1, most of a drawing's crop) stays 1 under any gamma.
+    for v in tensor.iter_mut().filter(|v| **v != 1.0) {
         *v = v.max(0.0).powf(DRAWING_GAMMA);
     }
     true
