@@ -4,13 +4,16 @@
 //! figure" by the calibrated presence and by the hard thresholds; the set scores agree with the
 //! metrics computed directly; a calibration cannot be fitted from one-sided outcomes; refusing
 //! a fraction of negative pages lowers only the presence intercepts, enough and no more; joints
-//! both backends agree on are averaged.
+//! both backends agree on are averaged; with both backends the presence is the surer of the
+//! two-backend model and BlazePose's own.
 
 use std::sync::Arc;
 
 use sketchbody::body::BodyModel;
-use sketchbody::detect::calibration::Calibration;
-use sketchbody::detect::figure::{decide, gather, Backend, FigureOptions, Fusion, LIMB_GROUPS};
+use sketchbody::detect::calibration::{log_odds, presence_features, Calibration};
+use sketchbody::detect::figure::{
+    decide, gather, presence_log_odds, Backend, EvidenceFeatures, FigureOptions, Fusion, LIMB_GROUPS,
+};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
 use sketchbody::error::Error;
@@ -100,6 +103,39 @@ fn fusion_presence_and_set_scores() {
     assert!(matches!(refuse_negatives(&mut cal.clone(), &[], 1.5), Err(Error::OutOfRange { .. })));
     assert_eq!("blazepose".parse::<Backend>().unwrap(), Backend::BlazePose);
     assert!(matches!("openpose".parse::<Backend>(), Err(Error::OutOfRange { .. })));
+}
+
+/// A figure BlazePose is sure of is not refused because the sketch model disagrees: with both
+/// backends the presence log-odds is the higher of the two-backend model's and BlazePose's
+/// own, never the sketch model's own (which answers most clutter pages); with one backend its
+/// own model decides.
+#[test]
+fn presence_is_the_surer_of_the_two_backend_model_and_blazeposes_own() {
+    let cal = Calibration::embedded().unwrap();
+    let both = |sketch: f64, flag: f64, agreement: f64| EvidenceFeatures {
+        candidates: Vec::new(),
+        presence_fmp: Some(presence_features(Some(sketch), None, None)),
+        presence_blazepose: Some(presence_features(None, Some(flag), None)),
+        presence_auto: Some(presence_features(Some(sketch), Some(flag), Some(agreement))),
+    };
+    let model = |w: &[f64], x: &Option<Vec<f64>>| log_odds(w, x.as_ref().unwrap()).unwrap();
+    let mut blazepose_decided = 0;
+    for (sketch, flag, agreement) in [(-3.0, 0.95, 1.0), (1.0, 0.2, 0.02), (0.5, 0.7, 0.05), (-1.0, 0.1, 0.9)] {
+        let f = both(sketch, flag, agreement);
+        let (auto, bp) =
+            (model(&cal.presence.auto, &f.presence_auto), model(&cal.presence.blazepose, &f.presence_blazepose));
+        assert_eq!(presence_log_odds(&f, cal).unwrap(), Some(auto.max(bp)));
+        blazepose_decided += usize::from(bp > auto);
+    }
+    assert!((1..4).contains(&blazepose_decided), "both models must decide somewhere: {blazepose_decided}");
+    // A confident sketch model alone keeps its own model; BlazePose alone its own.
+    let fmp = EvidenceFeatures { presence_blazepose: None, presence_auto: None, ..both(2.0, 0.0, 0.0) };
+    assert_eq!(presence_log_odds(&fmp, cal).unwrap(), Some(model(&cal.presence.fmp, &fmp.presence_fmp)));
+    let bp = EvidenceFeatures { presence_fmp: None, presence_auto: None, ..both(0.0, 0.9, 0.0) };
+    assert_eq!(presence_log_odds(&bp, cal).unwrap(), Some(model(&cal.presence.blazepose, &bp.presence_blazepose)));
+    let none =
+        EvidenceFeatures { presence_fmp: None, presence_blazepose: None, presence_auto: None, candidates: Vec::new() };
+    assert_eq!(presence_log_odds(&none, cal).unwrap(), None);
 }
 
 /// `Auto` per image lets the 3-D pose step referee a drawing the sketch model recognises: a

@@ -187,7 +187,8 @@ pub struct Figure {
     /// The figure's confidence, the mean of `joint_confidence`: the expected fraction of correct
     /// joints, in [0, 1].
     pub confidence: f64,
-    /// The calibrated probability that the image holds a figure, in [0, 1].
+    /// The calibrated probability that the image holds a figure, in [0, 1] (with both backends,
+    /// the higher of the two-backend model's and BlazePose's own: [`presence_log_odds`]).
     pub presence: f64,
     /// `confidence` < [`LOW_CONFIDENCE`]: look at the overlay and correct the joints.
     pub low_confidence: bool,
@@ -374,17 +375,21 @@ struct Scored {
     raw_score: f64,
 }
 
-/// The log-odds of a figure from the presence model [`decide`] uses for features `f`: both
-/// backends' when both found a candidate, else the one that did; `None` when neither did.
-/// Errors: `CorruptData` for a calibration of the wrong shape.
+/// The log-odds of a figure that [`decide`] thresholds for features `f`: when both backends
+/// found a candidate, the higher of the two-backend presence model's and BlazePose's own (a
+/// figure BlazePose alone is sure of is not refused because the sketch model, which does not
+/// read photo-like styles, disagrees; the sketch model's own presence is not taken, as it
+/// answers most clutter pages), else the model of the one backend that did; `None` when neither
+/// did. Measured in docs/benchmarks.md ("Either presence"). Errors: `CorruptData` for a
+/// calibration of the wrong shape.
 pub fn presence_log_odds(f: &EvidenceFeatures, cal: &Calibration) -> Result<Option<f64>> {
-    let (w, x) = match (&f.presence_auto, &f.presence_fmp, &f.presence_blazepose) {
-        (Some(x), _, _) => (&cal.presence.auto, x),
-        (None, Some(x), _) => (&cal.presence.fmp, x),
-        (None, None, Some(x)) => (&cal.presence.blazepose, x),
-        (None, None, None) => return Ok(None),
-    };
-    log_odds(w, x).map(Some)
+    match (&f.presence_auto, &f.presence_fmp, &f.presence_blazepose) {
+        (Some(x), _, Some(b)) => Ok(Some(log_odds(&cal.presence.auto, x)?.max(log_odds(&cal.presence.blazepose, b)?))),
+        (Some(x), _, None) => log_odds(&cal.presence.auto, x).map(Some),
+        (None, Some(x), _) => log_odds(&cal.presence.fmp, x).map(Some),
+        (None, None, Some(x)) => log_odds(&cal.presence.blazepose, x).map(Some),
+        (None, None, None) => Ok(None),
+    }
 }
 
 /// Decides the figure from `evidence` with calibration `cal`. Errors: `NoFigure` (with the
