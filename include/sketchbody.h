@@ -139,7 +139,8 @@
  * default): on a drawing the sketch model recognises (its score above its own threshold), the
  * one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
  * higher calibrated confidence. Each joint the two backends put within 0.08 of the figure's
- * size of each other is their mean.
+ * size of each other is their mean. BlazePose, unsure of a figure framed by the ink's box, also
+ * tries the sketch model's figure box.
  */
 #define SKB_DETECTOR_AUTO 0
 

@@ -2,7 +2,8 @@
 //! the bundled example (strokes at most 35 % dark, lighter than the pencil benchmark's outlines)
 //! is found with the same joints as the original; a pass that leaves the network unsure tries the
 //! retry ROIs and then the filled drawing, keeping the surest, while a clean sketch costs no
-//! extra pass.
+//! extra pass; a retry from another box (the sketch model's, in `Auto`) replaces an unsure
+//! detection only when sure.
 
 use sketchbody::detect::landmark::roi::RETRY_SCALES;
 use sketchbody::detect::landmark::{detect_blazepose, BlazePoseOptions, LandmarkNet, FILL_ACCEPT, RETRY_ACCEPT};
@@ -19,12 +20,17 @@ fn lighter(img: &GrayImage, k: f64) -> GrayImage {
     GrayImage::from_vec(img.width(), img.height(), px).unwrap()
 }
 
-#[test]
-fn a_light_pencil_copy_of_the_example_gives_the_same_joints() {
+/// The bundled example, its joints and the embedded landmark network.
+fn example() -> (GrayImage, [[f64; 2]; 15], LandmarkNet) {
     let root = common::repo_root();
     let sketch = load_image(&root.join("assets/examples/sketch.png")).unwrap();
     let truth = load_joints2d(&root.join("assets/examples/sketch_joints.json")).unwrap().xy;
-    let net = LandmarkNet::embedded().unwrap();
+    (sketch, truth, LandmarkNet::embedded().unwrap())
+}
+
+#[test]
+fn a_light_pencil_copy_of_the_example_gives_the_same_joints() {
+    let (sketch, truth, net) = example();
     let opts = BlazePoseOptions::default();
     let dark = detect_blazepose(&net, &sketch.view(), &opts).unwrap();
     let light_img = lighter(&sketch, 0.35);
@@ -121,4 +127,43 @@ fn blazepose_joints_move_to_the_body_models_definitions() {
     let bad = JointDefinitions { outward: [2.0; 15], ..JointDefinitions::IDENTITY };
     let bad_opts = BlazePoseOptions { definitions: bad, ..BlazePoseOptions::default() };
     assert!(matches!(detect_blazepose(&net, &sketch.view(), &bad_opts), Err(Error::OutOfRange { .. })));
+}
+
+/// `retry_from` (`Auto` retries BlazePose from the sketch model's figure box): an unsure
+/// detection is replaced by the passes from a ROI that frames the figure when their pose flag
+/// reaches the acceptance, and kept when the ROI holds no figure or the detection was sure;
+/// every ROI tried is counted; an acceptance outside [0, 1] is refused.
+#[test]
+fn a_retry_from_another_box_replaces_an_unsure_detection_only_when_sure() {
+    use sketchbody::detect::landmark::retry_from;
+    use sketchbody::detect::landmark::roi::Roi;
+    let (sketch, truth, net) = example();
+    let opts = BlazePoseOptions { min_pose_flag: 0.0, ..BlazePoseOptions::default() };
+    let sure = detect_blazepose(&net, &sketch.view(), &opts).unwrap();
+    assert!(sure.score >= 0.9, "{}", sure.score);
+    // The same detection as if the ink box had left the network unsure.
+    let mut unsure = sure.clone();
+    unsure.score = 0.1;
+    let (lo, hi) = truth.iter().fold(([f64::MAX; 2], [f64::MIN; 2]), |(lo, hi), p| {
+        ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
+    });
+    let figure = Roi::from_box([lo[0] - 20.0, lo[1] - 40.0, hi[0] + 20.0, hi[1] + 20.0]).unwrap();
+    let paper = Roi::from_box([2.0, 2.0, 40.0, 40.0]).unwrap();
+
+    let kept = retry_from(&net, &sketch.view(), unsure.clone(), &[paper], 0.5, &opts).unwrap();
+    assert_eq!((kept.score, kept.joints, kept.rois_tried), (0.1, unsure.joints, unsure.rois_tried + 1));
+
+    let found = retry_from(&net, &sketch.view(), unsure.clone(), &[paper, figure], 0.5, &opts).unwrap();
+    let (mean, worst, at) = common::joint_errors(&found.joints.xy, &truth);
+    let (mean0, _, _) = common::joint_errors(&sure.joints.xy, &truth);
+    println!("retried from the figure's box: pose flag {:.3}, mean {mean:.1} px, worst {worst:.1} px ({at}); the ink box's: mean {mean0:.1} px", found.score);
+    assert!(found.score >= 0.5 && found.rois_tried == unsure.rois_tried + 2, "{} {}", found.score, found.rois_tried);
+    assert!(mean <= mean0 + 3.0, "mean {mean} against {mean0}");
+    // Not accepted below its own acceptance.
+    let strict = retry_from(&net, &sketch.view(), unsure.clone(), &[figure], 1.0, &opts).unwrap();
+    assert_eq!(strict.score, 0.1);
+    // A sure detection runs no retry.
+    let same = retry_from(&net, &sketch.view(), sure.clone(), &[figure], 0.5, &opts).unwrap();
+    assert_eq!(same, sure);
+    assert!(matches!(retry_from(&net, &sketch.view(), unsure, &[figure], 1.5, &opts), Err(Error::OutOfRange { .. })));
 }

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "9e0df0198214fe404ff56f2555681566047162ff78ace398bffa01d28777df6c"
+HEADER_SHA256 = "816ceaaaedc55356121a5c8b814abca337adaea3fd4b52c32397e7c9bf72d385"
 
 # ---- constants (#define) ----
 
@@ -67,7 +67,8 @@ SKB_POSE_GROUPS = 6
 # default): on a drawing the sketch model recognises (its score above its own threshold), the
 # one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
 # higher calibrated confidence. Each joint the two backends put within 0.08 of the figure's
-# size of each other is their mean.
+# size of each other is their mean. BlazePose, unsure of a figure framed by the ink's box, also
+# tries the sketch model's figure box.
 SKB_DETECTOR_AUTO = 0
 # Backend of `skb_detect`: the flexible-mixture-of-parts sketch model alone.
 SKB_DETECTOR_FMP = 1

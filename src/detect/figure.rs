@@ -13,11 +13,23 @@
 //! (PCK@0.2), and the figure's confidence is their mean, the expected fraction of correct joints.
 
 use super::calibration::{clamp_score, joint_features, log_odds, predict, presence_features, sigmoid, Calibration};
-use super::landmark::{detect_blazepose, BlazePoseDetection, BlazePoseOptions, LandmarkNet};
+use super::landmark::roi::Roi;
+use super::landmark::{detect_blazepose, retry_from, BlazePoseDetection, BlazePoseOptions, LandmarkNet};
 use super::{detect, DetectOptions, Detection, Model};
 use crate::error::{Error, Result};
 use crate::image::ImageView;
 use crate::skeleton::{Joints2, NUM_JOINTS};
+
+/// `Auto`: how many of the sketch model's best figures give BlazePose a further starting ROI
+/// when it is unsure from the ink box ([`crate::detect::landmark::retry_from`]). Chosen with
+/// [`SKETCH_ROI_ACCEPT`] on images the benchmark does not test (docs/benchmarks.md, "BlazePose
+/// from the sketch model's box").
+pub const SKETCH_ROIS: usize = 1;
+
+/// `Auto`: the pose flag a pass from the sketch model's box needs to replace BlazePose's own
+/// (the flag at which BlazePose counts a figure; the ink box's scale retries need
+/// [`crate::detect::landmark::RETRY_ACCEPT`], as they are tried on every unsure page).
+pub const SKETCH_ROI_ACCEPT: f64 = 0.5;
 
 /// Which 2-D joint detector runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -170,7 +182,35 @@ pub fn gather(
     };
     let (sketch, blazepose) = rayon::join(run_sketch, run_blazepose);
     let (sketch, blazepose) = (sketch?, blazepose?);
-    Ok(Evidence { sketch, sketch_threshold: model.thresh, blazepose })
+    let evidence = Evidence { sketch, sketch_threshold: model.thresh, blazepose };
+    if backend == Backend::Auto {
+        return retry_blazepose_from_sketch(image, net, evidence, options);
+    }
+    Ok(evidence)
+}
+
+/// `Auto`'s last step of [`gather`]: BlazePose unsure from the ink box (pose flag under
+/// `retry_below`) retries from the boxes of the sketch model's [`SKETCH_ROIS`] best figures
+/// ([`crate::detect::landmark::retry_from`], kept at a pose flag ≥ [`SKETCH_ROI_ACCEPT`]): a
+/// figure small on a busy page, which the ink box frames loosely, is framed by the sketch model's
+/// search. The evidence is returned as it is without both backends' candidates. Errors: the
+/// network's.
+pub fn retry_blazepose_from_sketch(
+    image: &ImageView<'_>,
+    net: &LandmarkNet,
+    evidence: Evidence,
+    options: &FigureOptions,
+) -> Result<Evidence> {
+    let Evidence { sketch, sketch_threshold, blazepose } = evidence;
+    let blazepose = match (blazepose, &sketch) {
+        (Some(b), Some(s)) => {
+            let rois: Vec<Roi> = s.iter().take(SKETCH_ROIS).filter_map(|d| Roi::from_box(d.bbox).ok()).collect();
+            let o = BlazePoseOptions { min_pose_flag: 0.0, ..options.blazepose };
+            Some(retry_from(net, image, b, &rois, SKETCH_ROI_ACCEPT, &o)?)
+        }
+        (b, _) => b,
+    };
+    Ok(Evidence { sketch, sketch_threshold, blazepose })
 }
 
 /// The figure [`detect_figure`] returns.

@@ -5,8 +5,10 @@
 //! and the reliability of the calibrated confidences.
 
 use crate::detect::calibration::{fit_logistic, Calibration, JointModels, PresenceModels};
-use crate::detect::figure::{decide, features, gather, presence_log_odds, Backend, Evidence, FigureOptions};
-use crate::detect::landmark::LandmarkNet;
+use crate::detect::figure::{
+    decide, features, gather, presence_log_odds, retry_blazepose_from_sketch, Backend, Evidence, FigureOptions,
+};
+use crate::detect::landmark::{BlazePoseDetection, LandmarkNet};
 use crate::detect::Model;
 use crate::error::{Error, Result};
 use crate::image::ImageView;
@@ -17,8 +19,11 @@ use super::metrics::{pck, pck_normaliser};
 /// One image's evidence, its ground truth and the backends' times.
 #[derive(Clone, Debug)]
 pub struct Sample {
-    /// Both backends' candidates.
+    /// Both backends' candidates, as `Auto` gathers them (BlazePose retried from the sketch
+    /// model's box when unsure: [`retry_blazepose_from_sketch`]).
     pub evidence: Evidence,
+    /// BlazePose's candidate as the BlazePose backend alone gathers it.
+    pub blazepose_alone: Option<BlazePoseDetection>,
     /// The true canonical joints, px; `None` for a page without a figure.
     pub truth: Option<[[f64; 2]; NUM_JOINTS]>,
     /// Wall time of the sketch model and of BlazePose on this image, s.
@@ -38,20 +43,24 @@ pub fn gather_sample(
     let fmp = gather(image, model, net, Backend::Fmp, options)?;
     let t1 = std::time::Instant::now();
     let bp = gather(image, model, net, Backend::BlazePose, options)?;
+    let blazepose_alone = bp.blazepose.clone();
+    let evidence = Evidence { sketch: fmp.sketch, sketch_threshold: fmp.sketch_threshold, blazepose: bp.blazepose };
+    let evidence = retry_blazepose_from_sketch(image, net, evidence, options)?;
     let t2 = std::time::Instant::now();
-    Ok(Sample {
-        evidence: Evidence { sketch: fmp.sketch, sketch_threshold: fmp.sketch_threshold, blazepose: bp.blazepose },
-        truth,
-        seconds: [(t1 - t0).as_secs_f64(), (t2 - t1).as_secs_f64()],
-    })
+    Ok(Sample { evidence, blazepose_alone, truth, seconds: [(t1 - t0).as_secs_f64(), (t2 - t1).as_secs_f64()] })
 }
 
-/// The evidence a single backend would have gathered.
-fn restricted(e: &Evidence, backend: Backend) -> Evidence {
+/// The evidence `backend` would have gathered on sample `s`.
+fn restricted(s: &Sample, backend: Backend) -> Evidence {
+    let e = &s.evidence;
     Evidence {
         sketch: if backend == Backend::BlazePose { None } else { e.sketch.clone() },
         sketch_threshold: e.sketch_threshold,
-        blazepose: if backend == Backend::Fmp { None } else { e.blazepose.clone() },
+        blazepose: match backend {
+            Backend::Fmp => None,
+            Backend::BlazePose => s.blazepose_alone.clone(),
+            Backend::Auto => e.blazepose.clone(),
+        },
     }
 }
 
@@ -78,25 +87,35 @@ pub fn fit_calibration(samples: &[Sample], ridge: f64, provenance: &str) -> Resu
     let mut joints: [Rows; 4] = Default::default();
     let mut presence: [Rows; 3] = Default::default();
     for s in samples {
-        let f = features(&s.evidence);
+        // Each model learns from the evidence its decision reads: the single-backend models
+        // from what that backend gathers alone, the two-backend ones from `Auto`'s.
+        let (f, fmp, bp) = (
+            features(&s.evidence),
+            features(&restricted(s, Backend::Fmp)),
+            features(&restricted(s, Backend::BlazePose)),
+        );
         let has = s.truth.is_some();
-        for (k, x) in [&f.presence_fmp, &f.presence_blazepose, &f.presence_auto].into_iter().enumerate() {
+        for (k, x) in [&fmp.presence_fmp, &bp.presence_blazepose, &f.presence_auto].into_iter().enumerate() {
             if let Some(x) = x {
                 presence[k].x.push(x.clone());
                 presence[k].y.push(has);
             }
         }
         let Some(truth) = &s.truth else { continue };
-        for c in &f.candidates {
+        for c in fmp.candidates.iter().chain(&bp.candidates) {
             let ok = correct(truth, &c.joints.xy);
             let k = if c.backend == Backend::Fmp { 0 } else { 1 };
             for j in 0..NUM_JOINTS {
                 joints[k].x.push(c.alone[j].clone());
                 joints[k].y.push(ok[j]);
-                if let Some(a) = &c.auto {
-                    joints[k + 2].x.push(a[j].clone());
-                    joints[k + 2].y.push(ok[j]);
-                }
+            }
+        }
+        for c in &f.candidates {
+            let ok = correct(truth, &c.joints.xy);
+            let k = if c.backend == Backend::Fmp { 2 } else { 3 };
+            for (j, a) in c.auto.iter().flatten().enumerate() {
+                joints[k].x.push(a.clone());
+                joints[k].y.push(ok[j]);
             }
         }
     }
@@ -206,7 +225,7 @@ pub fn score_set(samples: &[Sample], cal: &Calibration, options: &FigureOptions)
             Backend::BlazePose => s.seconds[1],
             Backend::Auto => s.seconds[0] + s.seconds[1],
         };
-        let fig = match decide(&restricted(&s.evidence, backend), cal, options) {
+        let fig = match decide(&restricted(s, backend), cal, options) {
             Ok(f) => Some(f),
             Err(Error::NoFigure { .. }) => None,
             Err(e) => return Err(e),
@@ -253,7 +272,7 @@ pub fn reliability(
     let mut acc = vec![(0usize, 0.0, 0.0); bins];
     for s in samples {
         let Some(t) = &s.truth else { continue };
-        let f = match decide(&restricted(&s.evidence, backend), cal, options) {
+        let f = match decide(&restricted(s, backend), cal, options) {
             Ok(f) => f,
             Err(Error::NoFigure { .. }) => continue,
             Err(e) => return Err(e),

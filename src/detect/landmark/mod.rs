@@ -276,9 +276,49 @@ pub fn detect_blazepose(
     if pass.pose_flag < opts.min_pose_flag {
         return Err(no_figure(pass.pose_flag));
     }
+    Ok(detection_of(pass, rois_tried, filled, opts))
+}
+
+/// The detection of a kept pass: its landmarks mapped to the canonical joints and moved by
+/// `opts.definitions`.
+fn detection_of(pass: RoiLandmarks, rois_tried: usize, filled: bool, opts: &BlazePoseOptions) -> BlazePoseDetection {
     let xy: Vec<[f64; 2]> = pass.landmarks.iter().map(|l| [l.x, l.y]).collect();
     let conf: Vec<f64> = pass.landmarks.iter().map(|l| l.visibility * l.presence).collect();
     let (mapped, confidence) = joints::to_canonical(&xy[..NUM_POSE_LANDMARKS], &conf[..NUM_POSE_LANDMARKS]);
     let joints = opts.definitions.apply(&mapped);
-    Ok(BlazePoseDetection { score: pass.pose_flag, joints, confidence, pass, rois_tried, filled })
+    BlazePoseDetection { score: pass.pose_flag, joints, confidence, pass, rois_tried, filled }
+}
+
+/// Retries `found` ([`detect_blazepose`]'s detection of `image` with `opts`, any pose flag)
+/// from further starting ROIs, e.g. the boxes of the sketch model's figures: when its pose flag
+/// is under `opts.retry_below`, `opts.passes` passes from each of `rois`, the highest pose flag
+/// replacing `found` when it is higher and reaches `accept` (in [0, 1]). `found` is returned as
+/// it is (with `rois_tried` counting the ROIs) when its flag is not under `retry_below` or no
+/// ROI does better. Errors: `OutOfRange` for `accept` outside [0, 1]; the network's.
+pub fn retry_from(
+    net: &LandmarkNet,
+    image: &ImageView<'_>,
+    found: BlazePoseDetection,
+    rois: &[Roi],
+    accept: f64,
+    opts: &BlazePoseOptions,
+) -> Result<BlazePoseDetection> {
+    if !(0.0..=1.0).contains(&accept) {
+        return Err(Error::OutOfRange { name: "accept", detail: format!("{accept} not in [0, 1]") });
+    }
+    if found.score >= opts.retry_below {
+        return Ok(found);
+    }
+    let mut best: Option<RoiLandmarks> = None;
+    for r in rois {
+        let p = passes_from(net, image, r, opts, false)?;
+        if p.pose_flag >= accept && p.pose_flag > best.as_ref().map_or(found.score, |b| b.pose_flag) {
+            best = Some(p);
+        }
+    }
+    let tried = found.rois_tried + rois.len();
+    Ok(match best {
+        Some(p) => detection_of(p, tried, false, opts),
+        None => BlazePoseDetection { rois_tried: tried, ..found },
+    })
 }
