@@ -205,8 +205,7 @@ pub fn retry_blazepose_from_sketch(
     let blazepose = match (blazepose, &sketch) {
         (Some(b), Some(s)) => {
             let rois: Vec<Roi> = s.iter().take(SKETCH_ROIS).filter_map(|d| Roi::from_box(d.bbox).ok()).collect();
-            let o = BlazePoseOptions { min_pose_flag: 0.0, ..options.blazepose };
-            Some(retry_from(net, image, b, &rois, SKETCH_ROI_ACCEPT, &o)?)
+            Some(retry_from(net, image, b, &rois, SKETCH_ROI_ACCEPT, &options.blazepose)?)
         }
         (b, _) => b,
     };

@@ -51,12 +51,13 @@ fn fixed(v: f64) -> i64 {
 pub fn crop_tensor(image: &ImageView<'_>, roi: &Roi) -> Vec<f32> {
     let (w, h, ch) = (image.width() as i64, image.height() as i64, image.channels());
     let unit: [f32; 256] = std::array::from_fn(|c| c as f32 / 255.0);
+    // Pixel `x` of `row` in [0, 1]; white outside the image.
+    let tap = |row: &[u8], x: usize| rgb_of(&row[x * ch..(x + 1) * ch]).map(|c| unit[c as usize]);
     let pixel = |x: i64, y: i64| -> [f32; 3] {
         if x < 0 || y < 0 || x >= w || y >= h {
             return [1.0; 3];
         }
-        let row = image.row(y as usize);
-        rgb_of(&row[x as usize * ch..(x as usize + 1) * ch]).map(|c| unit[c as usize])
+        tap(image.row(y as usize), x as usize)
     };
     let m = inverse_map(roi);
     let round_delta = 1i64 << (AB_BITS - INTER_BITS - 1);
@@ -77,10 +78,8 @@ pub fn crop_tensor(image: &ImageView<'_>, roi: &Roi) -> Vec<f32> {
             let (fx, fy) = ((x & mask) as f32 / tab, (y & mask) as f32 / tab);
             let [a, b, c, d] = if ix >= 0 && iy >= 0 && ix + 1 < w && iy + 1 < h {
                 // All four taps inside: read the two rows directly.
-                let (r0, r1) = (image.row(iy as usize), image.row(iy as usize + 1));
-                let (s, t) = (ix as usize * ch, (ix as usize + 1) * ch);
-                let tap = |row: &[u8], at: usize| rgb_of(&row[at..at + ch]).map(|c| unit[c as usize]);
-                [tap(r0, s), tap(r0, t), tap(r1, s), tap(r1, t)]
+                let (r0, r1, x) = (image.row(iy as usize), image.row(iy as usize + 1), ix as usize);
+                [tap(r0, x), tap(r0, x + 1), tap(r1, x), tap(r1, x + 1)]
             } else {
                 [pixel(ix, iy), pixel(ix + 1, iy), pixel(ix, iy + 1), pixel(ix + 1, iy + 1)]
             };

@@ -437,6 +437,7 @@ fn resample(src: &[f32], outer: usize, len_in: usize, inner: usize, plan: &AxisP
                 continue;
             }
             if inner == 1 {
+                // One value per output (the second axis of an NCHW plan): the plain sum.
                 out[0] =
                     indices.iter().zip(weights).filter(|(_, &w)| w != 0.0).fold(0f32, |sum, (&i, &w)| sum + w * src[i]);
                 continue;
