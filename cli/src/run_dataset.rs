@@ -64,6 +64,10 @@ pub struct Args {
     oracle_pose: bool,
     #[command(flatten)]
     fit: FitArgs,
+    /// Pose dictionary file for the 3-D pose step (default: the embedded one; e.g. one learned
+    /// without the dataset's motion, to fit as on motion the pose step has not seen).
+    #[arg(long)]
+    dictionary: Option<PathBuf>,
     /// Only the first N samples (sorted by name).
     #[arg(long)]
     first: Option<usize>,
@@ -206,13 +210,16 @@ pub fn run(a: Args) -> Result<(), CliError> {
         .map_err(|e| CliError(format!("{}: cannot create the results folder: {e}", a.out.display())))?;
     let manifest = json!({
         "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
-        "gender": a.gender, "mean_shape": a.mean_shape, "detector": if a.detect { Some(a.detector.name()) } else { None }, "depth_hint": a.fit.depth_hint, "depth_prior": a.fit.depth_prior, "detected_joint_weight_scale": a.fit.detected_joint_weight_scale, "detected_proportions": a.fit.detected_proportions, "landmark_pose": a.fit.landmark_pose, "detected_classifier_gender": a.fit.detected_classifier_gender, "gender_evidence": a.fit.gender_evidence, "classify_gender": a.fit.classify_gender, "gender_decision_dims": a.fit.gender_decision_dims, "gender_decision_seeds": a.fit.gender_decision_seeds, "calibrate_fit": a.fit.calibrate_fit, "male_prior": a.fit.male_prior, "score": score_name(fit.score), "seed": fit.seed, "initial_factor": fit.initial_factor,
+        "gender": a.gender, "dictionary": a.dictionary.as_ref().map(|p| p.display().to_string()), "mean_shape": a.mean_shape, "detector": if a.detect { Some(a.detector.name()) } else { None }, "depth_hint": a.fit.depth_hint, "depth_prior": a.fit.depth_prior, "detected_joint_weight_scale": a.fit.detected_joint_weight_scale, "detected_proportions": a.fit.detected_proportions, "landmark_pose": a.fit.landmark_pose, "detected_classifier_gender": a.fit.detected_classifier_gender, "gender_evidence": a.fit.gender_evidence, "classify_gender": a.fit.classify_gender, "gender_decision_dims": a.fit.gender_decision_dims, "gender_decision_seeds": a.fit.gender_decision_seeds, "calibrate_fit": a.fit.calibrate_fit, "male_prior": a.fit.male_prior, "score": score_name(fit.score), "seed": fit.seed, "initial_factor": fit.initial_factor,
         "fit_samples": fit.samples, "iterations": fit.max_iterations, "transition_scale": fit.transition_scale,
         "temperature": fit.temperature, "joint_weight": fit.joint_weight, "sample_camera": fit.sample_camera, "proportion_sd": fit.proportion_sd, "estimate_proportions": fit.estimate_proportions, "height": fit.height, "true_height": a.true_height, "oracle_pose": a.oracle_pose, "keep_pose_scale": a.fit.keep_pose_scale, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
     });
     write_atomic(&a.out.join("run.json"), manifest.to_string().as_bytes())?;
     let model = BodyModel::embedded()?;
-    let dict = dict_io::embedded()?;
+    let dict = match &a.dictionary {
+        Some(p) => dict_io::read(p)?,
+        None => dict_io::embedded()?,
+    };
     let detector = if a.detect {
         let options = FigureOptions { backend: a.detector, ..FigureOptions::default() };
         Some((Model::embedded()?, LandmarkNet::embedded()?, options))

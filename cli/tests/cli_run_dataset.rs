@@ -1,5 +1,9 @@
 //! `sketchbody run-dataset` on a tiny rendered dataset: the results layout `eval` reads, the
-//! mean-shape baseline, resuming, determinism across thread counts, and its errors.
+//! mean-shape baseline, resuming, determinism across thread counts, a given pose dictionary, and
+//! its errors.
+
+#[path = "../../tests/common/mod.rs"]
+mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -101,6 +105,62 @@ fn results_are_scored_by_eval_and_deterministic() {
     let cells: Vec<&str> = aed_row.split('|').map(str::trim).collect();
     assert_eq!((cells[3], cells[5]), ("3", "3"), "{aed_row}");
     assert!(cells[2].parse::<f64>().unwrap() > 0.0 && cells[4].parse::<f64>().unwrap() > 0.0, "{aed_row}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--dictionary` replaces the embedded pose dictionary: the embedded asset given as a file
+/// changes nothing, one learned from other motion changes the pose (and so the body), the
+/// manifest names the file, and a missing file is a one-line error naming it.
+#[test]
+fn a_given_dictionary_replaces_the_embedded_one() {
+    let dir = scratch("dict");
+    let ds = dir.join("ds");
+    ok(&skb(&["make-dataset", "2", "--seed", "9", "--size", "256", "--out", s(&ds)]));
+    let fast = ["--samples", "16", "--iterations", "2"];
+    let run = |out: &Path, dict: Option<&Path>| {
+        let mut args = vec!["run-dataset", s(&ds), "--out", s(out)];
+        args.extend(dict.map(|d| ["--dictionary", s(d)]).into_iter().flatten());
+        ok(&skb(&[&args[..], &fast].concat()));
+    };
+    let json = |out: &Path, stem: &str| -> serde_json::Value {
+        let mut v: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(format!("{stem}.json"))).unwrap()).unwrap();
+        v["seconds"] = serde_json::Value::Null;
+        v
+    };
+    let (plain, same) = (dir.join("plain"), dir.join("same"));
+    let asset = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/pose_dictionary.skbpd");
+    run(&plain, None);
+    run(&same, Some(&asset));
+    for stem in ["000000", "000001"] {
+        assert_eq!(json(&plain, stem), json(&same, stem), "{stem}: the embedded dictionary as a file");
+    }
+    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(same.join("run.json")).unwrap()).unwrap();
+    assert_eq!(manifest["dictionary"], s(&asset));
+    let missing = dir.join("none.skbpd");
+    let o = skb(&["run-dataset", s(&ds), "--out", s(&dir.join("bad")), "--dictionary", s(&missing)]);
+    assert_eq!(o.status.code(), Some(1), "{o:?}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.trim_end().lines().count() == 1 && err.contains("none.skbpd"), "{err}");
+    // A dictionary of walking alone (the DeepMimic walks) poses the same sketches otherwise.
+    let Some(data) = common::shared_data("run-dataset --dictionary") else { return };
+    let walks = dir.join("walks.skbpd");
+    ok(&skb(&[
+        "learn-poses",
+        "--mocap",
+        s(&data.join("mocap/deepmimic")),
+        "--exclude",
+        "backflip,cartwheel,crawl,dance_a,dance_spin,getup_facedown,getup_faceup,jump,punch,roll,run,sideflip,spin,spinkick,zombie_walk,long_long_zombie",
+        "--out",
+        s(&walks),
+    ]));
+    let other = dir.join("other");
+    run(&other, Some(&walks));
+    let differ = ["000000", "000001"]
+        .iter()
+        .filter(|stem| json(&plain, stem)["joints3d"] != json(&other, stem)["joints3d"])
+        .count();
+    assert!(differ > 0, "another dictionary, another 3-D pose");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
