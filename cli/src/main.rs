@@ -139,7 +139,19 @@ fn command() -> clap::Command {
     cmd.help_template(template)
 }
 
+/// A closed standard output (`sketchbody eval … | head`) ends the process quietly, as it does
+/// other Unix tools, instead of a panic in `println!` (Rust's runtime ignores SIGPIPE, so the
+/// write fails with EPIPE). Every command writes its files before its last stdout line, and
+/// `run` commits its outputs atomically before it prints.
+fn default_sigpipe() {
+    // SAFETY: called first in `main`, before any thread starts; restores the default disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    default_sigpipe();
     let cli = match Cli::from_arg_matches(&command().get_matches()) {
         Ok(cli) => cli,
         Err(e) => e.exit(),

@@ -1,7 +1,7 @@
 //! File-system faults around `sketchbody run` (issue 20 item 5, the fault matrix in
 //! docs/reliability.md): a full file system, a read-only folder, a missing folder, a file in the
-//! way, symlinks, two runs to the same folder at once, and `kill -9` during a run followed by a
-//! rerun. Each row asserts the exit status, a specific one-line error, and that no half-written
+//! way, symlinks, two runs to the same folder at once, `kill -9` during a run followed by a
+//! rerun, and a closed standard output. Each row asserts the exit status, a specific one-line error, and that no half-written
 //! output and no stray staging folder is left.
 //!
 //! A full and a read-only file system are real tmpfs mounts when the test may mount (root with
@@ -9,7 +9,7 @@
 //! limit (`ulimit -f`, SIGXFSZ ignored, so writes fail with EFBIG like ENOSPC), a read-only
 //! folder by its permission bits (as root, the run then drops to uid 65534 so the bits bind).
 
-use std::os::unix::process::CommandExt;
+use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -270,5 +270,22 @@ fn kill_9_then_rerun_cleans_up() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(names(&dir), ["out"], "the dead run's staging folder was removed");
     assert_eq!(names(&out_dir), outputs());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A closed standard output (`sketchbody run … | head -0`): the run's outputs are committed
+/// before it prints its summary line, then the process ends by SIGPIPE as other Unix tools do,
+/// without a panic message.
+#[test]
+fn a_closed_stdout_ends_the_run_quietly_after_its_outputs() {
+    let dir = scratch("sigpipe");
+    let out = dir.join("out");
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let o = run_cmd(&out).stdout(writer).stderr(Stdio::piped()).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(o.status.signal(), Some(libc::SIGPIPE), "{o:?}");
+    assert_eq!(names(&out), outputs(), "every output written before the summary line");
     std::fs::remove_dir_all(&dir).unwrap();
 }
