@@ -149,7 +149,7 @@ impl FitCalibration {
     /// not seen their motion: the clips in two folds, each fold's sketches posed with a
     /// dictionary learned without it (`run-dataset --dictionary`), as a user's drawing is posed
     /// by the shipped dictionary. On sketches of the dictionary's own motion the pose step is far
-    /// better (PA-MPJPE 30 against 50 mm held out), and a calibration learned there trusts the
+    /// better (PA-MPJPE 32 against 50 mm held out), and a calibration learned there trusts the
     /// fitted proportions too much. `scripts/train-fit-calibration.sh` rebuilds it
     /// (docs/benchmarks.md, "Calibration on unseen motion").
     pub const SHIPPED: FitCalibration =
