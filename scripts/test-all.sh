@@ -4,8 +4,10 @@
 # python3-opencv for the BlazePose reference), a small Python venv for that reference
 # (scripts/reference-venv.sh), then cargo tests, the CMake/ctest harness (OpenCV, Ceres, Embree
 # cross-checks, C and C++ API tests under sanitizers), the Python package's tests
-# (scripts/test-python.sh), the Blender add-on's, and last a short run of every fuzz target
-# (scripts/fuzz.sh; cargo-fuzz's flags with plain cargo; built in the background meanwhile).
+# (scripts/test-python.sh), the Blender add-on's, the Windows DLL's C API tests under Wine
+# (scripts/windows-dll.sh; MinGW-w64 cross build in the background meanwhile), and last a short
+# run of every fuzz target (scripts/fuzz.sh; cargo-fuzz's flags with plain cargo; built in the
+# background meanwhile).
 # Set SKB_REQUIRE_SHARED_DATA=1 to turn "skipped: ../shared/data missing" into failures (CI does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,7 +16,8 @@ cd "$(dirname "$0")/.."
 # shows where its time went.
 step() { printf '== [%d:%02d] %s\n' $((SECONDS / 60)) $((SECONDS % 60)) "$*"; }
 
-packages=(cmake g++ pkg-config python3 libopencv-dev libceres-dev libembree-dev blender python3-numpy python3-opencv)
+packages=(cmake g++ pkg-config python3 libopencv-dev libceres-dev libembree-dev blender python3-numpy python3-opencv
+          gcc-mingw-w64-x86-64 g++-mingw-w64-x86-64 wine wine64)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
@@ -25,6 +28,12 @@ if [ ${#missing[@]} -gt 0 ]; then
   [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   "${sudo_cmd[@]}" apt-get update -qq
   DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq "${missing[@]}"
+fi
+
+windows_triple=x86_64-pc-windows-gnu
+if ! rustup target list --installed | grep -qx "$windows_triple"; then
+  step "installing the Rust target $windows_triple (the Windows DLL's cross build)"
+  rustup target add "$windows_triple"
 fi
 
 jobs=$(nproc)
@@ -41,7 +50,15 @@ set -m
 nice -n 19 scripts/fuzz.sh build >"$fuzz_build_log" 2>&1 &
 fuzz_build_pid=$!
 set +m
-trap 'kill -- -"$fuzz_build_pid" 2>/dev/null || true' EXIT
+# The Windows DLL's cross build (every dependency again, for x86_64-pc-windows-gnu, in its own
+# cargo folder target/windows-gnu), the same way and with the test build's profile.
+windows_build_log=target/windows-build.log
+step "Windows DLL: building in the background (scripts/windows-dll.sh build, log $windows_build_log)"
+set -m
+nice -n 19 scripts/windows-dll.sh build sanitize >"$windows_build_log" 2>&1 &
+windows_build_pid=$!
+set +m
+trap 'kill -- -"$fuzz_build_pid" -"$windows_build_pid" 2>/dev/null || true' EXIT
 
 step "lint gates: cargo fmt --check, cargo clippy -D warnings"
 cargo fmt --all --check
@@ -79,6 +96,15 @@ scripts/test-python.sh
 
 step "Blender add-on (integrations/blender, headless Blender 3.4; renders docs/img/blender-addon.png)"
 scripts/test-blender-addon.sh
+
+step "Windows DLL: joining the background build, then the C API tests under Wine"
+if ! wait "$windows_build_pid"; then
+  tail -n 60 "$windows_build_log"
+  echo "== the Windows DLL's build FAILED (log: $windows_build_log)"
+  exit 1
+fi
+tail -n 1 "$windows_build_log"
+scripts/windows-dll.sh test
 
 step "fuzz targets: joining the background build"
 if ! wait "$fuzz_build_pid"; then
