@@ -8,8 +8,12 @@ set(SKB_LINK_NAME "${CMAKE_SHARED_LIBRARY_PREFIX}sketchbody${CMAKE_SHARED_LIBRAR
 set(SKB_STATIC_NAME "${CMAKE_STATIC_LIBRARY_PREFIX}sketchbody${CMAKE_STATIC_LIBRARY_SUFFIX}")
 set(SKB_CMAKE_DIR "${CMAKE_INSTALL_LIBDIR}/cmake/sketchbody")
 
-# Release builds install the libraries without debug info (49 MB -> 16 MB for the .so, see
-# docs/benchmarks.md); Debug and RelWithDebInfo keep it, and so does SKB_KEEP_DEBUG_INFO=ON.
+# Release builds install the libraries without what a consumer does not need: the shared library
+# without debug info and without its static symbol table (the exported skb_* symbols are in the
+# dynamic one), the static library without debug info and without the LLVM bitcode of the Rust
+# standard library's objects (.llvmbc, .llvmcmd: only rustc's LTO reads them; linkers exclude
+# them). The test command prints the installed sizes (cpp_tests/consumer/run.sh; figures in
+# docs/plugins.md). Debug and RelWithDebInfo keep everything, and so does SKB_KEEP_DEBUG_INFO=ON.
 set(SKB_STRIP_ON_INSTALL OFF)
 if(NOT SKB_KEEP_DEBUG_INFO AND NOT CMAKE_BUILD_TYPE MATCHES "^(Debug|RelWithDebInfo)$" AND CMAKE_STRIP)
   set(SKB_STRIP_ON_INSTALL ON)
@@ -32,12 +36,14 @@ install(CODE "
   set(skb_libdir \"\$ENV{DESTDIR}\${skb_libdir}\")
   set(skb_strip ${SKB_STRIP_ON_INSTALL})
   if(skb_strip)
-    foreach(skb_lib \"${SKB_REAL_NAME}\" \"${SKB_STATIC_NAME}\")
-      message(STATUS \"Stripping debug info: \${skb_libdir}/\${skb_lib}\")
-      execute_process(COMMAND \"${CMAKE_STRIP}\" --strip-debug \"\${skb_libdir}/\${skb_lib}\"
+    foreach(skb_strip_args \"--strip-unneeded;${SKB_REAL_NAME}\"
+                           \"--strip-debug;--remove-section=.llvmbc;--remove-section=.llvmcmd;${SKB_STATIC_NAME}\")
+      list(POP_BACK skb_strip_args skb_lib)
+      message(STATUS \"Stripping (\${skb_strip_args}): \${skb_libdir}/\${skb_lib}\")
+      execute_process(COMMAND \"${CMAKE_STRIP}\" \${skb_strip_args} \"\${skb_libdir}/\${skb_lib}\"
                       RESULT_VARIABLE skb_rc)
       if(NOT skb_rc EQUAL 0)
-        message(FATAL_ERROR \"strip --strip-debug failed on \${skb_lib}\")
+        message(FATAL_ERROR \"strip \${skb_strip_args} failed on \${skb_lib}\")
       endif()
     endforeach()
   endif()

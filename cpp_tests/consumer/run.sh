@@ -44,14 +44,25 @@ exported=$(nm -D --defined-only "$libdir/libsketchbody.so.$version" | awk '{prin
 others=$(grep -v '^skb_' <<<"$exported" || true)
 [ -z "$others" ] || fail "non-skb_ symbols exported: $(head -n 5 <<<"$others" | paste -sd' ')"
 echo "exported: $(wc -l <<<"$exported") symbols, all skb_*"
+# What install strips (cmake/install.cmake): the .so's debug info and static symbol table, the
+# .a's debug info and LLVM bitcode. Debug, RelWithDebInfo and SKB_KEEP_DEBUG_INFO=ON keep them.
+so_sections=$(readelf -SW "$libdir/libsketchbody.so.$version")
+a_sections=$(readelf -SW "$libdir/libsketchbody.a")
 if [[ "$build_type" =~ ^(Debug|RelWithDebInfo)$ ]]; then
   echo "debug info kept ($build_type)"
-elif readelf -S "$libdir/libsketchbody.so.$version" | grep -q '\.debug_info'; then
-  grep -q 'SKB_KEEP_DEBUG_INFO:BOOL=ON' "$build/CMakeCache.txt" || fail "installed .so has debug info"
+elif grep -q 'SKB_KEEP_DEBUG_INFO:BOOL=ON' "$build/CMakeCache.txt"; then
   echo "debug info kept (SKB_KEEP_DEBUG_INFO=ON)"
 else
-  echo "debug info stripped"
+  for unneeded in '\.debug_info' '\.symtab'; do
+    ! grep -q " $unneeded " <<<"$so_sections" || fail "installed .so has a ${unneeded#\\} section"
+  done
+  for unneeded in '\.debug_info' '\.llvmbc'; do
+    ! grep -q " $unneeded " <<<"$a_sections" || fail "installed .a has ${unneeded#\\} sections"
+  done
+  echo "stripped: no debug info or static symbol table in the .so, no debug info or LLVM bitcode in the .a"
 fi
+mb() { awk -v b="$(stat -c %s "$1")" 'BEGIN { printf "%.1f MB", b / 1e6 }'; }
+echo "installed sizes: libsketchbody.so.$version $(mb "$libdir/libsketchbody.so.$version"), libsketchbody.a $(mb "$libdir/libsketchbody.a")"
 
 # Runs ./NAME, prints its line; checks whether libsketchbody.so is a runtime dependency.
 run_consumer() {
