@@ -12,8 +12,9 @@
 #       include/sketchbody.h, sketchbody.hpp
 #   scripts/windows-dll.sh test              checks that package (exports = the pinned manifest's,
 #                                            no MinGW runtime DLL needed), cross-compiles the C and
-#                                            C++ API tests of cpp_tests/ against sketchbody.lib and
-#                                            runs them under Wine (prefix target/windows-gnu/wine)
+#                                            C++ API tests of cpp_tests/ against sketchbody.lib,
+#                                            links a probe with lld-link (the MSVC linker's flavour)
+#                                            and runs them under Wine (prefix target/windows-gnu/wine)
 #
 # cargo's folder is target/windows-gnu (CARGO_TARGET_DIR), apart from target/ so that this build
 # never waits for, or invalidates, the Linux test build's lock and artifacts.
@@ -97,6 +98,13 @@ test_package() {
     cpp_tests/consumer/main.c "${link[@]}"
   "$cxx" -std=c++17 "${cflags[@]}" -o "$tests/capi_cpp_test.exe" cpp_tests/capi_cpp_test.cpp "${link[@]}"
   "$cxx" -std=c++17 "${cflags[@]}" -o "$tests/plugin_host.exe" examples/plugin_host.cpp "${link[@]}"
+  # An MSVC-style link: lld-link (rustup's rust-lld) takes sketchbody.lib, no C runtime involved.
+  local lld
+  lld="$(rustc --print sysroot)/lib/rustlib/$(rustc -vV | sed -n 's/^host: //p')/bin/rust-lld"
+  "$cc" "${cflags[@]}" -ffreestanding -c -o "$tests/msvc_link_probe.obj" cpp_tests/windows/msvc_link_probe.c
+  "$lld" -flavor link /nologo /nodefaultlib /entry:probe_main /subsystem:console \
+    /out:"$tests/msvc_link_probe.exe" "$tests/msvc_link_probe.obj" "$pkg/lib/sketchbody.lib" \
+    "$("$cc" -print-file-name=libkernel32.a)"
 
   # The struct layouts seen by a Windows compiler are the pinned (Linux) ones.
   if ! diff -u <(grep '^layout ' "$manifest") <(wine_run abi_layout | tr -d '\r' | grep '^layout '); then
@@ -108,6 +116,8 @@ test_package() {
     wine_run "$t"
   done
   wine_run plugin_host "Z:$PWD/assets/examples/sketch.png" "Z:$PWD/assets/examples/sketch_joints.json"
+  wine_run msvc_link_probe
+  echo "msvc_link_probe: linked by lld-link against sketchbody.lib, version strings equal"
   echo "windows-dll: every C API test passed under Wine"
 }
 
