@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fine-tunes the shipped BlazePose landmark network on drawings (issue 15 experiment; results in
-# docs/benchmarks.md, "Fine-tuning the landmark model on drawings"). Everything generated stays
+# docs/benchmarks-history.md, "Fine-tuning the landmark model on drawings"). Everything generated stays
 # under $WORK (default /tmp/ft): never commit the crops or the models.
 #
 # Python: a venv with torch (CPU), onnx and onnx2torch (PYTHON, default /tmp/tv/bin/python; the

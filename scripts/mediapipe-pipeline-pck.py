@@ -5,8 +5,8 @@ the proxy benchmark's stylisations, scored like `sketchbody eval-detector --sets
 canonical joints (PARSE's mapping of `detect::joints::parse_to_canonical`, MediaPipe's of
 `detect::landmark::joints::to_canonical`), PCK normalised by the longer side of the true joints'
 box, a missed image scoring 0. It is the reference for what the detector model we do not run
-(MediaPipe's pose detection) would give as our landmark backend's ROI (docs/benchmarks.md,
-"Detector backends").
+(MediaPipe's pose detection) would give as our landmark backend's ROI (docs/benchmarks-history.md,
+"MediaPipe's own pipeline on the proxy benchmark").
 
 Usage: scripts/mediapipe-pipeline-pck.py SKETCHBODY PARSE_DIR WORK_DIR [SET ...]
   SKETCHBODY  the CLI binary (makes the stylised copies with `stylise`, seeded by the image
