@@ -52,9 +52,8 @@ pub fn y_extent(vertices: &[[f32; 3]]) -> f64 {
 /// Scales `vertices` and `joints` (metres) uniformly about the pelvis joint so that their
 /// [`y_extent`] becomes `height`. The pelvis is the skeleton's root, which non-standard
 /// proportions (longer legs, a longer torso) leave in place, so scaling about it keeps the
-/// placement the unaligned rest AED of the benchmark compares (scaling about the feet or the
-/// model origin measured worse: docs/benchmarks.md, "How the fit's defaults were chosen"). Errors: `height` not
-/// finite or ≤ 0, or a flat or empty vertex set ([`Error::OutOfRange`]).
+/// body's placement. Errors: `height` not finite or ≤ 0, or a flat or empty vertex set
+/// ([`Error::OutOfRange`]).
 pub fn scale_to_height(vertices: &mut [[f32; 3]], joints: &mut Joints3, height: f64) -> Result<()> {
     let now = y_extent(vertices);
     if !(height.is_finite() && height > 0.0 && now.is_finite() && now > 1e-9) {

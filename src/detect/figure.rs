@@ -22,8 +22,8 @@ use crate::skeleton::{Joints2, NUM_JOINTS};
 
 /// `Auto`: how many of the sketch model's best figures give BlazePose a further starting ROI
 /// when it is unsure from the ink box ([`crate::detect::landmark::retry_from`]). Chosen with
-/// [`SKETCH_ROI_ACCEPT`] on images the benchmark does not test (docs/benchmarks.md, "BlazePose
-/// from the sketch model's box").
+/// [`SKETCH_ROI_ACCEPT`] on images the benchmark does not test (docs/benchmarks-history.md,
+/// "BlazePose from the sketch model's box").
 pub const SKETCH_ROIS: usize = 1;
 
 /// `Auto`: the pose flag a pass from the sketch model's box needs to replace BlazePose's own
@@ -85,7 +85,7 @@ pub enum Fusion {
     #[default]
     PerImage,
     /// One whole candidate per image, always the one with the higher mean calibrated
-    /// confidence (the per-image rule before 2026-12-04).
+    /// confidence, whatever the 3-D pose step makes of the two.
     Confidence,
     /// Per limb ([`LIMB_GROUPS`]), the candidate whose calibrated confidences over the limb are
     /// higher; the figure's backend is `Auto` when the limbs come from both.
@@ -253,8 +253,8 @@ pub struct Figure {
 
 /// [`FigureOptions::average_agreement`]'s default: two backends' joints closer than this fraction
 /// of the figure's size are averaged. Where both find the same joint their errors are largely
-/// independent, so their mean is nearer the truth than either (docs/benchmarks.md, "Averaging
-/// the backends where they agree").
+/// independent, so their mean is nearer the truth than either (docs/benchmarks-history.md,
+/// "Averaging the backends where they agree").
 pub const AVERAGE_AGREEMENT: f64 = 0.08;
 
 /// Largest distance, as a fraction of the figure's size, between BlazePose's 2-D joint and the
@@ -387,7 +387,7 @@ fn mean(c: &[f64; NUM_JOINTS]) -> f64 {
 /// than any body has; both candidates come from the same drawing, so a stylised figure
 /// stylises both alike. `Ok(None)` when the pose step fails on either candidate or they tie.
 /// Errors: `CorruptData` when the embedded dictionary or factor prior does not parse (a build
-/// fault). Measured in docs/benchmarks.md ("The pose step as the backends' referee").
+/// fault). Measured in docs/benchmarks-history.md ("The pose step as the backends' referee").
 pub fn proportion_choice(a: &Joints2, b: &Joints2) -> Result<Option<usize>> {
     let dict = crate::pose::dict_io::embedded_shared()?;
     let opts = crate::pose::PoseOptions::default();
@@ -419,7 +419,7 @@ struct Scored {
 /// figure BlazePose alone is sure of is not refused because the sketch model, which does not
 /// read photo-like styles, disagrees; the sketch model's own presence is not taken, as it
 /// answers most clutter pages), else the model of the one backend that did; `None` when neither
-/// did. Measured in docs/benchmarks.md ("Either presence"). Errors: `CorruptData` for a
+/// did. Measured in docs/benchmarks-history.md ("Either presence"). Errors: `CorruptData` for a
 /// calibration of the wrong shape.
 pub fn presence_log_odds(f: &EvidenceFeatures, cal: &Calibration) -> Result<Option<f64>> {
     match (&f.presence_auto, &f.presence_fmp, &f.presence_blazepose) {

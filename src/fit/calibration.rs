@@ -9,9 +9,9 @@
 //! the lower dimensions untouched.
 //!
 //! The lower dimensions carry most of the body's size, which [`HeightCalibration`] corrects
-//! after this map (it is trained on the mapped bodies' heights); mapping them as well measured
-//! worse in 5-fold cross-validation on the training set (docs/benchmarks.md, "Shape
-//! calibration"), which chose `first_dim` = 3. [`FitCalibration`] holds both maps, applied in
+//! after this map (it is trained on the mapped bodies' heights); `first_dim` (3 in the shipped
+//! map) is chosen by 5-fold cross-validation on the training sketches (docs/benchmarks.md,
+//! "Shape calibration"). [`FitCalibration`] holds both maps, applied in
 //! that order by [`crate::pipeline::fit_body`] when the 2-D joints are given and the height is
 //! unknown.
 
@@ -148,10 +148,8 @@ impl FitCalibration {
     /// than the shape-fit benchmark's six) fitted with the true gender by a pose step that has
     /// not seen their motion: the clips in two folds, each fold's sketches posed with a
     /// dictionary learned without it (`run-dataset --dictionary`), as a user's drawing is posed
-    /// by the shipped dictionary. On sketches of the dictionary's own motion the pose step is far
-    /// better (PA-MPJPE 32 against 50 mm held out), and a calibration learned there trusts the
-    /// fitted proportions too much. `scripts/train-fit-calibration.sh` rebuilds it
-    /// (docs/benchmarks.md, "Calibration on unseen motion").
+    /// by the shipped dictionary. `scripts/train-fit-calibration.sh` rebuilds it
+    /// (docs/benchmarks.md, "Shape calibration").
     pub const SHIPPED: FitCalibration =
         FitCalibration { shape: ShapeCalibration::SHIPPED, height: HeightCalibration::SHIPPED };
 }

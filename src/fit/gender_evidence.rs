@@ -20,8 +20,8 @@
 //! adds nothing to the classifier's sum (the training set's mean is imputed).
 //!
 //! The shipped classifier [`GenderClassifier::SHIPPED`] was trained by
-//! `sketchbody train-gender` (docs/benchmarks.md, "The fully automatic path …", gives the command
-//! and the held-out confusion table and calibration).
+//! `sketchbody train-gender` (command, confusion table and calibration: docs/benchmarks-history.md,
+//! "The fully automatic path, as a user meets it").
 
 use crate::camera::WeakPerspective;
 use crate::error::{ensure_finite, Error, Result};
@@ -119,8 +119,7 @@ impl GenderClassifier {
     /// The classifier the pipeline uses, trained on `make-dataset 1200 --seed 79 --mocap DIR`
     /// (DIR: the DeepMimic clips other than the shape-fit benchmark's six held-out ones) with
     /// ground-truth joints: `run-dataset DS --out R --gender truth --mean-shape`, then
-    /// `train-gender --train DS=R --ridge 1` (docs/benchmarks.md, "The fully automatic path";
-    /// training accuracy 0.78, calibrated within a few points per bin).
+    /// `train-gender --train DS=R --ridge 1`.
     pub const SHIPPED: GenderClassifier = GenderClassifier {
         means: [
             -0.357321, -0.963395, -0.429775, -0.839572, -0.714372, -2.228744, -2.076896, -2.234390, -1.355721,
@@ -204,14 +203,11 @@ impl MarginCombination {
     /// The combination the pipeline uses (with [`crate::pipeline::PipelineOptions::classify_gender`]),
     /// trained on the first 300 sketches of the classifier's training set with both gendered
     /// fits (ground-truth joints): `run-dataset DS --out RF --first 300 --gender f`, the same
-    /// with `--gender m` into RM, then `train-gender --fits DS=RF,RM --ridge 0.1`
-    /// (docs/benchmarks.md, "The fully automatic path"), its intercept then refitted
-    /// ([`MarginCombination::recalibrated`]) to the automatic-gender runs of the two tuning sets
-    /// at fit seeds 1 and 2 (320 sketches held out from that training: `train-gender --shipped
-    /// --recalibrate DS=R …`): −0.109850 → 0.110196. Sketches of other motion read men as women
-    /// more often than the training sketches did (CMU tuning set: 10 of 11 errors); the
-    /// recalibrated probabilities have the lower log loss there and on the held-out set
-    /// (docs/benchmarks.md, "Recalibrated gender decision").
+    /// with `--gender m` into RM, then `train-gender --fits DS=RF,RM --ridge 0.1`, its intercept
+    /// then refitted ([`MarginCombination::recalibrated`]) to the automatic-gender runs of the two
+    /// tuning sets at fit seeds 1 and 2 (320 sketches held out from that training:
+    /// `train-gender --shipped --recalibrate DS=R …`; docs/benchmarks-history.md, "Recalibrated
+    /// gender decision").
     pub const SHIPPED: MarginCombination = MarginCombination {
         means: [-0.130729, -0.007666],
         scales: [1.658562, 0.290201],

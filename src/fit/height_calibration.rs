@@ -9,29 +9,23 @@
 //! rest mesh's height (metres, [`crate::body::rig::y_extent`]), `g` the fit's gender value
 //! (0 female … 1 male) and `x` the drawing's [`HeightEvidence`]: the fitted bone-length factors
 //! and the drawn widths over the torso length ([`crate::fit::GenderFeatures`]). `m_k` is the
-//! training mean of `x_k`, so a missing value adds nothing. The fitted bone factors carry the
-//! most: a drawing the fit explained by a longer torso or broader shoulders was, on the training
-//! sketches, more often a shorter body than the fitted one. On the training sketches the
-//! evidence takes the RMS error of ln height from 0.054 to 0.048 (docs/benchmarks.md, "Height
+//! training mean of `x_k`, so a missing value adds nothing (docs/benchmarks.md, "Height
 //! evidence").
 //!
 //! The pipeline scales the fitted rest body about its pelvis to `h` when the character's height
 //! is unknown and the 2-D joints are given ([`crate::pipeline::PipelineOptions::calibrate_fit`]),
 //! after the shape map of [`crate::fit::ShapeCalibration`] ([`crate::fit::FitCalibration`]);
-//! the shape at a given height is untouched. With the detector's joints the fitted height says
-//! less (its error is near the spread of heights) and a calibration fitted the same way on
-//! detected-joint fits measured worse on the tuning set (docs/benchmarks.md, "Height
-//! calibration"), so those fits keep their height. The change is bounded by [`MAX_LOG_CHANGE`], so a figure far outside
-//! the training bodies (a chibi, a giant) keeps its fitted height within that bound.
+//! the shape at a given height is untouched. Fits of the detector's joints keep their fitted
+//! height (docs/benchmarks.md, "Height calibration"). The change is bounded by
+//! [`MAX_LOG_CHANGE`], so a figure far outside the training bodies (a chibi, a giant) keeps its
+//! fitted height within that bound.
 
 use crate::body::proportions::Proportions;
 use crate::error::{ensure_finite, Error, Result};
 use crate::fit::gender_evidence::{GenderFeatures, GENDER_FEATURE_NAMES, NUM_GENDER_FEATURES};
 use crate::fit::proportions::NUM_FACTORS;
 
-/// Largest |ln(h / h_fit)| the calibration applies (about ±16 %); with the shipped calibration
-/// 90 % of the changes on the held-out shape-fit benchmark lie within −4 % … +6 %, the largest
-/// +8.7 % (ln 0.083).
+/// Largest |ln(h / h_fit)| the calibration applies (natural log; about ±16 % of the height).
 pub const MAX_LOG_CHANGE: f64 = 0.15;
 
 /// Number of [`HeightEvidence`] values: the five bone-length factors, then the drawn widths.

@@ -15,9 +15,7 @@
 //! any scale estimate (the pose step: the first solve's camera scale, the convention of
 //! [`super::figure::estimate_factors`]). A second network of the same shape predicts each
 //! joint's depth toward the camera relative to the pelvis, over `s₂` (metres at the figure's
-//! 2-D scale). The factor network replaced a ridge regression on the inputs'
-//! products of degree ≤ 2 (format version 1), whose left-out spreads were 12–30 % larger
-//! (docs/benchmarks.md, issue 16).
+//! 2-D scale). How the networks are trained and measured: docs/benchmarks.md, "3-D pose".
 
 use std::sync::OnceLock;
 

@@ -88,7 +88,7 @@ pub enum Placement {
     /// that its lowest point is on the floor too. Default.
     #[default]
     Floor,
-    /// At the rest pelvis joint (the skeleton's own origin before issue 17); no root translation.
+    /// At the rest pelvis joint (the skeleton's own origin); no root translation.
     Pelvis,
 }
 

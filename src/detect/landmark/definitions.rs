@@ -79,8 +79,8 @@ impl JointDefinitions {
     /// The shifts BlazePose's joints take by default ([`super::BlazePoseOptions::definitions`]),
     /// fitted on the first 300 sketches of `make-dataset 1200 --seed 79 --mocap DIR` (the
     /// classifiers' training sketches) by `sketchbody fit-landmark-joints --train DS --first 300`,
-    /// on landmarks refined from the heatmap (docs/benchmarks.md, "BlazePose's joints on the body
-    /// model's definitions", "Landmarks refined from the heatmap").
+    /// on landmarks refined from the heatmap (docs/benchmarks-history.md, "BlazePose's joints on
+    /// the body model's definitions", "Landmarks refined from the heatmap").
     pub const SHIPPED: JointDefinitions = JointDefinitions {
         along_torso: [
             0.095903, 0.016533, -0.036644, 0.005798, 0.019818, -0.036644, 0.005798, 0.019818, 0.043058, 0.018922,
