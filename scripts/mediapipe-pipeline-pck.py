@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """MediaPipe's own pose pipeline (its person detector + the BlazePose "full" landmark model,
 `mediapipe.solutions.pose`, static images) on the PARSE test photos 101-305, plain and through
-the proxy benchmark's stylisations, scored like `sketchbody eval-detector --sets`: the same
+the proxy benchmark's stylisations, scored like `sketchbody-lab eval-detector --sets`: the same
 canonical joints (PARSE's mapping of `detect::joints::parse_to_canonical`, MediaPipe's of
 `detect::landmark::joints::to_canonical`), PCK normalised by the longer side of the true joints'
 box, a missed image scoring 0. It is the reference for what the detector model we do not run

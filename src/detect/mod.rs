@@ -2,8 +2,8 @@
 //! feature pyramid ([`hog`], [`pyramid`]), part filter responses ([`conv`]), quadratic
 //! deformations by the generalised distance transform ([`dt`]), tree dynamic programming with
 //! mixture co-occurrence biases and back-tracking ([`tree`]), joints ([`joints`]), model I/O
-//! ([`model`] for the PARSE JSON, [`format`] for the project's binary format) and the PARSE
-//! evaluation protocol ([`parse_eval`]).
+//! ([`model`] for the PARSE JSON, [`format`] for the project's binary format);
+//! its evaluation and training are in the `sketchbody-lab` crate.
 
 pub mod calibration;
 pub mod conv;
@@ -18,9 +18,7 @@ pub mod joints;
 pub mod landmark;
 pub mod model;
 pub mod normalise;
-pub mod parse_eval;
 pub mod pyramid;
-pub mod train;
 pub mod tree;
 
 use rayon::prelude::*;

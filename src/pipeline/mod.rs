@@ -4,6 +4,7 @@
 //! the files.
 //!
 //! - [`joints`]: the 2-D joints source (the caller's joints, or the detector's).
+//! - [`figure`]: the single-figure detector refereed by the pose step.
 //! - [`overlay`]: the overlay picture (sketch, joints, bones, fitted silhouette outline).
 //!
 //! Gender: given a gender ([`PipelineOptions::gender`]), that gender's space is fitted. Without
@@ -16,6 +17,7 @@
 
 pub mod body_fit;
 mod detected;
+pub mod figure;
 pub mod joints;
 pub mod overlay;
 
@@ -284,7 +286,7 @@ pub fn run_pipeline(
     p.report(0.02)?;
 
     let t = Instant::now();
-    let (joints2d, detection) = source.figure(sketch, &edges)?;
+    let (joints2d, detection) = source.figure(sketch, &edges, dict)?;
     joints::check_in_image(&joints2d, w, h)?;
     timings.joints = t.elapsed().as_secs_f64();
     p.report(0.04)?;
