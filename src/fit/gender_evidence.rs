@@ -190,7 +190,7 @@ impl MarginCombination {
     /// fits (ground-truth joints): `run-dataset DS --out RF --first 300 --gender f`, the same
     /// with `--gender m` into RM, then `train-gender --fits DS=RF,RM --ridge 0.1`
     /// (docs/benchmarks.md, "The fully automatic path"), its intercept then refitted
-    /// (`sketchbody_lab::fit::gender::recalibrated`) to the automatic-gender runs of the two tuning sets
+    /// (`sketchbody-lab train-gender --recalibrate`) to the automatic-gender runs of the two tuning sets
     /// at fit seeds 1 and 2 (320 sketches held out from that training: `train-gender --shipped
     /// --recalibrate DS=R …`): −0.109850 → 0.110196. Sketches of other motion read men as women
     /// more often than the training sketches did (CMU tuning set: 10 of 11 errors); the
