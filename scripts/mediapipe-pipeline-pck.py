@@ -9,7 +9,7 @@ box, a missed image scoring 0. It is the reference for what the detector model w
 "MediaPipe's own pipeline on the proxy benchmark").
 
 Usage: scripts/mediapipe-pipeline-pck.py SKETCHBODY PARSE_DIR WORK_DIR [SET ...]
-  SKETCHBODY  the CLI binary (makes the stylised copies with `stylise`, seeded by the image
+  SKETCHBODY  the sketchbody-lab binary (makes the stylised copies with `stylise`, seeded by the image
               number as eval-detector does); PARSE_DIR  ../shared/data/parse;
   WORK_DIR    where the stylised copies go; SET  plain, xdog, pencil, flat (default all).
 Runs in the conversion venv (scripts/mediapipe-venv.sh prints its python)."""

@@ -188,7 +188,7 @@ impl MarginCombination {
     /// trained on the first 300 sketches of the classifier's training set with both gendered
     /// fits (ground-truth joints): `run-dataset DS --out RF --first 300 --gender f`, the same
     /// with `--gender m` into RM, then `train-gender --fits DS=RF,RM --ridge 0.1`, its intercept
-    /// then refitted (`sketchbody_lab::fit::gender::recalibrated`) to the automatic-gender runs of the two
+    /// then refitted (`sketchbody-lab train-gender --recalibrate`) to the automatic-gender runs of the two
     /// tuning sets at fit seeds 1 and 2 (320 sketches held out from that training:
     /// `train-gender --shipped --recalibrate DS=R …`; docs/benchmarks-history.md, "Recalibrated
     /// gender decision").
