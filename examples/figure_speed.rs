@@ -7,10 +7,11 @@
 
 use std::time::Instant;
 
-use sketchbody::detect::figure::{detect_figure, Backend, FigureOptions};
+use sketchbody::detect::figure::{Backend, FigureOptions};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
 use sketchbody::image::load_rgb_image;
+use sketchbody::pipeline::figure::detect_figure;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -29,7 +30,7 @@ fn main() {
         for (i, &backend) in backends.iter().enumerate() {
             let options = FigureOptions { backend, ..FigureOptions::default() };
             let (t0, c0) = (Instant::now(), process_cpu());
-            let f = detect_figure(&img.view(), &model, &net, &options);
+            let f = detect_figure(&img.view(), &model, &net, &options, None);
             let (w, c) = (t0.elapsed().as_secs_f64() * 1e3, (process_cpu() - c0) * 1e3);
             if round == 0 {
                 match f {

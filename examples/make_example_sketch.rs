@@ -5,7 +5,7 @@
 //! `cargo run --release --example make_example_sketch -- OUT.png [JOINTS.json]`.
 
 use sketchbody::export::joints2d::write_joints2d;
-use sketchbody::image::{save_gray_png, GrayImage};
+use sketchbody::image::{save_png, GrayImage};
 use sketchbody::skeleton::{Joints2, BONES, NUM_JOINTS};
 
 /// Joint positions in pixels (512x512 image), canonical order, the figure's right on image left.
@@ -66,7 +66,7 @@ fn main() {
         }
     }
     let img = GrayImage::from_vec(n, n, data).expect("512x512 image");
-    if let Err(e) = save_gray_png(&img, std::path::Path::new(&out)) {
+    if let Err(e) = save_png(&img.view(), std::path::Path::new(&out)) {
         eprintln!("make_example_sketch: {e}");
         std::process::exit(1);
     }

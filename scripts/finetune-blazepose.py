@@ -28,7 +28,7 @@ figure):
   - pose flag on drawings with a figure: binary cross-entropy to 1, weight `--flag-drawing`.
 Deterministic given the seed and --steps (torch.use_deterministic_algorithms, 2 CPU threads); with
 the --minutes budget the number of steps depends on the machine's speed. Defaults: the best run of
-docs/benchmarks.md ("Fine-tuning the landmark model on drawings": run 1, 470 steps in 12 min).
+docs/benchmarks-history.md ("Fine-tuning the landmark model on drawings": run 1, 470 steps in 12 min).
 """
 import argparse
 import os

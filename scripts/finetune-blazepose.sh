@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fine-tunes the shipped BlazePose landmark network on drawings (issue 15 experiment; results in
-# docs/benchmarks.md, "Fine-tuning the landmark model on drawings"). Everything generated stays
+# docs/benchmarks-history.md, "Fine-tuning the landmark model on drawings"). Everything generated stays
 # under $WORK (default /tmp/ft): never commit the crops or the models.
 #
 # Python: a venv with torch (CPU), onnx and onnx2torch (PYTHON, default /tmp/tv/bin/python; the
@@ -21,8 +21,9 @@ SKETCHES=${SKETCHES:-1000}
 RUN=${RUN:-run}
 parse=../shared/data/parse
 mkdir -p "$WORK"
-cargo build --release -p sketchbody --example landmark_finetune_data --example landmark_model_diff
-cargo build --release -p sketchbody-cli
+cargo build --release -p sketchbody --example landmark_model_diff
+cargo build --release -p sketchbody-lab --example landmark_finetune_data
+cargo build --release -p sketchbody-lab
 
 # 1. The export path, checked with the unmodified network: our loader must read the same landmarks.
 "$PYTHON" scripts/finetune-blazepose.py export-identity "$WORK/identity.onnx"
@@ -41,7 +42,7 @@ target/release/examples/landmark_model_diff "$WORK/$RUN/model.onnx" "${images[@]
 #    seed 83 (neither the training seed nor the benchmark's 2).
 for model in "" "--landmark-model $WORK/$RUN/model.onnx"; do
   # shellcheck disable=SC2086
-  target/release/sketchbody eval-detector --sets parse,xdog,pencil,flat --parse-range 81-100 $model
+  target/release/sketchbody-lab eval-detector --sets parse,xdog,pencil,flat --parse-range 81-100 $model
   # shellcheck disable=SC2086
-  target/release/sketchbody eval-detector --sets synthetic,negatives --seed 83 --n 100 --hair keep $model
+  target/release/sketchbody-lab eval-detector --sets synthetic,negatives --seed 83 --n 100 --hair keep $model
 done

@@ -1,15 +1,15 @@
 #!/usr/bin/env python3
 """MediaPipe's own pose pipeline (its person detector + the BlazePose "full" landmark model,
 `mediapipe.solutions.pose`, static images) on the PARSE test photos 101-305, plain and through
-the proxy benchmark's stylisations, scored like `sketchbody eval-detector --sets`: the same
+the proxy benchmark's stylisations, scored like `sketchbody-lab eval-detector --sets`: the same
 canonical joints (PARSE's mapping of `detect::joints::parse_to_canonical`, MediaPipe's of
 `detect::landmark::joints::to_canonical`), PCK normalised by the longer side of the true joints'
 box, a missed image scoring 0. It is the reference for what the detector model we do not run
-(MediaPipe's pose detection) would give as our landmark backend's ROI (docs/benchmarks.md,
-"Detector backends").
+(MediaPipe's pose detection) would give as our landmark backend's ROI (docs/benchmarks-history.md,
+"MediaPipe's own pipeline on the proxy benchmark").
 
 Usage: scripts/mediapipe-pipeline-pck.py SKETCHBODY PARSE_DIR WORK_DIR [SET ...]
-  SKETCHBODY  the CLI binary (makes the stylised copies with `stylise`, seeded by the image
+  SKETCHBODY  the sketchbody-lab binary (makes the stylised copies with `stylise`, seeded by the image
               number as eval-detector does); PARSE_DIR  ../shared/data/parse;
   WORK_DIR    where the stylised copies go; SET  plain, xdog, pencil, flat (default all).
 Runs in the conversion venv (scripts/mediapipe-venv.sh prints its python)."""

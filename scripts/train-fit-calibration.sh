@@ -20,8 +20,8 @@ set -euo pipefail
 work=${1:?usage: scripts/train-fit-calibration.sh WORK_DIR}
 root=$(cd "$(dirname "$0")/.." && pwd)
 data=${SKB_SHARED_DATA:-$root/../shared/data}
-skb=$root/target/release/sketchbody
-[ -x "$skb" ] || (cd "$root" && cargo build --release -p sketchbody-cli)
+skb=$root/target/release/sketchbody-lab
+[ -x "$skb" ] || (cd "$root" && cargo build --release -p sketchbody-lab)
 mkdir -p "$work/mocap"
 held_out="dance_b jog kick long_long_walk3 long_long_walk3_mirror long_stealthy_walk1"
 for f in "$data"/mocap/deepmimic/*.csv; do

@@ -11,7 +11,6 @@ pub mod body;
 pub mod camera;
 pub mod detect;
 pub mod error;
-pub mod eval;
 pub mod export;
 pub mod fit;
 pub mod fsutil;
@@ -22,7 +21,6 @@ pub mod pipeline;
 pub mod pose;
 pub mod raster;
 pub mod render;
-pub mod rig;
 pub mod skeleton;
 
 pub use error::{Error, Result};

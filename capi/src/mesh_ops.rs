@@ -11,8 +11,9 @@ use sketchbody_core::body::skin::{skin, SkinMethod};
 use sketchbody_core::camera::WeakPerspective;
 use sketchbody_core::error::Error;
 use sketchbody_core::export::obj::write_obj;
+use sketchbody_core::image::save_png;
 use sketchbody_core::raster::Rasterizer;
-use sketchbody_core::render::preview::{preview, save_rgb_png};
+use sketchbody_core::render::preview::preview;
 use sketchbody_core::skeleton::{Joints3, NUM_JOINTS};
 
 use super::body::{skb_mesh, Posed};
@@ -292,7 +293,7 @@ pub unsafe extern "C" fn skb_mesh_write_preview(mesh: *const skb_mesh, path: *co
             let m = try_status!(try_ref(mesh, "mesh"));
             let path = try_status!(path_arg(path, "path"));
             let img = try_core!(preview(posed_vertices(m), &m.model.triangles(), size as usize));
-            try_core!(save_rgb_png(&img, path));
+            try_core!(save_png(&img.view(), path));
             skb_status::SKB_OK
         }
     }

@@ -12,8 +12,8 @@ use nalgebra::{UnitQuaternion, Vector3};
 
 use sketchbody_core::body::ik::Pose;
 use sketchbody_core::body::rig::{vertex_normals, RiggedMesh};
+use sketchbody_core::body::rig::{RigOptions, RigPose, RigScene, NUM_RIG_BONES, RIG_BONES};
 use sketchbody_core::error::Error;
-use sketchbody_core::rig::{RigOptions, RigPose, RigScene, NUM_RIG_BONES, RIG_BONES};
 
 use super::body::{copy_skin_weights, skb_mesh};
 use super::error::fail;

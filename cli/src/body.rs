@@ -4,14 +4,15 @@
 use std::path::PathBuf;
 
 use sketchbody::body::ik::{solve, IkOptions, Pose};
+use sketchbody::body::rig::RigScene;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::body::skin::{skin, SkinMethod};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::gltf::write_glb;
 use sketchbody::export::joints::load_joints3_json;
 use sketchbody::export::obj::write_obj;
-use sketchbody::render::preview::{preview, save_rgb_png};
-use sketchbody::rig::RigScene;
+use sketchbody::image::save_png;
+use sketchbody::render::preview::preview;
 
 use crate::rig_args::RigArgs;
 use crate::CliError;
@@ -76,7 +77,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         write_obj(&a.out, &posed, &mesh.quads, mesh.uvs.as_ref())?;
     }
     if let (Some(p), Some(img)) = (&a.preview, &image) {
-        save_rgb_png(img, p)?;
+        save_png(&img.view(), p)?;
     }
     Ok(())
 }

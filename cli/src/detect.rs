@@ -6,11 +6,12 @@
 use std::path::PathBuf;
 
 use serde_json::{json, Map, Value};
-use sketchbody::detect::figure::{detect_figure, Backend, FigureOptions, AVERAGE_AGREEMENT};
+use sketchbody::detect::figure::{Backend, FigureOptions, AVERAGE_AGREEMENT};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::{detect, DetectOptions, Detection, Model, PARSE_JOINT_NAMES};
 use sketchbody::export::joints2d::{detection_json as figure_json, LOW_CONFIDENCE_HINT};
 use sketchbody::image::{load_rgb_image, RgbImage};
+use sketchbody::pipeline::figure::detect_figure;
 use sketchbody::skeleton::Joints2;
 use sketchbody::skeleton::{BONES, JOINT_NAMES};
 
@@ -192,7 +193,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         average_agreement: a.average_agreement,
         ..FigureOptions::default()
     };
-    let f = detect_figure(&img.view(), &model, &net, &options).map_err(no_figure)?;
+    let f = detect_figure(&img.view(), &model, &net, &options, None).map_err(no_figure)?;
     let mut doc = header(&a, &img);
     let mut joints = Map::new();
     let mut conf = Map::new();

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use sketchbody::image::{canny, gaussian_blur, load_image, save_gray_png, CannyParams};
+use sketchbody::image::{canny, gaussian_blur, load_image, save_png, CannyParams};
 
 use crate::CliError;
 
@@ -39,6 +39,6 @@ pub fn run(a: Args) -> Result<(), CliError> {
     };
     let params = CannyParams { threshold1: a.low, threshold2: a.high, aperture: a.aperture, l2_gradient: a.l2 };
     let edges = canny(&img.view(), &params)?;
-    save_gray_png(&edges, &a.output)?;
+    save_png(&edges.view(), &a.output)?;
     Ok(())
 }

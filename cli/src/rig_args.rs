@@ -1,6 +1,6 @@
 //! The production rig's options shared by `run` and `body`: bone names, rest pose, origin.
 
-use sketchbody::rig::{Naming, Placement, RestPose, RigOptions};
+use sketchbody::body::rig::{Naming, Placement, RestPose, RigOptions};
 
 use crate::CliError;
 

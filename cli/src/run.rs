@@ -16,6 +16,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+use sketchbody::body::rig::RigScene;
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::detect::figure::{Backend, FigureOptions};
 use sketchbody::detect::landmark::LandmarkNet;
@@ -24,14 +25,13 @@ use sketchbody::export::gltf::write_glb;
 use sketchbody::export::joints2d::{load_joints2d, write_joints2d_with, LOW_CONFIDENCE_HINT};
 use sketchbody::export::obj::{mtl_string, write_obj_with_material};
 use sketchbody::export::pose3d::pose3d_json;
-use sketchbody::export::texture::{png_bytes, project_sketch};
+use sketchbody::export::texture::project_sketch;
 use sketchbody::fsutil::{write_atomic, StagingDir};
-use sketchbody::image::{load_rgb_image, to_gray};
+use sketchbody::image::{encode_png, load_rgb_image, save_png, to_gray};
 use sketchbody::pipeline::overlay::overlay;
 use sketchbody::pipeline::{run_pipeline, FigureJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use sketchbody::pose::dict_io;
-use sketchbody::render::preview::{compare_preview, save_rgb_png, SurfaceTexture};
-use sketchbody::rig::RigScene;
+use sketchbody::render::preview::{compare_preview, SurfaceTexture};
 
 use crate::detect::NO_FIGURE_HINT;
 use crate::fit_args::{score_name, FitArgs};
@@ -387,7 +387,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let views =
         compare_preview(&sketch_rgb, &r.posed_vertices, &tris, surface.as_ref(), &r.pose.camera, a.preview_size)?;
     let scene = RigScene::build(model.rig(), &r.mesh, &r.ik_pose, &rig_options)?;
-    let texture = texture_img.as_ref().map(|(img, _)| png_bytes(img)).transpose()?;
+    let texture = texture_img.as_ref().map(|(img, _)| encode_png(&img.view())).transpose()?;
     write_glb(&staging.path("body.glb"), &r.mesh, &scene, texture.as_deref())?;
     let mtl = texture.as_ref().map(|_| "body.mtl");
     if let Some(png) = &texture {
@@ -402,8 +402,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         serde_json::to_vec_pretty(&pose3d_json(&r.pose, &dict, &opts.pose)).map_err(|e| CliError(e.to_string()))?;
     pose_bytes.push(b'\n');
     write_atomic(&staging.path("pose3d.json"), &pose_bytes)?;
-    save_rgb_png(&over, &staging.path("overlay.png"))?;
-    save_rgb_png(&views, &staging.path("preview.png"))?;
+    save_png(&over.view(), &staging.path("overlay.png"))?;
+    save_png(&views.view(), &staging.path("preview.png"))?;
     let text = report(&a, &opts, &r, (sketch.width(), sketch.height()), load_s, t_write.elapsed().as_secs_f64());
     write_atomic(&staging.path("report.md"), text.as_bytes())?;
     staging.commit()?;

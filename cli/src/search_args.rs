@@ -1,4 +1,4 @@
-//! The detector's search flags, shared by `sketchbody detect` and `sketchbody eval-detector`:
+//! The detector's search flags, shared by `sketchbody detect` and `sketchbody-lab eval-detector`:
 //! figure sizes (`--min-figure`, `--max-figure`, `--all-scales`), pyramid cells (`--min-cell`,
 //! `--max-cell`) and `--levels-per-octave`, turned into `DetectOptions`.
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use sketchbody::export::joints2d::load_joints2d;
-use sketchbody::image::{save_gray_png, GrayImage};
+use sketchbody::image::{save_png, GrayImage};
 
 const SKETCH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sketch.png");
 const JOINTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sketch_joints.json");
@@ -189,7 +189,7 @@ fn bad_input_fails_in_one_line_and_leaves_nothing() {
     for y in 20..180 {
         page.as_bytes_mut()[y * 200 + 100] = 0;
     }
-    save_gray_png(&page, &stroke).unwrap();
+    save_png(&page.view(), &stroke).unwrap();
     one_line_error(&run(&[stroke.to_str().unwrap(), "--out", o, "--quiet"]), "no figure");
     assert!(!out_dir.exists());
     // A joint outside the image.
@@ -203,10 +203,10 @@ fn bad_input_fails_in_one_line_and_leaves_nothing() {
     );
     // Blank and tiny sketches.
     let blank = dir.join("blank.png");
-    save_gray_png(&GrayImage::filled(256, 256, 240).unwrap(), &blank).unwrap();
+    save_png(&GrayImage::filled(256, 256, 240).unwrap().view(), &blank).unwrap();
     one_line_error(&run(&[blank.to_str().unwrap(), "--joints", JOINTS, "--out", o, "--quiet"]), "has no edges");
     let tiny = dir.join("tiny.png");
-    save_gray_png(&GrayImage::filled(16, 16, 0).unwrap(), &tiny).unwrap();
+    save_png(&GrayImage::filled(16, 16, 0).unwrap().view(), &tiny).unwrap();
     one_line_error(&run(&[tiny.to_str().unwrap(), "--joints", JOINTS, "--out", o, "--quiet"]), "16x16 is too small");
     assert!(!out_dir.exists());
     // An output path below a file cannot be created.

@@ -15,7 +15,7 @@ converted, 1 when some failed.
 With `--scheduler local` (the default) a LocalCluster of `--workers` processes is started
 in-process; with an address the tasks go to a running cluster (`dask scheduler`, `dask worker`
 on each machine, sketchbody installed on each, SKETCH_DIR and OUT_DIR on storage every worker
-sees at the same path; docs/python.md). `sketchbody run-dataset` stays the single-machine path.
+sees at the same path; docs/python.md). `sketchbody-lab run-dataset` stays the single-machine path.
 
 Why Dask distributed rather than Ray: dask and distributed are pure-Python packages that pip
 installs on the Python the package already uses, a LocalCluster runs in-process

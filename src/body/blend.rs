@@ -43,8 +43,8 @@ pub const GENDER_LEVELS: [f64; 4] = [0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0];
 
 /// Prior mass of each level of [`GENDER_LEVELS`] (levels of mass 0 are left out). Default: the
 /// ends only, so the prior is the two gendered priors side by side; the gender value still
-/// varies continuously with each population's spread along the gender axis. In-between
-/// levels measured worse on the tuning set (docs/benchmarks.md, "How the fit's defaults were chosen").
+/// varies continuously with each population's spread along the gender axis (the choice:
+/// docs/benchmarks-history.md, "How the fit's defaults were chosen").
 pub const LEVEL_WEIGHTS: [f64; 4] = [0.5, 0.0, 0.0, 0.5];
 
 /// Default fitting dimension of the blended space: the gender weight plus the 4 shape weights

@@ -9,7 +9,7 @@ use crate::skeleton::{Joints3, NUM_BONES, NUM_JOINTS};
 
 use super::gmm::Gmm;
 use super::model::{BodyModel, ShapeSpace, VertexWeights, MAX_INFLUENCES};
-use crate::rig::{PointRegressor, RigData, NUM_RIG_BONES};
+use crate::body::rig::{PointRegressor, RigData, NUM_RIG_BONES};
 
 /// First 8 bytes of every `.skbm` file.
 pub const SKBM_MAGIC: [u8; 8] = *b"SKBMODEL";

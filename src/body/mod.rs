@@ -2,7 +2,7 @@
 //! mesh, and a both-sexes space with gender as a continuous weight built from them at load time, a GMM prior over the PCA weights, the canonical joints as linear functions of the shape,
 //! skin weights to the 14 canonical bones), rigged-mesh data, procedural test bodies, inverse
 //! kinematics and skinning. [`BodyModel::embedded`] decodes the model compiled into the library;
-//! `build` makes it from the MakeHuman data (`sketchbody build-model`).
+//! `build` makes it from the MakeHuman data (`sketchbody-lab build-model`).
 
 mod blend;
 #[cfg(feature = "model-builder")]
@@ -30,5 +30,5 @@ pub use gmm::Gmm;
 pub use model::{BodyModel, RestShape, ShapeChoice, ShapeSpace, VertexWeights, MAX_INFLUENCES};
 pub use proxy::{FitProxy, ProxySpace, PROXY_VERTICES};
 
-/// The committed model asset (`assets/body_model.skbm`, rebuilt by `sketchbody build-model`).
+/// The committed model asset (`assets/body_model.skbm`, rebuilt by `sketchbody-lab build-model`).
 pub(crate) static EMBEDDED_MODEL: &[u8] = include_bytes!("../../assets/body_model.skbm");

@@ -204,8 +204,8 @@ pub struct BodyModel {
     pub(crate) uvs: Vec<[f32; 2]>,
     pub(crate) skin: Vec<VertexWeights>,
     pub(crate) spaces: [ShapeSpace; 2],
-    /// MakeHuman's production rig fitted to the model ([`crate::rig`]).
-    pub(crate) rig: crate::rig::RigData,
+    /// MakeHuman's production rig fitted to the model ([`crate::body::rig`]).
+    pub(crate) rig: crate::body::rig::RigData,
     /// The fit proxy, built on first use ([`BodyModel::fit_proxy`]).
     pub(crate) proxy: super::proxy::ProxyCell,
     /// The both-sexes space, built on first use ([`BodyModel::blended`]).
@@ -262,8 +262,8 @@ impl BodyModel {
     }
 
     /// The production rig: MakeHuman's `game_engine` skeleton placed by regressors on the
-    /// canonical joints and body vertices, its rolls, T-pose and skin weights ([`crate::rig`]).
-    pub fn rig(&self) -> &crate::rig::RigData {
+    /// canonical joints and body vertices, its rolls, T-pose and skin weights ([`crate::body::rig`]).
+    pub fn rig(&self) -> &crate::body::rig::RigData {
         &self.rig
     }
 

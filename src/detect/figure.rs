@@ -1,8 +1,8 @@
 //! Single-figure detection, the product's default: the best figure in a drawing with calibrated
 //! confidences, from the sketch model ([`super::detect`], trained on concept sketches), the
 //! BlazePose landmark backend ([`super::landmark`], trained on photos) or both (`Auto`, which
-//! keeps per image one candidate: the one whose proportions the 3-D pose step finds nearer the
-//! body model's when the sketch model recognises the drawing, else the one whose calibrated
+//! keeps per image one candidate: the one the caller's [`Referee`] picks when the sketch model
+//! recognises the drawing — the pipeline's is the 3-D pose step — else the one whose calibrated
 //! joint confidences are higher; [`Fusion`]).
 //!
 //! Semantics: the best figure is returned whenever the evidence says the image plausibly holds
@@ -22,8 +22,8 @@ use crate::skeleton::{Joints2, NUM_JOINTS};
 
 /// `Auto`: how many of the sketch model's best figures give BlazePose a further starting ROI
 /// when it is unsure from the ink box ([`crate::detect::landmark::retry_from`]). Chosen with
-/// [`SKETCH_ROI_ACCEPT`] on images the benchmark does not test (docs/benchmarks.md, "BlazePose
-/// from the sketch model's box").
+/// [`SKETCH_ROI_ACCEPT`] on images the benchmark does not test (docs/benchmarks-history.md,
+/// "BlazePose from the sketch model's box").
 pub const SKETCH_ROIS: usize = 1;
 
 /// `Auto`: the pose flag a pass from the sketch model's box needs to replace BlazePose's own
@@ -80,12 +80,12 @@ pub enum Fusion {
     /// One whole candidate per image (default): when both backends answered and the sketch
     /// model's figure passes the sketch model's own threshold (a drawing it recognises), the
     /// candidate whose joints the 3-D pose step explains with drawn proportions nearest the
-    /// body model's ([`proportion_choice`]); otherwise, or when the pose step fails on either,
-    /// the one with the higher mean calibrated confidence.
+    /// body model's (the [`Referee`] the caller gives); otherwise, without a referee, or when
+    /// the pose step fails on either, the one with the higher mean calibrated confidence.
     #[default]
     PerImage,
     /// One whole candidate per image, always the one with the higher mean calibrated
-    /// confidence (the per-image rule before 2026-12-04).
+    /// confidence, whatever the 3-D pose step makes of the two.
     Confidence,
     /// Per limb ([`LIMB_GROUPS`]), the candidate whose calibrated confidences over the limb are
     /// higher; the figure's backend is `Auto` when the limbs come from both.
@@ -135,7 +135,7 @@ impl Default for FigureOptions {
 }
 
 /// What the backends found in one image, before any decision: the raw material of
-/// [`decide`] and of the calibration (`sketchbody calibrate-detector`).
+/// [`decide`] and of the calibration (`sketchbody-lab calibrate-detector`).
 #[derive(Clone, Debug)]
 pub struct Evidence {
     /// The sketch model's best figures (best first; any score), `None` when it did not run or
@@ -240,7 +240,7 @@ pub struct Figure {
     /// camera, relative to the hips) where its 2-D joint lies within [`DEPTH_AGREEMENT`] of the
     /// figure's size from the chosen joint (`None` at the others), whichever backend's joints
     /// were chosen; all `None` when BlazePose did not run. A cue for the pose step
-    /// ([`crate::pose::DepthHint`]).
+    /// (the pose module's `DepthHint`).
     pub landmark_depth: [Option<f64>; NUM_JOINTS],
     /// Joints that are the mean of both backends' ([`FigureOptions::average_agreement`]); all
     /// `false` when one backend answered.
@@ -253,8 +253,8 @@ pub struct Figure {
 
 /// [`FigureOptions::average_agreement`]'s default: two backends' joints closer than this fraction
 /// of the figure's size are averaged. Where both find the same joint their errors are largely
-/// independent, so their mean is nearer the truth than either (docs/benchmarks.md, "Averaging
-/// the backends where they agree").
+/// independent, so their mean is nearer the truth than either (docs/benchmarks-history.md,
+/// "Averaging the backends where they agree").
 pub const AVERAGE_AGREEMENT: f64 = 0.08;
 
 /// Largest distance, as a fraction of the figure's size, between BlazePose's 2-D joint and the
@@ -380,30 +380,11 @@ fn mean(c: &[f64; NUM_JOINTS]) -> f64 {
     c.iter().sum::<f64>() / NUM_JOINTS as f64
 }
 
-/// Which of two candidate joint sets (0 or 1) the 3-D pose step ([`crate::pose::estimate_pose`],
-/// default options, the embedded dictionary, parsed once per process) explains with drawn
-/// proportions nearer the body model's: the smaller Σ_g |ln k_g| of the estimated group factors
-/// ([`crate::pose::figure`]). A candidate with a misplaced joint needs a limb longer or shorter
-/// than any body has; both candidates come from the same drawing, so a stylised figure
-/// stylises both alike. `Ok(None)` when the pose step fails on either candidate or they tie.
-/// Errors: `CorruptData` when the embedded dictionary or factor prior does not parse (a build
-/// fault). Measured in docs/benchmarks.md ("The pose step as the backends' referee").
-pub fn proportion_choice(a: &Joints2, b: &Joints2) -> Result<Option<usize>> {
-    let dict = crate::pose::dict_io::embedded_shared()?;
-    let opts = crate::pose::PoseOptions::default();
-    let prior = crate::pose::factor_prior::FactorPrior::embedded()?;
-    let deviation = |j: &Joints2| -> Option<f64> {
-        let est = crate::pose::estimate_pose_with_factor_prior(dict, j, &opts, None, Some(prior)).ok()?;
-        let d: f64 = est.factors.k.iter().map(|k| k.ln().abs()).sum();
-        d.is_finite().then_some(d)
-    };
-    let (Some(da), Some(db)) = (deviation(a), deviation(b)) else { return Ok(None) };
-    Ok(match da.total_cmp(&db) {
-        std::cmp::Ordering::Less => Some(0),
-        std::cmp::Ordering::Greater => Some(1),
-        std::cmp::Ordering::Equal => None,
-    })
-}
+/// The referee of [`Fusion::PerImage`] between the two backends' candidates of one drawing:
+/// which joint set (0 or 1) to keep, `Ok(None)` for no preference (the higher mean calibrated
+/// confidence then decides). The product's referee is the 3-D pose step (the `pipeline` module's
+/// `proportion_choice`, which sees both steps); detection alone has none.
+pub type Referee<'a> = &'a dyn Fn(&Joints2, &Joints2) -> Result<Option<usize>>;
 
 /// A candidate of one backend with its calibrated confidences.
 #[derive(Clone, Copy)]
@@ -419,7 +400,7 @@ struct Scored {
 /// figure BlazePose alone is sure of is not refused because the sketch model, which does not
 /// read photo-like styles, disagrees; the sketch model's own presence is not taken, as it
 /// answers most clutter pages), else the model of the one backend that did; `None` when neither
-/// did. Measured in docs/benchmarks.md ("Either presence"). Errors: `CorruptData` for a
+/// did. Measured in docs/benchmarks-history.md ("Either presence"). Errors: `CorruptData` for a
 /// calibration of the wrong shape.
 pub fn presence_log_odds(f: &EvidenceFeatures, cal: &Calibration) -> Result<Option<f64>> {
     match (&f.presence_auto, &f.presence_fmp, &f.presence_blazepose) {
@@ -431,11 +412,17 @@ pub fn presence_log_odds(f: &EvidenceFeatures, cal: &Calibration) -> Result<Opti
     }
 }
 
-/// Decides the figure from `evidence` with calibration `cal`. Errors: `NoFigure` (with the
+/// Decides the figure from `evidence` with calibration `cal`; `referee` (when given) picks
+/// between the two backends' candidates under [`Fusion::PerImage`]. Errors: `NoFigure` (with the
 /// presence probability as its score and `min_presence` as its threshold, or the backend's own
 /// score and threshold when strict) when no candidate counts as a figure; `CorruptData` for a
-/// calibration of the wrong shape.
-pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -> Result<Figure> {
+/// calibration of the wrong shape; the referee's errors.
+pub fn decide(
+    evidence: &Evidence,
+    cal: &Calibration,
+    options: &FigureOptions,
+    referee: Option<Referee<'_>>,
+) -> Result<Figure> {
     let f = features(evidence);
     let mut cands = Vec::new();
     for c in &f.candidates {
@@ -482,10 +469,11 @@ pub fn decide(evidence: &Evidence, cal: &Calibration, options: &FigureOptions) -
         cands = vec![mixed];
     }
     let sketch_passes = cands.iter().any(|c| c.backend == Backend::Fmp && c.raw_score >= sketch_threshold);
-    let by_proportions = if options.fusion == Fusion::PerImage && cands.len() == 2 && sketch_passes {
-        proportion_choice(&cands[0].joints, &cands[1].joints)?
-    } else {
-        None
+    let by_proportions = match referee {
+        Some(choose) if options.fusion == Fusion::PerImage && cands.len() == 2 && sketch_passes => {
+            choose(&cands[0].joints, &cands[1].joints)?
+        }
+        _ => None,
     };
     let pick = match by_proportions {
         Some(k) => Some(k),
@@ -552,13 +540,15 @@ fn average_agreeing(chosen: &mut Joints2, other: &Joints2, other_backend: Backen
 }
 
 /// The best figure of `image` (1, 3 or 4 channels) by `options.backend`, with calibrated
-/// confidences (the embedded calibration). Errors: `ImageTooSmall`, `OutOfRange` / `NonFinite`
-/// for bad options, `NoFigure` (see [`decide`]), the models' errors.
+/// confidences (the embedded calibration) and `referee` as in [`decide`]. Errors:
+/// `ImageTooSmall`, `OutOfRange` / `NonFinite` for bad options, `NoFigure` (see [`decide`]), the
+/// models' errors.
 pub fn detect_figure(
     image: &ImageView<'_>,
     model: &Model,
     net: &LandmarkNet,
     options: &FigureOptions,
+    referee: Option<Referee<'_>>,
 ) -> Result<Figure> {
     if !(0.0..=1.0).contains(&options.min_presence) {
         return Err(Error::OutOfRange {
@@ -573,5 +563,5 @@ pub fn detect_figure(
         });
     }
     let evidence = gather(image, model, net, options.backend, options)?;
-    decide(&evidence, Calibration::embedded()?, options)
+    decide(&evidence, Calibration::embedded()?, options, referee)
 }

@@ -2,8 +2,8 @@
 //! feature pyramid ([`hog`], [`pyramid`]), part filter responses ([`conv`]), quadratic
 //! deformations by the generalised distance transform ([`dt`]), tree dynamic programming with
 //! mixture co-occurrence biases and back-tracking ([`tree`]), joints ([`joints`]), model I/O
-//! ([`model`] for the PARSE JSON, [`format`] for the project's binary format) and the PARSE
-//! evaluation protocol ([`parse_eval`]).
+//! ([`model`] for the PARSE JSON, [`format`] for the project's binary format);
+//! its evaluation and training are in the `sketchbody-lab` crate.
 
 pub mod calibration;
 pub mod conv;
@@ -18,9 +18,7 @@ pub mod joints;
 pub mod landmark;
 pub mod model;
 pub mod normalise;
-pub mod parse_eval;
 pub mod pyramid;
-pub mod train;
 pub mod tree;
 
 use rayon::prelude::*;
@@ -59,11 +57,8 @@ pub enum SearchScales {
 }
 
 /// The smallest figure the sketch default searches, as a fraction of the shorter image side.
-/// Concept sketches draw one figure large on the page: the renderer's figures are 0.72–0.92 of
-/// the shorter side tall (margins 0.04–0.14 on every side), and on 300 held-out sketches both
-/// the embedded and the PARSE model found every correct figure at levels tuned to ≥ 0.41 of the
-/// side, inside this range (levels down to 0.5 / 1.25 = 0.4); PCK was the same as with the
-/// earlier 0.25 (`docs/benchmarks.md`, "Detector (issue 7)"). Smaller figures need
+/// Concept sketches draw one figure large on the page (the renderer's figures are 0.72–0.92 of
+/// the shorter side tall; docs/benchmarks-history.md, "Detector (issue 7)"). Smaller figures need
 /// [`SearchScales::FigureFraction`] with a smaller `min` or [`SearchScales::All`].
 pub const SKETCH_MIN_FIGURE: f64 = 0.5;
 
@@ -124,9 +119,8 @@ pub struct DetectOptions {
 pub const DEFAULT_NORMALISE_SIDE: usize = 512;
 
 /// The documented default levels per octave for concept sketches ([`DetectOptions::default`]):
-/// 7 instead of the models' 10, 0.7 of the levels and of the work; on 300 held-out sketches
-/// PCK@0.1 / @0.2 of both the embedded and the PARSE model were as high as with 10, while 5
-/// cost the PARSE model 0.035 at PCK@0.1 (`docs/benchmarks.md`, "Detector (issue 7)").
+/// 7 instead of the models' 10, 0.7 of the levels and of the work at the same held-out PCK
+/// (docs/benchmarks-history.md, "Detector (issue 7)").
 pub const SKETCH_LEVELS_PER_OCTAVE: usize = 7;
 
 impl Default for DetectOptions {

@@ -1,10 +1,10 @@
 //! Binary glTF 2.0 (.glb), one scene: the rest mesh (normals, UVs, optional base-colour
 //! texture) skinned (`JOINTS_0`, `WEIGHTS_0`, inverse bind matrices) to MakeHuman's 53-bone
-//! production armature ([`crate::rig`]), posed: the nodes carry the body's pose as bone
+//! production armature ([`crate::body::rig`]), posed: the nodes carry the body's pose as bone
 //! rotations, with a translation on the root only; the same pose is also a one-frame animation
 //! clip named "pose" (STEP interpolation, time 0).
 //!
-//! Nodes 0..53 are the bones in [`crate::rig::RIG_BONES`] order, named in the chosen convention,
+//! Nodes 0..53 are the bones in [`crate::body::rig::RIG_BONES`] order, named in the chosen convention,
 //! each placed at its bone's head with its rest frame (local +Y along the bone, MakeHuman's roll);
 //! node 53 is the mesh. The scene's roots are the root bone (at the floor by default) and the
 //! mesh. UVs are written with v flipped (glTF's texture origin is the top-left).
@@ -15,9 +15,9 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
 use crate::body::rig::{vertex_normals, RiggedMesh};
+use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -277,8 +277,8 @@ mod tests {
     use super::*;
     use crate::body::ik::{solve, IkOptions};
     use crate::body::procedural::random_pose;
+    use crate::body::rig::RigOptions;
     use crate::body::{BodyModel, Gender};
-    use crate::rig::RigOptions;
     use rand::SeedableRng;
 
     fn parse(glb: &[u8]) -> Value {

@@ -11,9 +11,8 @@ use nalgebra::Vector3;
 use crate::body::rig::FaceUvs;
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
-use crate::image::RgbImage as SketchRgb;
+use crate::image::RgbImage;
 use crate::raster::{Rasterizer, MAX_RASTER_SIDE};
-use crate::render::preview::RgbImage;
 
 /// Colour of the texels the sketch does not see.
 pub const NEUTRAL: [u8; 3] = [190, 190, 190];
@@ -40,7 +39,7 @@ pub struct TextureStats {
 /// gives an all-neutral texture. Errors: `size` 0 or above 4096, UV faces that do not match the
 /// quads or index out of range, a non-finite vertex ([`Error::OutOfRange`] / [`Error::NonFinite`]).
 pub fn project_sketch(
-    sketch: &SketchRgb,
+    sketch: &RgbImage,
     posed: &[[f32; 3]],
     quads: &[[u32; 4]],
     uvs: &FaceUvs,
@@ -91,7 +90,7 @@ pub fn project_sketch(
     };
     // 0 unused, 1 inside a triangle but unseen, 2 coloured.
     let mut state = vec![0u8; size * size];
-    let mut img = RgbImage { width: size, height: size, data: NEUTRAL.repeat(size * size) };
+    let mut img = RgbImage::filled(size, size, NEUTRAL)?;
     let view = camera.r.transpose() * Vector3::z();
     let p3 =
         |i: u32| Vector3::new(posed[i as usize][0] as f64, posed[i as usize][1] as f64, posed[i as usize][2] as f64);
@@ -135,7 +134,7 @@ pub fn project_sketch(
                     let nearest = depth[v as usize * w + u as usize] as f64;
                     if camera.depth(&point) >= nearest - DEPTH_TOLERANCE {
                         state[k] = 2;
-                        img.data[k * 3..k * 3 + 3].copy_from_slice(&sample(u, v));
+                        img.as_bytes_mut()[k * 3..k * 3 + 3].copy_from_slice(&sample(u, v));
                     }
                 }
             }
@@ -163,28 +162,13 @@ pub fn project_sketch(
                 });
                 if let Some(src) = near {
                     state[j * size + i] = 2;
-                    let c: [u8; 3] = img.data[src * 3..src * 3 + 3].try_into().unwrap_or(NEUTRAL);
-                    img.data[(j * size + i) * 3..(j * size + i) * 3 + 3].copy_from_slice(&c);
+                    let c: [u8; 3] = img.as_bytes()[src * 3..src * 3 + 3].try_into().unwrap_or(NEUTRAL);
+                    img.as_bytes_mut()[(j * size + i) * 3..(j * size + i) * 3 + 3].copy_from_slice(&c);
                 }
             }
         }
     }
     Ok((img, stats))
-}
-
-/// PNG bytes of an RGB image. Errors: the encoder's ([`Error::CorruptData`]).
-pub fn png_bytes(img: &RgbImage) -> Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    let enc = image::codecs::png::PngEncoder::new(&mut bytes);
-    image::ImageEncoder::write_image(
-        enc,
-        &img.data,
-        img.width as u32,
-        img.height as u32,
-        image::ExtendedColorType::Rgb8,
-    )
-    .map_err(|e| Error::CorruptData(format!("PNG encoding failed: {e}")))?;
-    Ok(bytes)
 }
 
 #[cfg(test)]
@@ -199,12 +183,12 @@ mod tests {
         let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
         let quads = [[0, 1, 2, 3]];
         let uvs = FaceUvs { coords: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], quads: vec![[0, 1, 2, 3]] };
-        let sketch = SketchRgb::from_vec(64, 64, [200u8, 30, 30].repeat(64 * 64)).unwrap();
+        let sketch = RgbImage::from_vec(64, 64, [200u8, 30, 30].repeat(64 * 64)).unwrap();
         let cam = WeakPerspective { sx: 40.0, sy: 40.0, r: Matrix3::identity(), t: [10.0, 50.0] };
         let (img, stats) = project_sketch(&sketch, &v, &quads, &uvs, &cam, 16).unwrap();
         assert_eq!(stats.texels, 256);
         assert_eq!(stats.visible, 256);
-        assert_eq!(&img.data[..3], &[200, 30, 30]);
+        assert_eq!(&img.as_bytes()[..3], &[200, 30, 30]);
         let back = WeakPerspective {
             r: *nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), std::f64::consts::PI).matrix(),
             t: [50.0, 50.0],
@@ -212,10 +196,10 @@ mod tests {
         };
         let (img, stats) = project_sketch(&sketch, &v, &quads, &uvs, &back, 16).unwrap();
         assert_eq!(stats.visible, 0);
-        assert!(img.data.chunks(3).all(|p| p == NEUTRAL));
+        assert!(img.as_bytes().chunks(3).all(|p| p == NEUTRAL));
         let away = WeakPerspective { t: [-500.0, 50.0], ..cam };
         assert_eq!(project_sketch(&sketch, &v, &quads, &uvs, &away, 16).unwrap().1.visible, 0);
         assert!(project_sketch(&sketch, &v, &quads, &uvs, &cam, 0).is_err());
-        assert!(png_bytes(&img).unwrap().starts_with(b"\x89PNG"));
+        assert!(crate::image::encode_png(&img.view()).unwrap().starts_with(b"\x89PNG"));
     }
 }

@@ -20,11 +20,11 @@
 //! adds nothing to the classifier's sum (the training set's mean is imputed).
 //!
 //! The shipped classifier [`GenderClassifier::SHIPPED`] was trained by
-//! `sketchbody train-gender` (docs/benchmarks.md, "The fully automatic path …", gives the command
-//! and the held-out confusion table and calibration).
+//! `sketchbody-lab train-gender` (command, confusion table and calibration: docs/benchmarks-history.md,
+//! "The fully automatic path, as a user meets it").
 
 use crate::camera::WeakPerspective;
-use crate::error::{ensure_finite, Error, Result};
+use crate::error::{ensure_finite, Result};
 use crate::image::GrayImage;
 use crate::skeleton::{joint, Joints2, Joints3};
 
@@ -119,8 +119,7 @@ impl GenderClassifier {
     /// The classifier the pipeline uses, trained on `make-dataset 1200 --seed 79 --mocap DIR`
     /// (DIR: the DeepMimic clips other than the shape-fit benchmark's six held-out ones) with
     /// ground-truth joints: `run-dataset DS --out R --gender truth --mean-shape`, then
-    /// `train-gender --train DS=R --ridge 1` (docs/benchmarks.md, "The fully automatic path";
-    /// training accuracy 0.78, calibrated within a few points per bin).
+    /// `train-gender --train DS=R --ridge 1`.
     pub const SHIPPED: GenderClassifier = GenderClassifier {
         means: [
             -0.357321, -0.963395, -0.429775, -0.839572, -0.714372, -2.228744, -2.076896, -2.234390, -1.355721,
@@ -166,22 +165,6 @@ impl GenderClassifier {
         }
         z
     }
-
-    /// Fits the classifier to `(features, is_male)` by Newton's method on the L2-penalised
-    /// log-likelihood (penalty `ridge` × Σ coefficient², the intercept not penalised). Means and
-    /// scales are the samples' (over the samples where each feature is present).
-    /// Deterministic. Errors: fewer than 2 samples or a single class, a non-finite or negative
-    /// ridge ([`Error::OutOfRange`]), a non-finite feature ([`Error::NonFinite`]).
-    pub fn train(samples: &[(GenderFeatures, bool)], ridge: f64) -> Result<GenderClassifier> {
-        let rows: Vec<(Vec<Option<f64>>, bool)> = samples.iter().map(|(f, m)| (f.values.to_vec(), *m)).collect();
-        let fit = fit_logistic(&rows, NUM_GENDER_FEATURES, ridge)?;
-        Ok(GenderClassifier {
-            means: std::array::from_fn(|k| fit.means[k]),
-            scales: std::array::from_fn(|k| fit.scales[k]),
-            coefficients: std::array::from_fn(|k| fit.coefficients[k]),
-            intercept: fit.intercept,
-        })
-    }
 }
 
 /// The final gender choice when both gendered spaces are fitted: a logistic regression on the
@@ -204,14 +187,11 @@ impl MarginCombination {
     /// The combination the pipeline uses (with [`crate::pipeline::PipelineOptions::classify_gender`]),
     /// trained on the first 300 sketches of the classifier's training set with both gendered
     /// fits (ground-truth joints): `run-dataset DS --out RF --first 300 --gender f`, the same
-    /// with `--gender m` into RM, then `train-gender --fits DS=RF,RM --ridge 0.1`
-    /// (docs/benchmarks.md, "The fully automatic path"), its intercept then refitted
-    /// ([`MarginCombination::recalibrated`]) to the automatic-gender runs of the two tuning sets
-    /// at fit seeds 1 and 2 (320 sketches held out from that training: `train-gender --shipped
-    /// --recalibrate DS=R …`): −0.109850 → 0.110196. Sketches of other motion read men as women
-    /// more often than the training sketches did (CMU tuning set: 10 of 11 errors); the
-    /// recalibrated probabilities have the lower log loss there and on the held-out set
-    /// (docs/benchmarks.md, "Recalibrated gender decision").
+    /// with `--gender m` into RM, then `train-gender --fits DS=RF,RM --ridge 0.1`, its intercept
+    /// then refitted (`sketchbody-lab train-gender --recalibrate`) to the automatic-gender runs of the two
+    /// tuning sets at fit seeds 1 and 2 (320 sketches held out from that training:
+    /// `train-gender --shipped --recalibrate DS=R …`; docs/benchmarks-history.md, "Recalibrated
+    /// gender decision").
     pub const SHIPPED: MarginCombination = MarginCombination {
         means: [-0.130729, -0.007666],
         scales: [1.658562, 0.290201],
@@ -226,7 +206,7 @@ impl MarginCombination {
     }
 
     /// The log-odds of male behind [`MarginCombination::male_probability`].
-    fn combined_log_odds(&self, log_odds: f64, margin: f64) -> f64 {
+    pub fn combined_log_odds(&self, log_odds: f64, margin: f64) -> f64 {
         let x = [log_odds, margin];
         let mut z = self.intercept;
         for k in 0..2 {
@@ -236,132 +216,10 @@ impl MarginCombination {
         }
         z
     }
-
-    /// Fits the combination to `(classifier log-odds, score margin, is_male)` as
-    /// [`GenderClassifier::train`] does (same errors).
-    pub fn train(samples: &[(f64, f64, bool)], ridge: f64) -> Result<MarginCombination> {
-        let rows: Vec<(Vec<Option<f64>>, bool)> =
-            samples.iter().map(|&(z, m, male)| (vec![Some(z), m.is_finite().then_some(m)], male)).collect();
-        let fit = fit_logistic(&rows, 2, ridge)?;
-        Ok(MarginCombination {
-            means: [fit.means[0], fit.means[1]],
-            scales: [fit.scales[0], fit.scales[1]],
-            coefficients: [fit.coefficients[0], fit.coefficients[1]],
-            intercept: fit.intercept,
-        })
-    }
-
-    /// This combination with its intercept refitted (maximum likelihood, the other parameters
-    /// kept) to `(classifier log-odds, score margin, is_male)` of sketches it was not trained
-    /// on: a recalibration for sketches whose gender evidence reads one sex more often than the
-    /// training set's did. Deterministic (Newton's method on one unknown). Errors:
-    /// `OutOfRange` without both sexes among the samples (the likelihood has no maximum) or
-    /// when every sample's inputs are non-finite.
-    pub fn recalibrated(&self, samples: &[(f64, f64, bool)]) -> Result<MarginCombination> {
-        let z: Vec<(f64, bool)> = samples
-            .iter()
-            .filter(|(l, m, _)| l.is_finite() || m.is_finite())
-            .map(|&(l, m, male)| (self.combined_log_odds(l, m), male))
-            .collect();
-        let males = z.iter().filter(|s| s.1).count();
-        if males == 0 || males == z.len() {
-            return Err(Error::OutOfRange {
-                name: "gender recalibration set",
-                detail: format!("{} usable samples, {males} male: need both sexes", z.len()),
-            });
-        }
-        let mut shift = 0.0;
-        for _ in 0..100 {
-            let (mut gradient, mut curvature) = (0.0, 0.0);
-            for &(zi, male) in &z {
-                let p = sigmoid(zi + shift);
-                gradient += f64::from(u8::from(male)) - p;
-                curvature += p * (1.0 - p);
-            }
-            let step = gradient / curvature.max(1e-12);
-            shift += step.clamp(-2.0, 2.0);
-            if step.abs() < 1e-12 {
-                break;
-            }
-        }
-        Ok(MarginCombination { intercept: self.intercept + shift, ..*self })
-    }
 }
 
-/// A fitted logistic regression on standardised inputs.
-struct Logistic {
-    means: Vec<f64>,
-    scales: Vec<f64>,
-    coefficients: Vec<f64>,
-    intercept: f64,
-}
-
-/// Newton's method on the L2-penalised log-likelihood (penalty `ridge` × Σ coefficient², the
-/// intercept not penalised); missing inputs are imputed with the mean (0 after
-/// standardisation). Deterministic.
-fn fit_logistic(samples: &[(Vec<Option<f64>>, bool)], n: usize, ridge: f64) -> Result<Logistic> {
-    ensure_finite("ridge", ridge)?;
-    let males = samples.iter().filter(|s| s.1).count();
-    if ridge < 0.0 || samples.len() < 2 || males == 0 || males == samples.len() {
-        return Err(Error::OutOfRange {
-            name: "gender training set",
-            detail: format!("{} samples, {males} male, ridge {ridge}: need both classes and ridge ≥ 0", samples.len()),
-        });
-    }
-    let mut means = vec![0.0; n];
-    let mut scales = vec![1.0; n];
-    for k in 0..n {
-        let xs: Vec<f64> = samples.iter().filter_map(|s| s.0.get(k).copied().flatten()).collect();
-        for &x in &xs {
-            ensure_finite("gender feature", x)?;
-        }
-        if xs.len() >= 2 {
-            let m = xs.iter().sum::<f64>() / xs.len() as f64;
-            let v = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (xs.len() - 1) as f64;
-            means[k] = m;
-            scales[k] = if v > 1e-12 { v.sqrt() } else { 1.0 };
-        }
-    }
-    let rows: Vec<(nalgebra::DVector<f64>, f64)> = samples
-        .iter()
-        .map(|(f, male)| {
-            let x = nalgebra::DVector::from_fn(n + 1, |i, _| {
-                if i == 0 {
-                    1.0
-                } else {
-                    f.get(i - 1).copied().flatten().map_or(0.0, |x| (x - means[i - 1]) / scales[i - 1])
-                }
-            });
-            (x, if *male { 1.0 } else { 0.0 })
-        })
-        .collect();
-    let mut beta = nalgebra::DVector::<f64>::zeros(n + 1);
-    for _ in 0..100 {
-        let mut hess = nalgebra::DMatrix::<f64>::zeros(n + 1, n + 1);
-        let mut grad = nalgebra::DVector::<f64>::zeros(n + 1);
-        for (x, y) in &rows {
-            let p = sigmoid(x.dot(&beta));
-            grad += (y - p) * x;
-            hess += (p * (1.0 - p)).max(1e-9) * x * x.transpose();
-        }
-        for k in 1..=n {
-            grad[k] -= 2.0 * ridge * beta[k];
-            hess[(k, k)] += 2.0 * ridge;
-        }
-        hess[(0, 0)] += 1e-9;
-        let step = hess
-            .cholesky()
-            .ok_or_else(|| Error::Degenerate("gender classifier: singular Hessian".into()))?
-            .solve(&grad);
-        beta += &step;
-        if step.amax() < 1e-10 {
-            break;
-        }
-    }
-    Ok(Logistic { means, scales, coefficients: (1..=n).map(|k| beta[k]).collect(), intercept: beta[0] })
-}
-
-fn sigmoid(z: f64) -> f64 {
+/// The logistic function 1 / (1 + e^−z), without overflow for large |z|.
+pub fn sigmoid(z: f64) -> f64 {
     if z >= 0.0 {
         1.0 / (1.0 + (-z).exp())
     } else {
@@ -643,71 +501,5 @@ mod tests {
         let mut bad = j;
         bad.xy[3][0] = f64::NAN;
         assert!(gender_features(&bad, &blank, &pose, &cam).is_err());
-    }
-
-    #[test]
-    fn training_recovers_a_separating_direction_and_rejects_one_class() {
-        let sample = |k: f64, male: bool| {
-            let mut values = [None; NUM_GENDER_FEATURES];
-            values[0] = Some(k);
-            values[1] = Some(0.3 * k.sin());
-            (GenderFeatures { values }, male)
-        };
-        let data: Vec<_> = (0..200)
-            .map(|i| {
-                let x = (i as f64 - 100.0) / 30.0;
-                // Overlapping classes: male when x + a deterministic wobble > 0.
-                sample(x, x + 0.8 * (i as f64 * 1.7).sin() > 0.0)
-            })
-            .collect();
-        let c = GenderClassifier::train(&data, 1.0).unwrap();
-        assert!(c.coefficients[0] > 1.0, "{:?}", c.coefficients);
-        assert!(c.male_probability(&sample(3.0, true).0) > 0.9);
-        assert!(c.male_probability(&sample(-3.0, false).0) < 0.1);
-        let one_class: Vec<_> = data.iter().map(|(f, _)| (*f, true)).collect();
-        assert!(GenderClassifier::train(&one_class, 1.0).is_err());
-        assert!(GenderClassifier::train(&data, -1.0).is_err());
-    }
-
-    #[test]
-    fn recalibration_finds_the_intercept_shift_of_biased_sketches() {
-        let base = MarginCombination::SHIPPED;
-        // Sketches whose evidence reads 0.8 log-odds too female: males drawn with probability
-        // σ(z + 0.8) at the combination's own log-odds z. Deterministic draws.
-        let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(7);
-        let samples: Vec<(f64, f64, bool)> = (0..4000)
-            .map(|_| {
-                let (l, m) =
-                    (rand::Rng::random_range(&mut rng, -4.0..4.0), rand::Rng::random_range(&mut rng, -0.6..0.6));
-                let z = base.combined_log_odds(l, m);
-                (l, m, rand::Rng::random::<f64>(&mut rng) < sigmoid(z + 0.8))
-            })
-            .collect();
-        let r = base.recalibrated(&samples).unwrap();
-        let shift = r.intercept - base.intercept;
-        assert!((shift - 0.8).abs() < 0.15, "shift {shift}");
-        assert_eq!(MarginCombination { intercept: base.intercept, ..r }, base, "only the intercept moves");
-        // Sketches as the combination expects them: no shift to speak of.
-        let fair: Vec<_> = samples
-            .iter()
-            .map(|&(l, m, _)| (l, m, rand::Rng::random::<f64>(&mut rng) < base.male_probability(l, m)))
-            .collect();
-        let kept = base.recalibrated(&fair).unwrap().intercept - base.intercept;
-        assert!(kept.abs() < 0.15, "shift {kept}");
-        let nll = |c: &MarginCombination| -> f64 {
-            samples
-                .iter()
-                .map(|&(l, m, male)| {
-                    let p = c.male_probability(l, m);
-                    -if male { p.ln() } else { (1.0 - p).ln() }
-                })
-                .sum()
-        };
-        assert!(nll(&r) < nll(&base));
-        // One sex only, or nothing usable: no maximum.
-        let males: Vec<_> = samples.iter().map(|&(l, m, _)| (l, m, true)).collect();
-        assert!(base.recalibrated(&males).is_err());
-        assert!(base.recalibrated(&[(f64::NAN, f64::NAN, true), (f64::NAN, f64::NAN, false)]).is_err());
-        assert!(base.recalibrated(&[]).is_err());
     }
 }

@@ -14,9 +14,7 @@ pub use calibration::{FitCalibration, ShapeCalibration, CALIBRATED_DIMS};
 pub use gender_evidence::{
     gender_evidence, gender_features, GenderClassifier, GenderEvidence, GenderFeatures, MarginCombination,
 };
-pub use height_calibration::{
-    HeightCalibration, HeightEvidence, HeightSample, HEIGHT_EVIDENCE_NAMES, NUM_HEIGHT_EVIDENCE,
-};
+pub use height_calibration::{HeightCalibration, HeightEvidence, HEIGHT_EVIDENCE_NAMES, NUM_HEIGHT_EVIDENCE};
 pub use score::{distance_transform, MatchScore, SketchEvidence, CHAMFER_CAP};
 pub use sir::{
     fit_shape, FitOptions, FitProblem, FitResult, IterationStats, EDGE_SUPPORT_RADIUS, LOW_EVIDENCE_SUPPORT,

@@ -35,7 +35,9 @@ use crate::image::GrayImage;
 use crate::raster::{Facing, Rasterizer};
 use crate::skeleton::{Joints2, Joints3, BONES};
 
-/// Options of [`fit_shape`], with documented defaults ([`FitOptions::default`]).
+/// Options of [`fit_shape`], with documented defaults ([`FitOptions::default`]); the
+/// measurements behind each default are in docs/benchmarks-history.md, "How the fit's defaults
+/// were chosen". Plain data.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitOptions {
     /// Samples per iteration, S (default 200), from the iteration where
@@ -43,27 +45,23 @@ pub struct FitOptions {
     pub samples: usize,
     /// The first iteration draws `initial_factor × samples` prior samples, and each resampling
     /// halves the population until it is `samples` (default 8: 1600, 800, 400, then 200; 1 = a
-    /// flat population). A wide first look at the prior steadies the posterior mean: on two
-    /// tuning sets rest AED centred 0.0165 against 0.0174 with a flat 200, at 2.4× the
-    /// evaluations (a flat 800: 0.0166 at 4×; docs/benchmarks.md, "How the fit's defaults were
-    /// chosen"). In 1..=64; the first population is capped at 100000 (or `samples` if larger).
+    /// flat population). A wide first look at the prior steadies the posterior mean. In 1..=64;
+    /// the first population is capped at 100000 (or `samples` if larger).
     pub initial_factor: usize,
     /// Most iterations, T (default 8).
     pub max_iterations: usize,
     /// PCA dimensions searched. Default: for a gendered space every dimension its prior covers
-    /// (10 in the shipped model; its 96%-energy dimension, 4, fits less of the sketch), for the
-    /// both-sexes space its own default dimension (5; 10 measured worse there). Measurements:
-    /// docs/benchmarks.md, "How the fit's defaults were chosen".
+    /// (10 in the shipped model), for the both-sexes space its own default dimension (5).
     pub dims: Option<usize>,
     /// Transition step `s` in standard deviations: Σ = diag(s² λ_k) (default 0.3).
     pub transition_scale: f64,
     /// The match score (default [`MatchScore::Chamfer`], the most accurate of the scores on
-    /// outline sketches; docs/benchmarks.md, "How the fit's defaults were chosen").
+    /// outline sketches).
     pub score: MatchScore,
     /// For the non-paper scores, sample likelihood = exp(score / temperature) (for the chamfer
     /// score the unit is raster pixels of mean boundary distance). Default 2.0: sharper
     /// likelihoods overfit silhouettes that compensate pose error, flatter ones ignore the
-    /// sketch (docs/benchmarks.md, "How the fit's defaults were chosen"). Finite, > 0.
+    /// sketch. Finite, > 0.
     pub temperature: f64,
     /// Longest raster side in pixels; the sketch is scored at this resolution (default 256).
     pub raster_max_side: usize,
@@ -79,8 +77,7 @@ pub struct FitOptions {
     /// Weight of the 2-D joint term (used when [`FitProblem::joints2d`] is given): the score
     /// of a sample loses `joint_weight ×` the mean distance, in raster pixels, between its own
     /// posed rig joints projected by the camera and the visible estimated 2-D joints
-    /// (default 1.0, by the measurement under `temperature`; 0 turns it off). Must be finite
-    /// and ≥ 0.
+    /// (default 1.0; 0 turns it off). Must be finite and ≥ 0.
     pub joint_weight: f64,
     /// Give every sample its own camera: when [`FitProblem::joints2d`] is given, each sample's
     /// camera scales and translation are refitted in closed form
@@ -88,7 +85,7 @@ pub struct FitOptions {
     /// before it is rasterised and scored, so the body's size comes from its shape (proportions
     /// and the prior's correlations) rather than from [`FitProblem::camera`]'s scale (only its
     /// rotation is used). Without 2-D joints the problem's camera is used. Default on: the size
-    /// then follows the shape, which measures closer to the true body (docs/benchmarks.md, "How the fit's defaults were chosen").
+    /// then follows the shape.
     pub sample_camera: bool,
     /// The character's known rest height, metres (`None`: unknown, the default). With a
     /// problem camera (not [`sample_camera`](Self::sample_camera)) every sample's rest body is
@@ -100,21 +97,21 @@ pub struct FitOptions {
     pub height: Option<f64>,
     /// Search bone-length factors (legs, arms, shoulders, head, torso) with this prior standard
     /// deviation of each log factor (see [`super::proportions`]); 0 searches PCA weights only.
-    /// Default 0.1, the best of the values measured (docs/benchmarks.md, "How the fit's defaults were chosen"). Finite, in 0..=0.5.
+    /// Default 0.1. Finite, in 0..=0.5.
     pub proportion_sd: f64,
     /// Centre the bone factors' prior on the closed-form estimate of
     /// [`super::bone_estimate::estimate_proportions`] (bone lengths of the visible 2-D joints
     /// against the gender's mean skeleton, given the problem pose's bone directions and
     /// camera, default [`EstimateOptions`]) instead of 1. Needs [`FitProblem::joints2d`] and
     /// `proportion_sd > 0`; when the estimate is degenerate (no usable bone) the prior stays at 1.
-    /// Default on: drawn proportions then start near the sketch's own (docs/benchmarks.md, "How the fit's defaults were chosen").
+    /// Default on: drawn proportions then start near the sketch's own.
     pub estimate_proportions: bool,
     /// Clothing-robust chamfer ([`SketchEvidence::with_inside_cap`]): silhouette boundary
     /// pixels inside the sketch's outer outline cost their distance to the nearest stroke capped
     /// at this many raster pixels, those outside it the full capped distance, so outline
     /// strokes that may be clothing (coats, capes, skirts) do not pull the body outward while a
     /// body crossing the outline is still penalised. [`super::CHAMFER_CAP`] (12) turns it off.
-    /// Only the chamfer scores use it. Default 4.0, the best on the tuning set (docs/benchmarks.md, "How the fit's defaults were chosen"). Finite, > 0.
+    /// Only the chamfer scores use it. Default 4.0. Finite, > 0.
     pub inside_cap: f64,
     /// Blended space only: the prior's mass on the male end (a per-sketch
     /// [`crate::body::LEVEL_WEIGHTS`], [`crate::body::BlendedSpace::prior_with_male_mass`]),

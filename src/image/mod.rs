@@ -5,13 +5,15 @@ mod blur;
 mod canny;
 mod decode;
 mod gray;
+mod encode;
 mod rgb;
 mod sobel;
 mod view;
 
 pub use blur::{gaussian_blur, gaussian_kernel_size};
 pub use canny::{canny, canny_into, CannyParams};
-pub use decode::{load_image, save_gray_png};
+pub use decode::load_image;
+pub use encode::{encode_png, save_png};
 pub use gray::to_gray;
 pub use rgb::{decode_rgb_image, load_rgb_image, over_white, RgbImage};
 pub use view::{GrayImage, ImageView};

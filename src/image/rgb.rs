@@ -31,6 +31,12 @@ impl RgbImage {
         }
         Ok(Self { width, height, data })
     }
+    /// An image of `width` × `height` pixels all of colour `rgb`. Errors: empty or oversized
+    /// images.
+    pub fn filled(width: usize, height: usize, rgb: [u8; 3]) -> Result<Self> {
+        check_size(width, height)?;
+        Ok(Self { width, height, data: rgb.repeat(width * height) })
+    }
     /// Width in pixels.
     pub fn width(&self) -> usize {
         self.width
@@ -42,6 +48,10 @@ impl RgbImage {
     /// The pixels, row-major, `3 * width` bytes per row.
     pub fn as_bytes(&self) -> &[u8] {
         &self.data
+    }
+    /// The pixels for writing, row-major, `3 * width` bytes per row (the size is fixed).
+    pub fn as_bytes_mut(&mut self) -> &mut [u8] {
+        &mut self.data
     }
     /// A borrowed 3-channel view.
     pub fn view(&self) -> ImageView<'_> {

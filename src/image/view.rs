@@ -89,6 +89,11 @@ impl<'a> ImageView<'a> {
         let start = y * self.stride;
         &self.data[start..start + self.width * self.channels]
     }
+    /// All pixels as one slice when the rows are tightly packed (`stride == width * channels`).
+    pub(crate) fn packed(&self) -> Option<&'a [u8]> {
+        let row = self.width * self.channels;
+        (self.stride == row).then(|| &self.data[..row * self.height])
+    }
 }
 
 /// An owned, tightly packed 8-bit gray image (`data.len() == width * height`).

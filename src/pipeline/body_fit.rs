@@ -56,7 +56,7 @@ fn mean_skeleton(model: &BodyModel, choice: ShapeChoice, height: Option<f64>) ->
 
 /// The rest body of shape `weights` in `space` with the bone-length factors `proportions`
 /// applied (model frame, metres), before any scaling to a height: what [`fit_body`] poses, and
-/// what `sketchbody calibrate-fit` measures. Errors: the space's and the factors' errors.
+/// what `sketchbody-lab calibrate-fit` measures. Errors: the space's and the factors' errors.
 pub fn rest_body(
     model: &BodyModel,
     space: ShapeChoice,

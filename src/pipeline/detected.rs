@@ -7,10 +7,9 @@ use crate::error::{Error, Result};
 use crate::fit::FitOptions;
 use crate::pose::DepthHint;
 
-/// Default [`super::PipelineOptions::depth_hint`]. Chosen on `make-dataset 60 --seed 78` (six held-out
-/// clips) with detected joints and automatic gender, weights 0, 0.1, 0.3, 1: 0.1 lowers the
-/// posed AED from 0.0963 to 0.0885 and PA-MPJPE from 89.5 to 88.7 mm and leaves the rest AED
-/// (centred 0.0362 → 0.0363); larger weights make all three worse (docs/benchmarks.md).
+/// Default [`super::PipelineOptions::depth_hint`]: the weight of BlazePose's relative depths in
+/// the pose step, dimensionless. Chosen on `make-dataset 60 --seed 78` with detected joints and
+/// automatic gender (docs/benchmarks-history.md, "The fully automatic path, as a user meets it").
 pub const DEFAULT_DEPTH_HINT: f64 = 0.1;
 
 /// The shape fit's adjustments for detected joints ([`super::PipelineOptions::detected`]).
@@ -26,18 +25,14 @@ pub struct DetectedJointsFit {
     pub landmark_pose: bool,
     /// With automatic gender, fit the gendered space the detected-joints gender classifier
     /// ([`crate::fit::GenderClassifier::SHIPPED_DETECTED`]) picks (`P(male) > 0.5`) instead of the
-    /// both-sexes space, whose fitted gender value is no better than chance with detected joints
-    /// (33/60 right on the tuning set against the classifier's 44/60). Default `true`.
+    /// both-sexes space, whose fitted gender value is no better than chance with detected joints.
+    /// Default `true`.
     pub classifier_gender: bool,
 }
 
 impl Default for DetectedJointsFit {
-    /// Chosen on `make-dataset 60 --seed 78` with detected joints and automatic gender (rest AED
-    /// centred, mean shape 0.0275): as for given joints 0.0363; without the proportion search
-    /// 0.0334; joint-weight factor 0.1 / 0.3 / 0.5 then 0.0303 / 0.0309 / 0.0285, posed AED
-    /// 0.0885 → 0.0856 (docs/benchmarks.md). `classifier_gender`: on `make-dataset 60 --seed 78`,
-    /// first 60, detected joints, rest AED centred 0.0304 with the both-sexes fit, 0.0288 with the
-    /// classifier's gendered fit (mean shape of the true gender 0.0275).
+    /// Chosen on `make-dataset 60 --seed 78` with detected joints and automatic gender, by rest
+    /// AED centred (docs/benchmarks-history.md, "The fully automatic path, as a user meets it").
     fn default() -> Self {
         Self { joint_weight_scale: 0.5, proportions: false, landmark_pose: false, classifier_gender: true }
     }

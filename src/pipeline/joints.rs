@@ -2,11 +2,13 @@
 //! detector: the caller's joints ([`GivenJoints`], the paper's user-correction path) or a
 //! detector's ([`DetectedJoints`], by default the embedded model trained on concept sketches).
 
-use crate::detect::figure::{detect_figure, Figure, FigureOptions};
+use super::figure::detect_figure;
+use crate::detect::figure::{Figure, FigureOptions};
 use crate::detect::landmark::LandmarkNet;
 use crate::detect::{detect, DetectOptions, Model};
 use crate::error::{Error, Result};
 use crate::image::{GrayImage, ImageView};
+use crate::pose::{dict_io, Dictionary};
 use crate::skeleton::{Joints2, BONES, JOINT_NAMES, NUM_JOINTS};
 
 /// A provider of the 15 canonical 2-D joints of a sketch. Implementations must be deterministic
@@ -18,7 +20,8 @@ pub trait JointsSource: Sync {
     fn joints(&self, sketch: &GrayImage, edges: &GrayImage) -> Result<Joints2>;
     /// The joints with the detection behind them (backend, calibrated confidences), when the
     /// source is a single-figure detector; by default [`JointsSource::joints`] and `None`.
-    fn figure(&self, sketch: &GrayImage, edges: &GrayImage) -> Result<(Joints2, Option<Figure>)> {
+    /// `dict` is the pose step's dictionary, for a detector the pose step referees.
+    fn figure(&self, sketch: &GrayImage, edges: &GrayImage, _dict: &Dictionary) -> Result<(Joints2, Option<Figure>)> {
         Ok((self.joints(sketch, edges)?, None))
     }
 }
@@ -62,8 +65,8 @@ impl JointsSource for DetectedJoints<'_> {
 }
 
 /// Joints from the single-figure detector ([`detect_figure`]; by default `auto`: the sketch model
-/// and BlazePose, one candidate per image, [`crate::detect::figure::Fusion::PerImage`]): the product's default
-/// source. Runs on `colour` when given (a painted drawing's colours help the landmark model),
+/// and BlazePose, one candidate per image, [`crate::detect::figure::Fusion::PerImage`], refereed
+/// by the pose step with the pipeline's dictionary): the product's default source. Runs on `colour` when given (a painted drawing's colours help the landmark model),
 /// else on the gray sketch. Coincident children are marked missing as in [`DetectedJoints`].
 /// Errors as [`detect_figure`], notably [`Error::NoFigure`] on a page without a figure.
 #[derive(Clone, Copy, Debug)]
@@ -83,14 +86,14 @@ impl JointsSource for FigureJoints<'_> {
         "detector"
     }
     fn joints(&self, sketch: &GrayImage, edges: &GrayImage) -> Result<Joints2> {
-        Ok(self.figure(sketch, edges)?.0)
+        Ok(self.figure(sketch, edges, dict_io::embedded_shared()?)?.0)
     }
-    fn figure(&self, sketch: &GrayImage, _edges: &GrayImage) -> Result<(Joints2, Option<Figure>)> {
+    fn figure(&self, sketch: &GrayImage, _edges: &GrayImage, dict: &Dictionary) -> Result<(Joints2, Option<Figure>)> {
         let view = match self.colour {
             Some(c) if c.width() == sketch.width() && c.height() == sketch.height() => c,
             _ => sketch.view(),
         };
-        let f = detect_figure(&view, self.model, self.net, self.options)?;
+        let f = detect_figure(&view, self.model, self.net, self.options, Some(dict))?;
         let mut j = f.joints;
         hide_coincident_children(&mut j);
         Ok((j, Some(f)))

@@ -4,6 +4,7 @@
 //! the files.
 //!
 //! - [`joints`]: the 2-D joints source (the caller's joints, or the detector's).
+//! - [`figure`]: the single-figure detector refereed by the pose step.
 //! - [`overlay`]: the overlay picture (sketch, joints, bones, fitted silhouette outline).
 //!
 //! Gender: given a gender ([`PipelineOptions::gender`]), that gender's space is fitted. Without
@@ -16,6 +17,7 @@
 
 pub mod body_fit;
 mod detected;
+pub mod figure;
 pub mod joints;
 pub mod overlay;
 
@@ -77,39 +79,34 @@ pub struct PipelineOptions {
     /// ([`FitOptions::male_prior`]) to the gender classifier's probability
     /// ([`crate::fit::GenderClassifier::SHIPPED`], or `SHIPPED_DETECTED` for detected joints, on
     /// the sketch's joints and outline, [`crate::fit::gender_evidence`]) instead of 0.5. Ignored when `fit.male_prior` is set,
-    /// a gender is given, the joints were detected (measured worse there, docs/benchmarks.md)
-    /// or [`PipelineOptions::classify_gender`] applies. Default `true`.
+    /// a gender is given, the joints were detected or [`PipelineOptions::classify_gender`]
+    /// applies. Default `true`.
     pub gender_evidence: bool,
     /// With automatic gender and given (not detected) joints, fit both gendered spaces instead
     /// of the both-sexes space and keep the one [`MarginCombination::SHIPPED`] chooses from the
     /// gender classifier's log-odds and the two fits' score margin; the result's confidence is
     /// then that combination's probability of the chosen gender. With detected joints the
-    /// margin misleads (measured, docs/benchmarks.md) and [`DetectedJointsFit::classifier_gender`]
-    /// applies instead. Default `true`.
+    /// margin misleads and [`DetectedJointsFit::classifier_gender`] applies instead. Default
+    /// `true`.
     pub classify_gender: bool,
     /// PCA dimensions of the two gendered fits whose score margin decides the gender under
     /// [`PipelineOptions::classify_gender`] (`None`: each space's 96%-energy dimension, 4 in
     /// the shipped model, which [`MarginCombination::SHIPPED`] was trained on). When
     /// `fit.dims` searches other dimensions, the chosen gender is fitted once more with them
     /// (a third fit): fits of every dimension the prior covers follow the sketch more closely
-    /// but tell the genders apart less well (docs/benchmarks.md, "How the fit's defaults were
-    /// chosen").
+    /// but tell the genders apart less well.
     pub gender_decision_dims: Option<usize>,
     /// Pairs of deciding fits under [`PipelineOptions::classify_gender`], with fit seeds
     /// `fit.seed`, `fit.seed + 1`, …: their score margins are averaged (a best score is a noisy
     /// maximum over the samples, and the margin of one pair flips the gender of a few sketches
-    /// between seeds). Default 1: two pairs got the gender right more often on two tuning sets
-    /// at two fit seeds each (59 / 59 / 95 / 97 against one pair's 59 / 56 / 94 / 95, measured
-    /// before the combination's recalibration, after which one pair gets 59 / 57 / 96 / 97)
-    /// but not on the held-out sketches (53 / 53 of 60 against 55 / 53), for 1.35 times
-    /// `run`'s time (docs/benchmarks.md, "Two deciding seeds"). In 1..=16.
+    /// between seeds). Each further pair adds two fits to `run`'s time. Default 1 (the choice:
+    /// docs/benchmarks-history.md, "Two deciding seeds"). In 1..=16.
     pub gender_decision_seeds: usize,
     /// When the character's height is unknown (`fit.height` is `None`) and the 2-D joints are
     /// given, calibrate the fitted body with [`FitCalibration::SHIPPED`]: map a gendered fit's
     /// shape weights, then scale the rest body to the calibrated height. The fit alone draws
     /// the body toward the prior's mean (docs/benchmarks.md, "Shape calibration", "Height
-    /// calibration"). Not applied to detected joints (the height calibration measured worse
-    /// there) nor to the mean shape. Default `true`.
+    /// calibration"). Not applied to detected joints nor to the mean shape. Default `true`.
     pub calibrate_fit: bool,
 }
 
@@ -289,7 +286,7 @@ pub fn run_pipeline(
     p.report(0.02)?;
 
     let t = Instant::now();
-    let (joints2d, detection) = source.figure(sketch, &edges)?;
+    let (joints2d, detection) = source.figure(sketch, &edges, dict)?;
     joints::check_in_image(&joints2d, w, h)?;
     timings.joints = t.elapsed().as_secs_f64();
     p.report(0.04)?;
@@ -311,9 +308,10 @@ pub fn run_pipeline(
     let mut fit = if detection.is_some() { detected_fit } else { options.fit.clone() };
     let classifier = if detection.is_some() { GenderClassifier::SHIPPED_DETECTED } else { GenderClassifier::SHIPPED };
     let evidence = gender_evidence(&joints2d, &edges, &pose.joints, &pose.camera, &classifier)?;
-    // The score margin decides well only with the user's joints (docs/benchmarks.md).
+    // The score margin decides well only with the user's joints; with detected joints the
+    // classifier's prior measured worse than none (docs/benchmarks-history.md, "The fully
+    // automatic path, as a user meets it").
     let classify = options.gender.is_none() && options.classify_gender && !options.mean_shape && detection.is_none();
-    // With detected joints the classifier's prior measured worse than none (docs/benchmarks.md).
     if options.gender.is_none()
         && !classify
         && options.gender_evidence
@@ -323,7 +321,7 @@ pub fn run_pipeline(
         fit.male_prior = Some(evidence.male_probability);
     }
     // With detected joints the both-sexes fit's gender is no better than chance; the
-    // detected-joints classifier picks the gendered space instead (docs/benchmarks.md).
+    // detected-joints classifier picks the gendered space instead.
     let detected_gender = match (&detection, options.gender) {
         (Some(_), None) if !options.mean_shape => options.detected.gender(evidence.male_probability),
         _ => None,

@@ -5,8 +5,8 @@
 use crate::camera::WeakPerspective;
 use crate::error::Result;
 use crate::image::GrayImage;
+use crate::image::RgbImage;
 use crate::raster::{Rasterizer, MAX_RASTER_SIDE};
-use crate::render::preview::RgbImage;
 use crate::skeleton::{joint, Joints2, BONES, NUM_JOINTS};
 
 const OUTLINE: [u8; 3] = [20, 170, 60];
@@ -24,9 +24,9 @@ fn side_colour(j: usize) -> [u8; 3] {
 }
 
 fn put(img: &mut RgbImage, x: i64, y: i64, c: [u8; 3]) {
-    if x >= 0 && y >= 0 && (x as usize) < img.width && (y as usize) < img.height {
-        let o = (y as usize * img.width + x as usize) * 3;
-        img.data[o..o + 3].copy_from_slice(&c);
+    if x >= 0 && y >= 0 && (x as usize) < img.width() && (y as usize) < img.height() {
+        let o = (y as usize * img.width() + x as usize) * 3;
+        img.as_bytes_mut()[o..o + 3].copy_from_slice(&c);
     }
 }
 
@@ -66,7 +66,7 @@ pub fn overlay(
         let v = (128 + g as u16 / 2) as u8;
         [v, v, v]
     });
-    let mut img = RgbImage { width: w, height: h, data: data.collect() };
+    let mut img = RgbImage::from_vec(w, h, data.collect())?;
     let f = (MAX_RASTER_SIDE as f64 / w.max(h) as f64).min(1.0);
     let (rw, rh) = (((w as f64 * f).round() as usize).max(1), ((h as f64 * f).round() as usize).max(1));
     let cam =
@@ -130,7 +130,7 @@ mod tests {
         j.visible[joint::L_WRIST] = false;
         let sketch = GrayImage::filled(256, 256, 255).unwrap();
         let img = overlay(&sketch, &j, &m.vertices, &m.triangles(), &cam).unwrap();
-        let count = |c: [u8; 3]| img.data.chunks(3).filter(|p| *p == c).count();
+        let count = |c: [u8; 3]| img.as_bytes().chunks(3).filter(|p| *p == c).count();
         assert!(count(OUTLINE) > 200, "outline {}", count(OUTLINE));
         assert!(
             count(RIGHT) > 50 && count(LEFT) > 50 && count(CENTRE) > 10,
@@ -139,7 +139,7 @@ mod tests {
             count(LEFT),
             count(CENTRE)
         );
-        let px = |x: f64, y: f64| &img.data[((y as usize) * 256 + x as usize) * 3..][..3];
+        let px = |x: f64, y: f64| &img.as_bytes()[((y as usize) * 256 + x as usize) * 3..][..3];
         let [hx, hy] = j.xy[joint::HEAD];
         assert_eq!(px(hx, hy), CENTRE);
         let [wx, wy] = j.xy[joint::L_WRIST];

@@ -1,5 +1,5 @@
 //! Learned priors from the 2-D joints alone, trained on projected training motion with random
-//! cameras and random proportions ([`super::factor_train`], `sketchbody train-factor-prior`) and
+//! cameras and random proportions (`sketchbody-lab train-factor-prior`) and
 //! embedded from `assets/factor_prior.json`: a regressor of each proportion group's log factor
 //! ([`super::figure`]), with its predictive spread, and a regressor of the joints' relative
 //! depths, which becomes the pose step's depth hint ([`FactorPrior::depth_hint`],
@@ -15,9 +15,7 @@
 //! any scale estimate (the pose step: the first solve's camera scale, the convention of
 //! [`super::figure::estimate_factors`]). A second network of the same shape predicts each
 //! joint's depth toward the camera relative to the pelvis, over `s₂` (metres at the figure's
-//! 2-D scale). The factor network replaced a ridge regression on the inputs'
-//! products of degree ≤ 2 (format version 1), whose left-out spreads were 12–30 % larger
-//! (docs/benchmarks.md, issue 16).
+//! 2-D scale). How the networks are trained and measured: docs/benchmarks.md, "3-D pose".
 
 use std::sync::OnceLock;
 
@@ -101,12 +99,13 @@ pub fn inputs(j: &Joints2, lengths: &[f64; NUM_BONES]) -> Option<(f64, [f64; NUM
 }
 
 /// A raw input standardised by its training mean and spread, bounded to ±8 spreads.
-pub(crate) fn standardise(x: f64, mean: f64, scale: f64) -> f64 {
+pub fn standardise(x: f64, mean: f64, scale: f64) -> f64 {
     ((x - mean) / scale).clamp(-8.0, 8.0)
 }
 
-/// Summed reference length of each group.
-pub(crate) fn group_lengths(lengths: &[f64]) -> [f64; NUM_GROUPS] {
+/// Summed reference length (metres) of each bone-length group ([`super::figure::BONE_GROUP`]) from
+/// the 14 bone lengths `lengths`.
+pub fn group_lengths(lengths: &[f64]) -> [f64; NUM_GROUPS] {
     let mut g = [0.0; NUM_GROUPS];
     for (b, l) in lengths.iter().enumerate().take(NUM_BONES) {
         g[BONE_GROUP[b]] += l;
@@ -279,7 +278,7 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let p = FactorPrior::embedded().unwrap();
         let d = crate::pose::dict_io::embedded().unwrap();
-        let limbs = crate::pose::metrics::LIMB_BONES.map(|b| BONES[b]);
+        let limbs = crate::skeleton::LIMB_BONES.map(|b| BONES[b]);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let (mut right, mut total, mut scale_err) = (0, 0, 0.0f64);
         for c in d.exemplars.column_iter().step_by(97) {

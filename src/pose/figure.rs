@@ -47,10 +47,8 @@ pub const PRIOR_SD: [f64; NUM_GROUPS] = [0.35, 0.2, 0.2, 0.2, 0.2, 0.2];
 
 /// Expected spread of a group's log bound about the truth (2-D noise, the remaining
 /// foreshortening of the best bone), by group; the girdles (two collinear bones that
-/// foreshorten together when the body turns) and single bones are the least certain. Smaller
-/// spreads (0.05, 0.03, 0.1, 0.02, 0.12, 0.02) measured 0.5–0.8° better on stylised frontal
-/// figures but were not kept: the bundled example's second solve then fits the image worse and
-/// is rejected, so its proportions fall back to 1 (docs/benchmarks.md, issue 16).
+/// foreshorten together when the body turns) and single bones are the least certain. Natural
+/// log units, in [`PRIOR_SD`]'s group order.
 pub const EVIDENCE_SD: [f64; NUM_GROUPS] = [0.12, 0.12, 0.2, 0.06, 0.25, 0.06];
 
 /// Bones of a group are used only when the first estimate's foreshortening (image length over

@@ -3,15 +3,12 @@
 //!
 //! - [`motion`]: motion tables (canonical-joint CSV), pose normalisation, mirroring.
 //! - [`blend`]: posterior-mean blend of the exemplar starts' hypotheses.
-//! - [`bvh`]: BVH reader with a joint-name mapping for CMU-, Mixamo- and Rokoko-style rigs.
 //! - [`depth_hint`]: relative joint depths from an image cue, weighing the solver's choices.
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
 //! - [`exemplar`]: the nearest-neighbour starts (exemplar poses ranked by an affine camera fit).
 //! - [`figure`]: drawn proportions as unknowns (per-group bone-length factors).
 //! - [`factor_prior`]: the learned prior on the factors (a network from the 2-D joints).
-//! - [`factor_train`]: its training on projected mocap with random cameras and proportions.
-//! - [`mlp`]: the small network the learned prior uses, and its training (Adam).
-//! - [`learn`]: clip selection and provenance for learning from folders and BVH files.
+//! - [`mlp`]: the small network the learned prior uses.
 //! - [`dict_io`]: the dictionary's binary file format and the embedded default.
 //! - [`plausibility`]: the standing prior and the knee limits of the free-joint step.
 //! - [`options`]: solver options (κ, α, basis count, tolerance).
@@ -21,25 +18,20 @@
 //! - [`pursuit`]: the matching pursuit driver ([`estimate_pose`]).
 //! - [`refine`]: the joint Levenberg–Marquardt refinement with the constraint kept exactly.
 //! - [`joint_fit`]: the free-joint refinement (joints leave the dictionary's span, bone lengths kept).
-//! - [`metrics`]: MPJPE and PA-MPJPE.
 //!
 //! Units: 3-D joints are metres of a 1.75 m person (every pose is normalised to that stature,
 //! see [`motion::normalize_pose`]); 2-D joints are image pixels (origin top-left, y down).
 
 pub mod blend;
-pub mod bvh;
 pub mod camera_fit;
 pub mod depth_hint;
 pub mod dict_io;
 pub mod dictionary;
 pub mod exemplar;
 pub mod factor_prior;
-pub mod factor_train;
 pub mod mlp;
 pub mod figure;
 pub mod joint_fit;
-pub mod learn;
-pub mod metrics;
 pub mod motion;
 pub mod options;
 pub mod plausibility;

@@ -142,7 +142,7 @@ pub const MAX_DEPTH_PRIOR: f64 = 10.0;
 impl Default for PoseOptions {
     /// The library default (docs/benchmarks.md, "3-D pose"): κ = 0.05, α = 0.8 (the paper's)
     /// toward the level target (the pitch pulled to 0; the paper's identity target pulls the
-    /// yaw too and measured worse), equal scales, up to 4 bases, 0.5 px, refined, prior 0.1 m,
+    /// yaw too), equal scales, up to 4 bases, 0.5 px, refined, prior 0.1 m,
     /// 12 exemplar starts recomposed from 64 limb candidates, blended at τ = 30 px² per joint,
     /// then the free-joint refinement at 0.014 m (4 px on a 500-px figure), with the proportions
     /// estimated under the learned factor prior and the learned depths weighted 0.05.

@@ -33,8 +33,8 @@ pub const STANDING_MAX_ANKLE_STEP: f64 = 0.05;
 /// in the dictionary estimate for which the standing prior still puts both ankles under the
 /// pelvis ([`stride_in_depth`]). Chosen on a validation split of training motion (held-out
 /// DeepMimic walk, run, dance_a, punch, jump, long_long_walk1 and CMU subjects 02, 07, 09, 14,
-/// learned without them): 0.2 m lost nothing against no ankle residuals at all there, while the
-/// bundled example (0.13–0.18 m) keeps them (docs/benchmarks.md, issue 16).
+/// learned without them), above the bundled example's 0.13–0.18 m (docs/benchmarks-history.md,
+/// "Held-out real motion, drawn proportions, plausibility priors").
 pub const STANDING_MAX_STRIDE: f64 = 0.2;
 
 /// Spread of the standing residuals, metres: the torso's horizontal offset (3° of lean on a

@@ -150,7 +150,8 @@ pub fn estimate_pose_with_factor_prior(
     }
     // A figure the image shows standing takes the standing prior's depths instead of the
     // learned ones, which read the bundled example's short drawn legs as a lean with the feet
-    // behind (docs/benchmarks.md, issue 16).
+    // behind (docs/benchmarks-history.md, "Held-out real motion, drawn proportions,
+    // plausibility priors").
     let standing = opts.standing_prior
         && opts.joint_noise > 0.0
         && super::plausibility::standing_in_image(&joints.xy, &joints.visible);
@@ -200,13 +201,15 @@ fn with_proportions(
     let fixed = || estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, None);
     let Some(l) = learned else { return second_solve(dict, joints, opts, &first, hints, fixed()).unwrap_or(first) };
     // The factors under the learned prior; when that solve fits the image worse than the first
-    // estimate, the fixed prior's factors are tried (docs/benchmarks.md, issue 16).
+    // estimate, the fixed prior's factors are tried (docs/benchmarks-history.md, "Held-out
+    // real motion, drawn proportions, plausibility priors").
     let f = estimate_factors_with_prior(joints, &dict.bone_lengths, &first.joints, &c.r, c.sx, c.sy, Some(&l));
     match second_solve(dict, joints, opts, &first, hints, f) {
         Some(e) => e,
         None => {
             // From half the exemplar starts: as accurate on the validation split, less CPU on
-            // standard figures, where this fallback runs most (docs/benchmarks.md, issue 16).
+            // standard figures, where this fallback runs most (docs/benchmarks-history.md,
+            // "Held-out real motion, drawn proportions, plausibility priors").
             let half = PoseOptions { starts: opts.starts.div_ceil(2), ..*opts };
             second_solve(dict, joints, &half, &first, hints, fixed()).unwrap_or(first)
         }

@@ -3,26 +3,13 @@
 //! and [`compare_preview`], which puts the posed body seen through the estimated camera beside
 //! and over the sketch, then the front and side views.
 
-use std::path::Path;
-
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use crate::body::rig::FaceUvs;
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
-use crate::fsutil::write_atomic;
+use crate::image::RgbImage;
 use crate::raster::{check_size, scan, setup, GUARD_BAND, SUB};
-
-/// An RGB image, rows of `width * 3` bytes.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct RgbImage {
-    /// Width, pixels.
-    pub width: usize,
-    /// Height, pixels.
-    pub height: usize,
-    /// Interleaved R, G, B bytes, row-major, no padding.
-    pub data: Vec<u8>,
-}
 
 const BACKGROUND: [u8; 3] = [236, 238, 242];
 const BASE: [f32; 3] = [205.0, 180.0, 165.0];
@@ -39,7 +26,7 @@ pub struct SurfaceTexture<'a> {
 impl<'a> SurfaceTexture<'a> {
     /// The texture of a quad mesh with per-corner `uvs`, for the triangles
     /// [`quads_to_triangles`](crate::body::rig::quads_to_triangles) makes of `quads`, in that order.
-    /// Errors: UV faces that do not match the quads or index past the UV list, an empty image.
+    /// Errors: UV faces that do not match the quads or index past the UV list.
     pub fn for_quads(image: &'a RgbImage, quads: &[[u32; 4]], uvs: &FaceUvs) -> Result<Self> {
         let m = uvs.coords.len();
         if uvs.quads.len() != quads.len() || uvs.quads.iter().flatten().any(|&i| i as usize >= m) {
@@ -47,9 +34,6 @@ impl<'a> SurfaceTexture<'a> {
                 name: "texture UVs",
                 detail: format!("{} UV faces over {m} coordinates for {} quads", uvs.quads.len(), quads.len()),
             });
-        }
-        if image.width == 0 || image.height == 0 || image.data.len() != image.width * image.height * 3 {
-            return Err(Error::OutOfRange { name: "texture", detail: "empty or mis-sized texture image".into() });
         }
         let uv = |k: u32| uvs.coords[k as usize];
         let mut corners = Vec::with_capacity(2 * quads.len());
@@ -73,11 +57,11 @@ impl<'a> SurfaceTexture<'a> {
         let c = &self.corners[t];
         let u = w[0] * c[0][0] as f64 + w[1] * c[1][0] as f64 + w[2] * c[2][0] as f64;
         let v = w[0] * c[0][1] as f64 + w[1] * c[1][1] as f64 + w[2] * c[2][1] as f64;
-        let (iw, ih) = (self.image.width, self.image.height);
+        let (iw, ih) = (self.image.width(), self.image.height());
         let x = ((u * iw as f64).floor().max(0.0) as usize).min(iw - 1);
         let y = (((1.0 - v) * ih as f64).floor().max(0.0) as usize).min(ih - 1);
         let o = (y * iw + x) * 3;
-        [0, 1, 2].map(|k| self.image.data[o + k] as f32)
+        [0, 1, 2].map(|k| self.image.as_bytes()[o + k] as f32)
     }
 }
 
@@ -171,10 +155,10 @@ fn draw_view(
             [(u * SUB as f64).round() as i64, (v * SUB as f64).round() as i64]
         })
         .collect();
-    let width = img.width;
+    let width = img.width();
     shade_triangles(&cam, &px, tris, texture, (size, size), |_, i, j, rgb| {
         let o = (j * width + x0 + i) * 3;
-        img.data[o..o + 3].copy_from_slice(&rgb);
+        img.as_bytes_mut()[o..o + 3].copy_from_slice(&rgb);
     });
 }
 
@@ -214,7 +198,7 @@ pub fn preview_textured(
     if let Some(v) = vertices.iter().flatten().find(|c| !c.is_finite()) {
         return Err(Error::NonFinite { name: "mesh vertex", value: *v as f64 });
     }
-    let mut img = RgbImage { width: 2 * size, height: size, data: BACKGROUND.repeat(2 * size * size) };
+    let mut img = RgbImage::filled(2 * size, size, BACKGROUND)?;
     draw_view(&mut img, 0, size, vertices, tris, texture, &Matrix3::identity());
     // The character's right side (−X) faces the viewer: turn the model 90° about +Y.
     let side = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2).into_inner();
@@ -254,7 +238,7 @@ fn camera_view(
 /// base colour, one UV triangle per entry of `tris`) every body panel shows it. Errors:
 /// [`preview_textured`]'s, a camera that is not a rotation, a canvas over 4096 pixels wide.
 pub fn compare_preview(
-    sketch: &crate::image::RgbImage,
+    sketch: &RgbImage,
     vertices: &[[f32; 3]],
     tris: &[[u32; 3]],
     texture: Option<&SurfaceTexture>,
@@ -266,9 +250,9 @@ pub fn compare_preview(
     let (sw, sh) = (sketch.width(), sketch.height());
     let body = camera_view(vertices, tris, texture, camera, sw, sh);
     let tile = ((size as f64 * sw as f64 / sh as f64).round() as usize).max(1);
-    let width = 3 * tile + views.width;
+    let width = 3 * tile + views.width();
     check_size(width, size)?;
-    let mut img = RgbImage { width, height: size, data: BACKGROUND.repeat(width * size) };
+    let mut img = RgbImage::filled(width, size, BACKGROUND)?;
     let pix = sketch.as_bytes();
     for j in 0..size {
         let y = ((j as f64 + 0.5) * sh as f64 / size as f64) as usize;
@@ -280,28 +264,14 @@ pub fn compare_preview(
             let blend = b.map_or(s, |b| [0, 1, 2].map(|c| ((s[c] as u16 + b[c] as u16) / 2) as u8));
             for (k, rgb) in [s, b.unwrap_or(BACKGROUND), blend].iter().enumerate() {
                 let o = (j * width + k * tile + i) * 3;
-                img.data[o..o + 3].copy_from_slice(rgb);
+                img.as_bytes_mut()[o..o + 3].copy_from_slice(rgb);
             }
         }
         let o = (j * width + 3 * tile) * 3;
-        img.data[o..o + views.width * 3].copy_from_slice(&views.data[j * views.width * 3..(j + 1) * views.width * 3]);
+        let vw = views.width() * 3;
+        img.as_bytes_mut()[o..o + vw].copy_from_slice(&views.as_bytes()[j * vw..(j + 1) * vw]);
     }
     Ok(img)
-}
-
-/// Encodes an RGB image as PNG and writes it to `path` atomically.
-pub fn save_rgb_png(img: &RgbImage, path: &Path) -> Result<()> {
-    let mut bytes = Vec::new();
-    let enc = image::codecs::png::PngEncoder::new(&mut bytes);
-    image::ImageEncoder::write_image(
-        enc,
-        &img.data,
-        img.width as u32,
-        img.height as u32,
-        image::ExtendedColorType::Rgb8,
-    )
-    .map_err(|e| Error::Io { path: path.to_path_buf(), source: std::io::Error::other(e.to_string()) })?;
-    write_atomic(path, &bytes)
 }
 
 #[cfg(test)]
@@ -313,14 +283,16 @@ mod tests {
     fn front_and_side_views_show_the_body_shaded() {
         let m = capsule_humanoid(&rest_joints(), 10, 8);
         let img = preview(&m.vertices, &m.triangles(), 128).unwrap();
-        assert_eq!(img.data.len(), 256 * 128 * 3);
+        assert_eq!(img.as_bytes().len(), 256 * 128 * 3);
         let covered = |x0: usize| {
-            (0..128 * 128).filter(|&k| img.data[((k / 128) * 256 + x0 + k % 128) * 3..][..3] != BACKGROUND).count()
+            (0..128 * 128)
+                .filter(|&k| img.as_bytes()[((k / 128) * 256 + x0 + k % 128) * 3..][..3] != BACKGROUND)
+                .count()
         };
         let (front, side) = (covered(0), covered(128));
         // The A-pose is wider from the front than from the side.
         assert!(front > side && side > 500, "front {front}, side {side}");
-        let shades: std::collections::HashSet<u8> = img.data.chunks(3).map(|p| p[0]).collect();
+        let shades: std::collections::HashSet<u8> = img.as_bytes().chunks(3).map(|p| p[0]).collect();
         assert!(shades.len() > 20, "shading should vary");
         assert!(preview(&m.vertices, &[[0, 1, 999_999]], 64).is_err());
         assert!(preview(&m.vertices, &m.triangles(), 0).is_err());
@@ -330,11 +302,11 @@ mod tests {
     #[test]
     fn compare_preview_shows_the_body_through_the_camera() {
         let m = capsule_humanoid(&rest_joints(), 10, 8);
-        let sketch = crate::image::RgbImage::from_vec(100, 200, vec![255; 100 * 200 * 3]).unwrap();
+        let sketch = RgbImage::from_vec(100, 200, vec![255; 100 * 200 * 3]).unwrap();
         let cam = WeakPerspective { sx: 80.0, sy: 80.0, r: Matrix3::identity(), t: [50.0, 100.0] };
         let img = compare_preview(&sketch, &m.vertices, &m.triangles(), None, &cam, 64).unwrap();
-        assert_eq!((img.width, img.height), (3 * 32 + 128, 64));
-        let at = |i: usize, j: usize| img.data[(j * img.width + i) * 3..][..3].to_vec();
+        assert_eq!((img.width(), img.height()), (3 * 32 + 128, 64));
+        let at = |i: usize, j: usize| img.as_bytes()[(j * img.width() + i) * 3..][..3].to_vec();
         // The chest (between the pelvis and the neck) where the camera projects it.
         let j = rest_joints();
         let chest = (Vector3::from(j[1]) + Vector3::from(j[8])) / 2.0;
@@ -361,17 +333,17 @@ mod tests {
                 data.extend_from_slice(if x < 4 { &[250, 0, 0] } else { &[0, 0, 250] });
             }
         }
-        let tex_img = RgbImage { width: 8, height: 8, data };
+        let tex_img = RgbImage::from_vec(8, 8, data).unwrap();
         let tex = SurfaceTexture::for_quads(&tex_img, &quads, &uvs).unwrap();
         let tris = crate::body::rig::quads_to_triangles(&quads);
         assert_eq!(tex.triangles(), tris.len());
         let img = preview_textured(&v, &tris, Some(&tex), 64).unwrap();
-        let at = |i: usize, j: usize| img.data[(j * img.width + i) * 3..][..3].to_vec();
+        let at = |i: usize, j: usize| img.as_bytes()[(j * img.width() + i) * 3..][..3].to_vec();
         let (left, right) = (at(16, 32), at(48, 32));
         assert!(left[0] > 100 && left[2] == 0, "left {left:?}");
         assert!(right[2] > 100 && right[0] == 0, "right {right:?}");
         let plain = preview(&v, &tris, 64).unwrap();
-        assert_ne!(plain.data, img.data);
+        assert_ne!(plain.as_bytes(), img.as_bytes());
         assert!(preview_textured(&v, &tris[..1], Some(&tex), 64).is_err());
         let bad = FaceUvs { coords: uvs.coords.clone(), quads: vec![[0, 1, 2, 9]] };
         assert!(SurfaceTexture::for_quads(&tex_img, &quads, &bad).is_err());

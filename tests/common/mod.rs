@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 /// The repository's top folder: the package's own folder for the core's tests, its parent for
-/// the workspace members' (`capi/`, `cli/`).
+/// the workspace members' (`capi/`, `cli/`, `lab/`).
 pub fn repo_root() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     if dir.join("assets").is_dir() {

@@ -9,9 +9,9 @@ use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::body::rig::bones::{bone_by_makehuman_name, canonical_joint_of_cube, NUM_RIG_BONES, RIG_BONES};
+use crate::body::rig::{PointRegressor, RigData};
 use crate::error::{Error, Result};
-use crate::rig::bones::{bone_by_makehuman_name, canonical_joint_of_cube, NUM_RIG_BONES, RIG_BONES};
-use crate::rig::{PointRegressor, RigData};
 use crate::skeleton::{joint, Joints3, NUM_JOINTS};
 
 use super::super::model::{VertexWeights, MAX_INFLUENCES};
@@ -45,7 +45,7 @@ fn end_source(bone: &str, key: &str, end: &serde_json::Value) -> Result<EndSourc
     let bad = |m: &str| Error::CorruptData(format!("rig.game_engine.json {bone} {key}: {m}"));
     if bone == "Root" {
         // MakeHuman's root sits on ground helper vertices; ours is between the ankles, dropped
-        // to the body's lowest point (crate::rig::Armature::rest).
+        // to the body's lowest point (crate::body::rig::Armature::rest).
         return Ok(EndSource::Joint(joint::R_ANKLE));
     }
     match end.get("strategy").and_then(|s| s.as_str()) {

@@ -235,7 +235,7 @@ impl MakeHumanData {
     /// streams 6, 7), checked on [`RIG_CHECK_SAMPLES`] others (streams 8, 9); the nearest
     /// vertices are taken on MakeHuman's default human. Returns the rig and its held-out error.
     #[allow(clippy::type_complexity)] // (rig, (per-bone placement errors, mean error))
-    pub fn production_rig(&self, seed: u64) -> Result<(crate::rig::RigData, (Vec<(String, f64)>, f64))> {
+    pub fn production_rig(&self, seed: u64) -> Result<(crate::body::rig::RigData, (Vec<(String, f64)>, f64))> {
         let reference = self.rig_sample(&self.targets.synthesize(&MacroParams::default_human(), &[])?)?;
         let (mut fit, mut check) = (Vec::new(), Vec::new());
         for g in Gender::ALL {

@@ -9,7 +9,7 @@
 //! fraction of the figure's torso length (pelvis → neck of the mapped joints) along the torso
 //! and, for the paired joints, away from the body's axis: the median shift between the mapped
 //! joints and the true ones on rendered training sketches, the two sides of each pair averaged
-//! (`sketchbody fit-landmark-joints`). Scale-free and rotation-free by construction.
+//! (`sketchbody-lab fit-landmark-joints`). Scale-free and rotation-free by construction.
 
 use crate::error::{ensure_finite, Error, Result};
 use crate::skeleton::{joint, Joints2, MIRROR, NUM_JOINTS};
@@ -78,9 +78,9 @@ impl JointDefinitions {
 
     /// The shifts BlazePose's joints take by default ([`super::BlazePoseOptions::definitions`]),
     /// fitted on the first 300 sketches of `make-dataset 1200 --seed 79 --mocap DIR` (the
-    /// classifiers' training sketches) by `sketchbody fit-landmark-joints --train DS --first 300`,
-    /// on landmarks refined from the heatmap (docs/benchmarks.md, "BlazePose's joints on the body
-    /// model's definitions", "Landmarks refined from the heatmap").
+    /// classifiers' training sketches) by `sketchbody-lab fit-landmark-joints --train DS --first 300`,
+    /// on landmarks refined from the heatmap (docs/benchmarks-history.md, "BlazePose's joints on
+    /// the body model's definitions", "Landmarks refined from the heatmap").
     pub const SHIPPED: JointDefinitions = JointDefinitions {
         along_torso: [
             0.095903, 0.016533, -0.036644, 0.005798, 0.019818, -0.036644, 0.005798, 0.019818, 0.043058, 0.018922,

@@ -129,8 +129,8 @@ pub struct BlazePoseOptions {
     pub fill_drawings: bool,
     /// Refine each pass's landmarks from the network's heatmap, as MediaPipe's pose graph does
     /// ([`heatmap::refine`]; [`JointDefinitions::SHIPPED`] was fitted on refined landmarks).
-    /// Default true: on held-out rendered sketches the 3-D pose and the posed body gain 5–7 %,
-    /// for about 3 ms more per pass (docs/benchmarks.md, "Landmarks refined from the heatmap").
+    /// Default true; costs about 3 ms more per pass (docs/benchmarks-history.md, "Landmarks
+    /// refined from the heatmap").
     pub refine_from_heatmap: bool,
     /// Shifts from the mapped landmarks to the body model's joints. Default
     /// [`JointDefinitions::SHIPPED`]; [`JointDefinitions::IDENTITY`] keeps the landmarks'
@@ -139,17 +139,14 @@ pub struct BlazePoseOptions {
 }
 
 /// The filled pass ([`BlazePoseOptions::fill_drawings`]) replaces the others with a pose flag of
-/// at least this (and higher than theirs). On PARSE training photos 1–100 (`examples/landmark_roi.rs`,
-/// `pick0.5@0.8/3/0.75` against `nofill`): PCK@0.2 pencil 0.428 → 0.546, XDoG 0.664 → 0.681,
-/// photos, flat colour and rendered sketches unchanged; the network's flag ≥ 0.5 on clutter
-/// pages 7.5 → 10 % (the calibrated figure confidence decides "no figure"); keeping the filled
-/// pass only at ≥ 0.9 left pencil at 0.454.
+/// at least this (and higher than theirs); 0.5 is the flag at which BlazePose counts a figure.
+/// Chosen on PARSE training photos 1–100 through the proxy benchmark's stylisations
+/// (`examples/landmark_roi.rs`; docs/benchmarks-history.md, "Filled drawings").
 pub const FILL_ACCEPT: f64 = 0.5;
 
 /// A retry ROI's pass replaces the first only with a pose flag of at least this (and higher than
-/// the first's): keeping any higher flag raised the network's pose flag over 0.5 on 22.5 % of
-/// clutter pages (7.5 % with this bar, 0 % without retries; PARSE training photos and the
-/// calibration's pages, `examples/landmark_roi.rs`).
+/// the first's), so that retries rarely make BlazePose sure of a page without a figure (chosen
+/// on PARSE training photos and the calibration's pages, `examples/landmark_roi.rs`).
 pub const RETRY_ACCEPT: f64 = 0.9;
 
 /// The default [`BlazePoseOptions::retry_below`].

@@ -160,7 +160,7 @@ fn depthwise_conv<'a>(
 }
 
 /// Rewrites the depthwise convolutions that tract would run on its slow paths (measured in
-/// `docs/benchmarks.md`, "Detector backends"):
+/// docs/benchmarks-history.md, "Detector backends: BlazePose, calibrated confidences, `auto`"):
 /// - a stride-2 one over an input of at least [`SPLIT_MIN_SIDE`] px a side becomes the same
 ///   convolution at stride 1 followed by [`Subsample`]: tract runs strided depthwise kernels on a
 ///   scalar path, several times slower per output than its vectorised stride-1 path, so computing
@@ -233,10 +233,9 @@ fn bilinear_upsampling(model: &TypedModel, node: &TypedNode) -> TractResult<Opti
 }
 
 /// Replaces tract's 2× bilinear `Resize` nodes of a decluttered model (the ONNX `Resize` becomes
-/// tract's there; BlazePose's heatmap head has three, the 64² one the
-/// slowest node of the whole plan: 2.3 ms a pass on a busy host, against 1.4 ms for the largest
-/// convolution) by [`Upsample2x`], which sums the same taps with the same weights in the same order
-/// into the same intermediate tensor: bit-identical outputs.
+/// tract's there, and runs slowly; BlazePose's heatmap head has three) by [`Upsample2x`], which
+/// sums the same taps with the same weights in the same order into the same intermediate tensor:
+/// bit-identical outputs.
 fn rewrite_upsampling(mut model: TypedModel) -> TractResult<TypedModel> {
     let ids: Vec<usize> = model.nodes().iter().map(|n| n.id).collect();
     for id in ids {

@@ -1,12 +1,12 @@
 //! Input preprocessing for drawings: the landmark model was trained on photos, where a figure's
 //! edges are soft tone changes; a line drawing's hard, dark strokes on white paper leave it
 //! unsure that a person is there. Lightening the strokes of a crop that is mostly paper (a gamma
-//! under 1 on every channel) raised the pose flag and the PCK on ink and pencil drawings without
-//! changing photos or flat-colour pictures, which are not mostly paper (docs/benchmarks.md,
-//! "Detector backends"). Darkening light pencil instead (levels stretch, gamma over 1) lowered
-//! both. A line drawing the network still does not read as a person (pose flag under 0.5 at
-//! every ROI) gets one more try with its enclosed regions filled gray ([`fill_enclosed`]), so
-//! that it reads as a silhouette with lines, like a flat-colour picture.
+//! under 1 on every channel) raises the pose flag and the PCK on ink and pencil drawings without
+//! changing photos or flat-colour pictures, which are not mostly paper
+//! (docs/benchmarks-history.md, "BlazePose input lightening and ROI retries"). A line drawing the
+//! network still does not read as a person (pose flag under 0.5 at every ROI) gets one more try
+//! with its enclosed regions filled gray ([`fill_enclosed`]), so that it reads as a silhouette
+//! with lines, like a flat-colour picture.
 
 /// Gamma applied to a paper crop's values in [0, 1] (`v^γ`, so mid grays get lighter, white stays
 /// white and black stays black). Chosen on PARSE training photos 1–100 through the benchmark's

@@ -66,8 +66,8 @@ impl Roi {
 /// ([`ROI_SCALE`]) misses when the ink is not the figure: a photo's or a stylised photo's
 /// background fills the page, so the figure is smaller or off the page's centre, or light
 /// strokes leave the network unsure at that framing. Chosen on PARSE training photos 1–100 through
-/// the proxy benchmark's stylisations (`examples/landmark_roi.rs`; docs/benchmarks.md, "Detector
-/// backends").
+/// the proxy benchmark's stylisations (`examples/landmark_roi.rs`; docs/benchmarks-history.md,
+/// "Detector backends: BlazePose, calibrated confidences, `auto`").
 pub const RETRY_SCALES: [f64; 3] = [0.8, 1.0, 1.6];
 
 /// The upright square ROIs tried when the ink box's ROI leaves the network unsure: centred on

@@ -16,7 +16,6 @@ pub mod background;
 pub mod canvas;
 pub mod contours;
 pub mod costume;
-pub mod mannequin;
 pub mod mocap;
 pub mod paper;
 pub mod scene;

@@ -211,7 +211,7 @@ pub fn write_sample(dir: &Path, stem: &str, s: &Sketch) -> Result<()> {
         serde_json::to_string_pretty(&s.truth).map_err(|e| Error::CorruptData(format!("ground truth JSON: {e}")))?;
     write_atomic(&json, text.as_bytes())?;
     let img = crate::image::GrayImage::from_vec(s.truth.width, s.truth.height, s.pixels.clone())?;
-    crate::image::save_gray_png(&img, &png)
+    crate::image::save_png(&img.view(), &png)
 }
 
 /// The seed of sample `index` of a dataset made with `seed` (SplitMix64 of both), independent of

@@ -1,0 +1,254 @@
+//! `sketchbody-lab bench-pose --suite`: the 3-D pose step on held-out real motion (docs/benchmarks.md,
+//! "3-D pose"), by set (held-out DeepMimic clips; held-out CMU subjects), proportions (standard:
+//! the body model's skeletons; stylised: head ×U(1, 1.8) and each of torso, shoulders, arms, hips
+//! and legs ×U(0.75, 1.35), bone directions unchanged), view (near-frontal: yaw U(±30°); side:
+//! |yaw| U(60°, 90°); pitch U(±10°) for both) and 2-D noise σ. Scores: PA-MPJPE (mm, after a
+//! similarity alignment), limb direction error (upper arm, forearm, thigh, shin after the same
+//! alignment: mean degrees and % of limbs > 30° off), torso lean error (pelvis→neck, each pose
+//! in its own camera frame, degrees), share of estimates flagged implausible, CPU ms per call.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_distr::{Distribution, Normal};
+use sketchbody::body::BodyModel;
+use sketchbody::camera::WeakPerspective;
+use sketchbody::pose::factor_prior::FactorPrior;
+use sketchbody::pose::figure::{BodyFactors, GROUP_NAMES, NUM_GROUPS};
+use sketchbody::pose::motion::{normalize_pose, read_motion_csv, REF_STATURE};
+use sketchbody::pose::plausibility::standing_in_image;
+use sketchbody::pose::{estimate_pose, estimate_pose_with_factor_prior, Dictionary, PoseOptions};
+use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
+use sketchbody_lab::pose::learn::{
+    body_model_skeletons, clip_matches, default_held_out, held_out_of, motion_files, retarget_frames,
+};
+use sketchbody_lab::pose::metrics::{limb_direction_errors, pa_mpjpe, torso_lean_error_deg};
+
+use crate::bench_pose::thread_cpu_s;
+use sketchbody_cli::CliError;
+
+/// One held-out set: its name and its normalised frames (body-model skeletons).
+struct Set {
+    name: String,
+    clips: Vec<String>,
+    frames: Vec<Joints3>,
+}
+
+/// The held-out clips of `dir` (names matching the dictionary's held-out entries or the
+/// library's defaults), retargeted onto `skeletons` and normalised, `cases` evenly spaced.
+fn load_set(
+    name: &str,
+    dir: &Path,
+    entries: &[String],
+    skeletons: &[(String, Joints3)],
+    cases: usize,
+) -> Result<Set, CliError> {
+    let mut clips = Vec::new();
+    let mut all = Vec::new();
+    for f in motion_files(dir)? {
+        let stem = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        if !entries.iter().any(|e| clip_matches(e, &stem)) {
+            continue;
+        }
+        all.extend(retarget_frames(&stem, read_motion_csv(&f)?, skeletons)?.iter().filter_map(normalize_pose));
+        clips.push(stem);
+    }
+    if all.is_empty() {
+        return Err(CliError(format!("bench-pose --suite: no held-out clips in {}", dir.display())));
+    }
+    let n = cases.min(all.len()).max(1);
+    let frames = (0..n).map(|i| all[i * all.len() / n]).collect();
+    Ok(Set { name: name.to_string(), clips, frames })
+}
+
+/// Random stylised factors (module doc).
+fn stylised<R: Rng>(rng: &mut R) -> BodyFactors {
+    let mut k = [1.0; NUM_GROUPS];
+    k[0] = rng.random_range(1.0..=1.8);
+    for v in k.iter_mut().skip(1) {
+        *v = rng.random_range(0.75..=1.35);
+    }
+    BodyFactors { k }
+}
+
+fn camera<R: Rng>(rng: &mut R, side: bool) -> WeakPerspective {
+    let yaw = if side {
+        let y = rng.random_range(60.0f64..=90.0);
+        if rng.random_bool(0.5) {
+            y
+        } else {
+            -y
+        }
+    } else {
+        rng.random_range(-30.0f64..=30.0)
+    };
+    let pitch = rng.random_range(-10.0f64..=10.0).to_radians();
+    let r: Matrix3<f64> = *(Rotation3::from_axis_angle(&Vector3::x_axis(), pitch)
+        * Rotation3::from_axis_angle(&Vector3::y_axis(), yaw.to_radians()))
+    .matrix();
+    let scale = 500.0 / REF_STATURE;
+    WeakPerspective { sx: scale, sy: scale, r, t: [256.0, 300.0] }
+}
+
+fn dump_err(e: std::io::Error) -> CliError {
+    CliError(format!("bench-pose --dump: {e}"))
+}
+
+/// What the suite measures on.
+pub struct Suite<'a> {
+    /// The DeepMimic folder.
+    pub mocap: &'a Path,
+    /// The CMU folder.
+    pub cmu: Option<&'a PathBuf>,
+    /// Clips to measure on (names, or `SS_*` for a CMU subject) instead of the dictionary's
+    /// held-out clips and the library's list (a validation split learned without them).
+    pub clips: Option<&'a [String]>,
+    /// Cases per set.
+    pub cases: usize,
+    /// Noise levels, px.
+    pub sigmas: &'a [f64],
+    /// Seed of the cameras, proportions and noise.
+    pub seed: u64,
+    /// Per-case CSV output.
+    pub dump: Option<&'a Path>,
+    /// Learned priors (factors and depths) replacing the embedded ones, each used as
+    /// `PoseOptions::factor_prior` and `PoseOptions::depth_prior` say.
+    pub factor_prior: Option<FactorPrior>,
+}
+
+/// Runs the suite with options `opts` (see [`Suite`]).
+pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), CliError> {
+    let (mocap, cmu, cases, sigmas, seed) = (suite.mocap, suite.cmu, suite.cases, suite.sigmas, suite.seed);
+    let entries = match suite.clips {
+        Some(c) => c.to_vec(),
+        None => {
+            let mut e = held_out_of(dict);
+            e.extend(default_held_out());
+            e
+        }
+    };
+    let mut dump = match suite.dump {
+        Some(p) => {
+            let mut f = std::io::BufWriter::new(std::fs::File::create(p).map_err(dump_err)?);
+            writeln!(
+                f,
+                "set,props,view,sigma,case,standing_2d,{},{},{}",
+                (0..8).map(|i| format!("limb{i}")).collect::<Vec<_>>().join(","),
+                GROUP_NAMES.map(|g| format!("est_{g}")).join(","),
+                GROUP_NAMES.map(|g| format!("true_{g}")).join(",")
+            )
+            .map_err(dump_err)?;
+            Some(f)
+        }
+        None => None,
+    };
+    let skeletons = body_model_skeletons(&BodyModel::embedded()?);
+    let mut sets = vec![load_set("deepmimic", mocap, &entries, &skeletons, cases)?];
+    if let Some(c) = cmu {
+        sets.push(load_set("cmu", c, &entries, &skeletons, cases)?);
+    }
+    println!(
+        "bench-pose --suite: {} bases in {} actions, {} exemplars; seed {seed}; options {opts:?}",
+        dict.num_bases(),
+        dict.actions.len(),
+        dict.exemplars.ncols()
+    );
+    for s in &sets {
+        println!("set {}: {} cases from {} clips ({})", s.name, s.frames.len(), s.clips.len(), s.clips.join(","));
+    }
+    println!(
+        "{:<10} {:<10} {:<8} {:>5} {:>9} {:>9} {:>8} {:>8} {:>10} {:>8} {:>7}",
+        "set",
+        "props",
+        "view",
+        "sigma",
+        "PA-MPJPE",
+        "limb deg",
+        "limb>30%",
+        "lean deg",
+        "implaus %",
+        "failed",
+        "cpu ms"
+    );
+    let normal = Normal::new(0.0, 1.0).map_err(|e| CliError(e.to_string()))?;
+    for (si, set) in sets.iter().enumerate() {
+        for (pi, props) in ["standard", "stylised"].iter().enumerate() {
+            for (vi, view) in ["frontal", "side"].iter().enumerate() {
+                // One stream per (set, proportions, view): the same cases for every sigma.
+                let stream = seed.wrapping_mul(1000).wrapping_add((100 * si + 10 * pi + vi) as u64);
+                for &sigma in sigmas {
+                    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(stream);
+                    let (mut pa, mut limb, mut over, mut lean) = (0.0, 0.0, 0usize, 0.0);
+                    let (mut n, mut failed, mut implausible) = (0usize, 0usize, 0usize);
+                    let mut cpu = 0.0;
+                    for (case, f) in set.frames.iter().enumerate() {
+                        let factors = stylised(&mut rng);
+                        let gt = if pi == 1 { factors.apply(f) } else { *f };
+                        let cam = camera(&mut rng, vi == 1);
+                        let mut j2 = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
+                        for p in 0..NUM_JOINTS {
+                            let q = cam.project(&Vector3::from(gt[p]));
+                            let (a, b) = (normal.sample(&mut rng), normal.sample(&mut rng));
+                            j2.xy[p] = [q[0] + sigma * a, q[1] + sigma * b];
+                        }
+                        let c0 = thread_cpu_s();
+                        let res = match &suite.factor_prior {
+                            Some(p) => estimate_pose_with_factor_prior(dict, &j2, opts, None, Some(p)),
+                            None => estimate_pose(dict, &j2, opts),
+                        };
+                        cpu += thread_cpu_s() - c0;
+                        let Ok(est) = res else {
+                            failed += 1;
+                            continue;
+                        };
+                        let Some(errs) = limb_direction_errors(&est.joints, &gt) else {
+                            failed += 1;
+                            continue;
+                        };
+                        if let Some(out) = dump.as_mut() {
+                            let truth = if pi == 1 { factors } else { BodyFactors::default() };
+                            let vis = [true; NUM_JOINTS];
+                            writeln!(
+                                out,
+                                "{},{props},{view},{sigma},{case},{},{},{},{}",
+                                set.name,
+                                u8::from(standing_in_image(&j2.xy, &vis)),
+                                errs.iter().map(|e| format!("{e:.2}")).collect::<Vec<_>>().join(","),
+                                est.factors.k.map(|k| format!("{k:.3}")).join(","),
+                                truth.k.map(|k| format!("{k:.3}")).join(",")
+                            )
+                            .map_err(dump_err)?;
+                        }
+                        pa += pa_mpjpe(&est.joints, &gt);
+                        limb += errs.iter().sum::<f64>() / errs.len() as f64;
+                        over += errs.iter().filter(|e| **e > 30.0).count();
+                        lean += torso_lean_error_deg(&est.joints, &est.camera.r, &gt, &cam.r);
+                        implausible += usize::from(!est.plausible);
+                        n += 1;
+                    }
+                    let d = n.max(1) as f64;
+                    println!(
+                        "{:<10} {:<10} {:<8} {:>5.1} {:>9.1} {:>9.1} {:>8.1} {:>8.1} {:>10.1} {:>8} {:>7.2}",
+                        set.name,
+                        props,
+                        view,
+                        sigma,
+                        1e3 * pa / d,
+                        limb / d,
+                        100.0 * over as f64 / (8.0 * d),
+                        lean / d,
+                        100.0 * implausible as f64 / d,
+                        failed,
+                        1e3 * cpu / set.frames.len() as f64
+                    );
+                }
+            }
+        }
+    }
+    if let Some(mut out) = dump {
+        out.flush().map_err(dump_err)?;
+    }
+    Ok(())
+}

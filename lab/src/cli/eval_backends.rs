@@ -1,0 +1,147 @@
+//! `sketchbody-lab eval-detector --sets ...`: the detector backends (fmp, blazepose, auto, and the
+//! strict variants) on the real-drawing proxy benchmark: held-out rendered sketches, the PARSE
+//! *test* photos (101–305) plain and through stylisations never used in training, and pages
+//! without a figure; PCK@0.1 / @0.2, the no-figure rate and time per set and backend, and the
+//! reliability table of `auto`'s calibrated confidence.
+
+use std::path::Path;
+
+use sketchbody::detect::calibration::Calibration;
+use sketchbody::detect::figure::{Backend, FigureOptions, Fusion};
+use sketchbody::detect::landmark::LandmarkNet;
+use sketchbody::detect::Model;
+use sketchbody::render::sketch::{Hair, SketchRenderer};
+use sketchbody_lab::eval::backends::{expected_calibration_error, reliability, score_set, Sample};
+use sketchbody_lab::render::photo_npr::PhotoNpr;
+use sketchbody_lab::render::stylise::{NegativePage, Stylisation};
+
+use crate::backend_sets::{gather_set, SetContext, SetSpec};
+use sketchbody_cli::CliError;
+
+/// The set names `--sets` takes.
+pub const SET_NAMES: &str =
+    "synthetic, parse, xdog, pencil, flat, negatives, and the training filters npr-sobel, npr-charcoal, npr-marker";
+
+/// The benchmark sets named in `names` (comma separated, from [`SET_NAMES`]); the PARSE sets
+/// take photos `photos` (the test split 101-305 for the benchmark).
+pub fn benchmark_sets(
+    names: &str,
+    n: usize,
+    seed: u64,
+    size: usize,
+    hair: Option<Hair>,
+    photos: (usize, usize),
+) -> Result<Vec<SetSpec>, CliError> {
+    let (first, last) = photos;
+    let mut out = Vec::new();
+    for name in names.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        match name {
+            "synthetic" => out.push(SetSpec::Synthetic { seed, n, size, hair }),
+            "parse" => out.push(SetSpec::Parse { first, last, style: None, npr: None }),
+            "negatives" => out.extend(NegativePage::ALL.map(|kind| SetSpec::Negative { kind, n: 60, seed })),
+            other => match (other.parse::<Stylisation>(), other.strip_prefix("npr-").and_then(PhotoNpr::from_name)) {
+                (Ok(s), _) => out.push(SetSpec::Parse { first, last, style: Some(s), npr: None }),
+                (_, Some(f)) => out.push(SetSpec::Parse { first, last, style: None, npr: Some(f) }),
+                _ => return Err(CliError(format!("--sets: unknown set {other:?}; expected {SET_NAMES}"))),
+            },
+        }
+    }
+    Ok(out)
+}
+
+/// `auto`'s PCK@0.2 and no-figure rate on `samples` with `cal` at each presence threshold of
+/// `thresholds`, as "threshold: PCK / rate%" joined by commas.
+fn presence_sweep(samples: &[Sample], cal: &Calibration, thresholds: &[f64]) -> Result<String, CliError> {
+    let cells: Vec<String> = thresholds
+        .iter()
+        .map(|&m| {
+            let o = FigureOptions { min_presence: m, ..FigureOptions::default() };
+            score_set(samples, cal, &o).map(|s| format!("{m}: {:.3} / {:.1}%", s.pck[1], 100.0 * s.no_figure))
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(cells.join(", "))
+}
+
+/// Runs the evaluation on `specs` and prints the tables; each of `others` (name, calibration)
+/// adds an `auto` row per set, scored on the same detections; `net` is the landmark backend's
+/// network.
+pub fn run_sets(
+    specs: &[SetSpec],
+    renderer: &SketchRenderer,
+    parse_dir: &Path,
+    cal: &Calibration,
+    others: &[(String, Calibration)],
+    model: &Model,
+    net: &LandmarkNet,
+) -> Result<(), CliError> {
+    let ctx = SetContext { renderer, parse_dir, model, net };
+    let options = FigureOptions::default();
+    let averaged = options.average_agreement;
+    let configs = [
+        (Backend::Fmp, false, Fusion::PerImage, averaged, "fmp"),
+        (Backend::BlazePose, false, Fusion::PerImage, averaged, "blazepose"),
+        (Backend::Auto, false, Fusion::PerImage, averaged, "auto"),
+        (Backend::Auto, false, Fusion::PerImage, 0.0, "auto unaveraged"),
+        (Backend::Auto, false, Fusion::Confidence, averaged, "auto by confidence"),
+        (Backend::Auto, false, Fusion::PerLimb, averaged, "auto per limb"),
+        (Backend::Fmp, true, Fusion::PerImage, averaged, "fmp strict"),
+        (Backend::BlazePose, true, Fusion::PerImage, averaged, "blazepose strict"),
+    ];
+    println!("PCK@0.1 / PCK@0.2, no-figure rate, mean ms per image (wall, images in parallel) per set and backend");
+    println!("{:<26} {:>4}  {}", "set", "n", configs.map(|c| format!("{:<30}", c.4)).join(""));
+    let mut positives: Vec<Sample> = Vec::new();
+    for spec in specs {
+        let samples = gather_set(spec, &ctx, &options)?;
+        let mut cells = Vec::new();
+        for &(backend, strict, fusion, average_agreement, _) in &configs {
+            let o = FigureOptions { backend, strict, fusion, average_agreement, ..FigureOptions::default() };
+            let s = score_set(&samples, cal, &o)?;
+            let pck = if s.pck[0].is_nan() {
+                "   -  /   -  ".to_string()
+            } else {
+                format!("{:.3} / {:.3}", s.pck[0], s.pck[1])
+            };
+            cells.push(format!("{pck} {:>5.1}% {:>4.0}ms  ", 100.0 * s.no_figure, 1e3 * s.seconds));
+        }
+        println!("{:<26} {:>4}  {}", spec.label(), samples.len(), cells.join(""));
+        let auto = score_set(&samples, cal, &FigureOptions::default())?;
+        let limb = score_set(&samples, cal, &FigureOptions { fusion: Fusion::PerLimb, ..FigureOptions::default() })?;
+        println!(
+            "{:<26}       auto kept fmp on {:.0}%, blazepose on {:.0}% of its answers; per limb: fmp {:.0}%, blazepose {:.0}%, mixed {:.0}%",
+            "",
+            100.0 * auto.chosen[0],
+            100.0 * auto.chosen[1],
+            100.0 * limb.chosen[0],
+            100.0 * limb.chosen[1],
+            100.0 * limb.chosen[2]
+        );
+        let sweep = presence_sweep(&samples, cal, &[0.5, 0.2, 0.1, 0.05])?;
+        println!("{:<26}       auto by min presence (PCK@0.2 / no figure): {sweep}", "");
+        for (name, other) in others {
+            let s = score_set(&samples, other, &FigureOptions::default())?;
+            let stricter = presence_sweep(&samples, other, &[0.6, 0.7, 0.8, 0.9])?;
+            println!(
+                "{:<26}       auto with {name}: {:.3} / {:.3} {:>5.1}%; by min presence (PCK@0.2 / no figure): {}",
+                "",
+                s.pck[0],
+                s.pck[1],
+                100.0 * s.no_figure,
+                stricter
+            );
+        }
+        positives.extend(samples.into_iter().filter(|s| s.truth.is_some()));
+    }
+    for b in [Backend::Auto, Backend::Fmp, Backend::BlazePose] {
+        let table = reliability(&positives, cal, &FigureOptions { backend: b, ..FigureOptions::default() }, 10)?;
+        println!(
+            "reliability of {}'s confidence on {} images with a figure (bin: n, mean confidence, observed PCK@0.2); ECE {:.3}",
+            b.name(),
+            positives.len(),
+            expected_calibration_error(&table)
+        );
+        for bin in table.iter().filter(|b| b.n > 0) {
+            println!("  [{:.1}, {:.1})  {:>5}  {:.3}  {:.3}", bin.lo, bin.hi, bin.n, bin.mean_confidence, bin.observed);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,305 @@
+//! `sketchbody-lab run-dataset DATASET --out RESULTS [--gender truth|auto|f|m] [--mean-shape] ...`:
+//! the pipeline on every sample of a synthetic-sketch dataset with the sample's ground-truth
+//! 2-D joints (the user-correction path), writing the results layout `sketchbody-lab eval` reads
+//! (docs/dataset.md): `STEM.json` (joints2d, joints3d = the fitted mesh's posed joints,
+//! camera_r, gender, scores, fit_height_m / height_m), `STEM_rest.obj`, `STEM_posed.obj`, each
+//! atomically, the posed OBJ last. Samples whose `STEM_posed.obj` exists are skipped
+//! (resumable). Samples run in parallel (rayon); each fit's seed is the same `--seed`, so
+//! results do not depend on the thread count or the order. Ground-truth joints outside the
+//! image are marked missing.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde_json::json;
+use sketchbody::body::{BodyModel, Gender};
+use sketchbody::detect::figure::{Backend, FigureOptions};
+use sketchbody::detect::landmark::LandmarkNet;
+use sketchbody::detect::Model;
+use sketchbody::export::obj::write_obj;
+use sketchbody::fsutil::write_atomic;
+use sketchbody::image::load_image;
+use sketchbody::pipeline::{run_pipeline, FigureJoints, GivenJoints, JointsSource, PipelineOptions};
+use sketchbody::pose::{dict_io, Dictionary, PoseEstimate};
+use sketchbody::render::sketch::truth::GroundTruth;
+use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
+use sketchbody_lab::eval::score::dataset_samples;
+
+use sketchbody_cli::fit_args::{score_name, FitArgs};
+use sketchbody_cli::run::{catch_interrupt, parse_gender, INTERRUPTED};
+use sketchbody_cli::CliError;
+
+/// Arguments of `sketchbody-lab run-dataset`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Dataset folder (from make-dataset).
+    dataset: PathBuf,
+    /// Results folder (created when missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Gender: truth (the sample's, as a user would say), auto (fit both, choose by score), f or m.
+    #[arg(long, default_value = "truth")]
+    gender: String,
+    /// The mean-shape baseline: the gender's mean shape posed the same way (no fit).
+    #[arg(long)]
+    mean_shape: bool,
+    /// Take the 2-D joints from the embedded single-figure detector instead of the ground truth,
+    /// as `run` without `--joints` does (measures what detection costs the fit).
+    #[arg(long)]
+    detect: bool,
+    /// Detector backend with --detect: auto (the default of `run`), fmp (the sketch model) or
+    /// blazepose.
+    #[arg(long, default_value = "auto", value_parser = sketchbody_cli::detect::parse_backend, requires = "detect")]
+    detector: Backend,
+    /// Give the fit each sample's true rest height (`height_m` of the ground truth), as an
+    /// artist with a character sheet would: measures the fit when the size is known.
+    #[arg(long, conflicts_with = "height")]
+    true_height: bool,
+    /// Diagnostic only: skip the pose solver and use the ground-truth 3-D pose and camera of
+    /// each sample (shows what the fit reaches when the pose is right; not a pipeline result).
+    #[arg(long)]
+    oracle_pose: bool,
+    #[command(flatten)]
+    fit: FitArgs,
+    /// Pose dictionary file for the 3-D pose step (default: the embedded one; e.g. one learned
+    /// without the dataset's motion, to fit as on motion the pose step has not seen).
+    #[arg(long)]
+    dictionary: Option<PathBuf>,
+    /// Only the first N samples (sorted by name).
+    #[arg(long)]
+    first: Option<usize>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+enum GenderMode {
+    Truth,
+    Auto,
+    Fixed(Gender),
+}
+
+/// Ground-truth joints of a sample; joints outside the image are marked missing.
+fn truth_joints(t: &GroundTruth) -> Joints2 {
+    let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
+    for k in 0..NUM_JOINTS {
+        j.xy[k] = t.joints2d[k];
+        let [x, y] = j.xy[k];
+        j.visible[k] = (0.0..=t.width as f64).contains(&x) && (0.0..=t.height as f64).contains(&y);
+    }
+    j
+}
+
+struct Shared<'a> {
+    model: &'a BodyModel,
+    dict: &'a Dictionary,
+    base: PipelineOptions,
+    mode: GenderMode,
+    /// The sketch model, the landmark network and the figure options when the joints come from
+    /// detection.
+    detector: Option<(Model, LandmarkNet, FigureOptions)>,
+    /// `--true-height`.
+    true_height: bool,
+    /// `--oracle-pose`.
+    oracle_pose: bool,
+}
+
+/// The ground truth's 3-D pose and camera as a pose estimate (for `--oracle-pose`).
+fn truth_pose(t: &GroundTruth, stem: &str) -> Result<PoseEstimate, CliError> {
+    let joints: Joints3 = t
+        .joints3d
+        .as_slice()
+        .try_into()
+        .map_err(|_| CliError(format!("sample {stem}: joints3d must hold {NUM_JOINTS} joints")))?;
+    Ok(PoseEstimate {
+        joints,
+        camera: t.camera.to_camera()?,
+        bases: Vec::new(),
+        weights: Vec::new(),
+        rms: 0.0,
+        length_excess: 0.0,
+        base: joints,
+        base_parts: None,
+        factors: sketchbody::pose::figure::BodyFactors::default(),
+        plausible: true,
+    })
+}
+
+/// Runs one sample and writes its three files. Returns the pipeline's seconds.
+fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliError> {
+    let jp = dataset.join(format!("{stem}.json"));
+    let text = std::fs::read_to_string(&jp).map_err(|e| CliError(format!("{}: {e}", jp.display())))?;
+    let truth = GroundTruth::from_json(&text, &jp.display().to_string())?;
+    let sketch = load_image(&dataset.join(format!("{stem}.png")))?;
+    let gender = match s.mode {
+        GenderMode::Truth => Some(Gender::parse(&truth.gender)?),
+        GenderMode::Auto => None,
+        GenderMode::Fixed(g) => Some(g),
+    };
+    let mut opts = PipelineOptions { gender, ..s.base.clone() };
+    if s.true_height {
+        opts.fit.height = Some(truth.height_m);
+    }
+    if s.oracle_pose {
+        opts.given_pose = Some(truth_pose(&truth, stem)?);
+    }
+    let source: Box<dyn JointsSource + '_> = match &s.detector {
+        Some((model, net, options)) => Box::new(FigureJoints { model, net, options, colour: None }),
+        None => Box::new(GivenJoints(truth_joints(&truth))),
+    };
+    let r =
+        run_pipeline(s.model, s.dict, &sketch, source.as_ref(), &opts, &mut |_| !INTERRUPTED.load(Ordering::SeqCst))
+            .map_err(|e| CliError(format!("sample {stem}: {e}")))?;
+    let rm = r.pose.camera.r;
+    let finite = |x: f64| json!(if x.is_finite() { Some(x) } else { None });
+    // One score per fitted space: the deciding fit's when the chosen gender was refitted.
+    let mut scores = serde_json::Map::new();
+    for g in &r.fits {
+        scores.entry(g.space.name()).or_insert_with(|| finite(g.score));
+    }
+    let doc = json!({
+        "joints2d": r.joints2d.xy,
+        "joints3d": r.posed_joints,
+        "camera_r": [[rm[(0, 0)], rm[(0, 1)], rm[(0, 2)]], [rm[(1, 0)], rm[(1, 1)], rm[(1, 2)]], [rm[(2, 0)], rm[(2, 1)], rm[(2, 2)]]],
+        "gender": r.gender.name(),
+        "gender_fitted": r.gender_fitted,
+        "gender_value": r.gender_value,
+        "gender_confidence": r.gender_confidence,
+        "male_prior": r.male_prior,
+        "gender_features": r.gender_evidence.features.values,
+        "gender_evidence_male_probability": r.gender_evidence.male_probability,
+        "edge_support": if r.edge_support.is_finite() { Some(r.edge_support) } else { None },
+        "low_evidence": r.low_evidence,
+        "scores": scores,
+        "score": finite(r.score),
+        "shape_weights": r.weights,
+        "fit_shape_weights": r.chosen_fit().and_then(|g| g.fit.as_ref()).map(|f| &f.weights),
+        "fit_height_m": r.fit_height,
+        "height_m": r.mesh.height(),
+        "proportions": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportions),
+        "proportion_estimate": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportion_estimate),
+        "landmark_depth": r.detection.as_ref().map(|f| f.landmark_depth),
+        "seconds": r.timings.total,
+    });
+    write_atomic(&out.join(format!("{stem}.json")), doc.to_string().as_bytes())?;
+    write_obj(&out.join(format!("{stem}_rest.obj")), &r.mesh.vertices, &r.mesh.quads, None)?;
+    write_obj(&out.join(format!("{stem}_posed.obj")), &r.posed_vertices, &r.mesh.quads, None)?;
+    Ok(r.timings.total)
+}
+
+/// Runs the command.
+pub fn run(a: Args) -> Result<(), CliError> {
+    let fit = a.fit.options()?;
+    let mode = match a.gender.as_str() {
+        "truth" => GenderMode::Truth,
+        "auto" => GenderMode::Auto,
+        g => GenderMode::Fixed(parse_gender(Some(g))?.ok_or_else(|| CliError("--gender: missing".into()))?),
+    };
+    if a.mean_shape && matches!(mode, GenderMode::Auto) {
+        return Err(CliError("--mean-shape needs --gender truth, f or m (there is no score to choose by)".into()));
+    }
+    let mut stems = dataset_samples(&a.dataset)?;
+    if stems.is_empty() {
+        return Err(CliError(format!("{}: no samples (STEM.json + STEM.mesh) found", a.dataset.display())));
+    }
+    stems.truncate(a.first.unwrap_or(usize::MAX));
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| CliError(format!("{}: cannot create the results folder: {e}", a.out.display())))?;
+    let manifest = json!({
+        "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
+        "gender": a.gender, "dictionary": a.dictionary.as_ref().map(|p| p.display().to_string()), "mean_shape": a.mean_shape, "detector": if a.detect { Some(a.detector.name()) } else { None }, "depth_hint": a.fit.depth_hint, "depth_prior": a.fit.depth_prior, "detected_joint_weight_scale": a.fit.detected_joint_weight_scale, "detected_proportions": a.fit.detected_proportions, "landmark_pose": a.fit.landmark_pose, "detected_classifier_gender": a.fit.detected_classifier_gender, "gender_evidence": a.fit.gender_evidence, "classify_gender": a.fit.classify_gender, "gender_decision_dims": a.fit.gender_decision_dims, "gender_decision_seeds": a.fit.gender_decision_seeds, "calibrate_fit": a.fit.calibrate_fit, "male_prior": a.fit.male_prior, "score": score_name(fit.score), "seed": fit.seed, "initial_factor": fit.initial_factor,
+        "fit_samples": fit.samples, "iterations": fit.max_iterations, "transition_scale": fit.transition_scale,
+        "temperature": fit.temperature, "joint_weight": fit.joint_weight, "sample_camera": fit.sample_camera, "proportion_sd": fit.proportion_sd, "estimate_proportions": fit.estimate_proportions, "height": fit.height, "true_height": a.true_height, "oracle_pose": a.oracle_pose, "keep_pose_scale": a.fit.keep_pose_scale, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
+    });
+    write_atomic(&a.out.join("run.json"), manifest.to_string().as_bytes())?;
+    let model = BodyModel::embedded()?;
+    let dict = match &a.dictionary {
+        Some(p) => dict_io::read(p)?,
+        None => dict_io::embedded()?,
+    };
+    let detector = if a.detect {
+        let options = FigureOptions { backend: a.detector, ..FigureOptions::default() };
+        Some((Model::embedded()?, LandmarkNet::embedded()?, options))
+    } else {
+        None
+    };
+    let shared = Shared {
+        model: &model,
+        dict: &dict,
+        base: PipelineOptions {
+            fit,
+            mean_shape: a.mean_shape,
+            keep_pose_scale: a.fit.keep_pose_scale,
+            depth_hint: a.fit.depth_hint,
+            pose: a.fit.pose_options(),
+            detected: a.fit.detected(),
+            gender_evidence: a.fit.gender_evidence,
+            classify_gender: a.fit.classify_gender,
+            gender_decision_dims: a.fit.gender_decision_dims.map(|d| d as usize),
+            gender_decision_seeds: a.fit.gender_decision_seeds as usize,
+            calibrate_fit: a.fit.calibrate_fit,
+            ..PipelineOptions::default()
+        },
+        mode,
+        detector,
+        true_height: a.true_height,
+        oracle_pose: a.oracle_pose,
+    };
+    let todo: Vec<&String> = stems.iter().filter(|s| !a.out.join(format!("{s}_posed.obj")).is_file()).collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| CliError(format!("thread pool: {e}")))?;
+    catch_interrupt();
+    let done = AtomicUsize::new(0);
+    let failures = Mutex::new(Vec::new());
+    let seconds = Mutex::new(Vec::new());
+    let t0 = Instant::now();
+    let bar = Mutex::new(sketchbody_cli::run::Bar::new(false));
+    pool.install(|| {
+        todo.par_iter().for_each(|stem| {
+            if INTERRUPTED.load(Ordering::SeqCst) {
+                return;
+            }
+            match one(&shared, &a.dataset, &a.out, stem) {
+                Ok(s) => seconds.lock().unwrap_or_else(|p| p.into_inner()).push(s),
+                Err(CliError(m)) => failures.lock().unwrap_or_else(|p| p.into_inner()).push(m),
+            }
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+            bar.lock().unwrap_or_else(|p| p.into_inner()).update(n as f32 / todo.len().max(1) as f32);
+        })
+    });
+    bar.lock().unwrap_or_else(|p| p.into_inner()).finish();
+    let failures = failures.into_inner().unwrap_or_else(|p| p.into_inner());
+    for f in &failures {
+        eprintln!("sketchbody: {f}");
+    }
+    if INTERRUPTED.load(Ordering::SeqCst) {
+        return Err(CliError(format!(
+            "interrupted after {} of {} samples (rerun to resume)",
+            done.load(Ordering::Relaxed),
+            todo.len()
+        )));
+    }
+    let mut secs = seconds.into_inner().unwrap_or_else(|p| p.into_inner());
+    secs.sort_by(f64::total_cmp);
+    let median = if secs.is_empty() { f64::NAN } else { secs[secs.len() / 2] };
+    println!(
+        "{}: {} samples run, {} already done, {} failed; {:.1} s ({} threads), median pipeline {:.2} s per sample",
+        a.out.display(),
+        todo.len() - failures.len(),
+        stems.len() - todo.len(),
+        failures.len(),
+        t0.elapsed().as_secs_f64(),
+        pool.current_num_threads(),
+        median
+    );
+    if failures.is_empty() {
+        Ok(())
+    } else {
+        Err(CliError(format!("{} of {} samples failed (listed above)", failures.len(), todo.len())))
+    }
+}

@@ -1,0 +1,23 @@
+//! The rig, in one home: a rigged mesh in plain arrays ([`RiggedMesh`], posing and skinning's
+//! input) and the production rig (issue 17): MakeHuman's `game_engine` skeleton (53 bones: root at the
+//! floor, pelvis, a three-bone spine, neck, head, clavicles, arms, hands with fingers, legs,
+//! feet and toes) and its skin weights, fitted to each body and driven by the 15 canonical
+//! joints; names in three conventions; A- or T-pose rest; origin at the floor or the pelvis.
+//!
+//! - [`mesh`]: the rigged mesh and its geometry helpers (heights, normals, triangles).
+//! - [`bones`]: the bone table (names, parents, drivers).
+//! - [`data`]: what the body model stores ([`RigData`]).
+//! - [`armature`]: one body's rest armature and poses.
+//! - [`scene`]: everything an export writes (rest mesh, armature, pose) for the chosen options.
+
+pub mod armature;
+pub mod bones;
+pub mod data;
+pub mod mesh;
+pub mod scene;
+
+pub use armature::{Armature, RigPose};
+pub use bones::{RigBone, NUM_RIG_BONES, RIG_BONES};
+pub use data::{PointRegressor, RigData};
+pub use mesh::{quads_to_triangles, scale_to_height, vertex_normals, y_extent, FaceUvs, RiggedMesh, VertexWeights};
+pub use scene::{Naming, Placement, RestPose, RigOptions, RigScene};
