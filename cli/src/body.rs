@@ -46,7 +46,7 @@ pub struct Args {
     #[arg(long)]
     preview: Option<PathBuf>,
     /// Side of each preview view, pixels (1..=4096).
-    #[arg(long, default_value_t = 512, value_parser = crate::ranges::count(1..=4096))]
+    #[arg(long, default_value_t = 512)]
     preview_size: usize,
 }
 

@@ -63,7 +63,7 @@ fn body_command_writes_posed_glb_obj_and_preview() {
         (vec!["--gender", "f", "--weights", "NaN", "--out", &s(&missing)], "finite"),
         (vec!["--gender", "f", "--pose", &s(&bad_pose), "--out", &s(&missing)], "r_elbow"),
         (vec!["--gender", "f", "--out", &s(&d.join("never.stl"))], ".glb or .obj"),
-        (vec!["--gender", "f", "--out", &s(&missing), "--preview", &s(&png), "--preview-size", "0"], "--preview-size"),
+        (vec!["--gender", "f", "--out", &s(&missing), "--preview", &s(&png), "--preview-size", "0"], "empty"),
     ] {
         let (ok, err) = run(&args);
         assert!(!ok && err.contains(needle), "{args:?}: {err}");
