@@ -36,6 +36,13 @@ if ! rustup target list --installed | grep -qx "$windows_triple"; then
   rustup target add "$windows_triple"
 fi
 
+# The test run must leave the checkout as it found it: tests write only under target/, build/
+# or a temporary folder (checked at the end against this snapshot of the work tree's state).
+tree_state() {
+  git status --porcelain=v1 --untracked-files=all 2>/dev/null && git diff 2>/dev/null | sha256sum
+}
+tree_before=$(tree_state || true)
+
 jobs=$(nproc)
 # The fuzz targets' instrumented build (every dependency again, with libFuzzer's flags: the
 # longest build here) runs in the background at the lowest CPU priority, on the core time the
@@ -94,7 +101,7 @@ export SKETCHBODY_LIBRARY="$lib_dir/libsketchbody.so" SKB_CLI="$lib_dir/sketchbo
 step "Python package (python/tests: bindings drift, the pipeline, the Dask batch)"
 scripts/test-python.sh
 
-step "Blender add-on (integrations/blender, headless Blender 3.4; renders docs/img/blender-addon.png)"
+step "Blender add-on (integrations/blender, headless Blender 3.4; renders target/blender-addon/blender-addon.png)"
 scripts/test-blender-addon.sh
 
 step "Windows DLL: joining the background build, then the C API tests under Wine"
@@ -115,5 +122,13 @@ fi
 trap - EXIT
 step "fuzz targets: 2000 executions each from the committed seeds (the long run: scripts/fuzz.sh 1000000)"
 scripts/fuzz.sh 2000
+
+step "the work tree is as the tests found it (tests write only under target/, build/ or a temporary folder)"
+tree_after=$(tree_state || true)
+if [ "$tree_before" != "$tree_after" ]; then
+  diff <(echo "$tree_before") <(echo "$tree_after") || true
+  echo "== the tests changed files of the checkout (above)"
+  exit 1
+fi
 
 step "all tests passed"

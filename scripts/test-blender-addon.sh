@@ -3,8 +3,10 @@
 # checks the error paths, runs "Sketch to body" on assets/examples/sketch.png with
 # sketch_joints.json, checks the mesh, armature, weights, markers and material against the
 # sketchbody Python package, moves a joint marker and re-runs, and renders the result beside the
-# sketch to target/blender-addon/blender-addon.png, copied to docs/img/blender-addon.png when it
-# differs visibly (integrations/blender/tests/test_addon.py).
+# sketch to target/blender-addon/blender-addon.png (integrations/blender/tests/test_addon.py).
+# The test writes only under target/: `scripts/test-blender-addon.sh --update-docs` also copies
+# the pictures to docs/img/blender-addon.png and blender-addon-detect.png when they differ
+# visibly (refreshing the documentation's pictures is a deliberate step, never a test run's).
 # The add-on finds the package in python/ of this checkout and the package finds
 # target/release/libsketchbody.so (built here when missing), or the library SKETCHBODY_LIBRARY
 # names (scripts/test-all.sh's build). Without Blender it prints SKIPPED,
@@ -12,6 +14,12 @@
 # scripts/test-all.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+docs_png=()
+case "${1:-}" in
+  --update-docs) docs_png=(docs/img/blender-addon.png) ;;
+  "") ;;
+  *) echo "usage: scripts/test-blender-addon.sh [--update-docs]" >&2; exit 2 ;;
+esac
 
 if ! blender --version >/dev/null 2>&1; then
   if [ -n "${SKB_REQUIRE_SHARED_DATA:-}" ]; then
@@ -35,7 +43,7 @@ status=0
 env -u SKETCHBODY_PYTHON_PATH blender -b --factory-startup --python-exit-code 1 \
   --python integrations/blender/tests/test_addon.py -- \
   assets/examples/sketch.png assets/examples/sketch_joints.json "$out/blender-addon.png" "$out/report.json" \
-  docs/img/blender-addon.png \
+  "${docs_png[@]}" \
   >"$out/blender.log" 2>&1 || status=$?
 grep -E '^(ok  |FAIL|blender add-on test|sketchbody package|docs picture)' "$out/blender.log" || true
 if [ "$status" -ne 0 ]; then

@@ -1,5 +1,6 @@
 //! `sketchbody body`: a body of the embedded shape model, optionally posed to a 3-D joints file,
-//! written as .glb (MakeHuman's 53-bone rig, one posed scene) or .obj, with an optional preview PNG.
+//! written as .glb (MakeHuman's 53-bone rig, one posed scene) or .obj, with an optional preview PNG;
+//! the outputs replace their targets together or not at all (`fsutil::OutputSet`).
 
 use std::path::PathBuf;
 
@@ -11,6 +12,7 @@ use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::gltf::write_glb;
 use sketchbody::export::joints::load_joints3_json;
 use sketchbody::export::obj::write_obj;
+use sketchbody::fsutil::OutputSet;
 use sketchbody::image::save_png;
 use sketchbody::render::preview::preview;
 
@@ -44,7 +46,7 @@ pub struct Args {
     /// Also write front and side views of the posed mesh as a PNG.
     #[arg(long)]
     preview: Option<PathBuf>,
-    /// Side of each preview view, pixels.
+    /// Side of each preview view, pixels (1..=4096).
     #[arg(long, default_value_t = 512)]
     preview_size: usize,
 }
@@ -71,13 +73,17 @@ pub fn run(a: Args) -> Result<(), CliError> {
         Some(_) => Some(preview(&posed, &mesh.triangles(), a.preview_size)?),
         None => None,
     };
+    // Every output is staged, then all replace their targets together (or none does).
+    let mut outputs = OutputSet::new();
+    let out = outputs.stage(&a.out)?;
     if ext.as_deref() == Some("glb") {
-        write_glb(&a.out, &mesh, &RigScene::build(model.rig(), &mesh, &pose, &rig_options)?, None)?;
+        write_glb(&out, &mesh, &RigScene::build(model.rig(), &mesh, &pose, &rig_options)?, None)?;
     } else {
-        write_obj(&a.out, &posed, &mesh.quads, mesh.uvs.as_ref())?;
+        write_obj(&out, &posed, &mesh.quads, mesh.uvs.as_ref())?;
     }
     if let (Some(p), Some(img)) = (&a.preview, &image) {
-        save_png(&img.view(), p)?;
+        save_png(&img.view(), &outputs.stage(p)?)?;
     }
+    outputs.commit()?;
     Ok(())
 }

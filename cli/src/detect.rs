@@ -127,6 +127,8 @@ fn overlay(img: &RgbImage, joints: &Joints2, confidence: &[f64; 15]) -> Vec<u8> 
     px
 }
 
+/// Writes the joints JSON and the optional overlay as one set (`fsutil::OutputSet`): both
+/// replace their targets, or neither does.
 fn write_outputs(
     a: &Args,
     img: &RgbImage,
@@ -135,7 +137,8 @@ fn write_outputs(
     confidence: &[f64; 15],
 ) -> Result<(), CliError> {
     let text = serde_json::to_string_pretty(doc).map_err(|e| CliError(format!("JSON encoding failed: {e}")))?;
-    sketchbody::fsutil::write_atomic(&a.out, text.as_bytes())?;
+    let mut outputs = sketchbody::fsutil::OutputSet::new();
+    outputs.write(&a.out, text.as_bytes())?;
     if let Some(path) = &a.overlay {
         let mut png = Vec::new();
         image::ImageEncoder::write_image(
@@ -146,8 +149,9 @@ fn write_outputs(
             image::ExtendedColorType::Rgb8,
         )
         .map_err(|e| CliError(format!("{}: PNG encoding failed: {e}", path.display())))?;
-        sketchbody::fsutil::write_atomic(path, &png)?;
+        outputs.write(path, &png)?;
     }
+    outputs.commit()?;
     Ok(())
 }
 

@@ -25,13 +25,13 @@ use sketchbody::export::gltf::write_glb;
 use sketchbody::export::joints2d::{load_joints2d, write_joints2d_with, LOW_CONFIDENCE_HINT};
 use sketchbody::export::obj::{mtl_string, write_obj_with_material};
 use sketchbody::export::pose3d::pose3d_json;
-use sketchbody::export::texture::project_sketch;
+use sketchbody::export::texture::{check_texture_size, project_sketch};
 use sketchbody::fsutil::{write_atomic, StagingDir};
 use sketchbody::image::{encode_png, load_rgb_image, save_png, to_gray};
 use sketchbody::pipeline::overlay::overlay;
 use sketchbody::pipeline::{run_pipeline, FigureJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
 use sketchbody::pose::dict_io;
-use sketchbody::render::preview::{compare_preview, SurfaceTexture};
+use sketchbody::render::preview::{compare_layout, compare_preview, SurfaceTexture};
 
 use crate::detect::NO_FIGURE_HINT;
 use crate::fit_args::{score_name, FitArgs};
@@ -80,7 +80,8 @@ pub struct Args {
     /// Side of the texture projected from the sketch, texels (1..=4096).
     #[arg(long, default_value_t = sketchbody::export::texture::DEFAULT_TEXTURE_SIZE, value_parser = crate::ranges::count(1..=4096))]
     texture_size: usize,
-    /// Height of the preview's panels, pixels (1..=16384).
+    /// Height of the preview's panels, pixels (1..=16384; lowered when the preview would be over
+    /// 16384 px wide or a panel over 4096 px).
     #[arg(long, default_value_t = 512, value_parser = crate::ranges::count(1..=16384))]
     preview_size: usize,
     /// No progress bar.
@@ -356,7 +357,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
             })
         }
     };
-    // Fail on an unwritable output folder before the work.
+    // Fail on output sizes that cannot be drawn, and on an unwritable output folder, before
+    // the work.
+    compare_layout(sketch_rgb.width(), sketch_rgb.height(), a.preview_size)?;
+    check_texture_size(a.texture_size)?;
     let staging = StagingDir::new(&a.out).map_err(|e| CliError(format!("cannot write the output folder: {e}")))?;
     let model = BodyModel::embedded()?;
     let dict = dict_io::embedded()?;

@@ -72,3 +72,23 @@ fn body_command_writes_posed_glb_obj_and_preview() {
     assert!(!missing.exists());
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// Issue 52 finding 9: an output that cannot be written (`--preview /dev/full`, a device)
+/// fails the command with none of its outputs written: no new file, an old one unchanged.
+#[test]
+fn an_unwritable_preview_leaves_the_mesh_unwritten() {
+    let d = dir().join("partial");
+    std::fs::create_dir_all(&d).unwrap();
+    let obj = d.join("o.obj");
+    let args = ["--gender", "f", "--out", obj.to_str().unwrap(), "--preview", "/dev/full", "--preview-size", "16"];
+    let (ok, err) = run(&args);
+    assert!(!ok && err.contains("/dev/full") && err.contains("not a regular file"), "{err}");
+    assert!(!obj.exists(), "o.obj written by a failed command");
+    std::fs::write(&obj, "old").unwrap();
+    let (ok, err) = run(&args);
+    assert!(!ok, "{err}");
+    assert_eq!(std::fs::read_to_string(&obj).unwrap(), "old");
+    let left: Vec<_> = std::fs::read_dir(&d).unwrap().flatten().map(|e| e.file_name()).collect();
+    assert_eq!(left, ["o.obj"], "no staging file left");
+    std::fs::remove_dir_all(&d).unwrap();
+}

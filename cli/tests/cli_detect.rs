@@ -169,3 +169,26 @@ fn levels_per_octave_and_figure_flags_reach_the_search() {
     assert!(!dir.join("e.json").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Issue 52 finding 9: `detect --overlay /dev/full` fails with the joints JSON unwritten (it
+/// was written before the overlay failed); an existing JSON keeps its content.
+#[test]
+fn an_unwritable_overlay_leaves_the_joints_unwritten() {
+    let dir = scratch("partial");
+    let sketch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../assets/examples/sketch.png");
+    let out = dir.join("j.json");
+    let cmd = || {
+        let mut c = cli();
+        c.args(["detect", "--detector", "fmp", "--min-cell", "8"]).arg(&sketch).arg("--out").arg(&out);
+        c.args(["--overlay", "/dev/full"]);
+        c
+    };
+    let err = one_line_failure(&mut cmd());
+    assert!(err.contains("/dev/full"), "{err}");
+    assert!(!out.exists(), "joints written by a failed command");
+    std::fs::write(&out, "old").unwrap();
+    one_line_failure(&mut cmd());
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "old");
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "no staging file left");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

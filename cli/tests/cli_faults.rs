@@ -289,3 +289,76 @@ fn a_closed_stdout_ends_the_run_quietly_after_its_outputs() {
     assert_eq!(names(&out), outputs(), "every output written before the summary line");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Issue 52 finding 2: a rerun into a folder whose `overlay.png` cannot be replaced
+/// (`chattr +i`, as root on a file system with the attribute) fails, and every output of the
+/// earlier run is left exactly as it was (the same files: inode and bytes), with no staging
+/// folder or backup beside them. It deleted the earlier `body.glb`, `body.obj`, ... before.
+#[test]
+fn a_failed_rerun_leaves_the_previous_outputs_as_they_were() {
+    use std::os::unix::fs::MetadataExt;
+    let dir = scratch("rerun");
+    let out_dir = dir.join("out");
+    let first = run_cmd(&out_dir).output().unwrap();
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let snapshot = || -> Vec<(String, u64, Vec<u8>)> {
+        names(&out_dir)
+            .into_iter()
+            .map(|n| {
+                let p = out_dir.join(&n);
+                (n, std::fs::metadata(&p).unwrap().ino(), std::fs::read(&p).unwrap())
+            })
+            .collect()
+    };
+    let before = snapshot();
+    let overlay = out_dir.join("overlay.png");
+    let immutable = Command::new("chattr").arg("+i").arg(&overlay).stderr(Stdio::null()).status();
+    if !immutable.is_ok_and(|s| s.success()) {
+        println!("SKIPPED: chattr +i is not available here (needs root and a file system with the attribute)");
+        std::fs::remove_dir_all(&dir).unwrap();
+        return;
+    }
+    let mut again = run_cmd(&out_dir);
+    let second = again.args(["--seed", "2"]).output().unwrap();
+    let _ = Command::new("chattr").arg("-i").arg(&overlay).status();
+    one_line_error(&second, &["overlay.png"]);
+    assert_eq!(snapshot(), before, "the earlier outputs, unchanged");
+    assert_eq!(names(&dir), ["out"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 52 finding 3: a run in another PID namespace (`unshare --pid --fork --mount-proc`,
+/// as root; elsewhere the row says SKIPPED) beside a live run into the same folder leaves the
+/// live run's staging folder alone (its PID means nothing there, its lock does): both succeed.
+/// The first failed before ("body.glb: No such file or directory").
+#[test]
+fn a_run_in_another_pid_namespace_keeps_a_live_runs_staging() {
+    let dir = scratch("pidns");
+    let out_dir = dir.join("out");
+    let first = run_cmd(&out_dir).output().unwrap();
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let probe =
+        Command::new("unshare").args(["--pid", "--fork", "--mount-proc", "true"]).stderr(Stdio::null()).status();
+    if !probe.is_ok_and(|s| s.success()) {
+        println!("SKIPPED: unshare --pid needs root");
+        std::fs::remove_dir_all(&dir).unwrap();
+        return;
+    }
+    let mut live = Command::new(env!("CARGO_BIN_EXE_sketchbody"));
+    live.args(["run", SKETCH, "--joints", JOINTS, "--out", out_dir.to_str().unwrap()]);
+    let live = live.args(["--samples", "300", "--iterations", "6", "--quiet"]).stderr(Stdio::piped()).spawn().unwrap();
+    let t = Instant::now();
+    while !names(&out_dir).iter().any(|n| n.starts_with(".sketchbody-tmp-")) {
+        assert!(t.elapsed() < Duration::from_secs(30), "no staging folder appeared");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let mut other = Command::new("unshare");
+    other.args(["--pid", "--fork", "--mount-proc", env!("CARGO_BIN_EXE_sketchbody")]);
+    other.args(["run", SKETCH, "--joints", JOINTS, "--out", out_dir.to_str().unwrap()]).args(FAST);
+    let o = other.output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let l = live.wait_with_output().unwrap();
+    assert!(l.status.success(), "the live run: {}", String::from_utf8_lossy(&l.stderr));
+    assert_eq!(names(&out_dir), outputs());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

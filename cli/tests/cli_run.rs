@@ -256,3 +256,70 @@ fn ctrl_c_cancels_promptly_and_leaves_nothing() {
     assert_eq!(names(&dir).len(), 0, "{:?}", names(&dir));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The example sketch centred on a white `w`×`h` page, with its joints moved along.
+fn padded_example(dir: &Path, w: usize, h: usize) -> (PathBuf, PathBuf) {
+    let small = sketchbody::image::load_image(Path::new(SKETCH)).unwrap();
+    let (sw, sh) = (small.width(), small.height());
+    let (ox, oy) = ((w - sw) / 2, (h - sh) / 2);
+    let mut page = vec![255u8; w * h];
+    for y in 0..sh {
+        page[(oy + y) * w + ox..][..sw].copy_from_slice(&small.as_bytes()[y * sw..][..sw]);
+    }
+    let sketch = dir.join(format!("sketch-{w}x{h}.png"));
+    save_png(&GrayImage::from_vec(w, h, page).unwrap().view(), &sketch).unwrap();
+    let mut joints = load_joints2d(Path::new(JOINTS)).unwrap();
+    for p in &mut joints.xy {
+        p[0] += ox as f64;
+        p[1] += oy as f64;
+    }
+    let jpath = dir.join(format!("joints-{w}x{h}.json"));
+    sketchbody::export::joints2d::write_joints2d(&jpath, &joints).unwrap();
+    (sketch, jpath)
+}
+
+/// Issue 52 finding 1: sketches wider than 2:1 or over 4096 px a side, and the largest
+/// `--preview-size`, run to the end (they failed after the whole fit: "raster size is out of
+/// range: 4144x512 exceeds 4096 px a side", "4097x4097", "4100x820"); the preview is scaled
+/// down to fit, the overlay keeps the sketch's size.
+#[test]
+fn every_promised_size_runs_to_the_end() {
+    let dir = scratch("sizes");
+    for (w, h, preview) in [(4144, 512, "16384"), (4097, 4097, "512"), (512, 512, "820")] {
+        let (sketch, joints) =
+            if w == 512 { (PathBuf::from(SKETCH), PathBuf::from(JOINTS)) } else { padded_example(&dir, w, h) };
+        let out = dir.join(format!("out-{w}x{h}"));
+        let o = run(&[
+            sketch.to_str().unwrap(),
+            "--joints",
+            joints.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--samples",
+            "16",
+            "--iterations",
+            "1",
+            "--raster-side",
+            "64",
+            "--texture-size",
+            "64",
+            "--quiet",
+            "--preview-size",
+            preview,
+        ]);
+        assert!(o.status.success(), "{w}x{h}, preview {preview}: {}", String::from_utf8_lossy(&o.stderr));
+        let overlay = image::open(out.join("overlay.png")).unwrap();
+        assert_eq!((overlay.width() as usize, overlay.height() as usize), (w, h));
+        let p = image::open(out.join("preview.png")).unwrap();
+        assert!(p.width() <= 16384 && p.height() <= 4096, "{w}x{h}: preview {}x{}", p.width(), p.height());
+        let want_h = if w == 512 {
+            820
+        } else if w == 4144 {
+            506
+        } else {
+            512
+        };
+        assert_eq!(p.height(), want_h, "{w}x{h}: as tall as fits");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

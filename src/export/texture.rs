@@ -33,10 +33,24 @@ pub struct TextureStats {
     pub visible: usize,
 }
 
+/// Checks a texture side for [`project_sketch`]: 1..=[`MAX_RASTER_SIDE`] texels
+/// ([`Error::OutOfRange`] otherwise), so a caller can check it before the work.
+pub fn check_texture_size(size: usize) -> Result<()> {
+    if size == 0 || size > MAX_RASTER_SIDE {
+        return Err(Error::OutOfRange {
+            name: "texture size",
+            detail: format!("{size}: expected 1..={MAX_RASTER_SIDE}"),
+        });
+    }
+    Ok(())
+}
+
 /// Projects `sketch` (colour, same pixels as the image the pose was estimated on) onto the
 /// posed mesh (`posed` vertices, metres, model frame; `quads` with per-corner `uvs`) through
 /// `camera`, into a `size`×`size` texture (row 0 is the top, v = 1). A sketch that sees no face
-/// gives an all-neutral texture. Errors: `size` 0 or above 4096, UV faces that do not match the
+/// gives an all-neutral texture. Sketches of any size the library loads work: above 4096 px a
+/// side, which texel is seen is decided on a depth raster scaled down to 4096 px (the colour is
+/// still the sketch's own). Errors: `size` 0 or above 4096 ([`check_texture_size`]), UV faces that do not match the
 /// quads or index out of range, a non-finite vertex ([`Error::OutOfRange`] / [`Error::NonFinite`]).
 pub fn project_sketch(
     sketch: &RgbImage,
@@ -46,12 +60,7 @@ pub fn project_sketch(
     camera: &WeakPerspective,
     size: usize,
 ) -> Result<(RgbImage, TextureStats)> {
-    if size == 0 || size > MAX_RASTER_SIDE {
-        return Err(Error::OutOfRange {
-            name: "texture size",
-            detail: format!("{size}: expected 1..={MAX_RASTER_SIDE}"),
-        });
-    }
+    check_texture_size(size)?;
     let (n, m) = (posed.len(), uvs.coords.len());
     if uvs.quads.len() != quads.len()
         || quads.iter().any(|q| q.iter().any(|&i| i as usize >= n))
@@ -68,8 +77,22 @@ pub fn project_sketch(
     camera.validate()?;
     let (w, h) = (sketch.width(), sketch.height());
     let tris = crate::body::rig::quads_to_triangles(quads);
+    // The visibility depth at the sketch's pixels, or scaled down to the rasteriser's largest
+    // side for larger sketches (the colour is still sampled at full resolution).
+    let f = (MAX_RASTER_SIDE as f64 / w.max(h) as f64).min(1.0);
+    let (rw, rh) = (
+        ((w as f64 * f).round() as usize).clamp(1, MAX_RASTER_SIDE),
+        ((h as f64 * f).round() as usize).clamp(1, MAX_RASTER_SIDE),
+    );
+    let (fx, fy) = (rw as f64 / w as f64, rh as f64 / h as f64);
+    let depth_camera = WeakPerspective {
+        sx: camera.sx * fx,
+        sy: camera.sy * fy,
+        r: camera.r,
+        t: [camera.t[0] * fx, camera.t[1] * fy],
+    };
     let mut raster = Rasterizer::new();
-    let depth: Option<Vec<f32>> = match raster.rasterize(posed, &tris, camera, w, h, true) {
+    let depth: Option<Vec<f32>> = match raster.rasterize(posed, &tris, &depth_camera, rw, rh, true) {
         Ok(_) => Some(raster.depth().to_vec()),
         Err(Error::MeshOutsideImage { .. }) => None,
         Err(e) => return Err(e),
@@ -131,7 +154,8 @@ pub fn project_sketch(
                     if !(u >= 0.0 && v >= 0.0 && u < w as f64 && v < h as f64) {
                         continue;
                     }
-                    let nearest = depth[v as usize * w + u as usize] as f64;
+                    let (du, dv) = (((u * fx) as usize).min(rw - 1), ((v * fy) as usize).min(rh - 1));
+                    let nearest = depth[dv * rw + du] as f64;
                     if camera.depth(&point) >= nearest - DEPTH_TOLERANCE {
                         state[k] = 2;
                         img.as_bytes_mut()[k * 3..k * 3 + 3].copy_from_slice(&sample(u, v));
@@ -201,5 +225,39 @@ mod tests {
         assert_eq!(project_sketch(&sketch, &v, &quads, &uvs, &away, 16).unwrap().1.visible, 0);
         assert!(project_sketch(&sketch, &v, &quads, &uvs, &cam, 0).is_err());
         assert!(crate::image::encode_png(&img.view()).unwrap().starts_with(b"\x89PNG"));
+    }
+
+    /// Issue 52 finding 1: a sketch wider than the rasteriser's 4096 px is textured (it failed
+    /// with "raster size is out of range"), and occlusion is still decided: a square half hidden
+    /// behind a nearer one gives the same visible texels as on a small sketch, to one texel row
+    /// along the hidden edge.
+    #[test]
+    fn sketches_above_the_raster_side_are_textured_with_occlusion() {
+        // Square A at z = 0 (texture's left half), square B at z = 0.5 over A's left half
+        // (texture's right half).
+        let v = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.5],
+            [0.5, 0.0, 0.5],
+            [0.5, 1.0, 0.5],
+            [0.0, 1.0, 0.5f32],
+        ];
+        let quads = [[0, 1, 2, 3], [4, 5, 6, 7]];
+        let coords =
+            vec![[0.0, 0.0], [0.5, 0.0], [0.5, 1.0], [0.0, 1.0], [0.5, 0.0], [1.0, 0.0], [1.0, 1.0], [0.5, 1.0]];
+        let uvs = FaceUvs { coords, quads: vec![[0, 1, 2, 3], [4, 5, 6, 7]] };
+        let cam = WeakPerspective { sx: 40.0, sy: 40.0, r: Matrix3::identity(), t: [10.0, 50.0] };
+        let small = RgbImage::from_vec(64, 64, [200u8, 30, 30].repeat(64 * 64)).unwrap();
+        let wide = RgbImage::from_vec(8200, 64, [200u8, 30, 30].repeat(8200 * 64)).unwrap();
+        let (_, s) = project_sketch(&small, &v, &quads, &uvs, &cam, 32).unwrap();
+        let (img, w) = project_sketch(&wide, &v, &quads, &uvs, &cam, 32).unwrap();
+        assert_eq!(s.texels, 32 * 32);
+        assert!(s.visible > 700 && s.visible < 800, "B whole, half of A: {}", s.visible);
+        assert!(w.visible.abs_diff(s.visible) <= 32, "wide {} vs small {}", w.visible, s.visible);
+        let red = img.as_bytes().chunks(3).filter(|p| *p == [200, 30, 30]).count();
+        assert_eq!(red, w.visible);
     }
 }

@@ -7,9 +7,9 @@ use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use crate::body::rig::FaceUvs;
 use crate::camera::WeakPerspective;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, MAX_IMAGE_SIDE};
 use crate::image::RgbImage;
-use crate::raster::{check_size, scan, setup, GUARD_BAND, SUB};
+use crate::raster::{check_size, scan, setup, GUARD_BAND, MAX_RASTER_SIDE, SUB};
 
 const BACKGROUND: [u8; 3] = [236, 238, 242];
 const BASE: [f32; 3] = [205.0, 180.0, 165.0];
@@ -206,23 +206,25 @@ pub fn preview_textured(
     Ok(img)
 }
 
-/// The body shaded through `camera` on a `w`×`h` canvas (the sketch's pixels): colour per pixel,
-/// `None` where the body does not cover.
+/// The body shaded through `camera` (the sketch's pixels, a `sw`×`sh` sketch) on a `w`×`h`
+/// canvas covering the whole sketch: colour per pixel, `None` where the body does not cover.
 fn camera_view(
     vertices: &[[f32; 3]],
     tris: &[[u32; 3]],
     texture: Option<&SurfaceTexture>,
     camera: &WeakPerspective,
+    (sw, sh): (usize, usize),
     w: usize,
     h: usize,
 ) -> Vec<Option<[u8; 3]>> {
+    let (fx, fy) = (w as f64 / sw as f64, h as f64 / sh as f64);
     let cam: Vec<Vector3<f64>> =
         vertices.iter().map(|v| camera.r * Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)).collect();
     let px: Vec<[i64; 2]> = cam
         .iter()
         .map(|p| {
-            let u = (camera.sx * p.x + camera.t[0]).clamp(-GUARD_BAND, GUARD_BAND);
-            let v = (-camera.sy * p.y + camera.t[1]).clamp(-GUARD_BAND, GUARD_BAND);
+            let u = ((camera.sx * p.x + camera.t[0]) * fx).clamp(-GUARD_BAND, GUARD_BAND);
+            let v = ((-camera.sy * p.y + camera.t[1]) * fy).clamp(-GUARD_BAND, GUARD_BAND);
             [(u * SUB as f64).round() as i64, (v * SUB as f64).round() as i64]
         })
         .collect();
@@ -231,12 +233,50 @@ fn camera_view(
     out
 }
 
-/// What an artist compares: four panels `size` pixels high, left to right — the sketch, the
-/// posed body through the estimated `camera` (same framing as the sketch), the body blended
-/// half over the sketch, then the body's front and right side ([`preview`]). The first three
-/// are the sketch's aspect ratio, scaled to `size` pixels high. With `texture` (the export's
-/// base colour, one UV triangle per entry of `tris`) every body panel shows it. Errors:
-/// [`preview_textured`]'s, a camera that is not a rotation, a canvas over 4096 pixels wide.
+/// Largest width of a [`compare_preview`], pixels: the library's image side limit, so the
+/// preview can be read back by its own loaders.
+pub const MAX_COMPARE_WIDTH: usize = MAX_IMAGE_SIDE;
+
+/// The size of a [`compare_preview`] of a `sw`×`sh` sketch asked for `size` pixels high:
+/// `(height, tile)`, the panels' height and the width of each of the three sketch-framed
+/// panels. The height is `size`, lowered when needed so that every panel fits the rasteriser
+/// ([`MAX_RASTER_SIDE`] a side) and the whole preview ([`MAX_COMPARE_WIDTH`]); so any `size` in
+/// 1..=16384 and any sketch the library loads gives a preview, smaller when it must be. Cheap:
+/// callers check their options with it before the work. Errors ([`Error::OutOfRange`]): `size`
+/// 0 or above [`MAX_IMAGE_SIDE`], an empty sketch, a sketch so elongated that even 1 px high
+/// panels are too wide.
+pub fn compare_layout(sw: usize, sh: usize, size: usize) -> Result<(usize, usize)> {
+    let bad = |detail: String| Error::OutOfRange { name: "preview size", detail };
+    if size == 0 || size > MAX_IMAGE_SIDE {
+        return Err(bad(format!("{size}: expected 1..={MAX_IMAGE_SIDE}")));
+    }
+    if sw == 0 || sh == 0 {
+        return Err(Error::EmptyImage { width: sw, height: sh });
+    }
+    let tile = |h: usize| ((h as f64 * sw as f64 / sh as f64).round() as usize).max(1);
+    let fits = |h: usize| tile(h) <= MAX_RASTER_SIDE && 3 * tile(h) + 2 * h <= MAX_COMPARE_WIDTH;
+    let aspect = sw as f64 / sh as f64;
+    let mut h = size
+        .min(MAX_RASTER_SIDE)
+        .min((MAX_COMPARE_WIDTH as f64 / (3.0 * aspect + 2.0)).floor() as usize + 1)
+        .min((MAX_RASTER_SIDE as f64 / aspect).floor() as usize + 1)
+        .max(1);
+    while h > 1 && !fits(h) {
+        h -= 1;
+    }
+    if !fits(h) {
+        return Err(bad(format!("a {sw}x{sh} sketch gives panels too wide for a {MAX_COMPARE_WIDTH} px preview")));
+    }
+    Ok((h, tile(h)))
+}
+
+/// What an artist compares: four panels side by side, left to right — the sketch, the posed
+/// body through the estimated `camera` (same framing as the sketch), the body blended half
+/// over the sketch, then the body's front and right side ([`preview`]). The first three are
+/// the sketch's aspect ratio. The panels are `size` pixels high, or less when the preview would
+/// not fit otherwise ([`compare_layout`]). With `texture` (the export's base colour, one UV
+/// triangle per entry of `tris`) every body panel shows it. Errors: [`compare_layout`]'s,
+/// [`preview_textured`]'s, a camera that is not a rotation.
 pub fn compare_preview(
     sketch: &RgbImage,
     vertices: &[[f32; 3]],
@@ -245,22 +285,20 @@ pub fn compare_preview(
     camera: &WeakPerspective,
     size: usize,
 ) -> Result<RgbImage> {
+    let (sw, sh) = (sketch.width(), sketch.height());
+    let (size, tile) = compare_layout(sw, sh, size)?;
     let views = preview_textured(vertices, tris, texture, size)?;
     camera.validate()?;
-    let (sw, sh) = (sketch.width(), sketch.height());
-    let body = camera_view(vertices, tris, texture, camera, sw, sh);
-    let tile = ((size as f64 * sw as f64 / sh as f64).round() as usize).max(1);
+    let body = camera_view(vertices, tris, texture, camera, (sw, sh), tile, size);
     let width = 3 * tile + views.width();
-    check_size(width, size)?;
     let mut img = RgbImage::filled(width, size, BACKGROUND)?;
     let pix = sketch.as_bytes();
     for j in 0..size {
-        let y = ((j as f64 + 0.5) * sh as f64 / size as f64) as usize;
+        let y = (((j as f64 + 0.5) * sh as f64 / size as f64) as usize).min(sh - 1);
         for i in 0..tile {
-            let x = ((i as f64 + 0.5) * sw as f64 / tile as f64) as usize;
-            let (x, y) = (x.min(sw - 1), y.min(sh - 1));
+            let x = (((i as f64 + 0.5) * sw as f64 / tile as f64) as usize).min(sw - 1);
             let s: [u8; 3] = [pix[(y * sw + x) * 3], pix[(y * sw + x) * 3 + 1], pix[(y * sw + x) * 3 + 2]];
-            let b = body[y * sw + x];
+            let b = body[j * tile + i];
             let blend = b.map_or(s, |b| [0, 1, 2].map(|c| ((s[c] as u16 + b[c] as u16) / 2) as u8));
             for (k, rgb) in [s, b.unwrap_or(BACKGROUND), blend].iter().enumerate() {
                 let o = (j * width + k * tile + i) * 3;
@@ -347,5 +385,48 @@ mod tests {
         assert!(preview_textured(&v, &tris[..1], Some(&tex), 64).is_err());
         let bad = FaceUvs { coords: uvs.coords.clone(), quads: vec![[0, 1, 2, 9]] };
         assert!(SurfaceTexture::for_quads(&tex_img, &quads, &bad).is_err());
+    }
+
+    /// Issue 52 finding 1: every preview size the CLI accepts (1..=16384) and any sketch shape
+    /// gives a layout that fits the rasteriser and the preview width, lowered only as far as it
+    /// must be; a 2:1 sketch at 512 is unchanged.
+    #[test]
+    fn compare_layout_fits_every_size_and_shrinks_only_when_it_must() {
+        let fits = |sw: usize, sh: usize, h: usize| {
+            let t = ((h as f64 * sw as f64 / sh as f64).round() as usize).max(1);
+            h <= MAX_RASTER_SIDE && t <= MAX_RASTER_SIDE && 3 * t + 2 * h <= MAX_COMPARE_WIDTH
+        };
+        assert_eq!(compare_layout(1024, 512, 512).unwrap(), (512, 1024));
+        for (sw, sh) in [(512, 512), (4144, 512), (4097, 4097), (16384, 16384), (16384, 64), (64, 16384), (700, 300)] {
+            for size in [1, 2, 511, 512, 819, 820, 2048, 4096, 4097, 8192, 16384] {
+                let (h, tile) = compare_layout(sw, sh, size).unwrap();
+                assert!(h >= 1 && h <= size && fits(sw, sh, h), "{sw}x{sh} at {size}: {h}, {tile}");
+                assert!(h == size || !fits(sw, sh, h + 1), "{sw}x{sh} at {size}: {h} could be taller");
+            }
+        }
+        assert!(compare_layout(512, 512, 0).is_err());
+        assert!(compare_layout(512, 512, 16385).is_err());
+        assert!(compare_layout(16384, 1, 512).is_err(), "even 1 px panels too wide");
+    }
+
+    /// Issue 52 finding 1: the previews that failed ("4100x820 exceeds 4096", "4144x512") are
+    /// drawn, smaller, with the body where the camera puts it.
+    #[test]
+    fn wide_sketches_and_large_sizes_give_a_preview() {
+        let m = capsule_humanoid(&rest_joints(), 10, 8);
+        let sketch = crate::image::RgbImage::from_vec(4144, 512, vec![255; 4144 * 512 * 3]).unwrap();
+        let cam = WeakPerspective { sx: 200.0, sy: 200.0, r: Matrix3::identity(), t: [2072.0, 256.0] };
+        for size in [512, 820] {
+            let img = compare_preview(&sketch, &m.vertices, &m.triangles(), None, &cam, size).unwrap();
+            let (h, tile) = compare_layout(4144, 512, size).unwrap();
+            assert_eq!((img.width(), img.height()), (3 * tile + 2 * h, h));
+            let j = rest_joints();
+            let chest = (Vector3::from(j[1]) + Vector3::from(j[8])) / 2.0;
+            let [u, v] = cam.project(&chest);
+            let (i, k) = ((u * tile as f64 / 4144.0) as usize, (v * h as f64 / 512.0) as usize);
+            let at = |i: usize, j: usize| img.as_bytes()[(j * img.width() + i) * 3..][..3].to_vec();
+            assert_ne!(at(tile + i, k), BACKGROUND.to_vec(), "body at the chest");
+            assert_eq!(at(tile, 0), BACKGROUND.to_vec());
+        }
     }
 }
