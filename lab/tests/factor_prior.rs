@@ -26,7 +26,7 @@ fn rebuilt_factor_prior_matches_the_committed_asset() {
     let fresh = prior.to_json() + "\n";
     assert!(
         fresh == EMBEDDED_FACTOR_PRIOR,
-        "assets/factor_prior.json differs from a fresh build ({} vs {} bytes): rerun `sketchbody \
+        "assets/factor_prior.json differs from a fresh build ({} vs {} bytes): rerun `sketchbody-lab \
          train-factor-prior --mocap ../shared/data/mocap/deepmimic --mocap ../shared/data/mocap/cmu --out \
          assets/factor_prior.json`",
         fresh.len(),
