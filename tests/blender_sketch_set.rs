@@ -103,7 +103,11 @@ fn check_sample(dir: &Path, stem: &str, model: &BodyModel) {
     for k in 0..15 {
         let p = cam.project(truth.joints3d[k], SIZE, SIZE);
         let e = (p[0] - truth.joints2d[k][0]).hypot(p[1] - truth.joints2d[k][1]);
-        assert!(e < 1e-6, "{stem}: joint {k} projects to {p:?}, joints2d has {:?} (tolerance 1e-6 px)", truth.joints2d[k]);
+        assert!(
+            e < 1e-6,
+            "{stem}: joint {k} projects to {p:?}, joints2d has {:?} (tolerance 1e-6 px)",
+            truth.joints2d[k]
+        );
     }
     // The weak-perspective camera is exact at the pelvis (the model origin) and close elsewhere.
     let wp = truth.camera.to_camera().unwrap();
@@ -112,16 +116,24 @@ fn check_sample(dir: &Path, stem: &str, model: &BodyModel) {
     for k in 0..15 {
         let p = wp.project(&Vector3::from(truth.joints3d[k]));
         let e = (p[0] - truth.joints2d[k][0]).hypot(p[1] - truth.joints2d[k][1]);
-        assert!(e < 0.08 * SIZE as f64, "{stem}: weak perspective misses joint {k} by {e:.2} px (tolerance 8 % of the side)");
+        assert!(
+            e < 0.08 * SIZE as f64,
+            "{stem}: weak perspective misses joint {k} by {e:.2} px (tolerance 8 % of the side)"
+        );
     }
     // Posing keeps the body's own bone lengths; the rest mesh's height is height_m.
     for &(a, b) in BONES.iter() {
-        let (lr, lp) = (dist(truth.rest_joints3d[a], truth.rest_joints3d[b]), dist(truth.joints3d[a], truth.joints3d[b]));
+        let (lr, lp) =
+            (dist(truth.rest_joints3d[a], truth.rest_joints3d[b]), dist(truth.joints3d[a], truth.joints3d[b]));
         assert!((lr - lp).abs() < 1e-6, "{stem}: bone {a}-{b} is {lr} m at rest and {lp} m posed (tolerance 1e-6 m)");
     }
     let ys = rest.iter().map(|v| v[1] as f64);
     let h = ys.clone().fold(f64::MIN, f64::max) - ys.fold(f64::MAX, f64::min);
-    assert!((h - truth.height_m).abs() < 1e-5, "{stem}: rest mesh height {h} vs height_m {} (tolerance 1e-5 m)", truth.height_m);
+    assert!(
+        (h - truth.height_m).abs() < 1e-5,
+        "{stem}: rest mesh height {h} vs height_m {} (tolerance 1e-5 m)",
+        truth.height_m
+    );
     assert!((1.2..2.2).contains(&truth.height_m), "{stem}: height {} m", truth.height_m);
     // Same vertex order and frame as the body model: near the gender's mean shape, unaligned.
     let mean = model.space(Gender::parse(&truth.gender).unwrap()).mean();
