@@ -475,7 +475,7 @@ def configure_lines(sc, style, size):
     ls.select_suggestive_contour = style["kind"] == "contour_creases"
     lst = ls.linestyle
     scale = size / 512.0
-    lst.thickness = style["thickness"] * scale
+    lst.thickness = max(1.0, style["thickness"] * scale)
     lst.color = (0, 0, 0)
     lst.caps = "ROUND"
     kind = style["kind"]
@@ -548,8 +548,9 @@ def post_pass(rng, lines, shaded, style, body_uv, feet_uv, size):
     render `shaded` (RGBA), with jitter, hatching, stray strokes, ground line and paper."""
     ink = 1.0 - lines[..., :3].mean(-1)
     if style["jitter_px"] > 0:
-        dx = style["jitter_px"] * smooth_noise(rng, size, 12)
-        dy = style["jitter_px"] * smooth_noise(rng, size, 12)
+        amp = style["jitter_px"] * size / 512.0
+        dx = amp * smooth_noise(rng, size, 12)
+        dy = amp * smooth_noise(rng, size, 12)
         yy, xx = np.mgrid[0:size, 0:size]
         xs = np.clip(np.round(xx + dx).astype(int), 0, size - 1)
         ys = np.clip(np.round(yy + dy).astype(int), 0, size - 1)
