@@ -6,6 +6,7 @@
 //! matrices as a DCC does. Bad input: an unwritable path writes nothing.
 
 use std::collections::HashMap;
+use std::process::Command;
 
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Vector3};
 use rand::SeedableRng;
@@ -335,5 +336,40 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");
     write_fbx(&path, &mesh, &scene, None).unwrap();
     assert_eq!(std::fs::read(&path).unwrap(), fbx_bytes(&mesh, &scene, None).unwrap());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A second, independent reader: assimp (`assimp info`, Debian's assimp-utils) loads the FBX
+/// and finds one mesh with every vertex, the 53 bones, the material and the embedded texture.
+/// Without assimp the test prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
+#[test]
+fn assimp_reads_the_fbx() {
+    if Command::new("assimp").arg("version").output().map(|o| !o.status.success()).unwrap_or(true) {
+        if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
+            panic!("assimp is not installed (assimp-utils), but SKB_REQUIRE_SHARED_DATA is set");
+        }
+        eprintln!("SKIPPED assimp FBX check: assimp is not installed");
+        return;
+    }
+    let (mesh, scene) = scene(Gender::Female, 6);
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("assimp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let data = (0..16).flat_map(|i| [(i % 4 * 60) as u8, (i / 4 * 60) as u8, 90]).collect();
+    let img = sketchbody::render::preview::RgbImage { width: 4, height: 4, data };
+    let png = sketchbody::export::texture::png_bytes(&img).unwrap();
+    let path = dir.join("body.fbx");
+    write_fbx(&path, &mesh, &scene, Some(&png)).unwrap();
+    let out = Command::new("assimp").arg("info").arg(&path).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    println!("{text}");
+    assert!(out.status.success(), "assimp failed:\n{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    let field = |name: &str| -> u64 {
+        let line = text.lines().find(|l| l.trim_start().starts_with(name)).unwrap_or_else(|| panic!("no {name}"));
+        line.split(':').nth(1).unwrap().split_whitespace().next().unwrap().parse().unwrap()
+    };
+    assert_eq!(field("Meshes:"), 1);
+    assert_eq!(field("Faces:"), mesh.triangles().len() as u64, "assimp triangulates");
+    assert_eq!(field("Bones:"), NUM_RIG_BONES as u64);
+    assert_eq!(field("Textures (embed.):"), 1);
     std::fs::remove_dir_all(&dir).unwrap();
 }
