@@ -14,6 +14,7 @@ use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::body::{BodyModel, Gender};
+use sketchbody::export::fbx::node::{file_bytes, s, Node, Prop};
 use sketchbody::export::fbx::{fbx_bytes, write_fbx};
 use sketchbody::rig::{RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 
@@ -372,4 +373,29 @@ fn assimp_reads_the_fbx() {
     assert_eq!(field("Bones:"), NUM_RIG_BONES as u64);
     assert_eq!(field("Textures (embed.):"), 1);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The layout by hand: a record's end offset, property count and length, the null record
+/// closing a nested list, an empty record closed by a null record, and a file length that is
+/// a multiple of 16 ending in the closing magic.
+#[test]
+fn records_and_footer_lay_out_as_documented() {
+    let leaf = Node::new("B", vec![Prop::I32(7), s("xy")]);
+    let file = file_bytes(&[Node::new("A", vec![]).with(vec![leaf]), Node::new("E", vec![])]).unwrap();
+    assert_eq!(&file[..23], b"Kaydara FBX Binary  \x00\x1a\x00");
+    assert_eq!(u32::from_le_bytes(file[23..27].try_into().unwrap()), 7400);
+    let u = |at: usize| u32::from_le_bytes(file[at..at + 4].try_into().unwrap()) as usize;
+    // A at 27: header 13 + name 1; B at 41: header 13 + name 1 + I (5) + S (1 + 4 + 2).
+    assert_eq!((u(27 + 4), u(27 + 8), file[27 + 12], file[27 + 13]), (0, 0, 1, b'A'));
+    let b = 41;
+    assert_eq!((u(b + 4), u(b + 8), file[b + 13]), (2, 12, b'B'));
+    assert_eq!(u(b), b + 14 + 12, "B's end offset");
+    assert_eq!(&file[b + 14..b + 15], b"I");
+    assert_eq!(u(27), u(b) + 13, "A ends after B and its null record");
+    assert!(file[u(b)..u(b) + 13].iter().all(|&x| x == 0));
+    let e = u(27);
+    assert_eq!(u(e), e + 14 + 13, "an empty record is closed by a null record");
+    assert_eq!(file.len() % 16, 0);
+    assert_eq!(&file[file.len() - 16..file.len() - 12], &[0xf8, 0x5a, 0x8c, 0x6a]);
+    assert_eq!(u(file.len() - 140), 7400);
 }

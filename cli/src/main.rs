@@ -18,6 +18,7 @@ mod eval;
 mod eval_backends;
 mod eval_detector;
 mod eval_parse;
+mod export_formats;
 mod fit_args;
 mod learn_poses;
 mod train_factor_prior;
