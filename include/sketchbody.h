@@ -936,6 +936,27 @@ skb_status skb_mesh_write_glb_with_options(const struct skb_mesh *mesh,
                                            const struct skb_export_options *opts);
 
 /**
+ * Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
+ * same rigged, posed body as `skb_mesh_write_glb_with_options` (the bones' local transforms
+ * hold the pose, the clusters and the bind pose the rest), metres, Y up, a plain skin-colour
+ * material. See docs/formats.md, "body.fbx". Written atomically. Only reads `mesh` and `opts`.
+ */
+skb_status skb_export_fbx(const struct skb_mesh *mesh,
+                          const char *path,
+                          const struct skb_export_options *opts);
+
+/**
+ * Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
+ * the defaults): the same rigged, posed body as `skb_mesh_write_glb_with_options` (a Skeleton
+ * with bind and rest transforms, the pose as a static SkelAnimation), metres, Y up, a plain
+ * skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
+ * and `opts`.
+ */
+skb_status skb_export_usd(const struct skb_mesh *mesh,
+                          const char *path,
+                          const struct skb_export_options *opts);
+
+/**
  * Builds the rig of `mesh` in its current pose (the rest pose if never posed) with `opts`
  * (NULL: the defaults: project names, A-pose rest, origin on the floor) into `*out`, which the
  * caller owns (release with `skb_rig_free`). Errors: degenerate bones (`SKB_ERR_DEGENERATE_BONE`).

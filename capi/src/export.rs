@@ -1,5 +1,6 @@
 //! `skb_export_options`: the production rig's export options (bone names, rest pose, origin)
-//! for `skb_mesh_write_glb_with_options`. Opaque; set through setters.
+//! for `skb_mesh_write_glb_with_options`, `skb_export_fbx` and `skb_export_usd`. Opaque; set
+//! through setters; each writer writes atomically.
 
 use std::ffi::c_char;
 
@@ -7,7 +8,9 @@ use sketchbody_core::body::ik::Pose;
 use sketchbody_core::body::rig::RiggedMesh;
 use sketchbody_core::body::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
 use sketchbody_core::error::Error;
+use sketchbody_core::export::fbx::write_fbx;
 use sketchbody_core::export::gltf::write_glb;
+use sketchbody_core::export::usd::write_usda;
 
 use super::body::skb_mesh;
 use super::error::fail;
@@ -128,6 +131,37 @@ pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_opt
     }
 }
 
+/// A core writer of the rigged scene: path, rigged mesh, scene.
+type RiggedWriter = fn(&std::path::Path, &RiggedMesh, &RigScene) -> sketchbody_core::Result<()>;
+
+/// The shared body of the rigged-body writers: checks `mesh` and `path`, builds the scene of
+/// the mesh's current pose (the rest pose if never posed) with `opts` (NULL: the defaults) and
+/// hands it to `write`.
+///
+/// # Safety
+/// `mesh`, `path` and `opts` are NULL or valid as the calling export function's header says.
+unsafe fn write_rigged(
+    mesh: *const skb_mesh,
+    path: *const c_char,
+    opts: *const skb_export_options,
+    write: RiggedWriter,
+) -> skb_status {
+    // SAFETY: the caller's contract (above); the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let m = try_status!(try_ref(mesh, "mesh"));
+            let path = try_status!(path_arg(path, "path"));
+            let options = opt_ref(opts).map_or_else(RigOptions::default, |o| o.rig);
+            let rest_pose = Pose::rest(&m.rest.joints);
+            let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
+            let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
+            let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
+            try_core!(write(path, &rigged, &scene));
+            skb_status::SKB_OK
+        }
+    }
+}
+
 /// Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
 /// scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
 /// pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
@@ -139,19 +173,37 @@ pub unsafe extern "C" fn skb_mesh_write_glb_with_options(
     opts: *const skb_export_options,
 ) -> skb_status {
     // SAFETY: the header contract of `skb_mesh_write_glb_with_options` (lib.rs § Safety): `mesh`, `path`, `opts`
-    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
-    // before each borrow.
-    unsafe {
-        ffi_boundary! {
-            let m = try_status!(try_ref(mesh, "mesh"));
-            let path = try_status!(path_arg(path, "path"));
-            let options = opt_ref(opts).map_or_else(RigOptions::default, |o| o.rig);
-            let rest_pose = Pose::rest(&m.rest.joints);
-            let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
-            let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
-            let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
-            try_core!(write_glb(path, &rigged, &scene, None));
-            skb_status::SKB_OK
-        }
-    }
+    // are NULL or valid for the documented lengths during the call; `write_rigged` checks them.
+    unsafe { write_rigged(mesh, path, opts, |p, m, s| write_glb(p, m, s, None)) }
+}
+
+/// Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
+/// same rigged, posed body as `skb_mesh_write_glb_with_options` (the bones' local transforms
+/// hold the pose, the clusters and the bind pose the rest), metres, Y up, a plain skin-colour
+/// material. See docs/formats.md, "body.fbx". Written atomically. Only reads `mesh` and `opts`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_fbx(
+    mesh: *const skb_mesh,
+    path: *const c_char,
+    opts: *const skb_export_options,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_export_fbx` (lib.rs § Safety): `mesh`, `path`, `opts` are NULL or
+    // valid for the documented lengths during the call; `write_rigged` checks them.
+    unsafe { write_rigged(mesh, path, opts, |p, m, s| write_fbx(p, m, s, None)) }
+}
+
+/// Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
+/// the defaults): the same rigged, posed body as `skb_mesh_write_glb_with_options` (a Skeleton
+/// with bind and rest transforms, the pose as a static SkelAnimation), metres, Y up, a plain
+/// skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
+/// and `opts`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_usd(
+    mesh: *const skb_mesh,
+    path: *const c_char,
+    opts: *const skb_export_options,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_export_usd` (lib.rs § Safety): `mesh`, `path`, `opts` are NULL or
+    // valid for the documented lengths during the call; `write_rigged` checks them.
+    unsafe { write_rigged(mesh, path, opts, |p, m, s| write_usda(p, m, s, false)) }
 }

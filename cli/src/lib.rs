@@ -6,6 +6,7 @@
 pub mod body;
 pub mod detect;
 pub mod edges;
+pub mod export_formats;
 pub mod fit_args;
 pub mod pose;
 pub mod ranges;

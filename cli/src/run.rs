@@ -4,7 +4,8 @@
 //! interrupted (Ctrl-C) run leaves no file of its own in DIR.
 //!
 //! Files: `body.glb` (one scene: the rest mesh on MakeHuman's 53-bone rig, posed, with a
-//! one-frame clip and the sketch as its texture), `body.obj` (posed mesh), `body_rest.obj`,
+//! one-frame clip and the sketch as its texture; `--format` adds or replaces it with `body.fbx`
+//! and `body.usda`, the same rigged body), `body.obj` (posed mesh), `body_rest.obj`,
 //! `body.mtl` + `body_texture.png` (the texture, unless `--no-texture`), `joints2d.json`
 //! (sketchbody-joints2d), `pose3d.json` (sketchbody-pose3d: 3-D joints and camera),
 //! `overlay.png`, `preview.png` (sketch, body through the camera, blend, front, side),
@@ -21,7 +22,6 @@ use sketchbody::body::{BodyModel, Gender};
 use sketchbody::detect::figure::{Backend, FigureOptions};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
-use sketchbody::export::gltf::write_glb;
 use sketchbody::export::joints2d::{load_joints2d, write_joints2d_with, LOW_CONFIDENCE_HINT};
 use sketchbody::export::obj::{mtl_string, write_obj_with_material};
 use sketchbody::export::pose3d::pose3d_json;
@@ -34,6 +34,7 @@ use sketchbody::pose::dict_io;
 use sketchbody::render::preview::{compare_layout, compare_preview, SurfaceTexture};
 
 use crate::detect::NO_FIGURE_HINT;
+use crate::export_formats::{file_list, write_rigged, Format};
 use crate::fit_args::{score_name, FitArgs};
 use crate::rig_args::RigArgs;
 use crate::CliError;
@@ -74,6 +75,10 @@ pub struct Args {
     fit: FitArgs,
     #[command(flatten)]
     rig: RigArgs,
+    /// Rigged-body files to write, comma-separated: glb (body.glb), fbx (body.fbx, binary FBX
+    /// 7.4), usd (body.usda, UsdSkel).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "glb")]
+    format: Vec<Format>,
     /// No texture: the GLB gets a plain skin colour and the OBJs no material.
     #[arg(long)]
     no_texture: bool,
@@ -305,7 +310,8 @@ fn report(
     let tex = if a.no_texture { "" } else { " body.mtl, body_texture.png," };
     let _ = writeln!(
         s,
-        "\n## Files\n\nbody.glb, body.obj, body_rest.obj,{tex} joints2d.json, pose3d.json, overlay.png, preview.png, report.md"
+        "\n## Files\n\n{}, body.obj, body_rest.obj,{tex} joints2d.json, pose3d.json, overlay.png, preview.png, report.md",
+        file_list(&a.format)
     );
     s
 }
@@ -392,7 +398,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         compare_preview(&sketch_rgb, &r.posed_vertices, &tris, surface.as_ref(), &r.pose.camera, a.preview_size)?;
     let scene = RigScene::build(model.rig(), &r.mesh, &r.ik_pose, &rig_options)?;
     let texture = texture_img.as_ref().map(|(img, _)| encode_png(&img.view())).transpose()?;
-    write_glb(&staging.path("body.glb"), &r.mesh, &scene, texture.as_deref())?;
+    write_rigged(&a.format, |name| staging.path(name), &r.mesh, &scene, texture.as_deref())?;
     let mtl = texture.as_ref().map(|_| "body.mtl");
     if let Some(png) = &texture {
         write_atomic(&staging.path("body_texture.png"), png)?;

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "816ceaaaedc55356121a5c8b814abca337adaea3fd4b52c32397e7c9bf72d385"
+HEADER_SHA256 = "fdb5b637f00978e07935ae764cf500796986ac0969455b8432127c025f571462"
 
 # ---- constants (#define) ----
 
@@ -1160,6 +1160,45 @@ FUNCTIONS["skb_export_options_set_origin"] = (
 # pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
 # "pose". See docs/formats.md. Written atomically. Only reads `mesh` and `opts`.
 FUNCTIONS["skb_mesh_write_glb_with_options"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_mesh),
+        ctypes.c_char_p,
+        ctypes.POINTER(skb_export_options),
+    ],
+    "skb_status",
+    (
+        ("mesh", "const struct skb_mesh *"),
+        ("path", "const char *"),
+        ("opts", "const struct skb_export_options *"),
+    ),
+)
+
+# Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
+# same rigged, posed body as `skb_mesh_write_glb_with_options` (the bones' local transforms
+# hold the pose, the clusters and the bind pose the rest), metres, Y up, a plain skin-colour
+# material. See docs/formats.md, "body.fbx". Written atomically. Only reads `mesh` and `opts`.
+FUNCTIONS["skb_export_fbx"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_mesh),
+        ctypes.c_char_p,
+        ctypes.POINTER(skb_export_options),
+    ],
+    "skb_status",
+    (
+        ("mesh", "const struct skb_mesh *"),
+        ("path", "const char *"),
+        ("opts", "const struct skb_export_options *"),
+    ),
+)
+
+# Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
+# the defaults): the same rigged, posed body as `skb_mesh_write_glb_with_options` (a Skeleton
+# with bind and rest transforms, the pose as a static SkelAnimation), metres, Y up, a plain
+# skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
+# and `opts`.
+FUNCTIONS["skb_export_usd"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_mesh),

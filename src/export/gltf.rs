@@ -11,12 +11,13 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
 use crate::body::rig::{vertex_normals, RiggedMesh};
 use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
 use crate::error::{Error, Result};
+use crate::export::rigged::{bind_transform, check_scene, posed_locals};
 use crate::fsutil::write_atomic;
 
 const ARRAY_BUFFER: u32 = 34962;
@@ -69,16 +70,7 @@ fn vec_json(v: &Vector3<f64>) -> Value {
 /// `mesh` and, when given, `texture_png` (PNG bytes) as the base-colour texture. Errors: the
 /// mesh is invalid or its vertex count differs from the scene's; the file would exceed 4 GiB.
 pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>) -> Result<Vec<u8>> {
-    mesh.validate()?;
-    if scene.rest_vertices.len() != mesh.vertices.len() || scene.skin.len() != mesh.vertices.len() {
-        return Err(Error::OutOfRange {
-            name: "rig scene",
-            detail: format!("{} vertices for a mesh of {}", scene.rest_vertices.len(), mesh.vertices.len()),
-        });
-    }
-    if let Some(c) = scene.rest_vertices.iter().flatten().find(|c| !c.is_finite()) {
-        return Err(Error::NonFinite { name: "vertex coordinate", value: *c as f64 });
-    }
+    check_scene(mesh, scene)?;
     let vertices = &scene.rest_vertices;
     // Split vertices where a vertex has several UVs (glTF attributes are per vertex).
     let mut key_to_new: HashMap<(u32, u32), u32> = HashMap::new();
@@ -156,26 +148,19 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
         Some(ELEMENT_ARRAY_BUFFER),
         json!({"componentType": UNSIGNED_INT, "count": tris.len(), "type": "SCALAR"}),
     );
-    let arm = &scene.armature;
     // Inverse bind matrices: the inverse of each bone's rest transform [F_b | h_b].
     let ibm = f32_bytes((0..NUM_RIG_BONES).flat_map(|b| {
-        let m = Isometry3::from_parts(Translation3::from(arm.heads[b]), arm.frames[b]).inverse().to_homogeneous();
+        let m = bind_transform(scene, b).inverse().to_homogeneous();
         m.as_slice().iter().map(|&c| c as f32).collect::<Vec<_>>()
     }));
     let ibm = bin.add(&ibm, None, json!({"componentType": FLOAT, "count": NUM_RIG_BONES, "type": "MAT4"}));
 
-    let local = scene.pose.local_rotations(arm);
-    let translation = |b: usize| -> Vector3<f64> {
-        match RIG_BONES[b].parent {
-            None => arm.heads[b] + scene.pose.root_translation,
-            Some(p) => arm.frames[p].inverse() * (arm.heads[b] - arm.heads[p]),
-        }
-    };
+    let locals = posed_locals(scene);
     let mut nodes = Vec::with_capacity(NUM_RIG_BONES + 1);
     for (b, name) in scene.names.iter().enumerate() {
         let children: Vec<usize> = (0..NUM_RIG_BONES).filter(|&c| RIG_BONES[c].parent == Some(b)).collect();
         let mut node =
-            json!({"name": name, "translation": vec_json(&translation(b)), "rotation": quat_json(&local[b])});
+            json!({"name": name, "translation": vec_json(&locals[b].0), "rotation": quat_json(&locals[b].1)});
         if !children.is_empty() {
             node["children"] = json!(children);
         }
@@ -190,7 +175,7 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
     );
     let mut samplers = Vec::with_capacity(NUM_RIG_BONES + 1);
     let mut channels = Vec::with_capacity(NUM_RIG_BONES + 1);
-    for (b, q) in local.iter().enumerate() {
+    for (b, (_, q)) in locals.iter().enumerate() {
         let c = q.quaternion().coords.normalize();
         let out = bin.add(
             &f32_bytes([c[0], c[1], c[2], c[3]].map(|x| x as f32)),
@@ -200,7 +185,7 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
         samplers.push(json!({"input": time, "output": out, "interpolation": "STEP"}));
         channels.push(json!({"sampler": samplers.len() - 1, "target": {"node": b, "path": "rotation"}}));
     }
-    let t = translation(0);
+    let t = locals[0].0;
     let out = bin.add(
         &f32_bytes([t.x, t.y, t.z].map(|x| x as f32)),
         None,
@@ -279,6 +264,7 @@ mod tests {
     use crate::body::procedural::random_pose;
     use crate::body::rig::RigOptions;
     use crate::body::{BodyModel, Gender};
+    use nalgebra::{Isometry3, Translation3};
     use rand::SeedableRng;
 
     fn parse(glb: &[u8]) -> Value {

@@ -981,6 +981,10 @@ fn write_rows(t: &mut Table, fx: &Fx) {
             "skb_mesh_write_glb_with_options",
             Box::new(|m, p| unsafe { skb_mesh_write_glb_with_options(m, p, fx.export_opts) }),
         ),
+        // SAFETY: as above; the export options are live.
+        ("skb_export_fbx", Box::new(|m, p| unsafe { skb_export_fbx(m, p, fx.export_opts) })),
+        // SAFETY: as above; the export options are live.
+        ("skb_export_usd", Box::new(|m, p| unsafe { skb_export_usd(m, p, fx.export_opts) })),
     ];
     for (e, w) in &writers {
         t.check(e, "mesh", Kind::Null, SKB_ERR_NULL_POINTER, w(ptr::null(), good.as_ptr()), true);
@@ -1006,6 +1010,8 @@ fn write_rows(t: &mut Table, fx: &Fx) {
         );
         let e = "skb_mesh_write_glb_with_options";
         t.check(e, "opts", Kind::Null, SKB_OK, skb_mesh_write_glb_with_options(mesh, good.as_ptr(), ptr::null()), true);
+        t.check("skb_export_fbx", "opts", Kind::Null, SKB_OK, skb_export_fbx(mesh, good.as_ptr(), ptr::null()), true);
+        t.check("skb_export_usd", "opts", Kind::Null, SKB_OK, skb_export_usd(mesh, good.as_ptr(), ptr::null()), true);
     }
     let o = fx.export_opts;
     t.set_int(

@@ -1,0 +1,322 @@
+//! The FBX scene of a rigged body: header and global settings (metres, Y-up), the mesh geometry
+//! (polygons, per-vertex normals, per-corner UVs), a `Null` "armature" holding the 53 `LimbNode`
+//! bones in their posed local transforms, the skin (one cluster per bone with the bind
+//! matrices), the bind pose, and a material with the embedded texture; then the connections.
+use nalgebra::Matrix4;
+
+use super::node::{object_name, p, s, Node, Prop, VERSION};
+use crate::body::rig::{vertex_normals, RiggedMesh};
+use crate::export::rigged::{bind_transform, posed_locals};
+use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
+
+/// The file name the texture is referenced by (beside the .fbx, as the CLI writes it); the
+/// same bytes are embedded.
+pub const TEXTURE_FILE: &str = "body_texture.png";
+
+const GEOMETRY: i64 = 1000;
+const MESH_MODEL: i64 = 1001;
+const ARMATURE: i64 = 1002;
+const ARMATURE_ATTR: i64 = 1003;
+const SKIN: i64 = 1004;
+const MATERIAL: i64 = 1005;
+const TEXTURE: i64 = 1006;
+const VIDEO: i64 = 1007;
+const BIND_POSE: i64 = 1008;
+const DOCUMENT: i64 = 1009;
+
+fn bone_model(b: usize) -> i64 {
+    2000 + b as i64
+}
+fn bone_attr(b: usize) -> i64 {
+    3000 + b as i64
+}
+fn cluster(b: usize) -> i64 {
+    4000 + b as i64
+}
+
+fn int_p(name: &str, v: i32) -> Node {
+    p(name, "int", "Integer", "", vec![Prop::I32(v)])
+}
+
+fn double_p(name: &str, v: f64) -> Node {
+    p(name, "double", "Number", "", vec![Prop::F64(v)])
+}
+
+fn vec3_p(name: &str, v: [f64; 3]) -> Node {
+    p(name, name, "", "A", v.iter().map(|&x| Prop::F64(x)).collect())
+}
+
+fn props70(children: Vec<Node>) -> Node {
+    Node::new("Properties70", vec![]).with(children)
+}
+
+fn matrix(m: &Matrix4<f64>) -> Prop {
+    Prop::F64s(m.as_slice().to_vec())
+}
+
+fn connect(child: i64, parent: i64) -> Node {
+    Node::new("C", vec![s("OO"), Prop::I64(child), Prop::I64(parent)])
+}
+
+fn header() -> Vec<Node> {
+    let creator = format!("sketchbody {}", crate::VERSION);
+    vec![
+        Node::new("FBXHeaderExtension", vec![]).with(vec![
+            Node::new("FBXHeaderVersion", vec![Prop::I32(1003)]),
+            Node::new("FBXVersion", vec![Prop::I32(VERSION as i32)]),
+            Node::new("Creator", vec![s(&creator)]),
+        ]),
+        Node::new("Creator", vec![s(&creator)]),
+        Node::new("GlobalSettings", vec![]).with(vec![
+            Node::new("Version", vec![Prop::I32(1000)]),
+            props70(vec![
+                int_p("UpAxis", 1),
+                int_p("UpAxisSign", 1),
+                int_p("FrontAxis", 2),
+                int_p("FrontAxisSign", 1),
+                int_p("CoordAxis", 0),
+                int_p("CoordAxisSign", 1),
+                int_p("OriginalUpAxis", 1),
+                int_p("OriginalUpAxisSign", 1),
+                double_p("UnitScaleFactor", 100.0),
+                double_p("OriginalUnitScaleFactor", 100.0),
+            ]),
+        ]),
+        Node::new("Documents", vec![]).with(vec![
+            Node::new("Count", vec![Prop::I32(1)]),
+            Node::new("Document", vec![Prop::I64(DOCUMENT), s("Scene"), s("Scene")])
+                .with(vec![props70(vec![]), Node::new("RootNode", vec![Prop::I64(0)])]),
+        ]),
+        Node::new("References", vec![]),
+    ]
+}
+
+fn definitions(textured: bool) -> Node {
+    let n = NUM_RIG_BONES as i32;
+    let mut types = vec![("GlobalSettings", 1), ("Model", n + 2), ("NodeAttribute", n + 1), ("Geometry", 1)];
+    types.extend([("Material", 1), ("Deformer", n + 1), ("Pose", 1)]);
+    if textured {
+        types.extend([("Texture", 1), ("Video", 1)]);
+    }
+    let mut children = vec![
+        Node::new("Version", vec![Prop::I32(100)]),
+        Node::new("Count", vec![Prop::I32(types.iter().map(|t| t.1).sum())]),
+    ];
+    children.extend(
+        types
+            .iter()
+            .map(|&(t, c)| Node::new("ObjectType", vec![s(t)]).with(vec![Node::new("Count", vec![Prop::I32(c)])])),
+    );
+    Node::new("Definitions", vec![]).with(children)
+}
+
+/// The mesh geometry: polygons (a quad whose last two corners agree is a triangle), normals per
+/// vertex, UVs per polygon corner (v up, FBX's convention), one material for all.
+fn geometry(mesh: &RiggedMesh, scene: &RigScene) -> Node {
+    let vertices: Vec<f64> = scene.rest_vertices.iter().flatten().map(|&c| c as f64).collect();
+    let mut polygon = Vec::with_capacity(mesh.quads.len() * 4);
+    let mut uv_index = Vec::with_capacity(mesh.quads.len() * 4);
+    for (f, q) in mesh.quads.iter().enumerate() {
+        let n = if q[3] == q[2] { 3 } else { 4 };
+        for k in 0..n {
+            let v = q[k] as i32;
+            polygon.push(if k == n - 1 { -v - 1 } else { v });
+            if let Some(uv) = &mesh.uvs {
+                uv_index.push(uv.quads[f][k] as i32);
+            }
+        }
+    }
+    let normals: Vec<f64> =
+        vertex_normals(&scene.rest_vertices, &mesh.quads).iter().flatten().map(|&c| c as f64).collect();
+    let element = |name: &'static str, children: Vec<Node>| Node::new(name, vec![Prop::I32(0)]).with(children);
+    let mapping = |how: &str, reference: &str| {
+        vec![
+            Node::new("MappingInformationType", vec![s(how)]),
+            Node::new("ReferenceInformationType", vec![s(reference)]),
+        ]
+    };
+    let mut layers = vec![Node::new("Version", vec![Prop::I32(101)]), Node::new("Name", vec![s("")])];
+    layers.extend(mapping("ByVertice", "Direct"));
+    layers.push(Node::new("Normals", vec![Prop::F64s(normals)]));
+    let mut children = vec![
+        props70(vec![]),
+        Node::new("GeometryVersion", vec![Prop::I32(124)]),
+        Node::new("Vertices", vec![Prop::F64s(vertices)]),
+        Node::new("PolygonVertexIndex", vec![Prop::I32s(polygon)]),
+        element("LayerElementNormal", layers),
+    ];
+    let mut layer = vec![Node::new("Version", vec![Prop::I32(100)])];
+    let layer_element = |t: &str| {
+        Node::new("LayerElement", vec![])
+            .with(vec![Node::new("Type", vec![s(t)]), Node::new("TypedIndex", vec![Prop::I32(0)])])
+    };
+    layer.push(layer_element("LayerElementNormal"));
+    if let Some(uv) = &mesh.uvs {
+        let coords: Vec<f64> = uv.coords.iter().flatten().map(|&c| c as f64).collect();
+        let mut e = vec![Node::new("Version", vec![Prop::I32(101)]), Node::new("Name", vec![s("UVMap")])];
+        e.extend(mapping("ByPolygonVertex", "IndexToDirect"));
+        e.push(Node::new("UV", vec![Prop::F64s(coords)]));
+        e.push(Node::new("UVIndex", vec![Prop::I32s(uv_index)]));
+        children.push(element("LayerElementUV", e));
+        layer.push(layer_element("LayerElementUV"));
+    }
+    let mut e = vec![Node::new("Version", vec![Prop::I32(101)]), Node::new("Name", vec![s("")])];
+    e.extend(mapping("AllSame", "IndexToDirect"));
+    e.push(Node::new("Materials", vec![Prop::I32s(vec![0])]));
+    children.push(element("LayerElementMaterial", e));
+    layer.push(layer_element("LayerElementMaterial"));
+    children.push(Node::new("Layer", vec![Prop::I32(0)]).with(layer));
+    Node::new("Geometry", vec![Prop::I64(GEOMETRY), object_name("body", "Geometry"), s("Mesh")]).with(children)
+}
+
+fn model(id: i64, name: &str, kind: &str, props: Vec<Node>) -> Node {
+    Node::new("Model", vec![Prop::I64(id), object_name(name, "Model"), s(kind)]).with(vec![
+        Node::new("Version", vec![Prop::I32(232)]),
+        props70(props),
+        Node::new("Shading", vec![Prop::Bool(true)]),
+        Node::new("Culling", vec![s("CullingOff")]),
+    ])
+}
+
+/// The armature: a `Null` and the bones as `LimbNode` models whose local transforms are the
+/// posed ones (Euler XYZ degrees), each with its skeleton attribute.
+fn skeleton(scene: &RigScene) -> Vec<Node> {
+    let attr = |id: i64, name: &str, kind: &str, flags: &str| {
+        Node::new("NodeAttribute", vec![Prop::I64(id), object_name(name, "NodeAttribute"), s(kind)])
+            .with(vec![Node::new("TypeFlags", vec![s(flags)])])
+    };
+    let mut nodes = vec![model(ARMATURE, "armature", "Null", vec![]), attr(ARMATURE_ATTR, "armature", "Null", "Null")];
+    for (b, (t, q)) in posed_locals(scene).iter().enumerate() {
+        let (rx, ry, rz) = q.euler_angles();
+        let props = vec![
+            vec3_p("Lcl Translation", [t.x, t.y, t.z]),
+            vec3_p("Lcl Rotation", [rx.to_degrees(), ry.to_degrees(), rz.to_degrees()]),
+        ];
+        nodes.push(model(bone_model(b), &scene.names[b], "LimbNode", props));
+        nodes.push(attr(bone_attr(b), &scene.names[b], "LimbNode", "Skeleton"));
+    }
+    nodes
+}
+
+/// The skin deformer and one cluster per bone: its vertices and weights (absent for a bone that
+/// moves none), `TransformLink` the bone's bind matrix, `Transform` its inverse (the mesh sits
+/// at the origin unrotated).
+fn skin(scene: &RigScene) -> Vec<Node> {
+    let mut per_bone: Vec<(Vec<i32>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); NUM_RIG_BONES];
+    for (v, w) in scene.skin.iter().enumerate() {
+        for k in 0..w.bones.len() {
+            if w.weights[k] > 0.0 {
+                let entry = &mut per_bone[w.bones[k] as usize];
+                entry.0.push(v as i32);
+                entry.1.push(w.weights[k] as f64);
+            }
+        }
+    }
+    let mut nodes = vec![Node::new("Deformer", vec![Prop::I64(SKIN), object_name("armature", "Deformer"), s("Skin")])
+        .with(vec![
+            Node::new("Version", vec![Prop::I32(101)]),
+            Node::new("Link_DeformAcuracy", vec![Prop::F64(50.0)]),
+        ])];
+    for (b, (indexes, weights)) in per_bone.into_iter().enumerate() {
+        let bind = bind_transform(scene, b);
+        let mut children = vec![Node::new("Version", vec![Prop::I32(100)]), Node::new("UserData", vec![s(""), s("")])];
+        if !indexes.is_empty() {
+            children.push(Node::new("Indexes", vec![Prop::I32s(indexes)]));
+            children.push(Node::new("Weights", vec![Prop::F64s(weights)]));
+        }
+        children.push(Node::new("Transform", vec![matrix(&bind.inverse().to_homogeneous())]));
+        children.push(Node::new("TransformLink", vec![matrix(&bind.to_homogeneous())]));
+        nodes.push(
+            Node::new(
+                "Deformer",
+                vec![Prop::I64(cluster(b)), object_name(&scene.names[b], "SubDeformer"), s("Cluster")],
+            )
+            .with(children),
+        );
+    }
+    nodes
+}
+
+/// The bind pose: the mesh and the armature at the identity, each bone at its bind matrix.
+fn bind_pose(scene: &RigScene) -> Node {
+    let entry = |id: i64, m: Matrix4<f64>| {
+        Node::new("PoseNode", vec![])
+            .with(vec![Node::new("Node", vec![Prop::I64(id)]), Node::new("Matrix", vec![matrix(&m)])])
+    };
+    let mut children = vec![
+        Node::new("Type", vec![s("BindPose")]),
+        Node::new("Version", vec![Prop::I32(100)]),
+        Node::new("NbPoseNodes", vec![Prop::I32(NUM_RIG_BONES as i32 + 2)]),
+        entry(MESH_MODEL, Matrix4::identity()),
+        entry(ARMATURE, Matrix4::identity()),
+    ];
+    children.extend((0..NUM_RIG_BONES).map(|b| entry(bone_model(b), bind_transform(scene, b).to_homogeneous())));
+    Node::new("Pose", vec![Prop::I64(BIND_POSE), object_name("BindPose", "Pose"), s("BindPose")]).with(children)
+}
+
+/// The material (a skin colour, or white under the texture) and, with `texture_png`, the
+/// texture and its embedded image.
+fn material(texture_png: Option<&[u8]>) -> Vec<Node> {
+    let colour = if texture_png.is_some() { [1.0, 1.0, 1.0] } else { [0.8, 0.7, 0.65] };
+    let mut nodes = vec![Node::new("Material", vec![Prop::I64(MATERIAL), object_name("skin", "Material"), s("")])
+        .with(vec![
+            Node::new("Version", vec![Prop::I32(102)]),
+            Node::new("ShadingModel", vec![s("phong")]),
+            Node::new("MultiLayer", vec![Prop::I32(0)]),
+            props70(vec![
+                p("DiffuseColor", "Color", "", "A", colour.iter().map(|&c| Prop::F64(c)).collect()),
+                p("DiffuseFactor", "Number", "", "A", vec![Prop::F64(1.0)]),
+            ]),
+        ])];
+    if let Some(png) = texture_png {
+        nodes.push(Node::new("Texture", vec![Prop::I64(TEXTURE), object_name("sketch", "Texture"), s("")]).with(vec![
+            Node::new("Type", vec![s("TextureVideoClip")]),
+            Node::new("Version", vec![Prop::I32(202)]),
+            Node::new("TextureName", vec![object_name("sketch", "Texture")]),
+            Node::new("Media", vec![object_name("sketch", "Video")]),
+            Node::new("FileName", vec![s(TEXTURE_FILE)]),
+            Node::new("RelativeFilename", vec![s(TEXTURE_FILE)]),
+        ]));
+        nodes.push(Node::new("Video", vec![Prop::I64(VIDEO), object_name("sketch", "Video"), s("Clip")]).with(vec![
+            Node::new("Type", vec![s("Clip")]),
+            props70(vec![p("Path", "KString", "XRefUrl", "", vec![s(TEXTURE_FILE)])]),
+            Node::new("UseMipMap", vec![Prop::I32(0)]),
+            Node::new("Filename", vec![s(TEXTURE_FILE)]),
+            Node::new("RelativeFilename", vec![s(TEXTURE_FILE)]),
+            Node::new("Content", vec![Prop::Raw(png.to_vec())]),
+        ]));
+    }
+    nodes
+}
+
+fn connections(textured: bool) -> Node {
+    let mut c = vec![connect(MESH_MODEL, 0), connect(ARMATURE, 0), connect(ARMATURE_ATTR, ARMATURE)];
+    for (b, bone) in RIG_BONES.iter().enumerate() {
+        c.push(connect(bone_model(b), bone.parent.map_or(ARMATURE, bone_model)));
+        c.push(connect(bone_attr(b), bone_model(b)));
+    }
+    c.extend([connect(GEOMETRY, MESH_MODEL), connect(MATERIAL, MESH_MODEL), connect(SKIN, GEOMETRY)]);
+    for b in 0..NUM_RIG_BONES {
+        c.push(connect(cluster(b), SKIN));
+        c.push(connect(bone_model(b), cluster(b)));
+    }
+    if textured {
+        c.push(Node::new("C", vec![s("OP"), Prop::I64(TEXTURE), Prop::I64(MATERIAL), s("DiffuseColor")]));
+        c.push(connect(VIDEO, TEXTURE));
+    }
+    Node::new("Connections", vec![]).with(c)
+}
+
+/// The top-level records of the file.
+pub fn document(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>) -> Vec<Node> {
+    let mut objects = vec![geometry(mesh, scene), model(MESH_MODEL, "body", "Mesh", vec![])];
+    objects.extend(skeleton(scene));
+    objects.extend(skin(scene));
+    objects.push(bind_pose(scene));
+    objects.extend(material(texture_png));
+    let mut nodes = header();
+    nodes.push(definitions(texture_png.is_some()));
+    nodes.push(Node::new("Objects", vec![]).with(objects));
+    nodes.push(connections(texture_png.is_some()));
+    nodes
+}

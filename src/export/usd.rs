@@ -1,0 +1,282 @@
+//! USD (UsdSkel) text layer (.usda) of the rigged body, the same content as the glTF
+//! ([`crate::export::gltf`]): a `SkelRoot` "body" holding the `Skeleton` (53 joints, their
+//! bind transforms in skeleton space and rest transforms relative to their parents), a
+//! `SkelAnimation` "pose" (the body's pose as the joints' local translations, rotations and
+//! scales, unsampled: a static pose, not a keyed clip) bound as the skeleton's animation
+//! source, the `Mesh` (polygons, per-vertex normals, face-varying `st` UVs, 4 joint indices and
+//! weights per vertex through `SkelBindingAPI`) and a `UsdPreviewSurface` material reading the
+//! texture `body_texture.png` beside the file (a text layer cannot embed it). Metres
+//! (`metersPerUnit` 1), Y up. docs/formats.md, "body.usda".
+use std::fmt::Write;
+use std::path::Path;
+
+use nalgebra::{Matrix4, UnitQuaternion};
+
+use crate::body::rig::{vertex_normals, RiggedMesh};
+use crate::error::Result;
+use crate::export::rigged::{bind_transform, check_scene, posed_locals};
+use crate::fsutil::write_atomic;
+use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
+
+/// The texture file the material reads, relative to the layer (the CLI writes it beside).
+pub const TEXTURE_FILE: &str = "body_texture.png";
+
+/// A USD path element for bone name `name`: characters outside `[A-Za-z0-9_]` become `_`, and
+/// a leading digit gets a `_` before it (the original names are kept in `jointNames`).
+fn path_element(name: &str) -> String {
+    let mut s: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect();
+    if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
+        s.insert(0, '_');
+    }
+    s
+}
+
+/// Each joint's path: its ancestors' path elements and its own, joined by `/`.
+fn joint_paths(names: &[String]) -> Vec<String> {
+    let mut paths: Vec<String> = Vec::with_capacity(NUM_RIG_BONES);
+    for (b, bone) in RIG_BONES.iter().enumerate() {
+        let own = path_element(&names[b]);
+        paths.push(match bone.parent {
+            Some(p) => format!("{}/{own}", paths[p]),
+            None => own,
+        });
+    }
+    paths
+}
+
+fn list<T>(items: impl IntoIterator<Item = T>, f: impl Fn(T) -> String) -> String {
+    let parts: Vec<String> = items.into_iter().map(f).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+fn quoted(s: &str) -> String {
+    format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""))
+}
+
+/// A matrix in USD's row-vector layout (translation in the last row): nalgebra's columns are
+/// USD's rows.
+fn matrix(m: &Matrix4<f64>) -> String {
+    let rows: Vec<String> =
+        m.as_slice().chunks(4).map(|r| format!("({}, {}, {}, {})", r[0], r[1], r[2], r[3])).collect();
+    format!("( {} )", rows.join(", "))
+}
+
+fn quat(q: &UnitQuaternion<f64>) -> String {
+    let c = q.quaternion().coords.normalize(); // (i, j, k, w)
+    format!("({}, {}, {}, {})", c[3] as f32, c[0] as f32, c[1] as f32, c[2] as f32)
+}
+
+fn extent(points: &[[f32; 3]]) -> String {
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    format!("[({}, {}, {}), ({}, {}, {})]", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2])
+}
+
+fn skeleton(out: &mut String, scene: &RigScene) {
+    let paths = joint_paths(&scene.names);
+    let joints = list(&paths, |p| quoted(p));
+    let bind = list(0..NUM_RIG_BONES, |b| matrix(&bind_transform(scene, b).to_homogeneous()));
+    let rest = list(0..NUM_RIG_BONES, |b| {
+        let local = match RIG_BONES[b].parent {
+            Some(p) => bind_transform(scene, p).inverse() * bind_transform(scene, b),
+            None => bind_transform(scene, b),
+        };
+        matrix(&local.to_homogeneous())
+    });
+    let locals = posed_locals(scene);
+    let _ = write!(
+        out,
+        r#"    def Skeleton "skeleton" (
+        prepend apiSchemas = ["SkelBindingAPI"]
+    )
+    {{
+        uniform token[] joints = {joints}
+        uniform token[] jointNames = {names}
+        uniform matrix4d[] bindTransforms = {bind}
+        uniform matrix4d[] restTransforms = {rest}
+        rel skel:animationSource = </body/skeleton/pose>
+
+        def SkelAnimation "pose"
+        {{
+            uniform token[] joints = {joints}
+            float3[] translations = {translations}
+            quatf[] rotations = {rotations}
+            half3[] scales = {scales}
+        }}
+    }}
+
+"#,
+        names = list(&scene.names, |n| quoted(n)),
+        translations = list(&locals, |(t, _)| format!("({}, {}, {})", t.x as f32, t.y as f32, t.z as f32)),
+        rotations = list(&locals, |(_, q)| quat(q)),
+        scales = list(0..NUM_RIG_BONES, |_| "(1, 1, 1)".to_string()),
+    );
+}
+
+fn mesh_prim(out: &mut String, mesh: &RiggedMesh, scene: &RigScene) {
+    let mut counts = Vec::with_capacity(mesh.quads.len());
+    let mut indices = Vec::with_capacity(mesh.quads.len() * 4);
+    let mut uv_indices = Vec::with_capacity(mesh.quads.len() * 4);
+    for (f, q) in mesh.quads.iter().enumerate() {
+        let n = if q[3] == q[2] { 3 } else { 4 };
+        counts.push(n);
+        indices.extend_from_slice(&q[..n]);
+        if let Some(uv) = &mesh.uvs {
+            uv_indices.extend_from_slice(&uv.quads[f][..n]);
+        }
+    }
+    let v3 = |p: &[f32; 3]| format!("({}, {}, {})", p[0], p[1], p[2]);
+    let normals = vertex_normals(&scene.rest_vertices, &mesh.quads);
+    let mut joint_indices = Vec::with_capacity(scene.skin.len() * 4);
+    let mut joint_weights = Vec::with_capacity(scene.skin.len() * 4);
+    for w in &scene.skin {
+        for k in 0..w.bones.len() {
+            joint_indices.push(if w.weights[k] > 0.0 { w.bones[k] } else { 0 });
+            joint_weights.push(w.weights[k]);
+        }
+    }
+    let width = scene.skin.first().map_or(4, |w| w.bones.len());
+    let _ = write!(
+        out,
+        r#"    def Mesh "mesh" (
+        prepend apiSchemas = ["SkelBindingAPI", "MaterialBindingAPI"]
+    )
+    {{
+        uniform token subdivisionScheme = "none"
+        uniform token orientation = "rightHanded"
+        float3[] extent = {extent}
+        int[] faceVertexCounts = {counts}
+        int[] faceVertexIndices = {indices}
+        point3f[] points = {points}
+        normal3f[] normals = {normals} (
+            interpolation = "vertex"
+        )
+        int[] primvars:skel:jointIndices = {joint_indices} (
+            elementSize = {width}
+            interpolation = "vertex"
+        )
+        float[] primvars:skel:jointWeights = {joint_weights} (
+            elementSize = {width}
+            interpolation = "vertex"
+        )
+        matrix4d primvars:skel:geomBindTransform = ( (1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0, 0, 0, 1) )
+        rel skel:skeleton = </body/skeleton>
+        rel material:binding = </body/materials/skin>
+"#,
+        extent = extent(&scene.rest_vertices),
+        counts = list(&counts, |c| c.to_string()),
+        indices = list(&indices, |i| i.to_string()),
+        points = list(&scene.rest_vertices, v3),
+        normals = list(&normals, v3),
+        joint_indices = list(&joint_indices, |i| i.to_string()),
+        joint_weights = list(&joint_weights, |w| w.to_string()),
+    );
+    if let Some(uv) = &mesh.uvs {
+        let _ = write!(
+            out,
+            r#"        texCoord2f[] primvars:st = {coords} (
+            interpolation = "faceVarying"
+        )
+        int[] primvars:st:indices = {uv_indices}
+"#,
+            coords = list(&uv.coords, |c| format!("({}, {})", c[0], c[1])),
+            uv_indices = list(&uv_indices, |i| i.to_string()),
+        );
+    }
+    out.push_str("    }\n\n");
+}
+
+fn material(out: &mut String, textured: bool) {
+    let base = "/body/materials/skin";
+    let diffuse = if textured {
+        format!("color3f inputs:diffuseColor.connect = <{base}/texture.outputs:rgb>")
+    } else {
+        "color3f inputs:diffuseColor = (0.8, 0.7, 0.65)".to_string()
+    };
+    let _ = write!(
+        out,
+        r#"    def Scope "materials"
+    {{
+        def Material "skin"
+        {{
+            token outputs:surface.connect = <{base}/surface.outputs:surface>
+
+            def Shader "surface"
+            {{
+                uniform token info:id = "UsdPreviewSurface"
+                {diffuse}
+                float inputs:metallic = 0
+                float inputs:roughness = 0.8
+                token outputs:surface
+            }}
+"#
+    );
+    if textured {
+        let _ = write!(
+            out,
+            r#"
+            def Shader "texture"
+            {{
+                uniform token info:id = "UsdUVTexture"
+                asset inputs:file = @{TEXTURE_FILE}@
+                float2 inputs:st.connect = <{base}/uv.outputs:result>
+                token inputs:wrapS = "clamp"
+                token inputs:wrapT = "clamp"
+                float3 outputs:rgb
+            }}
+
+            def Shader "uv"
+            {{
+                uniform token info:id = "UsdPrimvarReader_float2"
+                string inputs:varname = "st"
+                float2 outputs:result
+            }}
+"#
+        );
+    }
+    out.push_str("        }\n    }\n");
+}
+
+/// The .usda text of `scene` (built by [`RigScene::build`] from `mesh`), with faces and UVs from
+/// `mesh`; `textured`: the material reads [`TEXTURE_FILE`] (write it beside the layer),
+/// otherwise a plain skin colour. Errors: the mesh is invalid or its vertex count differs from
+/// the scene's; a non-finite vertex.
+pub fn usda_string(mesh: &RiggedMesh, scene: &RigScene, textured: bool) -> Result<String> {
+    check_scene(mesh, scene)?;
+    let mut out = String::new();
+    let _ = write!(
+        out,
+        r#"#usda 1.0
+(
+    defaultPrim = "body"
+    doc = "sketchbody {version}"
+    metersPerUnit = 1
+    upAxis = "Y"
+)
+
+def SkelRoot "body" (
+    kind = "component"
+)
+{{
+    float3[] extent = {extent}
+
+"#,
+        version = crate::VERSION,
+        extent = extent(&scene.posed_vertices),
+    );
+    skeleton(&mut out, scene);
+    mesh_prim(&mut out, mesh, scene);
+    material(&mut out, textured && mesh.uvs.is_some());
+    out.push_str("}\n");
+    Ok(out)
+}
+
+/// Writes [`usda_string`] to `path` (a `.usda` file) atomically.
+pub fn write_usda(path: &Path, mesh: &RiggedMesh, scene: &RigScene, textured: bool) -> Result<()> {
+    write_atomic(path, usda_string(mesh, scene, textured)?.as_bytes())
+}

@@ -1,0 +1,203 @@
+//! The USD writer read back two ways. An independent minimal `.usda` reader written here (the
+//! attributes the writer sets, by name, bracketed values split into numbers and strings)
+//! checks the counts, the 53 joints and their paths, weights summing to 1 per vertex, the UV
+//! count, the bind transforms against the rest transforms, and the posed body reproduced by
+//! composing the animation's local transforms with the inverse bind transforms. Pixar's own
+//! library (`usd-core` in `target/usd-venv`, `scripts/usd-venv.sh`; or `$SKB_USD_PYTHON`) then
+//! runs usdchecker's validators (no error) and skins the mesh with UsdSkel (the posed body within
+//! 0.1 mm); without it that part prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
+//! Bad input: an unwritable path writes nothing.
+
+mod common;
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use nalgebra::{Matrix4, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use rand::SeedableRng;
+use sketchbody::body::ik::{solve, IkOptions};
+use sketchbody::body::procedural::random_pose;
+use sketchbody::body::rig::RiggedMesh;
+use sketchbody::body::{BodyModel, Gender};
+use sketchbody::export::usd::{usda_string, write_usda};
+use sketchbody::body::rig::{Naming, RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
+
+/// The text after `name = ` up to the end of its bracketed (or single-token) value.
+fn value<'t>(text: &'t str, name: &str) -> &'t str {
+    let key = format!(" {name} = ");
+    let start = text.find(&key).unwrap_or_else(|| panic!("no attribute {name}")) + key.len();
+    let rest = &text[start..];
+    let mut depth = 0i32;
+    for (i, c) in rest.char_indices() {
+        match c {
+            '[' | '(' => depth += 1,
+            ']' | ')' => {
+                depth -= 1;
+                if depth == 0 {
+                    return &rest[..=i];
+                }
+            }
+            '\n' if depth == 0 => return &rest[..i],
+            _ => {}
+        }
+    }
+    rest
+}
+
+fn numbers(v: &str) -> Vec<f64> {
+    v.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e' || c == 'E' || c == '+'))
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse::<f64>().unwrap_or_else(|_| panic!("not a number: {s:?}")))
+        .collect()
+}
+
+fn strings(v: &str) -> Vec<String> {
+    v.split('"').skip(1).step_by(2).map(str::to_string).collect()
+}
+
+/// USD matrices are rows with the translation in the last: read as nalgebra's columns.
+fn matrices(v: &str) -> Vec<Matrix4<f64>> {
+    numbers(v).chunks(16).map(Matrix4::from_column_slice).collect()
+}
+
+fn scene(gender: Gender, seed: u64, naming: Naming) -> (RiggedMesh, RigScene) {
+    let model = BodyModel::embedded().unwrap();
+    let mesh = RiggedMesh::from_model(&model, gender, &[]).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+    let options = RigOptions { naming, ..RigOptions::default() };
+    let scene = RigScene::build(model.rig(), &mesh, &pose, &options).unwrap();
+    (mesh, scene)
+}
+
+#[test]
+fn an_independent_reader_finds_the_skinned_posed_body() {
+    let (mesh, scene) = scene(Gender::Female, 4, Naming::Mixamo);
+    let text = usda_string(&mesh, &scene, true).unwrap();
+    assert!(text.starts_with("#usda 1.0\n"));
+    assert_eq!(strings(value(&text, "upAxis")), ["Y"]);
+    assert_eq!(numbers(value(&text, "metersPerUnit")), [1.0]);
+    // The skeleton: 53 joints, paths that nest as the rig, the convention's names kept.
+    let joints = strings(value(&text, "uniform token[] joints"));
+    assert_eq!(joints.len(), NUM_RIG_BONES);
+    for (b, bone) in RIG_BONES.iter().enumerate() {
+        if let Some(p) = bone.parent {
+            assert_eq!(joints[b].rsplit_once('/').unwrap().0, joints[p], "path of joint {b}");
+        }
+        assert!(joints[b].chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '/'), "{}", joints[b]);
+    }
+    assert_eq!(strings(value(&text, "uniform token[] jointNames")), scene.names);
+    assert!(scene.names[0].contains(':'), "the Mixamo names need escaping in paths");
+    let bind = matrices(value(&text, "uniform matrix4d[] bindTransforms"));
+    let rest = matrices(value(&text, "uniform matrix4d[] restTransforms"));
+    assert_eq!((bind.len(), rest.len()), (NUM_RIG_BONES, NUM_RIG_BONES));
+    for (b, bone) in RIG_BONES.iter().enumerate() {
+        let composed = bone.parent.map_or(rest[b], |p| bind[p] * rest[b]);
+        assert!((composed - bind[b]).abs().max() < 1e-9, "rest transforms compose to bind transforms at {b}");
+    }
+    // The mesh.
+    let n = mesh.vertices.len();
+    let points = numbers(value(&text, "point3f[] points"));
+    assert_eq!(points.len(), 3 * n);
+    let counts = numbers(value(&text, "int[] faceVertexCounts"));
+    let indices = numbers(value(&text, "int[] faceVertexIndices"));
+    assert_eq!(counts.len(), mesh.quads.len());
+    assert_eq!(counts.iter().sum::<f64>() as usize, indices.len());
+    assert_eq!(numbers(value(&text, "normal3f[] normals")).len(), 3 * n);
+    let uvs = mesh.uvs.as_ref().unwrap();
+    assert_eq!(numbers(value(&text, "texCoord2f[] primvars:st")).len(), 2 * uvs.coords.len(), "UV count");
+    assert_eq!(numbers(value(&text, "int[] primvars:st:indices")).len(), indices.len());
+    let ji = numbers(value(&text, "int[] primvars:skel:jointIndices"));
+    let jw = numbers(value(&text, "float[] primvars:skel:jointWeights"));
+    assert_eq!((ji.len(), jw.len()), (4 * n, 4 * n));
+    assert!(jw.chunks(4).all(|w| (w.iter().sum::<f64>() - 1.0).abs() < 1e-5), "weights sum to 1 per vertex");
+    assert!(ji.iter().all(|&j| j >= 0.0 && (j as usize) < NUM_RIG_BONES));
+    assert!(text.contains("asset inputs:file = @body_texture.png@"));
+    // The pose: the animation's local transforms composed down the tree, times inverse bind.
+    let t = numbers(value(&text, "float3[] translations"));
+    let r = numbers(value(&text, "quatf[] rotations"));
+    let mut global = vec![Matrix4::identity(); NUM_RIG_BONES];
+    for (b, bone) in RIG_BONES.iter().enumerate() {
+        let q = UnitQuaternion::from_quaternion(Quaternion::new(r[4 * b], r[4 * b + 1], r[4 * b + 2], r[4 * b + 3]));
+        let local = Translation3::new(t[3 * b], t[3 * b + 1], t[3 * b + 2]).to_homogeneous() * q.to_homogeneous();
+        global[b] = bone.parent.map_or(local, |p| global[p] * local);
+    }
+    let mut worst = 0.0f64;
+    for v in 0..n {
+        let x = Point3::new(points[3 * v], points[3 * v + 1], points[3 * v + 2]);
+        let mut p = Vector3::zeros();
+        for k in 0..4 {
+            let b = ji[4 * v + k] as usize;
+            p += (global[b] * bind[b].try_inverse().unwrap()).transform_point(&x).coords * jw[4 * v + k];
+        }
+        let o = scene.posed_vertices[v];
+        worst = worst.max((p - Vector3::new(o[0] as f64, o[1] as f64, o[2] as f64)).norm());
+    }
+    assert!(worst < 1e-5, "the USD's skinning differs from the scene's by {worst} m");
+    let plain = usda_string(&mesh, &scene, false).unwrap();
+    assert!(!plain.contains("UsdUVTexture") && plain.contains("inputs:diffuseColor = "));
+}
+
+fn usd_python() -> Option<PathBuf> {
+    let p = std::env::var_os("SKB_USD_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| common::repo_root().join("target/usd-venv/bin/python"));
+    let ok = Command::new(&p)
+        .args(["-c", "from pxr import Usd, UsdSkel, UsdValidation"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    ok.then_some(p)
+}
+
+#[test]
+fn usd_core_validates_and_skins_the_layer() {
+    let Some(python) = usd_python() else {
+        if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
+            panic!("usd-core is not installed (scripts/usd-venv.sh), but SKB_REQUIRE_SHARED_DATA is set");
+        }
+        eprintln!("SKIPPED usd-core checks: no target/usd-venv (scripts/usd-venv.sh)");
+        return;
+    };
+    let (mesh, scene) = scene(Gender::Male, 9, Naming::Unreal);
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("usd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let data = (0..16).flat_map(|i| [(i % 4 * 60) as u8, (i / 4 * 60) as u8, 90]).collect();
+    let img = sketchbody::image::RgbImage::from_vec(4, 4, data).unwrap();
+    std::fs::write(dir.join("body_texture.png"), sketchbody::image::encode_png(&img.view()).unwrap()).unwrap();
+    let usda = dir.join("body.usda");
+    write_usda(&usda, &mesh, &scene, true).unwrap();
+    let expected = serde_json::json!({"posed": scene.posed_vertices});
+    std::fs::write(dir.join("expected.json"), expected.to_string()).unwrap();
+    let script = common::repo_root().join("tests/usd/check_usd.py");
+    let out = Command::new(&python).arg(&script).arg(&usda).arg(dir.join("expected.json")).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "check_usd.py failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    println!("{stdout}");
+    let r: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert!(r["validators"].as_u64().unwrap() >= 20, "{stdout}");
+    assert_eq!(r["errors"], serde_json::json!([]), "{stdout}");
+    assert_eq!((r["bindings"].as_u64(), r["targets"].as_u64()), (Some(1), Some(1)), "{stdout}");
+    assert_eq!(r["joints"].as_array().unwrap().len(), NUM_RIG_BONES);
+    assert_eq!((r["has_animation"].as_bool(), r["skinned"].as_bool()), (Some(true), Some(true)), "{stdout}");
+    assert_eq!(r["points"].as_u64(), Some(mesh.vertices.len() as u64));
+    assert!(r["posed_gap"].as_f64().unwrap() < 1e-4, "UsdSkel's posed body differs: {stdout}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
+    let (mesh, scene) = scene(Gender::Male, 2, Naming::Project);
+    let dir = std::env::temp_dir().join(format!("skb-usd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let e = write_usda(&dir.join("missing").join("body.usda"), &mesh, &scene, false).unwrap_err();
+    assert!(matches!(e, sketchbody::Error::Io { .. }), "{e:?}");
+    let mut short = scene.clone();
+    short.rest_vertices.pop();
+    assert!(matches!(
+        write_usda(&dir.join("body.usda"), &mesh, &short, false),
+        Err(sketchbody::Error::OutOfRange { .. })
+    ));
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

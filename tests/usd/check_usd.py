@@ -1,0 +1,36 @@
+# Checks a sketchbody .usda with Pixar's own libraries (the usd-core wheel): the checks usdchecker
+# runs (USD 24 and later: every registered UsdValidation validator; the wheel ships the library,
+# not the usdchecker script), then UsdSkel's own skinning of the mesh by the skeleton and its
+# animation, compared with the expected posed points. Prints a JSON report.
+# Usage: python check_usd.py IN.usda EXPECTED.json   (EXPECTED.json: {"posed": [[x, y, z], ...]})
+import json
+import sys
+
+from pxr import Usd, UsdGeom, UsdSkel, UsdValidation
+
+path, expected_path = sys.argv[1:3]
+posed = json.load(open(expected_path))["posed"]
+report = {}
+stage = Usd.Stage.Open(path)
+validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
+errors = UsdValidation.ValidationContext(validators).Validate(stage)
+report["validators"] = len(validators)
+report["errors"] = [f"{e.GetType()}: {e.GetMessage()}" for e in errors]
+root = UsdSkel.Root(stage.GetDefaultPrim())
+cache = UsdSkel.Cache()
+cache.Populate(root, Usd.TraverseInstanceProxies())
+bindings = cache.ComputeSkelBindings(root, Usd.TraverseInstanceProxies())
+report["bindings"] = len(bindings)
+for binding in bindings:
+    query = cache.GetSkelQuery(binding.GetSkeleton())
+    report["joints"] = [str(j) for j in query.GetJointOrder()]
+    report["has_animation"] = bool(query.GetAnimQuery())
+    xforms = query.ComputeSkinningTransforms(Usd.TimeCode.Default())
+    targets = binding.GetSkinningTargets()
+    report["targets"] = len(targets)
+    for target in targets:
+        points = UsdGeom.Mesh(target.GetPrim()).GetPointsAttr().Get()
+        report["skinned"] = bool(target.ComputeSkinnedPoints(xforms, points, Usd.TimeCode.Default()))
+        report["points"] = len(points)
+        report["posed_gap"] = max(max(abs(a - b) for a, b in zip(p, q)) for p, q in zip(points, posed))
+print(json.dumps(report))
