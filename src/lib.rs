@@ -24,6 +24,7 @@ pub mod raster;
 pub mod render;
 pub mod rig;
 pub mod skeleton;
+pub mod strict_json;
 
 pub use error::{Error, Result};
 

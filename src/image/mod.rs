@@ -5,6 +5,8 @@ mod blur;
 mod canny;
 mod decode;
 mod gray;
+#[cfg(test)]
+pub(crate) mod metadata_files;
 mod rgb;
 mod sobel;
 mod view;
