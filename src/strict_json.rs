@@ -15,7 +15,7 @@ const BOM: &str = "\u{feff}";
 pub fn from_str<T: DeserializeOwned>(text: &str) -> Result<T, serde_json::Error> {
     let text = text.strip_prefix(BOM).unwrap_or(text);
     let mut de = serde_json::Deserializer::from_str(text);
-    de.deserialize_any(UniqueKeys)?;
+    (&mut de).deserialize_any(UniqueKeys)?;
     de.end()?;
     serde_json::from_str(text)
 }

@@ -15,7 +15,7 @@ use super::ptr::*;
 use super::status::skb_status;
 
 /// Largest joints JSON the readers accept, in bytes (1 MiB; a joints file is about 2 kB).
-pub const SKB_JOINTS_JSON_MAX_BYTES: u32 = 1 << 20;
+pub const SKB_JOINTS_JSON_MAX_BYTES: u32 = 1_048_576;
 
 const _: () = assert!(SKB_JOINTS_JSON_MAX_BYTES as u64 == MAX_JOINTS_FILE_BYTES);
 
@@ -159,11 +159,12 @@ mod tests {
                 .unwrap();
         let twice = example.replacen("\"head\":", "\"head\": [1, 2], \"head\":", 1);
         let unknown = example.replacen("\"head\":", "\"tail\": [1, 2], \"head\":", 1);
+        let big = vec![b' '; (1 << 20) + 1];
         let cases: [(&[u8], skb_status); 4] = [
             (twice.as_bytes(), skb_status::SKB_ERR_CORRUPT_DATA),
             (unknown.as_bytes(), skb_status::SKB_ERR_CORRUPT_DATA),
             (b"{\"format\": \"\xff\"}", skb_status::SKB_ERR_CORRUPT_DATA),
-            (&[b' '; (1 << 20) + 1], skb_status::SKB_ERR_OUT_OF_RANGE),
+            (&big, skb_status::SKB_ERR_OUT_OF_RANGE),
         ];
         for (bytes, want) in cases {
             let mut out = zeroed();

@@ -418,8 +418,8 @@ mod tests {
     }
 
     /// Issue 52 finding 10: detection reports progress on the calling thread, non-decreasing
-    /// to 1, and stops with `Cancelled` at the first `false` without calling again; a
-    /// cancelled and a whole run from the same input otherwise agree.
+    /// to 1, gives what `detect` gives, and stops with `Cancelled` at the first `false` (at
+    /// every progress point) without calling again.
     #[test]
     fn detection_reports_progress_and_can_be_cancelled() {
         let m = model::tests::tiny_model();
@@ -433,9 +433,9 @@ mod tests {
         })
         .unwrap();
         assert_eq!(whole, detect(&v, &m, &o).unwrap());
-        assert!(seen.len() >= 3, "{seen:?}");
-        assert!(seen.windows(2).all(|w| w[0] <= w[1]) && *seen.last().unwrap() == 1.0, "{seen:?}");
-        for stop_at in [0, 1, seen.len() - 1] {
+        assert!(seen.len() >= 2, "{seen:?}");
+        assert!(seen.windows(2).all(|w| w[0] <= w[1]) && (seen[seen.len() - 1] - 1.0).abs() < 1e-6, "{seen:?}");
+        for stop_at in 0..seen.len() {
             let mut calls = 0;
             let r = detect_with_progress(&v, &m, &o, &mut |_| {
                 calls += 1;

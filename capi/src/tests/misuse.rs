@@ -1338,6 +1338,8 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
         // SAFETY: live handles or NULL; buffers are canaries of the lengths passed (refused ones aside).
         unsafe { skb_detector_detect_with_progress(d, i, o, None, ptr::null_mut(), xy, xl, cf, cl, sc) }
     };
+    let (mut xy, mut cf, mut sc) = (Canary::of::<f64>(30), Canary::of::<f64>(15), Canary::of::<f64>(1));
+    let (xp, cp, sp) = (xy.ptr(), cf.ptr(), sc.ptr());
     let mut rows: Vec<(&'static str, Kind, skb_status, skb_status)> = vec![
         ("det", Kind::Null, SKB_ERR_NULL_POINTER, call(ptr::null(), &im, o, xp, 30, cp, 15, sp)),
         ("image", Kind::Null, SKB_ERR_NULL_POINTER, call(det, ptr::null(), o, xp, 30, cp, 15, sp)),
@@ -2046,19 +2048,21 @@ fn joints_file_rows(t: &mut Table, fx: &Fx) {
     inf.xy[0][1] = f64::INFINITY;
     let mut ninf = fx.joints;
     ninf.xy[14][0] = f64::NEG_INFINITY;
+    let (nan, inf, ninf, ok): (*const skb_joints2d, *const skb_joints2d, *const skb_joints2d, *const skb_joints2d) =
+        (&nan, &inf, &ninf, &fx.joints);
     for (param, kind, j, p, want) in [
         ("joints", Kind::Null, ptr::null(), out.as_ptr(), SKB_ERR_NULL_POINTER),
-        ("joints.xy", Kind::NaN, &nan as *const skb_joints2d, out.as_ptr(), SKB_ERR_NON_FINITE),
-        ("joints.xy", Kind::PosInf, &inf, out.as_ptr(), SKB_ERR_NON_FINITE),
-        ("joints.xy", Kind::NegInf, &ninf, out.as_ptr(), SKB_ERR_NON_FINITE),
-        ("path", Kind::Null, &fx.joints, ptr::null(), SKB_ERR_NULL_POINTER),
-        ("path", Kind::Other, &fx.joints, not_utf8.as_ptr(), SKB_ERR_INVALID_ARGUMENT),
-        ("path", Kind::Other, &fx.joints, folder.as_ptr(), SKB_ERR_IO),
+        ("joints.xy", Kind::NaN, nan, out.as_ptr(), SKB_ERR_NON_FINITE),
+        ("joints.xy", Kind::PosInf, inf, out.as_ptr(), SKB_ERR_NON_FINITE),
+        ("joints.xy", Kind::NegInf, ninf, out.as_ptr(), SKB_ERR_NON_FINITE),
+        ("path", Kind::Null, ok, ptr::null(), SKB_ERR_NULL_POINTER),
+        ("path", Kind::Other, ok, not_utf8.as_ptr(), SKB_ERR_INVALID_ARGUMENT),
+        ("path", Kind::Other, ok, folder.as_ptr(), SKB_ERR_IO),
     ] {
         let s = write(j, p);
         t.check(e, param, kind, want, s, !fx.dir.join("joints-out.json").exists());
     }
-    let s = write(&fx.joints, out.as_ptr());
+    let s = write(ok, out.as_ptr());
     t.check(e, "path", Kind::Other, SKB_OK, s, true);
     if std::fs::read_dir(&fx.dir).unwrap().flatten().any(|e| e.file_name().to_string_lossy().contains(".tmp")) {
         t.failures.push(format!("{e}: temporary files left in {}", fx.dir.display()));
