@@ -135,6 +135,11 @@
 #define SKB_POSE_GROUPS 6
 
 /**
+ * Largest joints JSON the readers accept, in bytes (1 MiB; a joints file is about 2 kB).
+ */
+#define SKB_JOINTS_JSON_MAX_BYTES 1048576
+
+/**
  * Backend of `skb_detect`: both the sketch model and BlazePose, one candidate per image (the
  * default): on a drawing the sketch model recognises (its score above its own threshold), the
  * one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
@@ -596,6 +601,14 @@ typedef struct skb_pose_figure {
 } skb_pose_figure;
 
 /**
+ * Progress callback: called from the calling thread with the fraction of the work done
+ * (0..=1, non-decreasing) after each stage and each fit iteration; `user` is the caller's
+ * pointer, passed through untouched. Return 0 to continue, non-zero to cancel: the call then
+ * returns `SKB_ERR_CANCELLED` within one fit iteration, having freed everything it made.
+ */
+typedef int (*skb_progress_fn)(void *user, float fraction);
+
+/**
  * What `skb_detect_figure` and `skb_result_detection` report beside the joints.
  */
 typedef struct skb_figure_info {
@@ -625,14 +638,6 @@ typedef struct skb_figure_info {
    */
   uint32_t reserved;
 } skb_figure_info;
-
-/**
- * Progress callback: called from the calling thread with the fraction of the work done
- * (0..=1, non-decreasing) after each stage and each fit iteration; `user` is the caller's
- * pointer, passed through untouched. Return 0 to continue, non-zero to cancel: the call then
- * returns `SKB_ERR_CANCELLED` within one fit iteration, having freed everything it made.
- */
-typedef int (*skb_progress_fn)(void *user, float fraction);
 
 #ifdef __cplusplus
 extern "C" {
@@ -1305,6 +1310,34 @@ skb_status skb_pose_refine(const struct skb_pose_dictionary *dict,
                            struct skb_pose3d *out);
 
 /**
+ * Reads a `sketchbody-joints2d` file into `*out` (joints listed in `missing` get
+ * `visible = 0`). `path` is NUL-terminated UTF-8 and must name a regular file of at most
+ * `SKB_JOINTS_JSON_MAX_BYTES` (a FIFO, a device or a folder is refused without blocking). A
+ * leading UTF-8 byte-order mark is accepted. Statuses: `SKB_ERR_IO` (missing, unreadable, not a
+ * regular file, too large), `SKB_ERR_CORRUPT_DATA` (not JSON, a key given twice, another format
+ * or version, a missing, unknown or malformed joint), `SKB_ERR_INVALID_ARGUMENT` (`path` not
+ * UTF-8). `*out` is written only on success. Thread-safe.
+ */
+skb_status skb_joints2d_read_json(const char *path, struct skb_joints2d *out);
+
+/**
+ * Parses the `len` bytes at `json` (UTF-8, not NUL-terminated; at most
+ * `SKB_JOINTS_JSON_MAX_BYTES`) as a `sketchbody-joints2d` document into `*out`, with the rules
+ * of `skb_joints2d_read_json`. Statuses: `SKB_ERR_CORRUPT_DATA` (as above, or not UTF-8),
+ * `SKB_ERR_OUT_OF_RANGE` (`len` over the limit). `*out` is written only on success. Thread-safe.
+ */
+skb_status skb_joints2d_parse_json(const char *json, size_t len, struct skb_joints2d *out);
+
+/**
+ * Writes `*joints` as a `sketchbody-joints2d` file at `path` (NUL-terminated UTF-8; joints with
+ * `visible == 0` listed in `missing`), atomically: a temporary file renamed over `path`, which
+ * is replaced only when it is a regular file. Statuses: `SKB_ERR_NON_FINITE` (a coordinate is
+ * NaN or infinite; nothing written), `SKB_ERR_IO`, `SKB_ERR_INVALID_ARGUMENT` (`path` not UTF-8).
+ * Thread-safe.
+ */
+skb_status skb_joints2d_write_json(const struct skb_joints2d *joints, const char *path);
+
+/**
  * Loads a detector model from `path` (NUL-terminated UTF-8): the binary `.skbd` format
  * (`docs/formats.md`, "Detector model") or the PARSE model JSON. Errors: `SKB_ERR_IO` (cannot
  * read), `SKB_ERR_CORRUPT_DATA` (bad magic, version, checksum, truncated or inconsistent
@@ -1340,6 +1373,28 @@ skb_status skb_detector_detect(const struct skb_detector *det,
                                double *confidence,
                                size_t confidence_len,
                                double *score);
+
+/**
+ * As `skb_detector_detect`, with the sketch model's settings of `opts` (NULL: the defaults of
+ * `skb_detect_options_new`; its threshold, scales, figure range and levels per octave apply,
+ * the backend and strictness do not) and a progress callback: `progress(user, fraction)` (may
+ * be NULL) is called on the calling thread with the fraction done (0..=1, non-decreasing)
+ * after the feature pyramid is built and after each group of pyramid levels; a non-zero
+ * return stops the search with `SKB_ERR_CANCELLED` (nothing written) and the callback is not
+ * called again. A search whose feature pyramid would exceed 1 GiB is `SKB_ERR_OUT_OF_RANGE`
+ * before any work; a score or joint that is not finite is `SKB_ERR_NON_FINITE`. Other
+ * statuses as `skb_detector_detect`. Thread-safe.
+ */
+skb_status skb_detector_detect_with_progress(const struct skb_detector *det,
+                                             const struct skb_image *image,
+                                             const struct skb_detect_options *opts,
+                                             skb_progress_fn progress,
+                                             void *user,
+                                             double *joints_xy,
+                                             size_t joints_len,
+                                             double *confidence,
+                                             size_t confidence_len,
+                                             double *score);
 
 /**
  * Creates options with the defaults. `*out` receives a handle the caller owns.

@@ -20,24 +20,42 @@ fn io_error(path: &Path, kind: std::io::ErrorKind, msg: String) -> Error {
     Error::Io { path: path.to_path_buf(), source: std::io::Error::new(kind, msg) }
 }
 
-/// Reads the whole of the regular file at `path` (symlinks followed), at most `cap` bytes.
-/// Errors ([`Error::Io`], naming the path): missing or unreadable; not a regular file (a FIFO,
-/// device or folder is refused before it is opened, so `/dev/zero` or a FIFO never hangs or
-/// exhausts memory); larger than `cap` bytes (checked from the size and again while reading).
-pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {
+/// Opens the regular file at `path` (symlinks followed) for reading, with its metadata. The
+/// file is opened without blocking (`O_NONBLOCK` on Unix, cleared once the open file is known
+/// to be regular) and the open file itself is checked (`fstat`), so a path that is, or is
+/// swapped for, a FIFO, a device (`/dev/zero`) or a folder is refused and never blocks.
+/// Errors ([`Error::Io`], naming the path): missing or unreadable; not a regular file.
+pub fn open_regular(path: &Path) -> Result<(std::fs::File, std::fs::Metadata)> {
     let io = |source| Error::Io { path: path.to_path_buf(), source };
-    let meta = std::fs::metadata(path).map_err(io)?;
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(rustix::fs::OFlags::NONBLOCK.bits() as i32);
+    }
+    let f = options.open(path).map_err(io)?;
+    let meta = f.metadata().map_err(io)?;
     if !meta.is_file() {
         return Err(io_error(path, std::io::ErrorKind::InvalidInput, "not a regular file".into()));
     }
+    #[cfg(unix)]
+    {
+        let flags = rustix::fs::fcntl_getfl(&f).map_err(|e| io(e.into()))?;
+        rustix::fs::fcntl_setfl(&f, flags - rustix::fs::OFlags::NONBLOCK).map_err(|e| io(e.into()))?;
+    }
+    Ok((f, meta))
+}
+
+/// Reads the whole of the regular file at `path` (opened by [`open_regular`]), at most `cap`
+/// bytes. Errors ([`Error::Io`], naming the path): those of [`open_regular`]; larger than `cap`
+/// bytes (checked from the open file's size and again while reading).
+pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {
+    let io = |source| Error::Io { path: path.to_path_buf(), source };
+    let (f, meta) = open_regular(path)?;
     let too_big = || io_error(path, std::io::ErrorKind::InvalidData, format!("larger than the {cap}-byte limit"));
     if meta.len() > cap {
         return Err(too_big());
-    }
-    let f = std::fs::File::open(path).map_err(io)?;
-    // The path may have been swapped between the check and the open: check the open file.
-    if !f.metadata().map_err(io)?.is_file() {
-        return Err(io_error(path, std::io::ErrorKind::InvalidInput, "not a regular file".into()));
     }
     let mut bytes = Vec::with_capacity(meta.len() as usize);
     f.take(cap + 1).read_to_end(&mut bytes).map_err(io)?;
@@ -122,6 +140,54 @@ mod tests {
         }
         std::fs::write(&f, [0xff, 0xfe]).unwrap();
         assert!(read_capped_string(&f, 10).unwrap_err().to_string().contains("UTF-8"));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// Issue 52 finding 7: a path swapped between a regular file and a FIFO while it is read
+    /// never blocks the reader (the check used to come before `open`, which then blocked on
+    /// the FIFO until a writer came). Each read gives the file's bytes or an `Io` error.
+    #[test]
+    fn a_path_swapped_for_a_fifo_never_blocks() {
+        let d = scratch("swap");
+        let (path, spare, tmp) = (d.join("in.json"), d.join("spare"), d.join("tmp"));
+        std::fs::write(&path, b"{}").unwrap();
+        if !std::process::Command::new("mkfifo").arg(&spare).status().is_ok_and(|s| s.success()) {
+            eprintln!("skipped: mkfifo unavailable");
+            return;
+        }
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let swapper = {
+            let (path, spare, tmp, stop) = (path.clone(), spare.clone(), tmp.clone(), stop.clone());
+            std::thread::spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    std::fs::rename(&path, &tmp).unwrap();
+                    std::fs::rename(&spare, &path).unwrap();
+                    std::fs::rename(&tmp, &spare).unwrap();
+                }
+            })
+        };
+        let (tx, rx) = std::sync::mpsc::channel();
+        let reader_path = path.clone();
+        std::thread::spawn(move || {
+            for _ in 0..3000 {
+                let r = read_capped(&reader_path, 100);
+                tx.send(r.map_err(|e| e.to_string())).unwrap();
+            }
+        });
+        let (mut read, mut refused) = (0, 0);
+        for _ in 0..3000 {
+            match rx.recv_timeout(std::time::Duration::from_secs(60)) {
+                Ok(Ok(bytes)) => {
+                    assert_eq!(bytes, b"{}");
+                    read += 1;
+                }
+                Ok(Err(_)) => refused += 1,
+                Err(_) => panic!("read_capped blocked on the FIFO swapped in ({read} reads, {refused} refused)"),
+            }
+        }
+        stop.store(true, Ordering::Relaxed);
+        swapper.join().unwrap();
+        assert!(read > 0 && refused > 0, "the swap never raced: {read} reads, {refused} refused");
         std::fs::remove_dir_all(&d).unwrap();
     }
 

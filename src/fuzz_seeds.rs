@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use image::ImageEncoder;
 use serde_json::json;
 
-use crate::image::GrayImage;
+use crate::image::{metadata_files, GrayImage};
 
 /// A 64 x 64 crop of the example sketch (gray), the images' base seed.
 fn sketch_crop() -> GrayImage {
@@ -32,7 +32,8 @@ fn jpeg(px: &[u8], w: u32, h: u32, colour: image::ExtendedColorType) -> Vec<u8> 
 }
 
 /// Image seeds: gray/RGB/RGBA PNG, gray/RGB JPEG, a truncated JPEG and header bombs (a 1.8 kB JPEG
-/// and a 74-byte PNG claiming 16384², a JPEG claiming exactly 64 Mpx).
+/// and a 74-byte PNG claiming 16384², a JPEG claiming exactly 64 Mpx), EXIF orientations (a JPEG
+/// with orientation 8, a PNG with 6) and a PNG whose colour profile inflates to 32 MiB.
 fn image_seeds() -> Vec<(String, Vec<u8>)> {
     let g = sketch_crop();
     let gray = g.as_bytes().to_vec();
@@ -61,7 +62,13 @@ fn image_seeds() -> Vec<(String, Vec<u8>)> {
         ("bomb_16384.jpg".into(), claim(16384, 16384)),
         ("bomb_64mpx.jpg".into(), claim(8192, 8192)),
         ("bomb_16384.png".into(), png_bomb),
+        ("exif8.jpg".into(), metadata_files::jpeg_with_orientation(&rgb_jpeg, 8)),
         ("rgb.jpg".into(), rgb_jpeg),
+        (
+            "exif6.png".into(),
+            metadata_files::rgb_png_with(&rgb, 64, 64, None, Some(metadata_files::exif_orientation(6))),
+        ),
+        ("iccp_32mib.png".into(), metadata_files::rgb_png_with(&rgb, 64, 64, Some(vec![0; 32 << 20]), None)),
     ]
 }
 

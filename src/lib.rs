@@ -22,6 +22,7 @@ pub mod pose;
 pub mod raster;
 pub mod render;
 pub mod skeleton;
+pub mod strict_json;
 
 pub use error::{Error, Result};
 

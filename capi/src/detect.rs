@@ -9,12 +9,13 @@ use std::path::PathBuf;
 
 use sketchbody_core::detect::figure::{Backend, Figure, FigureOptions};
 use sketchbody_core::detect::landmark::LandmarkNet;
-use sketchbody_core::detect::{detect, DetectOptions, Detection, Model, SearchScales};
+use sketchbody_core::detect::{detect_with_progress, DetectOptions, Detection, Model, SearchScales};
 use sketchbody_core::pipeline::figure::detect_figure;
 use sketchbody_core::skeleton::NUM_JOINTS;
 
 use super::body::skb_context;
 use super::error::{fail, fail_with};
+use super::fit::{progress_closure, skb_progress_fn};
 use super::image::{skb_image, view_of};
 use super::ptr::*;
 use super::status::skb_status;
@@ -88,7 +89,44 @@ pub unsafe extern "C" fn skb_detector_detect(
             let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
             let threshold = if threshold.is_nan() { None } else { Some(threshold) };
             let opts = DetectOptions { threshold, min_cell_px, ..Default::default() };
-            detect_into(&view, &det.model, &opts, xy, cf, score)
+            detect_into(&view, &det.model, &opts, &mut |_| true, xy, cf, score)
+        }
+    }
+}
+
+/// As `skb_detector_detect`, with the sketch model's settings of `opts` (NULL: the defaults of
+/// `skb_detect_options_new`; its threshold, scales, figure range and levels per octave apply,
+/// the backend and strictness do not) and a progress callback: `progress(user, fraction)` (may
+/// be NULL) is called on the calling thread with the fraction done (0..=1, non-decreasing)
+/// after the feature pyramid is built and after each group of pyramid levels; a non-zero
+/// return stops the search with `SKB_ERR_CANCELLED` (nothing written) and the callback is not
+/// called again. A search whose feature pyramid would exceed 1 GiB is `SKB_ERR_OUT_OF_RANGE`
+/// before any work; a score or joint that is not finite is `SKB_ERR_NON_FINITE`. Other
+/// statuses as `skb_detector_detect`. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_detector_detect_with_progress(
+    det: *const skb_detector,
+    image: *const skb_image,
+    opts: *const skb_detect_options,
+    progress: skb_progress_fn,
+    user: *mut std::ffi::c_void,
+    joints_xy: *mut f64,
+    joints_len: usize,
+    confidence: *mut f64,
+    confidence_len: usize,
+    score: *mut f64,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_detector_detect_with_progress` (lib.rs § Safety): `det`, `image`,
+    // `opts`, `joints_xy`, `confidence`, `score` are NULL or valid for the documented lengths during the call,
+    // `progress` NULL or callable with `user`; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let det = try_status!(try_ref(det, "det"));
+            let view = try_status!(view_of(image));
+            let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
+            let o = opt_ref(opts).map_or_else(DetectOptions::default, |o| o.inner.sketch.clone());
+            let mut cb = progress_closure(progress, user);
+            detect_into(&view, &det.model, &o, &mut cb, xy, cf, score)
         }
     }
 }
@@ -408,11 +446,12 @@ fn detect_into(
     view: &sketchbody_core::image::ImageView<'_>,
     model: &Model,
     o: &DetectOptions,
+    progress: &mut dyn FnMut(f32) -> bool,
     xy: &mut [f64],
     cf: &mut [f64],
     score: &mut f64,
 ) -> skb_status {
-    match detect(view, model, o) {
+    match detect_with_progress(view, model, o, progress) {
         Ok(d) => {
             write_best(d.best(), xy, cf, score);
             skb_status::SKB_OK

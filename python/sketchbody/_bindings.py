@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "fdb5b637f00978e07935ae764cf500796986ac0969455b8432127c025f571462"
+HEADER_SHA256 = "de213ca829a136c7791495686f55c470880b3ee4713aec52a478dedf3316bc25"
 
 # ---- constants (#define) ----
 
@@ -63,6 +63,8 @@ SKB_ALPHA_TARGET_IDENTITY = 0
 SKB_ALPHA_TARGET_LEVEL = 1
 # Number of proportion groups of `skb_pose_figure`.
 SKB_POSE_GROUPS = 6
+# Largest joints JSON the readers accept, in bytes (1 MiB; a joints file is about 2 kB).
+SKB_JOINTS_JSON_MAX_BYTES = 1048576
 # Backend of `skb_detect`: both the sketch model and BlazePose, one candidate per image (the
 # default): on a drawing the sketch model recognises (its score above its own threshold), the
 # one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
@@ -130,6 +132,7 @@ CONSTANTS = {
     "SKB_ALPHA_TARGET_IDENTITY": 0,
     "SKB_ALPHA_TARGET_LEVEL": 1,
     "SKB_POSE_GROUPS": 6,
+    "SKB_JOINTS_JSON_MAX_BYTES": 1048576,
     "SKB_DETECTOR_AUTO": 0,
     "SKB_DETECTOR_FMP": 1,
     "SKB_DETECTOR_BLAZEPOSE": 2,
@@ -2003,6 +2006,63 @@ FUNCTIONS["skb_pose_refine"] = (
     ),
 )
 
+# Reads a `sketchbody-joints2d` file into `*out` (joints listed in `missing` get
+# `visible = 0`). `path` is NUL-terminated UTF-8 and must name a regular file of at most
+# `SKB_JOINTS_JSON_MAX_BYTES` (a FIFO, a device or a folder is refused without blocking). A
+# leading UTF-8 byte-order mark is accepted. Statuses: `SKB_ERR_IO` (missing, unreadable, not a
+# regular file, too large), `SKB_ERR_CORRUPT_DATA` (not JSON, a key given twice, another format
+# or version, a missing, unknown or malformed joint), `SKB_ERR_INVALID_ARGUMENT` (`path` not
+# UTF-8). `*out` is written only on success. Thread-safe.
+FUNCTIONS["skb_joints2d_read_json"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.c_char_p,
+        ctypes.POINTER(skb_joints2d),
+    ],
+    "skb_status",
+    (
+        ("path", "const char *"),
+        ("out", "struct skb_joints2d *"),
+    ),
+)
+
+# Parses the `len` bytes at `json` (UTF-8, not NUL-terminated; at most
+# `SKB_JOINTS_JSON_MAX_BYTES`) as a `sketchbody-joints2d` document into `*out`, with the rules
+# of `skb_joints2d_read_json`. Statuses: `SKB_ERR_CORRUPT_DATA` (as above, or not UTF-8),
+# `SKB_ERR_OUT_OF_RANGE` (`len` over the limit). `*out` is written only on success. Thread-safe.
+FUNCTIONS["skb_joints2d_parse_json"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.c_char_p,
+        ctypes.c_size_t,
+        ctypes.POINTER(skb_joints2d),
+    ],
+    "skb_status",
+    (
+        ("json", "const char *"),
+        ("len", "size_t"),
+        ("out", "struct skb_joints2d *"),
+    ),
+)
+
+# Writes `*joints` as a `sketchbody-joints2d` file at `path` (NUL-terminated UTF-8; joints with
+# `visible == 0` listed in `missing`), atomically: a temporary file renamed over `path`, which
+# is replaced only when it is a regular file. Statuses: `SKB_ERR_NON_FINITE` (a coordinate is
+# NaN or infinite; nothing written), `SKB_ERR_IO`, `SKB_ERR_INVALID_ARGUMENT` (`path` not UTF-8).
+# Thread-safe.
+FUNCTIONS["skb_joints2d_write_json"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_joints2d),
+        ctypes.c_char_p,
+    ],
+    "skb_status",
+    (
+        ("joints", "const struct skb_joints2d *"),
+        ("path", "const char *"),
+    ),
+)
+
 # Loads a detector model from `path` (NUL-terminated UTF-8): the binary `.skbd` format
 # (`docs/formats.md`, "Detector model") or the PARSE model JSON. Errors: `SKB_ERR_IO` (cannot
 # read), `SKB_ERR_CORRUPT_DATA` (bad magic, version, checksum, truncated or inconsistent
@@ -2063,6 +2123,44 @@ FUNCTIONS["skb_detector_detect"] = (
         ("image", "const struct skb_image *"),
         ("threshold", "double"),
         ("min_cell_px", "double"),
+        ("joints_xy", "double *"),
+        ("joints_len", "size_t"),
+        ("confidence", "double *"),
+        ("confidence_len", "size_t"),
+        ("score", "double *"),
+    ),
+)
+
+# As `skb_detector_detect`, with the sketch model's settings of `opts` (NULL: the defaults of
+# `skb_detect_options_new`; its threshold, scales, figure range and levels per octave apply,
+# the backend and strictness do not) and a progress callback: `progress(user, fraction)` (may
+# be NULL) is called on the calling thread with the fraction done (0..=1, non-decreasing)
+# after the feature pyramid is built and after each group of pyramid levels; a non-zero
+# return stops the search with `SKB_ERR_CANCELLED` (nothing written) and the callback is not
+# called again. A search whose feature pyramid would exceed 1 GiB is `SKB_ERR_OUT_OF_RANGE`
+# before any work; a score or joint that is not finite is `SKB_ERR_NON_FINITE`. Other
+# statuses as `skb_detector_detect`. Thread-safe.
+FUNCTIONS["skb_detector_detect_with_progress"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_detector),
+        ctypes.POINTER(skb_image),
+        ctypes.POINTER(skb_detect_options),
+        skb_progress_fn,
+        ctypes.c_void_p,
+        ctypes.POINTER(ctypes.c_double),
+        ctypes.c_size_t,
+        ctypes.POINTER(ctypes.c_double),
+        ctypes.c_size_t,
+        ctypes.POINTER(ctypes.c_double),
+    ],
+    "skb_status",
+    (
+        ("det", "const struct skb_detector *"),
+        ("image", "const struct skb_image *"),
+        ("opts", "const struct skb_detect_options *"),
+        ("progress", "skb_progress_fn"),
+        ("user", "void *"),
         ("joints_xy", "double *"),
         ("joints_len", "size_t"),
         ("confidence", "double *"),

@@ -2,8 +2,6 @@
 
 import ctypes
 import dataclasses
-import json
-import os
 import threading
 from typing import Optional
 
@@ -53,12 +51,22 @@ class Joints2D:
     @classmethod
     def from_json(cls, path):
         """Reads a `sketchbody-joints2d` file (docs/formats.md; what `sketchbody detect` and
-        `run` write)."""
-        with open(path, encoding="utf-8") as f:
-            d = json.load(f)
-        if not isinstance(d, dict) or d.get("format") != "sketchbody-joints2d":
-            raise ValueError(f"{os.fspath(path)}: not a sketchbody-joints2d file")
-        return cls.from_dict(d["joints"], d.get("missing", ()))
+        `run` write) with the library's reader, as the CLI and the C API read it: a regular file
+        of at most 1 MiB (a FIFO, a device or a folder is refused without blocking), strict JSON
+        (no NaN, no key twice; a UTF-8 BOM accepted), every joint named once. Raises
+        SketchbodyError (SKB_ERR_IO, SKB_ERR_CORRUPT_DATA)."""
+        s = B.skb_joints2d()
+        call("skb_joints2d_read_json", A.path_arg(path), ctypes.byref(s))
+        return cls.from_struct(s)
+
+    @classmethod
+    def from_json_text(cls, text):
+        """Parses a `sketchbody-joints2d` document (str, or UTF-8 bytes) with the rules of
+        from_json. Raises SketchbodyError (SKB_ERR_CORRUPT_DATA; SKB_ERR_OUT_OF_RANGE over 1 MiB)."""
+        data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
+        s = B.skb_joints2d()
+        call("skb_joints2d_parse_json", data, len(data), ctypes.byref(s))
+        return cls.from_struct(s)
 
     def to_dict(self):
         return {"format": "sketchbody-joints2d", "version": 1,
@@ -66,9 +74,10 @@ class Joints2D:
                 "missing": [n for n, v in zip(JOINT_NAMES, self.visible) if not v]}
 
     def to_json(self, path):
-        with open(path, "w", encoding="utf-8") as f:
-            json.dump(self.to_dict(), f, indent=2)
-            f.write("\n")
+        """Writes a `sketchbody-joints2d` file with the library's writer (atomic; only a
+        regular file is replaced). Raises SketchbodyError (SKB_ERR_NON_FINITE, SKB_ERR_IO)."""
+        s = self.to_struct()
+        call("skb_joints2d_write_json", ctypes.byref(s), A.path_arg(path))
 
     def to_struct(self):
         s = B.skb_joints2d()

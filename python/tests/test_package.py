@@ -389,6 +389,77 @@ class PoseTest(unittest.TestCase):
         np.testing.assert_array_equal(k.visible, j.visible)
 
 
+class JointsFileTest(unittest.TestCase):
+    """Issue 52 finding 4: the package reads joints files through the library's reader, with the
+    CLI's guards (it used to hang on a FIFO, read /dev/zero until MemoryError, accept 100 MB files,
+    NaN literals and a key given twice)."""
+
+    def read_in_thread(self, path):
+        """Joints2D.from_json(path) on a worker thread: its exception, or None; fails if the call
+        has not returned after a minute (it blocked)."""
+        box = []
+
+        def work():
+            try:
+                skb.Joints2D.from_json(path)
+                box.append(None)
+            except Exception as e:  # the test inspects it
+                box.append(e)
+
+        t = threading.Thread(target=work, daemon=True)
+        t.start()
+        t.join(60)
+        self.assertFalse(t.is_alive(), f"Joints2D.from_json({path!r}) blocked")
+        return box[0]
+
+    def test_special_and_oversized_files_are_refused(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            fifo = os.path.join(tmp, "fifo")
+            os.mkfifo(fifo)
+            big = os.path.join(tmp, "big.json")
+            with open(big, "wb") as f:
+                f.write(b" " * (2 << 20))
+            for path in (fifo, "/dev/zero", big, tmp):
+                e = self.read_in_thread(path)
+                self.assertIsInstance(e, skb.SketchbodyError, path)
+                self.assertEqual(e.status_name, "SKB_ERR_IO", path)
+            with self.assertRaises(skb.SketchbodyError) as cm:
+                skb.run_pipeline(SKETCH, joints=fifo)
+            self.assertEqual(cm.exception.status_name, "SKB_ERR_IO")
+
+    def test_strict_json(self):
+        with open(SKETCH_JOINTS, encoding="utf-8") as f:
+            text = f.read()
+        good = skb.Joints2D.from_json(SKETCH_JOINTS)
+        np.testing.assert_array_equal(skb.Joints2D.from_json_text("\ufeff" + text).xy, good.xy)
+        x = float(good.xy[0][0])
+        cases = {
+            "NaN literal": text.replace(json.dumps(x), "NaN", 1),
+            "key twice": text.replace('"head":', '"head": [1, 2], "head":', 1),
+            "unknown joint": text.replace('"head":', '"tail": [1, 2], "head":', 1),
+        }
+        self.assertNotEqual(cases["NaN literal"], text)
+        with tempfile.TemporaryDirectory() as tmp:
+            for what, doc in cases.items():
+                p = os.path.join(tmp, "j.json")
+                with open(p, "w", encoding="utf-8") as f:
+                    f.write(doc)
+                for read in (lambda: skb.Joints2D.from_json(p), lambda: skb.Joints2D.from_json_text(doc)):
+                    with self.assertRaises(skb.SketchbodyError, msg=what) as cm:
+                        read()
+                    self.assertEqual(cm.exception.status_name, "SKB_ERR_CORRUPT_DATA", what)
+        with self.assertRaises(skb.SketchbodyError) as cm:
+            skb.Joints2D.from_json_text(b" " * ((1 << 20) + 1))
+        self.assertEqual(cm.exception.status_name, "SKB_ERR_OUT_OF_RANGE")
+        bad = skb.Joints2D(good.xy.copy())
+        bad.xy[2, 1] = np.inf
+        with tempfile.TemporaryDirectory() as tmp:
+            with self.assertRaises(skb.SketchbodyError) as cm:
+                bad.to_json(os.path.join(tmp, "j.json"))
+            self.assertEqual(cm.exception.status_name, "SKB_ERR_NON_FINITE")
+            self.assertEqual(os.listdir(tmp), [])
+
+
 class DetectTest(unittest.TestCase):
     def test_detect_example(self):
         d = skb.detect(SKETCH)

@@ -130,7 +130,7 @@ impl Calibration {
     /// or models of the wrong length.
     pub fn from_json(text: &str) -> Result<Self> {
         let c: Calibration =
-            serde_json::from_str(text).map_err(|e| Error::CorruptData(format!("detector calibration: {e}")))?;
+            crate::strict_json::from_str(text).map_err(|e| Error::CorruptData(format!("detector calibration: {e}")))?;
         if c.format != "sketchbody-detector-calibration" || c.version != 1 {
             return Err(Error::CorruptData(format!(
                 "detector calibration: format {:?} version {}",

@@ -235,7 +235,8 @@ pub fn prepare_image(image: &ImageView<'_>, max_side: usize) -> Result<(Planes, 
 
 /// Candidates scoring at least `thresh` on `im` (working pixels) that `accept` admits, at most
 /// `per_level` per pyramid level, best first, over a pyramid of `interval` levels per octave;
-/// levels with cells outside [min_cell_px, max_cell_px] are neither built nor scored.
+/// levels with cells outside [min_cell_px, max_cell_px] are neither built nor scored. Errors:
+/// the pyramid's ([`pyramid::build`]).
 #[allow(clippy::too_many_arguments)]
 pub fn candidates(
     im: &Planes,
@@ -247,13 +248,53 @@ pub fn candidates(
     per_level: usize,
     accept: &(dyn Fn(&Candidate) -> bool + Sync),
 ) -> Result<Vec<Candidate>> {
+    let search = Search { interval, min_cell_px, max_cell_px, per_level };
+    candidates_with_progress(im, model, thresh, &search, accept, &mut |_| true)
+}
+
+/// Which pyramid levels [`candidates_with_progress`] scores and how many candidates it keeps.
+#[derive(Clone, Copy, Debug)]
+pub struct Search {
+    /// Pyramid levels per octave.
+    pub interval: usize,
+    /// Smallest cell scored, working px.
+    pub min_cell_px: f64,
+    /// Largest cell scored, working px.
+    pub max_cell_px: f64,
+    /// Most candidates kept per level.
+    pub per_level: usize,
+}
+
+/// [`candidates`] reporting progress: `progress(fraction)` (0..=1, non-decreasing) is called on
+/// the calling thread after the pyramid is built and after each group of levels (as many as
+/// rayon has threads) is scored; returning `false` stops with [`Error::Cancelled`] there.
+pub fn candidates_with_progress(
+    im: &Planes,
+    model: &Model,
+    thresh: f64,
+    search: &Search,
+    accept: &(dyn Fn(&Candidate) -> bool + Sync),
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<Vec<Candidate>> {
     let (padx, pady) = model.padding();
-    let pyr = pyramid::build(im, model.sbin, interval, padx, pady, min_cell_px, max_cell_px)?;
-    let mut all: Vec<Candidate> = pyr
-        .levels
-        .par_iter()
-        .flat_map_iter(|l| tree::detect_level(model, l, padx, pady, thresh, per_level, accept))
-        .collect();
+    let pyr = pyramid::build(im, model.sbin, search.interval, padx, pady, search.min_cell_px, search.max_cell_px)?;
+    // The pyramid is about a tenth of the work; the levels' scoring the rest.
+    let share = |done: usize| 0.1 + 0.9 * done as f32 / pyr.levels.len().max(1) as f32;
+    if !progress(share(0)) {
+        return Err(Error::Cancelled);
+    }
+    let mut all: Vec<Candidate> = Vec::new();
+    let group = rayon::current_num_threads().max(1);
+    for (g, levels) in pyr.levels.chunks(group).enumerate() {
+        let found: Vec<Candidate> = levels
+            .par_iter()
+            .flat_map_iter(|l| tree::detect_level(model, l, padx, pady, thresh, search.per_level, accept))
+            .collect();
+        all.extend(found);
+        if !progress(share((g * group + levels.len()).min(pyr.levels.len()))) {
+            return Err(Error::Cancelled);
+        }
+    }
     all.sort_by(|a, b| b.score.total_cmp(&a.score));
     Ok(all)
 }
@@ -285,9 +326,22 @@ pub fn to_detection(c: &Candidate, model: &Model, scale: f64) -> Detection {
 /// scoring above the threshold. When no pyramid level lies in the searched range the result is
 /// [`Error::NoFigure`] with score −∞.
 /// Errors: [`Error::ImageTooSmall`] (side < [`MIN_DETECT_SIDE`]), [`Error::OutOfRange`] /
-/// [`Error::NonFinite`] for bad options, [`Error::NoFigure`] (with the best score found) when
-/// nothing reaches the threshold.
+/// [`Error::NonFinite`] for bad options or a search beyond [`pyramid::MAX_PYRAMID_BYTES`],
+/// [`Error::NonFinite`] when a score or a joint is not finite (never reported as a detection),
+/// [`Error::NoFigure`] (with the best score found) when nothing reaches the threshold.
 pub fn detect(image: &ImageView<'_>, model: &Model, options: &DetectOptions) -> Result<Detections> {
+    detect_with_progress(image, model, options, &mut |_| true)
+}
+
+/// [`detect`] reporting progress: `progress(fraction)` (0..=1, non-decreasing) is called on the
+/// calling thread between steps (see [`candidates_with_progress`]); returning `false` stops with
+/// [`Error::Cancelled`] within one group of pyramid levels.
+pub fn detect_with_progress(
+    image: &ImageView<'_>,
+    model: &Model,
+    options: &DetectOptions,
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<Detections> {
     options.validate()?;
     let normalise_side = if options.search == SearchScales::All { None } else { options.normalise };
     let (planes, scale, offset) =
@@ -300,16 +354,24 @@ pub fn detect(image: &ImageView<'_>, model: &Model, options: &DetectOptions) -> 
         };
     let thresh = options.threshold.unwrap_or(model.thresh);
     let (lo, hi) = options.search.cell_range(model, planes.width, planes.height);
-    let (lo, hi) = (lo.max(options.min_cell_px), hi.min(options.max_cell_px));
+    let (min_cell_px, max_cell_px) = (lo.max(options.min_cell_px), hi.min(options.max_cell_px));
     let interval = options.levels_per_octave.unwrap_or(model.interval);
-    let cands = candidates(&planes, model, interval, f64::NEG_INFINITY, lo, hi, 64, &|_| true)?;
+    let search = Search { interval, min_cell_px, max_cell_px, per_level: 64 };
+    let cands = candidates_with_progress(&planes, model, f64::NEG_INFINITY, &search, &|_| true, progress)?;
     let best_score = cands.first().map_or(f64::NEG_INFINITY, |c| c.score);
     let above: Vec<Candidate> = cands.into_iter().filter(|c| c.score >= thresh).collect();
     if above.is_empty() {
         return Err(Error::NoFigure { score: best_score, threshold: thresh });
     }
     let kept = tree::nms(above, options.nms_overlap, options.max_detections);
-    Ok(Detections { all: kept.iter().map(|c| shifted(to_detection(c, model, scale), offset)).collect() })
+    let all: Vec<Detection> = kept.iter().map(|c| shifted(to_detection(c, model, scale), offset)).collect();
+    for d in &all {
+        crate::error::ensure_finite("detection score", d.score)?;
+        for v in d.joints.xy.iter().flatten().chain(d.confidence.iter()) {
+            crate::error::ensure_finite("detected joint", *v)?;
+        }
+    }
+    Ok(Detections { all })
 }
 
 /// `d` moved by `offset` (input px): from a normalised crop's frame to the input image's.
@@ -347,6 +409,35 @@ mod tests {
         assert!(matches!(detect(&v, &m, &o), Err(Error::OutOfRange { name: "nms_overlap", .. })));
         let o = DetectOptions { threshold: Some(f64::NAN), ..Default::default() };
         assert!(matches!(detect(&v, &m, &o), Err(Error::NonFinite { .. })));
+    }
+
+    /// Issue 52 finding 10: detection reports progress on the calling thread, non-decreasing
+    /// to 1, gives what `detect` gives, and stops with `Cancelled` at the first `false` (at
+    /// every progress point) without calling again.
+    #[test]
+    fn detection_reports_progress_and_can_be_cancelled() {
+        let m = model::tests::tiny_model();
+        let data: Vec<u8> = (0..96 * 80).map(|i| if (i % 96) / 8 % 3 == 0 { 30 } else { 220 }).collect();
+        let v = ImageView::gray(&data, 96, 80).unwrap();
+        let o = DetectOptions { threshold: Some(-1e6), search: SearchScales::All, ..Default::default() };
+        let mut seen = Vec::new();
+        let whole = detect_with_progress(&v, &m, &o, &mut |f| {
+            seen.push(f);
+            true
+        })
+        .unwrap();
+        assert_eq!(whole, detect(&v, &m, &o).unwrap());
+        assert!(seen.len() >= 2, "{seen:?}");
+        assert!(seen.windows(2).all(|w| w[0] <= w[1]) && (seen[seen.len() - 1] - 1.0).abs() < 1e-6, "{seen:?}");
+        for stop_at in 0..seen.len() {
+            let mut calls = 0;
+            let r = detect_with_progress(&v, &m, &o, &mut |_| {
+                calls += 1;
+                calls <= stop_at
+            });
+            assert!(matches!(r, Err(Error::Cancelled)), "stop at {stop_at}: {r:?}");
+            assert_eq!(calls, stop_at + 1, "called after it asked to stop");
+        }
     }
 
     #[test]

@@ -18,6 +18,17 @@ pub const MAX_FILTER_CELLS: usize = 64;
 pub const MAX_PARTS: usize = 256;
 /// Largest accepted number of mixtures of one part (so also of rows of a bias matrix).
 pub const MAX_MIXTURES: usize = 255;
+/// Most filter weights a model may hold in all (2^20; the embedded and the PARSE model hold
+/// about 125 000): the detector's work per pyramid cell grows with it, so a model file of
+/// millions of distinct weights (which ran for minutes) is refused on load.
+pub const MAX_MODEL_WEIGHTS: usize = 1 << 20;
+/// Most filters, and most part mixtures (the sum of the parts' mixture counts), a model may
+/// hold (the embedded and the PARSE model: 156 each): each costs a response map per pyramid
+/// level.
+pub const MAX_FILTERS: usize = 1024;
+/// Largest magnitude of a filter weight, deformation weight or bias (the trained models' are
+/// under 10): scores are sums of these in `f32`, which stay finite within this bound.
+pub const MAX_WEIGHT_MAGNITUDE: f64 = 1e6;
 
 /// A linear filter over `rows` x `cols` HOG cells, weights row-major (y, x, feature).
 #[derive(Clone, Debug, PartialEq)]
@@ -106,8 +117,11 @@ impl Model {
         if self.interval == 0 || self.interval > 100 {
             return Err(corrupt(format!("interval {} must be in 1..=100", self.interval)));
         }
-        if !self.thresh.is_finite() {
-            return Err(corrupt("threshold is not finite"));
+        if !(self.thresh.abs() <= MAX_WEIGHT_MAGNITUDE) {
+            return Err(corrupt(format!(
+                "threshold {} is beyond ±{MAX_WEIGHT_MAGNITUDE:e} or not finite",
+                self.thresh
+            )));
         }
         for (k, f) in self.filters.iter().enumerate() {
             if f.rows == 0 || f.cols == 0 || f.rows > MAX_FILTER_CELLS || f.cols > MAX_FILTER_CELLS {
@@ -120,20 +134,34 @@ impl Model {
                     f.rows * f.cols * FEAT_DIM
                 )));
             }
-            if f.w.iter().any(|v| !v.is_finite()) {
-                return Err(corrupt(format!("filter {k} has a non-finite weight")));
+            if f.w.iter().any(|v| !(v.abs() as f64 <= MAX_WEIGHT_MAGNITUDE)) {
+                return Err(corrupt(format!("filter {k} has a weight beyond ±{MAX_WEIGHT_MAGNITUDE:e} or not finite")));
             }
         }
+        let mixtures: usize = self.parts.iter().map(|p| p.filter.len()).sum();
+        if self.filters.len() > MAX_FILTERS || mixtures > MAX_FILTERS {
+            return Err(corrupt(format!(
+                "{} filters and {mixtures} part mixtures (at most {MAX_FILTERS} each)",
+                self.filters.len()
+            )));
+        }
+        let weights: usize = self.filters.iter().map(|f| f.w.len()).sum();
+        if weights > MAX_MODEL_WEIGHTS {
+            return Err(corrupt(format!("{weights} filter weights (at most {MAX_MODEL_WEIGHTS})")));
+        }
         for (k, d) in self.defs.iter().enumerate() {
-            if d.w.iter().any(|v| !v.is_finite()) || d.w[0] <= 0.0 || d.w[2] <= 0.0 {
-                return Err(corrupt(format!("deformation {k} weights {:?}: must be finite with dx², dy² > 0", d.w)));
+            if d.w.iter().any(|v| !(v.abs() <= MAX_WEIGHT_MAGNITUDE)) || d.w[0] <= 0.0 || d.w[2] <= 0.0 {
+                return Err(corrupt(format!(
+                    "deformation {k} weights {:?}: must be within ±{MAX_WEIGHT_MAGNITUDE:e} with dx², dy² > 0",
+                    d.w
+                )));
             }
             if d.anchor.iter().any(|a| a.abs() > 1000) {
                 return Err(corrupt(format!("deformation {k} anchor {:?} is absurd", d.anchor)));
             }
         }
-        if self.bias.iter().any(|v| !v.is_finite()) {
-            return Err(corrupt("a bias is not finite"));
+        if self.bias.iter().any(|v| !(v.abs() <= MAX_WEIGHT_MAGNITUDE)) {
+            return Err(corrupt(format!("a bias is beyond ±{MAX_WEIGHT_MAGNITUDE:e} or not finite")));
         }
         if self.parts.is_empty() || self.parts.len() > MAX_PARTS {
             return Err(corrupt(format!("{} parts (expected 1..={MAX_PARTS})", self.parts.len())));
@@ -227,7 +255,8 @@ impl Model {
 
     /// Parses the PARSE model JSON from memory. Errors: `CorruptData`.
     pub fn from_json(bytes: &[u8]) -> Result<Self> {
-        let j: json::ModelJson = serde_json::from_slice(bytes).map_err(|e| corrupt(format!("model JSON: {e}")))?;
+        let j: json::ModelJson =
+            crate::strict_json::from_slice(bytes).map_err(|e| corrupt(format!("model JSON: {e}")))?;
         j.into_model()
     }
 }
@@ -378,5 +407,39 @@ pub(crate) mod tests {
     fn json_errors_are_specific() {
         assert!(matches!(Model::from_json(b"{\"sbin\": 4"), Err(Error::CorruptData(s)) if s.contains("model JSON")));
         assert!(matches!(Model::from_json(b"[]"), Err(Error::CorruptData(_))));
+    }
+
+    /// Issue 52 finding 10: extreme values that overflow the `f32` scores (a bias of 1e308 gave
+    /// score +inf and joints outside the image) and models too large to search in reasonable
+    /// time (millions of distinct filter weights) are refused on load.
+    #[test]
+    fn extreme_values_and_oversized_models_are_refused() {
+        let m = tiny_model();
+        let refused = |bad: Model, what: &str| {
+            let e = bad.validate().unwrap_err().to_string();
+            assert!(e.contains(what), "{e}");
+        };
+        let mut bad = m.clone();
+        bad.bias[2] = 1e308;
+        refused(bad, "bias is beyond");
+        let mut bad = m.clone();
+        bad.filters[1].w[5] = 3e38;
+        refused(bad, "filter 1 has a weight beyond");
+        let mut bad = m.clone();
+        bad.defs[1].w[1] = -1e300;
+        refused(bad, "deformation 1 weights");
+        let mut bad = m.clone();
+        bad.thresh = 1e300;
+        refused(bad, "threshold");
+        let big = Filter { rows: 32, cols: 32, w: vec![0.5; 32 * 32 * FEAT_DIM] };
+        let mut bad = m.clone();
+        bad.filters.extend(std::iter::repeat_n(big, MAX_MODEL_WEIGHTS / (32 * 32 * FEAT_DIM)));
+        refused(bad, "filter weights (at most");
+        let mut bad = m.clone();
+        bad.filters.extend(std::iter::repeat_n(m.filters[0].clone(), MAX_FILTERS));
+        refused(bad, "filters and");
+        let mut ok = m;
+        ok.bias[2] = MAX_WEIGHT_MAGNITUDE;
+        ok.validate().unwrap();
     }
 }

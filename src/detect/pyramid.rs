@@ -10,7 +10,13 @@ use rayon::prelude::*;
 use super::hog::hog;
 use super::hog::{gradients, hog_from_gradients, FeatureMap, Planes};
 use super::model::FEAT_DIM;
-use crate::error::Result;
+use crate::error::{Error, Result};
+
+/// Most bytes the HOG features of a pyramid's kept levels may take together (1 GiB; the sketch
+/// default on a 1024 px image needs a few MB, every level of the PARSE model's about 200 MB).
+/// A search beyond it (many levels per octave over every scale, a model of huge filters, whose
+/// padding grows every level) is refused before any level is built.
+pub const MAX_PYRAMID_BYTES: u64 = 1 << 30;
 use crate::image::ImageView;
 
 /// One pyramid level.
@@ -134,7 +140,8 @@ pub fn pad(f: &FeatureMap, padx: usize, pady: usize) -> FeatureMap {
 /// max_scale = 1 + ⌊log(min side / (5 sbin)) / log 2^(1/interval)⌋ (at least 1).
 /// Only levels with cells of `min_cell_px` to `max_cell_px` pixels (inclusive) are computed and
 /// returned: the others' HOG is never built (the image is still halved through skipped levels
-/// when a coarser kept level needs it).
+/// when a coarser kept level needs it). Errors: [`Error::OutOfRange`] when the kept levels'
+/// features would exceed [`MAX_PYRAMID_BYTES`].
 pub fn build(
     im: &Planes,
     sbin: usize,
@@ -175,13 +182,32 @@ pub fn build(
             j1 += interval;
         }
     }
+    let kept = |j: &Job| j.cell_px >= min_cell_px && j.cell_px <= max_cell_px;
+    // Each kept level's padded map, from the cell size (to within a cell of the real map).
+    let bytes: f64 = jobs
+        .iter()
+        .filter(|j| kept(j))
+        .map(|j| {
+            let cells = |side: usize, pad: usize| side as f64 / j.cell_px + 2.0 * (pad + 1) as f64 + 1.0;
+            cells(im.width, padx) * cells(im.height, pady) * (FEAT_DIM * 4) as f64
+        })
+        .sum();
+    if bytes > MAX_PYRAMID_BYTES as f64 {
+        return Err(Error::OutOfRange {
+            name: "detector search",
+            detail: format!(
+                "its feature pyramid would take {:.0} MB (at most {} MB): search fewer scales or levels per octave",
+                bytes / 1e6,
+                MAX_PYRAMID_BYTES / 1_000_000
+            ),
+        });
+    }
     let n_levels = jobs.iter().map(|j| j.level + 1).max().unwrap_or(0);
     // Resize once per octave base, then halve; run bases in parallel.
     let per_base: Vec<Vec<(usize, Level)>> = (0..interval)
         .into_par_iter()
         .map(|i| {
-            let mine: Vec<&Job> =
-                jobs.iter().filter(|j| j.base == i && j.cell_px >= min_cell_px && j.cell_px <= max_cell_px).collect();
+            let mine: Vec<&Job> = jobs.iter().filter(|j| j.base == i && kept(j)).collect();
             let mut out = Vec::new();
             if mine.is_empty() {
                 return out;
@@ -279,5 +305,18 @@ mod tests {
             assert!((l.cell_px - p.levels[2 * k].cell_px).abs() < 1e-9, "level {k}");
             assert_eq!(l.feat.data, p.levels[2 * k].feat.data, "level {k}");
         }
+    }
+
+    /// Issue 52 finding 10: a search whose features would exceed [`MAX_PYRAMID_BYTES`] (100
+    /// levels per octave over every scale of a 1024 px image with a huge filter's padding) is
+    /// refused before any level is built; the same image with the sketch model's settings is not.
+    #[test]
+    fn a_pyramid_beyond_the_memory_bound_is_refused_before_it_is_built() {
+        let im = Planes { width: 1024, height: 1024, channels: 1, data: vec![10.0; 1024 * 1024] };
+        let e = build(&im, 8, 100, 62, 62, 0.0, f64::INFINITY).unwrap_err();
+        assert!(matches!(&e, Error::OutOfRange { name: "detector search", .. }), "{e}");
+        let p = build(&im, 8, 7, 3, 3, 16.0, f64::INFINITY).unwrap();
+        let bytes: usize = p.levels.iter().map(|l| l.feat.data.len() * 4).sum();
+        assert!(bytes > 0 && (bytes as u64) < MAX_PYRAMID_BYTES);
     }
 }

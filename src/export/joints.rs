@@ -10,9 +10,10 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::skeleton::{Joints3, JOINT_NAMES, NUM_JOINTS};
 
-/// Parses a joints JSON document. Errors name the missing or malformed joint.
+/// Parses a joints JSON document (a leading UTF-8 BOM skipped; a key twice refused, see
+/// [`crate::strict_json`]). Errors name the missing, unknown or malformed joint.
 pub fn parse_joints3_json(text: &str) -> Result<Joints3> {
-    let doc: Value = serde_json::from_str(text).map_err(|e| Error::CorruptData(format!("joints JSON: {e}")))?;
+    let doc: Value = crate::strict_json::from_str(text).map_err(|e| Error::CorruptData(format!("joints JSON: {e}")))?;
     if let Some(u) = doc.get("units") {
         if u != "m" {
             return Err(Error::CorruptData(format!("joints JSON: units {u} (expected \"m\")")));
@@ -22,6 +23,9 @@ pub fn parse_joints3_json(text: &str) -> Result<Joints3> {
         .get("joints")
         .and_then(Value::as_object)
         .ok_or_else(|| Error::CorruptData("joints JSON: no \"joints\" object".into()))?;
+    if let Some(name) = joints.keys().find(|n| !JOINT_NAMES.contains(&n.as_str())) {
+        return Err(Error::CorruptData(format!("joints JSON: unknown joint {name:?}")));
+    }
     let mut out = [[0.0; 3]; NUM_JOINTS];
     for (j, name) in JOINT_NAMES.iter().enumerate() {
         let v = joints
@@ -89,5 +93,24 @@ mod tests {
         {
             assert!(matches!(parse_joints3_json(bad), Err(Error::CorruptData(_))), "{bad}");
         }
+    }
+
+    /// Issue 52 finding 11: an unknown joint name is refused as the 2-D reader refuses it, a key
+    /// given twice is refused, a leading UTF-8 BOM is accepted.
+    #[test]
+    fn unknown_names_and_duplicate_keys_are_refused_and_a_bom_accepted() {
+        let text = serde_json::to_string(&json!({"units": "m", "joints": rest_joints()
+            .iter()
+            .zip(JOINT_NAMES)
+            .map(|(p, n)| (n.to_string(), json!(p)))
+            .collect::<Map<String, Value>>()}))
+        .unwrap();
+        assert_eq!(parse_joints3_json(&format!("\u{feff}{text}")).unwrap(), rest_joints());
+        let extra = text.replacen("\"head\":", "\"tail\":[0,0,0],\"head\":", 1);
+        let e = parse_joints3_json(&extra).unwrap_err().to_string();
+        assert!(e.contains("unknown joint \"tail\""), "{e}");
+        let twice = text.replacen("\"head\":", "\"head\":[9,9,9],\"head\":", 1);
+        let e = parse_joints3_json(&twice).unwrap_err().to_string();
+        assert!(e.contains("duplicate key \"head\""), "{e}");
     }
 }

@@ -56,12 +56,18 @@ pub fn parse_joints2d(v: &Value) -> Result<Joints2> {
     Ok(j)
 }
 
-/// Reads a `sketchbody-joints2d` file; errors name the file.
+/// Parses the text of a `sketchbody-joints2d` file (a leading UTF-8 BOM skipped; an object
+/// holding a key twice refused, see [`crate::strict_json`]). Errors: [`Error::CorruptData`].
+pub fn parse_joints2d_text(text: &str) -> Result<Joints2> {
+    let v: Value = crate::strict_json::from_str(text).map_err(|e| bad(format!("not JSON: {e}")))?;
+    parse_joints2d(&v)
+}
+
+/// Reads a `sketchbody-joints2d` file (a regular file of at most
+/// [`MAX_JOINTS_FILE_BYTES`](crate::export::joints::MAX_JOINTS_FILE_BYTES)); errors name the file.
 pub fn load_joints2d(path: &Path) -> Result<Joints2> {
     let text = crate::fsutil::read_capped_string(path, crate::export::joints::MAX_JOINTS_FILE_BYTES)?;
-    let v: Value =
-        serde_json::from_str(&text).map_err(|e| Error::CorruptData(format!("{}: not JSON: {e}", path.display())))?;
-    parse_joints2d(&v).map_err(|e| match e {
+    parse_joints2d_text(&text).map_err(|e| match e {
         Error::CorruptData(m) => Error::CorruptData(format!("{}: {m}", path.display())),
         other => other,
     })
@@ -153,5 +159,19 @@ mod tests {
         nan.xy[0][0] = f64::NAN;
         assert!(matches!(joints2d_json(&nan), Err(Error::NonFinite { .. })));
         assert!(matches!(load_joints2d(Path::new("/nonexistent/j.json")), Err(Error::Io { .. })));
+    }
+
+    /// Issue 52 finding 11: a key given twice is refused (it used to take the last value
+    /// silently), a leading UTF-8 BOM is accepted (it used to be "not JSON").
+    #[test]
+    fn duplicate_keys_are_refused_and_a_bom_accepted() {
+        let j = Joints2 { xy: std::array::from_fn(|k| [k as f64, 2.0 * k as f64]), visible: [true; NUM_JOINTS] };
+        let text = serde_json::to_string(&joints2d_json(&j).unwrap()).unwrap();
+        assert_eq!(parse_joints2d_text(&format!("\u{feff}{text}")).unwrap(), j);
+        let twice = text.replacen("\"neck\":", "\"neck\":[500.0,500.0],\"neck\":", 1);
+        let e = parse_joints2d_text(&twice).unwrap_err().to_string();
+        assert!(e.contains("duplicate key \"neck\""), "{e}");
+        let twice = text.replacen("\"version\":1", "\"version\":1,\"version\":1", 1);
+        assert!(parse_joints2d_text(&twice).unwrap_err().to_string().contains("duplicate key \"version\""));
     }
 }

@@ -6,6 +6,8 @@ mod canny;
 mod decode;
 mod gray;
 mod encode;
+#[cfg(test)]
+pub(crate) mod metadata_files;
 mod rgb;
 mod sobel;
 mod view;

@@ -72,58 +72,112 @@ pub fn load_rgb_image(path: &Path) -> Result<RgbImage> {
     decode_rgb_image(&bytes, path)
 }
 
+/// Most bytes a PNG's metadata (colour profile, text, EXIF chunks after decompression) may take
+/// while it is decoded (16 MiB; a colour profile is rarely over 1 MB). A profile or text chunk
+/// that would take more is dropped (the pixels are decoded as without it), so a small file
+/// cannot make the decoder allocate hundreds of megabytes of metadata.
+pub const MAX_IMAGE_METADATA_BYTES: u64 = 16 << 20;
+
 /// Decodes a PNG or JPEG file's bytes as [`load_rgb_image`] does (same limits, strict JPEG,
-/// transparency over white); `path` only names the file in errors. Errors: `Decode`,
-/// `ImageTooLarge`, `TooManyPixels`.
+/// transparency over white, EXIF orientation applied: JPEG APP1 `Exif`, PNG `eXIf`); `path`
+/// only names the file in errors. The PNG decoder's metadata is capped at
+/// [`MAX_IMAGE_METADATA_BYTES`]. Errors: `Decode`, `ImageTooLarge`, `TooManyPixels`.
 pub fn decode_rgb_image(bytes: &[u8], path: &Path) -> Result<RgbImage> {
-    let decode_err = |reason: String| Error::Decode { path: path.to_path_buf(), reason };
-    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| decode_err(e.to_string()))?;
-    if reader.format().is_none() {
-        return Err(decode_err("unknown format (expected PNG or JPEG)".into()));
+    match image::guess_format(bytes) {
+        Ok(image::ImageFormat::Jpeg) => decode_jpeg(bytes, path),
+        Ok(image::ImageFormat::Png) => decode_png(bytes, path),
+        _ => Err(decode_error(path, "unknown format (expected PNG or JPEG)")),
     }
-    let format = reader.format();
-    let (w, h) = reader.into_dimensions().map_err(|e| decode_err(e.to_string()))?;
+}
+
+/// An [`Error::Decode`] naming `path`.
+fn decode_error(path: &Path, reason: impl ToString) -> Error {
+    Error::Decode { path: path.to_path_buf(), reason: reason.to_string() }
+}
+
+/// Refuses an image over 16384 px a side or [`MAX_DECODED_PIXELS`].
+fn check_decoded_size(w: u32, h: u32) -> Result<()> {
     check_size(w as usize, h as usize)?;
     if w as usize * h as usize > MAX_DECODED_PIXELS {
         return Err(Error::TooManyPixels { width: w as usize, height: h as usize });
     }
-    if format == Some(image::ImageFormat::Jpeg) {
-        // Every 8 x 8 luma block costs at least one bit of Huffman code (its DC difference), so
-        // a file with fewer bits than blocks cannot hold the image its header claims: it was cut
-        // short, or it is a bomb whose decoder would fill the missing blocks and report success
-        // (zune-jpeg's strict mode does so for a stream that ends early with a proper EOI).
-        // zune-jpeg decodes Huffman-coded JPEGs only (no arithmetic coding), so the bound holds.
-        let blocks = (w as usize).div_ceil(8) * (h as usize).div_ceil(8);
-        if bytes.len().saturating_mul(8) < blocks {
-            return Err(decode_err(format!(
-                "truncated: {} bytes cannot hold the {w}x{h} image the header claims",
-                bytes.len()
-            )));
-        }
-        let rgb = decode_jpeg_strict(bytes).map_err(decode_err)?;
-        return RgbImage::from_vec(w as usize, h as usize, rgb);
-    }
-    let img = image::load_from_memory(bytes).map_err(|e| decode_err(e.to_string()))?;
+    Ok(())
+}
+
+/// A PNG decoder whose metadata (colour profile, text, EXIF) may take at most
+/// [`MAX_IMAGE_METADATA_BYTES`], read up to the pixel data, the pixels' own allocation then
+/// limited to the largest image allowed ([`MAX_DECODED_PIXELS`] of 16-bit RGBA).
+fn png_decoder(bytes: &[u8]) -> image::ImageResult<image::codecs::png::PngDecoder<std::io::Cursor<&[u8]>>> {
+    use image::ImageDecoder;
+    let mut metadata = image::Limits::default();
+    metadata.max_alloc = Some(MAX_IMAGE_METADATA_BYTES);
+    let mut decoder = image::codecs::png::PngDecoder::with_limits(std::io::Cursor::new(bytes), metadata)?;
+    let mut pixels = image::Limits::default();
+    pixels.max_alloc = Some(MAX_DECODED_PIXELS as u64 * 8);
+    decoder.set_limits(pixels)?;
+    Ok(decoder)
+}
+
+/// Decodes a PNG (size checked from the header first), EXIF orientation applied.
+fn decode_png(bytes: &[u8], path: &Path) -> Result<RgbImage> {
+    use image::ImageDecoder;
+    let err = |e: image::ImageError| decode_error(path, e);
+    let mut decoder = png_decoder(bytes).map_err(err)?;
+    let (w, h) = decoder.dimensions();
+    check_decoded_size(w, h)?;
+    let orientation = decoder.orientation().map_err(err)?;
+    let mut img = image::DynamicImage::from_decoder(decoder).map_err(err)?;
+    img.apply_orientation(orientation);
     let rgb = if img.color().has_alpha() {
         img.to_rgba8().pixels().flat_map(|p| over_white(p.0)).collect()
     } else {
         img.to_rgb8().into_raw()
     };
-    RgbImage::from_vec(w as usize, h as usize, rgb)
+    RgbImage::from_vec(img.width() as usize, img.height() as usize, rgb)
 }
 
-/// Decodes a JPEG to packed RGB with zune-jpeg in strict mode (the decoder `image` uses, which
-/// `image` runs non-strictly: it fills a truncated stream with grey and reports success).
-fn decode_jpeg_strict(bytes: &[u8]) -> std::result::Result<Vec<u8>, String> {
+/// Decodes a JPEG strictly (size checked from the header first), EXIF orientation applied.
+fn decode_jpeg(bytes: &[u8], path: &Path) -> Result<RgbImage> {
+    let err = |e: zune_jpeg::errors::DecodeErrors| decode_error(path, e);
+    let mut decoder = jpeg_decoder(bytes);
+    decoder.decode_headers().map_err(err)?;
+    let (w, h) = decoder.dimensions().ok_or_else(|| decode_error(path, "no frame header"))?;
+    let (w, h) = (w as u32, h as u32);
+    check_decoded_size(w, h)?;
+    // Every 8 x 8 luma block costs at least one bit of Huffman code (its DC difference), so
+    // a file with fewer bits than blocks cannot hold the image its header claims: it was cut
+    // short, or it is a bomb whose decoder would fill the missing blocks and report success
+    // (zune-jpeg's strict mode does so for a stream that ends early with a proper EOI).
+    // zune-jpeg decodes Huffman-coded JPEGs only (no arithmetic coding), so the bound holds.
+    let blocks = (w as usize).div_ceil(8) * (h as usize).div_ceil(8);
+    if bytes.len().saturating_mul(8) < blocks {
+        let reason = format!("truncated: {} bytes cannot hold the {w}x{h} image the header claims", bytes.len());
+        return Err(decode_error(path, reason));
+    }
+    let rgb = decoder.decode().map_err(err)?;
+    let orientation = decoder.exif().and_then(|e| image::metadata::Orientation::from_exif_chunk(e));
+    let Some(orientation) = orientation else {
+        return RgbImage::from_vec(w as usize, h as usize, rgb);
+    };
+    let buffer = image::RgbImage::from_raw(w, h, rgb)
+        .ok_or_else(|| decode_error(path, "decoded size differs from the header's"))?;
+    let mut img = image::DynamicImage::ImageRgb8(buffer);
+    img.apply_orientation(orientation);
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    RgbImage::from_vec(w, h, img.into_rgb8().into_raw())
+}
+
+/// A zune-jpeg decoder in strict mode, RGB output (the decoder `image` uses, which `image` runs
+/// non-strictly: it fills a truncated stream with grey and reports success). Any size a JPEG
+/// can state is let through its header, so [`check_decoded_size`] gives the error.
+fn jpeg_decoder(bytes: &[u8]) -> zune_jpeg::JpegDecoder<zune_jpeg::zune_core::bytestream::ZCursor<&[u8]>> {
     use zune_jpeg::zune_core::{bytestream::ZCursor, colorspace::ColorSpace, options::DecoderOptions};
     let options = DecoderOptions::default()
         .set_strict_mode(true)
-        .set_max_width(crate::error::MAX_IMAGE_SIDE)
-        .set_max_height(crate::error::MAX_IMAGE_SIDE)
+        .set_max_width(usize::from(u16::MAX))
+        .set_max_height(usize::from(u16::MAX))
         .jpeg_set_out_colorspace(ColorSpace::RGB);
-    zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), options).decode().map_err(|e| e.to_string())
+    zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), options)
 }
 
 /// An RGBA pixel composited over white.
@@ -268,5 +322,74 @@ mod tests {
         std::fs::write(&f, &png).unwrap();
         assert!(matches!(load_rgb_image(&f), Err(Error::TooManyPixels { .. })), "{:?}", load_rgb_image(&f).err());
         std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// A 32 x 16 RGB image: its left half black, its right half white, a red top-left block.
+    fn halves() -> Vec<u8> {
+        (0..16u32 * 32)
+            .flat_map(|i| {
+                let (x, y) = (i % 32, i / 32);
+                if x < 8 && y < 8 {
+                    [255, 0, 0]
+                } else if x < 16 {
+                    [0, 0, 0]
+                } else {
+                    [255, 255, 255]
+                }
+            })
+            .collect()
+    }
+
+    /// Issue 52 finding 5: EXIF orientation 8 (stored rotated 90° clockwise, shown turned 90°
+    /// counter-clockwise) is applied to JPEGs (APP1) and PNGs (`eXIf`): the 32 x 16 image whose
+    /// left half is black decodes as 16 x 32 with its bottom half black, the red top-left block
+    /// at the bottom-left. Orientation 1 and no EXIF leave it as stored.
+    #[test]
+    fn exif_orientation_is_applied_to_jpeg_and_png() {
+        use super::super::metadata_files::{exif_orientation, jpeg_with_orientation, rgb_png_with};
+        let px = halves();
+        let mut jpeg = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 95)
+            .encode(&px, 32, 16, image::ExtendedColorType::Rgb8)
+            .unwrap();
+        let p = Path::new("t");
+        let dark = |im: &RgbImage, x: usize, y: usize| im.as_bytes()[3 * (y * im.width() + x) + 1] < 60;
+        let red = |im: &RgbImage, x: usize, y: usize| {
+            let q = &im.as_bytes()[3 * (y * im.width() + x)..][..3];
+            q[0] > 200 && q[1] < 60
+        };
+        for (name, bytes) in [
+            ("jpeg", jpeg_with_orientation(&jpeg, 8)),
+            ("png", rgb_png_with(&px, 32, 16, None, Some(exif_orientation(8)))),
+        ] {
+            let im = decode_rgb_image(&bytes, p).unwrap();
+            assert_eq!((im.width(), im.height()), (16, 32), "{name}");
+            assert!(dark(&im, 12, 28) && !dark(&im, 12, 3), "{name}: the black half is not at the bottom");
+            assert!(red(&im, 2, 29) && !red(&im, 13, 29) && !red(&im, 2, 2), "{name}: red block misplaced");
+        }
+        for bytes in [jpeg.clone(), jpeg_with_orientation(&jpeg, 1), rgb_png_with(&px, 32, 16, None, None)] {
+            let im = decode_rgb_image(&bytes, p).unwrap();
+            assert_eq!((im.width(), im.height()), (32, 16));
+            assert!(red(&im, 2, 2) && dark(&im, 12, 12) && !dark(&im, 20, 12));
+        }
+    }
+
+    /// Issue 52 finding 6: a PNG whose colour profile inflates past
+    /// [`MAX_IMAGE_METADATA_BYTES`] (a 32 kB chunk of 32 MiB; the `image` crate's default limit
+    /// let it take up to 512 MiB) has it dropped while its pixels decode as without it; a
+    /// profile within the limit is kept.
+    #[test]
+    fn a_huge_colour_profile_is_dropped_within_the_metadata_limit() {
+        use super::super::metadata_files::rgb_png_with;
+        use image::ImageDecoder;
+        let px = halves();
+        let plain = decode_rgb_image(&rgb_png_with(&px, 32, 16, None, None), Path::new("t")).unwrap();
+        let huge = rgb_png_with(&px, 32, 16, Some(vec![0; 32 << 20]), None);
+        assert!(huge.len() < 64 << 10, "{} bytes", huge.len());
+        assert_eq!(png_decoder(&huge).unwrap().icc_profile().unwrap(), None);
+        assert_eq!(decode_rgb_image(&huge, Path::new("t")).unwrap(), plain);
+        let small = rgb_png_with(&px, 32, 16, Some(vec![7; 4096]), None);
+        assert_eq!(png_decoder(&small).unwrap().icc_profile().unwrap().map(|p| p.len()), Some(4096));
+        assert_eq!(decode_rgb_image(&small, Path::new("t")).unwrap(), plain);
     }
 }

@@ -223,4 +223,25 @@ mod tests {
         let d = embedded().unwrap();
         assert!(d.num_bases() >= 20, "{} bases", d.num_bases());
     }
+
+    /// Issue 52 finding 10: a dictionary file with a bone of 1e300 m (checksum valid) used to
+    /// load and give a NaN length excess reported as OK; it is refused on load, as are extreme
+    /// mean, spread and exemplar values.
+    #[test]
+    fn extreme_values_are_refused_on_load() {
+        let d = embedded().unwrap();
+        let edits: [fn(&mut Dictionary); 4] = [
+            |d| d.bone_lengths[3] = 1e300,
+            |d| d.mean[7] = -1e30,
+            |d| d.sigma[0] = 1e200,
+            |d| d.exemplars[(2, 0)] = 1e300,
+        ];
+        assert!(d.exemplars.ncols() > 0);
+        for edit in edits {
+            let mut bad = d.clone();
+            edit(&mut bad);
+            let e = from_bytes(&to_bytes(&bad)).unwrap_err().to_string();
+            assert!(e.contains("beyond 100 m"), "{e}");
+        }
+    }
 }

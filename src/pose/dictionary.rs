@@ -36,6 +36,11 @@ pub const DEFAULT_EXEMPLAR_SPACING: f64 = 0.03;
 /// Most exemplars a dictionary may hold.
 pub const MAX_EXEMPLARS: usize = 65536;
 
+/// Largest magnitude of a mean or exemplar coordinate, bone length or basis spread a dictionary
+/// may hold, metres (its poses are of a 1.75 m person): larger values are refused on load, as
+/// they overflow the solver's sums (a bone of 1e300 m gave a NaN length excess).
+pub const MAX_POSE_VALUE_M: f64 = 100.0;
+
 /// One action's block of consecutive basis columns.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Action {
@@ -133,7 +138,8 @@ impl Dictionary {
         self.actions.iter().find(|a| k >= a.first && k < a.first + a.count).map(|a| a.name.as_str())
     }
 
-    /// Checks internal consistency (sizes, finiteness, unit columns, action blocks).
+    /// Checks internal consistency (sizes, finite values within [`MAX_POSE_VALUE_M`], unit
+    /// columns, action blocks).
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::CorruptData(format!("pose dictionary: {m}")));
         if self.mean.len() != POSE_DIM || self.bases.nrows() != POSE_DIM || self.bases.ncols() == 0 {
@@ -163,6 +169,11 @@ impl Dictionary {
         }
         if self.bone_lengths.iter().any(|&l| l <= 0.0) {
             return bad("bone length not positive".into());
+        }
+        let extreme = |v: &f64| v.abs() > MAX_POSE_VALUE_M;
+        if self.mean.iter().chain(&self.bone_lengths).chain(self.sigma.iter()).chain(self.exemplars.iter()).any(extreme)
+        {
+            return bad(format!("a pose value, bone length or spread beyond {MAX_POSE_VALUE_M} m"));
         }
         for (k, c) in self.bases.column_iter().enumerate() {
             if (c.norm() - 1.0).abs() > 1e-6 {

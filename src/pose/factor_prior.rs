@@ -118,7 +118,7 @@ impl FactorPrior {
     /// or version, arrays of the wrong size, non-finite values, or spreads / lengths ≤ 0.
     pub fn from_json(text: &str) -> Result<FactorPrior> {
         let p: FactorPrior =
-            serde_json::from_str(text).map_err(|e| Error::CorruptData(format!("factor prior: {e}")))?;
+            crate::strict_json::from_str(text).map_err(|e| Error::CorruptData(format!("factor prior: {e}")))?;
         if p.format != FORMAT || p.version != VERSION {
             return Err(Error::CorruptData(format!("factor prior: format {:?} version {}", p.format, p.version)));
         }

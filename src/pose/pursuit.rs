@@ -160,7 +160,22 @@ pub fn estimate_pose_with_factor_prior(
     let factor_prior = prior.filter(|_| opts.factor_prior);
     let first = estimate_fixed(dict, joints, opts, hints.of(joints).as_ref())?;
     let est = if opts.proportions { with_proportions(dict, joints, opts, first, &hints, factor_prior) } else { first };
-    Ok(flag_plausibility(joints, est))
+    finite_estimate(flag_plausibility(joints, est))
+}
+
+/// `e`, or [`Error::NonFinite`] naming its first NaN or infinite joint, camera value, RMS,
+/// length excess or basis weight (a dictionary of extreme values overflows; never reported OK).
+fn finite_estimate(e: PoseEstimate) -> Result<PoseEstimate> {
+    let c = &e.camera;
+    let named = (e.joints.iter().flatten().map(|&v| ("pose joint", v)))
+        .chain([("camera sx", c.sx), ("camera sy", c.sy), ("camera t", c.t[0]), ("camera t", c.t[1])])
+        .chain(c.r.iter().map(|&v| ("camera rotation", v)))
+        .chain([("pose RMS", e.rms), ("length excess", e.length_excess)])
+        .chain(e.weights.iter().map(|&v| ("basis weight", v)));
+    for (name, v) in named {
+        crate::error::ensure_finite(name, v)?;
+    }
+    Ok(e)
 }
 
 /// Where a solve's depth hint comes from: the caller's image cue, else the learned depths of

@@ -1330,6 +1330,42 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
     let ran = got == SKB_OK || got == SKB_ERR_NO_FIGURE;
     t.check(e, "threshold", Kind::NaN, SKB_OK, if ran { SKB_OK } else { got }, true);
 
+    let e = "skb_detector_detect_with_progress";
+    let o = fx.detect_opts as *const skb_detect_options;
+    #[allow(clippy::type_complexity)]
+    let call = |d: *const skb_detector,
+                i: *const skb_image,
+                o: *const skb_detect_options,
+                xy: *mut f64,
+                xl: usize,
+                cf: *mut f64,
+                cl: usize,
+                sc: *mut f64| {
+        // SAFETY: live handles or NULL; buffers are canaries of the lengths passed (refused ones aside).
+        unsafe { skb_detector_detect_with_progress(d, i, o, None, ptr::null_mut(), xy, xl, cf, cl, sc) }
+    };
+    let (mut xy, mut cf, mut sc) = (Canary::of::<f64>(30), Canary::of::<f64>(15), Canary::of::<f64>(1));
+    let (xp, cp, sp) = (xy.ptr(), cf.ptr(), sc.ptr());
+    let mut rows: Vec<(&'static str, Kind, skb_status, skb_status)> = vec![
+        ("det", Kind::Null, SKB_ERR_NULL_POINTER, call(ptr::null(), &im, o, xp, 30, cp, 15, sp)),
+        ("image", Kind::Null, SKB_ERR_NULL_POINTER, call(det, ptr::null(), o, xp, 30, cp, 15, sp)),
+        ("joints_xy", Kind::Null, SKB_ERR_NULL_POINTER, call(det, &im, o, ptr::null_mut(), 30, cp, 15, sp)),
+        ("confidence", Kind::Null, SKB_ERR_NULL_POINTER, call(det, &im, o, xp, 30, ptr::null_mut(), 15, sp)),
+        ("score", Kind::Null, SKB_ERR_NULL_POINTER, call(det, &im, o, xp, 30, cp, 15, ptr::null_mut())),
+        ("joints_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, call(det, &im, o, xp, usize::MAX, cp, 15, sp)),
+        ("joints_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, call(det, &im, o, xp, 29, cp, 15, sp)),
+        ("confidence_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, call(det, &im, o, xp, 30, cp, usize::MAX, sp)),
+        ("confidence_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, call(det, &im, o, xp, 30, cp, 14, sp)),
+        ("image", Kind::Other, SKB_ERR_IMAGE_TOO_SMALL, call(det, &small_im, o, xp, 30, cp, 15, sp)),
+    ];
+    for (param, kind, want, got) in rows.drain(..) {
+        t.check(e, param, kind, want, got, xy.intact() && cf.intact() && sc.intact());
+    }
+    // NULL options are the defaults: the call runs.
+    let got = call(det, &im, ptr::null(), xp, 30, cp, 15, sp);
+    let ran = got == SKB_OK || got == SKB_ERR_NO_FIGURE;
+    t.check(e, "opts", Kind::Null, SKB_OK, if ran { SKB_OK } else { got }, true);
+
     let ctx = fx.ctx as *const skb_context;
     let o = fx.detect_opts as *const skb_detect_options;
     let e = "skb_detect";
@@ -1962,6 +1998,83 @@ fn render_rows(t: &mut Table, fx: &Fx) {
 }
 
 /// A header prototype: the function name and its parameters (C type, name).
+fn joints_file_rows(t: &mut Table, fx: &Fx) {
+    let good = CString::new(JOINTS).unwrap();
+    let dev = CString::new("/dev/zero").unwrap();
+    let not_utf8 = CString::new(vec![0xFFu8]).unwrap();
+    let e = "skb_joints2d_read_json";
+    let read = |p: *const c_char, c: &mut Canary| {
+        // SAFETY: `p` is NULL or NUL-terminated; `c` holds one skb_joints2d.
+        unsafe { skb_joints2d_read_json(p, c.ptr()) }
+    };
+    for (param, kind, path, want) in [
+        ("path", Kind::Null, ptr::null(), SKB_ERR_NULL_POINTER),
+        ("path", Kind::Other, dev.as_ptr(), SKB_ERR_IO),
+        ("path", Kind::Other, not_utf8.as_ptr(), SKB_ERR_INVALID_ARGUMENT),
+        ("path", Kind::Other, good.as_ptr(), SKB_OK),
+    ] {
+        let mut c = Canary::of::<skb_joints2d>(1);
+        let s = read(path, &mut c);
+        t.check(e, param, kind, want, s, c.intact());
+    }
+    // SAFETY: a NUL-terminated path; the NULL out-pointer is what is tested.
+    let s = unsafe { skb_joints2d_read_json(good.as_ptr(), ptr::null_mut()) };
+    t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, s, true);
+
+    let e = "skb_joints2d_parse_json";
+    let text = std::fs::read(JOINTS).unwrap();
+    let parse = |p: *const u8, len: usize, c: &mut Canary| {
+        // SAFETY: `p` is NULL or valid for `len` bytes (SIZE_MAX is refused before any read).
+        unsafe { skb_joints2d_parse_json(p.cast(), len, c.ptr()) }
+    };
+    for (param, kind, p, len, want) in [
+        ("json", Kind::Null, ptr::null(), text.len(), SKB_ERR_NULL_POINTER),
+        ("len", Kind::Max, text.as_ptr(), usize::MAX, SKB_ERR_OUT_OF_RANGE),
+        ("len", Kind::Other, text.as_ptr(), text.len() / 2, SKB_ERR_CORRUPT_DATA),
+        ("len", Kind::Other, text.as_ptr(), text.len(), SKB_OK),
+    ] {
+        let mut c = Canary::of::<skb_joints2d>(1);
+        let s = parse(p, len, &mut c);
+        t.check(e, param, kind, want, s, c.intact());
+    }
+    // SAFETY: `text` is valid for its length; the NULL out-pointer is what is tested.
+    let s = unsafe { skb_joints2d_parse_json(text.as_ptr().cast(), text.len(), ptr::null_mut()) };
+    t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, s, true);
+
+    let e = "skb_joints2d_write_json";
+    let out = CString::new(fx.dir.join("joints-out.json").to_str().unwrap()).unwrap();
+    let folder = CString::new(fx.dir.to_str().unwrap()).unwrap();
+    let write = |j: *const skb_joints2d, p: *const c_char| {
+        // SAFETY: `j` is NULL or a live value, `p` NULL or NUL-terminated.
+        unsafe { skb_joints2d_write_json(j, p) }
+    };
+    let mut nan = fx.joints;
+    nan.xy[5][0] = f64::NAN;
+    let mut inf = fx.joints;
+    inf.xy[0][1] = f64::INFINITY;
+    let mut ninf = fx.joints;
+    ninf.xy[14][0] = f64::NEG_INFINITY;
+    let (nan, inf, ninf, ok): (*const skb_joints2d, *const skb_joints2d, *const skb_joints2d, *const skb_joints2d) =
+        (&nan, &inf, &ninf, &fx.joints);
+    for (param, kind, j, p, want) in [
+        ("joints", Kind::Null, ptr::null(), out.as_ptr(), SKB_ERR_NULL_POINTER),
+        ("joints.xy", Kind::NaN, nan, out.as_ptr(), SKB_ERR_NON_FINITE),
+        ("joints.xy", Kind::PosInf, inf, out.as_ptr(), SKB_ERR_NON_FINITE),
+        ("joints.xy", Kind::NegInf, ninf, out.as_ptr(), SKB_ERR_NON_FINITE),
+        ("path", Kind::Null, ok, ptr::null(), SKB_ERR_NULL_POINTER),
+        ("path", Kind::Other, ok, not_utf8.as_ptr(), SKB_ERR_INVALID_ARGUMENT),
+        ("path", Kind::Other, ok, folder.as_ptr(), SKB_ERR_IO),
+    ] {
+        let s = write(j, p);
+        t.check(e, param, kind, want, s, !fx.dir.join("joints-out.json").exists());
+    }
+    let s = write(ok, out.as_ptr());
+    t.check(e, "path", Kind::Other, SKB_OK, s, true);
+    if std::fs::read_dir(&fx.dir).unwrap().flatten().any(|e| e.file_name().to_string_lossy().contains(".tmp")) {
+        t.failures.push(format!("{e}: temporary files left in {}", fx.dir.display()));
+    }
+}
+
 fn prototypes(header: &str) -> Vec<(String, Vec<(String, String)>)> {
     let mut text = String::new();
     let mut rest = header;
@@ -2033,6 +2146,7 @@ fn every_export_is_in_the_misuse_table_and_fails_cleanly() {
     gray_image_rows(&mut t, &fx);
     render_rows(&mut t, &fx);
     detect_rows(&mut t, &fx);
+    joints_file_rows(&mut t, &fx);
 
     // Coverage against the header: every export, every parameter's kinds.
     let header = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../include/sketchbody.h")).unwrap();

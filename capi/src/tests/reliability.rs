@@ -161,3 +161,80 @@ fn panics_are_captured_not_printed() {
     assert!(!stderr.contains("deliberate test panic"), "the panic was printed: {stderr}");
     assert!(String::from_utf8_lossy(&out.stdout).contains("1 passed"), "the child ran the test");
 }
+
+/// Progress of one detection: the call that cancels, calls so far and after cancelling.
+struct DetectProgress {
+    calls: usize,
+    cancel_at: usize,
+    after_cancel: usize,
+}
+
+unsafe extern "C" fn on_detect_progress(user: *mut std::ffi::c_void, _fraction: f32) -> std::ffi::c_int {
+    // SAFETY: `user` is the `DetectProgress` the test passes with the call, alive for its duration.
+    let p = unsafe { &mut *(user as *mut DetectProgress) };
+    if p.calls > p.cancel_at {
+        p.after_cancel += 1;
+    }
+    p.calls += 1;
+    std::ffi::c_int::from(p.calls > p.cancel_at)
+}
+
+/// Issue 52 finding 10: a detector file with a bias of 1e308 (score +inf, joints outside the
+/// image, reported OK) is refused on load; detection with a loaded model is cancellable at every
+/// progress point (`SKB_ERR_CANCELLED`, nothing written, no call after the cancelling one).
+#[test]
+fn detector_models_are_bounded_and_detection_cancellable() {
+    use sketchbody_core::detect::model::tiny_model;
+    let dir = scratch("detector");
+    let mut m = tiny_model();
+    m.bias[1] = 1e308;
+    let bad = dir.join("bias.skbd");
+    // The writer does not validate; the reader does.
+    std::fs::write(&bad, m.to_bytes()).unwrap();
+    let good = dir.join("tiny.skbd");
+    std::fs::write(&good, tiny_model().to_bytes()).unwrap();
+    let px: Vec<u8> = (0..96 * 80).map(|i| if (i % 96) / 8 % 3 == 0 { 30 } else { 220 }).collect();
+    let im = skb_image { data: px.as_ptr(), width: 96, height: 80, stride: 96, channels: 1 };
+    // SAFETY: test code; each pointer is NULL or a live local of the documented size.
+    unsafe {
+        let mut det = ptr::null_mut();
+        let p = CString::new(bad.to_str().unwrap()).unwrap();
+        assert_eq!(skb_detector_new_from_file(p.as_ptr(), &mut det), skb_status::SKB_ERR_CORRUPT_DATA);
+        assert!(last_error().contains("bias is beyond"), "{}", last_error());
+        let p = CString::new(good.to_str().unwrap()).unwrap();
+        assert_eq!(skb_detector_new_from_file(p.as_ptr(), &mut det), skb_status::SKB_OK);
+        let mut opts = ptr::null_mut();
+        assert_eq!(skb_detect_options_new(&mut opts), skb_status::SKB_OK);
+        assert_eq!(skb_detect_options_set_threshold(opts, -1e6), skb_status::SKB_OK);
+        let run = |cancel_at: usize| {
+            let mut pr = DetectProgress { calls: 0, cancel_at, after_cancel: 0 };
+            let (mut xy, mut cf, mut score) = ([7.0; 30], [7.0; 15], 7.0);
+            let s = skb_detector_detect_with_progress(
+                det,
+                &im,
+                opts,
+                Some(on_detect_progress),
+                &mut pr as *mut DetectProgress as *mut std::ffi::c_void,
+                xy.as_mut_ptr(),
+                30,
+                cf.as_mut_ptr(),
+                15,
+                &mut score,
+            );
+            let untouched = xy == [7.0; 30] && cf == [7.0; 15] && score == 7.0;
+            (s, pr, untouched)
+        };
+        let (s, whole, _) = run(usize::MAX);
+        assert_eq!(s, skb_status::SKB_OK, "{}", last_error());
+        assert!(whole.calls >= 2, "{} progress calls", whole.calls);
+        for at in 0..whole.calls {
+            let (s, pr, untouched) = run(at);
+            assert_eq!(s, skb_status::SKB_ERR_CANCELLED, "cancel at {at}");
+            assert!(untouched, "cancel at {at}: outputs written");
+            assert_eq!((pr.calls, pr.after_cancel), (at + 1, 0), "cancel at {at}");
+        }
+        skb_detect_options_free(opts);
+        skb_detector_free(det);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
