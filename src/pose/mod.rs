@@ -21,7 +21,7 @@
 //! - [`pursuit`]: the matching pursuit driver ([`estimate_pose`]).
 //! - [`refine`]: the joint Levenberg–Marquardt refinement with the constraint kept exactly.
 //! - [`joint_fit`]: the free-joint refinement (joints leave the dictionary's span, bone lengths kept).
-//! - [`metrics`]: MPJPE and PA-MPJPE.
+//! - [`metrics`]: MPJPE, PA-MPJPE, limb directions, torso lean, knee and elbow bends.
 //!
 //! Units: 3-D joints are metres of a 1.75 m person (every pose is normalised to that stature,
 //! see [`motion::normalize_pose`]); 2-D joints are image pixels (origin top-left, y down).
