@@ -239,7 +239,7 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
     let held_out = |stem: &str| entries.iter().any(|e| clip_matches(e, stem));
     let mut sets = vec![load_set("deepmimic", &[mocap.to_path_buf()], &held_out, &skeletons, cases)?];
     if let Some(c) = cmu {
-        sets.push(load_set("cmu", &[c.clone()], &held_out, &skeletons, cases)?);
+        sets.push(load_set("cmu", std::slice::from_ref(c), &held_out, &skeletons, cases)?);
     }
     if let Some(c) = suite.cmu_more {
         sets.extend(category_sets(c, &skeletons, cases)?);
