@@ -13,10 +13,10 @@ use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
 use sketchbody::body::rig::RiggedMesh;
+use sketchbody::body::rig::{RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::fbx::node::{file_bytes, s, Node, Prop};
 use sketchbody::export::fbx::{fbx_bytes, write_fbx};
-use sketchbody::body::rig::{RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 
 #[derive(Debug, Clone)]
 enum Value {

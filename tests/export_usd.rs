@@ -18,9 +18,9 @@ use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
 use sketchbody::body::rig::RiggedMesh;
+use sketchbody::body::rig::{Naming, RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::usd::{usda_string, write_usda};
-use sketchbody::body::rig::{Naming, RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 
 /// The text after `name = ` up to the end of its bracketed (or single-token) value.
 fn value<'t>(text: &'t str, name: &str) -> &'t str {

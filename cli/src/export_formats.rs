@@ -3,11 +3,11 @@
 
 use std::path::PathBuf;
 
+use sketchbody::body::rig::RigScene;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::export::fbx::write_fbx;
 use sketchbody::export::gltf::write_glb;
 use sketchbody::export::usd::write_usda;
-use sketchbody::body::rig::RigScene;
 
 /// A rigged-body file format of `--format`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

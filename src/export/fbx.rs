@@ -6,11 +6,11 @@
 //! "body.fbx".
 use std::path::Path;
 
+use crate::body::rig::RigScene;
 use crate::body::rig::RiggedMesh;
 use crate::error::Result;
 use crate::export::rigged::check_scene;
 use crate::fsutil::write_atomic;
-use crate::body::rig::RigScene;
 
 pub mod node;
 pub mod scene;

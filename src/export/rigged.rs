@@ -3,8 +3,8 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 use crate::body::rig::RiggedMesh;
-use crate::error::{Error, Result};
 use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
+use crate::error::{Error, Result};
 
 /// Checks that `scene` was built for `mesh`: a valid mesh, one rest vertex and one skin entry per
 /// mesh vertex, finite coordinates. Errors: [`Error::OutOfRange`] (`"rig scene"`) for a count

@@ -13,10 +13,10 @@ use std::path::Path;
 use nalgebra::{Matrix4, UnitQuaternion};
 
 use crate::body::rig::{vertex_normals, RiggedMesh};
+use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
 use crate::error::Result;
 use crate::export::rigged::{bind_transform, check_scene, posed_locals};
 use crate::fsutil::write_atomic;
-use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
 
 /// The texture file the material reads, relative to the layer (the CLI writes it beside).
 pub const TEXTURE_FILE: &str = "body_texture.png";

@@ -116,6 +116,10 @@ pub struct Args {
     /// With `--suite`: the CMU folder (../shared/data/mocap/cmu).
     #[arg(long)]
     cmu: Option<PathBuf>,
+    /// With `--suite`: the `cmu_more` folder (../shared/data/mocap/cmu_more), measured per
+    /// action category (actions the shipped models never saw).
+    #[arg(long)]
+    cmu_more: Option<PathBuf>,
     /// With `--suite`: cases per set (evenly spaced over its held-out frames).
     #[arg(long, default_value_t = 360)]
     cases: usize,
@@ -243,6 +247,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         let suite = crate::bench_pose_suite::Suite {
             mocap: &a.mocap,
             cmu: a.cmu.as_ref(),
+            cmu_more: a.cmu_more.as_ref(),
             clips: a.clips.as_deref(),
             cases: a.cases,
             sigmas: &a.sigma,

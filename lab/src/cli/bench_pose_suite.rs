@@ -5,7 +5,13 @@
 //! |yaw| U(60°, 90°); pitch U(±10°) for both) and 2-D noise σ. Scores: PA-MPJPE (mm, after a
 //! similarity alignment), limb direction error (upper arm, forearm, thigh, shin after the same
 //! alignment: mean degrees and % of limbs > 30° off), torso lean error (pelvis→neck, each pose
-//! in its own camera frame, degrees), share of estimates flagged implausible, CPU ms per call.
+//! in its own camera frame, degrees), knee and elbow bend errors (degrees), the extra bend of
+//! knees and elbows straight in the truth (bend < 15°: mean estimated − true, degrees), share of
+//! estimates flagged implausible, CPU ms per call.
+//!
+//! With `--cmu-more`, one more set per action category of `../shared/data/mocap/cmu_more`
+//! ([`CATEGORIES`]; every clip of it: neither the dictionary nor the learned priors were trained
+//! on that folder, so each category is an action they have not seen), and a row over all of them.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -24,7 +30,7 @@ use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
 use sketchbody_lab::pose::learn::{
     body_model_skeletons, clip_matches, default_held_out, held_out_of, motion_files, retarget_frames,
 };
-use sketchbody_lab::pose::metrics::{limb_direction_errors, pa_mpjpe, torso_lean_error_deg};
+use sketchbody_lab::pose::metrics::{limb_direction_errors, pa_mpjpe, torso_lean_error_deg, HingeScores};
 
 use crate::bench_pose::thread_cpu_s;
 use sketchbody_cli::CliError;
@@ -34,33 +40,65 @@ struct Set {
     name: String,
     clips: Vec<String>,
     frames: Vec<Joints3>,
+    /// One of `--cmu-more`'s action categories (summed into its "all" row).
+    category: bool,
 }
 
-/// The held-out clips of `dir` (names matching the dictionary's held-out entries or the
-/// library's defaults), retargeted onto `skeletons` and normalised, `cases` evenly spaced.
+/// The action categories of `cmu_more` (its README): set name and clip-name prefix.
+pub const CATEGORIES: [(&str, &str); 8] = [
+    ("referee", "hmp_basketball_signal_"),
+    ("traffic", "hmp_directing_traffic_"),
+    ("soccer", "hmp_soccer_"),
+    ("walks", "hmp_walking_extra_"),
+    ("windows", "hmp_washwindow_"),
+    ("mj_walk", "131_"),
+    ("breakdance", "85_"),
+    ("karate", "135_"),
+];
+
+/// The clips of `dirs` that `keep` accepts (by file stem), retargeted onto `skeletons` and
+/// normalised, `cases` evenly spaced.
 fn load_set(
     name: &str,
-    dir: &Path,
-    entries: &[String],
+    dirs: &[PathBuf],
+    keep: &dyn Fn(&str) -> bool,
     skeletons: &[(String, Joints3)],
     cases: usize,
 ) -> Result<Set, CliError> {
     let mut clips = Vec::new();
     let mut all = Vec::new();
-    for f in motion_files(dir)? {
-        let stem = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        if !entries.iter().any(|e| clip_matches(e, &stem)) {
-            continue;
+    for dir in dirs {
+        for f in motion_files(dir)? {
+            let stem = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            if !keep(&stem) {
+                continue;
+            }
+            all.extend(retarget_frames(&stem, read_motion_csv(&f)?, skeletons)?.iter().filter_map(normalize_pose));
+            clips.push(stem);
         }
-        all.extend(retarget_frames(&stem, read_motion_csv(&f)?, skeletons)?.iter().filter_map(normalize_pose));
-        clips.push(stem);
     }
     if all.is_empty() {
-        return Err(CliError(format!("bench-pose --suite: no held-out clips in {}", dir.display())));
+        let d = dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", ");
+        return Err(CliError(format!("bench-pose --suite: no clips of set {name} in {d}")));
     }
     let n = cases.min(all.len()).max(1);
     let frames = (0..n).map(|i| all[i * all.len() / n]).collect();
-    Ok(Set { name: name.to_string(), clips, frames })
+    Ok(Set { name: name.to_string(), clips, frames, category: false })
+}
+
+/// One set per [`CATEGORIES`] entry from the sub-folders of `root` (`cmu_more`).
+fn category_sets(root: &Path, skeletons: &[(String, Joints3)], cases: usize) -> Result<Vec<Set>, CliError> {
+    let io = |e: std::io::Error| CliError(format!("bench-pose --cmu-more {}: {e}", root.display()));
+    let mut dirs: Vec<PathBuf> =
+        std::fs::read_dir(root).map_err(io)?.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_dir()).collect();
+    dirs.sort();
+    CATEGORIES
+        .iter()
+        .map(|(name, prefix)| {
+            let set = load_set(name, &dirs, &|stem: &str| stem.starts_with(prefix), skeletons, cases)?;
+            Ok(Set { category: true, ..set })
+        })
+        .collect()
 }
 
 /// Random stylised factors (module doc).
@@ -92,6 +130,57 @@ fn camera<R: Rng>(rng: &mut R, side: bool) -> WeakPerspective {
     WeakPerspective { sx: scale, sy: scale, r, t: [256.0, 300.0] }
 }
 
+/// Sums over the cases of one row of the table.
+#[derive(Clone, Copy, Default)]
+struct Scores {
+    pa: f64,
+    limb: f64,
+    over: usize,
+    lean: f64,
+    hinges: HingeScores,
+    n: usize,
+    calls: usize,
+    failed: usize,
+    implausible: usize,
+    cpu: f64,
+}
+
+impl Scores {
+    fn merge(&mut self, o: &Scores) {
+        self.pa += o.pa;
+        self.limb += o.limb;
+        self.over += o.over;
+        self.lean += o.lean;
+        self.hinges.merge(&o.hinges);
+        self.n += o.n;
+        self.calls += o.calls;
+        self.failed += o.failed;
+        self.implausible += o.implausible;
+        self.cpu += o.cpu;
+    }
+
+    fn print(&self, set: &str, props: &str, view: &str, sigma: f64) {
+        let d = self.n.max(1) as f64;
+        println!(
+            "{:<10} {:<9} {:<7} {:>5.1} {:>8.1} {:>8.2} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>9.1} {:>9.1} {:>6} {:>7.2}",
+            set,
+            props,
+            view,
+            sigma,
+            1e3 * self.pa / d,
+            self.limb / d,
+            100.0 * self.over as f64 / (8.0 * d),
+            self.lean / d,
+            self.hinges.knee_deg(),
+            self.hinges.elbow_deg(),
+            self.hinges.straight_extra_deg(),
+            100.0 * self.implausible as f64 / d,
+            self.failed,
+            1e3 * self.cpu / self.calls.max(1) as f64
+        );
+    }
+}
+
 fn dump_err(e: std::io::Error) -> CliError {
     CliError(format!("bench-pose --dump: {e}"))
 }
@@ -102,6 +191,8 @@ pub struct Suite<'a> {
     pub mocap: &'a Path,
     /// The CMU folder.
     pub cmu: Option<&'a PathBuf>,
+    /// The `cmu_more` folder: one set per action category ([`CATEGORIES`]).
+    pub cmu_more: Option<&'a PathBuf>,
     /// Clips to measure on (names, or `SS_*` for a CMU subject) instead of the dictionary's
     /// held-out clips and the library's list (a validation split learned without them).
     pub clips: Option<&'a [String]>,
@@ -145,9 +236,13 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
         None => None,
     };
     let skeletons = body_model_skeletons(&BodyModel::embedded()?);
-    let mut sets = vec![load_set("deepmimic", mocap, &entries, &skeletons, cases)?];
+    let held_out = |stem: &str| entries.iter().any(|e| clip_matches(e, stem));
+    let mut sets = vec![load_set("deepmimic", &[mocap.to_path_buf()], &held_out, &skeletons, cases)?];
     if let Some(c) = cmu {
-        sets.push(load_set("cmu", c, &entries, &skeletons, cases)?);
+        sets.push(load_set("cmu", std::slice::from_ref(c), &held_out, &skeletons, cases)?);
+    }
+    if let Some(c) = suite.cmu_more {
+        sets.extend(category_sets(c, &skeletons, cases)?);
     }
     println!(
         "bench-pose --suite: {} bases in {} actions, {} exemplars; seed {seed}; options {opts:?}",
@@ -159,7 +254,7 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
         println!("set {}: {} cases from {} clips ({})", s.name, s.frames.len(), s.clips.len(), s.clips.join(","));
     }
     println!(
-        "{:<10} {:<10} {:<8} {:>5} {:>9} {:>9} {:>8} {:>8} {:>10} {:>8} {:>7}",
+        "{:<10} {:<9} {:<7} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>6} {:>7}",
         "set",
         "props",
         "view",
@@ -168,21 +263,23 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
         "limb deg",
         "limb>30%",
         "lean deg",
+        "knee deg",
+        "elbow dg",
+        "straight+",
         "implaus %",
         "failed",
         "cpu ms"
     );
     let normal = Normal::new(0.0, 1.0).map_err(|e| CliError(e.to_string()))?;
+    let mut all_categories = std::collections::BTreeMap::<(usize, usize, usize), Scores>::new();
     for (si, set) in sets.iter().enumerate() {
         for (pi, props) in ["standard", "stylised"].iter().enumerate() {
             for (vi, view) in ["frontal", "side"].iter().enumerate() {
                 // One stream per (set, proportions, view): the same cases for every sigma.
                 let stream = seed.wrapping_mul(1000).wrapping_add((100 * si + 10 * pi + vi) as u64);
-                for &sigma in sigmas {
+                for (ni, &sigma) in sigmas.iter().enumerate() {
                     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(stream);
-                    let (mut pa, mut limb, mut over, mut lean) = (0.0, 0.0, 0usize, 0.0);
-                    let (mut n, mut failed, mut implausible) = (0usize, 0usize, 0usize);
-                    let mut cpu = 0.0;
+                    let mut sc = Scores::default();
                     for (case, f) in set.frames.iter().enumerate() {
                         let factors = stylised(&mut rng);
                         let gt = if pi == 1 { factors.apply(f) } else { *f };
@@ -198,13 +295,14 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
                             Some(p) => estimate_pose_with_factor_prior(dict, &j2, opts, None, Some(p)),
                             None => estimate_pose(dict, &j2, opts),
                         };
-                        cpu += thread_cpu_s() - c0;
+                        sc.cpu += thread_cpu_s() - c0;
+                        sc.calls += 1;
                         let Ok(est) = res else {
-                            failed += 1;
+                            sc.failed += 1;
                             continue;
                         };
                         let Some(errs) = limb_direction_errors(&est.joints, &gt) else {
-                            failed += 1;
+                            sc.failed += 1;
                             continue;
                         };
                         if let Some(out) = dump.as_mut() {
@@ -221,31 +319,24 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
                             )
                             .map_err(dump_err)?;
                         }
-                        pa += pa_mpjpe(&est.joints, &gt);
-                        limb += errs.iter().sum::<f64>() / errs.len() as f64;
-                        over += errs.iter().filter(|e| **e > 30.0).count();
-                        lean += torso_lean_error_deg(&est.joints, &est.camera.r, &gt, &cam.r);
-                        implausible += usize::from(!est.plausible);
-                        n += 1;
+                        sc.pa += pa_mpjpe(&est.joints, &gt);
+                        sc.limb += errs.iter().sum::<f64>() / errs.len() as f64;
+                        sc.over += errs.iter().filter(|e| **e > 30.0).count();
+                        sc.lean += torso_lean_error_deg(&est.joints, &est.camera.r, &gt, &cam.r);
+                        sc.hinges.add(&est.joints, &gt);
+                        sc.implausible += usize::from(!est.plausible);
+                        sc.n += 1;
                     }
-                    let d = n.max(1) as f64;
-                    println!(
-                        "{:<10} {:<10} {:<8} {:>5.1} {:>9.1} {:>9.1} {:>8.1} {:>8.1} {:>10.1} {:>8} {:>7.2}",
-                        set.name,
-                        props,
-                        view,
-                        sigma,
-                        1e3 * pa / d,
-                        limb / d,
-                        100.0 * over as f64 / (8.0 * d),
-                        lean / d,
-                        100.0 * implausible as f64 / d,
-                        failed,
-                        1e3 * cpu / set.frames.len() as f64
-                    );
+                    sc.print(&set.name, props, view, sigma);
+                    if set.category {
+                        all_categories.entry((pi, vi, ni)).or_default().merge(&sc);
+                    }
                 }
             }
         }
+    }
+    for ((pi, vi, ni), sc) in &all_categories {
+        sc.print("categories", ["standard", "stylised"][*pi], ["frontal", "side"][*vi], sigmas[*ni]);
     }
     if let Some(mut out) = dump {
         out.flush().map_err(dump_err)?;

@@ -1,5 +1,5 @@
 //! 3-D pose errors: MPJPE (root-aligned), PA-MPJPE (after a similarity Procrustes alignment),
-//! limb direction errors and the torso lean.
+//! limb direction errors, the torso lean and the bends of the knees and elbows.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -71,6 +71,90 @@ pub fn limb_direction_errors(est: &Joints3, gt: &Joints3) -> Option<[f64; 8]> {
     }))
 }
 
+/// The hinge joints scored by [`hinge_bends_deg`], as (parent, hinge, child) joints: right
+/// knee, left knee, right elbow, left elbow.
+pub const HINGES: [(usize, usize, usize); 4] = [
+    (joint::R_HIP, joint::R_KNEE, joint::R_ANKLE),
+    (joint::L_HIP, joint::L_KNEE, joint::L_ANKLE),
+    (joint::R_SHOULDER, joint::R_ELBOW, joint::R_WRIST),
+    (joint::L_SHOULDER, joint::L_ELBOW, joint::L_WRIST),
+];
+
+/// Largest bend, degrees, of a hinge counted as straight by [`HingeScores`].
+pub const STRAIGHT_BEND_DEG: f64 = 15.0;
+
+/// Bend of each of [`HINGES`], degrees: the angle between the upper and the lower bone (0 =
+/// straight, whatever the direction of the bend). Needs no alignment: bends do not change under
+/// a similarity.
+pub fn hinge_bends_deg(x: &Joints3) -> [f64; 4] {
+    HINGES.map(|(p, h, c)| angle_deg(&(v(&x[h]) - v(&x[p])), &(v(&x[c]) - v(&x[h]))))
+}
+
+/// Sums of hinge-bend errors over many poses ([`HingeScores::add`]); the means are the
+/// benchmark's figures.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HingeScores {
+    /// Sum of |estimated − true| knee bends, degrees.
+    pub knee_sum: f64,
+    /// Knees counted.
+    pub knees: usize,
+    /// Sum of |estimated − true| elbow bends, degrees.
+    pub elbow_sum: f64,
+    /// Elbows counted.
+    pub elbows: usize,
+    /// Sum of estimated − true bend (signed: > 0 bent more than the truth), degrees, over the
+    /// hinges whose true bend is below [`STRAIGHT_BEND_DEG`].
+    pub straight_extra_sum: f64,
+    /// Hinges straight in the truth.
+    pub straight: usize,
+}
+
+impl HingeScores {
+    /// Adds the hinges of one estimate `est` against its truth `gt`.
+    pub fn add(&mut self, est: &Joints3, gt: &Joints3) {
+        let (e, g) = (hinge_bends_deg(est), hinge_bends_deg(gt));
+        for i in 0..4 {
+            let d = e[i] - g[i];
+            if i < 2 {
+                self.knee_sum += d.abs();
+                self.knees += 1;
+            } else {
+                self.elbow_sum += d.abs();
+                self.elbows += 1;
+            }
+            if g[i] < STRAIGHT_BEND_DEG {
+                self.straight_extra_sum += d;
+                self.straight += 1;
+            }
+        }
+    }
+
+    /// Adds another set of sums.
+    pub fn merge(&mut self, o: &HingeScores) {
+        self.knee_sum += o.knee_sum;
+        self.knees += o.knees;
+        self.elbow_sum += o.elbow_sum;
+        self.elbows += o.elbows;
+        self.straight_extra_sum += o.straight_extra_sum;
+        self.straight += o.straight;
+    }
+
+    /// Mean knee-bend error, degrees (NaN without knees).
+    pub fn knee_deg(&self) -> f64 {
+        self.knee_sum / self.knees as f64
+    }
+
+    /// Mean elbow-bend error, degrees (NaN without elbows).
+    pub fn elbow_deg(&self) -> f64 {
+        self.elbow_sum / self.elbows as f64
+    }
+
+    /// Mean extra bend of the hinges straight in the truth, degrees (NaN without any).
+    pub fn straight_extra_deg(&self) -> f64 {
+        self.straight_extra_sum / self.straight as f64
+    }
+}
+
 /// Torso lean of a pose, degrees: the angle between its pelvis→neck vector and the model's up
 /// axis (+Y).
 pub fn torso_lean_deg(x: &Joints3) -> f64 {
@@ -119,5 +203,40 @@ mod tests {
         assert!(torso_lean_deg(&up) < 1e-9);
         let r = *Rotation3::from_euler_angles(0.2, 0.0, 0.0).matrix();
         assert!((torso_lean_error_deg(&up, &r, &up, &id) - 0.2f64.to_degrees()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn hinge_bends_score_knees_elbows_and_straight_limbs() {
+        use joint::*;
+        let mut gt = [[0.0; 3]; NUM_JOINTS];
+        for (h, k, a, x) in [(R_HIP, R_KNEE, R_ANKLE, -0.1), (L_HIP, L_KNEE, L_ANKLE, 0.1)] {
+            gt[h] = [x, 0.0, 0.0];
+            gt[k] = [x, -0.4, 0.0];
+            gt[a] = [x, -0.8, 0.0];
+        }
+        for (s, e, w, x) in [(R_SHOULDER, R_ELBOW, R_WRIST, -0.2), (L_SHOULDER, L_ELBOW, L_WRIST, 0.2)] {
+            gt[s] = [x, 0.5, 0.0];
+            gt[e] = [x, 0.2, 0.0];
+            gt[w] = [x, 0.2, 0.3];
+        }
+        let b = hinge_bends_deg(&gt);
+        assert!(b[0] < 1e-9 && b[1] < 1e-9 && (b[2] - 90.0).abs() < 1e-9 && (b[3] - 90.0).abs() < 1e-9);
+        // The right knee bent 30° forward, and the same pose turned and scaled.
+        let mut est = gt;
+        est[R_ANKLE] = [-0.1, -0.4 - 0.4 * 30f64.to_radians().cos(), 0.4 * 30f64.to_radians().sin()];
+        let r = Rotation3::from_euler_angles(0.3, -0.2, 1.0);
+        let est: Joints3 = std::array::from_fn(|j| (r * v(&est[j]) * 2.0).into());
+        let mut s = HingeScores::default();
+        s.add(&est, &gt);
+        assert!((s.knee_deg() - 15.0).abs() < 1e-6, "{s:?}");
+        assert!(s.elbow_deg() < 1e-6);
+        assert_eq!(s.straight, 2);
+        assert!((s.straight_extra_deg() - 15.0).abs() < 1e-6);
+        let mut t = HingeScores::default();
+        t.merge(&s);
+        t.merge(&s);
+        assert_eq!((t.knees, t.straight), (4, 4));
+        assert!((t.straight_extra_deg() - 15.0).abs() < 1e-6);
+        assert!(HingeScores::default().knee_deg().is_nan());
     }
 }

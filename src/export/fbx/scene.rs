@@ -6,8 +6,8 @@ use nalgebra::Matrix4;
 
 use super::node::{object_name, p, s, Node, Prop, VERSION};
 use crate::body::rig::{vertex_normals, RiggedMesh};
-use crate::export::rigged::{bind_transform, posed_locals};
 use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
+use crate::export::rigged::{bind_transform, posed_locals};
 
 /// The file name the texture is referenced by (beside the .fbx, as the CLI writes it); the
 /// same bytes are embedded.
