@@ -18,7 +18,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// The main job: sketch (+ 2-D joints) to a rigged, posed 3-D body and its report.
-    Run(run::Args),
+    Run(Box<run::Args>),
     /// 2-D pose (15 joints with confidences) of the figure in a sketch, with a detector model.
     Detect(detect::Args),
     /// 3-D pose and weak-perspective camera from 2-D joints (JSON in, JSON out).
@@ -32,7 +32,7 @@ enum Command {
 fn main() -> ExitCode {
     default_sigpipe();
     let result = match Cli::parse().command {
-        Command::Run(a) => run::run(a),
+        Command::Run(a) => run::run(*a),
         Command::Detect(a) => detect::run(a),
         Command::Pose(a) => pose::run(a),
         Command::Body(a) => body::run(a),
