@@ -143,7 +143,7 @@ def _read_joints_file(skb, path):
         joints = skb.Joints2D.from_json(path)
         with open(path, encoding="utf-8") as f:
             raw = json.load(f).get("confidence")
-    except (ValueError, KeyError, TypeError, OSError) as e:
+    except (skb.SketchbodyError, ValueError, KeyError, TypeError, OSError) as e:
         detail = str(e) if path in str(e) else f"{path}: {e}"
         raise UserError(f"Cannot read the joints file {detail}")
     conf = np.where(joints.visible, 1.0, 0.0)
