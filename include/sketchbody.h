@@ -1105,7 +1105,7 @@ skb_status skb_mesh_copy_normals(const struct skb_mesh *mesh,
 skb_status skb_pose_dictionary_new_default(struct skb_pose_dictionary **out);
 
 /**
- * Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody learn-poses`);
+ * Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody-lab learn-poses`);
  * `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
  * `*out` owns the dictionary. Thread-safe.
  */

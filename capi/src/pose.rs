@@ -115,7 +115,7 @@ pub unsafe extern "C" fn skb_pose_dictionary_new_default(out: *mut *mut skb_pose
     }
 }
 
-/// Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody learn-poses`);
+/// Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody-lab learn-poses`);
 /// `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
 /// `*out` owns the dictionary. Thread-safe.
 #[no_mangle]

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "de213ca829a136c7791495686f55c470880b3ee4713aec52a478dedf3316bc25"
+HEADER_SHA256 = "bbb3b02be017c05daaca3c66722a4042fe49af9f6daa04f5a2a0107f2f20eaac"
 
 # ---- constants (#define) ----
 
@@ -1549,7 +1549,7 @@ FUNCTIONS["skb_pose_dictionary_new_default"] = (
     ),
 )
 
-# Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody learn-poses`);
+# Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody-lab learn-poses`);
 # `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
 # `*out` owns the dictionary. Thread-safe.
 FUNCTIONS["skb_pose_dictionary_load"] = (
