@@ -167,6 +167,25 @@ impl FitArgs {
         sketchbody::pose::PoseOptions { depth_prior: self.depth_prior, ..sketchbody::pose::PoseOptions::default() }
     }
 
+    /// The pipeline's options these arguments describe, with the fit options `fit` (from
+    /// [`FitArgs::options`]) and `mean_shape`; the gender and the joints' source stay defaults.
+    pub fn pipeline_options(&self, fit: FitOptions, mean_shape: bool) -> PipelineOptions {
+        PipelineOptions {
+            fit,
+            mean_shape,
+            keep_pose_scale: self.keep_pose_scale,
+            depth_hint: self.depth_hint,
+            pose: self.pose_options(),
+            detected: self.detected(),
+            gender_evidence: self.gender_evidence,
+            classify_gender: self.classify_gender,
+            gender_decision_dims: self.gender_decision_dims.map(|d| d as usize),
+            gender_decision_seeds: self.gender_decision_seeds as usize,
+            calibrate_fit: self.calibrate_fit,
+            ..PipelineOptions::default()
+        }
+    }
+
     /// The fit options these arguments describe.
     pub fn options(&self) -> Result<FitOptions, CliError> {
         Ok(FitOptions {

@@ -325,19 +325,8 @@ pub fn parse_gender(g: Option<&str>) -> Result<Option<Gender>, CliError> {
 pub fn run(a: Args) -> Result<(), CliError> {
     let t_all = Instant::now();
     let opts = PipelineOptions {
-        fit: a.fit.options()?,
         gender: parse_gender(a.gender.as_deref())?,
-        mean_shape: a.mean_shape,
-        keep_pose_scale: a.fit.keep_pose_scale,
-        depth_hint: a.fit.depth_hint,
-        pose: a.fit.pose_options(),
-        detected: a.fit.detected(),
-        gender_evidence: a.fit.gender_evidence,
-        classify_gender: a.fit.classify_gender,
-        gender_decision_dims: a.fit.gender_decision_dims.map(|d| d as usize),
-        gender_decision_seeds: a.fit.gender_decision_seeds as usize,
-        calibrate_fit: a.fit.calibrate_fit,
-        ..PipelineOptions::default()
+        ..a.fit.pipeline_options(a.fit.options()?, a.mean_shape)
     };
     let sketch_rgb = load_rgb_image(&a.sketch)?;
     let sketch = to_gray(&sketch_rgb.view())?;

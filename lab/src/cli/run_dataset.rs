@@ -229,20 +229,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let shared = Shared {
         model: &model,
         dict: &dict,
-        base: PipelineOptions {
-            fit,
-            mean_shape: a.mean_shape,
-            keep_pose_scale: a.fit.keep_pose_scale,
-            depth_hint: a.fit.depth_hint,
-            pose: a.fit.pose_options(),
-            detected: a.fit.detected(),
-            gender_evidence: a.fit.gender_evidence,
-            classify_gender: a.fit.classify_gender,
-            gender_decision_dims: a.fit.gender_decision_dims.map(|d| d as usize),
-            gender_decision_seeds: a.fit.gender_decision_seeds as usize,
-            calibrate_fit: a.fit.calibrate_fit,
-            ..PipelineOptions::default()
-        },
+        base: a.fit.pipeline_options(fit, a.mean_shape),
         mode,
         detector,
         true_height: a.true_height,
