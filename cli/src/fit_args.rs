@@ -84,6 +84,11 @@ pub struct FitArgs {
     /// Weight of the pose step's learned joint depths (`PoseOptions::depth_prior`; 0 = off).
     #[arg(long, default_value_t = sketchbody::pose::PoseOptions::default().depth_prior, value_parser = crate::ranges::real(0.0, sketchbody::pose::options::MAX_DEPTH_PRIOR, false))]
     pub depth_prior: f64,
+    /// Straighten the arms and legs drawn straight that the 3-D pose step bent by at most 60° in
+    /// depth (`PoseOptions::straight_limbs`): for figures drawn standing or posing with straight
+    /// limbs. Off by default (on unseen motion it straightens truly bent limbs too).
+    #[arg(long)]
+    pub straight_limbs: bool,
     /// With detected joints, the fit's joint weight is multiplied by this (0..=1).
     #[arg(long, default_value_t = DetectedJointsFit::default().joint_weight_scale, value_parser = crate::ranges::real(0.0, 1.0, false))]
     pub detected_joint_weight_scale: f64,
@@ -162,9 +167,13 @@ impl FitArgs {
     }
 
     /// The 3-D pose step's options these arguments describe (the defaults but the learned depths'
-    /// weight).
+    /// weight and the straight limbs).
     pub fn pose_options(&self) -> sketchbody::pose::PoseOptions {
-        sketchbody::pose::PoseOptions { depth_prior: self.depth_prior, ..sketchbody::pose::PoseOptions::default() }
+        sketchbody::pose::PoseOptions {
+            depth_prior: self.depth_prior,
+            straight_limbs: self.straight_limbs,
+            ..sketchbody::pose::PoseOptions::default()
+        }
     }
 
     /// The pipeline's options these arguments describe, with the fit options `fit` (from

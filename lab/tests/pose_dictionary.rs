@@ -99,3 +99,44 @@ fn frontal_example_sketch_gets_a_level_camera_and_stands_straight() {
     let bent = estimate_pose(&dict, &joints, &off).unwrap();
     assert!(torso_lean_deg(&bent.joints) > 5.0, "lean without the prior {:.1} deg", torso_lean_deg(&bent.joints));
 }
+
+#[test]
+fn straight_limbs_straighten_the_example_without_moving_its_image() {
+    // The example stands with straight arms and legs; the default solve bends its knees ~38° in
+    // depth (its drawn shins are shorter than the dictionary's). With straight limbs (issue 46)
+    // every knee and elbow is within 10° of straight, the ankles, wrists and torso stay where
+    // they were, the reprojection barely moves, and the estimate is still base + Σ B w with the
+    // factors applied.
+    use sketchbody::pose::straighten::{bend_deg, LIMBS};
+    use sketchbody::skeleton::Joints3;
+    let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../assets/examples/sketch_joints.json"
+    )))
+    .unwrap();
+    let dict = dict_io::embedded().unwrap();
+    let bends =
+        |x: &Joints3| LIMBS.map(|(a, b, c)| bend_deg(&Vector3::from(x[a]), &Vector3::from(x[b]), &Vector3::from(x[c])));
+    let plain = estimate_pose(&dict, &joints, &PoseOptions::default()).unwrap();
+    assert!(bends(&plain.joints)[2] > 20.0 && bends(&plain.joints)[3] > 20.0, "knees {:?}", bends(&plain.joints));
+    let opts = PoseOptions { straight_limbs: true, ..PoseOptions::default() };
+    let est = estimate_pose(&dict, &joints, &opts).unwrap();
+    for (i, b) in bends(&est.joints).iter().enumerate() {
+        assert!(*b <= 10.0, "limb {i} bent {b:.1} deg");
+    }
+    let middles: Vec<usize> = LIMBS.iter().map(|l| l.1).collect();
+    for j in (0..NUM_JOINTS).filter(|j| !middles.contains(j)) {
+        assert_eq!(est.joints[j], plain.joints[j], "joint {j} moved");
+    }
+    assert!(est.rms <= plain.rms + 1.0, "rms {:.2} -> {:.2} px", plain.rms, est.rms);
+    let mut x = sketchbody::pose::dictionary::pose_to_vec(&est.base);
+    for (&b, &w) in est.bases.iter().zip(&est.weights) {
+        x.axpy(w, &dict.bases.column(b), 1.0);
+    }
+    let rebuilt = est.factors.apply(&sketchbody::pose::dictionary::vec_to_pose(x.as_slice()));
+    for j in 0..NUM_JOINTS {
+        for a in 0..3 {
+            assert!((rebuilt[j][a] - est.joints[j][a]).abs() < 1e-9, "joint {j} axis {a}");
+        }
+    }
+}

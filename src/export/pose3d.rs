@@ -44,6 +44,6 @@ pub fn pose3d_json(est: &PoseEstimate, dict: &Dictionary, opts: &PoseOptions) ->
         "base_exemplars": est.base_parts,
         "proportions": factors,
         "plausible": est.plausible,
-        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "alpha_target": opts.alpha_target.name(), "equal_scales": opts.equal_scales, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior, "starts": opts.starts, "limb_candidates": opts.limb_candidates, "blend": opts.blend, "joint_noise": opts.joint_noise, "proportions": opts.proportions, "depth_prior": opts.depth_prior},
+        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "alpha_target": opts.alpha_target.name(), "equal_scales": opts.equal_scales, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior, "starts": opts.starts, "limb_candidates": opts.limb_candidates, "blend": opts.blend, "joint_noise": opts.joint_noise, "proportions": opts.proportions, "depth_prior": opts.depth_prior, "straight_limbs": opts.straight_limbs},
     })
 }

@@ -18,6 +18,7 @@
 //! - [`pursuit`]: the matching pursuit driver ([`estimate_pose`]).
 //! - [`refine`]: the joint Levenberg–Marquardt refinement with the constraint kept exactly.
 //! - [`joint_fit`]: the free-joint refinement (joints leave the dictionary's span, bone lengths kept).
+//! - [`straighten`]: limbs drawn straight kept straight in depth (the last step).
 //!
 //! Units: 3-D joints are metres of a 1.75 m person (every pose is normalised to that stature,
 //! see [`motion::normalize_pose`]); 2-D joints are image pixels (origin top-left, y down).
@@ -39,6 +40,7 @@ pub mod problem;
 pub mod pursuit;
 pub mod qcls;
 pub mod refine;
+pub mod straighten;
 
 pub use depth_hint::DepthHint;
 pub use dictionary::{Dictionary, LearnParams};

@@ -134,6 +134,11 @@ pub struct PoseOptions {
     /// the solver chooses between readings ([`super::depth_hint`]), used when the caller gives no
     /// image cue's depths; 0 = off.
     pub depth_prior: f64,
+    /// Straight limbs ([`super::straighten`]): the last step straightens the arms and legs
+    /// drawn straight that are bent at most [`super::straighten::MAX_BEND_DEG`] in depth (the
+    /// drawn proportions of the two bones absorb what the bend did). Off by default: it trades
+    /// limb-direction error on held-out motion for straight limbs.
+    pub straight_limbs: bool,
 }
 
 /// Largest [`PoseOptions::depth_prior`].
@@ -165,6 +170,7 @@ impl Default for PoseOptions {
             knee_limits: true,
             factor_prior: true,
             depth_prior: 0.05,
+            straight_limbs: false,
         }
     }
 }

@@ -160,6 +160,7 @@ pub fn estimate_pose_with_factor_prior(
     let factor_prior = prior.filter(|_| opts.factor_prior);
     let first = estimate_fixed(dict, joints, opts, hints.of(joints).as_ref())?;
     let est = if opts.proportions { with_proportions(dict, joints, opts, first, &hints, factor_prior) } else { first };
+    let est = with_straight_limbs(dict, joints, opts, est);
     finite_estimate(flag_plausibility(joints, est))
 }
 
@@ -255,6 +256,25 @@ fn second_solve(
         return None;
     }
     Some(PoseEstimate { joints: x, rms, factors: f, ..second })
+}
+
+/// `est` with its limbs drawn straight straightened ([`super::straighten`]) when
+/// [`PoseOptions::straight_limbs`] is on; the base pose is redefined so that the joints are still
+/// the factors applied to base + Σ B w, and the RMS is that of the new joints.
+fn with_straight_limbs(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions, est: PoseEstimate) -> PoseEstimate {
+    if !opts.straight_limbs {
+        return est;
+    }
+    let (x, n) = super::straighten::straighten_limbs(&est.joints, &est.camera, joints);
+    let Ok(prob) = Problem::new(dict, joints, 0.0) else { return est };
+    if n == 0 {
+        return est;
+    }
+    let inverse = BodyFactors { k: est.factors.k.map(|k| 1.0 / k) };
+    let (old, new) = (inverse.apply(&est.joints), inverse.apply(&x));
+    let base = std::array::from_fn(|j| std::array::from_fn(|a| est.base[j][a] + new[j][a] - old[j][a]));
+    let xs: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(x[j]));
+    PoseEstimate { joints: x, rms: prob.rms(&est.camera, &xs), base, ..est }
 }
 
 /// Sets [`PoseEstimate::plausible`].
@@ -598,6 +618,7 @@ pub(crate) mod tests {
             knee_limits: false,
             factor_prior: false,
             depth_prior: 0.0,
+            straight_limbs: false,
         }
     }
 

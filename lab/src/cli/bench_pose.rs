@@ -92,6 +92,9 @@ pub struct Args {
     /// off).
     #[arg(long)]
     depth_prior: Option<f64>,
+    /// Straight limbs on (`on`) or off (`off`) in configuration (d) (default: the library's).
+    #[arg(long)]
+    straight_limbs: Option<String>,
     /// With `--suite`: this learned prior file (factors and depths) instead of the embedded one
     /// (e.g. one trained without a validation split; `train-factor-prior`).
     #[arg(long)]
@@ -241,6 +244,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
         knee_limits: def.knee_limits && !a.no_knee_limits,
         factor_prior: def.factor_prior && !a.no_factor_prior,
         depth_prior: a.depth_prior.unwrap_or(def.depth_prior),
+        straight_limbs: match a.straight_limbs.as_deref() {
+            None => def.straight_limbs,
+            Some("on") => true,
+            Some("off") => false,
+            Some(o) => return Err(CliError(format!("--straight-limbs {o:?}: expected on or off"))),
+        },
         ..def
     };
     if a.suite {
@@ -282,6 +291,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         knee_limits: false,
         factor_prior: false,
         depth_prior: 0.0,
+        straight_limbs: false,
     };
     let configs = [
         ("(a) mean pose, camera fitted", PoseOptions { max_bases: 0, alpha: 0.0, refine: false, ..paper }),

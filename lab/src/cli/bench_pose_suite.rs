@@ -36,10 +36,10 @@ use crate::bench_pose::thread_cpu_s;
 use sketchbody_cli::CliError;
 
 /// One held-out set: its name and its normalised frames (body-model skeletons).
-struct Set {
-    name: String,
-    clips: Vec<String>,
-    frames: Vec<Joints3>,
+pub(crate) struct Set {
+    pub(crate) name: String,
+    pub(crate) clips: Vec<String>,
+    pub(crate) frames: Vec<Joints3>,
     /// One of `--cmu-more`'s action categories (summed into its "all" row).
     category: bool,
 }
@@ -58,7 +58,7 @@ pub const CATEGORIES: [(&str, &str); 8] = [
 
 /// The clips of `dirs` that `keep` accepts (by file stem), retargeted onto `skeletons` and
 /// normalised, `cases` evenly spaced.
-fn load_set(
+pub(crate) fn load_set(
     name: &str,
     dirs: &[PathBuf],
     keep: &dyn Fn(&str) -> bool,
@@ -102,7 +102,7 @@ fn category_sets(root: &Path, skeletons: &[(String, Joints3)], cases: usize) -> 
 }
 
 /// Random stylised factors (module doc).
-fn stylised<R: Rng>(rng: &mut R) -> BodyFactors {
+pub(crate) fn stylised<R: Rng>(rng: &mut R) -> BodyFactors {
     let mut k = [1.0; NUM_GROUPS];
     k[0] = rng.random_range(1.0..=1.8);
     for v in k.iter_mut().skip(1) {
@@ -111,7 +111,7 @@ fn stylised<R: Rng>(rng: &mut R) -> BodyFactors {
     BodyFactors { k }
 }
 
-fn camera<R: Rng>(rng: &mut R, side: bool) -> WeakPerspective {
+pub(crate) fn camera<R: Rng>(rng: &mut R, side: bool) -> WeakPerspective {
     let yaw = if side {
         let y = rng.random_range(60.0f64..=90.0);
         if rng.random_bool(0.5) {
