@@ -3,7 +3,9 @@
 //! zlib-flagged arrays refused): node counts, the 53 named bones and their hierarchy, weights
 //! summing to 1 per vertex, UV and normal counts, the embedded texture, and the posed body
 //! reproduced by composing the bones' local transforms (Euler XYZ) with the clusters' bind
-//! matrices as a DCC does. Bad input: an unwritable path writes nothing.
+//! matrices as a DCC does, for each unit (m, cm) and up axis (Y, Z): the global settings name
+//! them and every position is the model frame's turned and scaled as documented. Bad input: an
+//! unwritable path writes nothing.
 
 use std::collections::HashMap;
 use std::process::Command;
@@ -17,6 +19,12 @@ use sketchbody::body::rig::{RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::fbx::node::{file_bytes, s, Node, Prop};
 use sketchbody::export::fbx::{fbx_bytes, write_fbx};
+use sketchbody::export::frame::{ExportFrame, UpAxis, Units};
+
+#[path = "common/frames.rs"]
+mod frames;
+use frames::{in_frame, metres_to_unit, FRAMES};
+
 
 #[derive(Debug, Clone)]
 enum Value {
@@ -192,12 +200,30 @@ fn scene(gender: Gender, seed: u64) -> (RiggedMesh, RigScene) {
 #[test]
 fn an_independent_reader_finds_the_skinned_posed_body() {
     let (mesh, scene) = scene(Gender::Female, 11);
+    for frame in FRAMES {
+        check_file(&mesh, &scene, &frame);
+    }
+}
+
+/// The file of `scene` in `frame` read back: settings, bones, geometry, skin, pose, texture.
+fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     let png = b"\x89PNG\r\n\x1a\n-not-really".to_vec();
-    let bytes = fbx_bytes(&mesh, &scene, Some(&png)).unwrap();
+    let bytes = fbx_bytes(mesh, scene, Some(&png), frame).unwrap();
     let root = parse(&bytes);
     let settings = root.kid("GlobalSettings");
-    assert_eq!(settings.p70("UpAxis"), Some(vec![1.0]));
-    assert_eq!(settings.p70("UnitScaleFactor"), Some(vec![100.0]));
+    // Up, front (toward the viewer: the way the character faces) and the third axis, each as
+    // (axis index, sign); FBX's unit is centimetres per file unit.
+    let (up, front) = match frame.up {
+        UpAxis::Y => ([1.0, 1.0], [2.0, 1.0]),
+        UpAxis::Z => ([2.0, 1.0], [1.0, -1.0]),
+    };
+    let g = |name: &str| settings.p70(name).unwrap_or_else(|| panic!("no {name}"))[0];
+    assert_eq!([g("UpAxis"), g("UpAxisSign")], up, "{frame:?}");
+    assert_eq!([g("FrontAxis"), g("FrontAxisSign")], front, "{frame:?}");
+    assert_eq!([g("CoordAxis"), g("CoordAxisSign")], [0.0, 1.0], "{frame:?}");
+    assert_eq!([g("OriginalUpAxis"), g("OriginalUpAxisSign")], up, "{frame:?}");
+    let cm = if frame.units == Units::Centimetres { 1.0 } else { 100.0 };
+    assert_eq!([g("UnitScaleFactor"), g("OriginalUnitScaleFactor")], [cm, cm], "{frame:?}");
     let objects = root.kid("Objects");
     let by_id: HashMap<i64, &Rec> = objects.kids.iter().map(|o| (o.int(0), o)).collect();
     let mut parent: HashMap<i64, i64> = HashMap::new();
@@ -292,16 +318,27 @@ fn an_independent_reader_finds_the_skinned_posed_body() {
         };
     }
     let mut worst = 0.0f64;
+    let mut rest_worst = 0.0f64;
+    let unit = metres_to_unit(frame);
     for v in 0..n {
         let x = Point3::new(verts[3 * v], verts[3 * v + 1], verts[3 * v + 2]);
+        rest_worst = rest_worst.max((x.coords - in_frame(frame, scene.rest_vertices[v])).norm() / unit);
         let mut p = Vector3::zeros();
         for &(b, w) in &influences[v] {
             p += (global[b] * bind[&b].try_inverse().unwrap()).transform_point(&x).coords * w;
         }
-        let o = scene.posed_vertices[v];
-        worst = worst.max((p - Vector3::new(o[0] as f64, o[1] as f64, o[2] as f64)).norm());
+        worst = worst.max((p - in_frame(frame, scene.posed_vertices[v])).norm() / unit);
     }
-    assert!(worst < 1e-5, "the FBX's skinning differs from the scene's by {worst} m");
+    assert!(rest_worst < 1e-6, "{frame:?}: the FBX's rest vertices differ from the scene's by {rest_worst} m");
+    assert!(worst < 1e-5, "{frame:?}: the FBX's skinning differs from the scene's by {worst} m");
+    // Normals turn with the axes and keep unit length.
+    let normals = geom.kid("LayerElementNormal").kid("Normals").floats();
+    let rest_normals = sketchbody::body::rig::vertex_normals(&scene.rest_vertices, &mesh.quads);
+    let turned = |k: usize| in_frame(&ExportFrame { units: Units::Metres, ..*frame }, rest_normals[k]);
+    let normal_gap = (0..n)
+        .map(|k| (Vector3::new(normals[3 * k], normals[3 * k + 1], normals[3 * k + 2]) - turned(k)).norm())
+        .fold(0.0, f64::max);
+    assert!(normal_gap < 1e-6, "{frame:?}: normals differ by {normal_gap}");
     // The bind pose lists the mesh, the armature and every bone.
     let pose = objects.all("Pose").next().unwrap();
     assert_eq!(pose.kid("NbPoseNodes").int(0) as usize, NUM_RIG_BONES + 2);
@@ -318,7 +355,7 @@ fn an_independent_reader_finds_the_skinned_posed_body() {
         v => panic!("{v:?}"),
     }
     // Without a texture: no texture or video objects.
-    let plain = parse(&fbx_bytes(&mesh, &scene, None).unwrap());
+    let plain = parse(&fbx_bytes(mesh, scene, None, frame).unwrap());
     assert!(plain.kid("Objects").kids.iter().all(|o| o.name != "Texture" && o.name != "Video"));
 }
 
@@ -328,15 +365,21 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
     let dir = std::env::temp_dir().join(format!("skb-fbx-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let missing = dir.join("no-such-folder").join("body.fbx");
-    let e = write_fbx(&missing, &mesh, &scene, None).unwrap_err();
+    let frame = ExportFrame { units: Units::Centimetres, up: UpAxis::Z };
+    let e = write_fbx(&missing, &mesh, &scene, None, &frame).unwrap_err();
     assert!(matches!(e, sketchbody::Error::Io { .. }), "{e:?}");
     let mut short = scene.clone();
     short.skin.pop();
     let path = dir.join("body.fbx");
-    assert!(matches!(write_fbx(&path, &mesh, &short, None), Err(sketchbody::Error::OutOfRange { .. })));
+    assert!(matches!(write_fbx(&path, &mesh, &short, None, &frame), Err(sketchbody::Error::OutOfRange { .. })));
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");
-    write_fbx(&path, &mesh, &scene, None).unwrap();
-    assert_eq!(std::fs::read(&path).unwrap(), fbx_bytes(&mesh, &scene, None).unwrap());
+    write_fbx(&path, &mesh, &scene, None, &frame).unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), fbx_bytes(&mesh, &scene, None, &frame).unwrap());
+    // An unknown unit or axis name is refused by name before anything is written.
+    let e = Units::parse("mm").unwrap_err().to_string();
+    assert!(e.contains("units") && e.contains("\"mm\"") && e.contains("m or cm"), "{e}");
+    let e = UpAxis::parse("x").unwrap_err().to_string();
+    assert!(e.contains("up axis") && e.contains("\"x\"") && e.contains("y or z"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
