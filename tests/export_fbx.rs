@@ -19,12 +19,11 @@ use sketchbody::body::rig::{RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::fbx::node::{file_bytes, s, Node, Prop};
 use sketchbody::export::fbx::{fbx_bytes, write_fbx};
-use sketchbody::export::frame::{ExportFrame, UpAxis, Units};
+use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
 
 #[path = "common/frames.rs"]
 mod frames;
 use frames::{in_frame, metres_to_unit, FRAMES};
-
 
 #[derive(Debug, Clone)]
 enum Value {
@@ -384,8 +383,13 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
 }
 
 /// A second, independent reader: assimp (`assimp info`, Debian's assimp-utils) loads the FBX
-/// and finds one mesh with every vertex, the 53 bones, the material and the embedded texture.
-/// Without assimp the test prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
+/// and finds one mesh with every vertex, the 53 bones, the material and the embedded texture;
+/// then, for each unit and up axis, `assimp export` to assimp's JSON (assimp applies no unit or
+/// axis conversion of its own): the mesh's rest vertices span the body's box in the file's frame
+/// (each axis's lowest and highest value, so a turned or mirrored axis or a wrong unit shows)
+/// and the bones' node transforms, composed down assimp's node tree, put every bone's posed head
+/// where the scene's posed head lands in that frame, within 0.1 mm. Without assimp the test
+/// prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
 #[test]
 fn assimp_reads_the_fbx() {
     if Command::new("assimp").arg("version").output().map(|o| !o.status.success()).unwrap_or(true) {
@@ -402,7 +406,7 @@ fn assimp_reads_the_fbx() {
     let img = sketchbody::image::RgbImage::from_vec(4, 4, data).unwrap();
     let png = sketchbody::image::encode_png(&img.view()).unwrap();
     let path = dir.join("body.fbx");
-    write_fbx(&path, &mesh, &scene, Some(&png)).unwrap();
+    write_fbx(&path, &mesh, &scene, Some(&png), &FRAMES[0]).unwrap();
     let out = Command::new("assimp").arg("info").arg(&path).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     println!("{text}");
@@ -415,7 +419,67 @@ fn assimp_reads_the_fbx() {
     assert_eq!(field("Faces:"), mesh.triangles().len() as u64, "assimp triangulates");
     assert_eq!(field("Bones:"), NUM_RIG_BONES as u64);
     assert_eq!(field("Textures (embed.):"), 1);
+    let heads = posed_heads(&scene);
+    for frame in FRAMES {
+        write_fbx(&path, &mesh, &scene, None, &frame).unwrap();
+        let json = dir.join("body.json");
+        let out = Command::new("assimp").arg("export").arg(&path).arg(&json).arg("-fassjson").output().unwrap();
+        assert!(out.status.success(), "assimp export failed: {}", String::from_utf8_lossy(&out.stderr));
+        let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        let unit = metres_to_unit(&frame);
+        // The rest mesh's box along each axis.
+        let v: Vec<f64> =
+            doc["meshes"][0]["vertices"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        assert!(v.len() >= 3 * mesh.vertices.len(), "{frame:?}: {} coordinates", v.len());
+        for k in 0..3 {
+            let span =
+                |it: &mut dyn Iterator<Item = f64>| it.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+            let got = span(&mut v.iter().skip(k).step_by(3).copied());
+            let want = span(&mut scene.rest_vertices.iter().map(|&p| in_frame(&frame, p)[k]));
+            let gap = (got.0 - want.0).abs().max((got.1 - want.1).abs()) / unit;
+            assert!(gap < 1e-4, "{frame:?}: axis {k} spans {got:?} in assimp, {want:?} expected");
+        }
+        // The posed bone heads from assimp's node tree (row-major matrices, translation in the
+        // fourth column).
+        let mut found = HashMap::new();
+        node_heads(&doc["rootnode"], &Matrix4::identity(), &mut found);
+        let mut worst = 0.0f64;
+        for (b, name) in scene.names.iter().enumerate() {
+            let got = found.get(name).unwrap_or_else(|| panic!("{frame:?}: assimp has no node {name}"));
+            let want = in_frame(&frame, heads[b].map(|c| c as f32));
+            worst = worst.max((got - want).norm() / unit);
+        }
+        println!("assimp {frame:?}: posed bone heads within {worst:.2e} m");
+        assert!(worst < 1e-4, "{frame:?}: assimp's posed bone heads differ by {worst} m");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Each node's global translation (`transformation`: 16 row-major numbers) by name, composed
+/// from `parent`.
+fn node_heads(node: &serde_json::Value, parent: &Matrix4<f64>, out: &mut HashMap<String, Vector3<f64>>) {
+    let m: Vec<f64> = node["transformation"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let global = parent * Matrix4::from_row_slice(&m);
+    out.insert(
+        node["name"].as_str().unwrap().to_string(),
+        Vector3::new(global[(0, 3)], global[(1, 3)], global[(2, 3)]),
+    );
+    for child in node["children"].as_array().into_iter().flatten() {
+        node_heads(child, &global, out);
+    }
+}
+
+/// The scene's posed bone heads (metres, model frame), composed from the bones' posed local
+/// transforms.
+fn posed_heads(scene: &RigScene) -> Vec<[f64; 3]> {
+    let locals = sketchbody::export::rigged::posed_locals(scene);
+    let mut global: Vec<Matrix4<f64>> = Vec::with_capacity(NUM_RIG_BONES);
+    for (b, (t, q)) in locals.iter().enumerate() {
+        let local = Translation3::from(*t).to_homogeneous() * q.to_homogeneous();
+        let g = RIG_BONES[b].parent.map_or(local, |p| global[p] * local);
+        global.push(g);
+    }
+    global.iter().map(|g| [g[(0, 3)], g[(1, 3)], g[(2, 3)]]).collect()
 }
 
 /// The layout by hand: a record's end offset, property count and length, the null record

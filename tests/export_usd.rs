@@ -23,13 +23,12 @@ use sketchbody::body::procedural::random_pose;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::body::rig::{Naming, RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
-use sketchbody::export::frame::{ExportFrame, UpAxis, Units};
+use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
 
 #[path = "common/frames.rs"]
 mod frames;
 use frames::{in_frame, FRAMES};
 use sketchbody::export::usd::{usda_string, write_usda};
-
 
 /// The text after `name = ` up to the end of its bracketed (or single-token) value.
 fn value<'t>(text: &'t str, name: &str) -> &'t str {
@@ -229,7 +228,8 @@ fn check_with_usd_core(python: &std::path::Path, mesh: &RiggedMesh, scene: &RigS
     // layer's axes (the height along the up axis), in its unit.
     let size: Vec<f64> = r["extent_size"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
     for k in 0..3 {
-        let (lo, hi) = posed.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[k]), hi.max(p[k])));
+        let (lo, hi) =
+            posed.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[k]), hi.max(p[k])));
         assert!((size[k] - (hi - lo)).abs() * metres < 1e-5, "{frame:?}: extent {size:?} along axis {k}");
     }
     std::fs::remove_dir_all(&dir).unwrap();

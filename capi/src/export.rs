@@ -10,7 +10,7 @@ use sketchbody_core::body::rig::RiggedMesh;
 use sketchbody_core::body::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
 use sketchbody_core::error::Error;
 use sketchbody_core::export::fbx::write_fbx;
-use sketchbody_core::export::frame::{ExportFrame, UpAxis, Units};
+use sketchbody_core::export::frame::{ExportFrame, Units, UpAxis};
 use sketchbody_core::export::gltf::write_glb;
 use sketchbody_core::export::usd::write_usda;
 
@@ -81,7 +81,10 @@ unsafe fn set(opts: *mut skb_export_options, f: impl FnOnce(&mut RigOptions) -> 
 ///
 /// # Safety
 /// `opts` is NULL or a live handle from `skb_export_options_new`, not used by another thread.
-unsafe fn set_all(opts: *mut skb_export_options, f: impl FnOnce(&mut skb_export_options) -> Result<(), Error>) -> skb_status {
+unsafe fn set_all(
+    opts: *mut skb_export_options,
+    f: impl FnOnce(&mut skb_export_options) -> Result<(), Error>,
+) -> skb_status {
     // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to the ptr.rs helpers, which
     // check NULL and lengths.
     unsafe {

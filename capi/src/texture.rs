@@ -127,7 +127,10 @@ unsafe fn project_into(
             return fail(&Error::BadStride { stride: dst_stride, row_bytes: row });
         }
         let Some(needed) = dst_stride.checked_mul(side - 1).and_then(|n| n.checked_add(row)) else {
-            return fail(&Error::OutOfRange { name: "dst_stride", detail: format!("{dst_stride} bytes × {} rows overflows", side - 1) });
+            return fail(&Error::OutOfRange {
+                name: "dst_stride",
+                detail: format!("{dst_stride} bytes × {} rows overflows", side - 1),
+            });
         };
         let out = try_status!(try_slice_mut(dst, dst_len, "dst"));
         if out.len() < needed {

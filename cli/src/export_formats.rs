@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use sketchbody::body::rig::RigScene;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::export::fbx::write_fbx;
-use sketchbody::export::frame::{ExportFrame, UpAxis, Units};
+use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
 use sketchbody::export::gltf::write_glb;
 use sketchbody::export::usd::write_usda;
 

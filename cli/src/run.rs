@@ -23,7 +23,7 @@ use sketchbody::body::{BodyModel, Gender};
 use sketchbody::detect::figure::{Backend, FigureOptions};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
-use sketchbody::export::frame::{ExportFrame, UpAxis, Units};
+use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
 use sketchbody::export::joints2d::{load_joints2d, write_joints2d_with, LOW_CONFIDENCE_HINT};
 use sketchbody::export::obj::{mtl_string, write_obj_with_material};
 use sketchbody::export::pose3d::pose3d_json;

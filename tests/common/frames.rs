@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use nalgebra::Vector3;
-use sketchbody::export::frame::{ExportFrame, UpAxis, Units};
+use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
 
 /// Every unit and up axis: m Y, cm Y, m Z, cm Z.
 pub const FRAMES: [ExportFrame; 4] = [

@@ -1041,8 +1041,24 @@ fn write_rows(t: &mut Table, fx: &Fx) {
         SKB_ERR_OUT_OF_RANGE,
         0,
     );
-    t.set_int("skb_export_options_set_units", "units", skb_export_options_set_units, o, u32::MAX, SKB_ERR_OUT_OF_RANGE, 1);
-    t.set_int("skb_export_options_set_up_axis", "up", skb_export_options_set_up_axis, o, u32::MAX, SKB_ERR_OUT_OF_RANGE, 1);
+    t.set_int(
+        "skb_export_options_set_units",
+        "units",
+        skb_export_options_set_units,
+        o,
+        u32::MAX,
+        SKB_ERR_OUT_OF_RANGE,
+        1,
+    );
+    t.set_int(
+        "skb_export_options_set_up_axis",
+        "up",
+        skb_export_options_set_up_axis,
+        o,
+        u32::MAX,
+        SKB_ERR_OUT_OF_RANGE,
+        1,
+    );
     // SAFETY: restores the defaults on the live options.
     unsafe {
         skb_export_options_set_naming(o, 0);
@@ -1073,7 +1089,14 @@ fn texture_rows(t: &mut Table, fx: &Fx) {
         t.check(e, "img", Kind::Null, SKB_ERR_NULL_POINTER, skb_image_write_png(ptr::null(), good.as_ptr()), true);
         t.check(e, "img", Kind::Other, SKB_ERR_BAD_STRIDE, skb_image_write_png(&bad_stride, good.as_ptr()), true);
         t.check(e, "path", Kind::Null, SKB_ERR_NULL_POINTER, skb_image_write_png(&fx.sketch, ptr::null()), true);
-        t.check(e, "path", Kind::Other, SKB_ERR_INVALID_ARGUMENT, skb_image_write_png(&fx.sketch, not_utf8.as_ptr()), true);
+        t.check(
+            e,
+            "path",
+            Kind::Other,
+            SKB_ERR_INVALID_ARGUMENT,
+            skb_image_write_png(&fx.sketch, not_utf8.as_ptr()),
+            true,
+        );
         t.check(e, "path", Kind::Other, SKB_ERR_IO, skb_image_write_png(&fx.sketch, missing.as_ptr()), true);
     }
     if std::fs::read_dir(&fx.dir).unwrap().flatten().any(|f| f.file_name().to_string_lossy().starts_with("t.png")) {
@@ -1097,9 +1120,15 @@ fn texture_rows(t: &mut Table, fx: &Fx) {
     type Project<'a> = Box<dyn Fn(*const skb_image, u32, *mut u8, usize, usize, *mut u64, *mut u64) -> skb_status + 'a>;
     let projections: Vec<(&'static str, Project)> = vec![
         // SAFETY: live result; the other pointers NULL or locals of the sizes passed.
-        ("skb_result_project_texture", Box::new(|i, n, d, st, l, a, b| unsafe { skb_result_project_texture(res, i, n, d, st, l, a, b) })),
+        (
+            "skb_result_project_texture",
+            Box::new(|i, n, d, st, l, a, b| unsafe { skb_result_project_texture(res, i, n, d, st, l, a, b) }),
+        ),
         // SAFETY: live mesh and camera; the other pointers as above.
-        ("skb_mesh_project_texture", Box::new(|i, n, d, st, l, a, b| unsafe { skb_mesh_project_texture(mesh, i, &cam, n, d, st, l, a, b) })),
+        (
+            "skb_mesh_project_texture",
+            Box::new(|i, n, d, st, l, a, b| unsafe { skb_mesh_project_texture(mesh, i, &cam, n, d, st, l, a, b) }),
+        ),
     ];
     for (e, f) in &projections {
         let (mut px, mut counts) = (Canary::bytes(len), Canary::of::<u64>(2));
@@ -1108,7 +1137,12 @@ fn texture_rows(t: &mut Table, fx: &Fx) {
         let b = unsafe { a.add(1) };
         let rows: Vec<(&'static str, Kind, skb_status, skb_status)> = vec![
             ("sketch", Kind::Null, SKB_ERR_NULL_POINTER, f(ptr::null(), size, d, stride, len, a, b)),
-            ("sketch", Kind::Other, SKB_ERR_BAD_STRIDE, f(&skb_image { stride: 1, ..view }, size, d, stride, len, a, b)),
+            (
+                "sketch",
+                Kind::Other,
+                SKB_ERR_BAD_STRIDE,
+                f(&skb_image { stride: 1, ..view }, size, d, stride, len, a, b),
+            ),
             ("size", Kind::Max, SKB_ERR_OUT_OF_RANGE, f(&view, u32::MAX, d, stride, len, a, b)),
             ("size", Kind::Other, SKB_ERR_OUT_OF_RANGE, f(&view, 0, d, stride, len, a, b)),
             ("dst", Kind::Null, SKB_ERR_NULL_POINTER, f(&view, size, ptr::null_mut(), stride, len, a, b)),
@@ -1132,15 +1166,54 @@ fn texture_rows(t: &mut Table, fx: &Fx) {
     // SAFETY: the live result or mesh; NULL is what is tested.
     unsafe {
         let mut px = Canary::bytes(len);
-        let s = skb_result_project_texture(ptr::null(), &view, size, px.ptr(), stride, len, ptr::null_mut(), ptr::null_mut());
+        let s = skb_result_project_texture(
+            ptr::null(),
+            &view,
+            size,
+            px.ptr(),
+            stride,
+            len,
+            ptr::null_mut(),
+            ptr::null_mut(),
+        );
         t.check("skb_result_project_texture", "result", Kind::Null, SKB_ERR_NULL_POINTER, s, px.intact());
-        let s = skb_mesh_project_texture(ptr::null(), &view, &cam, size, px.ptr(), stride, len, ptr::null_mut(), ptr::null_mut());
+        let s = skb_mesh_project_texture(
+            ptr::null(),
+            &view,
+            &cam,
+            size,
+            px.ptr(),
+            stride,
+            len,
+            ptr::null_mut(),
+            ptr::null_mut(),
+        );
         t.check("skb_mesh_project_texture", "mesh", Kind::Null, SKB_ERR_NULL_POINTER, s, px.intact());
-        let s = skb_mesh_project_texture(mesh, &view, ptr::null(), size, px.ptr(), stride, len, ptr::null_mut(), ptr::null_mut());
+        let s = skb_mesh_project_texture(
+            mesh,
+            &view,
+            ptr::null(),
+            size,
+            px.ptr(),
+            stride,
+            len,
+            ptr::null_mut(),
+            ptr::null_mut(),
+        );
         t.check("skb_mesh_project_texture", "cam", Kind::Null, SKB_ERR_NULL_POINTER, s, px.intact());
         for (v, k) in NON_FINITE {
             for (field, c) in camera_variants(v) {
-                let s = skb_mesh_project_texture(mesh, &view, &c, size, px.ptr(), stride, len, ptr::null_mut(), ptr::null_mut());
+                let s = skb_mesh_project_texture(
+                    mesh,
+                    &view,
+                    &c,
+                    size,
+                    px.ptr(),
+                    stride,
+                    len,
+                    ptr::null_mut(),
+                    ptr::null_mut(),
+                );
                 t.check("skb_mesh_project_texture", field, k, SKB_ERR_NON_FINITE, s, px.intact());
             }
         }
