@@ -128,7 +128,7 @@ fn blender_imports_the_fbx_as_it_imports_the_gltf() {
 
 /// One FBX import's report (tests/blender/check_fbx.py) against the glTF import's.
 fn check_fbx_report(text: &str, vertices: usize) {
-    let r: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let r: serde_json::Value = serde_json::from_str(text).unwrap();
     let f = |k: &str| r[k].as_f64().unwrap();
     assert_eq!(r["result"], serde_json::json!(["FINISHED"]), "{text}");
     assert_eq!(r["warnings"], serde_json::json!([]), "{text}");
