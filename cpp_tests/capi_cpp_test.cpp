@@ -1,8 +1,12 @@
 // Uses the C API through sketchbody.hpp (built -Wall -Wextra -Werror under ASan + UBSan):
 // RAII results, exceptions carrying status and message, and thread-local error messages that
 // do not leak between threads.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -148,6 +152,46 @@ int main() {
         CHECK(status_of([&] { mesh.rig(bad); }) == SKB_ERR_OUT_OF_RANGE);
         std::printf("capi_cpp_test: rig %zu bones (%s ... %s), %zu vertices, %zu UVs\n", names.size(), names[0].c_str(),
                     names.back().c_str(), nv, mesh.uv_count());
+
+        // The texture: a green page seen from the front colours the texels facing it, the
+        // others stay grey; written as PNG and read back by the library's colour decoder.
+        const uint32_t w = 256, h = 512;
+        std::vector<uint8_t> page(3 * w * h);
+        for (size_t i = 0; i < page.size(); i += 3) page[i] = 10, page[i + 1] = 200, page[i + 2] = 30;
+        const skb_image sketch{page.data(), w, h, 3 * w, 3};
+        const skb_camera front{250, 250, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {128, 470}};
+        const sketchbody::Texture tex = mesh.texture(sketch, front, 128);
+        size_t green = 0, grey = 0;
+        for (size_t i = 0; i < tex.rgb.size(); i += 3) {
+            green += tex.rgb[i] == 10 && tex.rgb[i + 1] == 200 && tex.rgb[i + 2] == 30;
+            grey += tex.rgb[i] == 190 && tex.rgb[i + 1] == 190 && tex.rgb[i + 2] == 190;
+        }
+        CHECK(tex.size == 128 && tex.rgb.size() == 3 * 128 * 128 && green > 1000 && grey > 1000);
+        const std::filesystem::path dir = std::filesystem::temp_directory_path() / "skb-capi-cpp-test";
+        std::filesystem::create_directories(dir);
+        const std::string png = (dir / "t.png").string();
+        sketchbody::write_png(tex.view(), png);
+        const sketchbody::LoadedColourImage back(png);
+        const skb_image bv = back.view();
+        CHECK(bv.width == 128 && bv.channels == 3 && std::equal(tex.rgb.begin(), tex.rgb.end(), bv.data));
+        CHECK(status_of([&] { mesh.texture(sketch, front, 0); }) == SKB_ERR_OUT_OF_RANGE);
+        // FBX and USD in centimetres, Z up.
+        sketchbody::RigOptions cm_z;
+        cm_z.units = SKB_UNITS_CENTIMETRES;
+        cm_z.up_axis = SKB_UP_Z;
+        const std::string usd = (dir / "b.usda").string(), fbx = (dir / "b.fbx").string();
+        mesh.write_usd(usd, cm_z);
+        mesh.write_fbx(fbx, cm_z);
+        std::stringstream text;
+        text << std::ifstream(usd).rdbuf();
+        CHECK(text.str().find("metersPerUnit = 0.01\n") != std::string::npos);
+        CHECK(text.str().find("upAxis = \"Z\"\n") != std::string::npos);
+        CHECK(std::filesystem::file_size(fbx) > 100000);
+        sketchbody::RigOptions bad_units;
+        bad_units.units = 9;
+        CHECK(status_of([&] { mesh.write_usd(usd, bad_units); }) == SKB_ERR_OUT_OF_RANGE);
+        std::filesystem::remove_all(dir);
+        std::printf("capi_cpp_test: texture %zu green / %zu grey texels of 128x128; FBX, USD in cm, Z up\n", green, grey);
     }
 
     std::printf("%s (%d failed checks)\n", failures ? "FAIL" : "PASS", failures);

@@ -99,6 +99,26 @@
 #define SKB_ORIGIN_PELVIS 1
 
 /**
+ * FBX and USD length unit: metres (the default; one file unit is 1 m).
+ */
+#define SKB_UNITS_METRES 0
+
+/**
+ * FBX and USD length unit: centimetres (one file unit is 1 cm; coordinates 100× the metres).
+ */
+#define SKB_UNITS_CENTIMETRES 1
+
+/**
+ * FBX and USD up axis: +Y, the body facing +Z (the default; the library's model frame).
+ */
+#define SKB_UP_Y 0
+
+/**
+ * FBX and USD up axis: +Z, the body facing −Y (the model frame turned +90° about X).
+ */
+#define SKB_UP_Z 1
+
+/**
  * Number of bones of the production rig (MakeHuman's `game_engine` skeleton).
  */
 #define SKB_NUM_RIG_BONES 53
@@ -215,6 +235,16 @@
  * `skb_result_copy_joints3d`: the 3-D pose estimated from the 2-D joints (a 1.75 m person).
  */
 #define SKB_JOINTS_ESTIMATED 2
+
+/**
+ * Largest texture side `skb_*_project_texture` accept, texels.
+ */
+#define SKB_MAX_TEXTURE_SIZE 4096
+
+/**
+ * The texture side `sketchbody run` uses by default (`--texture-size`), texels.
+ */
+#define SKB_DEFAULT_TEXTURE_SIZE 1024
 
 /**
  * Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
@@ -372,9 +402,9 @@ typedef struct skb_detect_options skb_detect_options;
 typedef struct skb_detector skb_detector;
 
 /**
- * Export options of the rigged GLB (docs/formats.md, "body.glb"). Create with
- * `skb_export_options_new` (defaults: project names, A-pose, floor), free with
- * `skb_export_options_free`. Not shared between threads while being set.
+ * Export options of the rigged body (docs/formats.md, "body.glb", "body.fbx", "body.usda").
+ * Create with `skb_export_options_new` (defaults: project names, A-pose, floor, metres, Y up),
+ * free with `skb_export_options_free`. Not shared between threads while being set.
  */
 typedef struct skb_export_options skb_export_options;
 
@@ -431,6 +461,14 @@ typedef struct skb_rasterizer skb_rasterizer;
  * all its data (nothing refers to the inputs). Immutable: several threads may read it at once.
  */
 typedef struct skb_result skb_result;
+
+/**
+ * A decoded image file, 8-bit RGB (gray expanded, palettes resolved, transparency composited
+ * over white, EXIF orientation applied): the sketch as `sketchbody run` reads it for the
+ * texture. Create with `skb_rgb_image_load`, view with `skb_rgb_image_view`, free with
+ * `skb_rgb_image_free`. Immutable: several threads may read it at once.
+ */
+typedef struct skb_rgb_image skb_rgb_image;
 
 /**
  * The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb_with_options` writes for
@@ -931,6 +969,21 @@ skb_status skb_export_options_set_rest_pose(struct skb_export_options *opts, uin
 skb_status skb_export_options_set_origin(struct skb_export_options *opts, uint32_t origin);
 
 /**
+ * Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
+ * `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
+ * is always in metres (glTF's specification) and `skb_mesh_rig_new` in the model frame.
+ */
+skb_status skb_export_options_set_units(struct skb_export_options *opts, uint32_t units);
+
+/**
+ * Sets the up axis of the FBX and USD files: `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model
+ * frame turned +90° about X: Z up, the body facing −Y); anything else is
+ * `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB is always Y up (glTF's specification)
+ * and `skb_mesh_rig_new` in the model frame.
+ */
+skb_status skb_export_options_set_up_axis(struct skb_export_options *opts, uint32_t up);
+
+/**
  * Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
  * scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
  * pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
@@ -943,8 +996,9 @@ skb_status skb_mesh_write_glb_with_options(const struct skb_mesh *mesh,
 /**
  * Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
  * same rigged, posed body as `skb_mesh_write_glb_with_options` (the bones' local transforms
- * hold the pose, the clusters and the bind pose the rest), metres, Y up, a plain skin-colour
- * material. See docs/formats.md, "body.fbx". Written atomically. Only reads `mesh` and `opts`.
+ * hold the pose, the clusters and the bind pose the rest), in the options' unit and up axis
+ * (default metres, Y up), a plain skin-colour material. See docs/formats.md, "body.fbx".
+ * Written atomically. Only reads `mesh` and `opts`.
  */
 skb_status skb_export_fbx(const struct skb_mesh *mesh,
                           const char *path,
@@ -953,8 +1007,8 @@ skb_status skb_export_fbx(const struct skb_mesh *mesh,
 /**
  * Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
  * the defaults): the same rigged, posed body as `skb_mesh_write_glb_with_options` (a Skeleton
- * with bind and rest transforms, the pose as a static SkelAnimation), metres, Y up, a plain
- * skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
+ * with bind and rest transforms, the pose as a static SkelAnimation), in the options' unit and
+ * up axis (default metres, Y up: `metersPerUnit`, `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
  * and `opts`.
  */
 skb_status skb_export_usd(const struct skb_mesh *mesh,
@@ -1808,6 +1862,80 @@ skb_status skb_result_shape_weights(const struct skb_result *result,
  * for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
  */
 skb_status skb_result_mesh(const struct skb_result *result, struct skb_mesh **out);
+
+/**
+ * Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as 8-bit RGB into `*out` (caller
+ * owns it). Errors: `SKB_ERR_IO` (missing, unreadable, not a regular file), `SKB_ERR_DECODE`
+ * (not an image, truncated), `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
+ */
+skb_status skb_rgb_image_load(const char *path, struct skb_rgb_image **out);
+
+/**
+ * A borrowed 3-channel `skb_image` view of `img` into `*out` (rows packed, `stride` = 3 ×
+ * `width`), valid while `img` lives.
+ */
+skb_status skb_rgb_image_view(const struct skb_rgb_image *img, struct skb_image *out);
+
+/**
+ * Frees an image from `skb_rgb_image_load`. NULL is a no-op.
+ */
+void skb_rgb_image_free(struct skb_rgb_image *img);
+
+/**
+ * Writes `img` (1 channel: gray, 3: RGB, 4: RGBA; any stride) as an 8-bit PNG to `path`
+ * (NUL-terminated UTF-8) with the library's encoder, the one `sketchbody run` writes
+ * `body_texture.png` with (same pixels, same bytes). Written atomically: on error (`SKB_ERR_IO`
+ * for an unwritable path) nothing is left at `path`. Thread-safe.
+ */
+skb_status skb_image_write_png(const struct skb_image *img, const char *path);
+
+/**
+ * The texture `sketchbody run` writes as `body_texture.png` for this result: the sketch
+ * projected through the result's camera onto its posed mesh, into MakeHuman's UV layout
+ * (`skb_mesh_copy_uvs`, v up; texture row 0 is v = 1). Every texel whose surface point the
+ * camera sees (facing it, not hidden by another part of the body, within 1 cm of the nearest
+ * surface) takes the sketch's colour there (bilinear); texels the sketch does not see are
+ * light grey (190, 190, 190); seen texels grow 2 texels into the unused space around UV
+ * islands.
+ *
+ * `sketch` is the colour image the result was computed from (the same pixels; 3 channels as
+ * `skb_rgb_image_load` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
+ * alpha ignored). `size` is the texture side in texels, 1..=`SKB_MAX_TEXTURE_SIZE` (the CLI's
+ * default `SKB_DEFAULT_TEXTURE_SIZE`). Writes `size` rows of `size` RGB pixels (3 bytes each)
+ * into `dst`, rows `dst_stride` bytes apart (at least 3 × `size`); `dst_len` is the size of
+ * `dst` in bytes and must be at least `dst_stride * (size - 1) + 3 * size`. `texels` and
+ * `visible` (each may be NULL) receive the number of texels inside the UV layout and of those
+ * the sketch coloured. Errors: `SKB_ERR_OUT_OF_RANGE` (size), `SKB_ERR_BAD_STRIDE`,
+ * `SKB_ERR_BUFFER_TOO_SMALL`, the image errors, `SKB_ERR_NULL_POINTER`; nothing is written on
+ * error. Thread-safe (the result is only read).
+ */
+skb_status skb_result_project_texture(const struct skb_result *result,
+                                      const struct skb_image *sketch,
+                                      uint32_t size,
+                                      uint8_t *dst,
+                                      size_t dst_stride,
+                                      size_t dst_len,
+                                      uint64_t *texels,
+                                      uint64_t *visible);
+
+/**
+ * The same projection for a mesh and a camera of the host's own: the sketch seen through
+ * `cam` (model metres → sketch pixels, as `skb_result_camera` gives it) projected onto the
+ * mesh in its current pose (`skb_mesh_pose`; the rest pose if never posed). For a mesh from
+ * `skb_result_mesh` and the result's camera this is exactly `skb_result_project_texture`.
+ * Arguments, output and errors otherwise as `skb_result_project_texture`, plus
+ * `SKB_ERR_NON_FINITE` / `SKB_ERR_OUT_OF_RANGE` for an invalid camera (non-finite, scales not
+ * positive, rotation not orthonormal). Only reads `mesh`.
+ */
+skb_status skb_mesh_project_texture(const struct skb_mesh *mesh,
+                                    const struct skb_image *sketch,
+                                    const struct skb_camera *cam,
+                                    uint32_t size,
+                                    uint8_t *dst,
+                                    size_t dst_stride,
+                                    size_t dst_len,
+                                    uint64_t *texels,
+                                    uint64_t *visible);
 
 /**
  * Creates options with the defaults. `*out` receives a handle the caller owns.

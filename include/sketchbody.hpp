@@ -108,6 +108,34 @@ private:
     Handle<skb_gray_image, skb_gray_image_free> img_;
 };
 
+/// A decoded image file (PNG/JPEG) as 8-bit RGB, transparency over white: the sketch as
+/// `sketchbody run` reads it for the texture; see skb_rgb_image_load.
+class LoadedColourImage {
+public:
+    explicit LoadedColourImage(const std::string &path) { check(skb_rgb_image_load(path.c_str(), img_.out())); }
+    /// A borrowed 3-channel view, valid while this object lives.
+    skb_image view() const {
+        skb_image v{};
+        check(skb_rgb_image_view(img_.get(), &v));
+        return v;
+    }
+
+private:
+    Handle<skb_rgb_image, skb_rgb_image_free> img_;
+};
+
+/// Writes an 8-bit PNG (1, 3 or 4 channels) with the library's encoder, atomically; see
+/// skb_image_write_png.
+inline void write_png(const skb_image &img, const std::string &path) { check(skb_image_write_png(&img, path.c_str())); }
+
+/// An RGB texture, `size` × `size` texels, 3 bytes each, rows packed, row 0 at v = 1.
+struct Texture {
+    uint32_t size = 0;
+    std::vector<uint8_t> rgb;
+    /// A borrowed view for write_png, valid while this object lives.
+    skb_image view() const { return skb_image{rgb.data(), size, size, 3 * size, 3}; }
+};
+
 /// The library context (holds the body model); shareable across threads.
 class Context {
 public:
@@ -176,12 +204,29 @@ std::vector<T> copy_out(F f, const H *handle, size_t n) {
 }
 }  // namespace detail
 
-/// Options of the production rig (skb_export_options): bone names, rest pose, origin.
+/// Options of the production rig (skb_export_options): bone names, rest pose, origin; the FBX
+/// and USD files' unit and up axis (the GLB and the in-memory rig stay metres, Y up).
 struct RigOptions {
     uint32_t naming = SKB_NAMING_PROJECT;     // SKB_NAMING_*
     uint32_t rest_pose = SKB_REST_A_POSE;     // SKB_REST_*
     uint32_t origin = SKB_ORIGIN_FLOOR;       // SKB_ORIGIN_*
+    uint32_t units = SKB_UNITS_METRES;        // SKB_UNITS_* (FBX, USD)
+    uint32_t up_axis = SKB_UP_Y;              // SKB_UP_* (FBX, USD)
 };
+
+namespace detail {
+/// An skb_export_options handle holding `o` (throws Error on a value out of range).
+inline Handle<skb_export_options, skb_export_options_free> export_options(const RigOptions &o) {
+    Handle<skb_export_options, skb_export_options_free> h;
+    check(skb_export_options_new(h.out()));
+    check(skb_export_options_set_naming(h.get(), o.naming));
+    check(skb_export_options_set_rest_pose(h.get(), o.rest_pose));
+    check(skb_export_options_set_origin(h.get(), o.origin));
+    check(skb_export_options_set_units(h.get(), o.units));
+    check(skb_export_options_set_up_axis(h.get(), o.up_axis));
+    return h;
+}
+}  // namespace detail
 
 /// The production rig of a mesh as the rigged GLB writes it (see skb_rig_*). Move-only.
 class Rig {
@@ -275,14 +320,28 @@ public:
     }
     /// The production rig in the current pose, for `options`.
     Rig rig(const RigOptions &options = {}) const {
-        Handle<skb_export_options, skb_export_options_free> o;
-        check(skb_export_options_new(o.out()));
-        check(skb_export_options_set_naming(o.get(), options.naming));
-        check(skb_export_options_set_rest_pose(o.get(), options.rest_pose));
-        check(skb_export_options_set_origin(o.get(), options.origin));
+        auto o = detail::export_options(options);
         skb_rig *raw = nullptr;
         check(skb_mesh_rig_new(m_.get(), o.get(), &raw));
         return Rig(raw);
+    }
+    /// Binary FBX 7.4 of the rigged, posed body in the options' unit and up axis; skb_export_fbx.
+    void write_fbx(const std::string &path, const RigOptions &options = {}) const {
+        auto o = detail::export_options(options);
+        check(skb_export_fbx(m_.get(), path.c_str(), o.get()));
+    }
+    /// UsdSkel .usda of the rigged, posed body in the options' unit and up axis; skb_export_usd.
+    void write_usd(const std::string &path, const RigOptions &options = {}) const {
+        auto o = detail::export_options(options);
+        check(skb_export_usd(m_.get(), path.c_str(), o.get()));
+    }
+    /// The sketch seen through `cam` projected onto the mesh in its current pose, into the UV
+    /// layout; skb_mesh_project_texture.
+    Texture texture(const skb_image &sketch, const skb_camera &cam, uint32_t size = SKB_DEFAULT_TEXTURE_SIZE) const {
+        Texture t{size, std::vector<uint8_t>(3 * size_t(size) * size)};
+        check(skb_mesh_project_texture(m_.get(), &sketch, &cam, size, t.rgb.data(), 3 * size_t(size), t.rgb.size(),
+                                       nullptr, nullptr));
+        return t;
     }
     const skb_mesh *get() const noexcept { return m_.get(); }
 
@@ -340,6 +399,15 @@ public:
         std::vector<double> w(n);
         if (n > 0) check(skb_result_shape_weights(r_.get(), w.data(), w.size(), &n));
         return w;
+    }
+    /// The texture `sketchbody run` writes as body_texture.png: `sketch` (the colour image the
+    /// result came from, e.g. LoadedColourImage::view()) projected through the result's camera
+    /// onto its posed mesh; skb_result_project_texture.
+    Texture texture(const skb_image &sketch, uint32_t size = SKB_DEFAULT_TEXTURE_SIZE) const {
+        Texture t{size, std::vector<uint8_t>(3 * size_t(size) * size)};
+        check(skb_result_project_texture(r_.get(), &sketch, size, t.rgb.data(), 3 * size_t(size), t.rgb.size(), nullptr,
+                                         nullptr));
+        return t;
     }
     /// The result's mesh (fitted rest shape, posed as in the result) for the mesh and rig getters.
     Mesh mesh() const {

@@ -14,6 +14,9 @@ use sketchbody::body::procedural::random_pose;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::body::rig::{Naming, RigOptions, RigScene, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
+#[path = "common/frames.rs"]
+mod frames;
+use frames::FRAMES;
 use sketchbody::export::gltf::write_glb;
 
 /// True when Blender is missing: prints SKIPPED naming `what`, or panics when
@@ -81,10 +84,12 @@ fn blender_imports_one_rigged_mesh_that_bends_at_the_elbow() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Blender 3.4's FBX importer against its glTF importer on the same posed, textured body: one
-/// mesh and one armature, no warning printed, the same 53 bones and parents, every vertex's
-/// weights and posed world position equal to the glTF import's (vertices matched by rest
-/// position) within 0.1 mm, a UV layer, and the embedded texture packed.
+/// Blender 3.4's FBX importer against its glTF importer on the same posed, textured body, for
+/// the FBX in each unit (m, cm) and up axis (Y, Z), Blender's own conversion from the file's
+/// global settings bringing it into Blender's metres, Z up: one mesh and one armature, no
+/// warning printed, the same 53 bones and parents, every bone's rest and posed head, every
+/// vertex's weights and posed world position equal to the glTF import's (vertices matched by
+/// rest position) within 0.1 mm, a UV layer, and the embedded texture packed.
 #[test]
 fn blender_imports_the_fbx_as_it_imports_the_gltf() {
     if blender_missing("Blender FBX import") {
@@ -100,27 +105,40 @@ fn blender_imports_the_fbx_as_it_imports_the_gltf() {
     let data = (0..64).flat_map(|i| [(i % 8 * 30) as u8, (i / 8 * 30) as u8, 128]).collect();
     let img = sketchbody::image::RgbImage::from_vec(8, 8, data).unwrap();
     let png = sketchbody::image::encode_png(&img.view()).unwrap();
-    let (glb, fbx) = (dir.join("body.glb"), dir.join("body.fbx"));
+    let glb = dir.join("body.glb");
     write_glb(&glb, &body, &scene, Some(&png)).unwrap();
-    sketchbody::export::fbx::write_fbx(&fbx, &body, &scene, Some(&png)).unwrap();
+    let mut args = vec![glb];
+    for (k, frame) in FRAMES.iter().enumerate() {
+        let fbx = dir.join(format!("body{k}.fbx"));
+        sketchbody::export::fbx::write_fbx(&fbx, &body, &scene, Some(&png), frame).unwrap();
+        args.extend([fbx, dir.join(format!("report{k}.json"))]);
+    }
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/check_fbx.py");
-    let out = blender(&script, &[&glb, &fbx, &dir.join("report.json")]);
+    let out = blender(&script, &args.iter().map(|p| p.as_path()).collect::<Vec<_>>());
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "blender failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-    let text = std::fs::read_to_string(dir.join("report.json")).unwrap();
-    println!("{text}");
-    let r: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert!(!stdout.to_lowercase().contains("warning"), "Blender printed a warning:\n{stdout}");
+    for (k, frame) in FRAMES.iter().enumerate() {
+        let text = std::fs::read_to_string(dir.join(format!("report{k}.json"))).unwrap();
+        println!("{frame:?}: {text}");
+        check_fbx_report(&text, body.vertices.len());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// One FBX import's report (tests/blender/check_fbx.py) against the glTF import's.
+fn check_fbx_report(text: &str, vertices: usize) {
+    let r: serde_json::Value = serde_json::from_str(text).unwrap();
     let f = |k: &str| r[k].as_f64().unwrap();
     assert_eq!(r["result"], serde_json::json!(["FINISHED"]), "{text}");
     assert_eq!(r["warnings"], serde_json::json!([]), "{text}");
-    assert!(!stdout.to_lowercase().contains("warning"), "Blender printed a warning:\n{stdout}");
     assert_eq!((r["meshes"].as_u64(), r["armatures"].as_u64()), (Some(1), Some(1)), "{text}");
     assert_eq!(r["bones"].as_u64(), Some(53));
     assert_eq!(r["bones_match"], true, "{text}");
-    assert_eq!(r["vertices"].as_u64(), Some(body.vertices.len() as u64));
+    assert_eq!(r["vertices"].as_u64(), Some(vertices as u64));
     assert_eq!(r["uv_layers"].as_u64(), Some(1));
     assert!(f("rest_gap") < 1e-4 && f("posed_gap") < 1e-4 && f("weight_gap") < 1e-4, "{text}");
+    assert!(f("bone_head_gap") < 1e-4 && f("posed_bone_head_gap") < 1e-4, "{text}");
     assert!(f("posed_moved") > 0.05, "the pose moves the body: {text}");
     assert!(r["images"].as_array().unwrap().iter().any(|i| i[1] == 8 && i[2] == 8 && i[3] == true), "{text}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -3,7 +3,9 @@
 //! zlib-flagged arrays refused): node counts, the 53 named bones and their hierarchy, weights
 //! summing to 1 per vertex, UV and normal counts, the embedded texture, and the posed body
 //! reproduced by composing the bones' local transforms (Euler XYZ) with the clusters' bind
-//! matrices as a DCC does. Bad input: an unwritable path writes nothing.
+//! matrices as a DCC does, for each unit (m, cm) and up axis (Y, Z): the global settings name
+//! them and every position is the model frame's turned and scaled as documented. Bad input: an
+//! unwritable path writes nothing.
 
 use std::collections::HashMap;
 use std::process::Command;
@@ -17,6 +19,11 @@ use sketchbody::body::rig::{RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::fbx::node::{file_bytes, s, Node, Prop};
 use sketchbody::export::fbx::{fbx_bytes, write_fbx};
+use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
+
+#[path = "common/frames.rs"]
+mod frames;
+use frames::{in_frame, metres_to_unit, FRAMES};
 
 #[derive(Debug, Clone)]
 enum Value {
@@ -192,12 +199,30 @@ fn scene(gender: Gender, seed: u64) -> (RiggedMesh, RigScene) {
 #[test]
 fn an_independent_reader_finds_the_skinned_posed_body() {
     let (mesh, scene) = scene(Gender::Female, 11);
+    for frame in FRAMES {
+        check_file(&mesh, &scene, &frame);
+    }
+}
+
+/// The file of `scene` in `frame` read back: settings, bones, geometry, skin, pose, texture.
+fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     let png = b"\x89PNG\r\n\x1a\n-not-really".to_vec();
-    let bytes = fbx_bytes(&mesh, &scene, Some(&png)).unwrap();
+    let bytes = fbx_bytes(mesh, scene, Some(&png), frame).unwrap();
     let root = parse(&bytes);
     let settings = root.kid("GlobalSettings");
-    assert_eq!(settings.p70("UpAxis"), Some(vec![1.0]));
-    assert_eq!(settings.p70("UnitScaleFactor"), Some(vec![100.0]));
+    // Up, front (toward the viewer: the way the character faces) and the third axis, each as
+    // (axis index, sign); FBX's unit is centimetres per file unit.
+    let (up, front) = match frame.up {
+        UpAxis::Y => ([1.0, 1.0], [2.0, 1.0]),
+        UpAxis::Z => ([2.0, 1.0], [1.0, -1.0]),
+    };
+    let g = |name: &str| settings.p70(name).unwrap_or_else(|| panic!("no {name}"))[0];
+    assert_eq!([g("UpAxis"), g("UpAxisSign")], up, "{frame:?}");
+    assert_eq!([g("FrontAxis"), g("FrontAxisSign")], front, "{frame:?}");
+    assert_eq!([g("CoordAxis"), g("CoordAxisSign")], [0.0, 1.0], "{frame:?}");
+    assert_eq!([g("OriginalUpAxis"), g("OriginalUpAxisSign")], up, "{frame:?}");
+    let cm = if frame.units == Units::Centimetres { 1.0 } else { 100.0 };
+    assert_eq!([g("UnitScaleFactor"), g("OriginalUnitScaleFactor")], [cm, cm], "{frame:?}");
     let objects = root.kid("Objects");
     let by_id: HashMap<i64, &Rec> = objects.kids.iter().map(|o| (o.int(0), o)).collect();
     let mut parent: HashMap<i64, i64> = HashMap::new();
@@ -292,16 +317,27 @@ fn an_independent_reader_finds_the_skinned_posed_body() {
         };
     }
     let mut worst = 0.0f64;
+    let mut rest_worst = 0.0f64;
+    let unit = metres_to_unit(frame);
     for v in 0..n {
         let x = Point3::new(verts[3 * v], verts[3 * v + 1], verts[3 * v + 2]);
+        rest_worst = rest_worst.max((x.coords - in_frame(frame, scene.rest_vertices[v])).norm() / unit);
         let mut p = Vector3::zeros();
         for &(b, w) in &influences[v] {
             p += (global[b] * bind[&b].try_inverse().unwrap()).transform_point(&x).coords * w;
         }
-        let o = scene.posed_vertices[v];
-        worst = worst.max((p - Vector3::new(o[0] as f64, o[1] as f64, o[2] as f64)).norm());
+        worst = worst.max((p - in_frame(frame, scene.posed_vertices[v])).norm() / unit);
     }
-    assert!(worst < 1e-5, "the FBX's skinning differs from the scene's by {worst} m");
+    assert!(rest_worst < 1e-6, "{frame:?}: the FBX's rest vertices differ from the scene's by {rest_worst} m");
+    assert!(worst < 1e-5, "{frame:?}: the FBX's skinning differs from the scene's by {worst} m");
+    // Normals turn with the axes and keep unit length.
+    let normals = geom.kid("LayerElementNormal").kid("Normals").floats();
+    let rest_normals = sketchbody::body::rig::vertex_normals(&scene.rest_vertices, &mesh.quads);
+    let turned = |k: usize| in_frame(&ExportFrame { units: Units::Metres, ..*frame }, rest_normals[k]);
+    let normal_gap = (0..n)
+        .map(|k| (Vector3::new(normals[3 * k], normals[3 * k + 1], normals[3 * k + 2]) - turned(k)).norm())
+        .fold(0.0, f64::max);
+    assert!(normal_gap < 1e-6, "{frame:?}: normals differ by {normal_gap}");
     // The bind pose lists the mesh, the armature and every bone.
     let pose = objects.all("Pose").next().unwrap();
     assert_eq!(pose.kid("NbPoseNodes").int(0) as usize, NUM_RIG_BONES + 2);
@@ -318,7 +354,7 @@ fn an_independent_reader_finds_the_skinned_posed_body() {
         v => panic!("{v:?}"),
     }
     // Without a texture: no texture or video objects.
-    let plain = parse(&fbx_bytes(&mesh, &scene, None).unwrap());
+    let plain = parse(&fbx_bytes(mesh, scene, None, frame).unwrap());
     assert!(plain.kid("Objects").kids.iter().all(|o| o.name != "Texture" && o.name != "Video"));
 }
 
@@ -328,21 +364,32 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
     let dir = std::env::temp_dir().join(format!("skb-fbx-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let missing = dir.join("no-such-folder").join("body.fbx");
-    let e = write_fbx(&missing, &mesh, &scene, None).unwrap_err();
+    let frame = ExportFrame { units: Units::Centimetres, up: UpAxis::Z };
+    let e = write_fbx(&missing, &mesh, &scene, None, &frame).unwrap_err();
     assert!(matches!(e, sketchbody::Error::Io { .. }), "{e:?}");
     let mut short = scene.clone();
     short.skin.pop();
     let path = dir.join("body.fbx");
-    assert!(matches!(write_fbx(&path, &mesh, &short, None), Err(sketchbody::Error::OutOfRange { .. })));
+    assert!(matches!(write_fbx(&path, &mesh, &short, None, &frame), Err(sketchbody::Error::OutOfRange { .. })));
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");
-    write_fbx(&path, &mesh, &scene, None).unwrap();
-    assert_eq!(std::fs::read(&path).unwrap(), fbx_bytes(&mesh, &scene, None).unwrap());
+    write_fbx(&path, &mesh, &scene, None, &frame).unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), fbx_bytes(&mesh, &scene, None, &frame).unwrap());
+    // An unknown unit or axis name is refused by name before anything is written.
+    let e = Units::parse("mm").unwrap_err().to_string();
+    assert!(e.contains("units") && e.contains("\"mm\"") && e.contains("m or cm"), "{e}");
+    let e = UpAxis::parse("x").unwrap_err().to_string();
+    assert!(e.contains("up axis") && e.contains("\"x\"") && e.contains("y or z"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A second, independent reader: assimp (`assimp info`, Debian's assimp-utils) loads the FBX
-/// and finds one mesh with every vertex, the 53 bones, the material and the embedded texture.
-/// Without assimp the test prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
+/// and finds one mesh with every vertex, the 53 bones, the material and the embedded texture;
+/// then, for each unit and up axis, `assimp export` to assimp's JSON (assimp applies no unit or
+/// axis conversion of its own): the mesh's rest vertices span the body's box in the file's frame
+/// (each axis's lowest and highest value, so a turned or mirrored axis or a wrong unit shows)
+/// and the bones' node transforms, composed down assimp's node tree, put every bone's posed head
+/// where the scene's posed head lands in that frame, within 0.1 mm. Without assimp the test
+/// prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
 #[test]
 fn assimp_reads_the_fbx() {
     if Command::new("assimp").arg("version").output().map(|o| !o.status.success()).unwrap_or(true) {
@@ -359,7 +406,7 @@ fn assimp_reads_the_fbx() {
     let img = sketchbody::image::RgbImage::from_vec(4, 4, data).unwrap();
     let png = sketchbody::image::encode_png(&img.view()).unwrap();
     let path = dir.join("body.fbx");
-    write_fbx(&path, &mesh, &scene, Some(&png)).unwrap();
+    write_fbx(&path, &mesh, &scene, Some(&png), &FRAMES[0]).unwrap();
     let out = Command::new("assimp").arg("info").arg(&path).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     println!("{text}");
@@ -372,7 +419,67 @@ fn assimp_reads_the_fbx() {
     assert_eq!(field("Faces:"), mesh.triangles().len() as u64, "assimp triangulates");
     assert_eq!(field("Bones:"), NUM_RIG_BONES as u64);
     assert_eq!(field("Textures (embed.):"), 1);
+    let heads = posed_heads(&scene);
+    for frame in FRAMES {
+        write_fbx(&path, &mesh, &scene, None, &frame).unwrap();
+        let json = dir.join("body.json");
+        let out = Command::new("assimp").arg("export").arg(&path).arg(&json).arg("-fassjson").output().unwrap();
+        assert!(out.status.success(), "assimp export failed: {}", String::from_utf8_lossy(&out.stderr));
+        let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        let unit = metres_to_unit(&frame);
+        // The rest mesh's box along each axis.
+        let v: Vec<f64> =
+            doc["meshes"][0]["vertices"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        assert!(v.len() >= 3 * mesh.vertices.len(), "{frame:?}: {} coordinates", v.len());
+        for k in 0..3 {
+            let span =
+                |it: &mut dyn Iterator<Item = f64>| it.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+            let got = span(&mut v.iter().skip(k).step_by(3).copied());
+            let want = span(&mut scene.rest_vertices.iter().map(|&p| in_frame(&frame, p)[k]));
+            let gap = (got.0 - want.0).abs().max((got.1 - want.1).abs()) / unit;
+            assert!(gap < 1e-4, "{frame:?}: axis {k} spans {got:?} in assimp, {want:?} expected");
+        }
+        // The posed bone heads from assimp's node tree (row-major matrices, translation in the
+        // fourth column).
+        let mut found = HashMap::new();
+        node_heads(&doc["rootnode"], &Matrix4::identity(), &mut found);
+        let mut worst = 0.0f64;
+        for (b, name) in scene.names.iter().enumerate() {
+            let got = found.get(name).unwrap_or_else(|| panic!("{frame:?}: assimp has no node {name}"));
+            let want = in_frame(&frame, heads[b].map(|c| c as f32));
+            worst = worst.max((got - want).norm() / unit);
+        }
+        println!("assimp {frame:?}: posed bone heads within {worst:.2e} m");
+        assert!(worst < 1e-4, "{frame:?}: assimp's posed bone heads differ by {worst} m");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Each node's global translation (`transformation`: 16 row-major numbers) by name, composed
+/// from `parent`.
+fn node_heads(node: &serde_json::Value, parent: &Matrix4<f64>, out: &mut HashMap<String, Vector3<f64>>) {
+    let m: Vec<f64> = node["transformation"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let global = parent * Matrix4::from_row_slice(&m);
+    out.insert(
+        node["name"].as_str().unwrap().to_string(),
+        Vector3::new(global[(0, 3)], global[(1, 3)], global[(2, 3)]),
+    );
+    for child in node["children"].as_array().into_iter().flatten() {
+        node_heads(child, &global, out);
+    }
+}
+
+/// The scene's posed bone heads (metres, model frame), composed from the bones' posed local
+/// transforms.
+fn posed_heads(scene: &RigScene) -> Vec<[f64; 3]> {
+    let locals = sketchbody::export::rigged::posed_locals(scene);
+    let mut global: Vec<Matrix4<f64>> = Vec::with_capacity(NUM_RIG_BONES);
+    for (b, (t, q)) in locals.iter().enumerate() {
+        let local = Translation3::from(*t).to_homogeneous() * q.to_homogeneous();
+        let g = RIG_BONES[b].parent.map_or(local, |p| global[p] * local);
+        global.push(g);
+    }
+    global.iter().map(|g| [g[(0, 3)], g[(1, 3)], g[(2, 3)]]).collect()
 }
 
 /// The layout by hand: a record's end offset, property count and length, the null record

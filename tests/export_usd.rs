@@ -2,10 +2,13 @@
 //! attributes the writer sets, by name, bracketed values split into numbers and strings)
 //! checks the counts, the 53 joints and their paths, weights summing to 1 per vertex, the UV
 //! count, the bind transforms against the rest transforms, and the posed body reproduced by
-//! composing the animation's local transforms with the inverse bind transforms. Pixar's own
+//! composing the animation's local transforms with the inverse bind transforms, for each unit
+//! (m, cm: `metersPerUnit`) and up axis (Y, Z: `upAxis`), every position the model frame's
+//! turned and scaled as documented. Pixar's own
 //! library (`usd-core` in `target/usd-venv`, `scripts/usd-venv.sh`; or `$SKB_USD_PYTHON`) then
 //! runs usdchecker's validators (no error) and skins the mesh with UsdSkel (the posed body within
-//! 0.1 mm); without it that part prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
+//! 0.1 mm), in centimetres and Z up too, reading `upAxis` and `metersPerUnit` back through
+//! `UsdGeom`; without it that part prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
 //! Bad input: an unwritable path writes nothing.
 
 mod common;
@@ -20,6 +23,11 @@ use sketchbody::body::procedural::random_pose;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::body::rig::{Naming, RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
+use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
+
+#[path = "common/frames.rs"]
+mod frames;
+use frames::{in_frame, FRAMES};
 use sketchbody::export::usd::{usda_string, write_usda};
 
 /// The text after `name = ` up to the end of its bracketed (or single-token) value.
@@ -73,10 +81,23 @@ fn scene(gender: Gender, seed: u64, naming: Naming) -> (RiggedMesh, RigScene) {
 #[test]
 fn an_independent_reader_finds_the_skinned_posed_body() {
     let (mesh, scene) = scene(Gender::Female, 4, Naming::Mixamo);
-    let text = usda_string(&mesh, &scene, true).unwrap();
+    for frame in FRAMES {
+        check_layer(&mesh, &scene, &frame);
+    }
+}
+
+/// The layer of `scene` in `frame` read back: metadata, skeleton, mesh, pose, material.
+fn check_layer(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
+    let text = usda_string(mesh, scene, true, frame).unwrap();
     assert!(text.starts_with("#usda 1.0\n"));
-    assert_eq!(strings(value(&text, "upAxis")), ["Y"]);
-    assert_eq!(numbers(value(&text, "metersPerUnit")), [1.0]);
+    let (up, metres) = match (frame.up, frame.units) {
+        (UpAxis::Y, Units::Metres) => ("Y", 1.0),
+        (UpAxis::Y, Units::Centimetres) => ("Y", 0.01),
+        (UpAxis::Z, Units::Metres) => ("Z", 1.0),
+        (UpAxis::Z, Units::Centimetres) => ("Z", 0.01),
+    };
+    assert_eq!(strings(value(&text, "upAxis")), [up]);
+    assert_eq!(numbers(value(&text, "metersPerUnit")), [metres]);
     // The skeleton: 53 joints, paths that nest as the rig, the convention's names kept.
     let joints = strings(value(&text, "uniform token[] joints"));
     assert_eq!(joints.len(), NUM_RIG_BONES);
@@ -123,18 +144,21 @@ fn an_independent_reader_finds_the_skinned_posed_body() {
         global[b] = bone.parent.map_or(local, |p| global[p] * local);
     }
     let mut worst = 0.0f64;
+    let mut rest_worst = 0.0f64;
     for v in 0..n {
         let x = Point3::new(points[3 * v], points[3 * v + 1], points[3 * v + 2]);
+        rest_worst = rest_worst.max((x.coords - in_frame(frame, scene.rest_vertices[v])).norm() * metres);
         let mut p = Vector3::zeros();
         for k in 0..4 {
             let b = ji[4 * v + k] as usize;
             p += (global[b] * bind[b].try_inverse().unwrap()).transform_point(&x).coords * jw[4 * v + k];
         }
-        let o = scene.posed_vertices[v];
-        worst = worst.max((p - Vector3::new(o[0] as f64, o[1] as f64, o[2] as f64)).norm());
+        worst = worst.max((p - in_frame(frame, scene.posed_vertices[v])).norm() * metres);
     }
-    assert!(worst < 1e-5, "the USD's skinning differs from the scene's by {worst} m");
-    let plain = usda_string(&mesh, &scene, false).unwrap();
+    // Points are written as f32: 1e-6 m in metres, 1e-6 cm-units relative in centimetres.
+    assert!(rest_worst < 1e-5, "{frame:?}: the USD's rest points differ from the scene's by {rest_worst} m");
+    assert!(worst < 1e-5, "{frame:?}: the USD's skinning differs from the scene's by {worst} m");
+    let plain = usda_string(mesh, scene, false, frame).unwrap();
     assert!(!plain.contains("UsdUVTexture") && plain.contains("inputs:diffuseColor = "));
 }
 
@@ -160,17 +184,26 @@ fn usd_core_validates_and_skins_the_layer() {
         return;
     };
     let (mesh, scene) = scene(Gender::Male, 9, Naming::Unreal);
+    for frame in [FRAMES[0], FRAMES[3]] {
+        check_with_usd_core(&python, &mesh, &scene, &frame);
+    }
+}
+
+/// usd-core on the layer of `scene` in `frame`: validators, UsdSkel's skinning, and UsdGeom's
+/// reading of `upAxis` and `metersPerUnit`; the posed points compared in `frame`.
+fn check_with_usd_core(python: &std::path::Path, mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("usd-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let data = (0..16).flat_map(|i| [(i % 4 * 60) as u8, (i / 4 * 60) as u8, 90]).collect();
     let img = sketchbody::image::RgbImage::from_vec(4, 4, data).unwrap();
     std::fs::write(dir.join("body_texture.png"), sketchbody::image::encode_png(&img.view()).unwrap()).unwrap();
     let usda = dir.join("body.usda");
-    write_usda(&usda, &mesh, &scene, true).unwrap();
-    let expected = serde_json::json!({"posed": scene.posed_vertices});
+    write_usda(&usda, mesh, scene, true, frame).unwrap();
+    let posed: Vec<[f64; 3]> = scene.posed_vertices.iter().map(|&p| in_frame(frame, p).into()).collect();
+    let expected = serde_json::json!({"posed": posed});
     std::fs::write(dir.join("expected.json"), expected.to_string()).unwrap();
     let script = common::repo_root().join("tests/usd/check_usd.py");
-    let out = Command::new(&python).arg(&script).arg(&usda).arg(dir.join("expected.json")).output().unwrap();
+    let out = Command::new(python).arg(&script).arg(&usda).arg(dir.join("expected.json")).output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "check_usd.py failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
     println!("{stdout}");
@@ -181,7 +214,24 @@ fn usd_core_validates_and_skins_the_layer() {
     assert_eq!(r["joints"].as_array().unwrap().len(), NUM_RIG_BONES);
     assert_eq!((r["has_animation"].as_bool(), r["skinned"].as_bool()), (Some(true), Some(true)), "{stdout}");
     assert_eq!(r["points"].as_u64(), Some(mesh.vertices.len() as u64));
-    assert!(r["posed_gap"].as_f64().unwrap() < 1e-4, "UsdSkel's posed body differs: {stdout}");
+    // metersPerUnit converts the gap to metres: within 0.1 mm in either unit.
+    let (up, metres) = match frame.units {
+        Units::Metres => (frame.up, 1.0),
+        Units::Centimetres => (frame.up, 0.01),
+    };
+    let gap = r["posed_gap"].as_f64().unwrap() * metres;
+    assert!(gap < 1e-4, "{frame:?}: UsdSkel's posed body differs by {gap} m: {stdout}");
+    let up = if up == UpAxis::Z { "Z" } else { "Y" };
+    assert_eq!(r["up_axis"].as_str(), Some(up), "{stdout}");
+    assert_eq!(r["meters_per_unit"].as_f64(), Some(metres), "{stdout}");
+    // The SkelRoot's extent as usd-core reads it: the posed body's size along each of the
+    // layer's axes (the height along the up axis), in its unit.
+    let size: Vec<f64> = r["extent_size"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    for k in 0..3 {
+        let (lo, hi) =
+            posed.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[k]), hi.max(p[k])));
+        assert!((size[k] - (hi - lo)).abs() * metres < 1e-5, "{frame:?}: extent {size:?} along axis {k}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -190,12 +240,13 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
     let (mesh, scene) = scene(Gender::Male, 2, Naming::Project);
     let dir = std::env::temp_dir().join(format!("skb-usd-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let e = write_usda(&dir.join("missing").join("body.usda"), &mesh, &scene, false).unwrap_err();
+    let frame = ExportFrame { units: Units::Centimetres, up: UpAxis::Z };
+    let e = write_usda(&dir.join("missing").join("body.usda"), &mesh, &scene, false, &frame).unwrap_err();
     assert!(matches!(e, sketchbody::Error::Io { .. }), "{e:?}");
     let mut short = scene.clone();
     short.rest_vertices.pop();
     assert!(matches!(
-        write_usda(&dir.join("body.usda"), &mesh, &short, false),
+        write_usda(&dir.join("body.usda"), &mesh, &short, false, &frame),
         Err(sketchbody::Error::OutOfRange { .. })
     ));
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");

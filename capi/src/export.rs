@@ -1,6 +1,7 @@
-//! `skb_export_options`: the production rig's export options (bone names, rest pose, origin)
-//! for `skb_mesh_write_glb_with_options`, `skb_export_fbx` and `skb_export_usd`. Opaque; set
-//! through setters; each writer writes atomically.
+//! `skb_export_options`: the production rig's export options (bone names, rest pose, origin;
+//! the FBX and USD files' unit and up axis) for `skb_mesh_write_glb_with_options`,
+//! `skb_export_fbx` and `skb_export_usd`. Opaque; set through setters; each writer writes
+//! atomically.
 
 use std::ffi::c_char;
 
@@ -9,6 +10,7 @@ use sketchbody_core::body::rig::RiggedMesh;
 use sketchbody_core::body::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
 use sketchbody_core::error::Error;
 use sketchbody_core::export::fbx::write_fbx;
+use sketchbody_core::export::frame::{ExportFrame, Units, UpAxis};
 use sketchbody_core::export::gltf::write_glb;
 use sketchbody_core::export::usd::write_usda;
 
@@ -31,12 +33,22 @@ pub const SKB_REST_T_POSE: u32 = 1;
 pub const SKB_ORIGIN_FLOOR: u32 = 0;
 /// Origin at the rest pelvis joint.
 pub const SKB_ORIGIN_PELVIS: u32 = 1;
+/// FBX and USD length unit: metres (the default; one file unit is 1 m).
+pub const SKB_UNITS_METRES: u32 = 0;
+/// FBX and USD length unit: centimetres (one file unit is 1 cm; coordinates 100× the metres).
+pub const SKB_UNITS_CENTIMETRES: u32 = 1;
+/// FBX and USD up axis: +Y, the body facing +Z (the default; the library's model frame).
+pub const SKB_UP_Y: u32 = 0;
+/// FBX and USD up axis: +Z, the body facing −Y (the model frame turned +90° about X).
+pub const SKB_UP_Z: u32 = 1;
 
-/// Export options of the rigged GLB (docs/formats.md, "body.glb"). Create with
-/// `skb_export_options_new` (defaults: project names, A-pose, floor), free with
-/// `skb_export_options_free`. Not shared between threads while being set.
+/// Export options of the rigged body (docs/formats.md, "body.glb", "body.fbx", "body.usda").
+/// Create with `skb_export_options_new` (defaults: project names, A-pose, floor, metres, Y up),
+/// free with `skb_export_options_free`. Not shared between threads while being set.
 pub struct skb_export_options {
     pub(crate) rig: RigOptions,
+    /// Unit and up axis of the FBX and USD writers (the GLB is always metres, Y up).
+    pub(crate) frame: ExportFrame,
 }
 
 /// Creates export options with the defaults into `*out` (the caller owns them).
@@ -47,7 +59,7 @@ pub unsafe extern "C" fn skb_export_options_new(out: *mut *mut skb_export_option
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
-            give(out, skb_export_options { rig: RigOptions::default() })
+            give(out, skb_export_options { rig: RigOptions::default(), frame: ExportFrame::default() })
         }
     }
 }
@@ -61,11 +73,23 @@ pub unsafe extern "C" fn skb_export_options_free(opts: *mut skb_export_options) 
 }
 
 unsafe fn set(opts: *mut skb_export_options, f: impl FnOnce(&mut RigOptions) -> Result<(), Error>) -> skb_status {
+    // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to `set_all`.
+    unsafe { set_all(opts, |o| f(&mut o.rig)) }
+}
+
+/// Applies `f` to the options behind `opts`; `f` changes them only when it succeeds.
+///
+/// # Safety
+/// `opts` is NULL or a live handle from `skb_export_options_new`, not used by another thread.
+unsafe fn set_all(
+    opts: *mut skb_export_options,
+    f: impl FnOnce(&mut skb_export_options) -> Result<(), Error>,
+) -> skb_status {
     // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to the ptr.rs helpers, which
     // check NULL and lengths.
     unsafe {
         let o = try_status!(try_mut(opts, "opts"));
-        match f(&mut o.rig) {
+        match f(o) {
             Ok(()) => skb_status::SKB_OK,
             Err(e) => fail(&e),
         }
@@ -131,8 +155,51 @@ pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_opt
     }
 }
 
-/// A core writer of the rigged scene: path, rigged mesh, scene.
-type RiggedWriter = fn(&std::path::Path, &RiggedMesh, &RigScene) -> sketchbody_core::Result<()>;
+/// Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
+/// `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
+/// is always in metres (glTF's specification) and `skb_mesh_rig_new` in the model frame.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_units(opts: *mut skb_export_options, units: u32) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_units` (lib.rs § Safety): `opts` is NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            set_all(opts, |o| {
+                o.frame.units = match units {
+                    SKB_UNITS_METRES => Units::Metres,
+                    SKB_UNITS_CENTIMETRES => Units::Centimetres,
+                    _ => return Err(Error::OutOfRange { name: "units", detail: format!("{units} (expected 0 metres, 1 centimetres)") }),
+                };
+                Ok(())
+            })
+        }
+    }
+}
+
+/// Sets the up axis of the FBX and USD files: `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model
+/// frame turned +90° about X: Z up, the body facing −Y); anything else is
+/// `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB is always Y up (glTF's specification)
+/// and `skb_mesh_rig_new` in the model frame.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_up_axis(opts: *mut skb_export_options, up: u32) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_up_axis` (lib.rs § Safety): `opts` is NULL or valid
+    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            set_all(opts, |o| {
+                o.frame.up = match up {
+                    SKB_UP_Y => UpAxis::Y,
+                    SKB_UP_Z => UpAxis::Z,
+                    _ => return Err(Error::OutOfRange { name: "up axis", detail: format!("{up} (expected 0 Y, 1 Z)") }),
+                };
+                Ok(())
+            })
+        }
+    }
+}
+
+/// A core writer of the rigged scene: path, rigged mesh, scene, the FBX/USD frame.
+type RiggedWriter = fn(&std::path::Path, &RiggedMesh, &RigScene, &ExportFrame) -> sketchbody_core::Result<()>;
 
 /// The shared body of the rigged-body writers: checks `mesh` and `path`, builds the scene of
 /// the mesh's current pose (the rest pose if never posed) with `opts` (NULL: the defaults) and
@@ -151,12 +218,12 @@ unsafe fn write_rigged(
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
             let path = try_status!(path_arg(path, "path"));
-            let options = opt_ref(opts).map_or_else(RigOptions::default, |o| o.rig);
+            let (options, frame) = opt_ref(opts).map_or_else(Default::default, |o| (o.rig, o.frame));
             let rest_pose = Pose::rest(&m.rest.joints);
             let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
             let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
             let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
-            try_core!(write(path, &rigged, &scene));
+            try_core!(write(path, &rigged, &scene, &frame));
             skb_status::SKB_OK
         }
     }
@@ -174,13 +241,14 @@ pub unsafe extern "C" fn skb_mesh_write_glb_with_options(
 ) -> skb_status {
     // SAFETY: the header contract of `skb_mesh_write_glb_with_options` (lib.rs § Safety): `mesh`, `path`, `opts`
     // are NULL or valid for the documented lengths during the call; `write_rigged` checks them.
-    unsafe { write_rigged(mesh, path, opts, |p, m, s| write_glb(p, m, s, None)) }
+    unsafe { write_rigged(mesh, path, opts, |p, m, s, _| write_glb(p, m, s, None)) }
 }
 
 /// Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
 /// same rigged, posed body as `skb_mesh_write_glb_with_options` (the bones' local transforms
-/// hold the pose, the clusters and the bind pose the rest), metres, Y up, a plain skin-colour
-/// material. See docs/formats.md, "body.fbx". Written atomically. Only reads `mesh` and `opts`.
+/// hold the pose, the clusters and the bind pose the rest), in the options' unit and up axis
+/// (default metres, Y up), a plain skin-colour material. See docs/formats.md, "body.fbx".
+/// Written atomically. Only reads `mesh` and `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_fbx(
     mesh: *const skb_mesh,
@@ -189,13 +257,13 @@ pub unsafe extern "C" fn skb_export_fbx(
 ) -> skb_status {
     // SAFETY: the header contract of `skb_export_fbx` (lib.rs § Safety): `mesh`, `path`, `opts` are NULL or
     // valid for the documented lengths during the call; `write_rigged` checks them.
-    unsafe { write_rigged(mesh, path, opts, |p, m, s| write_fbx(p, m, s, None)) }
+    unsafe { write_rigged(mesh, path, opts, |p, m, s, f| write_fbx(p, m, s, None, f)) }
 }
 
 /// Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
 /// the defaults): the same rigged, posed body as `skb_mesh_write_glb_with_options` (a Skeleton
-/// with bind and rest transforms, the pose as a static SkelAnimation), metres, Y up, a plain
-/// skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
+/// with bind and rest transforms, the pose as a static SkelAnimation), in the options' unit and
+/// up axis (default metres, Y up: `metersPerUnit`, `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
 /// and `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_usd(
@@ -205,5 +273,5 @@ pub unsafe extern "C" fn skb_export_usd(
 ) -> skb_status {
     // SAFETY: the header contract of `skb_export_usd` (lib.rs § Safety): `mesh`, `path`, `opts` are NULL or
     // valid for the documented lengths during the call; `write_rigged` checks them.
-    unsafe { write_rigged(mesh, path, opts, |p, m, s| write_usda(p, m, s, false)) }
+    unsafe { write_rigged(mesh, path, opts, |p, m, s, f| write_usda(p, m, s, false, f)) }
 }

@@ -37,6 +37,7 @@ mod joints_io;
 mod detect;
 mod fit;
 mod pipeline;
+mod texture;
 mod sketch;
 
 #[cfg(test)]
@@ -57,6 +58,7 @@ pub use pose::*;
 pub use rig::*;
 pub use sketch::*;
 pub use status::*;
+pub use texture::*;
 pub use version::*;
 
 pub(crate) use error::{clear_last_error as error_reset, fail as error_fail};

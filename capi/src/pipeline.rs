@@ -44,7 +44,7 @@ pub struct skb_gray_image {
 /// all its data (nothing refers to the inputs). Immutable: several threads may read it at once.
 pub struct skb_result {
     model: Arc<BodyModel>,
-    inner: PipelineResult,
+    pub(crate) inner: PipelineResult,
 }
 
 /// Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as gray into `*out` (caller owns it).

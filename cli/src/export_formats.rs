@@ -1,11 +1,13 @@
-//! `run --format glb,fbx,usd`: which rigged-body files a run writes (`body.glb`, `body.fbx`,
-//! `body.usda`) and writing them into the run's staging folder.
+//! `run --format glb,fbx,usd --units m|cm --up y|z`: which rigged-body files a run writes
+//! (`body.glb`, `body.fbx`, `body.usda`), the unit and up axis of the FBX and USD files, and
+//! writing them into the run's staging folder.
 
 use std::path::PathBuf;
 
 use sketchbody::body::rig::RigScene;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::export::fbx::write_fbx;
+use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
 use sketchbody::export::gltf::write_glb;
 use sketchbody::export::usd::write_usda;
 
@@ -31,15 +33,27 @@ impl Format {
     }
 }
 
+/// Parses `--units` (`m` or `cm`); the error names the value and the choices.
+pub fn parse_units(s: &str) -> Result<Units, String> {
+    Units::parse(s).map_err(|e| e.to_string())
+}
+
+/// Parses `--up` (`y` or `z`); the error names the value and the choices.
+pub fn parse_up(s: &str) -> Result<UpAxis, String> {
+    UpAxis::parse(s).map_err(|e| e.to_string())
+}
+
 /// Writes each of `formats` once (first mention first) as `path(file name)`, the scene built
 /// from `mesh`, with `texture_png` as the texture (the USD layer names `body_texture.png`,
-/// which the caller writes beside it).
+/// which the caller writes beside it); FBX and USD in `frame`'s unit and axes, the GLB always
+/// in metres, Y up (glTF's own).
 pub fn write_rigged(
     formats: &[Format],
     path: impl Fn(&str) -> PathBuf,
     mesh: &RiggedMesh,
     scene: &RigScene,
     texture_png: Option<&[u8]>,
+    frame: &ExportFrame,
 ) -> sketchbody::Result<()> {
     for (i, &f) in formats.iter().enumerate() {
         if formats[..i].contains(&f) {
@@ -48,8 +62,8 @@ pub fn write_rigged(
         let p = path(f.file_name());
         match f {
             Format::Glb => write_glb(&p, mesh, scene, texture_png)?,
-            Format::Fbx => write_fbx(&p, mesh, scene, texture_png)?,
-            Format::Usd => write_usda(&p, mesh, scene, texture_png.is_some())?,
+            Format::Fbx => write_fbx(&p, mesh, scene, texture_png, frame)?,
+            Format::Usd => write_usda(&p, mesh, scene, texture_png.is_some(), frame)?,
         }
     }
     Ok(())

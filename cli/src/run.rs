@@ -5,7 +5,8 @@
 //!
 //! Files: `body.glb` (one scene: the rest mesh on MakeHuman's 53-bone rig, posed, with a
 //! one-frame clip and the sketch as its texture; `--format` adds or replaces it with `body.fbx`
-//! and `body.usda`, the same rigged body), `body.obj` (posed mesh), `body_rest.obj`,
+//! and `body.usda`, the same rigged body, in the unit and up axis of `--units` and `--up`),
+//! `body.obj` (posed mesh), `body_rest.obj`,
 //! `body.mtl` + `body_texture.png` (the texture, unless `--no-texture`), `joints2d.json`
 //! (sketchbody-joints2d), `pose3d.json` (sketchbody-pose3d: 3-D joints and camera),
 //! `overlay.png`, `preview.png` (sketch, body through the camera, blend, front, side),
@@ -22,6 +23,7 @@ use sketchbody::body::{BodyModel, Gender};
 use sketchbody::detect::figure::{Backend, FigureOptions};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
+use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
 use sketchbody::export::joints2d::{load_joints2d, write_joints2d_with, LOW_CONFIDENCE_HINT};
 use sketchbody::export::obj::{mtl_string, write_obj_with_material};
 use sketchbody::export::pose3d::pose3d_json;
@@ -79,6 +81,15 @@ pub struct Args {
     /// 7.4), usd (body.usda, UsdSkel).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "glb")]
     format: Vec<Format>,
+    /// Length unit of body.fbx and body.usda: m (metres) or cm (centimetres). body.glb is always
+    /// in metres (glTF's specification).
+    #[arg(long, default_value = "m", value_parser = crate::export_formats::parse_units)]
+    units: Units,
+    /// Up axis of body.fbx and body.usda: y (Y up, the body facing +Z) or z (Z up, the body
+    /// facing -Y, as Blender, 3ds Max and Unreal). body.glb is always Y up (glTF's
+    /// specification).
+    #[arg(long, default_value = "y", value_parser = crate::export_formats::parse_up)]
+    up: UpAxis,
     /// No texture: the GLB gets a plain skin colour and the OBJs no material.
     #[arg(long)]
     no_texture: bool,
@@ -387,7 +398,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         compare_preview(&sketch_rgb, &r.posed_vertices, &tris, surface.as_ref(), &r.pose.camera, a.preview_size)?;
     let scene = RigScene::build(model.rig(), &r.mesh, &r.ik_pose, &rig_options)?;
     let texture = texture_img.as_ref().map(|(img, _)| encode_png(&img.view())).transpose()?;
-    write_rigged(&a.format, |name| staging.path(name), &r.mesh, &scene, texture.as_deref())?;
+    let frame = ExportFrame { units: a.units, up: a.up };
+    write_rigged(&a.format, |name| staging.path(name), &r.mesh, &scene, texture.as_deref(), &frame)?;
     let mtl = texture.as_ref().map(|_| "body.mtl");
     if let Some(png) = &texture {
         write_atomic(&staging.path("body_texture.png"), png)?;

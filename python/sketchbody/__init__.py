@@ -22,7 +22,7 @@ from ._lib import (LIBRARY_PATH, Cancelled, LibraryNotFoundError, NoFigure, Sket
                    status_text)
 from .context import AUTO, FEMALE, MALE, Context, default_context
 from .detect import Detection, DetectOptions, Detector, detect
-from .images import canny, gaussian_blur, load_image, render_sketch
+from .images import canny, gaussian_blur, load_image, load_rgb_image, render_sketch, write_png
 from .mesh import ExportOptions, Mesh, Rig, quat_to_matrix
 from .pipeline import FitOptions, Result, fit_shape, run_pipeline
 from .pose import (JOINT_NAMES, PROPORTION_GROUPS, Camera, Joints2D, Pose3D, PoseDictionary, PoseOptions,
@@ -49,6 +49,6 @@ __all__ = [
     "Camera", "Cancelled", "Context", "Detection", "DetectOptions", "Detector", "ExportOptions", "FitOptions",
     "Joints2D", "LibraryNotFoundError", "Mesh", "NoFigure", "Pose3D", "PoseDictionary", "PoseOptions", "Result",
     "Rig", "SketchbodyError", "Status", "canny", "default_context", "detect", "estimate_pose", "fit_shape",
-    "gaussian_blur", "library_path", "load_image", "quat_to_matrix", "refine_pose", "render_sketch",
-    "run_pipeline", "status_text", "version",
+    "gaussian_blur", "library_path", "load_image", "load_rgb_image", "quat_to_matrix", "refine_pose",
+    "render_sketch", "run_pipeline", "status_text", "version", "write_png",
 ]

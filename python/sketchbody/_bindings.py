@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "bbb3b02be017c05daaca3c66722a4042fe49af9f6daa04f5a2a0107f2f20eaac"
+HEADER_SHA256 = "232fbca6ebc48cef4dfbf57a85e2e379994da2167010db9b50cd5d5a6122aa83"
 
 # ---- constants (#define) ----
 
@@ -48,6 +48,14 @@ SKB_REST_T_POSE = 1
 SKB_ORIGIN_FLOOR = 0
 # Origin at the rest pelvis joint.
 SKB_ORIGIN_PELVIS = 1
+# FBX and USD length unit: metres (the default; one file unit is 1 m).
+SKB_UNITS_METRES = 0
+# FBX and USD length unit: centimetres (one file unit is 1 cm; coordinates 100× the metres).
+SKB_UNITS_CENTIMETRES = 1
+# FBX and USD up axis: +Y, the body facing +Z (the default; the library's model frame).
+SKB_UP_Y = 0
+# FBX and USD up axis: +Z, the body facing −Y (the model frame turned +90° about X).
+SKB_UP_Z = 1
 # Number of bones of the production rig (MakeHuman's `game_engine` skeleton).
 SKB_NUM_RIG_BONES = 53
 # Doubles per bone in `skb_rig_copy_rest_transforms`: translation x, y, z then rotation
@@ -100,6 +108,10 @@ SKB_JOINTS_REST = 0
 SKB_JOINTS_POSED = 1
 # `skb_result_copy_joints3d`: the 3-D pose estimated from the 2-D joints (a 1.75 m person).
 SKB_JOINTS_ESTIMATED = 2
+# Largest texture side `skb_*_project_texture` accept, texels.
+SKB_MAX_TEXTURE_SIZE = 4096
+# The texture side `sketchbody run` uses by default (`--texture-size`), texels.
+SKB_DEFAULT_TEXTURE_SIZE = 1024
 # Style: a random style drawn from the seed (costume, hair, shading, clutter, proportions).
 SKB_SKETCH_STYLE_RANDOM = 0
 # Style: clean line art (no costume, hair, shading or clutter, white paper).
@@ -125,6 +137,10 @@ CONSTANTS = {
     "SKB_REST_T_POSE": 1,
     "SKB_ORIGIN_FLOOR": 0,
     "SKB_ORIGIN_PELVIS": 1,
+    "SKB_UNITS_METRES": 0,
+    "SKB_UNITS_CENTIMETRES": 1,
+    "SKB_UP_Y": 0,
+    "SKB_UP_Z": 1,
     "SKB_NUM_RIG_BONES": 53,
     "SKB_RIG_TRANSFORM_LEN": 7,
     "SKB_POSE_DIM": 45,
@@ -147,6 +163,8 @@ CONSTANTS = {
     "SKB_JOINTS_REST": 0,
     "SKB_JOINTS_POSED": 1,
     "SKB_JOINTS_ESTIMATED": 2,
+    "SKB_MAX_TEXTURE_SIZE": 4096,
+    "SKB_DEFAULT_TEXTURE_SIZE": 1024,
     "SKB_SKETCH_STYLE_RANDOM": 0,
     "SKB_SKETCH_STYLE_CLEAN": 1,
 }
@@ -285,9 +303,9 @@ class skb_detector(ctypes.Structure):
     pass
 
 
-# Export options of the rigged GLB (docs/formats.md, "body.glb"). Create with
-# `skb_export_options_new` (defaults: project names, A-pose, floor), free with
-# `skb_export_options_free`. Not shared between threads while being set.
+# Export options of the rigged body (docs/formats.md, "body.glb", "body.fbx", "body.usda").
+# Create with `skb_export_options_new` (defaults: project names, A-pose, floor, metres, Y up),
+# free with `skb_export_options_free`. Not shared between threads while being set.
 class skb_export_options(ctypes.Structure):
     pass
 
@@ -343,6 +361,14 @@ class skb_rasterizer(ctypes.Structure):
 # The result of `skb_run_pipeline`, owned by the caller (free with `skb_result_free`). It owns
 # all its data (nothing refers to the inputs). Immutable: several threads may read it at once.
 class skb_result(ctypes.Structure):
+    pass
+
+
+# A decoded image file, 8-bit RGB (gray expanded, palettes resolved, transparency composited
+# over white, EXIF orientation applied): the sketch as `sketchbody run` reads it for the
+# texture. Create with `skb_rgb_image_load`, view with `skb_rgb_image_view`, free with
+# `skb_rgb_image_free`. Immutable: several threads may read it at once.
+class skb_rgb_image(ctypes.Structure):
     pass
 
 
@@ -1158,6 +1184,39 @@ FUNCTIONS["skb_export_options_set_origin"] = (
     ),
 )
 
+# Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
+# `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
+# is always in metres (glTF's specification) and `skb_mesh_rig_new` in the model frame.
+FUNCTIONS["skb_export_options_set_units"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_export_options),
+        ctypes.c_uint32,
+    ],
+    "skb_status",
+    (
+        ("opts", "struct skb_export_options *"),
+        ("units", "uint32_t"),
+    ),
+)
+
+# Sets the up axis of the FBX and USD files: `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model
+# frame turned +90° about X: Z up, the body facing −Y); anything else is
+# `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB is always Y up (glTF's specification)
+# and `skb_mesh_rig_new` in the model frame.
+FUNCTIONS["skb_export_options_set_up_axis"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_export_options),
+        ctypes.c_uint32,
+    ],
+    "skb_status",
+    (
+        ("opts", "struct skb_export_options *"),
+        ("up", "uint32_t"),
+    ),
+)
+
 # Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
 # scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
 # pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
@@ -1179,8 +1238,9 @@ FUNCTIONS["skb_mesh_write_glb_with_options"] = (
 
 # Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
 # same rigged, posed body as `skb_mesh_write_glb_with_options` (the bones' local transforms
-# hold the pose, the clusters and the bind pose the rest), metres, Y up, a plain skin-colour
-# material. See docs/formats.md, "body.fbx". Written atomically. Only reads `mesh` and `opts`.
+# hold the pose, the clusters and the bind pose the rest), in the options' unit and up axis
+# (default metres, Y up), a plain skin-colour material. See docs/formats.md, "body.fbx".
+# Written atomically. Only reads `mesh` and `opts`.
 FUNCTIONS["skb_export_fbx"] = (
     ctypes.c_uint32,
     [
@@ -1198,8 +1258,8 @@ FUNCTIONS["skb_export_fbx"] = (
 
 # Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
 # the defaults): the same rigged, posed body as `skb_mesh_write_glb_with_options` (a Skeleton
-# with bind and rest transforms, the pose as a static SkelAnimation), metres, Y up, a plain
-# skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
+# with bind and rest transforms, the pose as a static SkelAnimation), in the options' unit and
+# up axis (default metres, Y up: `metersPerUnit`, `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
 # and `opts`.
 FUNCTIONS["skb_export_usd"] = (
     ctypes.c_uint32,
@@ -3044,6 +3104,143 @@ FUNCTIONS["skb_result_mesh"] = (
     (
         ("result", "const struct skb_result *"),
         ("out", "struct skb_mesh **"),
+    ),
+)
+
+# Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as 8-bit RGB into `*out` (caller
+# owns it). Errors: `SKB_ERR_IO` (missing, unreadable, not a regular file), `SKB_ERR_DECODE`
+# (not an image, truncated), `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
+FUNCTIONS["skb_rgb_image_load"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.c_char_p,
+        ctypes.POINTER(ctypes.POINTER(skb_rgb_image)),
+    ],
+    "skb_status",
+    (
+        ("path", "const char *"),
+        ("out", "struct skb_rgb_image **"),
+    ),
+)
+
+# A borrowed 3-channel `skb_image` view of `img` into `*out` (rows packed, `stride` = 3 ×
+# `width`), valid while `img` lives.
+FUNCTIONS["skb_rgb_image_view"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_rgb_image),
+        ctypes.POINTER(skb_image),
+    ],
+    "skb_status",
+    (
+        ("img", "const struct skb_rgb_image *"),
+        ("out", "struct skb_image *"),
+    ),
+)
+
+# Frees an image from `skb_rgb_image_load`. NULL is a no-op.
+FUNCTIONS["skb_rgb_image_free"] = (
+    None,
+    [
+        ctypes.POINTER(skb_rgb_image),
+    ],
+    "void",
+    (
+        ("img", "struct skb_rgb_image *"),
+    ),
+)
+
+# Writes `img` (1 channel: gray, 3: RGB, 4: RGBA; any stride) as an 8-bit PNG to `path`
+# (NUL-terminated UTF-8) with the library's encoder, the one `sketchbody run` writes
+# `body_texture.png` with (same pixels, same bytes). Written atomically: on error (`SKB_ERR_IO`
+# for an unwritable path) nothing is left at `path`. Thread-safe.
+FUNCTIONS["skb_image_write_png"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_image),
+        ctypes.c_char_p,
+    ],
+    "skb_status",
+    (
+        ("img", "const struct skb_image *"),
+        ("path", "const char *"),
+    ),
+)
+
+# The texture `sketchbody run` writes as `body_texture.png` for this result: the sketch
+# projected through the result's camera onto its posed mesh, into MakeHuman's UV layout
+# (`skb_mesh_copy_uvs`, v up; texture row 0 is v = 1). Every texel whose surface point the
+# camera sees (facing it, not hidden by another part of the body, within 1 cm of the nearest
+# surface) takes the sketch's colour there (bilinear); texels the sketch does not see are
+# light grey (190, 190, 190); seen texels grow 2 texels into the unused space around UV
+# islands.
+#
+# `sketch` is the colour image the result was computed from (the same pixels; 3 channels as
+# `skb_rgb_image_load` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
+# alpha ignored). `size` is the texture side in texels, 1..=`SKB_MAX_TEXTURE_SIZE` (the CLI's
+# default `SKB_DEFAULT_TEXTURE_SIZE`). Writes `size` rows of `size` RGB pixels (3 bytes each)
+# into `dst`, rows `dst_stride` bytes apart (at least 3 × `size`); `dst_len` is the size of
+# `dst` in bytes and must be at least `dst_stride * (size - 1) + 3 * size`. `texels` and
+# `visible` (each may be NULL) receive the number of texels inside the UV layout and of those
+# the sketch coloured. Errors: `SKB_ERR_OUT_OF_RANGE` (size), `SKB_ERR_BAD_STRIDE`,
+# `SKB_ERR_BUFFER_TOO_SMALL`, the image errors, `SKB_ERR_NULL_POINTER`; nothing is written on
+# error. Thread-safe (the result is only read).
+FUNCTIONS["skb_result_project_texture"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.POINTER(skb_image),
+        ctypes.c_uint32,
+        ctypes.POINTER(ctypes.c_uint8),
+        ctypes.c_size_t,
+        ctypes.c_size_t,
+        ctypes.POINTER(ctypes.c_uint64),
+        ctypes.POINTER(ctypes.c_uint64),
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("sketch", "const struct skb_image *"),
+        ("size", "uint32_t"),
+        ("dst", "uint8_t *"),
+        ("dst_stride", "size_t"),
+        ("dst_len", "size_t"),
+        ("texels", "uint64_t *"),
+        ("visible", "uint64_t *"),
+    ),
+)
+
+# The same projection for a mesh and a camera of the host's own: the sketch seen through
+# `cam` (model metres → sketch pixels, as `skb_result_camera` gives it) projected onto the
+# mesh in its current pose (`skb_mesh_pose`; the rest pose if never posed). For a mesh from
+# `skb_result_mesh` and the result's camera this is exactly `skb_result_project_texture`.
+# Arguments, output and errors otherwise as `skb_result_project_texture`, plus
+# `SKB_ERR_NON_FINITE` / `SKB_ERR_OUT_OF_RANGE` for an invalid camera (non-finite, scales not
+# positive, rotation not orthonormal). Only reads `mesh`.
+FUNCTIONS["skb_mesh_project_texture"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_mesh),
+        ctypes.POINTER(skb_image),
+        ctypes.POINTER(skb_camera),
+        ctypes.c_uint32,
+        ctypes.POINTER(ctypes.c_uint8),
+        ctypes.c_size_t,
+        ctypes.c_size_t,
+        ctypes.POINTER(ctypes.c_uint64),
+        ctypes.POINTER(ctypes.c_uint64),
+    ],
+    "skb_status",
+    (
+        ("mesh", "const struct skb_mesh *"),
+        ("sketch", "const struct skb_image *"),
+        ("cam", "const struct skb_camera *"),
+        ("size", "uint32_t"),
+        ("dst", "uint8_t *"),
+        ("dst_stride", "size_t"),
+        ("dst_len", "size_t"),
+        ("texels", "uint64_t *"),
+        ("visible", "uint64_t *"),
     ),
 )
 

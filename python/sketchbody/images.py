@@ -1,4 +1,5 @@
-"""Images: the library's PNG/JPEG loader, Canny edges and Gaussian blur, on numpy arrays.
+"""Images: the library's PNG/JPEG loaders and PNG writer, Canny edges and Gaussian blur, on
+numpy arrays.
 
 Images are numpy uint8 arrays: (H, W) gray, (H, W, 3) RGB or (H, W, 4) RGBA (alpha ignored).
 Every function accepting an image also accepts a path (str or os.PathLike) to a PNG or JPEG,
@@ -17,6 +18,10 @@ class _GrayImage(Handle):
     _free_fn = "skb_gray_image_free"
 
 
+class _RgbImage(Handle):
+    _free_fn = "skb_rgb_image_free"
+
+
 def load_image(path):
     """Decodes a PNG or JPEG file as an 8-bit gray (H, W) array (a copy; colour converted
     with OpenCV's weights). Errors: SketchbodyError SKB_ERR_IO (missing, unreadable),
@@ -29,6 +34,28 @@ def load_image(path):
         buf = ctypes.string_at(view.data, stride * (h - 1) + w) if h else b""
     rows = np.frombuffer(buf + b"\0" * (stride * h - len(buf)), dtype=np.uint8).reshape(h, stride)
     return np.ascontiguousarray(rows[:, :w])
+
+
+def load_rgb_image(path):
+    """Decodes a PNG or JPEG file as an 8-bit RGB (H, W, 3) array (a copy; gray expanded,
+    transparency composited over white, EXIF orientation applied): the sketch as `sketchbody run`
+    reads it for the texture. Errors as load_image."""
+    p = A.path_arg(path)
+    with _RgbImage(new_handle("skb_rgb_image_load", B.skb_rgb_image, p)) as img:
+        view = B.skb_image()
+        call("skb_rgb_image_view", img._p, ctypes.byref(view))
+        h, w = view.height, view.width
+        buf = ctypes.string_at(view.data, 3 * w * h)
+    return np.frombuffer(buf, dtype=np.uint8).reshape(h, w, 3).copy()
+
+
+def write_png(image, path):
+    """Writes a numpy uint8 image ((H, W) gray, (H, W, 3) RGB, (H, W, 4) RGBA) as an 8-bit PNG
+    with the library's encoder (the bytes `sketchbody run` writes for the same pixels),
+    atomically: on error nothing is left at `path`."""
+    view, keep = A.image(image, "image")
+    call("skb_image_write_png", ctypes.byref(view), A.path_arg(path))
+    del keep
 
 
 def as_image(image, name="image"):

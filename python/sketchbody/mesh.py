@@ -12,23 +12,30 @@ from . import _bindings as B
 from ._lib import Handle, call, new_handle
 from ._options import OptionsBase, options_handle
 from .context import default_context, gender_code, gender_name
+from .images import load_rgb_image
 from .pose import Camera
 
 
 @dataclasses.dataclass
 class ExportOptions(OptionsBase):
-    """The GLB's / rig's conventions (None: the defaults). naming: "project", "mixamo" or
-    "unreal"; rest_pose: "a" or "t"; origin: "floor" or "pelvis"."""
+    """The rigged export's conventions (None: the defaults). naming: "project", "mixamo" or
+    "unreal"; rest_pose: "a" or "t"; origin: "floor" or "pelvis"; for write_fbx and write_usd
+    only (the GLB is always metres, Y up, as glTF specifies): units "m" or "cm", up_axis "y"
+    (the body facing +Z) or "z" (the body facing -Y)."""
 
     naming: Optional[str] = None
     rest_pose: Optional[str] = None
     origin: Optional[str] = None
+    units: Optional[str] = None
+    up_axis: Optional[str] = None
 
     _c_prefix = "skb_export_options"
     _enums = {
         "naming": {"project": B.SKB_NAMING_PROJECT, "mixamo": B.SKB_NAMING_MIXAMO, "unreal": B.SKB_NAMING_UNREAL},
         "rest_pose": {"a": B.SKB_REST_A_POSE, "t": B.SKB_REST_T_POSE},
         "origin": {"floor": B.SKB_ORIGIN_FLOOR, "pelvis": B.SKB_ORIGIN_PELVIS},
+        "units": {"m": B.SKB_UNITS_METRES, "cm": B.SKB_UNITS_CENTIMETRES},
+        "up_axis": {"y": B.SKB_UP_Y, "z": B.SKB_UP_Z},
     }
 
 
@@ -209,6 +216,36 @@ class Mesh(Handle):
         (ExportOptions or None for the defaults), written atomically."""
         with options_handle(options, ExportOptions) as h, self._lock:
             call("skb_mesh_write_glb_with_options", self._p, A.path_arg(path), h)
+
+    def write_fbx(self, path, options=None):
+        """Binary FBX 7.4 of the same rigged, posed body as write_glb, in the options' units and
+        up axis (default metres, Y up), a plain skin colour; written atomically."""
+        with options_handle(options, ExportOptions) as h, self._lock:
+            call("skb_export_fbx", self._p, A.path_arg(path), h)
+
+    def write_usd(self, path, options=None):
+        """UsdSkel text layer (.usda) of the same rigged, posed body as write_glb, in the
+        options' units and up axis (metersPerUnit, upAxis); written atomically."""
+        with options_handle(options, ExportOptions) as h, self._lock:
+            call("skb_export_usd", self._p, A.path_arg(path), h)
+
+    def texture(self, sketch, camera, size=1024):
+        """The sketch projected through `camera` (a Camera: model metres -> sketch pixels) onto
+        the mesh in its current pose, as a (size, size, 3) uint8 RGB texture in the UV layout
+        (row 0 is v = 1); texels the sketch does not see are grey (190, 190, 190). `sketch`: a
+        numpy image or a PNG/JPEG path (decoded in colour). With result.mesh() and
+        result.camera() this is Result.texture."""
+        if A.is_path(sketch):
+            sketch = load_rgb_image(sketch)
+        view, keep = A.image(sketch, "sketch")
+        n = A.index(size, "size", 1, 4096)
+        out = np.empty((n, n, 3), dtype=np.uint8)
+        cam = camera.to_struct()
+        with self._lock:
+            call("skb_mesh_project_texture", self._p, ctypes.byref(view), ctypes.byref(cam), n, A.ptr(out),
+                 3 * n, out.size, None, None)
+        del keep
+        return out
 
     def write_preview(self, path, size=512):
         """A front + side preview PNG, `size` px square each, written atomically."""

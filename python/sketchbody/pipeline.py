@@ -11,7 +11,7 @@ from . import _bindings as B
 from ._lib import Handle, Progress, call, new_handle
 from ._options import OptionsBase, options_handle
 from .context import AUTO, FEMALE, MALE, default_context, gender_name
-from .images import as_image
+from .images import as_image, load_rgb_image
 from .mesh import Mesh
 from .pose import Camera, Joints2D, PoseOptions, _dict_arg, joints2d_arg
 
@@ -153,6 +153,21 @@ class Result(Handle):
         call("skb_result_shape_weights", self._p, None, 0, ctypes.byref(n))
         out = np.empty(n.value, dtype=np.float64)
         call("skb_result_shape_weights", self._p, A.ptr(out), out.size, None)
+        return out
+
+    def texture(self, sketch, size=1024):
+        """The texture `sketchbody run` writes as body_texture.png for this result: `sketch`
+        (the colour image the result was computed from, a numpy image or a PNG/JPEG path decoded
+        in colour as the CLI does) projected through the result's camera onto its posed mesh, a
+        (size, size, 3) uint8 RGB array in the UV layout (row 0 is v = 1; texels the sketch does
+        not see grey). images.write_png(texture, path) writes the CLI's bytes."""
+        if A.is_path(sketch):
+            sketch = load_rgb_image(sketch)
+        view, keep = A.image(sketch, "sketch")
+        n = A.index(size, "size", 1, 4096)
+        out = np.empty((n, n, 3), dtype=np.uint8)
+        call("skb_result_project_texture", self._p, ctypes.byref(view), n, A.ptr(out), 3 * n, out.size, None, None)
+        del keep
         return out
 
     def mesh(self):

@@ -645,6 +645,87 @@ class CancelAndOptionsTest(unittest.TestCase):
             self.assertEqual(mesh.vertices(posed=True).shape, (NV, 3))
 
 
+class TextureTest(unittest.TestCase):
+    """The CLI's textured result and its cm / Z-up FBX and USD, reproduced through the package:
+    `sketchbody run` with a small fit, then the same job here (colour sketch, the same fit
+    settings): Result.texture written by write_png is the CLI's body_texture.png byte for byte,
+    Mesh.texture with the result's mesh and camera the same pixels, Mesh.write_usd with
+    ExportOptions(units="cm", up_axis="z") the CLI's points and metadata."""
+
+    SIZE = 128
+
+    @classmethod
+    def setUpClass(cls):
+        if not os.path.exists(CLI):
+            raise unittest.SkipTest(f"SKIPPED: {CLI} not built")
+        cls.tmp = tempfile.TemporaryDirectory()
+        cls.out = os.path.join(cls.tmp.name, "cli")
+        fast = ["--samples", "24", "--iterations", "2", "--quiet", "--preview-size=128"]
+        subprocess.run([CLI, "run", SKETCH, "--joints", SKETCH_JOINTS, "--gender", "m", "--out", cls.out, *fast,
+                        "--texture-size", str(cls.SIZE), "--format", "usd", "--units", "cm", "--up", "z"], check=True)
+        cls.sketch = skb.load_rgb_image(SKETCH)
+        cls.r = skb.run_pipeline(cls.sketch, joints=SKETCH_JOINTS,
+                                 fit_options=skb.FitOptions(samples=24, iterations=2, gender="male"))
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.r.close()
+        cls.tmp.cleanup()
+
+    def test_texture_is_the_cli_texture(self):
+        self.assertEqual(self.sketch.ndim, 3)
+        tex = self.r.texture(SKETCH, self.SIZE)
+        self.assertEqual((tex.shape, tex.dtype), ((self.SIZE, self.SIZE, 3), np.uint8))
+        np.testing.assert_array_equal(tex, self.r.texture(self.sketch, self.SIZE))
+        png = os.path.join(self.tmp.name, "t.png")
+        skb.write_png(tex, png)
+        with open(png, "rb") as a, open(os.path.join(self.out, "body_texture.png"), "rb") as b:
+            self.assertEqual(a.read(), b.read(), "body_texture.png differs from the CLI's")
+        grey = np.all(tex == 190, axis=2).mean()
+        self.assertTrue(0.05 < grey < 0.95, grey)
+        np.testing.assert_array_equal(skb.load_rgb_image(png), tex)
+        with self.r.mesh() as m:
+            np.testing.assert_array_equal(m.texture(self.sketch, self.r.camera(), self.SIZE), tex)
+
+    def test_units_and_up_axis(self):
+        usd = os.path.join(self.tmp.name, "c.usda")
+        with self.r.mesh() as m:
+            m.write_usd(usd, skb.ExportOptions(units="cm", up_axis="z"))
+            fbx = os.path.join(self.tmp.name, "c.fbx")
+            m.write_fbx(fbx, skb.ExportOptions(units="cm", up_axis="z"))
+            with open(fbx, "rb") as f:
+                self.assertEqual(f.read(18), b"Kaydara FBX Binary")
+            with self.assertRaises(ValueError) as cm:
+                m.write_usd(usd, skb.ExportOptions(units="km"))
+            self.assertIn("units", str(cm.exception))
+            with self.assertRaises(ValueError):
+                m.write_fbx(fbx, skb.ExportOptions(up_axis="x"))
+            with self.assertRaises(skb.SketchbodyError) as cm:
+                m.write_usd(os.path.join(self.tmp.name, "no", "such", "x.usda"))
+            self.assertEqual(cm.exception.status_name, "SKB_ERR_IO")
+        with open(usd) as f:
+            ours = f.read().splitlines()
+        with open(os.path.join(self.out, "body.usda")) as f:
+            cli = f.read().splitlines()
+        self.assertIn("    metersPerUnit = 0.01", ours)
+        self.assertIn('    upAxis = "Z"', ours)
+        line = lambda lines, key: next(x for x in lines if key in x)  # noqa: E731
+        self.assertEqual(line(ours, "point3f[] points"), line(cli, "point3f[] points"))
+        self.assertEqual(line(ours, "bindTransforms"), line(cli, "bindTransforms"))
+
+    def test_bad_texture_arguments(self):
+        with self.assertRaises(ValueError):
+            self.r.texture(self.sketch, 0)
+        with self.assertRaises(ValueError):
+            self.r.texture(self.sketch, 5000)
+        with self.assertRaises(skb.SketchbodyError) as cm:
+            skb.load_rgb_image(SKETCH_JOINTS)
+        self.assertEqual(cm.exception.status_name, "SKB_ERR_DECODE")
+        with self.assertRaises(skb.SketchbodyError) as cm:
+            skb.write_png(self.sketch, os.path.join(self.tmp.name, "no", "such", "x.png"))
+        self.assertEqual(cm.exception.status_name, "SKB_ERR_IO")
+
+
 class RawBindingsTest(unittest.TestCase):
     def test_raw_call_through_lib(self):
         st = skb.lib.skb_canny(None, 1.0, 2.0, 3, False, None, 0, 0)

@@ -5,16 +5,19 @@
 //! scales, unsampled: a static pose, not a keyed clip) bound as the skeleton's animation
 //! source, the `Mesh` (polygons, per-vertex normals, face-varying `st` UVs, 4 joint indices and
 //! weights per vertex through `SkelBindingAPI`) and a `UsdPreviewSurface` material reading the
-//! texture `body_texture.png` beside the file (a text layer cannot embed it). Metres
-//! (`metersPerUnit` 1), Y up. docs/formats.md, "body.usda".
+//! texture `body_texture.png` beside the file (a text layer cannot embed it). Units and axes as
+//! the [`ExportFrame`] chooses: `metersPerUnit` 1 (metres) or 0.01 (centimetres), `upAxis` "Y"
+//! or "Z", every position, normal and transform written in that frame. docs/formats.md,
+//! "body.usda".
 use std::fmt::Write;
 use std::path::Path;
 
-use nalgebra::{Matrix4, UnitQuaternion};
+use nalgebra::{Matrix4, UnitQuaternion, Vector3};
 
 use crate::body::rig::{vertex_normals, RiggedMesh};
 use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
 use crate::error::Result;
+use crate::export::frame::{ExportFrame, UpAxis};
 use crate::export::rigged::{bind_transform, check_scene, posed_locals};
 use crate::fsutil::write_atomic;
 
@@ -77,18 +80,31 @@ fn extent(points: &[[f32; 3]]) -> String {
     format!("[({}, {}, {}), ({}, {}, {})]", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2])
 }
 
-fn skeleton(out: &mut String, scene: &RigScene) {
+/// `points` in `frame` (from metres in the model frame).
+fn points_in(points: &[[f32; 3]], frame: &ExportFrame) -> Vec<[f32; 3]> {
+    points.iter().map(|&p| frame.point_f32(p)).collect()
+}
+
+fn skeleton(out: &mut String, scene: &RigScene, frame: &ExportFrame) {
     let paths = joint_paths(&scene.names);
     let joints = list(&paths, |p| quoted(p));
-    let bind = list(0..NUM_RIG_BONES, |b| matrix(&bind_transform(scene, b).to_homogeneous()));
+    let global = |b: usize| frame.global(&bind_transform(scene, b));
+    let bind = list(0..NUM_RIG_BONES, |b| matrix(&global(b).to_homogeneous()));
     let rest = list(0..NUM_RIG_BONES, |b| {
         let local = match RIG_BONES[b].parent {
-            Some(p) => bind_transform(scene, p).inverse() * bind_transform(scene, b),
-            None => bind_transform(scene, b),
+            Some(p) => global(p).inverse() * global(b),
+            None => global(b),
         };
         matrix(&local.to_homogeneous())
     });
-    let locals = posed_locals(scene);
+    let locals: Vec<(Vector3<f64>, UnitQuaternion<f64>)> = posed_locals(scene)
+        .into_iter()
+        .enumerate()
+        .map(|(b, (t, q))| match RIG_BONES[b].parent {
+            None => frame.root_local(t, q),
+            Some(_) => frame.child_local(t, q),
+        })
+        .collect();
     let _ = write!(
         out,
         r#"    def Skeleton "skeleton" (
@@ -118,7 +134,7 @@ fn skeleton(out: &mut String, scene: &RigScene) {
     );
 }
 
-fn mesh_prim(out: &mut String, mesh: &RiggedMesh, scene: &RigScene) {
+fn mesh_prim(out: &mut String, mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     let mut counts = Vec::with_capacity(mesh.quads.len());
     let mut indices = Vec::with_capacity(mesh.quads.len() * 4);
     let mut uv_indices = Vec::with_capacity(mesh.quads.len() * 4);
@@ -131,7 +147,9 @@ fn mesh_prim(out: &mut String, mesh: &RiggedMesh, scene: &RigScene) {
         }
     }
     let v3 = |p: &[f32; 3]| format!("({}, {}, {})", p[0], p[1], p[2]);
-    let normals = vertex_normals(&scene.rest_vertices, &mesh.quads);
+    let normals: Vec<[f32; 3]> =
+        vertex_normals(&scene.rest_vertices, &mesh.quads).into_iter().map(|n| frame.direction_f32(n)).collect();
+    let rest = points_in(&scene.rest_vertices, frame);
     let mut joint_indices = Vec::with_capacity(scene.skin.len() * 4);
     let mut joint_weights = Vec::with_capacity(scene.skin.len() * 4);
     for w in &scene.skin {
@@ -168,10 +186,10 @@ fn mesh_prim(out: &mut String, mesh: &RiggedMesh, scene: &RigScene) {
         rel skel:skeleton = </body/skeleton>
         rel material:binding = </body/materials/skin>
 "#,
-        extent = extent(&scene.rest_vertices),
+        extent = extent(&rest),
         counts = list(&counts, |c| c.to_string()),
         indices = list(&indices, |i| i.to_string()),
-        points = list(&scene.rest_vertices, v3),
+        points = list(&rest, v3),
         normals = list(&normals, v3),
         joint_indices = list(&joint_indices, |i| i.to_string()),
         joint_weights = list(&joint_weights, |w| w.to_string()),
@@ -244,10 +262,15 @@ fn material(out: &mut String, textured: bool) {
 
 /// The .usda text of `scene` (built by [`RigScene::build`] from `mesh`), with faces and UVs from
 /// `mesh`; `textured`: the material reads [`TEXTURE_FILE`] (write it beside the layer),
-/// otherwise a plain skin colour. Errors: the mesh is invalid or its vertex count differs from
-/// the scene's; a non-finite vertex.
-pub fn usda_string(mesh: &RiggedMesh, scene: &RigScene, textured: bool) -> Result<String> {
+/// otherwise a plain skin colour; in `frame`'s unit and axes ([`ExportFrame::default`]: metres,
+/// Y up). Errors: the mesh is invalid or its vertex count differs from the scene's; a
+/// non-finite vertex.
+pub fn usda_string(mesh: &RiggedMesh, scene: &RigScene, textured: bool, frame: &ExportFrame) -> Result<String> {
     check_scene(mesh, scene)?;
+    let up = match frame.up {
+        UpAxis::Y => "Y",
+        UpAxis::Z => "Z",
+    };
     let mut out = String::new();
     let _ = write!(
         out,
@@ -255,8 +278,8 @@ pub fn usda_string(mesh: &RiggedMesh, scene: &RigScene, textured: bool) -> Resul
 (
     defaultPrim = "body"
     doc = "sketchbody {version}"
-    metersPerUnit = 1
-    upAxis = "Y"
+    metersPerUnit = {meters}
+    upAxis = "{up}"
 )
 
 def SkelRoot "body" (
@@ -267,16 +290,18 @@ def SkelRoot "body" (
 
 "#,
         version = crate::VERSION,
-        extent = extent(&scene.posed_vertices),
+        meters = frame.units.metres(),
+        extent = extent(&points_in(&scene.posed_vertices, frame)),
     );
-    skeleton(&mut out, scene);
-    mesh_prim(&mut out, mesh, scene);
+    skeleton(&mut out, scene, frame);
+    mesh_prim(&mut out, mesh, scene, frame);
     material(&mut out, textured && mesh.uvs.is_some());
     out.push_str("}\n");
     Ok(out)
 }
 
-/// Writes [`usda_string`] to `path` (a `.usda` file) atomically.
-pub fn write_usda(path: &Path, mesh: &RiggedMesh, scene: &RigScene, textured: bool) -> Result<()> {
-    write_atomic(path, usda_string(mesh, scene, textured)?.as_bytes())
+/// Writes [`usda_string`] to `path` (a `.usda` file) atomically (an error leaves nothing
+/// behind).
+pub fn write_usda(path: &Path, mesh: &RiggedMesh, scene: &RigScene, textured: bool, frame: &ExportFrame) -> Result<()> {
+    write_atomic(path, usda_string(mesh, scene, textured, frame)?.as_bytes())
 }

@@ -53,6 +53,22 @@ impl RgbImage {
     pub fn as_bytes_mut(&mut self) -> &mut [u8] {
         &mut self.data
     }
+    /// An RGB copy of `view`: 3 channels copied, 1 (gray) repeated in R, G and B, 4 with the
+    /// fourth (alpha) dropped, as the C API treats 4-channel views (composite a transparent
+    /// drawing over white first to match [`load_rgb_image`]).
+    pub fn from_view(view: &ImageView<'_>) -> Result<Self> {
+        let (w, h, c) = (view.width(), view.height(), view.channels());
+        let mut data = Vec::with_capacity(3 * w * h);
+        for y in 0..h {
+            let row = &view.row(y)[..w * c];
+            match c {
+                1 => data.extend(row.iter().flat_map(|&g| [g, g, g])),
+                3 => data.extend_from_slice(row),
+                _ => data.extend(row.chunks_exact(c).flat_map(|p| [p[0], p[1], p[2]])),
+            }
+        }
+        Self::from_vec(w, h, data)
+    }
     /// A borrowed 3-channel view.
     pub fn view(&self) -> ImageView<'_> {
         // The geometry was validated at construction, so this cannot fail.
@@ -190,6 +206,19 @@ pub fn over_white(p: [u8; 4]) -> [u8; 3] {
 mod tests {
     use super::*;
     use image::ImageEncoder;
+
+    #[test]
+    fn from_view_expands_gray_and_drops_alpha() {
+        let gray = [10u8, 20, 0, 30, 40, 0];
+        let g = RgbImage::from_view(&ImageView::new(&gray, 2, 2, 1, 3).unwrap()).unwrap();
+        assert_eq!(g.as_bytes(), &[10, 10, 10, 20, 20, 20, 30, 30, 30, 40, 40, 40]);
+        let rgba = [1u8, 2, 3, 0, 4, 5, 6, 255];
+        let c = RgbImage::from_view(&ImageView::new(&rgba, 2, 1, 4, 8).unwrap()).unwrap();
+        assert_eq!(c.as_bytes(), &[1, 2, 3, 4, 5, 6]);
+        let rgb = [9u8, 8, 7, 99, 6, 5, 4, 99];
+        let r = RgbImage::from_view(&ImageView::new(&rgb, 1, 2, 3, 4).unwrap()).unwrap();
+        assert_eq!(r.as_bytes(), &[9, 8, 7, 6, 5, 4]);
+    }
 
     #[test]
     fn sizes_are_checked_and_missing_files_named() {

@@ -1,7 +1,9 @@
 # Checks a sketchbody .usda with Pixar's own libraries (the usd-core wheel): the checks usdchecker
 # runs (USD 24 and later: every registered UsdValidation validator; the wheel ships the library,
 # not the usdchecker script), then UsdSkel's own skinning of the mesh by the skeleton and its
-# animation, compared with the expected posed points. Prints a JSON report.
+# animation, compared with the expected posed points (in the layer's own units and axes); the
+# stage's up axis and metres per unit as UsdGeom reads them, and the SkelRoot's authored extent
+# size. Prints a JSON report.
 # Usage: python check_usd.py IN.usda EXPECTED.json   (EXPECTED.json: {"posed": [[x, y, z], ...]})
 import json
 import sys
@@ -15,6 +17,10 @@ stage = Usd.Stage.Open(path)
 validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
 errors = UsdValidation.ValidationContext(validators).Validate(stage)
 report["validators"] = len(validators)
+report["up_axis"] = str(UsdGeom.GetStageUpAxis(stage))
+report["meters_per_unit"] = UsdGeom.GetStageMetersPerUnit(stage)
+lo, hi = UsdGeom.Boundable(stage.GetDefaultPrim()).GetExtentAttr().Get()
+report["extent_size"] = [hi[k] - lo[k] for k in range(3)]
 report["errors"] = [f"{e.GetType()}: {e.GetMessage()}" for e in errors]
 root = UsdSkel.Root(stage.GetDefaultPrim())
 cache = UsdSkel.Cache()

@@ -1041,8 +1041,184 @@ fn write_rows(t: &mut Table, fx: &Fx) {
         SKB_ERR_OUT_OF_RANGE,
         0,
     );
-    // SAFETY: restores the default naming on the live options.
-    unsafe { skb_export_options_set_naming(o, 0) };
+    t.set_int(
+        "skb_export_options_set_units",
+        "units",
+        skb_export_options_set_units,
+        o,
+        u32::MAX,
+        SKB_ERR_OUT_OF_RANGE,
+        1,
+    );
+    t.set_int(
+        "skb_export_options_set_up_axis",
+        "up",
+        skb_export_options_set_up_axis,
+        o,
+        u32::MAX,
+        SKB_ERR_OUT_OF_RANGE,
+        1,
+    );
+    // SAFETY: restores the defaults on the live options.
+    unsafe {
+        skb_export_options_set_naming(o, 0);
+        skb_export_options_set_units(o, SKB_UNITS_METRES);
+        skb_export_options_set_up_axis(o, SKB_UP_Y);
+    }
+}
+
+/// The texture projection (`skb_result_project_texture`, `skb_mesh_project_texture`), the
+/// colour decoder and the PNG writer.
+fn texture_rows(t: &mut Table, fx: &Fx) {
+    let json = CString::new(JOINTS).unwrap();
+    t.loader("skb_rgb_image_load", skb_rgb_image_load, &json, SKB_ERR_DECODE);
+    t.free("skb_rgb_image_free", "img", skb_rgb_image_free);
+    let mut rgb = ptr::null_mut();
+    let p = CString::new(SKETCH).unwrap();
+    // SAFETY: a NUL-terminated path and a live out-pointer.
+    assert_eq!(unsafe { skb_rgb_image_load(p.as_ptr(), &mut rgb) }, SKB_OK);
+    t.getter("skb_rgb_image_view", "img", "out", skb_rgb_image_view, rgb as *const skb_rgb_image);
+
+    let e = "skb_image_write_png";
+    let good = CString::new(fx.dir.join("t.png").to_str().unwrap()).unwrap();
+    let missing = CString::new(fx.dir.join("no/such/dir/t.png").to_str().unwrap()).unwrap();
+    let not_utf8 = CString::new(vec![b'/', b't', b'm', b'p', b'/', 0xFF]).unwrap();
+    let bad_stride = skb_image { stride: 1, ..fx.sketch };
+    // SAFETY: the image views are live (the fixture's gray sketch) or NULL; paths NUL-terminated or NULL.
+    unsafe {
+        t.check(e, "img", Kind::Null, SKB_ERR_NULL_POINTER, skb_image_write_png(ptr::null(), good.as_ptr()), true);
+        t.check(e, "img", Kind::Other, SKB_ERR_BAD_STRIDE, skb_image_write_png(&bad_stride, good.as_ptr()), true);
+        t.check(e, "path", Kind::Null, SKB_ERR_NULL_POINTER, skb_image_write_png(&fx.sketch, ptr::null()), true);
+        t.check(
+            e,
+            "path",
+            Kind::Other,
+            SKB_ERR_INVALID_ARGUMENT,
+            skb_image_write_png(&fx.sketch, not_utf8.as_ptr()),
+            true,
+        );
+        t.check(e, "path", Kind::Other, SKB_ERR_IO, skb_image_write_png(&fx.sketch, missing.as_ptr()), true);
+    }
+    if std::fs::read_dir(&fx.dir).unwrap().flatten().any(|f| f.file_name().to_string_lossy().starts_with("t.png")) {
+        t.failures.push(format!("{e}: a failed write left a file"));
+    }
+    // SAFETY: as above.
+    unsafe {
+        t.check(e, "path", Kind::Other, SKB_OK, skb_image_write_png(&fx.sketch, good.as_ptr()), true);
+    }
+
+    // A 16-texel texture: 768 bytes at stride 48.
+    let (size, stride, len) = (16u32, 48usize, 768usize);
+    let mut view = fx.sketch;
+    // SAFETY: `rgb` is live; `view` is a local.
+    assert_eq!(unsafe { skb_rgb_image_view(rgb, &mut view) }, SKB_OK);
+    let res = fx.result as *const skb_result;
+    let mut cam: skb_camera = camera();
+    // SAFETY: the live result; `cam` a local.
+    assert_eq!(unsafe { skb_result_camera(res, &mut cam) }, SKB_OK);
+    let mesh = fx.mesh as *const skb_mesh;
+    type Project<'a> = Box<dyn Fn(*const skb_image, u32, *mut u8, usize, usize, *mut u64, *mut u64) -> skb_status + 'a>;
+    let projections: Vec<(&'static str, Project)> = vec![
+        // SAFETY: live result; the other pointers NULL or locals of the sizes passed.
+        (
+            "skb_result_project_texture",
+            Box::new(|i, n, d, st, l, a, b| unsafe { skb_result_project_texture(res, i, n, d, st, l, a, b) }),
+        ),
+        // SAFETY: live mesh and camera; the other pointers as above.
+        (
+            "skb_mesh_project_texture",
+            Box::new(|i, n, d, st, l, a, b| unsafe { skb_mesh_project_texture(mesh, i, &cam, n, d, st, l, a, b) }),
+        ),
+    ];
+    for (e, f) in &projections {
+        let (mut px, mut counts) = (Canary::bytes(len), Canary::of::<u64>(2));
+        let (d, a) = (px.ptr::<u8>(), counts.ptr::<u64>());
+        // SAFETY: `a` holds two u64.
+        let b = unsafe { a.add(1) };
+        let rows: Vec<(&'static str, Kind, skb_status, skb_status)> = vec![
+            ("sketch", Kind::Null, SKB_ERR_NULL_POINTER, f(ptr::null(), size, d, stride, len, a, b)),
+            (
+                "sketch",
+                Kind::Other,
+                SKB_ERR_BAD_STRIDE,
+                f(&skb_image { stride: 1, ..view }, size, d, stride, len, a, b),
+            ),
+            ("size", Kind::Max, SKB_ERR_OUT_OF_RANGE, f(&view, u32::MAX, d, stride, len, a, b)),
+            ("size", Kind::Other, SKB_ERR_OUT_OF_RANGE, f(&view, 0, d, stride, len, a, b)),
+            ("dst", Kind::Null, SKB_ERR_NULL_POINTER, f(&view, size, ptr::null_mut(), stride, len, a, b)),
+            ("dst_stride", Kind::Max, SKB_ERR_OUT_OF_RANGE, f(&view, size, d, usize::MAX, len, a, b)),
+            ("dst_stride", Kind::Other, SKB_ERR_BAD_STRIDE, f(&view, size, d, stride - 1, len, a, b)),
+            ("dst_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, f(&view, size, d, stride, usize::MAX, a, b)),
+            ("dst_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, f(&view, size, d, stride, len - 1, a, b)),
+        ];
+        for (param, kind, want, got) in rows {
+            t.check(e, param, kind, want, got, px.intact() && counts.intact());
+        }
+        // NULL counts are optional; then a control that writes every output.
+        t.check(e, "texels", Kind::Null, SKB_OK, f(&view, size, d, stride, len, ptr::null_mut(), b), true);
+        t.check(e, "visible", Kind::Null, SKB_OK, f(&view, size, d, stride, len, a, ptr::null_mut()), true);
+        let (mut px, mut counts) = (Canary::bytes(len), Canary::of::<u64>(2));
+        let (d, a) = (px.ptr::<u8>(), counts.ptr::<u64>());
+        // SAFETY: `a` holds two u64.
+        let s = f(&view, size, d, stride, len, a, unsafe { a.add(1) });
+        t.check(e, "dst", Kind::Other, SKB_OK, s, px.intact() || counts.intact());
+    }
+    // SAFETY: the live result or mesh; NULL is what is tested.
+    unsafe {
+        let mut px = Canary::bytes(len);
+        let s = skb_result_project_texture(
+            ptr::null(),
+            &view,
+            size,
+            px.ptr(),
+            stride,
+            len,
+            ptr::null_mut(),
+            ptr::null_mut(),
+        );
+        t.check("skb_result_project_texture", "result", Kind::Null, SKB_ERR_NULL_POINTER, s, px.intact());
+        let s = skb_mesh_project_texture(
+            ptr::null(),
+            &view,
+            &cam,
+            size,
+            px.ptr(),
+            stride,
+            len,
+            ptr::null_mut(),
+            ptr::null_mut(),
+        );
+        t.check("skb_mesh_project_texture", "mesh", Kind::Null, SKB_ERR_NULL_POINTER, s, px.intact());
+        let s = skb_mesh_project_texture(
+            mesh,
+            &view,
+            ptr::null(),
+            size,
+            px.ptr(),
+            stride,
+            len,
+            ptr::null_mut(),
+            ptr::null_mut(),
+        );
+        t.check("skb_mesh_project_texture", "cam", Kind::Null, SKB_ERR_NULL_POINTER, s, px.intact());
+        for (v, k) in NON_FINITE {
+            for (field, c) in camera_variants(v) {
+                let s = skb_mesh_project_texture(
+                    mesh,
+                    &view,
+                    &c,
+                    size,
+                    px.ptr(),
+                    stride,
+                    len,
+                    ptr::null_mut(),
+                    ptr::null_mut(),
+                );
+                t.check("skb_mesh_project_texture", field, k, SKB_ERR_NON_FINITE, s, px.intact());
+            }
+        }
+        skb_rgb_image_free(rgb);
+    }
 }
 
 fn rig_rows(t: &mut Table, fx: &Fx) {
@@ -2147,6 +2323,7 @@ fn every_export_is_in_the_misuse_table_and_fails_cleanly() {
     render_rows(&mut t, &fx);
     detect_rows(&mut t, &fx);
     joints_file_rows(&mut t, &fx);
+    texture_rows(&mut t, &fx);
 
     // Coverage against the header: every export, every parameter's kinds.
     let header = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../include/sketchbody.h")).unwrap();

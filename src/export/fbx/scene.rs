@@ -1,12 +1,15 @@
-//! The FBX scene of a rigged body: header and global settings (metres, Y-up), the mesh geometry
-//! (polygons, per-vertex normals, per-corner UVs), a `Null` "armature" holding the 53 `LimbNode`
-//! bones in their posed local transforms, the skin (one cluster per bone with the bind
-//! matrices), the bind pose, and a material with the embedded texture; then the connections.
-use nalgebra::Matrix4;
+//! The FBX scene of a rigged body: header and global settings (the [`ExportFrame`]'s unit and
+//! axes), the mesh geometry (polygons, per-vertex normals, per-corner UVs), a `Null` "armature"
+//! holding the 53 `LimbNode` bones in their posed local transforms, the skin (one cluster per
+//! bone with the bind matrices), the bind pose, and a material with the embedded texture; then
+//! the connections. Every position, normal and transform is written in the frame's axes and
+//! unit.
+use nalgebra::{Matrix4, Vector3};
 
 use super::node::{object_name, p, s, Node, Prop, VERSION};
 use crate::body::rig::{vertex_normals, RiggedMesh};
 use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
+use crate::export::frame::{ExportFrame, UpAxis};
 use crate::export::rigged::{bind_transform, posed_locals};
 
 /// The file name the texture is referenced by (beside the .fbx, as the CLI writes it); the
@@ -58,7 +61,19 @@ fn connect(child: i64, parent: i64) -> Node {
     Node::new("C", vec![s("OO"), Prop::I64(child), Prop::I64(parent)])
 }
 
-fn header() -> Vec<Node> {
+/// The global settings' axes for `frame`, as (axis index 0 X / 1 Y / 2 Z, sign): up; front,
+/// the axis pointing from the scene toward the viewer (the way the character faces); coord,
+/// the third axis (up × front, right-handed).
+fn axes(frame: &ExportFrame) -> [(i32, i32); 3] {
+    match frame.up {
+        UpAxis::Y => [(1, 1), (2, 1), (0, 1)],
+        UpAxis::Z => [(2, 1), (1, -1), (0, 1)],
+    }
+}
+
+fn header(frame: &ExportFrame) -> Vec<Node> {
+    let [(up, up_sign), (front, front_sign), (coord, coord_sign)] = axes(frame);
+    let unit = frame.units.centimetres();
     let creator = format!("sketchbody {}", crate::VERSION);
     vec![
         Node::new("FBXHeaderExtension", vec![]).with(vec![
@@ -70,16 +85,16 @@ fn header() -> Vec<Node> {
         Node::new("GlobalSettings", vec![]).with(vec![
             Node::new("Version", vec![Prop::I32(1000)]),
             props70(vec![
-                int_p("UpAxis", 1),
-                int_p("UpAxisSign", 1),
-                int_p("FrontAxis", 2),
-                int_p("FrontAxisSign", 1),
-                int_p("CoordAxis", 0),
-                int_p("CoordAxisSign", 1),
-                int_p("OriginalUpAxis", 1),
-                int_p("OriginalUpAxisSign", 1),
-                double_p("UnitScaleFactor", 100.0),
-                double_p("OriginalUnitScaleFactor", 100.0),
+                int_p("UpAxis", up),
+                int_p("UpAxisSign", up_sign),
+                int_p("FrontAxis", front),
+                int_p("FrontAxisSign", front_sign),
+                int_p("CoordAxis", coord),
+                int_p("CoordAxisSign", coord_sign),
+                int_p("OriginalUpAxis", up),
+                int_p("OriginalUpAxisSign", up_sign),
+                double_p("UnitScaleFactor", unit),
+                double_p("OriginalUnitScaleFactor", unit),
             ]),
         ]),
         Node::new("Documents", vec![]).with(vec![
@@ -111,9 +126,17 @@ fn definitions(textured: bool) -> Node {
 }
 
 /// The mesh geometry: polygons (a quad whose last two corners agree is a triangle), normals per
-/// vertex, UVs per polygon corner (v up, FBX's convention), one material for all.
-fn geometry(mesh: &RiggedMesh, scene: &RigScene) -> Node {
-    let vertices: Vec<f64> = scene.rest_vertices.iter().flatten().map(|&c| c as f64).collect();
+/// vertex, UVs per polygon corner (v up, FBX's convention), one material for all; positions
+/// and normals in `frame`.
+fn geometry(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) -> Node {
+    let vertices: Vec<f64> = scene
+        .rest_vertices
+        .iter()
+        .flat_map(|p| {
+            let q = frame.point(Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+            [q.x, q.y, q.z]
+        })
+        .collect();
     let mut polygon = Vec::with_capacity(mesh.quads.len() * 4);
     let mut uv_index = Vec::with_capacity(mesh.quads.len() * 4);
     for (f, q) in mesh.quads.iter().enumerate() {
@@ -126,8 +149,11 @@ fn geometry(mesh: &RiggedMesh, scene: &RigScene) -> Node {
             }
         }
     }
-    let normals: Vec<f64> =
-        vertex_normals(&scene.rest_vertices, &mesh.quads).iter().flatten().map(|&c| c as f64).collect();
+    let normals: Vec<f64> = vertex_normals(&scene.rest_vertices, &mesh.quads)
+        .iter()
+        .flat_map(|&n| frame.direction_f32(n))
+        .map(|c| c as f64)
+        .collect();
     let element = |name: &'static str, children: Vec<Node>| Node::new(name, vec![Prop::I32(0)]).with(children);
     let mapping = |how: &str, reference: &str| {
         vec![
@@ -179,14 +205,18 @@ fn model(id: i64, name: &str, kind: &str, props: Vec<Node>) -> Node {
 }
 
 /// The armature: a `Null` and the bones as `LimbNode` models whose local transforms are the
-/// posed ones (Euler XYZ degrees), each with its skeleton attribute.
-fn skeleton(scene: &RigScene) -> Vec<Node> {
+/// posed ones (Euler XYZ degrees) in `frame`, each with its skeleton attribute.
+fn skeleton(scene: &RigScene, frame: &ExportFrame) -> Vec<Node> {
     let attr = |id: i64, name: &str, kind: &str, flags: &str| {
         Node::new("NodeAttribute", vec![Prop::I64(id), object_name(name, "NodeAttribute"), s(kind)])
             .with(vec![Node::new("TypeFlags", vec![s(flags)])])
     };
     let mut nodes = vec![model(ARMATURE, "armature", "Null", vec![]), attr(ARMATURE_ATTR, "armature", "Null", "Null")];
-    for (b, (t, q)) in posed_locals(scene).iter().enumerate() {
+    for (b, &(t, q)) in posed_locals(scene).iter().enumerate() {
+        let (t, q) = match RIG_BONES[b].parent {
+            None => frame.root_local(t, q),
+            Some(_) => frame.child_local(t, q),
+        };
         let (rx, ry, rz) = q.euler_angles();
         let props = vec![
             vec3_p("Lcl Translation", [t.x, t.y, t.z]),
@@ -200,8 +230,8 @@ fn skeleton(scene: &RigScene) -> Vec<Node> {
 
 /// The skin deformer and one cluster per bone: its vertices and weights (absent for a bone that
 /// moves none), `TransformLink` the bone's bind matrix, `Transform` its inverse (the mesh sits
-/// at the origin unrotated).
-fn skin(scene: &RigScene) -> Vec<Node> {
+/// at the origin unrotated); in `frame`.
+fn skin(scene: &RigScene, frame: &ExportFrame) -> Vec<Node> {
     let mut per_bone: Vec<(Vec<i32>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); NUM_RIG_BONES];
     for (v, w) in scene.skin.iter().enumerate() {
         for k in 0..w.bones.len() {
@@ -218,7 +248,7 @@ fn skin(scene: &RigScene) -> Vec<Node> {
             Node::new("Link_DeformAcuracy", vec![Prop::F64(50.0)]),
         ])];
     for (b, (indexes, weights)) in per_bone.into_iter().enumerate() {
-        let bind = bind_transform(scene, b);
+        let bind = frame.global(&bind_transform(scene, b));
         let mut children = vec![Node::new("Version", vec![Prop::I32(100)]), Node::new("UserData", vec![s(""), s("")])];
         if !indexes.is_empty() {
             children.push(Node::new("Indexes", vec![Prop::I32s(indexes)]));
@@ -237,8 +267,9 @@ fn skin(scene: &RigScene) -> Vec<Node> {
     nodes
 }
 
-/// The bind pose: the mesh and the armature at the identity, each bone at its bind matrix.
-fn bind_pose(scene: &RigScene) -> Node {
+/// The bind pose: the mesh and the armature at the identity, each bone at its bind matrix (in
+/// `frame`).
+fn bind_pose(scene: &RigScene, frame: &ExportFrame) -> Node {
     let entry = |id: i64, m: Matrix4<f64>| {
         Node::new("PoseNode", vec![])
             .with(vec![Node::new("Node", vec![Prop::I64(id)]), Node::new("Matrix", vec![matrix(&m)])])
@@ -250,7 +281,9 @@ fn bind_pose(scene: &RigScene) -> Node {
         entry(MESH_MODEL, Matrix4::identity()),
         entry(ARMATURE, Matrix4::identity()),
     ];
-    children.extend((0..NUM_RIG_BONES).map(|b| entry(bone_model(b), bind_transform(scene, b).to_homogeneous())));
+    children.extend(
+        (0..NUM_RIG_BONES).map(|b| entry(bone_model(b), frame.global(&bind_transform(scene, b)).to_homogeneous())),
+    );
     Node::new("Pose", vec![Prop::I64(BIND_POSE), object_name("BindPose", "Pose"), s("BindPose")]).with(children)
 }
 
@@ -307,14 +340,14 @@ fn connections(textured: bool) -> Node {
     Node::new("Connections", vec![]).with(c)
 }
 
-/// The top-level records of the file.
-pub fn document(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>) -> Vec<Node> {
-    let mut objects = vec![geometry(mesh, scene), model(MESH_MODEL, "body", "Mesh", vec![])];
-    objects.extend(skeleton(scene));
-    objects.extend(skin(scene));
-    objects.push(bind_pose(scene));
+/// The top-level records of the file, in `frame`'s unit and axes.
+pub fn document(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>, frame: &ExportFrame) -> Vec<Node> {
+    let mut objects = vec![geometry(mesh, scene, frame), model(MESH_MODEL, "body", "Mesh", vec![])];
+    objects.extend(skeleton(scene, frame));
+    objects.extend(skin(scene, frame));
+    objects.push(bind_pose(scene, frame));
     objects.extend(material(texture_png));
-    let mut nodes = header();
+    let mut nodes = header(frame);
     nodes.push(definitions(texture_png.is_some()));
     nodes.push(Node::new("Objects", vec![]).with(objects));
     nodes.push(connections(texture_png.is_some()));
