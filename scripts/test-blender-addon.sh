@@ -2,8 +2,10 @@
 # Tests the Blender add-on (integrations/blender) headless in Debian's Blender 3.4: enables it,
 # checks the error paths, runs "Sketch to body" on assets/examples/sketch.png with
 # sketch_joints.json, checks the mesh, armature, weights, markers and material against the
-# sketchbody Python package, moves a joint marker and re-runs, and renders the result beside the
-# sketch to target/blender-addon/blender-addon.png (integrations/blender/tests/test_addon.py).
+# sketchbody Python package, runs it in the background and cancels a run, moves a joint marker and
+# re-runs (the edited body kept), compares the detector path with the CLI's `run` (SKB_CLI, else
+# target/release/sketchbody, built when missing), and renders the result beside the sketch to
+# target/blender-addon/blender-addon.png (integrations/blender/tests/test_addon.py).
 # The test writes only under target/: `scripts/test-blender-addon.sh --update-docs` also copies
 # the pictures to docs/img/blender-addon.png and blender-addon-detect.png when they differ
 # visibly (refreshing the documentation's pictures is a deliberate step, never a test run's).
@@ -33,6 +35,13 @@ if [ -n "${SKETCHBODY_LIBRARY:-}" ]; then
   [ -f "$SKETCHBODY_LIBRARY" ] || { echo "test-blender-addon: $SKETCHBODY_LIBRARY missing" >&2; exit 1; }
 else
   [ -f target/release/libsketchbody.so ] || cargo build --release -p sketchbody-capi
+fi
+# The CLI whose `run` the add-on's result is compared with (scripts/test-all.sh passes its build).
+if [ -n "${SKB_CLI:-}" ]; then
+  [ -x "$SKB_CLI" ] || { echo "test-blender-addon: $SKB_CLI missing" >&2; exit 1; }
+else
+  [ -x target/release/sketchbody ] || cargo build --release -p sketchbody-cli
+  export SKB_CLI=$PWD/target/release/sketchbody
 fi
 
 out=target/blender-addon

@@ -79,6 +79,36 @@ def _record(job, **kw):
     return rec
 
 
+def current_umask():
+    """The process's file-mode creation mask, read without changing it where Linux shows it
+    (/proc/self/status), else by setting and restoring it."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def default_dir_mode():
+    """The mode `mkdir` gives a new folder: 0o777 less the umask (0o755 with the usual 022;
+    group-readable, unlike tempfile.mkdtemp's 0o700)."""
+    return 0o777 & ~current_umask()
+
+
+def make_staging_dir(out_dir, name):
+    """A new hidden folder `out_dir/.NAME.partial-*` for one task's outputs, with the mode a
+    plain mkdir would give (default_dir_mode()), so the folder renamed into place is as
+    readable by the group as any other folder the user makes."""
+    tmp = tempfile.mkdtemp(prefix=f".{name}.partial-", dir=out_dir)
+    os.chmod(tmp, default_dir_mode())
+    return tmp
+
+
 def _write_json(path, data):
     with open(path, "w", encoding="utf-8") as f:
         json.dump(data, f, indent=2)
@@ -97,7 +127,7 @@ def convert_sketch(job, out_dir, fit_options=None, export_options=None, skip_exi
     try:
         import sketchbody as skb  # imported on the worker
 
-        tmp = tempfile.mkdtemp(prefix=f".{job.name}.partial-", dir=out_dir)
+        tmp = make_staging_dir(out_dir, job.name)
         with skb.run_pipeline(job.sketch, joints=job.joints, fit_options=fit_options) as result, \
                 result.mesh() as mesh:
             mesh.write_glb(os.path.join(tmp, "body.glb"), export_options)

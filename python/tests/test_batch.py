@@ -8,6 +8,7 @@ cluster test prints SKIPPED, or fails when SKB_REQUIRE_DASK=1."""
 import json
 import os
 import shutil
+import stat
 import subprocess
 import sys
 import tempfile
@@ -23,6 +24,13 @@ try:
     HAVE_DASK = True
 except ImportError:
     HAVE_DASK = False
+
+
+def batch_fit():
+    """A quick fit (the tests check files and modes, not the body)."""
+    from sketchbody import FitOptions
+
+    return FitOptions(samples=8, iterations=1)
 
 
 def make_inputs(folder):
@@ -44,6 +52,30 @@ class FindAndConvertTest(unittest.TestCase):
         self.assertEqual([j.name for j in jobs], ["blank", "broken", "sketch"])
         self.assertTrue(jobs[2].joints.endswith("sketch_joints.json"))
         self.assertIsNone(jobs[0].joints)
+
+    def test_output_folder_mode_follows_the_umask(self):
+        # Not tempfile.mkdtemp's 0700: the folder a plain mkdir would make, readable by the group.
+        with tempfile.TemporaryDirectory() as src, tempfile.TemporaryDirectory() as out:
+            make_inputs(src)
+            job = [j for j in batch.find_sketches(src) if j.name == "sketch"][0]
+            old = os.umask(0o022)
+            try:
+                self.assertEqual(batch.current_umask(), 0o022)
+                self.assertEqual(batch.default_dir_mode(), 0o755)
+                rec = batch.convert_sketch(job, out, batch_fit(), preview_size=64)
+                mode = stat.S_IMODE(os.stat(os.path.join(out, "sketch")).st_mode)
+                files = {f: stat.S_IMODE(os.stat(os.path.join(out, "sketch", f)).st_mode)
+                         for f in os.listdir(os.path.join(out, "sketch"))}
+                os.umask(0o027)
+                self.assertEqual(batch.default_dir_mode(), 0o750)
+                staging = batch.make_staging_dir(out, "other")
+                self.assertEqual(stat.S_IMODE(os.stat(staging).st_mode), 0o750)
+            finally:
+                os.umask(old)
+        self.assertTrue(rec["ok"], rec)
+        self.assertEqual(mode, 0o755, oct(mode))
+        unreadable = {f: oct(m) for f, m in files.items() if not m & stat.S_IRGRP}
+        self.assertEqual(unreadable, {})
 
     def test_failed_task_leaves_nothing(self):
         with tempfile.TemporaryDirectory() as src, tempfile.TemporaryDirectory() as out:
@@ -86,6 +118,8 @@ class LocalClusterTest(unittest.TestCase):
                 self.assertTrue(recs[name]["message"])
             # Only complete outputs: the converted sketch's folder and the records.
             self.assertEqual(sorted(os.listdir(out)), ["batch.json", "sketch"])
+            self.assertEqual(stat.S_IMODE(os.stat(os.path.join(out, "sketch")).st_mode),
+                             0o777 & ~batch.current_umask())
             files = sorted(os.listdir(os.path.join(out, "sketch")))
             self.assertEqual(files, ["body.glb", "body.obj", "body_rest.obj", "joints2d.json", "preview.png",
                                      "result.json"])
