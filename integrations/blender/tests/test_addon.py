@@ -536,8 +536,10 @@ finally:
     np.bool = saved_bool
 for name in set(bpy.data.objects.keys()) - names_before:
     bpy.data.objects.remove(bpy.data.objects[name], do_unlink=True)
+print("", flush=True)  # the importer's traceback (on stderr) may end without a newline
+cause = [line for line in unpatched_error.splitlines() if "no attribute 'bool'" in line]
 check("without numpy.bool Blender 3.4's glTF importer fails (what the add-on's patch is for)",
-      "bool" in unpatched_error, unpatched_error.splitlines()[-1][:160] if unpatched_error else "imported")
+      len(cause) > 0, cause[0].strip()[:160] if cause else unpatched_error[-200:] or "imported")
 names_before = set(bpy.data.objects.keys())
 bpy.ops.import_scene.gltf(filepath=os.path.join(cli_out, "body.glb"))
 imported = [bpy.data.objects[n] for n in set(bpy.data.objects.keys()) - names_before]
