@@ -60,3 +60,29 @@ if [ "$status" -ne 0 ]; then
   tail -40 "$out/blender.log" >&2
   exit 1
 fi
+
+# The same add-on in a windowed Blender under Xvfb, where Blender's event loop runs the add-on's
+# timer as for an artist (integrations/blender/tests/test_addon_ui.py: the run in the
+# background, Cancel, a re-run keeping the former body, all from timers). Needs xvfb-run
+# (apt-get install xvfb; scripts/test-all.sh installs it): without it SKIPPED, or a failure
+# when SKB_REQUIRE_SHARED_DATA is set.
+if ! command -v xvfb-run >/dev/null 2>&1; then
+  if [ -n "${SKB_REQUIRE_SHARED_DATA:-}" ]; then
+    echo "test-blender-addon: xvfb-run is not installed, but SKB_REQUIRE_SHARED_DATA is set" >&2
+    exit 1
+  fi
+  echo "SKIPPED Blender add-on in a window: xvfb-run is not installed (apt-get install xvfb)"
+  exit 0
+fi
+rm -f "$out/ui-result.txt"
+ui_status=0
+env -u SKETCHBODY_PYTHON_PATH timeout 900 xvfb-run -a -s "-screen 0 1280x800x24" blender --factory-startup \
+  --python integrations/blender/tests/test_addon_ui.py -- \
+  assets/examples/sketch.png assets/examples/sketch_joints.json "$out/ui-result.txt" \
+  >"$out/blender-ui.log" 2>&1 || ui_status=$?
+cat "$out/ui-result.txt" 2>/dev/null || true
+if [ "$ui_status" -ne 0 ] || [ "$(tail -1 "$out/ui-result.txt" 2>/dev/null)" != "PASS" ]; then
+  echo "test-blender-addon: the windowed check failed (status $ui_status); its log ($out/blender-ui.log):" >&2
+  tail -40 "$out/blender-ui.log" >&2
+  exit 1
+fi
