@@ -93,7 +93,7 @@ class SketchbodySettings(bpy.types.PropertyGroup):
         description="Optional sketchbody-joints2d JSON file with the 15 2-D joints; empty: the embedded detector")
     gender: EnumProperty(
         name="Gender", default="AUTO",
-        items=[("AUTO", "Auto", "Fit gender as a continuous shape weight"),
+        items=[("AUTO", "Auto", "The library decides the gender (as the CLI without --gender)"),
                ("FEMALE", "Female", "Fit the female body model"), ("MALE", "Male", "Fit the male body model")])
     height: FloatProperty(
         name="Height", description="The character's height (0: unknown, the fit decides)", default=0.0, min=0.0,
@@ -121,6 +121,7 @@ class SketchbodySettings(bpy.types.PropertyGroup):
 
 
 def _settings(context):
+    """The scene's Sketchbody settings (the panel's)."""
     return context.scene.sketchbody
 
 
@@ -156,15 +157,18 @@ def running_fraction():
 
 
 def _abspath(path):
+    """An absolute, normalised path of a Blender path (// relative to the .blend); "" stays ""."""
     return os.path.normpath(bpy.path.abspath(path)) if path else ""
 
 
 def _fit_options(skb, st):
+    """The package's FitOptions from the panel's settings."""
     return skb.FitOptions(gender=st.gender.lower(), height=st.height if st.height > 0 else None,
                           samples=st.samples, iterations=st.iterations)
 
 
 def _rig_options(skb, st):
+    """The package's ExportOptions (names, rest pose; origin on the floor) from the settings."""
     return skb.ExportOptions(naming=st.naming.lower(), rest_pose=st.rest_pose.lower(), origin="floor")
 
 
@@ -181,6 +185,7 @@ def _summary(req, data, seconds, kept):
 
 
 def _object_mode(context):
+    """Leaves edit or pose mode (the add-on builds and removes objects in object mode)."""
     if context.object is not None and context.object.mode != "OBJECT":
         bpy.ops.object.mode_set(mode="OBJECT")
 
