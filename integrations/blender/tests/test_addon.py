@@ -556,6 +556,14 @@ check("the CLI's body.glb imported by Blender = the add-on's posed body",
 for o in imported:
     bpy.data.objects.remove(o, do_unlink=True)
 
+# A re-run with no marker moved on the detector's plane detects again: the CLI's body again.
+res, err = run_wait(bpy.ops.sketchbody.rerun)
+arm5 = bpy.data.objects["SKB_Armature"]
+check("re-run of detected joints, none moved: detected again, the CLI's body",
+      res == {"FINISHED"} and arm5 != arm4 and arm5["skb_detected"] and arm5["skb_gender"] == cli_gender
+      and abs(arm5["skb_height_m"] - arm4["skb_height_m"]) < 1e-9 and "from detected joints" in st.status,
+      f"{arm5['skb_gender']} {arm5['skb_height_m']:.3f} m; {st.status[:60]}")
+
 res, err = run_op(bpy.ops.sketchbody.clear)
 check("Clear removes everything, the kept bodies too", res == {"FINISHED"} and skb_objects() == []
       and "Sketchbody" not in bpy.data.collections, str(skb_objects()))
