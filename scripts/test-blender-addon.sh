@@ -2,8 +2,10 @@
 # Tests the Blender add-on (integrations/blender) headless in Debian's Blender 3.4: enables it,
 # checks the error paths, runs "Sketch to body" on assets/examples/sketch.png with
 # sketch_joints.json, checks the mesh, armature, weights, markers and material against the
-# sketchbody Python package, moves a joint marker and re-runs, and renders the result beside the
-# sketch to target/blender-addon/blender-addon.png (integrations/blender/tests/test_addon.py).
+# sketchbody Python package, runs it in the background and cancels a run, moves a joint marker and
+# re-runs (the edited body kept), compares the detector path with the CLI's `run` (SKB_CLI, else
+# target/release/sketchbody, built when missing), and renders the result beside the sketch to
+# target/blender-addon/blender-addon.png (integrations/blender/tests/test_addon.py).
 # The test writes only under target/: `scripts/test-blender-addon.sh --update-docs` also copies
 # the pictures to docs/img/blender-addon.png and blender-addon-detect.png when they differ
 # visibly (refreshing the documentation's pictures is a deliberate step, never a test run's).
@@ -34,6 +36,13 @@ if [ -n "${SKETCHBODY_LIBRARY:-}" ]; then
 else
   [ -f target/release/libsketchbody.so ] || cargo build --release -p sketchbody-capi
 fi
+# The CLI whose `run` the add-on's result is compared with (scripts/test-all.sh passes its build).
+if [ -n "${SKB_CLI:-}" ]; then
+  [ -x "$SKB_CLI" ] || { echo "test-blender-addon: $SKB_CLI missing" >&2; exit 1; }
+else
+  [ -x target/release/sketchbody ] || cargo build --release -p sketchbody-cli
+  export SKB_CLI=$PWD/target/release/sketchbody
+fi
 
 out=target/blender-addon
 rm -rf "$out" && mkdir -p "$out"
@@ -49,5 +58,31 @@ grep -E '^(ok  |FAIL|blender add-on test|sketchbody package|docs picture)' "$out
 if [ "$status" -ne 0 ]; then
   echo "test-blender-addon: blender exited with status $status; its log ($out/blender.log):" >&2
   tail -40 "$out/blender.log" >&2
+  exit 1
+fi
+
+# The same add-on in a windowed Blender under Xvfb, where Blender's event loop runs the add-on's
+# timer as for an artist (integrations/blender/tests/test_addon_ui.py: the run in the
+# background, Cancel, a re-run keeping the former body, all from timers). Needs xvfb-run
+# (apt-get install xvfb; scripts/test-all.sh installs it): without it SKIPPED, or a failure
+# when SKB_REQUIRE_SHARED_DATA is set.
+if ! command -v xvfb-run >/dev/null 2>&1; then
+  if [ -n "${SKB_REQUIRE_SHARED_DATA:-}" ]; then
+    echo "test-blender-addon: xvfb-run is not installed, but SKB_REQUIRE_SHARED_DATA is set" >&2
+    exit 1
+  fi
+  echo "SKIPPED Blender add-on in a window: xvfb-run is not installed (apt-get install xvfb)"
+  exit 0
+fi
+rm -f "$out/ui-result.txt"
+ui_status=0
+env -u SKETCHBODY_PYTHON_PATH timeout 900 xvfb-run -a -s "-screen 0 1280x800x24" blender --factory-startup \
+  --python integrations/blender/tests/test_addon_ui.py -- \
+  assets/examples/sketch.png assets/examples/sketch_joints.json "$out/ui-result.txt" \
+  >"$out/blender-ui.log" 2>&1 || ui_status=$?
+cat "$out/ui-result.txt" 2>/dev/null || true
+if [ "$ui_status" -ne 0 ] || [ "$(tail -1 "$out/ui-result.txt" 2>/dev/null)" != "PASS" ]; then
+  echo "test-blender-addon: the windowed check failed (status $ui_status); its log ($out/blender-ui.log):" >&2
+  tail -40 "$out/blender-ui.log" >&2
   exit 1
 fi

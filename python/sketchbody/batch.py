@@ -12,6 +12,12 @@ with the status name and message) and never stops the batch. The records are pri
 tasks finish and written to `OUT_DIR/batch.json`; the exit status is 0 when every sketch
 converted, 1 when some failed.
 
+With `--cli PATH` each task runs that `sketchbody` command's `run` instead of the package (the
+command must be at PATH on every worker): the outputs are the CLI's (body.glb with the sketch
+projected as its texture, body_texture.png, body.mtl, pose3d.json, overlay.png, report.md, ...)
+plus result.json, written the same atomic way. The package path's body.glb has no texture: the C
+API has no texture projection yet.
+
 With `--scheduler local` (the default) a LocalCluster of `--workers` processes is started
 in-process; with an address the tasks go to a running cluster (`dask scheduler`, `dask worker`
 on each machine, sketchbody installed on each, SKETCH_DIR and OUT_DIR on storage every worker
@@ -31,6 +37,7 @@ import glob
 import json
 import logging
 import os
+import re
 import shutil
 import socket
 import sys
@@ -79,57 +86,171 @@ def _record(job, **kw):
     return rec
 
 
+def current_umask():
+    """The process's file-mode creation mask, read without changing it where Linux shows it
+    (/proc/self/status), else by setting and restoring it."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def default_dir_mode():
+    """The mode `mkdir` gives a new folder: 0o777 less the umask (0o755 with the usual 022;
+    group-readable, unlike tempfile.mkdtemp's 0o700)."""
+    return 0o777 & ~current_umask()
+
+
+def make_staging_dir(out_dir, name):
+    """A new hidden folder `out_dir/.NAME.partial-*` for one task's outputs, with the mode a
+    plain mkdir would give (default_dir_mode()), so the folder renamed into place is as
+    readable by the group as any other folder the user makes."""
+    tmp = tempfile.mkdtemp(prefix=f".{name}.partial-", dir=out_dir)
+    os.chmod(tmp, default_dir_mode())
+    return tmp
+
+
 def _write_json(path, data):
     with open(path, "w", encoding="utf-8") as f:
         json.dump(data, f, indent=2)
         f.write("\n")
 
 
-def convert_sketch(job, out_dir, fit_options=None, export_options=None, skip_existing=False, preview_size=512):
-    """Converts one sketch into `out_dir/job.name/` atomically (runs on a worker). Returns a
-    record dict: ok, status / status_name / message on failure, output, seconds, host, pid.
-    Never raises for a bad sketch: every exception becomes a failed record."""
+def _write_with_package(job, tmp, fit_options, export_options, preview_size):
+    """Writes one sketch's outputs into the folder `tmp` through the Python package; returns the
+    result.json summary (without its seconds)."""
+    import sketchbody as skb  # imported on the worker
+
+    with skb.run_pipeline(job.sketch, joints=job.joints, fit_options=fit_options) as result, \
+            result.mesh() as mesh:
+        mesh.write_glb(os.path.join(tmp, "body.glb"), export_options)
+        mesh.write_obj(os.path.join(tmp, "body.obj"), posed=True)
+        mesh.write_obj(os.path.join(tmp, "body_rest.obj"), posed=False)
+        if preview_size:
+            mesh.write_preview(os.path.join(tmp, "preview.png"), preview_size)
+        result.joints2d().to_json(os.path.join(tmp, "joints2d.json"))
+        cam = result.camera()
+        low, support = result.evidence()
+        value, confidence = result.gender_value()
+        return {
+            "format": "sketchbody-batch-result", "version": 1, "sketch": job.sketch, "joints": job.joints,
+            "writer": "package", "gender": result.gender, "gender_fitted": result.gender_fitted,
+            "gender_value": value, "gender_confidence": confidence, "score": result.score, "low_evidence": low,
+            "edge_support": support, "library_version": skb.version(),
+            "camera": {"sx": cam.sx, "sy": cam.sy, "r": cam.r.tolist(), "t": cam.t.tolist()},
+            "joints3d_posed": result.joints3d("posed").tolist(),
+            "shape_weights": result.shape_weights().tolist(),
+        }
+
+
+class CliFailed(Exception):
+    """`sketchbody run` failed on a sketch: `status` its exit status, `message` its error text."""
+
+    status_name = "CliError"
+
+    def __init__(self, status, message):
+        super().__init__(message)
+        self.status, self.message = status, message
+
+
+_CLI_FIT = {"height": "--height", "samples": "--samples", "iterations": "--iterations", "seed": "--seed"}
+_CLI_EXPORT = {"naming": "--naming", "rest_pose": "--rest-pose", "origin": "--origin"}
+_CLI_GENDER = {"female": "f", "f": "f", "male": "m", "m": "m", "auto": None}
+
+
+def _option_arguments(options, flags, what):
+    """The CLI flags of the options' set fields (`flags`: field -> flag); ValueError for a set
+    field the batch's CLI mode does not pass on."""
+    args = []
+    for field in dataclasses.fields(options) if options is not None else ():
+        value = getattr(options, field.name)
+        if value is None or field.name == "gender":
+            continue
+        if field.name not in flags:
+            raise ValueError(f"{what}.{field.name} is not passed to `sketchbody run` by the batch's --cli mode")
+        args += [flags[field.name], str(value)]
+    return args
+
+
+def cli_arguments(job, out, fit_options=None, export_options=None, preview_size=512):
+    """The `sketchbody run` arguments that convert `job` into the folder `out` with the options
+    the package path would use (gender, height, samples, iterations, seed; naming, rest pose,
+    origin; the preview's size)."""
+    args = ["run", job.sketch, "--out", out, "--quiet"]
+    if job.joints:
+        args += ["--joints", job.joints]
+    gender = getattr(fit_options, "gender", None)
+    if gender is not None:
+        if str(gender).lower() not in _CLI_GENDER:
+            raise ValueError(f"gender {gender!r}: expected female, male or auto")
+        if _CLI_GENDER[str(gender).lower()]:
+            args += ["--gender", _CLI_GENDER[str(gender).lower()]]
+    args += _option_arguments(fit_options, _CLI_FIT, "FitOptions")
+    args += _option_arguments(export_options, _CLI_EXPORT, "ExportOptions")
+    if preview_size:
+        args += ["--preview-size", str(preview_size)]
+    return args
+
+
+def _write_with_cli(cli, job, tmp, fit_options, export_options, preview_size):
+    """Writes one sketch's outputs into the folder `tmp` with the command-line tool `cli`
+    (`sketchbody run`: its files, body.glb with the sketch as texture); returns the result.json
+    summary (gender and height from its report line). CliFailed when it fails."""
+    import subprocess
+
+    r = subprocess.run([cli] + cli_arguments(job, tmp, fit_options, export_options, preview_size),
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        lines = [line.strip() for line in r.stderr.splitlines() if line.strip()]
+        raise CliFailed(r.returncode, lines[-1] if lines else f"exit status {r.returncode}")
+    m = re.search(r"\b(female|male)\b.*?([\d.]+) m tall", r.stdout)
+    return {"format": "sketchbody-batch-result", "version": 1, "sketch": job.sketch, "joints": job.joints,
+            "writer": "cli", "cli": cli, "cli_report": r.stdout.strip(), "gender": m.group(1) if m else None,
+            "height": float(m.group(2)) if m else None}
+
+
+def _replace(final, tmp, out_dir, name):
+    """Moves the complete folder `tmp` to `final`, replacing an earlier one (moved aside first,
+    removed after)."""
+    old = None
+    if os.path.lexists(final):
+        old = tempfile.mkdtemp(prefix=f".{name}.old-", dir=out_dir)
+        os.rename(final, os.path.join(old, name))
+    os.rename(tmp, final)
+    if old:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def convert_sketch(job, out_dir, fit_options=None, export_options=None, skip_existing=False, preview_size=512,
+                   cli=None):
+    """Converts one sketch into `out_dir/job.name/` atomically (runs on a worker): through the
+    Python package, or with `cli` (the path of the `sketchbody` command) its `run`, whose
+    body.glb carries the sketch as texture. Returns a record dict: ok, status / status_name /
+    message on failure, output, seconds, host, pid. Never raises for a bad sketch: every
+    exception becomes a failed record."""
     t0 = time.perf_counter()
     final = os.path.join(out_dir, job.name)
     if skip_existing and os.path.isdir(final):
         return _record(job, ok=True, skipped=True, output=final)
     tmp = None
     try:
-        import sketchbody as skb  # imported on the worker
-
-        tmp = tempfile.mkdtemp(prefix=f".{job.name}.partial-", dir=out_dir)
-        with skb.run_pipeline(job.sketch, joints=job.joints, fit_options=fit_options) as result, \
-                result.mesh() as mesh:
-            mesh.write_glb(os.path.join(tmp, "body.glb"), export_options)
-            mesh.write_obj(os.path.join(tmp, "body.obj"), posed=True)
-            mesh.write_obj(os.path.join(tmp, "body_rest.obj"), posed=False)
-            if preview_size:
-                mesh.write_preview(os.path.join(tmp, "preview.png"), preview_size)
-            result.joints2d().to_json(os.path.join(tmp, "joints2d.json"))
-            cam = result.camera()
-            low, support = result.evidence()
-            value, confidence = result.gender_value()
-            summary = {
-                "format": "sketchbody-batch-result", "version": 1, "sketch": job.sketch, "joints": job.joints,
-                "gender": result.gender, "gender_fitted": result.gender_fitted, "gender_value": value,
-                "gender_confidence": confidence, "score": result.score, "low_evidence": low,
-                "edge_support": support, "library_version": skb.version(),
-                "camera": {"sx": cam.sx, "sy": cam.sy, "r": cam.r.tolist(), "t": cam.t.tolist()},
-                "joints3d_posed": result.joints3d("posed").tolist(),
-                "shape_weights": result.shape_weights().tolist(),
-            }
+        tmp = make_staging_dir(out_dir, job.name)
+        if cli:
+            summary = _write_with_cli(cli, job, tmp, fit_options, export_options, preview_size)
+        else:
+            summary = _write_with_package(job, tmp, fit_options, export_options, preview_size)
         summary["seconds"] = time.perf_counter() - t0
         _write_json(os.path.join(tmp, "result.json"), summary)
-        old = None
-        if os.path.lexists(final):
-            old = tempfile.mkdtemp(prefix=f".{job.name}.old-", dir=out_dir)
-            os.rename(final, os.path.join(old, job.name))
-        os.rename(tmp, final)
+        _replace(final, tmp, out_dir, job.name)
         tmp = None
-        if old:
-            shutil.rmtree(old, ignore_errors=True)
         return _record(job, ok=True, output=final, seconds=time.perf_counter() - t0, gender=summary["gender"],
-                       score=summary["score"])
+                       score=summary.get("score"))
     except Exception as e:  # noqa: BLE001 - reported per sketch
         status = getattr(e, "status", None)
         name = getattr(e, "status_name", None) or type(e).__name__
@@ -168,12 +289,14 @@ def start_client(scheduler="local", workers=2, threads_per_worker=1, rayon_threa
 
 def run_batch(sketch_dir, out_dir, client=None, scheduler="local", workers=2, threads_per_worker=1,
               rayon_threads=None, fit_options=None, export_options=None, skip_existing=False, preview_size=512,
-              on_result=None):
+              on_result=None, cli=None):
     """Converts every sketch of `sketch_dir` into `out_dir`, one Dask task per sketch, on
     `client` (None: start_client(scheduler, workers, ...), closed at the end). Calls
     `on_result(record)` as each task finishes; writes all records to `out_dir/batch.json`;
     returns them sorted by name. A task whose worker dies is reported with status_name
-    "WorkerError" (Dask reschedules it first, up to its allowed-failures)."""
+    "WorkerError" (Dask reschedules it first, up to its allowed-failures). `cli`: the path of the
+    `sketchbody` command on the workers, to convert with its `run` (textured body.glb) instead
+    of the package."""
     from distributed import as_completed
 
     out_dir = os.path.abspath(out_dir)
@@ -188,7 +311,7 @@ def run_batch(sketch_dir, out_dir, client=None, scheduler="local", workers=2, th
         futures = {}
         for job in jobs:
             fut = client.submit(convert_sketch, job, out_dir, fit_options, export_options, skip_existing, preview_size,
-                                key=f"sketchbody-{job.name}-{uuid.uuid4().hex[:8]}", pure=False)
+                                cli, key=f"sketchbody-{job.name}-{uuid.uuid4().hex[:8]}", pure=False)
             futures[fut] = job
         for fut in as_completed(list(futures)):
             job = futures[fut]
@@ -215,7 +338,8 @@ def run_batch(sketch_dir, out_dir, client=None, scheduler="local", workers=2, th
 
 def _line(rec):
     if rec["ok"]:
-        what = "skipped (exists)" if rec["skipped"] else f"{rec.get('gender', '')}, score {rec.get('score', 0):.3f}"
+        score = f", score {rec['score']:.3f}" if rec.get("score") is not None else ""
+        what = "skipped (exists)" if rec["skipped"] else f"{rec.get('gender', '')}{score}"
         return f"ok    {rec['name']}: {rec['seconds']:.1f} s, {what} -> {rec['output']}"
     return f"FAIL  {rec['name']}: {rec['status_name']}: {rec['message']} ({rec['seconds']:.1f} s)"
 
@@ -241,6 +365,9 @@ def main(argv=None):
     ap.add_argument("--origin", choices=["floor", "pelvis"], default=None)
     ap.add_argument("--preview-size", type=int, default=512, help="preview.png size; 0: no preview")
     ap.add_argument("--skip-existing", action="store_true", help="keep OUT_DIR/NAME folders already there")
+    ap.add_argument("--cli", metavar="PATH", default=None,
+                    help="convert with this `sketchbody` command's `run` (on every worker) instead of the package: "
+                         "its outputs, body.glb with the sketch as texture")
     ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
     if a.workers < 1 or a.threads_per_worker < 1:
@@ -258,7 +385,7 @@ def main(argv=None):
     records = run_batch(a.sketch_dir, a.out_dir, scheduler=a.scheduler, workers=a.workers,
                         threads_per_worker=a.threads_per_worker, rayon_threads=a.rayon_threads, fit_options=fit,
                         export_options=export, skip_existing=a.skip_existing, preview_size=a.preview_size,
-                        on_result=show)
+                        on_result=show, cli=a.cli)
     ok = sum(r["ok"] for r in records)
     print(f"{len(records)} sketches: {ok} ok, {len(records) - ok} failed; wall {time.perf_counter() - t0:.1f} s; "
           f"results in {os.path.join(os.path.abspath(a.out_dir), RESULTS_FILE)}")

@@ -59,6 +59,28 @@ class Detection:
     presence: Optional[float] = None
     low_confidence: Optional[bool] = None
 
+
+@dataclasses.dataclass
+class FigureInfo:
+    """What the embedded detector found behind a pipeline result's joints (Result.detection()):
+    `backend` kept ("fmp", "blazepose"), `confidence` (calibrated: the expected fraction of
+    joints within 0.2 x the figure's size of the truth), `presence` (probability that the image
+    holds a figure), `low_confidence` (confidence < 0.75: show the joints for correction),
+    `other_figures` (further figures the sketch model found above its threshold)."""
+
+    backend: str
+    confidence: float
+    presence: float
+    low_confidence: bool
+    other_figures: int
+
+    @classmethod
+    def from_struct(cls, info):
+        """From a filled skb_figure_info."""
+        return cls(_BACKEND_NAMES.get(info.backend, "?"), info.confidence, info.presence,
+                   bool(info.low_confidence), int(info.other_figures))
+
+
 _BACKEND_NAMES = {B.SKB_DETECTOR_AUTO: "auto", B.SKB_DETECTOR_FMP: "fmp", B.SKB_DETECTOR_BLAZEPOSE: "blazepose"}
 
 

@@ -8,9 +8,10 @@ import numpy as np
 
 from . import _arrays as A
 from . import _bindings as B
-from ._lib import Handle, Progress, call, new_handle
+from ._lib import Handle, Progress, call, error, lib, new_handle
 from ._options import OptionsBase, options_handle
 from .context import AUTO, FEMALE, MALE, default_context, gender_name
+from .detect import FigureInfo
 from .images import as_image, load_rgb_image
 from .mesh import Mesh
 from .pose import Camera, Joints2D, PoseOptions, _dict_arg, joints2d_arg
@@ -98,6 +99,23 @@ class Result(Handle):
         call("skb_result_gender", self._p, ctypes.byref(g), None)
         call("skb_result_score", self._p, g.value, ctypes.byref(s))
         return s.value
+
+    @property
+    def detected(self):
+        """True when the embedded detector found the 2-D joints (run_pipeline without `joints`),
+        False when they were given."""
+        return self.detection() is not None
+
+    def detection(self):
+        """The detection behind the joints (FigureInfo: backend, calibrated confidence,
+        presence, low_confidence), or None when the joints were given to run_pipeline."""
+        info = B.skb_figure_info()
+        st = lib.skb_result_detection(self._p, ctypes.byref(info))
+        if st == B.SKB_ERR_OUT_OF_RANGE:
+            return None
+        if st != B.SKB_OK:
+            raise error(st, "skb_result_detection")
+        return FigureInfo.from_struct(info)
 
     def evidence(self):
         """(low_evidence: bool, edge_support: fraction of the fitted outline near a stroke)."""

@@ -8,6 +8,8 @@ cluster test prints SKIPPED, or fails when SKB_REQUIRE_DASK=1."""
 import json
 import os
 import shutil
+import stat
+import struct
 import subprocess
 import sys
 import tempfile
@@ -16,13 +18,29 @@ import unittest
 
 from sketchbody import batch
 
-from _util import SKETCH, SKETCH_JOINTS, write_gray_png
+from _util import CLI, SKETCH, SKETCH_JOINTS, write_gray_png
 
 try:
     import distributed  # noqa: F401
     HAVE_DASK = True
 except ImportError:
     HAVE_DASK = False
+
+
+def batch_fit():
+    """A quick fit (the tests check files and modes, not the body)."""
+    from sketchbody import FitOptions
+
+    return FitOptions(samples=8, iterations=1)
+
+
+def glb_json(path):
+    """The JSON chunk of a binary glTF file."""
+    with open(path, "rb") as f:
+        data = f.read()
+    length, kind = struct.unpack("<I4s", data[12:20])
+    assert data[:4] == b"glTF" and kind == b"JSON", path
+    return json.loads(data[20:20 + length])
 
 
 def make_inputs(folder):
@@ -44,6 +62,76 @@ class FindAndConvertTest(unittest.TestCase):
         self.assertEqual([j.name for j in jobs], ["blank", "broken", "sketch"])
         self.assertTrue(jobs[2].joints.endswith("sketch_joints.json"))
         self.assertIsNone(jobs[0].joints)
+
+    def test_output_folder_mode_follows_the_umask(self):
+        # Not tempfile.mkdtemp's 0700: the folder a plain mkdir would make, readable by the group.
+        with tempfile.TemporaryDirectory() as src, tempfile.TemporaryDirectory() as out:
+            make_inputs(src)
+            job = [j for j in batch.find_sketches(src) if j.name == "sketch"][0]
+            old = os.umask(0o022)
+            try:
+                self.assertEqual(batch.current_umask(), 0o022)
+                self.assertEqual(batch.default_dir_mode(), 0o755)
+                rec = batch.convert_sketch(job, out, batch_fit(), preview_size=64)
+                mode = stat.S_IMODE(os.stat(os.path.join(out, "sketch")).st_mode)
+                files = {f: stat.S_IMODE(os.stat(os.path.join(out, "sketch", f)).st_mode)
+                         for f in os.listdir(os.path.join(out, "sketch"))}
+                os.umask(0o027)
+                self.assertEqual(batch.default_dir_mode(), 0o750)
+                staging = batch.make_staging_dir(out, "other")
+                self.assertEqual(stat.S_IMODE(os.stat(staging).st_mode), 0o750)
+            finally:
+                os.umask(old)
+        self.assertTrue(rec["ok"], rec)
+        self.assertEqual(mode, 0o755, oct(mode))
+        unreadable = {f: oct(m) for f, m in files.items() if not m & stat.S_IRGRP}
+        self.assertEqual(unreadable, {})
+
+    def test_cli_arguments(self):
+        from sketchbody import ExportOptions, FitOptions
+
+        job = batch.Job("a", "/s/a.png", "/s/a_joints.json")
+        args = batch.cli_arguments(job, "/o/tmp", FitOptions(gender="male", height=1.8, samples=8, seed=3),
+                                   ExportOptions(naming="unreal", rest_pose="t"), preview_size=64)
+        self.assertEqual(args, ["run", "/s/a.png", "--out", "/o/tmp", "--quiet", "--joints", "/s/a_joints.json",
+                                "--gender", "m", "--samples", "8", "--height", "1.8", "--seed", "3",
+                                "--naming", "unreal", "--rest-pose", "t", "--preview-size", "64"])
+        self.assertNotIn("--gender", batch.cli_arguments(job, "/o", FitOptions(gender="auto")))
+        with self.assertRaises(ValueError):  # an option `run` is not given: said, not dropped
+            batch.cli_arguments(job, "/o", FitOptions(score="paper"))
+
+    @unittest.skipUnless(os.access(CLI, os.X_OK) or os.environ.get("SKB_REQUIRE_SHARED_DATA"),
+                         f"SKIPPED: no sketchbody command at {CLI} (set SKB_CLI)")
+    def test_cli_mode_writes_the_clis_textured_glb(self):
+        with tempfile.TemporaryDirectory() as src, tempfile.TemporaryDirectory() as out:
+            make_inputs(src)
+            jobs = {j.name: j for j in batch.find_sketches(src)}
+            os.makedirs(os.path.join(out, "own"))
+            old = os.umask(0o022)
+            try:
+                rec = batch.convert_sketch(jobs["sketch"], out, batch_fit(), preview_size=64, cli=CLI)
+                bad = batch.convert_sketch(jobs["broken"], out, batch_fit(), preview_size=64, cli=CLI)
+                own = batch.convert_sketch(jobs["sketch"], os.path.join(out, "own"), batch_fit(), preview_size=64)
+            finally:
+                os.umask(old)
+            folder = os.path.join(out, "sketch")
+            self.assertTrue(rec["ok"], rec)
+            self.assertIn(rec["gender"], ("female", "male"))
+            files = sorted(os.listdir(folder))
+            for name in ("body.glb", "body_texture.png", "body.mtl", "body.obj", "report.md", "result.json"):
+                self.assertIn(name, files)
+            self.assertFalse([f for f in files if f.startswith(".")], files)
+            self.assertEqual(stat.S_IMODE(os.stat(folder).st_mode), 0o755)
+            self.assertEqual({f for f in files if not os.stat(os.path.join(folder, f)).st_mode & stat.S_IRGRP}, set())
+            gltf = glb_json(os.path.join(folder, "body.glb"))
+            self.assertTrue(gltf.get("images") and gltf.get("textures"), sorted(gltf))
+            # The package path's GLB (no texture projection in the C API yet) has none.
+            self.assertTrue(own["ok"], own)
+            self.assertFalse(glb_json(os.path.join(out, "own", "sketch", "body.glb")).get("images"))
+            self.assertFalse(bad["ok"])
+            self.assertEqual(bad["status_name"], "CliError")
+            self.assertIn("broken.png", bad["message"])
+            self.assertEqual(sorted(os.listdir(out)), ["own", "sketch"])
 
     def test_failed_task_leaves_nothing(self):
         with tempfile.TemporaryDirectory() as src, tempfile.TemporaryDirectory() as out:
@@ -86,6 +174,8 @@ class LocalClusterTest(unittest.TestCase):
                 self.assertTrue(recs[name]["message"])
             # Only complete outputs: the converted sketch's folder and the records.
             self.assertEqual(sorted(os.listdir(out)), ["batch.json", "sketch"])
+            self.assertEqual(stat.S_IMODE(os.stat(os.path.join(out, "sketch")).st_mode),
+                             0o777 & ~batch.current_umask())
             files = sorted(os.listdir(os.path.join(out, "sketch")))
             self.assertEqual(files, ["body.glb", "body.obj", "body_rest.obj", "joints2d.json", "preview.png",
                                      "result.json"])

@@ -199,6 +199,23 @@ class PipelineTest(unittest.TestCase):
         self.assertIsInstance(low, bool)
         self.assertGreater(len(r.shape_weights()), 0)
 
+    def test_detection_of_given_and_detected_joints(self):
+        # Given joints: no detection behind them.
+        self.assertIsNone(self.r.detection())
+        self.assertFalse(self.r.detected)
+        # No joints: the library detects them as the CLI's `run` does, and says so.
+        with skb.run_pipeline(SKETCH, fit_options=skb.FitOptions(samples=8, iterations=1)) as r:
+            info = r.detection()
+            self.assertTrue(r.detected)
+            used = r.joints2d().xy
+        self.assertIsInstance(info, skb.FigureInfo)
+        det = skb.detect(SKETCH)
+        self.assertEqual(info.backend, det.backend)
+        self.assertAlmostEqual(info.confidence, det.score, places=9)
+        self.assertEqual(info.low_confidence, info.confidence < 0.75)
+        self.assertTrue(0.5 <= info.presence <= 1.0)
+        np.testing.assert_allclose(used, det.joints.xy, atol=1e-9)
+
     def test_progress_is_monotonic_and_ends_at_one(self):
         p = Example.progress
         self.assertGreater(len(p), 3)

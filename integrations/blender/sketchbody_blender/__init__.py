@@ -17,14 +17,18 @@ bl_info = {
     "category": "Import-Export",
 }
 
+import contextlib  # noqa: E402
+import dataclasses  # noqa: E402
+import functools  # noqa: E402
 import os  # noqa: E402
 import time  # noqa: E402
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
-from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty  # noqa: E402
+from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty,  # noqa: E402
+                       StringProperty)
 
-from . import build, package  # noqa: E402
+from . import build, gltf_compat, jobs, package, work  # noqa: E402
 
 ADDON = __name__
 
@@ -89,7 +93,7 @@ class SketchbodySettings(bpy.types.PropertyGroup):
         description="Optional sketchbody-joints2d JSON file with the 15 2-D joints; empty: the embedded detector")
     gender: EnumProperty(
         name="Gender", default="AUTO",
-        items=[("AUTO", "Auto", "Fit gender as a continuous shape weight"),
+        items=[("AUTO", "Auto", "The library decides the gender (as the CLI without --gender)"),
                ("FEMALE", "Female", "Fit the female body model"), ("MALE", "Male", "Fit the male body model")])
     height: FloatProperty(
         name="Height", description="The character's height (0: unknown, the fit decides)", default=0.0, min=0.0,
@@ -109,95 +113,278 @@ class SketchbodySettings(bpy.types.PropertyGroup):
         name="Low confidence", default=0.75, min=0.0, max=1.0, update=_threshold_changed,
         description="Detected joints whose confidence (the detector's calibrated probability that the joint is "
                     "right) is below this are highlighted (red, larger); 0.75 is the library's low-confidence level")
+    progress: FloatProperty(name="Progress", subtype="FACTOR", min=0.0, max=1.0, get=lambda self: running_fraction(),
+                            description="The running fit's fraction done (read-only)")
+    status: StringProperty(name="Last run", description="What the last run reported")
+    status_level: StringProperty(name="Last run's level", default="INFO",
+                                 description="INFO, WARNING, ERROR or RUNNING")
 
 
 def _settings(context):
+    """The scene's Sketchbody settings (the panel's)."""
     return context.scene.sketchbody
 
 
 # ---------------------------------------------------------------------------------------------
-# running the package
+# running the package in the background
 
 
-class UserError(Exception):
-    """A problem the user can fix; its text goes to the report as it is."""
+UserError = work.UserError
+POLL_SECONDS = 0.1  # how often the timer looks at a running job
+
+
+@dataclasses.dataclass
+class _Active:
+    """The one run in progress: its job, request, package module and start time."""
+
+    job: jobs.Job
+    req: work.Request
+    skb: object
+    t0: float
+
+
+_active = None
+
+
+def is_running():
+    """True while a run works in the background (the start buttons are then disabled)."""
+    return _active is not None
+
+
+def running_fraction():
+    """The running job's fraction done (0..1), 0 when none runs."""
+    return _active.job.fraction if _active is not None else 0.0
 
 
 def _abspath(path):
+    """An absolute, normalised path of a Blender path (// relative to the .blend); "" stays ""."""
     return os.path.normpath(bpy.path.abspath(path)) if path else ""
 
 
 def _fit_options(skb, st):
+    """The package's FitOptions from the panel's settings."""
     return skb.FitOptions(gender=st.gender.lower(), height=st.height if st.height > 0 else None,
                           samples=st.samples, iterations=st.iterations)
 
 
-def _read_joints_file(skb, path):
-    """(Joints2D, confidence (15,)) from a sketchbody-joints2d file; confidences from the file's
-    optional "confidence" ({name: c} or a list), else 1 (0 for joints listed as missing)."""
-    import json
-
-    if not os.path.isfile(path):
-        raise UserError(f"Joints file not found: {path}")
-    try:
-        joints = skb.Joints2D.from_json(path)
-        with open(path, encoding="utf-8") as f:
-            raw = json.load(f).get("confidence")
-    except (skb.SketchbodyError, ValueError, KeyError, TypeError, OSError) as e:
-        detail = str(e) if path in str(e) else f"{path}: {e}"
-        raise UserError(f"Cannot read the joints file {detail}")
-    conf = np.where(joints.visible, 1.0, 0.0)
-    if isinstance(raw, dict):
-        conf = np.array([float(raw.get(n, c)) for n, c in zip(skb.JOINT_NAMES, conf)])
-    elif isinstance(raw, list) and len(raw) == len(conf):
-        conf = np.array([float(c) for c in raw])
-    return joints, conf
-
-
-def _run(skb, context, image_path, joints, rig_options):
-    """Runs the pipeline; returns the arrays build.py needs (nothing in the scene changes here)."""
-    st = _settings(context)
-    wm = context.window_manager
-    wm.progress_begin(0, 100)
-    try:
-        with skb.run_pipeline(image_path, joints=joints, fit_options=_fit_options(skb, st),
-                              progress=lambda f: wm.progress_update(int(100 * f)) or True) as result:
-            camera = result.camera()
-            pixels = camera.project(result.vertices(posed=True))
-            gender, (gender_value, _) = result.gender, result.gender_value()
-            low_evidence, support = result.evidence()
-            with result.mesh() as mesh:
-                rig = mesh.rig(rig_options)
-                data = dict(rig=rig, quads=mesh.faces(), uvs=mesh.uvs(), face_uvs=mesh.face_uvs())
-                # How squarely the sketch's camera sees each vertex: the posed normal's component
-                # toward the viewer (+Z of the camera frame), full from 0.2 on, none when facing away.
-                toward_viewer = (mesh.normals(posed=True) @ camera.r.T)[:, 2]
-                data["seen"] = np.clip(toward_viewer / 0.2, 0.0, 1.0)
-    finally:
-        wm.progress_end()
-    sketch = skb.load_image(image_path)
-    h, w = sketch.shape[:2]
-    data.update(
-        camera=camera, pixels=pixels, width=w, height=h, gender=gender, gender_value=gender_value,
-        low_evidence=low_evidence, edge_support=support,
-        sketch_uv=np.stack([pixels[:, 0] / w, 1.0 - pixels[:, 1] / h], axis=1))
-    return data
-
-
 def _rig_options(skb, st):
+    """The package's ExportOptions (names, rest pose; origin on the floor) from the settings."""
     return skb.ExportOptions(naming=st.naming.lower(), rest_pose=st.rest_pose.lower(), origin="floor")
 
 
-def _summary(data, seconds):
+def _summary(req, data, seconds, kept):
+    """The report of a finished run."""
     low = " (low evidence: few strokes near the outline)" if data["low_evidence"] else ""
-    return (f"Sketchbody: {data['gender']} body (gender value {data['gender_value']:.2f}), "
-            f"{len(data['rig'].rest_vertices)} vertices, {len(data['rig'].bone_names)} bones, "
-            f"edge support {data['edge_support']:.2f}{low}, {seconds:.1f} s")
+    source = "detected joints" if req.joints is None else "given joints"
+    text = (f"Sketchbody: {data['gender']} body, {data['body_height']:.2f} m (gender value "
+            f"{data['gender_value']:.2f}), from {source}, {len(data['rig'].rest_vertices)} vertices, "
+            f"{len(data['rig'].bone_names)} bones, edge support {data['edge_support']:.2f}{low}, {seconds:.1f} s")
+    if kept:
+        text += f"; the former body is kept as {kept}"
+    return text
 
 
 def _object_mode(context):
+    """Leaves edit or pose mode (the add-on builds and removes objects in object mode)."""
     if context.object is not None and context.object.mode != "OBJECT":
         bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def _main_context():
+    """A context for building the scene: the script's own, or, from a timer (which has no
+    window), the first window's, which operators such as mode_set need."""
+    wm = bpy.context.window_manager
+    if bpy.context.window is None and wm is not None and len(wm.windows) > 0:
+        win = wm.windows[0]
+        return bpy.context.temp_override(window=win, screen=win.screen)
+    return contextlib.nullcontext()
+
+
+def _redraw():
+    """Redraws the 3-D views (their sidebar shows the progress and the last report)."""
+    wm = bpy.context.window_manager
+    for win in (wm.windows if wm is not None else []):
+        for area in win.screen.areas:
+            if area.type == "VIEW_3D":
+                area.tag_redraw()
+
+
+def _cursor_progress(fraction=None):
+    """Blender's progress cursor: begun with 0, updated, ended with None (no-op without a window)."""
+    wm = bpy.context.window_manager
+    try:
+        if fraction is None:
+            wm.progress_end()
+        elif fraction == 0:
+            wm.progress_begin(0, 100)
+        else:
+            wm.progress_update(int(100 * fraction))
+    except (RuntimeError, AttributeError):
+        pass
+
+
+def _start(op, context, skb, req):
+    """Starts `req` on a worker thread. With the operator's `wait` the call returns when the
+    body is built (scripts); otherwise at once, a timer polling the job (Blender stays usable;
+    the panel shows the progress and a Cancel button)."""
+    global _active
+    _active = _Active(jobs.Job(functools.partial(work.compute, skb, req), req.label).start(), req, skb,
+                      time.perf_counter())
+    _set_status(context.scene, "RUNNING", f"{req.label}: running")
+    _cursor_progress(0)
+    if op.wait:
+        _active.job.wait()
+        level, text = _finish()
+        op.report({level}, text)
+        return {"FINISHED"} if level == "INFO" else {"CANCELLED"}
+    if not bpy.app.timers.is_registered(_tick):  # (under blender -b a former one may linger)
+        bpy.app.timers.register(_tick, first_interval=POLL_SECONDS)
+    op.report({"INFO"}, f"Sketchbody: {req.label} runs in the background (Cancel in the Sketchbody panel)")
+    return {"FINISHED"}
+
+
+def _tick():
+    """The bpy.app.timers callback: shows the running job's progress; once it is done builds
+    the scene on the main thread (_finish) and stops."""
+    if _active is None:
+        return None
+    if not _active.job.done:
+        _cursor_progress(max(_active.job.fraction, 0.01))
+        _redraw()
+        return POLL_SECONDS
+    level, text = _finish()
+    print(text, flush=True)
+    return None
+
+
+def wait_for_job(timeout=None):
+    """For scripts under `blender -b`, where timers do not run: polls the running job as the
+    timer does until it has finished and its result is in the scene. Returns the scene's
+    status afterwards as (level, text); (None, "") when nothing ran."""
+    deadline = None if timeout is None else time.perf_counter() + timeout
+    if _active is None:
+        return None, ""
+    while _tick() is not None:
+        if deadline is not None and time.perf_counter() > deadline:
+            raise TimeoutError(f"the Sketchbody run did not finish within {timeout} s")
+        time.sleep(0.02)
+    st = _settings(bpy.context)
+    return st.status_level, st.status
+
+
+def _set_status(scene, level, text):
+    """The panel's report line: `level` INFO, WARNING, ERROR or RUNNING."""
+    if scene is not None and hasattr(scene, "sketchbody"):
+        scene.sketchbody.status_level, scene.sketchbody.status = level, text
+
+
+def _finish():
+    """Ends the active run on the main thread: builds its result into the scene, or reports
+    why not (cancelled: the scene unchanged). Returns (level, text)."""
+    global _active
+    a, _active = _active, None
+    _cursor_progress(None)
+    job, req = a.job, a.req
+    if isinstance(job.error, a.skb.Cancelled):
+        level, text = "WARNING", f"Sketchbody: {req.label} cancelled; the scene is unchanged"
+    elif job.error is not None:
+        level, text = "ERROR", work.describe_error(a.skb, job.error, req)
+    else:
+        try:
+            with _main_context():
+                kept = _build(bpy.context, a.skb, req, job.result)
+            level, text = "INFO", _summary(req, job.result, time.perf_counter() - a.t0, kept)
+            _undo_push(f"Sketchbody: {req.label}")
+        except Exception as e:  # noqa: BLE001 - reported, never a traceback
+            level, text = "ERROR", work.describe_error(a.skb, e, req)
+    _set_status(bpy.context.scene, level, text)
+    _redraw()
+    return level, text
+
+
+def _undo_push(message):
+    """An undo step for what a background run built (the operator had finished before)."""
+    try:
+        bpy.ops.ed.undo_push(message=message)
+    except RuntimeError:  # no window (blender -b) or undo disabled
+        pass
+
+
+def _build(context, skb, req, data):
+    """Puts a finished run into the scene: a new body (beside the former ones, which stay as
+    the artist left them, renamed `SKB_Body_runN`), and for "Sketch to body" a new sketch plane
+    with its markers; for a re-run the markers' colours. Returns the former current body's new
+    name, or ""."""
+    try:
+        image = build.load_image(req.image)
+    except RuntimeError as e:
+        raise UserError(f"Blender cannot load the sketch {req.image}: {e}")
+    if req.kind == "rerun" and build.find_plane() is None:
+        raise UserError("The sketch plane was removed while the body was computed; run 'Sketch to body' again")
+    _object_mode(context)
+    scene = context.scene
+    old_arm, old_body = build.current_body()
+    if req.kind == "new":
+        build.remove_sketch()
+    arm, body = build.build_body(scene, data["rig"], data["quads"], data["uvs"], data["face_uvs"],
+                                 data["sketch_uv"], data["seen"], image, build.next_run())
+    try:
+        if req.kind == "new":
+            _make_sketch(scene, skb, req, data, image, arm, body)
+        else:
+            _update_markers(req, data)
+            _place_beside_kept(arm, body)
+    except Exception:
+        build.remove_body(arm, body)
+        raise
+    kept = ""
+    if old_arm is not None:
+        build.retire(old_arm, old_body)
+        kept = old_body.name if old_body is not None else old_arm.name
+    build.promote(arm, body)
+    arm["skb_gender"], arm["skb_height_m"] = data["gender"], data["body_height"]
+    arm["skb_detected"] = data["detection"] is not None
+    return kept
+
+
+def _make_sketch(scene, skb, req, data, image, arm, body):
+    """The sketch plane beside the new body at the body's scale, its 15 markers, and both moved
+    right of the bodies already in the scene."""
+    px_floor = float(data["pixels"][:, 1].max())
+    body_min_x = float(np.min(data["rig"].posed_vertices[:, 0]))
+    # The sketch at the body's scale: the projected body's height in pixels = its height in metres.
+    px_height = float(np.ptp(data["pixels"][:, 1]))
+    body_height = float(np.ptp(data["rig"].posed_vertices[:, 1]))
+    scale = body_height / px_height if px_height > 1.0 else 1.0 / data["camera"].sy
+    try:
+        plane = build.make_sketch_plane(scene, image, scale, px_floor, body_min_x)
+        plane["skb_detected"] = req.joints is None
+        build.make_markers(scene, plane, skb.JOINT_NAMES, data["joints"].xy, data["confidence"],
+                           data["joints"].visible, req.threshold)
+    except Exception:
+        build.remove_sketch()
+        raise
+    right = build.kept_bodies_right_edge(exclude={body})
+    if right is not None:
+        plane_left = plane.location.x - image.size[0] * scale / 2
+        dx = max(0.0, right + build.GAP - plane_left)
+        plane.location.x += dx
+        arm.location.x += dx
+
+
+def _update_markers(req, data):
+    """After a re-run: the markers' visibility as used, their colours for the threshold."""
+    for m in build.find_markers(build.find_plane()):
+        m["skb_visible"] = bool(data["joints"].visible[m["skb_index"]])
+        build.highlight(m, req.threshold)
+
+
+def _place_beside_kept(arm, body):
+    """Moves the new body right of the bodies already in the scene (GAP between)."""
+    right = build.kept_bodies_right_edge(exclude={body})
+    new = build.world_x_range([body])
+    if right is not None and new is not None:
+        arm.location.x += max(0.0, right + build.GAP - new[0])
 
 
 class _Reporting:
@@ -216,16 +403,27 @@ class _Reporting:
         return {"CANCELLED"}
 
 
+WAIT = BoolProperty(
+    name="Wait", default=False, options={"SKIP_SAVE", "HIDDEN"},
+    description="Return only when the body is built (for scripts; from the panel the run goes on in the "
+                "background while Blender stays usable)")
+
+
 class SKETCHBODY_OT_sketch_to_body(_Reporting, bpy.types.Operator):
     """Detect the 15 joints (or read them from the joints file), fit a rigged 3-D body to the
-    sketch and show the sketch with draggable joint markers beside it"""
+    sketch in the background and show the sketch with draggable joint markers beside it"""
 
     bl_idname = "sketchbody.sketch_to_body"
     bl_label = "Sketch to body"
-    bl_options = {"REGISTER", "UNDO"}
+    bl_options = {"REGISTER"}
+
+    wait: WAIT
+
+    @classmethod
+    def poll(cls, context):
+        return not is_running()
 
     def run(self, context):
-        t0 = time.perf_counter()
         st = _settings(context)
         image_path = _abspath(st.image)
         if not image_path:
@@ -233,103 +431,81 @@ class SKETCHBODY_OT_sketch_to_body(_Reporting, bpy.types.Operator):
         if not os.path.isfile(image_path):
             raise UserError(f"Sketch image not found: {image_path}")
         skb = package.load(_preference_path(context))
+        w, h = work.check_image(skb, image_path)
+        joints, confidence = None, None  # None: the library detects them, as the CLI's run
         if st.joints:
-            joints, confidence = _read_joints_file(skb, _abspath(st.joints))
-        else:
-            try:
-                det = skb.detect(image_path)
-            except skb.NoFigure as e:
-                raise UserError(
-                    f"The detector found no figure in the sketch (score {e.score:.2f}); give a joints file "
-                    "(sketchbody-joints2d JSON) and correct the joints on the sketch")
-            except skb.SketchbodyError as e:
-                raise UserError(f"Joint detection failed: {e.message} ({e.status_name}); give a joints file "
-                                "(sketchbody-joints2d JSON) instead")
-            joints, confidence = det.joints, np.asarray(det.confidence, dtype=np.float64)
-        data = _run(skb, context, image_path, joints, _rig_options(skb, st))
-        try:
-            image = build.load_image(image_path)
-        except RuntimeError as e:
-            raise UserError(f"Blender cannot load the sketch {image_path}: {e}")
-
-        # Everything computed: only now change the scene.
-        _object_mode(context)
-        build.clear(context.scene)
-        try:
-            px_floor = float(data["pixels"][:, 1].max())
-            body_min_x = float(np.min(data["rig"].posed_vertices[:, 0]))
-            # The sketch at the body's scale: the projected body's height in pixels = its height in metres.
-            px_height = float(np.ptp(data["pixels"][:, 1]))
-            body_height = float(np.ptp(data["rig"].posed_vertices[:, 1]))
-            scale = body_height / px_height if px_height > 1.0 else 1.0 / data["camera"].sy
-            plane = build.make_sketch_plane(context.scene, image, scale, px_floor, body_min_x)
-            markers = build.make_markers(context.scene, plane, skb.JOINT_NAMES, joints.xy, confidence,
-                                         joints.visible, st.threshold)
-            build.build_body(context.scene, data["rig"], data["quads"], data["uvs"], data["face_uvs"],
-                             data["sketch_uv"], data["seen"], image)
-        except Exception:
-            build.clear(context.scene)  # nothing half-built stays in the scene
-            raise
-        low = [m["skb_joint"] for m in markers if m["skb_low_confidence"]]
-        self.report({"INFO"}, _summary(data, time.perf_counter() - t0)
-                    + (f"; check the red joints: {', '.join(low)}" if low else ""))
-        return {"FINISHED"}
+            joints, confidence = work.read_joints_file(skb, _abspath(st.joints))
+        req = work.Request("new", image_path, w, h, joints, confidence, _fit_options(skb, st),
+                           _rig_options(skb, st), context.scene.name, st.threshold)
+        return _start(self, context, skb, req)
 
 
 class SKETCHBODY_OT_rerun(_Reporting, bpy.types.Operator):
-    """Fit the body again from the joint markers' current positions on the sketch (move them
-    with G first: the paper's user-correction step)"""
+    """Fit a new body from the joint markers' current positions on the sketch (move them with
+    G first: the paper's user-correction step); the former body stays, renamed, beside it"""
 
     bl_idname = "sketchbody.rerun"
     bl_label = "Re-run from corrected joints"
-    bl_options = {"REGISTER", "UNDO"}
+    bl_options = {"REGISTER"}
+
+    wait: WAIT
 
     @classmethod
     def poll(cls, context):
-        return build.find_plane() is not None
+        return build.find_plane() is not None and not is_running()
 
     def run(self, context):
-        t0 = time.perf_counter()
         st = _settings(context)
         plane = build.find_plane()
         if plane is None or "skb_image" not in plane:
             raise UserError("No sketch in the scene: run 'Sketch to body' first")
         image_path = _abspath(plane["skb_image"])
-        if not os.path.isfile(image_path):
-            raise UserError(f"Sketch image not found: {image_path}")
         skb = package.load(_preference_path(context))
+        w, h = work.check_image(skb, image_path)
         try:
             xy, visible = build.read_markers(plane, skb.JOINT_NAMES)
         except ValueError as e:
             raise UserError(str(e))
-        w, h = plane["skb_width"], plane["skb_height"]
         outside = [n for n, (x, y), v in zip(skb.JOINT_NAMES, xy, visible) if v and not (0 <= x <= w and 0 <= y <= h)]
         if outside:
             raise UserError(f"Joint markers outside the sketch: {', '.join(outside)}; move them back onto it")
-        joints = skb.Joints2D(xy, visible)
-        data = _run(skb, context, image_path, joints, _rig_options(skb, st))
-        image = build.load_image(image_path)
-        _object_mode(context)
-        build.remove_body()
-        try:
-            build.build_body(context.scene, data["rig"], data["quads"], data["uvs"], data["face_uvs"],
-                             data["sketch_uv"], data["seen"], image)
-        except Exception:
-            build.remove_body()
-            raise
-        for m in build.find_markers(plane):
-            m["skb_visible"] = bool(visible[m["skb_index"]])
-            build.highlight(m, st.threshold)
-        self.report({"INFO"}, _summary(data, time.perf_counter() - t0))
+        markers = build.find_markers(plane)
+        if plane.get("skb_detected") and not any(m["skb_moved"] for m in markers):
+            joints, confidence = None, None  # nothing corrected: detected again, as the CLI
+        else:
+            joints, confidence = skb.Joints2D(xy, visible), np.array([m["skb_confidence"] for m in markers])
+        req = work.Request("rerun", image_path, w, h, joints, confidence, _fit_options(skb, st),
+                           _rig_options(skb, st), context.scene.name, st.threshold)
+        return _start(self, context, skb, req)
+
+
+class SKETCHBODY_OT_cancel(bpy.types.Operator):
+    """Stop the running Sketchbody fit (within one fit iteration); the scene stays as it was"""
+
+    bl_idname = "sketchbody.cancel"
+    bl_label = "Cancel"
+
+    @classmethod
+    def poll(cls, context):
+        return is_running()
+
+    def execute(self, context):
+        _active.job.cancel()
+        self.report({"INFO"}, f"Sketchbody: cancelling {_active.req.label}")
         return {"FINISHED"}
 
 
 class SKETCHBODY_OT_clear(_Reporting, bpy.types.Operator):
-    """Remove the body, the sketch plane and the joint markers"""
+    """Remove every body the add-on made (the current one and those kept by re-runs), the sketch
+    plane and the joint markers"""
 
     bl_idname = "sketchbody.clear"
     bl_label = "Clear"
     bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return not is_running()
 
     def run(self, context):
         _object_mode(context)
@@ -391,6 +567,7 @@ class SKETCHBODY_PT_panel(bpy.types.Panel):
         row.prop(st, "samples")
         row.prop(st, "iterations")
         layout.operator(SKETCHBODY_OT_sketch_to_body.bl_idname, icon="OUTLINER_OB_ARMATURE")
+        _draw_status(layout, st)
         plane = build.find_plane()
         box = layout.box()
         box.label(text="Correct the joints", icon="EMPTY_AXIS")
@@ -408,17 +585,39 @@ class SKETCHBODY_PT_panel(bpy.types.Panel):
         layout.operator(SKETCHBODY_OT_clear.bl_idname, icon="TRASH")
 
 
+def _draw_status(layout, st):
+    """The running fit's progress with a Cancel button, or the last run's report."""
+    if is_running():
+        box = layout.box()
+        box.label(text=f"{_active.req.label}: {100 * running_fraction():.0f} %", icon="SORTTIME")
+        box.prop(st, "progress", text="", slider=True)
+        box.operator(SKETCHBODY_OT_cancel.bl_idname, icon="CANCEL")
+    elif st.status:
+        icon = {"ERROR": "ERROR", "WARNING": "CANCEL"}.get(st.status_level, "INFO")
+        for i, line in enumerate(_wrap(st.status, 60)[:6]):
+            layout.label(text=line, icon=icon if i == 0 else "BLANK1")
+
+
 CLASSES = (SketchbodyPreferences, SketchbodySettings, SKETCHBODY_OT_sketch_to_body, SKETCHBODY_OT_rerun,
-           SKETCHBODY_OT_clear, SKETCHBODY_OT_save_joints, SKETCHBODY_PT_panel)
+           SKETCHBODY_OT_cancel, SKETCHBODY_OT_clear, SKETCHBODY_OT_save_joints, SKETCHBODY_PT_panel)
 
 
 def register():
+    # Blender 3.4's own glTF importer needs numpy.bool, which Debian 12's numpy 1.24 lacks: with
+    # the add-on on, File > Import > glTF 2.0 (e.g. `sketchbody run`'s body.glb) works.
+    gltf_compat.patch_numpy_bool()
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.Scene.sketchbody = PointerProperty(type=SketchbodySettings)
 
 
 def unregister():
+    global _active
+    if _active is not None:  # a run in progress: stop it, build nothing
+        _active.job.cancel()
+        _active = None
+    if bpy.app.timers.is_registered(_tick):
+        bpy.app.timers.unregister(_tick)
     del bpy.types.Scene.sketchbody
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

@@ -27,7 +27,10 @@ MARKER_MATERIALS = {"ok": ("SKB_JointOK", (0.1, 0.55, 1.0, 1.0)), "low": ("SKB_J
 MARKER_RADIUS_PX = {"ok": 6.0, "low": 11.0, "moved": 7.0}
 UNSEEN_GREY = (0.55, 0.55, 0.55, 1.0)  # the body where the sketch does not see it (as the GLB's texture)
 SEEN = "sketch_seen"  # colour attribute: how squarely the sketch's camera sees each vertex (0..1)
-GAP = 0.4  # metres between the sketch plane's right edge and the body's left side
+GAP = 0.4  # metres between the sketch plane's right edge and the body's left side, and between bodies
+ROLE = "skb_role"  # custom property: "armature" or "body" on what build_body made
+RUN = "skb_run"  # custom property of an armature: its run number (1, 2, ...)
+CURRENT = "skb_current"  # custom property of an armature: the latest run's (re-runs keep the others)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -59,18 +62,93 @@ def _remove_material(name):
         bpy.data.materials.remove(m)
 
 
-def remove_body():
-    """Removes the body (mesh, armature) and its material; keeps the sketch plane and markers."""
-    for name in (BODY, ARMATURE):
-        obj = bpy.data.objects.get(name)
+def body_objects():
+    """Every body the add-on built and the scene still holds, as (armature, mesh or None) pairs,
+    oldest run first: the current one and those kept by re-runs."""
+    arms = [o for o in bpy.data.objects if o.get(ROLE) == "armature"]
+    arms.sort(key=lambda o: o.get(RUN, 0))
+    return [(a, next((c for c in a.children if c.get(ROLE) == "body"), None)) for a in arms]
+
+
+def current_body():
+    """(armature, mesh) of the latest run, or (None, None)."""
+    for arm, body in reversed(body_objects()):
+        if arm.get(CURRENT):
+            return arm, body
+    return None, None
+
+
+def next_run():
+    """The run number of the next body (1 + the largest in the scene)."""
+    return 1 + max([a.get(RUN, 0) for a, _ in body_objects()], default=0)
+
+
+def retire(arm, body):
+    """Keeps a former run's body as it is (with whatever the artist changed: pose, edits,
+    modifiers, materials), renamed `SKB_Armature_runN` / `SKB_Body_runN` so that the next run
+    takes the plain names."""
+    n = arm.get(RUN, 0)
+    arm[CURRENT] = False
+    arm.name = f"{ARMATURE}_run{n}"
+    arm.data.name = arm.name
+    if body is not None:
+        body.name = f"{BODY}_run{n}"
+        body.data.name = body.name
+        material = body.active_material
+        if material is not None and material.name == BODY_MATERIAL:
+            material.name = f"{BODY_MATERIAL}_run{n}"
+
+
+def promote(arm, body):
+    """Gives a newly built body the plain names (SKB_Armature, SKB_Body, SKB_BodyMaterial)
+    once the former current one was retired."""
+    arm.name = arm.data.name = ARMATURE
+    body.name = body.data.name = BODY
+    if body.active_material is not None:
+        body.active_material.name = BODY_MATERIAL
+
+
+def remove_body(arm, body):
+    """Removes one body (mesh, armature) and its material when nothing else uses it."""
+    material = body.active_material if body is not None else None
+    for obj in (body, arm):
         if obj is not None:
             _remove_object(obj)
-    _remove_material(BODY_MATERIAL)
+    if material is not None and material.users == 0:
+        bpy.data.materials.remove(material)
+
+
+def world_x_range(objects):
+    """(min, max) world x of the evaluated (deformed, modified) objects' bounding boxes, or
+    None for none."""
+    bpy.context.view_layer.update()
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    xs = []
+    for obj in objects:
+        ev = obj.evaluated_get(depsgraph)
+        xs += [(obj.matrix_world @ Vector(c)).x for c in ev.bound_box]
+    return (min(xs), max(xs)) if xs else None
+
+
+def kept_bodies_right_edge(exclude=()):
+    """The largest world x of the bodies already in the scene (not those in `exclude`), or None."""
+    r = world_x_range([b for _, b in body_objects() if b is not None and b not in exclude])
+    return None if r is None else r[1]
 
 
 def clear(scene):
-    """Removes everything the add-on made: body, plane, markers, their materials and collection."""
-    remove_body()
+    """Removes everything the add-on made: every body (the current one and those kept by
+    re-runs), the plane, the markers, their materials and collection."""
+    for arm, body in body_objects():
+        remove_body(arm, body)
+    remove_sketch()
+    coll = bpy.data.collections.get(COLLECTION)
+    if coll is not None and len(coll.all_objects) == 0:
+        bpy.data.collections.remove(coll)
+
+
+def remove_sketch():
+    """Removes the sketch plane, the joint markers and their materials (not the bodies)."""
     for obj in list(bpy.data.objects):
         if obj.name == PLANE or obj.name.startswith(MARKER_PREFIX):
             _remove_object(obj)
@@ -79,9 +157,6 @@ def clear(scene):
     mesh = bpy.data.meshes.get("SKB_JointSphere")
     if mesh is not None and mesh.users == 0:
         bpy.data.meshes.remove(mesh)
-    coll = bpy.data.collections.get(COLLECTION)
-    if coll is not None and len(coll.all_objects) == 0:
-        bpy.data.collections.remove(coll)
 
 
 def load_image(path):
@@ -94,11 +169,13 @@ def _socket(sockets, identifier):
     return next(x for x in sockets if x.identifier == identifier)
 
 
-def _image_material(name, image, uv_map=None, emission=False, seen_attribute=None):
+def _image_material(name, image, uv_map=None, emission=False, seen_attribute=None, fresh=False):
     """A material showing `image` (through `uv_map`); lit (Principled) or unlit (Emission).
     With `seen_attribute` (a colour attribute: 1 where the sketch sees the surface, 0 where it
-    does not) the unseen parts show a neutral grey instead of the projected strokes."""
-    mat = bpy.data.materials.get(name) or bpy.data.materials.new(name)
+    does not) the unseen parts show a neutral grey instead of the projected strokes. `fresh`:
+    always a new material (a former body's, which the artist may have changed, stays as it is)."""
+    mat = None if fresh else bpy.data.materials.get(name)
+    mat = mat or bpy.data.materials.new(name)
     mat.use_nodes = True
     nt = mat.node_tree
     nt.nodes.clear()
@@ -351,12 +428,28 @@ def _mesh_from_arrays(name, vertices, quads, uv_layers):
     return me
 
 
-def build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image):
+def build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image, run):
     """The armature (53 bones from the rig's names, parents and rest transforms, posed by its
     local rotations) and the skinned mesh (the rig's bind-pose vertices, vertex groups with the
     rig's weights, an Armature modifier, MakeHuman's UVs and the sketch's
     projection as UV map "sketch" with the sketch as texture where `seen` (per vertex, 0..1,
-    the colour attribute "sketch_seen") says the sketch sees the surface). Returns (armature, mesh)."""
+    the colour attribute "sketch_seen") says the sketch sees the surface), with a material of
+    its own; both tagged as run `run` (the current one). Returns (armature, mesh); on an error
+    nothing of it stays in the scene. Another run's body is left as it is (the new one may take
+    a suffixed name until promote())."""
+    made = []
+    try:
+        return _build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image, run, made)
+    except Exception:
+        arm = next((o for o in made if o.type == "ARMATURE"), None)
+        if bpy.context.object is not None and bpy.context.object.mode != "OBJECT":
+            bpy.ops.object.mode_set(mode="OBJECT")
+        remove_body(arm, next((o for o in made if o.type == "MESH"), None))
+        raise
+
+
+def _build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image, run, made):
+    """build_body's work; appends each object it makes to `made` (for the clean-up)."""
     coll = collection(scene)
     names = list(rig.bone_names)
     rest_local, posed_local, rest_global = rig_matrices(rig)
@@ -365,6 +458,7 @@ def build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image):
     arm_data = bpy.data.armatures.new(ARMATURE)
     arm_data.display_type = "STICK"
     arm = bpy.data.objects.new(ARMATURE, arm_data)
+    made.append(arm)
     arm.rotation_euler = (math.radians(90.0), 0.0, 0.0)  # glTF +Y up -> Blender +Z up
     arm.show_in_front = True
     coll.objects.link(arm)
@@ -399,8 +493,9 @@ def build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image):
     attr = me.color_attributes.new(SEEN, "FLOAT_COLOR", "POINT")
     seen = np.clip(np.asarray(seen, dtype=np.float32), 0.0, 1.0)
     attr.data.foreach_set("color", np.repeat(seen[:, None], 4, axis=1).ravel())
-    me.materials.append(_image_material(BODY_MATERIAL, image, uv_map="sketch", seen_attribute=SEEN))
+    me.materials.append(_image_material(BODY_MATERIAL, image, uv_map="sketch", seen_attribute=SEEN, fresh=True))
     body = bpy.data.objects.new(BODY, me)
+    made.append(body)
     body.parent = arm
     coll.objects.link(body)
     groups = [body.vertex_groups.new(name=n) for n in names]
@@ -416,4 +511,6 @@ def build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image):
     mod.use_vertex_groups = True
 
     arm["skb_bones"] = len(names)
+    arm[ROLE], arm[RUN], arm[CURRENT] = "armature", run, True
+    body[ROLE] = "body"
     return arm, body
