@@ -1308,6 +1308,15 @@ skb_status skb_pose_options_set_standing_prior(struct skb_pose_options *opts, bo
 skb_status skb_pose_options_set_knee_limits(struct skb_pose_options *opts, bool on);
 
 /**
+ * Sets the straight limbs (default off): the last step straightens every arm and leg drawn
+ * straight that the solve bent by at most 60° in depth (the middle joint moves onto the segment
+ * between the limb's ends; the ends and the image are kept, the two bones get shorter). For
+ * figures drawn standing or posing with straight limbs; on unseen motion it straightens truly
+ * bent limbs too (docs/benchmarks.md, "3-D pose").
+ */
+skb_status skb_pose_options_set_straight_limbs(struct skb_pose_options *opts, bool on);
+
+/**
  * Sets the learned factor prior (default on): the prior on the drawn proportions is predicted
  * from the 2-D joints by the embedded regression (`assets/factor_prior.json`) instead of a
  * fixed spread about the dictionary's proportions. Acts only with the proportions estimated.

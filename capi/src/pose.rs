@@ -449,6 +449,21 @@ pub unsafe extern "C" fn skb_pose_options_set_knee_limits(opts: *mut skb_pose_op
     }
 }
 
+/// Sets the straight limbs (default off): the last step straightens every arm and leg drawn
+/// straight that the solve bent by at most 60° in depth (the middle joint moves onto the segment
+/// between the limb's ends; the ends and the image are kept, the two bones get shorter). For
+/// figures drawn standing or posing with straight limbs; on unseen motion it straightens truly
+/// bent limbs too (docs/benchmarks.md, "3-D pose").
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_options_set_straight_limbs(opts: *mut skb_pose_options, on: bool) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_options_set_straight_limbs` (lib.rs § Safety): `opts` is NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! { set_option(opts, |o| o.straight_limbs = on) }
+    }
+}
+
 /// Sets the learned factor prior (default on): the prior on the drawn proportions is predicted
 /// from the 2-D joints by the embedded regression (`assets/factor_prior.json`) instead of a
 /// fixed spread about the dictionary's proportions. Acts only with the proportions estimated.
@@ -709,6 +724,10 @@ mod tests {
             assert_eq!(skb_pose_options_set_standing_prior(o, false), skb_status::SKB_OK);
             assert_eq!(skb_pose_options_set_knee_limits(o, false), skb_status::SKB_OK);
             assert!(!(*o).inner.standing_prior && !(*o).inner.knee_limits);
+            assert!(!(*o).inner.straight_limbs);
+            assert_eq!(skb_pose_options_set_straight_limbs(o, true), skb_status::SKB_OK);
+            assert!((*o).inner.straight_limbs);
+            assert_eq!(skb_pose_options_set_straight_limbs(o, false), skb_status::SKB_OK);
             assert!((*o).inner.factor_prior);
             assert_eq!(skb_pose_options_set_factor_prior(o, false), skb_status::SKB_OK);
             assert!(!(*o).inner.factor_prior);

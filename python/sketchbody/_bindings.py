@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "232fbca6ebc48cef4dfbf57a85e2e379994da2167010db9b50cd5d5a6122aa83"
+HEADER_SHA256 = "2367168d69ed0645a37ab1e1ca792589c79d7c369894aed170f20154f0ed7890"
 
 # ---- constants (#define) ----
 
@@ -1948,6 +1948,24 @@ FUNCTIONS["skb_pose_options_set_standing_prior"] = (
 # Sets the knee limits of the free-joint refinement (default on): knees bent backwards are
 # flipped in depth (image and bone lengths unchanged). Acts only with joint noise > 0.
 FUNCTIONS["skb_pose_options_set_knee_limits"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_pose_options),
+        ctypes.c_bool,
+    ],
+    "skb_status",
+    (
+        ("opts", "struct skb_pose_options *"),
+        ("on", "bool"),
+    ),
+)
+
+# Sets the straight limbs (default off): the last step straightens every arm and leg drawn
+# straight that the solve bent by at most 60° in depth (the middle joint moves onto the segment
+# between the limb's ends; the ends and the image are kept, the two bones get shorter). For
+# figures drawn standing or posing with straight limbs; on unseen motion it straightens truly
+# bent limbs too (docs/benchmarks.md, "3-D pose").
+FUNCTIONS["skb_pose_options_set_straight_limbs"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_options),

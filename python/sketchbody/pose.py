@@ -160,6 +160,7 @@ class PoseOptions(OptionsBase):
     knee_limits: Optional[bool] = None
     factor_prior: Optional[bool] = None
     depth_prior: Optional[float] = None
+    straight_limbs: Optional[bool] = None
 
     _c_prefix = "skb_pose_options"
     _enums = {"alpha_target": {"level": B.SKB_ALPHA_TARGET_LEVEL, "identity": B.SKB_ALPHA_TARGET_IDENTITY}}

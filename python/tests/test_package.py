@@ -375,6 +375,22 @@ class PoseTest(unittest.TestCase):
         with self.assertRaises(ValueError):
             skb.estimate_pose(j, skb.PoseOptions(alpha_target="up"))
 
+    def test_straight_limbs_straighten_the_example(self):
+        j = skb.Joints2D.from_json(SKETCH_JOINTS)
+
+        def bends(x):
+            out = []
+            for a, b, c in ((2, 3, 4), (5, 6, 7), (9, 10, 11), (12, 13, 14)):
+                u, v = x[b] - x[a], x[c] - x[b]
+                cos = np.dot(u, v) / (np.linalg.norm(u) * np.linalg.norm(v))
+                out.append(float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))))
+            return out
+
+        bent = bends(skb.estimate_pose(j).joints)
+        self.assertGreater(min(bent[2:]), 20.0, bent)
+        straight = bends(skb.estimate_pose(j, skb.PoseOptions(straight_limbs=True)).joints)
+        self.assertLessEqual(max(straight), 10.0, straight)
+
     def test_bad_joints(self):
         with self.assertRaises(TypeError):
             skb.estimate_pose(None)

@@ -1366,6 +1366,7 @@ fn pose_option_rows(t: &mut Table, fx: &Fx) {
     t.set_bool("skb_pose_options_set_proportions", skb_pose_options_set_proportions, o);
     t.set_bool("skb_pose_options_set_standing_prior", skb_pose_options_set_standing_prior, o);
     t.set_bool("skb_pose_options_set_knee_limits", skb_pose_options_set_knee_limits, o);
+    t.set_bool("skb_pose_options_set_straight_limbs", skb_pose_options_set_straight_limbs, o);
     t.set_bool("skb_pose_options_set_factor_prior", skb_pose_options_set_factor_prior, o);
     t.set_f64("skb_pose_options_set_depth_prior", "weight", skb_pose_options_set_depth_prior, o, 0.05);
 }
