@@ -384,7 +384,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     })?;
     let t_write = Instant::now();
     let tris = r.mesh.triangles();
-    let over = overlay(&sketch, &r.joints2d, &r.posed_vertices, &tris, &r.pose.camera)?;
+    let over = overlay(&sketch, &r.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &r.pose.camera)?;
     let texture_img = match (&r.mesh.uvs, a.no_texture) {
         (Some(uvs), false) => Some((
             project_sketch(&sketch_rgb, &r.posed_vertices, &r.mesh.quads, uvs, &r.pose.camera, a.texture_size)?.0,

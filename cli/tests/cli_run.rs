@@ -77,7 +77,8 @@ fn run_writes_every_output() {
     assert!(obj.contains("\nmtllib body.mtl\n"));
     assert!(std::fs::read_to_string(out_dir.join("body.mtl")).unwrap().contains("map_Kd body_texture.png"));
     let overlay = image::open(out_dir.join("overlay.png")).unwrap();
-    assert_eq!((overlay.width(), overlay.height()), (512, 512));
+    // The sketch's size plus the side-view panel (half its height) on the right.
+    assert_eq!((overlay.width(), overlay.height()), (512 + 256, 512));
     let preview = image::open(out_dir.join("preview.png")).unwrap();
     // Sketch, camera view, blend (the 512×512 sketch's aspect, 128 px high), then front and side.
     assert_eq!((preview.width(), preview.height()), (3 * 128 + 256, 128));
@@ -281,7 +282,7 @@ fn padded_example(dir: &Path, w: usize, h: usize) -> (PathBuf, PathBuf) {
 /// Issue 52 finding 1: sketches wider than 2:1 or over 4096 px a side, and the largest
 /// `--preview-size`, run to the end (they failed after the whole fit: "raster size is out of
 /// range: 4144x512 exceeds 4096 px a side", "4097x4097", "4100x820"); the preview is scaled
-/// down to fit, the overlay keeps the sketch's size.
+/// down to fit, the overlay keeps the sketch's size plus its side panel (half the height).
 #[test]
 fn every_promised_size_runs_to_the_end() {
     let dir = scratch("sizes");
@@ -309,7 +310,7 @@ fn every_promised_size_runs_to_the_end() {
         ]);
         assert!(o.status.success(), "{w}x{h}, preview {preview}: {}", String::from_utf8_lossy(&o.stderr));
         let overlay = image::open(out.join("overlay.png")).unwrap();
-        assert_eq!((overlay.width() as usize, overlay.height() as usize), (w, h));
+        assert_eq!((overlay.width() as usize, overlay.height() as usize), (w + h.div_ceil(2), h));
         let p = image::open(out.join("preview.png")).unwrap();
         assert!(p.width() <= 16384 && p.height() <= 4096, "{w}x{h}: preview {}x{}", p.width(), p.height());
         let want_h = if w == 512 {
