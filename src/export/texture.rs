@@ -282,6 +282,31 @@ mod tests {
         assert_eq!(stats, TextureStats { texels: inside, visible: inside });
     }
 
+    /// A face seen exactly edge-on (its normal across the view) does not face the camera: its
+    /// texels count but stay neutral, even where nothing else covers its pixels.
+    #[test]
+    fn faces_seen_edge_on_stay_neutral() {
+        // A facing square (texture's left half) and a square in the plane y = 1.1 (right half),
+        // which projects onto the sketch's row 6, above the first.
+        let v = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 1.1, 0.0],
+            [1.0, 1.1, 0.0],
+            [1.0, 1.1, 1.0],
+            [0.0, 1.1, 1.0f32],
+        ];
+        let coords =
+            vec![[0.0, 0.0], [0.5, 0.0], [0.5, 1.0], [0.0, 1.0], [0.5, 0.0], [1.0, 0.0], [1.0, 1.0], [0.5, 1.0]];
+        let uvs = FaceUvs { coords, quads: vec![[0, 1, 2, 3], [4, 5, 6, 7]] };
+        let sketch = RgbImage::from_vec(64, 64, [200u8, 30, 30].repeat(64 * 64)).unwrap();
+        let cam = WeakPerspective { sx: 40.0, sy: 40.0, r: Matrix3::identity(), t: [10.0, 50.0] };
+        let (_, stats) = project_sketch(&sketch, &v, &[[0, 1, 2, 3], [4, 5, 6, 7]], &uvs, &cam, 16).unwrap();
+        assert_eq!(stats, TextureStats { texels: 256, visible: 128 });
+    }
+
     /// Visible texels grow by exactly [`GUTTER`] texels (4-neighbour steps) into the unused space
     /// around their UV island, on every side, with the island's colour; texels further away and
     /// the statistics (which count the island only) are untouched.

@@ -535,6 +535,20 @@ mod tests {
         assert_eq!(along, None);
     }
 
+    /// A segment of 4 px or less is too short to measure across: the neck outline with the head
+    /// exactly 4 px above the neck is missing, at 4.5 px it is the drawn width.
+    #[test]
+    fn segments_of_four_pixels_or_less_are_not_measured() {
+        let w = widths_at(0.0);
+        let (mut j, e, pose, cam) = figure(&w);
+        let neck = j.xy[joint::NECK];
+        j.xy[joint::HEAD] = [neck[0], neck[1] - 4.0];
+        assert_eq!(gender_features(&j, &e, &pose, &cam).unwrap().values[5], None);
+        j.xy[joint::HEAD] = [neck[0], neck[1] - 4.5];
+        let got = gender_features(&j, &e, &pose, &cam).unwrap().values[5].expect("neck measured");
+        assert!((got.exp() * TORSO - w[5]).abs() < 1.5, "{} px vs {} px", got.exp() * TORSO, w[5]);
+    }
+
     #[test]
     fn missing_evidence_adds_nothing() {
         let (mut j, e, pose, cam) = figure(&widths_at(1.5));
