@@ -503,8 +503,8 @@ mod tests {
         assert!((m.combined_log_odds(1.0, 1.0) - 12.54416312117011).abs() < 1e-9, "{}", m.combined_log_odds(1.0, 1.0));
         assert_eq!(m.combined_log_odds(m.means[0], f64::NAN), m.intercept);
         assert_eq!(sigmoid(0.0), 0.5);
-        for z in [0.3, 2.0, 30.0] {
-            let p = 1.0 / (1.0 + (-z as f64).exp());
+        for z in [0.3f64, 2.0, 30.0] {
+            let p = 1.0 / (1.0 + (-z).exp());
             assert!((sigmoid(z) - p).abs() < 1e-15 && (sigmoid(-z) - (1.0 - p)).abs() < 1e-15, "{z}");
         }
         assert_eq!((sigmoid(800.0), sigmoid(-800.0)), (1.0, 0.0));
