@@ -152,7 +152,16 @@ mod tests {
         assert!((left.rotation + FRAC_PI_2).abs() < 1e-12, "{}", left.rotation);
         let down = Roi::from_alignment([100.0, 100.0], [100.0, 180.0]).unwrap();
         assert!((down.rotation + PI).abs() < 1e-12, "{}", down.rotation);
-        for (a, want) in [(0.5, 0.5), (PI, -PI), (-PI, -PI), (3.0 * PI + 0.25, -PI + 0.25), (-2.5 * PI, -0.5 * PI)] {
+        for (a, want) in [
+            (0.5, 0.5),
+            (2.5, 2.5),
+            (3.1, 3.1),
+            (-3.1, -3.1),
+            (PI, -PI),
+            (-PI, -PI),
+            (3.0 * PI + 0.25, -PI + 0.25),
+            (-2.5 * PI, -0.5 * PI),
+        ] {
             assert!((normalize_angle(a) - want).abs() < 1e-12, "{a}: {}", normalize_angle(a));
         }
     }
