@@ -565,3 +565,281 @@ pub fn detect_figure(
     let evidence = gather(image, model, net, options.backend, options)?;
     decide(&evidence, Calibration::embedded()?, options, referee)
 }
+
+#[cfg(test)]
+mod tests {
+    use std::cell::Cell;
+
+    use super::*;
+    use crate::detect::calibration::{JointModels, PresenceModels};
+    use crate::detect::landmark::{Landmark, RoiLandmarks};
+    use crate::detect::NUM_PARSE_JOINTS;
+    use crate::skeleton::joint;
+
+    /// The sketch model's threshold in these tests.
+    const THRESH: f64 = -0.7;
+
+    /// A calibration that keeps the evidence readable: each joint's confidence is its raw one
+    /// (σ(logit p) = p), the presence σ(score − threshold) from the sketch model (alone or with
+    /// BlazePose) and σ(10 · flag − 5) from BlazePose (0.5 at a flag of 0.5).
+    fn plain_calibration() -> Calibration {
+        Calibration {
+            format: "sketchbody-detector-calibration".into(),
+            version: 1,
+            provenance: "test".into(),
+            joints: JointModels {
+                fmp: vec![0.0, 1.0, 0.0],
+                blazepose: vec![0.0, 1.0, 0.0],
+                fmp_auto: vec![0.0, 1.0, 0.0, 0.0, 0.0],
+                blazepose_auto: vec![0.0, 1.0, 0.0, 0.0, 0.0],
+            },
+            presence: PresenceModels {
+                fmp: vec![0.0, 1.0],
+                blazepose: vec![-5.0, 10.0],
+                auto: vec![0.0, 1.0, 0.0, 0.0],
+            },
+        }
+    }
+
+    /// A standing figure 420 px tall (the standing prior's, its left ankle level with the
+    /// right), shifted right by `dx` px.
+    fn standing(dx: f64) -> Joints2 {
+        let mut xy = crate::pose::plausibility::tests::standing_uv();
+        xy[joint::L_ANKLE][1] = xy[joint::R_ANKLE][1];
+        for p in &mut xy {
+            p[0] += dx;
+        }
+        Joints2 { xy, visible: [true; NUM_JOINTS] }
+    }
+
+    fn sketch(score: f64, joints: Joints2, confidence: [f64; NUM_JOINTS]) -> Detection {
+        Detection {
+            score,
+            joints,
+            confidence,
+            parse_joints: [[0.0; 2]; NUM_PARSE_JOINTS],
+            parts: Vec::new(),
+            bbox: [0.0, 0.0, 1.0, 1.0],
+            cell_px: 8.0,
+        }
+    }
+
+    /// BlazePose's figure; landmark `i` at depth `i` px.
+    fn blazepose(flag: f64, joints: Joints2, confidence: [f64; NUM_JOINTS]) -> BlazePoseDetection {
+        let landmarks =
+            (0..39).map(|i| Landmark { x: 0.0, y: 0.0, z: i as f64, visibility: 0.9, presence: 0.9 }).collect();
+        BlazePoseDetection {
+            score: flag,
+            joints,
+            confidence,
+            pass: RoiLandmarks { roi: Roi { cx: 0.0, cy: 0.0, size: 1.0, rotation: 0.0 }, landmarks, pose_flag: flag },
+            rois_tried: 1,
+            filled: false,
+        }
+    }
+
+    fn both(score: f64, fmp_conf: f64, flag: f64, bp_conf: f64) -> Evidence {
+        Evidence {
+            sketch: Some(vec![sketch(score, standing(0.0), [fmp_conf; NUM_JOINTS])]),
+            sketch_threshold: THRESH,
+            blazepose: Some(blazepose(flag, standing(50.0), [bp_conf; NUM_JOINTS])),
+        }
+    }
+
+    /// The sketch model's figure `fmp` (confidence 0.9) above BlazePose's `bp` (0.6).
+    fn sketch_over(fmp: Joints2, bp: Joints2) -> Evidence {
+        Evidence {
+            sketch: Some(vec![sketch(THRESH + 1.0, fmp, [0.9; NUM_JOINTS])]),
+            sketch_threshold: THRESH,
+            blazepose: Some(blazepose(0.9, bp, [0.6; NUM_JOINTS])),
+        }
+    }
+
+    fn no_figure(r: Result<Figure>) -> (f64, f64) {
+        match r {
+            Err(Error::NoFigure { score, threshold }) => (score, threshold),
+            other => panic!("expected NoFigure, got {other:?}"),
+        }
+    }
+
+    /// Issue 52 finding 13 (`decide`'s `>=` → `<`): per image, the referee chooses between the
+    /// two candidates when the sketch model's figure passes its own threshold (exactly at it
+    /// counts), and is not asked otherwise; without it the surer candidate wins.
+    #[test]
+    fn the_referee_decides_only_when_the_sketch_model_recognises_the_drawing() {
+        let cal = plain_calibration();
+        let o = FigureOptions::default();
+        let calls = Cell::new(0);
+        let pick_sketch = |_: &Joints2, _: &Joints2| -> Result<Option<usize>> {
+            calls.set(calls.get() + 1);
+            Ok(Some(0))
+        };
+        for (score, want, asked) in
+            [(THRESH, Backend::Fmp, 1), (THRESH + 1.0, Backend::Fmp, 1), (THRESH - 0.01, Backend::BlazePose, 0)]
+        {
+            calls.set(0);
+            let f = decide(&both(score, 0.6, 0.9, 0.9), &cal, &o, Some(&pick_sketch)).unwrap();
+            assert_eq!((f.backend, calls.get()), (want, asked), "sketch score {score}");
+            assert_eq!(f.joints, standing(if want == Backend::Fmp { 0.0 } else { 50.0 }));
+        }
+        let e = both(THRESH + 1.0, 0.6, 0.9, 0.9);
+        assert_eq!(decide(&e, &cal, &o, None).unwrap().backend, Backend::BlazePose);
+        let confidence = FigureOptions { fusion: Fusion::Confidence, ..o.clone() };
+        assert_eq!(decide(&e, &cal, &confidence, Some(&pick_sketch)).unwrap().backend, Backend::BlazePose);
+        let undecided = |_: &Joints2, _: &Joints2| -> Result<Option<usize>> { Ok(None) };
+        assert_eq!(decide(&e, &cal, &o, Some(&undecided)).unwrap().backend, Backend::BlazePose);
+        let e = both(THRESH + 1.0, 0.9, 0.9, 0.6);
+        let pick_blazepose = |_: &Joints2, _: &Joints2| -> Result<Option<usize>> { Ok(Some(1)) };
+        assert_eq!(decide(&e, &cal, &o, Some(&pick_blazepose)).unwrap().backend, Backend::BlazePose);
+        let failing = |_: &Joints2, _: &Joints2| -> Result<Option<usize>> { Err(Error::Degenerate("referee".into())) };
+        assert!(matches!(decide(&e, &cal, &o, Some(&failing)), Err(Error::Degenerate(_))));
+    }
+
+    /// `strict`: a candidate counts only at or above its backend's own threshold (the sketch
+    /// model's, BlazePose's pose flag 0.5), whatever its confidence; with none, `NoFigure`
+    /// reports the sketch model's score and threshold, else BlazePose's.
+    #[test]
+    fn strict_keeps_only_candidates_passing_their_backends_own_threshold() {
+        let cal = plain_calibration();
+        let o = FigureOptions { strict: true, ..FigureOptions::default() };
+        assert_eq!(decide(&both(THRESH - 0.1, 0.9, 0.5, 0.6), &cal, &o, None).unwrap().backend, Backend::BlazePose);
+        assert_eq!(decide(&both(THRESH, 0.6, 0.49, 0.9), &cal, &o, None).unwrap().backend, Backend::Fmp);
+        assert_eq!(no_figure(decide(&both(THRESH - 0.1, 0.9, 0.3, 0.9), &cal, &o, None)), (THRESH - 0.1, THRESH));
+        let bp_only = Evidence { sketch: None, ..both(0.0, 0.9, 0.3, 0.9) };
+        assert_eq!(no_figure(decide(&bp_only, &cal, &o, None)), (0.3, 0.5));
+        let neither = Evidence { sketch: None, sketch_threshold: THRESH, blazepose: None };
+        assert_eq!(no_figure(decide(&neither, &cal, &o, None)), (f64::NEG_INFINITY, THRESH));
+        // Not strict, the low-flag BlazePose figure is kept when the presence says so.
+        let lenient = FigureOptions { min_presence: 0.0, ..FigureOptions::default() };
+        assert_eq!(decide(&bp_only, &cal, &lenient, None).unwrap().backend, Backend::BlazePose);
+    }
+
+    /// Not strict: the calibrated presence (the surer of the two-backend model and BlazePose's
+    /// own when both ran) decides "no figure", at `min_presence` and above a figure.
+    #[test]
+    fn a_presence_under_the_minimum_is_no_figure() {
+        let cal = plain_calibration();
+        let o = FigureOptions::default();
+        let bp_only = |flag: f64| Evidence { sketch: None, ..both(0.0, 0.9, flag, 0.9) };
+        let f = decide(&bp_only(0.5), &cal, &o, None).unwrap();
+        assert_eq!(f.presence, 0.5);
+        let (score, threshold) = no_figure(decide(&bp_only(0.45), &cal, &o, None));
+        assert!((score - sigmoid(-0.5)).abs() < 1e-12 && threshold == 0.5, "{score} {threshold}");
+        let low = FigureOptions { min_presence: 0.3, ..o.clone() };
+        assert!((decide(&bp_only(0.45), &cal, &low, None).unwrap().presence - sigmoid(-0.5)).abs() < 1e-12);
+        let sketch_only = Evidence { blazepose: None, ..both(THRESH + 2.0, 0.9, 0.0, 0.0) };
+        assert!((decide(&sketch_only, &cal, &o, None).unwrap().presence - sigmoid(2.0)).abs() < 1e-12);
+        // Both: the two-backend model says σ(−1), BlazePose's own σ(4), and the reverse.
+        assert!(
+            (decide(&both(THRESH - 1.0, 0.9, 0.9, 0.6), &cal, &o, None).unwrap().presence - sigmoid(4.0)).abs() < 1e-12
+        );
+        assert!(
+            (decide(&both(THRESH + 3.0, 0.9, 0.2, 0.6), &cal, &o, None).unwrap().presence - sigmoid(3.0)).abs() < 1e-12
+        );
+        assert!(no_figure(decide(&both(THRESH - 1.0, 0.9, 0.3, 0.6), &cal, &o, None)).0 < 0.5);
+    }
+
+    /// `PerLimb`: each limb group whole from the backend whose confidences over it sum higher
+    /// (the sketch model's on a tie); `Auto` when the limbs come from both, else that backend.
+    #[test]
+    fn per_limb_fusion_takes_each_limb_from_the_surer_backend() {
+        let cal = plain_calibration();
+        let o = FigureOptions { fusion: Fusion::PerLimb, average_agreement: 0.0, ..FigureOptions::default() };
+        let mut fmp_conf = [0.5; NUM_JOINTS];
+        for j in [2, 3, 4, 13, 14] {
+            fmp_conf[j] = 0.9;
+        }
+        fmp_conf[0] = 0.7;
+        fmp_conf[1] = 0.7;
+        let mut e = both(THRESH + 1.0, 0.0, 0.9, 0.7);
+        e.sketch.as_mut().unwrap()[0].confidence = fmp_conf;
+        let f = decide(&e, &cal, &o, None).unwrap();
+        assert_eq!(f.backend, Backend::Auto);
+        let (a, b) = (standing(0.0), standing(50.0));
+        for j in 0..NUM_JOINTS {
+            let from_fmp = [0, 1, 2, 3, 4, 13, 14].contains(&j);
+            assert_eq!(f.joints.xy[j], if from_fmp { a.xy[j] } else { b.xy[j] }, "joint {j}");
+            let want = if from_fmp { fmp_conf[j] } else { 0.7 };
+            assert!((f.joint_confidence[j] - want).abs() < 1e-9, "joint {j}: {}", f.joint_confidence[j]);
+        }
+        assert!((f.confidence - f.joint_confidence.iter().sum::<f64>() / 15.0).abs() < 1e-12);
+        let f = decide(&both(THRESH + 1.0, 0.9, 0.9, 0.6), &cal, &o, None).unwrap();
+        assert_eq!((f.backend, f.joints), (Backend::Fmp, a));
+        let f = decide(&both(THRESH + 1.0, 0.6, 0.9, 0.9), &cal, &o, None).unwrap();
+        assert_eq!((f.backend, f.joints, f.raw_score), (Backend::BlazePose, b, 0.9));
+    }
+
+    /// Joints of the chosen candidate within `average_agreement` of the figure's size (the
+    /// BlazePose joints' box, 420 px here) of the other backend's become the two joints' mean;
+    /// the others, every joint with the option at 0, and a lone backend's stay.
+    #[test]
+    fn joints_the_backends_agree_on_are_averaged() {
+        let cal = plain_calibration();
+        let o = FigureOptions::default();
+        let bp = standing(0.0);
+        let mut fmp = bp;
+        fmp.xy[joint::R_WRIST][0] += 30.0; // 0.071 of 420 px
+        fmp.xy[joint::L_WRIST][0] += 36.0; // 0.086
+        let e = sketch_over(fmp, bp);
+        let f = decide(&e, &cal, &o, None).unwrap();
+        assert_eq!(f.backend, Backend::Fmp);
+        for j in 0..NUM_JOINTS {
+            assert_eq!(f.averaged[j], j != joint::L_WRIST, "joint {j}");
+        }
+        assert_eq!(f.joints.xy[joint::R_WRIST], [bp.xy[joint::R_WRIST][0] + 15.0, bp.xy[joint::R_WRIST][1]]);
+        assert_eq!(f.joints.xy[joint::L_WRIST], fmp.xy[joint::L_WRIST]);
+        let off = FigureOptions { average_agreement: 0.0, ..o.clone() };
+        let f = decide(&e, &cal, &off, None).unwrap();
+        assert_eq!((f.joints, f.averaged), (fmp, [false; NUM_JOINTS]));
+        let alone = Evidence { blazepose: None, ..e };
+        assert_eq!(decide(&alone, &cal, &o, None).unwrap().averaged, [false; NUM_JOINTS]);
+    }
+
+    /// BlazePose's depth of a joint rides along where its 2-D joint lies within
+    /// [`DEPTH_AGREEMENT`] of the chosen one, its whole figure when the median joint does; none
+    /// without a BlazePose pass of all 33 landmarks.
+    #[test]
+    fn blazepose_depths_ride_along_where_its_joints_agree() {
+        let cal = plain_calibration();
+        let o = FigureOptions { average_agreement: 0.0, ..FigureOptions::default() };
+        let fmp = standing(0.0);
+        let mut bp = fmp;
+        bp.xy[joint::R_WRIST][1] += 42.0; // exactly 0.1 of 420 px: agrees
+        bp.xy[joint::L_WRIST][1] += 50.0;
+        let depth = crate::detect::landmark::joints::canonical_depth(&(0..39).map(f64::from).collect::<Vec<_>>());
+        let e = sketch_over(fmp, bp);
+        let f = decide(&e, &cal, &o, None).unwrap();
+        assert_eq!(f.backend, Backend::Fmp);
+        for j in 0..NUM_JOINTS {
+            assert_eq!(f.landmark_depth[j], (j != joint::L_WRIST).then_some(depth[j]), "joint {j}");
+        }
+        assert_eq!(f.landmark_joints, Some((bp, depth)));
+        // Most joints off by more than a tenth of the figure: no whole figure, no depths there.
+        let far = sketch_over(fmp, standing(50.0));
+        let f = decide(&far, &cal, &o, None).unwrap();
+        assert_eq!((f.landmark_depth, f.landmark_joints), ([None; NUM_JOINTS], None));
+        let mut short = e.clone();
+        short.blazepose.as_mut().unwrap().pass.landmarks.truncate(32);
+        let f = decide(&short, &cal, &o, None).unwrap();
+        assert_eq!((f.landmark_depth, f.landmark_joints), ([None; NUM_JOINTS], None));
+    }
+
+    /// The sketch model's further figures at or above its threshold are reported as `others`,
+    /// best first; a figure whose confidence is under [`LOW_CONFIDENCE`] is flagged.
+    #[test]
+    fn other_figures_and_low_confidence_are_reported() {
+        let cal = plain_calibration();
+        let o = FigureOptions::default();
+        let list = [THRESH + 1.0, THRESH + 0.2, THRESH, THRESH - 0.1]
+            .map(|s| sketch(s, standing(0.0), [0.76; NUM_JOINTS]))
+            .to_vec();
+        let e = Evidence { sketch: Some(list.clone()), sketch_threshold: THRESH, blazepose: None };
+        let f = decide(&e, &cal, &o, None).unwrap();
+        assert_eq!(f.others, list[1..3].to_vec());
+        assert_eq!(f.raw_score, THRESH + 1.0);
+        assert!(!f.low_confidence && (f.confidence - 0.76).abs() < 1e-9, "{}", f.confidence);
+        let mut unsure = e;
+        unsure.sketch.as_mut().unwrap()[0].confidence = [0.74; NUM_JOINTS];
+        assert!(decide(&unsure, &cal, &o, None).unwrap().low_confidence);
+    }
+}

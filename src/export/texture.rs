@@ -227,6 +227,111 @@ mod tests {
         assert!(crate::image::encode_png(&img.view()).unwrap().starts_with(b"\x89PNG"));
     }
 
+    /// Each texel takes the sketch's colour, bilinearly sampled, at the pixel its surface point
+    /// projects to: on a sketch whose red and green channels grow with the column and the row,
+    /// the texel's colour gives back the point's pixel.
+    #[test]
+    fn texels_take_the_sketch_colour_where_their_point_projects() {
+        let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let uvs = FaceUvs { coords: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], quads: vec![[0, 1, 2, 3]] };
+        let pixels: Vec<u8> = (0..64 * 64).flat_map(|k| [(k % 64 * 3) as u8, (k / 64 * 3) as u8, 7]).collect();
+        let sketch = RgbImage::from_vec(64, 64, pixels).unwrap();
+        let cam = WeakPerspective { sx: 40.0, sy: 40.0, r: Matrix3::identity(), t: [10.0, 50.0] };
+        let size = 16;
+        let (img, stats) = project_sketch(&sketch, &v, &[[0, 1, 2, 3]], &uvs, &cam, size).unwrap();
+        assert_eq!(stats.visible, size * size);
+        for j in 0..size {
+            for i in 0..size {
+                // The texel's point: model x = u, y = v (row 0 is v = 1); its pixel (u, v).
+                let (x, y) = ((i as f64 + 0.5) / size as f64, 1.0 - (j as f64 + 0.5) / size as f64);
+                let [pu, pv] = cam.project(&Vector3::new(x, y, 0.0));
+                // Pixel centres at +0.5: the bilinear value at pu is 3 (pu − 0.5).
+                let want = [3.0 * (pu - 0.5), 3.0 * (pv - 0.5), 7.0];
+                let got = &img.as_bytes()[(j * size + i) * 3..(j * size + i) * 3 + 3];
+                for c in 0..3 {
+                    assert!((got[c] as f64 - want[c]).abs() <= 0.5 + 1e-9, "texel ({i}, {j}): {got:?} vs {want:?}");
+                }
+            }
+        }
+    }
+
+    /// Only texels whose centre lies inside a UV triangle are textured: on a triangle with no
+    /// edge along the texture's axes, the texels of its bounding box beyond each edge are not
+    /// counted (a three-corner quad is one triangle).
+    #[test]
+    fn only_texels_inside_a_uv_triangle_count() {
+        let corners = [[0.5f32, 0.0], [1.0, 0.7], [0.0, 1.0]];
+        let v: Vec<[f32; 3]> = corners.iter().map(|c| [c[0], c[1], 0.0]).collect();
+        let uvs = FaceUvs { coords: corners.to_vec(), quads: vec![[0, 1, 2, 2]] };
+        let sketch = RgbImage::from_vec(64, 64, [200u8, 30, 30].repeat(64 * 64)).unwrap();
+        let cam = WeakPerspective { sx: 40.0, sy: 40.0, r: Matrix3::identity(), t: [10.0, 50.0] };
+        let size = 16;
+        let (_, stats) = project_sketch(&sketch, &v, &[[0, 1, 2, 2]], &uvs, &cam, size).unwrap();
+        // The texel centres on the inner side of all three edges (counter-clockwise corners; two
+        // centres lie on the first edge and count).
+        let c = corners.map(|c| [c[0] as f64, c[1] as f64]);
+        let side =
+            |a: [f64; 2], b: [f64; 2], p: [f64; 2]| (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+        let inside = (0..size * size)
+            .filter(|k| {
+                let p = [(k % size) as f64 + 0.5, size as f64 - (k / size) as f64 - 0.5].map(|x| x / size as f64);
+                [(0, 1), (1, 2), (2, 0)].iter().all(|&(a, b)| side(c[a], c[b], p) >= -1e-9)
+            })
+            .count();
+        assert!(inside > 60 && inside < 160, "{inside}");
+        assert_eq!(stats, TextureStats { texels: inside, visible: inside });
+    }
+
+    /// A face seen exactly edge-on (its normal across the view) does not face the camera: its
+    /// texels count but stay neutral, even where nothing else covers its pixels.
+    #[test]
+    fn faces_seen_edge_on_stay_neutral() {
+        // A facing square (texture's left half) and a square in the plane y = 1.1 (right half),
+        // which projects onto the sketch's row 6, above the first.
+        let v = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 1.1, 0.0],
+            [1.0, 1.1, 0.0],
+            [1.0, 1.1, 1.0],
+            [0.0, 1.1, 1.0f32],
+        ];
+        let coords =
+            vec![[0.0, 0.0], [0.5, 0.0], [0.5, 1.0], [0.0, 1.0], [0.5, 0.0], [1.0, 0.0], [1.0, 1.0], [0.5, 1.0]];
+        let uvs = FaceUvs { coords, quads: vec![[0, 1, 2, 3], [4, 5, 6, 7]] };
+        let sketch = RgbImage::from_vec(64, 64, [200u8, 30, 30].repeat(64 * 64)).unwrap();
+        let cam = WeakPerspective { sx: 40.0, sy: 40.0, r: Matrix3::identity(), t: [10.0, 50.0] };
+        let (_, stats) = project_sketch(&sketch, &v, &[[0, 1, 2, 3], [4, 5, 6, 7]], &uvs, &cam, 16).unwrap();
+        assert_eq!(stats, TextureStats { texels: 256, visible: 128 });
+    }
+
+    /// Visible texels grow by exactly [`GUTTER`] texels (4-neighbour steps) into the unused space
+    /// around their UV island, on every side, with the island's colour; texels further away and
+    /// the statistics (which count the island only) are untouched.
+    #[test]
+    fn the_gutter_grows_islands_by_two_texels_on_every_side() {
+        let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        // The island: texels 4..12 of a 16-texel texture in both directions.
+        let coords = vec![[0.25, 0.25], [0.75, 0.25], [0.75, 0.75], [0.25, 0.75]];
+        let uvs = FaceUvs { coords, quads: vec![[0, 1, 2, 3]] };
+        let sketch = RgbImage::from_vec(64, 64, [200u8, 30, 30].repeat(64 * 64)).unwrap();
+        let cam = WeakPerspective { sx: 40.0, sy: 40.0, r: Matrix3::identity(), t: [10.0, 50.0] };
+        let (img, stats) = project_sketch(&sketch, &v, &[[0, 1, 2, 3]], &uvs, &cam, 16).unwrap();
+        assert_eq!(stats, TextureStats { texels: 64, visible: 64 });
+        for j in 0..16i64 {
+            for i in 0..16i64 {
+                // 4-neighbour steps from the island [4, 12)²: the Manhattan distance.
+                let out = |k: i64| (4 - k).max(k - 11).max(0);
+                let steps = out(i) + out(j);
+                let want = if steps <= GUTTER as i64 { [200, 30, 30] } else { NEUTRAL };
+                let k = (j * 16 + i) as usize;
+                assert_eq!(&img.as_bytes()[k * 3..k * 3 + 3], &want, "texel ({i}, {j}), {steps} steps out");
+            }
+        }
+    }
+
     /// Issue 52 finding 1: a sketch wider than the rasteriser's 4096 px is textured (it failed
     /// with "raster size is out of range"), and occlusion is still decided: a square half hidden
     /// behind a nearer one gives the same visible texels as on a small sketch, to one texel row

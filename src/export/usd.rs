@@ -305,3 +305,31 @@ def SkelRoot "body" (
 pub fn write_usda(path: &Path, mesh: &RiggedMesh, scene: &RigScene, textured: bool, frame: &ExportFrame) -> Result<()> {
     write_atomic(path, usda_string(mesh, scene, textured, frame)?.as_bytes())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Isometry3, Translation3, Vector3};
+
+    /// Matrices are written in USD's row-vector layout: a transform's translation is the last
+    /// row, and a point times the matrix (row vector on the left) is the transformed point.
+    #[test]
+    fn matrices_are_written_as_usd_row_vectors() {
+        let m = Isometry3::from_parts(
+            Translation3::new(1.0, 2.0, 3.0),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::FRAC_PI_2),
+        )
+        .to_homogeneous();
+        let text = matrix(&m);
+        let rows: Vec<Vec<f64>> = text
+            .trim_matches(|c| c == '(' || c == ')' || c == ' ')
+            .split("), (")
+            .map(|r| r.split(", ").map(|v| v.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(rows.len(), 4, "{text}");
+        assert_eq!(rows[3], [1.0, 2.0, 3.0, 1.0], "{text}");
+        // (1, 0, 0, 1) · M: the x axis turned a quarter about z (to +y), then moved.
+        let p: Vec<f64> = (0..4).map(|c| rows[0][c] + rows[3][c]).collect();
+        assert!((p[0] - 1.0).abs() < 1e-12 && (p[1] - 3.0).abs() < 1e-12 && (p[2] - 3.0).abs() < 1e-12, "{p:?}");
+    }
+}

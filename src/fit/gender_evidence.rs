@@ -486,6 +486,69 @@ mod tests {
         assert!((middle - 0.5).abs() < 0.1, "ambiguous fixture: P(male) {middle}");
     }
 
+    /// The shipped models are the trained ones: their log-odds at fixed inputs (every feature
+    /// −1, widths e⁻¹ of the torso; classifier log-odds 1 and margin 1) are those of the
+    /// published coefficients, so a changed digit or sign of any mean, scale, coefficient or
+    /// intercept shows. The logistic function is exact at 0, symmetric and finite far out.
+    #[test]
+    fn the_shipped_models_give_their_trained_log_odds() {
+        let f = GenderFeatures { values: [Some(-1.0); NUM_GENDER_FEATURES] };
+        for (c, want) in
+            [(GenderClassifier::SHIPPED, -7.330641313161677), (GenderClassifier::SHIPPED_DETECTED, -3.679819382736251)]
+        {
+            assert!((c.log_odds(&f) - want).abs() < 1e-9, "{} vs {want}", c.log_odds(&f));
+            assert!((c.male_probability(&f) - 1.0 / (1.0 + want.exp().recip())).abs() < 1e-12);
+        }
+        let m = MarginCombination::SHIPPED;
+        assert!((m.combined_log_odds(1.0, 1.0) - 12.54416312117011).abs() < 1e-9, "{}", m.combined_log_odds(1.0, 1.0));
+        assert_eq!(m.combined_log_odds(m.means[0], f64::NAN), m.intercept);
+        assert_eq!(sigmoid(0.0), 0.5);
+        for z in [0.3f64, 2.0, 30.0] {
+            let p = 1.0 / (1.0 + (-z).exp());
+            assert!((sigmoid(z) - p).abs() < 1e-15 && (sigmoid(-z) - (1.0 - p)).abs() < 1e-15, "{z}");
+        }
+        assert_eq!((sigmoid(800.0), sigmoid(-800.0)), (1.0, 0.0));
+    }
+
+    /// Across a slanted segment the outline width is measured along its normal: two edge bands
+    /// 20 px either side of a segment 30° from the horizontal give a width of about 40 px (the
+    /// bands' near sides); a segment across the bands, whose rays run along them, gives none.
+    #[test]
+    fn outline_width_is_measured_across_a_slanted_segment() {
+        let (a, angle) = ([60.0, 200.0], 30f64.to_radians());
+        let b = [a[0] + 150.0 * angle.cos(), a[1] - 150.0 * angle.sin()];
+        let n = [angle.sin(), angle.cos()];
+        let mut e = GrayImage::filled(256, 256, 0).unwrap();
+        let w = e.width();
+        for y in 0..256 {
+            for x in 0..256 {
+                let d = ((x as f64 - a[0]) * n[0] + (y as f64 - a[1]) * n[1]).abs();
+                if (d - 20.0).abs() < 1.0 {
+                    e.as_bytes_mut()[y * w + x] = 255;
+                }
+            }
+        }
+        let width = outline_width(&e, a, b, 0.5, 0.15, (2.0, 60.0)).expect("both bands found");
+        assert!((36.0..=41.0).contains(&width), "{width}");
+        // Along the segment (rays in the bands' direction from its line) there is no outline.
+        let along = outline_width(&e, a, [a[0] + n[0], a[1] + n[1]], 0.0, 0.0, (2.0, 60.0));
+        assert_eq!(along, None);
+    }
+
+    /// A segment of 4 px or less is too short to measure across: the neck outline with the head
+    /// exactly 4 px above the neck is missing, at 4.5 px it is the drawn width.
+    #[test]
+    fn segments_of_four_pixels_or_less_are_not_measured() {
+        let w = widths_at(0.0);
+        let (mut j, e, pose, cam) = figure(&w);
+        let neck = j.xy[joint::NECK];
+        j.xy[joint::HEAD] = [neck[0], neck[1] - 4.0];
+        assert_eq!(gender_features(&j, &e, &pose, &cam).unwrap().values[5], None);
+        j.xy[joint::HEAD] = [neck[0], neck[1] - 4.5];
+        let got = gender_features(&j, &e, &pose, &cam).unwrap().values[5].expect("neck measured");
+        assert!((got.exp() * TORSO - w[5]).abs() < 1.5, "{} px vs {} px", got.exp() * TORSO, w[5]);
+    }
+
     #[test]
     fn missing_evidence_adds_nothing() {
         let (mut j, e, pose, cam) = figure(&widths_at(1.5));

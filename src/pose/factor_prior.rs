@@ -244,6 +244,68 @@ mod tests {
         assert_eq!(&FactorPrior::from_json(&text).unwrap(), p);
     }
 
+    /// Every array and network of the wrong size is refused ("wrong size"), each on its own;
+    /// so are lengths and spreads ≤ 0.
+    #[test]
+    fn every_array_of_the_wrong_size_is_rejected() {
+        let p = FactorPrior::embedded().unwrap();
+        let faults: [fn(&mut FactorPrior); 9] = [
+            |p| {
+                p.lengths.pop();
+            },
+            |p| {
+                p.mean.pop();
+            },
+            |p| {
+                p.scale.pop();
+            },
+            |p| {
+                p.sd.pop();
+            },
+            |p| p.network.layers[0].inputs -= 1,
+            |p| p.network.layers.last_mut().unwrap().outputs -= 1,
+            |p| p.depth_network.layers[0].inputs -= 1,
+            |p| p.depth_network.layers.last_mut().unwrap().outputs -= 1,
+            |p| std::mem::swap(&mut p.network, &mut p.depth_network),
+        ];
+        for (i, fault) in faults.iter().enumerate() {
+            let mut bad = p.clone();
+            fault(&mut bad);
+            let r = FactorPrior::from_json(&bad.to_json());
+            assert!(matches!(&r, Err(Error::CorruptData(m)) if m.contains("wrong size")), "fault {i}: {r:?}");
+        }
+        let faults: [fn(&mut FactorPrior); 3] = [|p| p.lengths[2] = 0.0, |p| p.scale[5] = -1.0, |p| p.sd[1] = 0.0];
+        for (i, fault) in faults.iter().enumerate() {
+            let mut bad = p.clone();
+            fault(&mut bad);
+            let r = FactorPrior::from_json(&bad.to_json());
+            assert!(matches!(&r, Err(Error::CorruptData(m)) if m.contains("non-positive")), "fault {i}: {r:?}");
+        }
+    }
+
+    /// A prediction is converted to the caller's reference lengths group by group: doubling
+    /// every length lowers each group's log scale by ln 2; a group of no length is not
+    /// converted.
+    #[test]
+    fn predictions_convert_to_the_callers_reference_lengths() {
+        let p = FactorPrior::embedded().unwrap();
+        let own: [f64; NUM_BONES] = std::array::from_fn(|b| p.lengths[b]);
+        let j = Joints2 {
+            xy: std::array::from_fn(|i| [(i * 37 % 11) as f64 * 20.0, (i * 13 % 7) as f64 * 30.0]),
+            visible: [true; NUM_JOINTS],
+        };
+        let base = p.predict(&j, &own).unwrap();
+        let doubled = p.predict(&j, &own.map(|l| 2.0 * l)).unwrap();
+        for g in 0..NUM_GROUPS {
+            assert!((doubled.log_scale[g] - (base.log_scale[g] - 2f64.ln())).abs() < 1e-12, "group {g}");
+        }
+        assert_eq!(doubled.sd, base.sd);
+        let mut headless = own;
+        headless[0] = 0.0; // bone 0 is the head group's only bone
+        let h = p.predict(&j, &headless).unwrap();
+        assert_eq!(h.log_scale, base.log_scale);
+    }
+
     #[test]
     fn predictions_are_finite_or_none_on_bad_input() {
         let p = FactorPrior::embedded().unwrap();

@@ -179,10 +179,12 @@ pub fn unbend_knees(y: &mut [Vector3<f64>; NUM_JOINTS]) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn standing_uv() -> [[f64; 2]; NUM_JOINTS] {
+    /// A figure standing on both feet, 422 px tall (y down): the fixture of the standing prior
+    /// and of `detect::figure`'s tests.
+    pub(crate) fn standing_uv() -> [[f64; 2]; NUM_JOINTS] {
         use joint::*;
         let mut uv = [[0.0; 2]; NUM_JOINTS];
         for (j, p) in [
@@ -223,6 +225,17 @@ mod tests {
         assert!(!standing_in_image(&uv, &hidden));
         let lying: [[f64; 2]; NUM_JOINTS] = std::array::from_fn(|j| [uv[j][1], uv[j][0]]);
         assert!(!standing_in_image(&lying, &vis));
+        // A torso leaning 20° from the vertical, or upside down (neck under the pelvis).
+        let mut leaning = uv;
+        leaning[joint::NECK][0] = 250.0 + 150.0 * 20f64.to_radians().tan();
+        assert!(!standing_in_image(&leaning, &vis));
+        let mut upside_down = uv;
+        upside_down[joint::NECK][1] = 300.0;
+        assert!(!standing_in_image(&upside_down, &vis));
+        // 9° is within the limit.
+        let mut upright = uv;
+        upright[joint::NECK][0] = 250.0 + 150.0 * 9f64.to_radians().tan();
+        assert!(standing_in_image(&upright, &vis));
     }
 
     #[test]
@@ -240,6 +253,53 @@ mod tests {
         assert_eq!(feet(&standing_residuals(&r, false)), 0);
         // The torso, head and ground residuals stay either way.
         assert_eq!(standing_residuals(&r, false).len(), 4);
+    }
+
+    /// The bend is the sine of the knee's angle (shin against the thigh's line), positive with
+    /// the ankle behind the knee, whatever the two bones' lengths; 0 for a bone of no length.
+    #[test]
+    fn knee_bend_is_the_sine_of_the_knee_angle_whatever_the_bone_lengths() {
+        // Body facing +z, left +x: the shin swung back (−z) by `theta` from the thigh's line.
+        let left = Vector3::x();
+        let hip = Vector3::new(0.1, 0.9, 0.05);
+        for (thigh, shin) in [(0.45, 0.38), (0.2, 0.6), (1.0, 1.0)] {
+            let knee = hip + Vector3::new(0.0, -thigh, 0.0);
+            for theta in [0.3f64, 1.0, -0.5, 1.5] {
+                let ankle = knee + shin * Vector3::new(0.0, -theta.cos(), -theta.sin());
+                let bend = knee_bend(&hip, &knee, &ankle, &left);
+                assert!((bend - theta.sin()).abs() < 1e-12, "{thigh}/{shin} at {theta}: {bend}");
+            }
+        }
+        assert_eq!(knee_bend(&hip, &hip, &Vector3::zeros(), &left), 0.0);
+    }
+
+    /// Of the thigh's, the shin's and the whole leg's depth flips that bend a backwards knee
+    /// forward, the one moving knee and ankle least in depth is taken; the image and both bone
+    /// lengths stay. The body's left counts the shoulders as well as the hips (here the hips are
+    /// 5 cm apart: the shoulders' line decides it).
+    #[test]
+    fn a_backwards_knee_takes_the_cheapest_flip_that_bends_it_forward() {
+        use joint::*;
+        // (knee z − hip z, ankle z − knee z) → (knee z, ankle z) after; the hip at z = 0.
+        for (tz, sz, want) in [(-0.05, -0.02, (0.05, 0.03)), (0.02, 0.1, (0.02, -0.08))] {
+            let mut y = [Vector3::zeros(); NUM_JOINTS];
+            y[R_HIP] = Vector3::new(-0.025, 0.0, 0.0);
+            y[L_HIP] = Vector3::new(0.025, 0.0, 0.0);
+            y[R_SHOULDER] = Vector3::new(-0.18, 0.45, 0.0);
+            y[L_SHOULDER] = Vector3::new(0.18, 0.45, 0.0);
+            y[L_KNEE] = Vector3::new(0.025, -0.4, 0.0);
+            y[L_ANKLE] = Vector3::new(0.025, -0.8, -0.05);
+            y[R_KNEE] = Vector3::new(-0.025, -0.4, tz);
+            y[R_ANKLE] = Vector3::new(-0.025, -0.8, tz + sz);
+            let before = y;
+            assert_eq!(unbend_knees(&mut y), 1, "{tz} {sz}");
+            assert!((y[R_KNEE].z - want.0).abs() < 1e-12 && (y[R_ANKLE].z - want.1).abs() < 1e-12, "{tz} {sz}: {y:?}");
+            for (a, b) in [(R_HIP, R_KNEE), (R_KNEE, R_ANKLE)] {
+                assert!(((y[b] - y[a]).norm() - (before[b] - before[a]).norm()).abs() < 1e-12);
+                assert_eq!(y[b].xy(), before[b].xy());
+            }
+            assert_eq!((y[L_KNEE], y[L_ANKLE]), (before[L_KNEE], before[L_ANKLE]));
+        }
     }
 
     #[test]

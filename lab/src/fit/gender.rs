@@ -149,6 +149,66 @@ fn fit_logistic(samples: &[(Vec<Option<f64>>, bool)], n: usize, ridge: f64) -> R
 mod tests {
     use super::*;
 
+    /// Issue 52 finding 13 (`fit_logistic`'s `-` → `+`): the classifier's means and scales are
+    /// the present samples' mean and standard deviation (n − 1), a feature no sample has keeps
+    /// 0 and 1 with no weight, and the fitted model solves the penalised likelihood's equations
+    /// (Σ (y − p) = 0 for the intercept; Σ (y − p) x_k = 2 ridge β_k for each standardised
+    /// feature, missing ones imputed at the mean); likewise the combination without a ridge.
+    #[test]
+    fn the_fit_standardises_by_the_samples_and_solves_the_penalised_likelihood() {
+        // Feature 0 in every sample, feature 1 in every third; overlapping classes.
+        let data: Vec<(GenderFeatures, bool)> = (0..60)
+            .map(|i| {
+                let x = i as f64 / 10.0;
+                let mut values = [None; NUM_GENDER_FEATURES];
+                values[0] = Some(x);
+                if i % 3 == 0 {
+                    values[1] = Some((i as f64 * 0.7).sin());
+                }
+                (GenderFeatures { values }, x + 1.5 * (i as f64 * 1.3).sin() > 3.0)
+            })
+            .collect();
+        for ridge in [1.0, 0.25] {
+            let c = train_gender_classifier(&data, ridge).unwrap();
+            for k in 0..2 {
+                let xs: Vec<f64> = data.iter().filter_map(|d| d.0.values[k]).collect();
+                let m = xs.iter().sum::<f64>() / xs.len() as f64;
+                let sd = (xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (xs.len() - 1) as f64).sqrt();
+                assert!((c.means[k] - m).abs() < 1e-12 && (c.scales[k] - sd).abs() < 1e-12, "feature {k}: {c:?}");
+            }
+            assert_eq!((c.means[2], c.scales[2], c.coefficients[2]), (0.0, 1.0, 0.0));
+            let mut grad = [0.0; 3];
+            for (f, male) in &data {
+                let r = f64::from(u8::from(*male)) - c.male_probability(f);
+                grad[0] += r;
+                for k in 0..2 {
+                    grad[k + 1] += r * f.values[k].map_or(0.0, |x| (x - c.means[k]) / c.scales[k]);
+                }
+            }
+            let want = [0.0, 2.0 * ridge * c.coefficients[0], 2.0 * ridge * c.coefficients[1]];
+            for k in 0..3 {
+                assert!((grad[k] - want[k]).abs() < 1e-7, "ridge {ridge}, equation {k}: {grad:?} vs {want:?}");
+            }
+            assert!(c.coefficients[0] > 0.5, "{c:?}");
+        }
+        let pairs: Vec<(f64, f64, bool)> = (0..40)
+            .map(|i| {
+                let z = (i as f64 - 20.0) / 5.0;
+                let m = if i % 5 == 0 { f64::NAN } else { 0.3 * (i as f64 * 0.9).cos() };
+                (z, m, z + 2.0 * (i as f64 * 2.1).sin() > 0.0)
+            })
+            .collect();
+        let c = train_margin_combination(&pairs, 0.0).unwrap();
+        let (mut g0, mut g1, mut g2) = (0.0, 0.0, 0.0);
+        for &(z, m, male) in &pairs {
+            let r = f64::from(u8::from(male)) - c.male_probability(z, m);
+            g0 += r;
+            g1 += r * (z - c.means[0]) / c.scales[0];
+            g2 += r * if m.is_finite() { (m - c.means[1]) / c.scales[1] } else { 0.0 };
+        }
+        assert!(g0.abs() < 1e-7 && g1.abs() < 1e-7 && g2.abs() < 1e-7, "{g0} {g1} {g2}");
+    }
+
     #[test]
     fn training_recovers_a_separating_direction_and_rejects_one_class() {
         let sample = |k: f64, male: bool| {

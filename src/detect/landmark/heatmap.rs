@@ -95,6 +95,17 @@ mod tests {
         assert_eq!(lm[5], [41.0, 83.0, 7.0, 1.0, 2.0]);
     }
 
+    /// A window whose highest confidence is exactly [`MIN_CONFIDENCE_TO_REFINE`] (logit 0)
+    /// refines the landmark ("reaches"), one just under it does not.
+    #[test]
+    fn a_window_reaching_the_threshold_exactly_refines() {
+        let mut lm = vec![[41.0f32, 83.0, 0.0, 0.0, 0.0]; 2];
+        let h = heatmap_with(&[(0, 22, 12, 0.0), (1, 22, 12, -0.01)]);
+        refine(&mut lm, &h).unwrap();
+        assert!((lm[0][0] - 12.0 * 4.0).abs() < 1e-3 && (lm[0][1] - 22.0 * 4.0).abs() < 1e-3, "{:?}", lm[0]);
+        assert_eq!(lm[1], [41.0, 83.0, 0.0, 0.0, 0.0]);
+    }
+
     #[test]
     fn peaks_outside_the_window_and_landmarks_outside_the_heatmap_are_ignored() {
         let mut lm = vec![[128.0f32, 128.0, 0.0, 0.0, 0.0]; NUM_OUTPUT_LANDMARKS];

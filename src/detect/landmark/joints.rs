@@ -105,4 +105,20 @@ mod tests {
         assert_eq!(d[at("pelvis")], -23.5);
         assert_eq!(d[at("neck")], -(0.5 * 11.5 + 0.5 * 9.5));
     }
+
+    /// A derived joint's confidence is the mean of its landmarks' (head: the ears; neck: both
+    /// shoulders and both mouth corners; pelvis: the hips), a direct joint's its landmark's.
+    #[test]
+    fn derived_joint_confidences_are_the_means_of_their_sources() {
+        let xy = vec![[0.0; 2]; 33];
+        let mut conf = vec![0.0; 33];
+        for (i, c) in [(7, 0.2), (8, 0.6), (9, 0.1), (10, 0.3), (11, 0.5), (12, 0.9), (23, 0.4), (24, 0.8), (16, 0.7)] {
+            conf[i] = c;
+        }
+        let (_, c) = to_canonical(&xy, &conf);
+        let at = |n: &str| crate::skeleton::joint_index(n).unwrap();
+        for (name, want) in [("head", 0.4), ("neck", 0.45), ("pelvis", 0.6), ("r_wrist", 0.7), ("l_wrist", 0.0)] {
+            assert!((c[at(name)] - want).abs() < 1e-12, "{name}: {} vs {want}", c[at(name)]);
+        }
+    }
 }

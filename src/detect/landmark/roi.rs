@@ -131,6 +131,41 @@ mod tests {
         assert!((top[0] - 200.0).abs() < 1e-9 && (top[1] - 100.0).abs() < 1e-9, "{top:?}");
     }
 
+    /// The retry ROIs are upright squares centred on the ink box, one per [`RETRY_SCALES`] times
+    /// its larger side.
+    #[test]
+    fn retry_rois_are_centred_on_the_box_at_each_scale() {
+        let rois = retry_rois([10.0, 20.0, 50.0, 120.0]);
+        let want: Vec<Roi> =
+            RETRY_SCALES.iter().map(|&k| Roi { cx: 30.0, cy: 70.0, size: k * 100.0, rotation: 0.0 }).collect();
+        assert_eq!(rois, want);
+        let wide = retry_rois([0.0, 0.0, 80.0, 10.0]);
+        assert_eq!((wide[2].cx, wide[2].cy, wide[2].size), (40.0, 5.0, 1.6 * 80.0));
+    }
+
+    /// Angles are wrapped to [−π, π): a figure lying head left turns the crop's up to −x, one
+    /// upside down to −π.
+    #[test]
+    fn rotations_are_wrapped_to_a_half_open_turn() {
+        use std::f64::consts::{FRAC_PI_2, PI};
+        let left = Roi::from_alignment([100.0, 100.0], [20.0, 100.0]).unwrap();
+        assert!((left.rotation + FRAC_PI_2).abs() < 1e-12, "{}", left.rotation);
+        let down = Roi::from_alignment([100.0, 100.0], [100.0, 180.0]).unwrap();
+        assert!((down.rotation + PI).abs() < 1e-12, "{}", down.rotation);
+        for (a, want) in [
+            (0.5, 0.5),
+            (2.5, 2.5),
+            (3.1, 3.1),
+            (-3.1, -3.1),
+            (PI, -PI),
+            (-PI, -PI),
+            (3.0 * PI + 0.25, -PI + 0.25),
+            (-2.5 * PI, -0.5 * PI),
+        ] {
+            assert!((normalize_angle(a) - want).abs() < 1e-12, "{a}: {}", normalize_angle(a));
+        }
+    }
+
     #[test]
     fn boxes_and_blank_pages() {
         assert!(Roi::from_box([0.0, 0.0, 0.0, 0.0]).is_err());

@@ -175,3 +175,31 @@ fn write_prop(out: &mut Vec<u8>, prop: &Prop) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashSet;
+
+    use super::*;
+
+    /// Whatever the records' length, the file is padded to a multiple of 16 bytes after the
+    /// footer id and ends with 4 zero bytes, the version, 120 zero bytes and the closing magic.
+    #[test]
+    fn the_footer_pads_to_16_bytes_and_closes_the_file() {
+        let mut lengths = HashSet::new();
+        for n in 0..16 {
+            let file = file_bytes(&[Node::new("Name", vec![s(&"x".repeat(n))])]).unwrap();
+            assert_eq!(file.len() % 16, 0, "name of {n} bytes: {} bytes", file.len());
+            let end = file.len() - 16;
+            assert_eq!(file[end], 0xf8);
+            assert!(file[end - 120..end].iter().all(|&b| b == 0));
+            assert_eq!(file[end - 124..end - 120], VERSION.to_le_bytes());
+            assert_eq!(file[end - 128..end - 124], [0; 4]);
+            // The footer id follows the 13-byte null record closing the top level; then the zeros.
+            let id = file.windows(4).position(|w| w == [0xfa, 0xbc, 0xab, 0x09]).unwrap();
+            assert!(file[id + 16..end - 128].iter().all(|&b| b == 0) && end - 128 - (id + 16) < 16);
+            lengths.insert(id % 16);
+        }
+        assert_eq!(lengths.len(), 16, "every padding length was tried");
+    }
+}

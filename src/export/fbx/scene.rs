@@ -353,3 +353,73 @@ pub fn document(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>,
     nodes.push(connections(texture_png.is_some()));
     nodes
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::{BTreeMap, HashSet};
+
+    use super::*;
+    use crate::body::ik::{solve, IkOptions};
+    use crate::body::procedural::random_pose;
+    use crate::body::rig::RigOptions;
+    use crate::body::{BodyModel, Gender};
+    use rand::SeedableRng;
+
+    fn text(p: &Prop) -> &str {
+        match p {
+            Prop::Str(b) => std::str::from_utf8(b).unwrap(),
+            other => panic!("not a string: {other:?}"),
+        }
+    }
+
+    fn id(p: &Prop) -> i64 {
+        match p {
+            Prop::I64(v) => *v,
+            other => panic!("not an id: {other:?}"),
+        }
+    }
+
+    /// The `Definitions` count every object of the document by type (and all of them, with the
+    /// global settings), the object ids are unique, and every connection joins a written object
+    /// to another or to the root (0); with and without the texture.
+    #[test]
+    fn definitions_and_connections_match_the_objects() {
+        let model = BodyModel::embedded().unwrap();
+        let mesh = RiggedMesh::from_model(&model, Gender::Female, &[]).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+        let scene = RigScene::build(model.rig(), &mesh, &pose, &RigOptions::default()).unwrap();
+        for png in [None, Some(&b"\x89PNG"[..])] {
+            let doc = document(&mesh, &scene, png);
+            let top = |name: &str| doc.iter().find(|n| n.name == name).unwrap_or_else(|| panic!("no {name}"));
+            let objects = &top("Objects").children;
+            let mut counted: BTreeMap<&str, i32> = BTreeMap::from([("GlobalSettings", 1)]);
+            top("GlobalSettings");
+            for o in objects {
+                *counted.entry(o.name).or_default() += 1;
+            }
+            let (mut declared, mut total) = (BTreeMap::new(), None);
+            for c in &top("Definitions").children {
+                match c.name {
+                    "Count" => total = Some(c.props[0].clone()),
+                    "ObjectType" => {
+                        assert_eq!(c.children[0].name, "Count");
+                        declared.insert(text(&c.props[0]), c.children[0].props[0].clone());
+                    }
+                    _ => {}
+                }
+            }
+            let counted_props: BTreeMap<&str, Prop> = counted.iter().map(|(&k, &v)| (k, Prop::I32(v))).collect();
+            assert_eq!(declared, counted_props, "textured: {}", png.is_some());
+            assert_eq!(total, Some(Prop::I32(counted.values().sum())));
+            assert_eq!(counted["Model"], NUM_RIG_BONES as i32 + 2);
+            let ids: Vec<i64> = objects.iter().map(|o| id(&o.props[0])).collect();
+            let known: HashSet<i64> = ids.iter().copied().collect();
+            assert_eq!(known.len(), ids.len(), "object ids are unique");
+            for c in &top("Connections").children {
+                let (child, parent) = (id(&c.props[1]), id(&c.props[2]));
+                assert!(known.contains(&child) && (parent == 0 || known.contains(&parent)), "{c:?}");
+            }
+        }
+    }
+}
