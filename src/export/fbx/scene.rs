@@ -390,7 +390,7 @@ mod tests {
         let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
         let scene = RigScene::build(model.rig(), &mesh, &pose, &RigOptions::default()).unwrap();
         for png in [None, Some(&b"\x89PNG"[..])] {
-            let doc = document(&mesh, &scene, png);
+            let doc = document(&mesh, &scene, png, &crate::export::frame::ExportFrame::default());
             let top = |name: &str| doc.iter().find(|n| n.name == name).unwrap_or_else(|| panic!("no {name}"));
             let objects = &top("Objects").children;
             let mut counted: BTreeMap<&str, i32> = BTreeMap::from([("GlobalSettings", 1)]);
