@@ -266,10 +266,10 @@ fn with_straight_limbs(dict: &Dictionary, joints: &Joints2, opts: &PoseOptions, 
         return est;
     }
     let (x, n) = super::straighten::straighten_limbs(&est.joints, &est.camera, joints);
-    let Ok(prob) = Problem::new(dict, joints, 0.0) else { return est };
     if n == 0 {
         return est;
     }
+    let Ok(prob) = Problem::new(dict, joints, 0.0) else { return est };
     let inverse = BodyFactors { k: est.factors.k.map(|k| 1.0 / k) };
     let (old, new) = (inverse.apply(&est.joints), inverse.apply(&x));
     let base = std::array::from_fn(|j| std::array::from_fn(|a| est.base[j][a] + new[j][a] - old[j][a]));

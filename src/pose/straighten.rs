@@ -44,11 +44,11 @@ pub const MAX_BEND_DEG: f64 = 60.0;
 /// A limb this step straightens: drawn straight, bent more than 0 and at most [`MAX_BEND_DEG`]
 /// in 3-D.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LimbCandidate {
+struct LimbCandidate {
     /// Index into [`LIMBS`].
-    pub limb: usize,
+    limb: usize,
     /// Where the middle joint goes: `end + t (far end − end)`, in [0, 1].
-    pub t: f64,
+    t: f64,
 }
 
 /// Bend of the limb `a → b → c`, degrees (0 = straight); 0 for a zero-length bone.
@@ -65,7 +65,7 @@ pub fn bend_deg(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>) -> f64 {
 /// The limbs of `joints` (model frame, seen by `camera`) that the drawn 2-D joints `drawn` show
 /// straight (all three visible, the middle one within [`MAX_OFFSET`] of the ends' line and its
 /// foot between them) and that are bent more than 0 and at most [`MAX_BEND_DEG`] in 3-D.
-pub fn candidates(joints: &Joints3, camera: &WeakPerspective, drawn: &Joints2) -> Vec<LimbCandidate> {
+fn candidates(joints: &Joints3, camera: &WeakPerspective, drawn: &Joints2) -> Vec<LimbCandidate> {
     let x: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(joints[j]));
     let scale = 0.5 * (camera.sx + camera.sy);
     let mut out = Vec::new();
@@ -89,7 +89,7 @@ pub fn candidates(joints: &Joints3, camera: &WeakPerspective, drawn: &Joints2) -
 }
 
 /// The straightened joints of `joints` (model frame, seen by `camera`) for the drawn 2-D joints
-/// `drawn` (module doc): every candidate ([`candidates`]); returns the joints and how many limbs
+/// `drawn` (module doc): every limb drawn straight and bent at most [`MAX_BEND_DEG`] in depth; returns the joints and how many limbs
 /// were straightened.
 pub fn straighten_limbs(joints: &Joints3, camera: &WeakPerspective, drawn: &Joints2) -> (Joints3, usize) {
     let mut out = *joints;
