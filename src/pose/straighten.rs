@@ -89,8 +89,8 @@ fn candidates(joints: &Joints3, camera: &WeakPerspective, drawn: &Joints2) -> Ve
 }
 
 /// The straightened joints of `joints` (model frame, seen by `camera`) for the drawn 2-D joints
-/// `drawn` (module doc): every limb drawn straight and bent at most [`MAX_BEND_DEG`] in depth; returns the joints and how many limbs
-/// were straightened.
+/// `drawn` (module doc): every limb drawn straight and bent at most [`MAX_BEND_DEG`] in depth;
+/// returns the joints and how many limbs were straightened.
 pub fn straighten_limbs(joints: &Joints3, camera: &WeakPerspective, drawn: &Joints2) -> (Joints3, usize) {
     let mut out = *joints;
     let mut n = 0;
