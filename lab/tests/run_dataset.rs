@@ -105,7 +105,27 @@ fn results_are_scored_by_eval_and_deterministic() {
     let cells: Vec<&str> = aed_row.split('|').map(str::trim).collect();
     assert_eq!((cells[3], cells[5]), ("3", "3"), "{aed_row}");
     assert!(cells[2].parse::<f64>().unwrap() > 0.0 && cells[4].parse::<f64>().unwrap() > 0.0, "{aed_row}");
+    shape_floor_agrees_with_eval(&ds, &table);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `shape-floor`'s mean-shape row is the mean-shape baseline `eval` scored (`eval_table`, the
+/// mean-shape results first), and the truth projected onto all 16 dimensions of the model it
+/// was rendered from lies far below it.
+fn shape_floor_agrees_with_eval(ds: &Path, eval_table: &str) {
+    let o = skb(&["shape-floor", s(ds), "--dims", "4,16"]);
+    ok(&o);
+    let floor = String::from_utf8_lossy(&o.stdout);
+    let cell = |table: &str, row: &str, col: usize| -> f64 {
+        let line = table.lines().find(|l| l.starts_with(row)).unwrap_or_else(|| panic!("no {row} in {table}"));
+        line.split('|').map(str::trim).nth(col).unwrap().parse().unwrap()
+    };
+    let eval_mean = cell(eval_table, "| aed_rest_centred |", 2);
+    assert!((cell(&floor, "| mean shape |", 2) - eval_mean).abs() < 1.5e-4, "{floor} vs eval {eval_mean}");
+    let (four, all) = (cell(&floor, "| truth projected, 4 dims |", 2), cell(&floor, "| truth projected, 16 dims |", 2));
+    assert!(all <= four && all < 0.5 * eval_mean, "{floor}");
+    let bad = skb(&["shape-floor", s(ds), "--dims", "17"]);
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("17 > 16"));
 }
 
 /// `--dictionary` replaces the embedded pose dictionary: the embedded asset given as a file

@@ -21,6 +21,7 @@ mod make_dataset;
 mod negative_page;
 mod render_sketch;
 mod run_dataset;
+mod shape_floor;
 mod stylise;
 mod train_detector;
 mod train_factor_prior;
@@ -83,6 +84,9 @@ enum Command {
     Stylise(stylise::Args),
     /// A page without a figure (blank, notes, clutter) for the detector's no-figure rate.
     NegativePage(negative_page::Args),
+    /// The shape fit's floor on a dataset: each true rest mesh projected onto the body model's
+    /// space of its gender, scored as eval scores a fit, beside the mean shape.
+    ShapeFloor(shape_floor::Args),
 }
 
 fn main() -> ExitCode {
@@ -106,6 +110,7 @@ fn main() -> ExitCode {
         Command::FitLandmarkJoints(a) => fit_landmark_joints::run(a),
         Command::Stylise(a) => stylise::run(a),
         Command::NegativePage(a) => negative_page::run(a),
+        Command::ShapeFloor(a) => shape_floor::run(a),
     };
     exit_code("sketchbody-lab", result)
 }
