@@ -237,6 +237,11 @@
 #define SKB_JOINTS_ESTIMATED 2
 
 /**
+ * Number of body parts `skb_result_part_support` reports.
+ */
+#define SKB_NUM_BODY_PARTS 6
+
+/**
  * Largest texture side `skb_*_project_texture` accept, texels.
  */
 #define SKB_MAX_TEXTURE_SIZE 4096
@@ -1796,6 +1801,15 @@ skb_status skb_result_detection(const struct skb_result *result, struct skb_figu
  * NULL).
  */
 skb_status skb_result_evidence(const struct skb_result *result, bool *low, double *edge_support);
+
+/**
+ * Per body part, the share (0..=1) of the fitted silhouette's outline within 2 raster pixels
+ * of a stroke, into `dst[0..6]` (`dst_len` ≥ `SKB_NUM_BODY_PARTS`) in the order head, torso,
+ * right arm, left arm, right leg, left leg (the figure's own sides); NaN for a part with no
+ * outline in view and for every part of the mean shape. A part below 0.5 is one the drawing
+ * does not support (clothing, a shape no body has): the body there is the prior's reading.
+ */
+skb_status skb_result_part_support(const struct skb_result *result, double *dst, size_t dst_len);
 
 /**
  * The best match score (higher is better) of the chosen fit into `*score`; `gender` must be

@@ -7,7 +7,7 @@ use sketchbody::body::{BodyModel, Gender, ShapeChoice};
 use sketchbody::detect::figure::Figure;
 use sketchbody::detect::{DetectOptions, Model};
 use sketchbody::export::joints2d::load_joints2d;
-use sketchbody::fit::FitOptions;
+use sketchbody::fit::{BodyPart, FitOptions};
 use sketchbody::image::{load_image, GrayImage};
 use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions};
 use sketchbody::pose::dict_io;
@@ -57,6 +57,12 @@ fn fits_gender_as_a_continuous_weight_and_is_deterministic() {
     let range = blend.space().gmm().marginal(r.weights.len()).unwrap().range(sketchbody::fit::PRIOR_RANGE_SD);
     assert!(r.weights.iter().zip(&range).all(|(w, (lo, hi))| (lo..=hi).contains(&w)), "{:?}", r.weights);
     assert!((0.0..=1.0).contains(&r.edge_support));
+    // The example drawn as a body: every part in view, the torso and limbs supported (its
+    // head is drawn larger than a body's, with hair: the body's skull outline lies inside it).
+    let parts = r.part_support.expect("a fitted body");
+    assert!(parts.support.iter().all(|s| s.is_some()), "{parts:?}");
+    let weak = parts.below(sketchbody::fit::LOW_EVIDENCE_SUPPORT);
+    assert!(weak.iter().all(|&p| p == BodyPart::Head), "{parts:?}");
     assert!(r.fits.iter().all(|g| g.score.is_finite() && g.score < 0.0));
     assert_eq!(r.weights, best.fit.as_ref().unwrap().weights);
     assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");
@@ -441,9 +447,23 @@ fn an_unknown_height_is_calibrated_and_a_known_one_wins() {
     assert_eq!(m.mesh.vertices, model.space(Gender::Female).synthesize(&[]).unwrap().vertices);
 }
 
+/// Mean distance between corresponding vertices of two rest meshes, each centred on its
+/// centroid and divided by its own height (a fraction of the height; the eval's centred AED).
+fn shape_distance(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+    let normalised = |v: &[[f32; 3]]| {
+        let n = v.len() as f64;
+        let c: [f64; 3] = std::array::from_fn(|k| v.iter().map(|p| p[k] as f64).sum::<f64>() / n);
+        let h = sketchbody::body::rig::y_extent(v);
+        v.iter().map(|p| nalgebra::Vector3::from_fn(|k, _| (p[k] as f64 - c[k]) / h)).collect::<Vec<_>>()
+    };
+    let (a, b) = (normalised(a), normalised(b));
+    a.iter().zip(&b).map(|(p, q)| (p - q).norm()).sum::<f64>() / a.len() as f64
+}
+
 /// The example sketch under a cloak to the ground: everything below the shoulders is replaced
 /// by a wide trapezoid outline (no body stroke left inside it). The fit still returns a body of
-/// plausible size inside the prior's range and flags it as low-evidence.
+/// plausible size inside the prior's range, nearer the uncloaked figure's than the mean body is,
+/// flags it as low-evidence and names the legs as the parts not trusted.
 #[test]
 fn a_cloak_to_the_ground_gives_a_plausible_body_flagged_low_evidence() {
     let (model, dict, sketch, j) = inputs();
@@ -473,6 +493,26 @@ fn a_cloak_to_the_ground_gives_a_plausible_body_flagged_low_evidence() {
     let cloaked = GrayImage::from_vec(w, h, pixels).unwrap();
     let r = run_pipeline(&model, &dict, &cloaked, &GivenJoints(j), &fast(None), &mut |_| true).unwrap();
     assert!(r.low_evidence, "edge support {}", r.edge_support);
+    // Never worse than the mean: against the same figure drawn without the cloak, the cloaked
+    // body (centred, at a common height) is nearer than the mean body of the figure's gender.
+    let clean = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &fast(None), &mut |_| true).unwrap();
+    let mean_options = PipelineOptions { mean_shape: true, ..fast(Some(clean.gender)) };
+    let mean = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &mean_options, &mut |_| true).unwrap();
+    let (to_cloaked, to_mean) = (
+        shape_distance(&r.mesh.vertices, &clean.mesh.vertices),
+        shape_distance(&mean.mesh.vertices, &clean.mesh.vertices),
+    );
+    assert!(to_cloaked < to_mean, "cloaked {to_cloaked} vs mean {to_mean} (fractions of the height)");
+    // Per part: the legs under the cloak are the parts not trusted, and the least supported.
+    let parts = r.part_support.expect("a fitted body");
+    let weak = parts.below(sketchbody::fit::LOW_EVIDENCE_SUPPORT);
+    assert!(weak.contains(&BodyPart::RightLeg) && weak.contains(&BodyPart::LeftLeg), "{parts:?}");
+    let leg = |p| parts.of(p).unwrap();
+    let legs = leg(BodyPart::RightLeg).max(leg(BodyPart::LeftLeg));
+    assert!(
+        BodyPart::ALL[..4].iter().all(|&p| parts.of(p).unwrap() > legs),
+        "the legs are the least supported: {parts:?}"
+    );
     let range = model.blended().unwrap().space().gmm().marginal(r.weights.len()).unwrap();
     let range = range.range(sketchbody::fit::PRIOR_RANGE_SD);
     assert!(r.weights.iter().zip(&range).all(|(w, (lo, hi))| (lo..=hi).contains(&w)), "{:?}", r.weights);

@@ -270,6 +270,36 @@ pub unsafe extern "C" fn skb_result_evidence(
     }
 }
 
+/// Number of body parts `skb_result_part_support` reports.
+pub const SKB_NUM_BODY_PARTS: u32 = 6;
+const _: () = assert!(SKB_NUM_BODY_PARTS as usize == sketchbody_core::fit::BodyPart::ALL.len());
+
+/// Per body part, the share (0..=1) of the fitted silhouette's outline within 2 raster pixels
+/// of a stroke, into `dst[0..6]` (`dst_len` ≥ `SKB_NUM_BODY_PARTS`) in the order head, torso,
+/// right arm, left arm, right leg, left leg (the figure's own sides); NaN for a part with no
+/// outline in view and for every part of the mean shape. A part below 0.5 is one the drawing
+/// does not support (clothing, a shape no body has): the body there is the prior's reading.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_part_support(
+    result: *const skb_result,
+    dst: *mut f64,
+    dst_len: usize,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_result_part_support` (lib.rs § Safety): `result`, `dst` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let out = try_status!(out_slice(dst, dst_len, SKB_NUM_BODY_PARTS as usize, "dst"));
+            for (k, o) in out.iter_mut().take(SKB_NUM_BODY_PARTS as usize).enumerate() {
+                *o = r.part_support.and_then(|p| p.support[k]).unwrap_or(f64::NAN);
+            }
+            skb_status::SKB_OK
+        }
+    }
+}
+
 /// The best match score (higher is better) of the chosen fit into `*score`; `gender` must be
 /// the result's gender (`skb_result_gender`: the given gender's space or the gendered fit the
 /// classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.

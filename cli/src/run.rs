@@ -294,6 +294,12 @@ fn report(
             sketchbody::fit::EDGE_SUPPORT_RADIUS
         );
     }
+    if let Some(parts) = &r.part_support {
+        let _ = writeln!(s, "- evidence per part: {}", part_support_line(parts));
+        if let Some(line) = not_trusted_line(parts) {
+            let _ = writeln!(s, "- {line}");
+        }
+    }
     let chosen = r.chosen_fit().and_then(|g| g.fit.as_ref());
     let factors = |p: &sketchbody::body::proportions::Proportions| {
         format!(
@@ -454,4 +460,54 @@ pub fn run(a: Args) -> Result<(), CliError> {
         eprintln!("sketchbody: detection confidence {:.2} ({}): {LOW_CONFIDENCE_HINT}", f.confidence, f.backend.name());
     }
     Ok(())
+}
+
+/// `head 97%, torso 99%, right_arm -, …`: each part's supported share of the fitted outline
+/// (`-`: the part has no outline in view).
+fn part_support_line(parts: &sketchbody::fit::PartSupport) -> String {
+    sketchbody::fit::BodyPart::ALL
+        .iter()
+        .map(|&p| match parts.of(p) {
+            Some(v) => format!("{} {:.0}%", p.name(), 100.0 * v),
+            None => format!("{} -", p.name()),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `**not trusted**: right_leg, left_leg (…)` naming the parts in view whose support is below
+/// [`sketchbody::fit::LOW_EVIDENCE_SUPPORT`]; `None` when every part in view is supported.
+fn not_trusted_line(parts: &sketchbody::fit::PartSupport) -> Option<String> {
+    let weak = parts.below(sketchbody::fit::LOW_EVIDENCE_SUPPORT);
+    if weak.is_empty() {
+        return None;
+    }
+    let names: Vec<&str> = weak.iter().map(|p| p.name()).collect();
+    Some(format!(
+        "**not trusted**: {} (the strokes support under {:.0}% of the fitted outline there: clothing, or a shape no \
+         body has; the body there is the prior's reading)",
+        names.join(", "),
+        100.0 * sketchbody::fit::LOW_EVIDENCE_SUPPORT
+    ))
+}
+
+#[cfg(test)]
+mod part_lines {
+    use super::*;
+    use sketchbody::fit::PartSupport;
+
+    /// The per-part line lists every part, `-` for one out of view; the not-trusted line names
+    /// only the parts in view under the threshold, and is absent when there are none.
+    #[test]
+    fn the_report_names_the_parts_not_trusted() {
+        let parts = PartSupport::from_counts(&[(9, 10), (8, 10), (0, 0), (4, 10), (1, 10), (6, 10)]);
+        assert_eq!(
+            part_support_line(&parts),
+            "head 90%, torso 80%, right_arm -, left_arm 40%, right_leg 10%, left_leg 60%"
+        );
+        let line = not_trusted_line(&parts).unwrap();
+        assert!(line.starts_with("**not trusted**: left_arm, right_leg ("), "{line}");
+        let fine = PartSupport::from_counts(&[(9, 10), (8, 10), (0, 0), (5, 10), (7, 10), (6, 10)]);
+        assert_eq!(not_trusted_line(&fine), None);
+    }
 }

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "2367168d69ed0645a37ab1e1ca792589c79d7c369894aed170f20154f0ed7890"
+HEADER_SHA256 = "e49f7e9451104812e4f188ace579e783bb7f2836dea7e99bca8e9a75d7b75a39"
 
 # ---- constants (#define) ----
 
@@ -108,6 +108,8 @@ SKB_JOINTS_REST = 0
 SKB_JOINTS_POSED = 1
 # `skb_result_copy_joints3d`: the 3-D pose estimated from the 2-D joints (a 1.75 m person).
 SKB_JOINTS_ESTIMATED = 2
+# Number of body parts `skb_result_part_support` reports.
+SKB_NUM_BODY_PARTS = 6
 # Largest texture side `skb_*_project_texture` accept, texels.
 SKB_MAX_TEXTURE_SIZE = 4096
 # The texture side `sketchbody run` uses by default (`--texture-size`), texels.
@@ -163,6 +165,7 @@ CONSTANTS = {
     "SKB_JOINTS_REST": 0,
     "SKB_JOINTS_POSED": 1,
     "SKB_JOINTS_ESTIMATED": 2,
+    "SKB_NUM_BODY_PARTS": 6,
     "SKB_MAX_TEXTURE_SIZE": 4096,
     "SKB_DEFAULT_TEXTURE_SIZE": 1024,
     "SKB_SKETCH_STYLE_RANDOM": 0,
@@ -2947,6 +2950,26 @@ FUNCTIONS["skb_result_evidence"] = (
         ("result", "const struct skb_result *"),
         ("low", "bool *"),
         ("edge_support", "double *"),
+    ),
+)
+
+# Per body part, the share (0..=1) of the fitted silhouette's outline within 2 raster pixels
+# of a stroke, into `dst[0..6]` (`dst_len` ≥ `SKB_NUM_BODY_PARTS`) in the order head, torso,
+# right arm, left arm, right leg, left leg (the figure's own sides); NaN for a part with no
+# outline in view and for every part of the mean shape. A part below 0.5 is one the drawing
+# does not support (clothing, a shape no body has): the body there is the prior's reading.
+FUNCTIONS["skb_result_part_support"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.POINTER(ctypes.c_double),
+        ctypes.c_size_t,
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("dst", "double *"),
+        ("dst_len", "size_t"),
     ),
 )
 

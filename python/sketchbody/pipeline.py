@@ -123,6 +123,17 @@ class Result(Handle):
         call("skb_result_evidence", self._p, ctypes.byref(low), ctypes.byref(sup))
         return bool(low.value), sup.value
 
+    #: Body parts of `part_support`, in the library's order.
+    BODY_PARTS = ("head", "torso", "right_arm", "left_arm", "right_leg", "left_leg")
+
+    def part_support(self):
+        """Per body part (names in BODY_PARTS), the share (0..1) of the fitted outline near a
+        stroke, or None for a part out of view (every part of the mean shape). A part below 0.5
+        is not supported by the drawing: the body there is the prior's reading."""
+        out = np.full(len(self.BODY_PARTS), np.nan)
+        call("skb_result_part_support", self._p, A.ptr(out), out.size)
+        return {name: (None if np.isnan(v) else float(v)) for name, v in zip(self.BODY_PARTS, out)}
+
     def vertices(self, posed=True):
         """(N, 3) float32 vertices, metres, model frame: posed (default) or rest."""
         out = np.empty((self.vertex_count, 3), dtype=np.float32)

@@ -197,6 +197,13 @@ class PipelineTest(unittest.TestCase):
         self.assertTrue(np.isfinite(r.score))
         low, support = r.evidence()
         self.assertIsInstance(low, bool)
+        parts = r.part_support()
+        self.assertEqual(tuple(parts), r.BODY_PARTS)
+        seen = [v for v in parts.values() if v is not None]
+        self.assertIsNotNone(parts["torso"])
+        self.assertTrue(all(0 <= v <= 1 for v in seen))
+        self.assertLessEqual(min(seen), support + 1e-9)
+        self.assertGreaterEqual(max(seen), support - 1e-9)
         self.assertGreater(len(r.shape_weights()), 0)
 
     def test_detection_of_given_and_detected_joints(self):

@@ -4,6 +4,7 @@ pub mod bone_estimate;
 pub mod calibration;
 pub mod gender_evidence;
 pub mod height_calibration;
+pub mod parts;
 pub mod proportions;
 mod score;
 mod sir;
@@ -15,6 +16,7 @@ pub use gender_evidence::{
     gender_evidence, gender_features, GenderClassifier, GenderEvidence, GenderFeatures, MarginCombination,
 };
 pub use height_calibration::{HeightCalibration, HeightEvidence, HEIGHT_EVIDENCE_NAMES, NUM_HEIGHT_EVIDENCE};
+pub use parts::{BodyPart, PartSupport};
 pub use score::{distance_transform, MatchScore, SketchEvidence, CHAMFER_CAP};
 pub use sir::{
     fit_shape, FitOptions, FitProblem, FitResult, IterationStats, EDGE_SUPPORT_RADIUS, LOW_EVIDENCE_SUPPORT,

@@ -103,6 +103,29 @@ impl SketchEvidence {
         }
     }
 
+    /// Edge support per label: every boundary pixel of `mask` is given a label by `label(x, y)`
+    /// (raster pixels; `None` skips it); returns, per label below `labels`, (boundary pixels
+    /// within `radius` raster pixels of a stroke, boundary pixels). Labels at or above `labels`
+    /// are skipped.
+    pub fn edge_support_counts(
+        &self,
+        mask: &[u8],
+        bounds: Option<[usize; 4]>,
+        radius: f64,
+        labels: usize,
+        label: impl Fn(usize, usize) -> Option<usize>,
+    ) -> Vec<(usize, usize)> {
+        let mut counts = vec![(0usize, 0usize); labels];
+        let w = self.width;
+        self.for_each_boundary(mask, bounds, |i| {
+            if let Some(c) = label(i % w, i / w).and_then(|k| counts.get_mut(k)) {
+                c.1 += 1;
+                c.0 += (self.distance[i] as f64 <= radius) as usize;
+            }
+        });
+        counts
+    }
+
     /// Calls `f` with the index of every boundary pixel of `mask` inside `bounds`.
     fn for_each_boundary(&self, mask: &[u8], bounds: Option<[usize; 4]>, mut f: impl FnMut(usize)) {
         let (w, h) = (self.width, self.height);
@@ -485,6 +508,15 @@ mod tests {
         assert!((support(5.5) - 48.0 / 76.0).abs() < 1e-12, "{}", support(5.5));
         assert_eq!(support(6.0), 1.0);
         assert_eq!(ev.edge_support(&vec![0u8; n * n], full, 3.0), 0.0);
+        // Per label, the shifted square's left half (x < 26) and right half: the counts add up
+        // to the whole's, the left half holds the left column and is better supported than the
+        // right one (whose column is 6 from a stroke), and a label at or above `labels` is skipped.
+        let halves = ev.edge_support_counts(&shifted, full, 5.5, 2, |x, _| Some((x >= 26) as usize));
+        assert_eq!(halves[0].1 + halves[1].1, 76);
+        assert_eq!(halves[0].0 + halves[1].0, 48);
+        assert!(halves[0].0 as f64 / halves[0].1 as f64 > halves[1].0 as f64 / halves[1].1 as f64, "{halves:?}");
+        let one = ev.edge_support_counts(&shifted, full, 5.5, 1, |x, _| Some((x >= 26) as usize));
+        assert_eq!(one, vec![halves[0]]);
     }
 
     /// Two outlined squares: the figure is the one a skeleton point falls in (with its strokes),

@@ -21,6 +21,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::bone_estimate::{estimate_proportions, EstimateOptions};
+use super::parts::{nearest_part, BodyPart, PartSupport};
 use super::proportions::{apply_in_place, proportions_of, FactorPrior};
 use super::score::{MatchScore, SketchEvidence};
 use super::transition::Transition;
@@ -33,7 +34,7 @@ use crate::camera::WeakPerspective;
 use crate::error::{ensure_finite, Error, Result};
 use crate::image::GrayImage;
 use crate::raster::{Facing, Rasterizer};
-use crate::skeleton::{Joints2, Joints3, BONES};
+use crate::skeleton::{Joints2, Joints3, BONES, NUM_JOINTS};
 
 /// Options of [`fit_shape`], with documented defaults ([`FitOptions::default`]); the
 /// measurements behind each default are in docs/benchmarks-history.md, "How the fit's defaults
@@ -220,6 +221,10 @@ pub struct FitResult {
     /// Fraction of Y*'s silhouette boundary within [`EDGE_SUPPORT_RADIUS`] raster pixels of a
     /// stroke (0..=1).
     pub edge_support: f64,
+    /// Per body part, the share of Y*'s silhouette boundary within [`EDGE_SUPPORT_RADIUS`]
+    /// raster pixels of a stroke (each boundary pixel belongs to the part of its nearest
+    /// projected bone); all `None` when Y* cannot be drawn.
+    pub part_support: PartSupport,
 }
 
 impl FitResult {
@@ -332,6 +337,8 @@ struct Scratch {
     raster: Rasterizer,
     rest: Vec<[f32; 3]>,
     posed: Vec<[f32; 3]>,
+    /// The last drawn shape's posed joints projected into the raster, pixels.
+    joints_px: [[f64; 2]; NUM_JOINTS],
 }
 
 impl Evaluator<'_> {
@@ -341,12 +348,19 @@ impl Evaluator<'_> {
         Ok(self.draw_and_score(y, s)?.unwrap_or(f64::NEG_INFINITY))
     }
 
-    /// Score and edge support of one shape; `None` when it cannot be posed or lands outside
-    /// the image.
-    fn evaluate(&self, y: &[f64], s: &mut Scratch) -> Result<Option<(f64, f64)>> {
+    /// Score, edge support and per-part support of one shape; `None` when it cannot be posed or
+    /// lands outside the image.
+    fn evaluate(&self, y: &[f64], s: &mut Scratch) -> Result<Option<(f64, f64, PartSupport)>> {
         Ok(self.draw_and_score(y, s)?.map(|score| {
-            let support = self.evidence.edge_support(s.raster.mask(), s.raster.covered_bounds(), EDGE_SUPPORT_RADIUS);
-            (score, support)
+            let (mask, bounds) = (s.raster.mask(), s.raster.covered_bounds());
+            let support = self.evidence.edge_support(mask, bounds, EDGE_SUPPORT_RADIUS);
+            let joints = &s.joints_px;
+            let counts =
+                self.evidence.edge_support_counts(mask, bounds, EDGE_SUPPORT_RADIUS, BodyPart::ALL.len(), |x, y| {
+                    let part = nearest_part(joints, [x as f64 + 0.5, y as f64 + 0.5])?;
+                    BodyPart::ALL.iter().position(|&p| p == part)
+                });
+            (score, support, PartSupport::from_counts(&counts))
         }))
     }
 
@@ -384,6 +398,9 @@ impl Evaluator<'_> {
         let (w, h) = (self.evidence.width(), self.evidence.height());
         match s.raster.rasterize_mask(&s.posed, self.proxy.triangles(), &camera, w, h, Facing::Front) {
             Ok(_) => {
+                for (px, j) in s.joints_px.iter_mut().zip(&pose.joints) {
+                    *px = camera.project(&nalgebra::Vector3::from(*j));
+                }
                 let (mask, bounds) = (s.raster.mask(), s.raster.covered_bounds());
                 Ok(Some(
                     self.evidence.score_in(mask, bounds, self.options.score)
@@ -600,7 +617,9 @@ pub fn fit_shape(
         }
     }
     clamp(&mut weighted_mean);
-    let edge_support = evaluator.evaluate(&weighted_mean, &mut Scratch::default())?.map_or(0.0, |(_, support)| support);
+    let (edge_support, part_support) = evaluator
+        .evaluate(&weighted_mean, &mut Scratch::default())?
+        .map_or((0.0, PartSupport::from_counts(&[])), |(_, support, parts)| (support, parts));
     let proportions = factors.map(|_| proportions_of(&weighted_mean[dims..]));
     weighted_mean.truncate(dims);
     best.1.truncate(dims);
@@ -616,6 +635,7 @@ pub fn fit_shape(
         gender_value,
         male_probability,
         edge_support,
+        part_support,
     })
 }
 

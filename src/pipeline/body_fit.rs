@@ -12,7 +12,8 @@ use crate::body::{BodyModel, Gender, RestShape, ShapeChoice};
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
 use crate::fit::{
-    fit_shape, FitCalibration, FitOptions, FitProblem, FitResult, GenderFeatures, HeightEvidence, PRIOR_RANGE_SD,
+    fit_shape, FitCalibration, FitOptions, FitProblem, FitResult, GenderFeatures, HeightEvidence, PartSupport,
+    PRIOR_RANGE_SD,
 };
 use crate::image::GrayImage;
 use crate::pose::PoseEstimate;
@@ -153,6 +154,9 @@ pub struct FittedBody {
     /// The fit is low-evidence ([`FitResult::low_evidence`]): the body is mostly the prior's
     /// (e.g. a figure under a cloak to the ground). `false` for the mean shape.
     pub low_evidence: bool,
+    /// Per body part, the share of the fitted silhouette's outline the sketch's strokes support
+    /// ([`FitResult::part_support`]); `None` for the mean shape.
+    pub part_support: Option<PartSupport>,
     /// Best match score of the chosen fit (NaN for the mean shape).
     pub score: f64,
     /// The camera refitted to the chosen body (see [`BodyChoice::keep_pose_scale`] and
@@ -235,6 +239,7 @@ pub fn fit_body(
     };
     let (edge_support, low_evidence) =
         fit.fit.as_ref().map_or((f64::NAN, false), |f| (f.edge_support, f.low_evidence()));
+    let part_support = fit.fit.as_ref().map(|f| f.part_support);
     let proportions = fit.fit.as_ref().and_then(|f| f.proportions);
     let fits = vec![fit];
 
@@ -273,6 +278,7 @@ pub fn fit_body(
         weights,
         edge_support,
         low_evidence,
+        part_support,
         score,
         camera,
         rest,

@@ -27,7 +27,9 @@ use crate::body::ik::Pose;
 use crate::body::rig::RiggedMesh;
 use crate::body::{BodyModel, Gender, ShapeChoice};
 use crate::error::{Error, Result};
-use crate::fit::{gender_evidence, FitCalibration, FitOptions, GenderClassifier, GenderEvidence, MarginCombination};
+use crate::fit::{
+    gender_evidence, FitCalibration, FitOptions, GenderClassifier, GenderEvidence, MarginCombination, PartSupport,
+};
 use crate::image::{canny, CannyParams, GrayImage};
 use crate::pose::{estimate_pose_hinted, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::Joints2;
@@ -196,6 +198,9 @@ pub struct PipelineResult {
     pub edge_support: f64,
     /// The fit is low-evidence ([`FittedBody::low_evidence`]).
     pub low_evidence: bool,
+    /// Per body part, the share of the fitted outline the sketch supports
+    /// ([`FittedBody::part_support`]; `None` for the mean shape).
+    pub part_support: Option<PartSupport>,
     /// PCA weights of the chosen body ([`FittedBody::weights`]: Y* of the SIR, mapped when
     /// [`PipelineResult::calibrated`]; empty for the mean shape), metres.
     pub weights: Vec<f64>,
@@ -371,6 +376,7 @@ pub fn run_pipeline(
         male_prior,
         edge_support: body.edge_support,
         low_evidence: body.low_evidence,
+        part_support: body.part_support,
         weights: body.weights,
         score: body.score,
         mesh,

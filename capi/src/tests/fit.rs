@@ -197,6 +197,15 @@ fn pipeline_result_accessors() {
         let (mut low, mut support) = (true, f64::NAN);
         assert_eq!(skb_result_evidence(r, &mut low, &mut support), skb_status::SKB_OK);
         assert!((0.0..=1.0).contains(&support) && low == (support < 0.5));
+        // Per part: shares in 0..=1 (NaN only for a part out of view); the torso is always in
+        // view, and the parts' shares bracket the whole outline's.
+        let mut parts = [f64::NAN; SKB_NUM_BODY_PARTS as usize];
+        assert_eq!(skb_result_part_support(r, parts.as_mut_ptr(), parts.len()), skb_status::SKB_OK);
+        assert!(parts.iter().all(|p| p.is_nan() || (0.0..=1.0).contains(p)), "{parts:?}");
+        assert!(parts[1].is_finite(), "{parts:?}");
+        let seen: Vec<f64> = parts.iter().copied().filter(|p| p.is_finite()).collect();
+        assert!(seen.iter().copied().fold(1.0, f64::min) <= support + 1e-9, "{parts:?} {support}");
+        assert!(seen.iter().copied().fold(0.0, f64::max) >= support - 1e-9, "{parts:?} {support}");
         let mut n = 0usize;
         assert_eq!(skb_result_shape_weights(r, ptr::null_mut(), 0, &mut n), skb_status::SKB_OK);
         let mut w = vec![0.0; n];

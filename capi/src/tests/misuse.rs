@@ -1989,6 +1989,7 @@ fn result_rows(t: &mut Table, fx: &Fx) {
         t.check(e, "dst_len", Kind::Other, SKB_OK, f(r, c.ptr(), 3 * nv), true);
     }
     t.copy("skb_result_copy_faces", "result", "dst", "dst_len", skb_result_copy_faces, r, 4 * nf);
+    t.copy("skb_result_part_support", "result", "dst", "dst_len", skb_result_part_support, r, 6);
     two_buffer_rows(t, "skb_result_copy_skin_weights", "result", skb_result_copy_skin_weights, r, 4 * nv);
     t.getter("skb_result_joints2d", "result", "out", skb_result_joints2d, r);
     t.getter("skb_result_camera", "result", "out", skb_result_camera, r);

@@ -172,6 +172,9 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         "gender_features": r.gender_evidence.features.values,
         "gender_evidence_male_probability": r.gender_evidence.male_probability,
         "edge_support": if r.edge_support.is_finite() { Some(r.edge_support) } else { None },
+        "part_support": r.part_support.map(|p| {
+            sketchbody::fit::BodyPart::ALL.iter().map(|&b| (b.name().to_string(), json!(p.of(b)))).collect::<serde_json::Map<_, _>>()
+        }),
         "low_evidence": r.low_evidence,
         "scores": scores,
         "score": finite(r.score),
