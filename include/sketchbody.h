@@ -237,6 +237,18 @@
 #define SKB_JOINTS_ESTIMATED 2
 
 /**
+ * `skb_interim_fn` stage: the mean shape of the expected gender posed to the estimated 3-D
+ * pose, right after the pose step.
+ */
+#define SKB_INTERIM_MEAN_SHAPE 0
+
+/**
+ * `skb_interim_fn` stage: the gender decision's fit of the chosen gender, posed, before the
+ * final fit (only when the gender is decided by fitting: automatic gender with given joints).
+ */
+#define SKB_INTERIM_DECIDING_FIT 1
+
+/**
  * Number of body parts `skb_result_part_support` reports.
  */
 #define SKB_NUM_BODY_PARTS 6
@@ -681,6 +693,14 @@ typedef struct skb_figure_info {
    */
   uint32_t reserved;
 } skb_figure_info;
+
+/**
+ * Interim-body callback of `skb_run_pipeline_progressive`: called on the calling thread with
+ * the caller's `user`, the stage (`SKB_INTERIM_MEAN_SHAPE`, `SKB_INTERIM_DECIDING_FIT`) and a
+ * posed mesh borrowed for the call only (read it with the mesh getters, e.g.
+ * `skb_mesh_copy_posed_vertices`; do not free or keep it).
+ */
+typedef void (*skb_interim_fn)(void *user, uint32_t stage, const struct skb_mesh *mesh);
 
 #ifdef __cplusplus
 extern "C" {
@@ -1759,6 +1779,24 @@ skb_status skb_run_pipeline(const struct skb_context *ctx,
                             skb_progress_fn progress,
                             void *user,
                             struct skb_result **out);
+
+/**
+ * `skb_run_pipeline` that also shows the bodies it has before the final one: `interim` (may be
+ * NULL) gets the mean shape in the estimated pose as soon as the pose is known (a few ms after
+ * the pose step), then the deciding fit of the chosen gender before the final fit, so a host
+ * can draw something at once. The result is `skb_run_pipeline`'s for the same inputs. Arguments,
+ * ownership, errors and threading as `skb_run_pipeline`; `progress` and `interim` share `user`.
+ */
+skb_status skb_run_pipeline_progressive(const struct skb_context *ctx,
+                                        const struct skb_image *sketch,
+                                        const struct skb_joints2d *joints,
+                                        const struct skb_pose_dictionary *dict,
+                                        const struct skb_pose_options *pose_opts,
+                                        const struct skb_fit_options *fit_opts,
+                                        skb_progress_fn progress,
+                                        skb_interim_fn interim,
+                                        void *user,
+                                        struct skb_result **out);
 
 /**
  * Frees a result. NULL is a no-op.

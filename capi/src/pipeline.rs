@@ -11,7 +11,7 @@ use sketchbody_core::detect::landmark::LandmarkNet;
 use sketchbody_core::error::Error;
 use sketchbody_core::image::{load_image, to_gray, GrayImage};
 use sketchbody_core::pipeline::{
-    run_pipeline, FigureJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult,
+    run_pipeline_progressive, FigureJoints, GivenJoints, InterimBody, JointsSource, PipelineOptions, PipelineResult,
 };
 use sketchbody_core::pose::dict_io;
 use sketchbody_core::skeleton::NUM_JOINTS;
@@ -121,9 +121,88 @@ pub unsafe extern "C" fn skb_run_pipeline(
     user: *mut c_void,
     out: *mut *mut skb_result,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_run_pipeline` (lib.rs § Safety): `ctx`, `sketch`, `joints`, `dict`,
-    // `pose_opts`, `fit_opts`, `progress`, `user`, `out` are NULL or valid for the documented lengths during the
-    // call; the ptr.rs helpers check NULL and lengths before each borrow.
+    // SAFETY: the header contract of `skb_run_pipeline` (lib.rs § Safety), forwarded.
+    unsafe { run(ctx, sketch, joints, dict, pose_opts, fit_opts, progress, None, user, out) }
+}
+
+/// Interim-body callback of `skb_run_pipeline_progressive`: called on the calling thread with
+/// the caller's `user`, the stage (`SKB_INTERIM_MEAN_SHAPE`, `SKB_INTERIM_DECIDING_FIT`) and a
+/// posed mesh borrowed for the call only (read it with the mesh getters, e.g.
+/// `skb_mesh_copy_posed_vertices`; do not free or keep it).
+pub type skb_interim_fn = Option<unsafe extern "C" fn(user: *mut c_void, stage: u32, mesh: *const skb_mesh)>;
+
+/// `skb_interim_fn` stage: the mean shape of the expected gender posed to the estimated 3-D
+/// pose, right after the pose step.
+pub const SKB_INTERIM_MEAN_SHAPE: u32 = 0;
+/// `skb_interim_fn` stage: the gender decision's fit of the chosen gender, posed, before the
+/// final fit (only when the gender is decided by fitting: automatic gender with given joints).
+pub const SKB_INTERIM_DECIDING_FIT: u32 = 1;
+
+/// `skb_run_pipeline` that also shows the bodies it has before the final one: `interim` (may be
+/// NULL) gets the mean shape in the estimated pose as soon as the pose is known (a few ms after
+/// the pose step), then the deciding fit of the chosen gender before the final fit, so a host
+/// can draw something at once. The result is `skb_run_pipeline`'s for the same inputs. Arguments,
+/// ownership, errors and threading as `skb_run_pipeline`; `progress` and `interim` share `user`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_run_pipeline_progressive(
+    ctx: *const skb_context,
+    sketch: *const skb_image,
+    joints: *const skb_joints2d,
+    dict: *const skb_pose_dictionary,
+    pose_opts: *const skb_pose_options,
+    fit_opts: *const skb_fit_options,
+    progress: skb_progress_fn,
+    interim: skb_interim_fn,
+    user: *mut c_void,
+    out: *mut *mut skb_result,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_run_pipeline_progressive` (lib.rs § Safety), forwarded.
+    unsafe { run(ctx, sketch, joints, dict, pose_opts, fit_opts, progress, interim, user, out) }
+}
+
+/// Calls `f` with each interim body as a borrowed `skb_mesh` of `model`.
+fn interim_closure(
+    f: unsafe extern "C" fn(*mut c_void, u32, *const skb_mesh),
+    user: *mut c_void,
+    model: Arc<BodyModel>,
+) -> impl FnMut(&InterimBody) {
+    move |b| {
+        let posed = Posed { pose: b.pose.clone(), vertices: b.posed_vertices.to_vec() };
+        let mesh = skb_mesh {
+            model: Arc::clone(&model),
+            gender: b.gender,
+            rest: b.rest.clone(),
+            weights: b.weights.to_vec(),
+            posed: Some(Box::new(posed)),
+        };
+        // SAFETY: the caller of the exported function promised a valid callback and `user`;
+        // `mesh` outlives the call.
+        unsafe { f(user, b.stage.index(), &mesh) };
+    }
+}
+
+/// The two entry points' shared body.
+///
+/// # Safety
+/// `ctx`, `sketch`, `joints`, `dict`, `pose_opts`, `fit_opts`, `out` are NULL or valid for the
+/// documented lengths during the call; `progress` and `interim` are NULL or valid callbacks for
+/// `user`.
+#[allow(clippy::too_many_arguments)]
+unsafe fn run(
+    ctx: *const skb_context,
+    sketch: *const skb_image,
+    joints: *const skb_joints2d,
+    dict: *const skb_pose_dictionary,
+    pose_opts: *const skb_pose_options,
+    fit_opts: *const skb_fit_options,
+    progress: skb_progress_fn,
+    interim: skb_interim_fn,
+    user: *mut c_void,
+    out: *mut *mut skb_result,
+) -> skb_status {
+    // SAFETY: forwarded contract: `ctx`, `sketch`, `joints`, `dict`, `pose_opts`, `fit_opts`, `out` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));
@@ -161,7 +240,9 @@ pub unsafe extern "C" fn skb_run_pipeline(
                 options.gender = f.gender;
             }
             let mut cb = progress_closure(progress, user);
-            let inner = try_core!(run_pipeline(&ctx.model, d, &gray, source.as_ref(), &options, &mut cb));
+            let mut show = interim.map(|f| interim_closure(f, user, Arc::clone(&ctx.model)));
+            let show = show.as_mut().map(|c| c as &mut dyn FnMut(&InterimBody));
+            let inner = try_core!(run_pipeline_progressive(&ctx.model, d, &gray, source.as_ref(), &options, &mut cb, show));
             give(out, skb_result { model: Arc::clone(&ctx.model), inner })
         }
     }

@@ -31,7 +31,10 @@ use sketchbody::export::texture::{check_texture_size, project_sketch};
 use sketchbody::fsutil::{write_atomic, StagingDir};
 use sketchbody::image::{encode_png, load_rgb_image, save_png, to_gray};
 use sketchbody::pipeline::overlay::overlay;
-use sketchbody::pipeline::{run_pipeline, FigureJoints, GivenJoints, JointsSource, PipelineOptions, PipelineResult};
+use sketchbody::pipeline::{
+    run_pipeline_progressive, FigureJoints, GivenJoints, InterimBody, InterimStage, JointsSource, PipelineOptions,
+    PipelineResult,
+};
 use sketchbody::pose::dict_io;
 use sketchbody::render::preview::{compare_layout, compare_preview, SurfaceTexture};
 
@@ -159,6 +162,7 @@ fn report(
     opts: &PipelineOptions,
     r: &PipelineResult,
     size: (usize, usize),
+    firsts: &[(InterimStage, f64)],
     load_s: f64,
     write_s: f64,
 ) -> String {
@@ -324,6 +328,20 @@ fn report(
         "load {load_s:.3}, edges {:.3}, joints {:.3}, pose {:.3}, fit {:.3}, posing {:.3}, pipeline {:.3}, writing {write_s:.3}",
         t.edges, t.joints, t.pose, t.fit, t.posing, t.total
     );
+    if !firsts.is_empty() {
+        let shown: Vec<String> = firsts
+            .iter()
+            .map(|(stage, at)| match stage {
+                InterimStage::MeanShape => format!("the mean body in the pose at {at:.3}"),
+                InterimStage::DecidingFit => format!("the deciding fit at {at:.3}"),
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "\nBodies a host could show before the final one (`skb_run_pipeline_progressive`): {}",
+            shown.join(", ")
+        );
+    }
     let tex = if a.no_texture { "" } else { " body.mtl, body_texture.png," };
     let _ = writeln!(
         s,
@@ -379,7 +397,18 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let load_s = t_all.elapsed().as_secs_f64();
     catch_interrupt();
     let mut bar = Bar::new(a.quiet);
-    let result = run_pipeline(&model, &dict, &sketch, source.as_ref(), &opts, &mut |f| bar.update(f));
+    let t_run = Instant::now();
+    let mut firsts: Vec<(InterimStage, f64)> = Vec::new();
+    let mut note = |b: &InterimBody| firsts.push((b.stage, t_run.elapsed().as_secs_f64()));
+    let result = run_pipeline_progressive(
+        &model,
+        &dict,
+        &sketch,
+        source.as_ref(),
+        &opts,
+        &mut |f| bar.update(f),
+        Some(&mut note),
+    );
     bar.finish();
     let r = result.map_err(|e| match (&e, &a.joints) {
         (sketchbody::Error::JointOutsideImage { .. }, Some(p)) => CliError(format!("{}: {e}", p.display())),
@@ -421,7 +450,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     write_atomic(&staging.path("pose3d.json"), &pose_bytes)?;
     save_png(&over.view(), &staging.path("overlay.png"))?;
     save_png(&views.view(), &staging.path("preview.png"))?;
-    let text = report(&a, &opts, &r, (sketch.width(), sketch.height()), load_s, t_write.elapsed().as_secs_f64());
+    let text =
+        report(&a, &opts, &r, (sketch.width(), sketch.height()), &firsts, load_s, t_write.elapsed().as_secs_f64());
     write_atomic(&staging.path("report.md"), text.as_bytes())?;
     staging.commit()?;
     // Fits in different dimensions (the gender decision's and the refit) carry their dimensions.
@@ -484,7 +514,7 @@ fn not_trusted_line(parts: &sketchbody::fit::PartSupport) -> Option<String> {
     }
     let names: Vec<&str> = weak.iter().map(|p| p.name()).collect();
     Some(format!(
-        "**not trusted**: {} (the strokes support under {:.0}% of the fitted outline there: clothing, or a shape no \
+        "**not trusted**: {} (the strokes support under {:.0}% of the fitted outline there: clothing, hair, or a shape no \
          body has; the body there is the prior's reading)",
         names.join(", "),
         100.0 * sketchbody::fit::LOW_EVIDENCE_SUPPORT

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "e49f7e9451104812e4f188ace579e783bb7f2836dea7e99bca8e9a75d7b75a39"
+HEADER_SHA256 = "7f027ea0bdc20b84683caa833b7e157a80e02442b4304a2ddf4f5971ac2d26db"
 
 # ---- constants (#define) ----
 
@@ -108,6 +108,12 @@ SKB_JOINTS_REST = 0
 SKB_JOINTS_POSED = 1
 # `skb_result_copy_joints3d`: the 3-D pose estimated from the 2-D joints (a 1.75 m person).
 SKB_JOINTS_ESTIMATED = 2
+# `skb_interim_fn` stage: the mean shape of the expected gender posed to the estimated 3-D
+# pose, right after the pose step.
+SKB_INTERIM_MEAN_SHAPE = 0
+# `skb_interim_fn` stage: the gender decision's fit of the chosen gender, posed, before the
+# final fit (only when the gender is decided by fitting: automatic gender with given joints).
+SKB_INTERIM_DECIDING_FIT = 1
 # Number of body parts `skb_result_part_support` reports.
 SKB_NUM_BODY_PARTS = 6
 # Largest texture side `skb_*_project_texture` accept, texels.
@@ -165,6 +171,8 @@ CONSTANTS = {
     "SKB_JOINTS_REST": 0,
     "SKB_JOINTS_POSED": 1,
     "SKB_JOINTS_ESTIMATED": 2,
+    "SKB_INTERIM_MEAN_SHAPE": 0,
+    "SKB_INTERIM_DECIDING_FIT": 1,
     "SKB_NUM_BODY_PARTS": 6,
     "SKB_MAX_TEXTURE_SIZE": 4096,
     "SKB_DEFAULT_TEXTURE_SIZE": 1024,
@@ -529,6 +537,12 @@ STRUCT_FIELDS = {
 # pointer, passed through untouched. Return 0 to continue, non-zero to cancel: the call then
 # returns `SKB_ERR_CANCELLED` within one fit iteration, having freed everything it made.
 skb_progress_fn = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_float)
+
+# Interim-body callback of `skb_run_pipeline_progressive`: called on the calling thread with
+# the caller's `user`, the stage (`SKB_INTERIM_MEAN_SHAPE`, `SKB_INTERIM_DECIDING_FIT`) and a
+# posed mesh borrowed for the call only (read it with the mesh getters, e.g.
+# `skb_mesh_copy_posed_vertices`; do not free or keep it).
+skb_interim_fn = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_uint32, ctypes.POINTER(skb_mesh))
 
 # ---- functions ----
 # name: (restype, argtypes, C return type, ((argument name, C type), ...))
@@ -2859,6 +2873,40 @@ FUNCTIONS["skb_run_pipeline"] = (
         ("pose_opts", "const struct skb_pose_options *"),
         ("fit_opts", "const struct skb_fit_options *"),
         ("progress", "skb_progress_fn"),
+        ("user", "void *"),
+        ("out", "struct skb_result **"),
+    ),
+)
+
+# `skb_run_pipeline` that also shows the bodies it has before the final one: `interim` (may be
+# NULL) gets the mean shape in the estimated pose as soon as the pose is known (a few ms after
+# the pose step), then the deciding fit of the chosen gender before the final fit, so a host
+# can draw something at once. The result is `skb_run_pipeline`'s for the same inputs. Arguments,
+# ownership, errors and threading as `skb_run_pipeline`; `progress` and `interim` share `user`.
+FUNCTIONS["skb_run_pipeline_progressive"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_context),
+        ctypes.POINTER(skb_image),
+        ctypes.POINTER(skb_joints2d),
+        ctypes.POINTER(skb_pose_dictionary),
+        ctypes.POINTER(skb_pose_options),
+        ctypes.POINTER(skb_fit_options),
+        skb_progress_fn,
+        skb_interim_fn,
+        ctypes.c_void_p,
+        ctypes.POINTER(ctypes.POINTER(skb_result)),
+    ],
+    "skb_status",
+    (
+        ("ctx", "const struct skb_context *"),
+        ("sketch", "const struct skb_image *"),
+        ("joints", "const struct skb_joints2d *"),
+        ("dict", "const struct skb_pose_dictionary *"),
+        ("pose_opts", "const struct skb_pose_options *"),
+        ("fit_opts", "const struct skb_fit_options *"),
+        ("progress", "skb_progress_fn"),
+        ("interim", "skb_interim_fn"),
         ("user", "void *"),
         ("out", "struct skb_result **"),
     ),

@@ -185,16 +185,18 @@ class Progress:
     (anything with is_set(), e.g. threading.Event) is set. An exception raised by `progress`
     cancels the C call and is re-raised by `reraise()` after it returns."""
 
-    def __init__(self, progress=None, cancel=None):
+    def __init__(self, progress=None, cancel=None, always=False):
         if progress is not None and not callable(progress):
             raise TypeError(f"progress must be callable, not {type(progress).__name__}")
         if cancel is not None and not callable(getattr(cancel, "is_set", None)):
             raise TypeError("cancel must have an is_set() method (e.g. threading.Event)")
         self.progress, self.cancel, self.exc = progress, cancel, None
-        self.fn = B.skb_progress_fn(self._cb) if (progress or cancel) else B.skb_progress_fn()
+        self.fn = B.skb_progress_fn(self._cb) if (progress or cancel or always) else B.skb_progress_fn()
 
     def _cb(self, _user, fraction):
         try:
+            if self.exc is not None:
+                return 1
             if self.cancel is not None and self.cancel.is_set():
                 return 1
             if self.progress is not None and self.progress(float(fraction)) is False:

@@ -205,8 +205,34 @@ class Result(Handle):
         return Mesh(new_handle("skb_result_mesh", B.skb_mesh, self._p))
 
 
+class _Interim:
+    """The skb_interim_fn trampoline for one run: hands `interim(stage, vertices)` each interim
+    body's stage name and a copy of its posed vertices; an exception it raises cancels the run
+    at the next progress call and is re-raised."""
+
+    STAGES = ("mean_shape", "deciding_fit")
+
+    def __init__(self, interim, prog):
+        if interim is not None and not callable(interim):
+            raise TypeError(f"interim must be callable, not {type(interim).__name__}")
+        self.interim, self.prog = interim, prog
+        self.fn = B.skb_interim_fn(self._cb) if interim is not None else B.skb_interim_fn()
+
+    def _cb(self, _user, stage, mesh):
+        if self.prog.exc is not None:
+            return
+        try:
+            n = ctypes.c_size_t()
+            call("skb_mesh_vertex_count", mesh, ctypes.byref(n))
+            v = np.empty((n.value, 3), dtype=np.float32)
+            call("skb_mesh_copy_posed_vertices", mesh, A.ptr(v), v.size)
+            self.interim(self.STAGES[stage] if stage < len(self.STAGES) else int(stage), v)
+        except BaseException as e:  # noqa: BLE001 - re-raised after the C call
+            self.prog.exc = e
+
+
 def run_pipeline(sketch, joints=None, fit_options=None, pose_options=None, dictionary=None, progress=None,
-                 cancel=None, context=None):
+                 cancel=None, context=None, interim=None):
     """The main job: Canny edges of `sketch` (numpy uint8 image or a PNG/JPEG path), the 2-D
     joints (`joints`: Joints2D, a sketchbody-joints2d JSON path, a dict or a (15, 2) array;
     None: the embedded detector finds them), the 3-D pose and camera, the shape fit and the
@@ -215,17 +241,24 @@ def run_pipeline(sketch, joints=None, fit_options=None, pose_options=None, dicti
     `progress(fraction)` is called on the calling thread after each stage and fit iteration;
     returning False cancels. `cancel` (e.g. a threading.Event, set from any thread) cancels
     too. Cancelling raises Cancelled within one fit iteration; an exception raised by
-    `progress` cancels and is re-raised. The GIL is released while the library works."""
+    `progress` cancels and is re-raised. The GIL is released while the library works.
+
+    `interim(stage, vertices)` (optional) gets the bodies the run has before the final one, on
+    the calling thread: "mean_shape" (the mean body posed to the estimated pose, right after the
+    pose step), then "deciding_fit" (the chosen gender's first fit, when the gender is decided
+    by fitting); `vertices` is an (N, 3) float32 copy of the posed vertices (metres, model
+    frame, the Result's vertex order), e.g. to draw a first body at once."""
     ctx = context or default_context()
     view, keep = as_image(sketch, "sketch")
     j = None if joints is None else joints2d_arg(joints).to_struct()
     d = None if dictionary is None else _dict_arg(dictionary)
-    prog = Progress(progress, cancel)
+    prog = Progress(progress, cancel, always=interim is not None)
+    shown = _Interim(interim, prog)
     out = ctypes.POINTER(B.skb_result)()
     with options_handle(fit_options, FitOptions) as fh, options_handle(pose_options, PoseOptions) as ph:
         try:
-            call("skb_run_pipeline", ctx._p, ctypes.byref(view), None if j is None else ctypes.byref(j),
-                 None if d is None else d._p, ph, fh, prog.fn, None, ctypes.byref(out))
+            call("skb_run_pipeline_progressive", ctx._p, ctypes.byref(view), None if j is None else ctypes.byref(j),
+                 None if d is None else d._p, ph, fh, prog.fn, shown.fn, None, ctypes.byref(out))
         finally:
             prog.reraise()
     del keep

@@ -206,6 +206,25 @@ class PipelineTest(unittest.TestCase):
         self.assertGreaterEqual(max(seen), support - 1e-9)
         self.assertGreater(len(r.shape_weights()), 0)
 
+    def test_interim_bodies_come_first_and_the_result_is_the_same(self):
+        fast = skb.FitOptions(samples=24, iterations=2)
+        seen = []
+        r = skb.run_pipeline(SKETCH, joints=SKETCH_JOINTS, fit_options=fast,
+                             interim=lambda stage, v: seen.append((stage, v)))
+        plain = skb.run_pipeline(SKETCH, joints=SKETCH_JOINTS, fit_options=fast)
+        np.testing.assert_array_equal(r.vertices(), plain.vertices())
+        self.assertEqual([s for s, _ in seen], ["mean_shape", "deciding_fit"])
+        for _, v in seen:
+            self.assertEqual((v.shape, v.dtype), ((NV, 3), np.float32))
+            self.assertFalse(np.array_equal(v, r.vertices()))
+
+    def test_an_interim_exception_cancels_and_is_raised(self):
+        def boom(stage, v):
+            raise ValueError(f"stop at {stage}")
+        with self.assertRaisesRegex(ValueError, "stop at mean_shape"):
+            skb.run_pipeline(SKETCH, joints=SKETCH_JOINTS, fit_options=skb.FitOptions(samples=24, iterations=2),
+                             interim=boom)
+
     def test_detection_of_given_and_detected_joints(self):
         # Given joints: no detection behind them.
         self.assertIsNone(self.r.detection())

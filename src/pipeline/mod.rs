@@ -18,6 +18,7 @@
 pub mod body_fit;
 mod detected;
 pub mod figure;
+pub mod interim;
 pub mod joints;
 pub mod overlay;
 
@@ -36,6 +37,7 @@ use crate::skeleton::Joints2;
 
 pub use body_fit::{calibrated_weights, fit_body, refit_camera, rest_body, BodyChoice, FittedBody, GenderFit};
 pub use detected::{DetectedJointsFit, DEFAULT_DEPTH_HINT};
+pub use interim::{InterimBody, InterimStage};
 pub use joints::{DetectedJoints, FigureJoints, GivenJoints, JointsSource};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
@@ -266,6 +268,24 @@ pub fn run_pipeline(
     options: &PipelineOptions,
     progress: &mut dyn FnMut(f32) -> bool,
 ) -> Result<PipelineResult> {
+    run_pipeline_progressive(model, dict, sketch, source, options, progress, None)
+}
+
+/// [`run_pipeline`] that also hands `interim` (called from the calling thread) the bodies it has
+/// before the final one: [`InterimStage::MeanShape`] right after the pose step (the mean shape
+/// of the expected gender in the estimated pose; a few ms of posing), then, when the gender is
+/// decided by fitting, [`InterimStage::DecidingFit`] before the final fit. With `interim` `None`
+/// the run is [`run_pipeline`]'s; with it the result is the same. Errors: [`run_pipeline`]'s and
+/// the interim body's posing errors.
+pub fn run_pipeline_progressive(
+    model: &BodyModel,
+    dict: &Dictionary,
+    sketch: &GrayImage,
+    source: &dyn JointsSource,
+    options: &PipelineOptions,
+    progress: &mut dyn FnMut(f32) -> bool,
+    mut interim: Option<&mut dyn FnMut(&InterimBody)>,
+) -> Result<PipelineResult> {
     let t0 = Instant::now();
     let mut p = Progress { callback: progress };
     let mut timings = Timings::default();
@@ -342,12 +362,19 @@ pub fn run_pipeline(
         calibration,
         widths: Some(evidence.features),
     };
+    if let Some(show) = interim.as_deref_mut() {
+        let gender =
+            choice.gender.unwrap_or(if evidence.male_probability > 0.5 { Gender::Male } else { Gender::Female });
+        let mean = BodyChoice { gender: Some(gender), mean_shape: true, ..choice };
+        let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &mean, &mut |_| true)?;
+        show(&interim_of(&body, InterimStage::MeanShape));
+    }
     let (body, classified) = if classify {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
         let sketch = SketchInputs { pose: &pose, edges: &edges, joints2d: &joints2d };
         let log_odds = classifier.log_odds(&evidence.features);
         let decision = Decision { dims: options.gender_decision_dims, seeds: options.gender_decision_seeds };
-        let (body, male) = classify_and_fit(model, &sketch, &fit, &choice, decision, log_odds, &mut cb)?;
+        let (body, male) = classify_and_fit(model, &sketch, &fit, &choice, decision, log_odds, &mut cb, interim)?;
         (body, Some(male.max(1.0 - male)))
     } else {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
@@ -389,6 +416,19 @@ pub fn run_pipeline(
     })
 }
 
+/// The interim view of a fitted `body` at `stage`.
+fn interim_of(body: &FittedBody, stage: InterimStage) -> InterimBody<'_> {
+    InterimBody {
+        stage,
+        gender: body.gender,
+        rest: &body.rest,
+        weights: &body.weights,
+        pose: &body.ik_pose,
+        posed_vertices: &body.posed_vertices,
+        camera: &body.camera,
+    }
+}
+
 /// What the gender decision's fits read of the sketch: the estimated pose and camera, the
 /// edge map and the 2-D joints.
 struct SketchInputs<'a> {
@@ -413,7 +453,7 @@ struct Decision {
 /// searches other dimensions or another population schedule (else the last seed's fit is the
 /// body). Returns the chosen body (its `fits`: the deciding fits, female then male per seed,
 /// then the refit if any; `fit_seconds` their sum) and P(male). `progress` sees 0..=1 over all
-/// the fits. Errors: `decision.seeds` outside 1..=16 ([`Error::OutOfRange`]) and the fits'.
+/// the fits; `interim` gets the chosen gender's deciding body before a refit. Errors: `decision.seeds` outside 1..=16 ([`Error::OutOfRange`]) and the fits'.
 fn classify_and_fit(
     model: &BodyModel,
     sketch: &SketchInputs,
@@ -422,6 +462,7 @@ fn classify_and_fit(
     decision: Decision,
     log_odds: f64,
     progress: &mut dyn FnMut(f32) -> bool,
+    interim: Option<&mut dyn FnMut(&InterimBody)>,
 ) -> Result<(FittedBody, f64)> {
     if !(1..=16).contains(&decision.seeds) {
         return Err(Error::OutOfRange {
@@ -457,6 +498,9 @@ fn classify_and_fit(
     // Without a refit the body is the last seed's fit (the last of its space in `fits`).
     let mut last_pair = bodies.split_off(deciding_fits - 2);
     let mut body = if refit(chosen)? {
+        if let Some(show) = interim {
+            show(&interim_of(&last_pair[chosen.index()], InterimStage::DecidingFit));
+        }
         let body = fit_one(chosen, fit, deciding_fits as f32)?;
         fits.extend(body.fits.iter().cloned());
         seconds += body.fit_seconds;

@@ -373,3 +373,69 @@ fn fit_shape_from_c() {
         assert!(m2.is_null());
     }
 }
+
+/// What the interim test's callback records: per call, the stage, the mesh's gender, its
+/// shape-weight count and its posed vertices.
+type InterimLog = Vec<(u32, u32, usize, Vec<f32>)>;
+
+unsafe extern "C" fn record_interim(user: *mut c_void, stage: u32, mesh: *const skb_mesh) {
+    // SAFETY: the test passes `user` as a pointer to its log, alive for the whole run; `mesh`
+    // is the library's borrowed mesh, valid during this call.
+    unsafe {
+        let log = &mut *(user as *mut InterimLog);
+        let (mut g, mut nv, mut nk) = (9u32, 0usize, 0usize);
+        assert_eq!(skb_mesh_gender(mesh, &mut g), skb_status::SKB_OK);
+        assert_eq!(skb_mesh_vertex_count(mesh, &mut nv), skb_status::SKB_OK);
+        assert_eq!(skb_mesh_shape_weight_count(mesh, &mut nk), skb_status::SKB_OK);
+        let mut v = vec![0.0f32; 3 * nv];
+        assert_eq!(skb_mesh_copy_posed_vertices(mesh, v.as_mut_ptr(), v.len()), skb_status::SKB_OK);
+        log.push((stage, g, nk, v));
+    }
+}
+
+/// The progressive run shows the posed mean shape, then the chosen gender's 4-dimension
+/// deciding fit, as borrowed meshes, and ends with skb_run_pipeline's result.
+#[test]
+fn progressive_run_shows_interim_bodies_and_ends_as_the_plain_run() {
+    let i = Inputs::new();
+    let j = joints();
+    let mut log: InterimLog = Vec::new();
+    let (mut plain, mut progressive) = (ptr::null_mut(), ptr::null_mut());
+    // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
+    unsafe {
+        let st =
+            skb_run_pipeline(i.ctx, &i.view, &j, ptr::null(), ptr::null(), i.opts, None, ptr::null_mut(), &mut plain);
+        assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
+        let st = skb_run_pipeline_progressive(
+            i.ctx,
+            &i.view,
+            &j,
+            ptr::null(),
+            ptr::null(),
+            i.opts,
+            None,
+            Some(record_interim),
+            &mut log as *mut _ as *mut c_void,
+            &mut progressive,
+        );
+        assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
+        let vertices = |r: *mut skb_result| {
+            let (mut nv, mut nf) = (0usize, 0usize);
+            assert_eq!(skb_result_counts(r, &mut nv, &mut nf), skb_status::SKB_OK);
+            let mut v = vec![0.0f32; 3 * nv];
+            assert_eq!(skb_result_copy_vertices(r, true, v.as_mut_ptr(), v.len()), skb_status::SKB_OK);
+            v
+        };
+        let final_vertices = vertices(progressive);
+        assert_eq!(final_vertices, vertices(plain));
+        let mut g = 9u32;
+        let mut by_score = false;
+        assert_eq!(skb_result_gender(progressive, &mut g, &mut by_score), skb_status::SKB_OK);
+        let stages: Vec<(u32, usize)> = log.iter().map(|l| (l.0, l.2)).collect();
+        assert_eq!(stages, [(SKB_INTERIM_MEAN_SHAPE, 0), (SKB_INTERIM_DECIDING_FIT, 4)]);
+        assert_eq!(log[1].1, g, "the deciding fit of the chosen gender");
+        assert!(log.iter().all(|l| l.3.len() == final_vertices.len() && l.3 != final_vertices));
+        skb_result_free(plain);
+        skb_result_free(progressive);
+    }
+}

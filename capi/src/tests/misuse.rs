@@ -1876,7 +1876,21 @@ fn long_call_rows(t: &mut Table, fx: &Fx) {
         unsafe { skb_fit_shape(ctx, j3.as_ptr(), 45, &cam, &blank_im, o, None, ptr::null_mut(), ptr::null_mut(), op) };
     t.check(e, "score", Kind::Null, SKB_ERR_BLANK_IMAGE, s, out.intact());
 
-    let e = "skb_run_pipeline";
+    for (e, progressive) in [("skb_run_pipeline", false), ("skb_run_pipeline_progressive", true)] {
+        pipeline_rows(t, fx, ctx, &blank_im, e, progressive);
+    }
+}
+
+/// The main job's rows for `skb_run_pipeline` or (`progressive`) `skb_run_pipeline_progressive`
+/// (with an interim callback: every row fails before a body exists).
+fn pipeline_rows(
+    t: &mut Table,
+    fx: &Fx,
+    ctx: *const skb_context,
+    blank_im: &skb_image,
+    e: &'static str,
+    progressive: bool,
+) {
     let mut out = Canary::of::<*mut skb_result>(1);
     let op = out.ptr();
     let d = fx.dict as *const skb_pose_dictionary;
@@ -1889,8 +1903,14 @@ fn long_call_rows(t: &mut Table, fx: &Fx) {
                po: *const skb_pose_options,
                fo: *const skb_fit_options,
                out: *mut *mut skb_result| {
-        // SAFETY: live handles, locals or NULL.
-        unsafe { skb_run_pipeline(c, s, j, d, po, fo, None, ptr::null_mut(), out) }
+        // SAFETY: live handles, locals or NULL; the interim callback only counts.
+        unsafe {
+            if progressive {
+                skb_run_pipeline_progressive(c, s, j, d, po, fo, None, Some(no_interim), ptr::null_mut(), out)
+            } else {
+                skb_run_pipeline(c, s, j, d, po, fo, None, ptr::null_mut(), out)
+            }
+        }
     };
     let small = [255u8; 16 * 16];
     let small_im = skb_image { data: small.as_ptr(), width: 16, height: 16, stride: 16, channels: 1 };
@@ -1903,7 +1923,7 @@ fn long_call_rows(t: &mut Table, fx: &Fx) {
         ("sketch", Kind::Null, SKB_ERR_NULL_POINTER, run(ctx, ptr::null(), &j, d, po, fo, op)),
         ("out", Kind::Null, SKB_ERR_NULL_POINTER, run(ctx, &sk, &j, d, po, fo, ptr::null_mut())),
         ("sketch", Kind::Other, SKB_ERR_IMAGE_TOO_SMALL, run(ctx, &small_im, &j, d, po, fo, op)),
-        ("sketch", Kind::Other, SKB_ERR_BLANK_IMAGE, run(ctx, &blank_im, &j, d, po, fo, op)),
+        ("sketch", Kind::Other, SKB_ERR_BLANK_IMAGE, run(ctx, blank_im, &j, d, po, fo, op)),
         ("joints", Kind::Other, SKB_ERR_JOINT_OUTSIDE_IMAGE, run(ctx, &sk, &outside, d, po, fo, op)),
         // NULL joints, dict and options are allowed (detector, embedded dictionary, defaults):
         // with a too-small sketch the call fails on the sketch, not on the NULL.
@@ -1920,6 +1940,11 @@ fn long_call_rows(t: &mut Table, fx: &Fx) {
     for (param, kind, want, got) in rows {
         t.check(e, param, kind, want, got, out.intact());
     }
+}
+
+/// An interim callback for rows that must fail before any body: panics if called.
+unsafe extern "C" fn no_interim(_: *mut std::ffi::c_void, stage: u32, _: *const skb_mesh) {
+    panic!("interim body {stage} from a call that should have failed first");
 }
 
 fn result_rows(t: &mut Table, fx: &Fx) {
