@@ -194,6 +194,37 @@ int main() {
         std::printf("capi_cpp_test: texture %zu green / %zu grey texels of 128x128; FBX, USD in cm, Z up\n", green, grey);
     }
 
+    {
+        // The main job with interim bodies: the posed mean shape, then the deciding fit, then a
+        // result equal to run_pipeline's; per-part support in 0..1 or NaN.
+        sketchbody::Context ctx;
+        const sketchbody::LoadedColourImage sketch(SKB_SOURCE_DIR "/assets/examples/sketch.png");
+        skb_joints2d joints{};
+        sketchbody::check(skb_joints2d_read_json(SKB_SOURCE_DIR "/assets/examples/sketch_joints.json", &joints));
+        sketchbody::FitOptions fit;
+        fit.samples(24).iterations(2);
+        std::vector<uint32_t> stages;
+        std::vector<float> first;
+        const sketchbody::Result r = sketchbody::run_pipeline_progressive(
+            ctx, sketch.view(), &joints, &fit, [&](uint32_t stage, const std::vector<float> &v) {
+                stages.push_back(stage);
+                if (first.empty()) first = v;
+            });
+        const sketchbody::Result plain = sketchbody::run_pipeline(ctx, sketch.view(), &joints, &fit);
+        CHECK((stages == std::vector<uint32_t>{SKB_INTERIM_MEAN_SHAPE, SKB_INTERIM_DECIDING_FIT}));
+        CHECK(r.vertices(true) == plain.vertices(true));
+        CHECK(first.size() == 3 * r.vertex_count() && first != r.vertices(true));
+        const std::vector<double> parts = r.part_support();
+        CHECK(parts.size() == SKB_NUM_BODY_PARTS && std::isfinite(parts[1]));
+        for (double p : parts) CHECK(std::isnan(p) || (p >= 0 && p <= 1));
+        // An exception in the interim callback cancels the run.
+        CHECK(status_of([&] {
+                  sketchbody::run_pipeline_progressive(ctx, sketch.view(), &joints, &fit,
+                                                       [](uint32_t, const std::vector<float> &) { throw 1; });
+              }) == SKB_ERR_CANCELLED);
+        std::printf("capi_cpp_test: progressive run, %zu interim bodies; torso support %.2f\n", stages.size(), parts[1]);
+    }
+
     std::printf("%s (%d failed checks)\n", failures ? "FAIL" : "PASS", failures);
     return failures ? 1 : 0;
 }

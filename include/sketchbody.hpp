@@ -364,6 +364,14 @@ public:
     double gender_confidence() const { double v = 0, c = 0; check(skb_result_gender_value(r_.get(), &v, &c)); return c; }
     /// True when the sketch supports less than half of the fitted outline (mostly clothing).
     bool low_evidence() const { bool l = false; check(skb_result_evidence(r_.get(), &l, nullptr)); return l; }
+    /// Per body part (head, torso, right arm, left arm, right leg, left leg), the share of the
+    /// fitted outline near a stroke (0..1; NaN out of view or for the mean shape);
+    /// skb_result_part_support.
+    std::vector<double> part_support() const {
+        std::vector<double> p(SKB_NUM_BODY_PARTS);
+        check(skb_result_part_support(r_.get(), p.data(), p.size()));
+        return p;
+    }
     /// Best match score of the fit; g must be gender() (throws otherwise).
     double score(uint32_t g) const { double s = 0; check(skb_result_score(r_.get(), g, &s)); return s; }
     size_t vertex_count() const { size_t v = 0; check(skb_result_counts(r_.get(), &v, nullptr)); return v; }
@@ -429,6 +437,49 @@ inline Result run_pipeline(const Context &ctx, const skb_image &sketch, const sk
     skb_progress_fn fn = progress ? &detail::progress_trampoline : nullptr;
     check(skb_run_pipeline(ctx.get(), &sketch, joints, nullptr, nullptr, fit ? fit->get() : nullptr, fn,
                            progress ? static_cast<void *>(&progress) : nullptr, &raw));
+    return Result(raw);
+}
+
+/// Interim-body callback of run_pipeline_progressive: the stage (SKB_INTERIM_MEAN_SHAPE,
+/// SKB_INTERIM_DECIDING_FIT) and a copy of the body's posed vertices (x, y, z per vertex, metres).
+using Interim = std::function<void(uint32_t stage, const std::vector<float> &posed_vertices)>;
+
+namespace detail {
+/// The progress and interim callbacks of one progressive run (they share the C `user`).
+struct ProgressiveCallbacks {
+    Progress progress;
+    Interim interim;
+    bool failed = false;  ///< an interim callback threw: the next progress call cancels
+};
+inline int progressive_progress(void *user, float fraction) {
+    auto *c = static_cast<ProgressiveCallbacks *>(user);
+    if (c->failed) return 1;
+    return c->progress ? progress_trampoline(&c->progress, fraction) : 0;
+}
+inline void progressive_interim(void *user, uint32_t stage, const skb_mesh *mesh) {
+    auto *c = static_cast<ProgressiveCallbacks *>(user);
+    if (c->failed) return;
+    try {
+        size_t n = 0;
+        check(skb_mesh_vertex_count(mesh, &n));
+        std::vector<float> v(3 * n);
+        check(skb_mesh_copy_posed_vertices(mesh, v.data(), v.size()));
+        c->interim(stage, v);
+    } catch (...) {
+        c->failed = true;  // an exception in the callback cancels the run
+    }
+}
+}  // namespace detail
+
+/// run_pipeline that also hands `interim` the bodies it has before the final one
+/// (skb_run_pipeline_progressive): the mean shape in the estimated pose, then the deciding fit.
+inline Result run_pipeline_progressive(const Context &ctx, const skb_image &sketch, const skb_joints2d *joints,
+                                       const FitOptions *fit, Interim interim, Progress progress = {}) {
+    skb_result *raw = nullptr;
+    detail::ProgressiveCallbacks c{std::move(progress), std::move(interim)};
+    check(skb_run_pipeline_progressive(ctx.get(), &sketch, joints, nullptr, nullptr, fit ? fit->get() : nullptr,
+                                       &detail::progressive_progress, c.interim ? &detail::progressive_interim : nullptr,
+                                       &c, &raw));
     return Result(raw);
 }
 
