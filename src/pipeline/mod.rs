@@ -6,6 +6,7 @@
 //! - [`joints`]: the 2-D joints source (the caller's joints, or the detector's).
 //! - [`figure`]: the single-figure detector refereed by the pose step.
 //! - [`overlay`]: the overlay picture (sketch, joints, bones, fitted silhouette outline).
+//! - [`repose`]: re-posing a finished result (a depth reading, a flipped limb, moved joints) without re-fitting its shape.
 //!
 //! Gender: given a gender ([`PipelineOptions::gender`]), that gender's space is fitted. Without
 //! one, with given joints the default fits both gendered spaces and a classifier chooses
@@ -20,6 +21,7 @@ mod detected;
 pub mod figure;
 pub mod joints;
 pub mod overlay;
+pub mod repose;
 
 use std::time::Instant;
 
@@ -35,6 +37,7 @@ use crate::skeleton::Joints2;
 pub use body_fit::{calibrated_weights, fit_body, refit_camera, rest_body, BodyChoice, FittedBody, GenderFit};
 pub use detected::{DetectedJointsFit, DEFAULT_DEPTH_HINT};
 pub use joints::{DetectedJoints, FigureJoints, GivenJoints, JointsSource};
+pub use repose::{repose, Posing, ReposeOutcome, ReposeRequest};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
 pub const MIN_SKETCH_SIDE: usize = 32;
@@ -215,6 +218,8 @@ pub struct PipelineResult {
     pub posed_vertices: Vec<[f32; 3]>,
     /// Posed joints of the mesh (model frame, metres).
     pub posed_joints: crate::skeleton::Joints3,
+    /// The options of the pose and posing steps, for [`repose`].
+    pub posing_options: Posing,
     /// Stage timings.
     pub timings: Timings,
 }
@@ -379,6 +384,7 @@ pub fn run_pipeline(
         calibrated: body.calibrated,
         ik_pose: body.ik_pose,
         posed_vertices: body.posed_vertices,
+        posing_options: Posing { pose: options.pose, retarget: fit.retarget, skinning: fit.skinning },
         timings,
     })
 }
