@@ -1031,4 +1031,59 @@ mod tests {
             skb_pose_dictionary_free(std::ptr::null_mut());
         }
     }
+
+    #[test]
+    fn estimate_handle_lists_the_cores_alternatives_and_flips_like_it() {
+        let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sketch_joints.json");
+        let core_j = sketchbody_core::export::joints2d::load_joints2d(Path::new(root)).unwrap();
+        let mut j = skb_joints2d { xy: core_j.xy, visible: [0; 15], reserved: 0 };
+        for (v, &c) in j.visible.iter_mut().zip(&core_j.visible) {
+            *v = u8::from(c);
+        }
+        let core = estimate_pose(&dict_io::embedded().unwrap(), &core_j, &PoseOptions::default()).unwrap();
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
+        unsafe {
+            let mut d = std::ptr::null_mut();
+            assert_eq!(skb_pose_dictionary_new_default(&mut d), skb_status::SKB_OK);
+            let mut e = std::ptr::null_mut();
+            assert_eq!(skb_pose_estimate_new(d, &j, std::ptr::null(), &mut e), skb_status::SKB_OK);
+            let mut n = 0u32;
+            assert_eq!(skb_pose_estimate_num_alternatives(e, &mut n), skb_status::SKB_OK);
+            assert_eq!(n as usize, core.alternatives.len());
+            assert!(n >= 2, "{n}");
+            for (i, a) in core.alternatives.iter().enumerate() {
+                let (mut x, mut score) = ([0.0f64; 45], f64::NAN);
+                assert_eq!(skb_pose_estimate_copy_alternative_joints(e, i as u32, x.as_mut_ptr(), 45, &mut score), skb_status::SKB_OK);
+                assert_eq!(x.to_vec(), a.joints.iter().flatten().copied().collect::<Vec<_>>());
+                assert_eq!(score, a.score);
+                let (mut limbs, mut count) = ([u32::MAX; 8], usize::MAX);
+                assert_eq!(
+                    skb_pose_estimate_copy_alternative_flipped(e, i as u32, limbs.as_mut_ptr(), 8, &mut count),
+                    skb_status::SKB_OK
+                );
+                assert_eq!(limbs[..count].to_vec(), a.flipped.iter().map(|l| l.index() as u32).collect::<Vec<_>>());
+            }
+            // Flipping alternative 1's first limb twice: there and back, as the core does.
+            let limb = core.alternatives[1].flipped[0];
+            let mut outcome = u32::MAX;
+            let mut p: skb_pose3d = std::mem::zeroed();
+            assert_eq!(skb_pose_flip_limb(e, limb.index() as u32, &mut outcome), skb_status::SKB_OK);
+            assert_eq!(outcome, SKB_REPOSE_DONE);
+            assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
+            let once = flip_limb(&core, limb).0;
+            assert_eq!(p.joints, once.joints);
+            assert_eq!(skb_pose_flip_limb(e, limb.index() as u32, &mut outcome), skb_status::SKB_OK);
+            assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
+            let back = p.joints.iter().flatten().zip(core.joints.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            assert!(back < 1e-12, "{back}");
+            // Picking alternative 1 takes its joints.
+            assert_eq!(skb_pose_estimate_pick(e, 1), skb_status::SKB_OK);
+            assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
+            let picked =
+                p.joints.iter().flatten().zip(core.alternatives[1].joints.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            assert!(picked < 1e-12, "{picked}");
+            skb_pose_estimate_free(e);
+            skb_pose_dictionary_free(d);
+        }
+    }
 }

@@ -2379,6 +2379,7 @@ fn alternatives_rows(t: &mut Table, fx: &Fx) {
         t.check(e, "outcome", Kind::Other, SKB_OK, skb_result_flip_limb(r, SKB_LIMB_L_THIGH, oc.ptr()), true);
 
         let e = "skb_result_repose_joints";
+        let mut oc = Canary::of::<u32>(1);
         let mut rj = skb_joints2d { xy: [[0.0; 2]; 15], visible: [0; 15], reserved: 0 };
         assert_eq!(skb_result_joints2d(r, &mut rj), SKB_OK);
         t.check(e, "result", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_repose_joints(ptr::null_mut(), d, &rj, oc.ptr()), oc.intact());
