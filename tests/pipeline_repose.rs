@@ -3,12 +3,14 @@
 
 use std::path::Path;
 
+use nalgebra::Vector3;
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::fit::FitOptions;
 use sketchbody::image::load_image;
-use sketchbody::pipeline::{repose, run_pipeline, GivenJoints, PipelineOptions, PipelineResult, ReposeOutcome, ReposeRequest};
-use nalgebra::Vector3;
+use sketchbody::pipeline::{
+    repose, run_pipeline, GivenJoints, PipelineOptions, PipelineResult, ReposeOutcome, ReposeRequest,
+};
 use sketchbody::pose::alternatives::has_depth;
 use sketchbody::pose::{dict_io, Limb};
 use sketchbody::skeleton::{joint, Joints3};

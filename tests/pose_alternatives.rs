@@ -5,7 +5,9 @@ use nalgebra::{Rotation3, Vector3};
 use sketchbody::camera::WeakPerspective;
 use sketchbody::pose::alternatives::{has_depth, MAX_ALTERNATIVES, NO_DEPTH_SIN};
 use sketchbody::pose::problem::Problem;
-use sketchbody::pose::{dict_io, estimate_pose, flip_limb, pick_alternative, FlipStatus, Limb, PoseEstimate, PoseOptions};
+use sketchbody::pose::{
+    dict_io, estimate_pose, flip_limb, pick_alternative, FlipStatus, Limb, PoseEstimate, PoseOptions,
+};
 use sketchbody::skeleton::{Joints2, Joints3, BONES, NUM_JOINTS};
 
 /// How far an alternative's image may be from the estimate's, px: a flip keeps the image
@@ -97,7 +99,10 @@ fn flipping_a_limb_twice_returns_the_original() {
         flipped_any = true;
         assert!(max_diff(&once.joints, &est.joints) > 1e-3, "{limb:?}");
         // The flipped estimate's own alternatives hold the original reading.
-        assert!(once.alternatives.iter().any(|a| max_diff(&a.joints, &est.joints) < 1e-12) || once.alternatives.len() == MAX_ALTERNATIVES);
+        assert!(
+            once.alternatives.iter().any(|a| max_diff(&a.joints, &est.joints) < 1e-12)
+                || once.alternatives.len() == MAX_ALTERNATIVES
+        );
         let (twice, status2) = flip_limb(&once, limb);
         assert_eq!(status2, FlipStatus::Flipped);
         assert!(max_diff(&twice.joints, &est.joints) < 1e-12, "{limb:?}");
@@ -127,7 +132,8 @@ fn a_limb_in_the_picture_plane_has_no_depth_to_flip() {
     let len = (y_w - y_e).norm();
     y_w.z = y_e.z + 0.5 * NO_DEPTH_SIN * len;
     let dir = Vector3::new(y_w.x - y_e.x, y_w.y - y_e.y, 0.0).normalize();
-    let planar = y_e + dir * (len * len - (0.5 * NO_DEPTH_SIN * len).powi(2)).sqrt() + Vector3::z() * 0.5 * NO_DEPTH_SIN * len;
+    let planar =
+        y_e + dir * (len * len - (0.5 * NO_DEPTH_SIN * len).powi(2)).sqrt() + Vector3::z() * 0.5 * NO_DEPTH_SIN * len;
     est.joints[w] = (r.transpose() * planar).into();
     assert!(!has_depth(&est.joints, &r, Limb::RForearm));
     let (out, status) = flip_limb(&est, Limb::RForearm);

@@ -562,7 +562,11 @@ unsafe fn repose_c(
 /// `index` ≥ the count (nothing changed). Changes `result`: do not call while another thread
 /// uses it.
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_pick_alternative(result: *mut skb_result, index: u32, outcome: *mut u32) -> skb_status {
+pub unsafe extern "C" fn skb_result_pick_alternative(
+    result: *mut skb_result,
+    index: u32,
+    outcome: *mut u32,
+) -> skb_status {
     // SAFETY: the header contract of `skb_result_pick_alternative` (lib.rs § Safety): `result`, `outcome` are NULL
     // or valid during the call; the ptr.rs helpers check NULL before each borrow.
     unsafe {

@@ -12,7 +12,8 @@ use sketchbody_core::error::Error;
 use sketchbody_core::pose::dictionary::POSE_DIM;
 use sketchbody_core::pose::options::RotationTarget;
 use sketchbody_core::pose::{
-    dict_io, estimate_pose, flip_limb, pick_alternative, refine_pose, Dictionary, FlipStatus, Limb, PoseEstimate, PoseOptions,
+    dict_io, estimate_pose, flip_limb, pick_alternative, refine_pose, Dictionary, FlipStatus, Limb, PoseEstimate,
+    PoseOptions,
 };
 use sketchbody_core::skeleton::{Joints2, NUM_BONES};
 
@@ -734,9 +735,9 @@ pub(crate) fn limb_in(limb: u32) -> Result<Limb, skb_status> {
 }
 
 fn alternative_at(e: &PoseEstimate, index: u32) -> Result<&sketchbody_core::pose::Alternative, skb_status> {
-    e.alternatives.get(index as usize).ok_or_else(|| {
-        out_of_range("index", format!("{index} is not below the {} alternatives", e.alternatives.len()))
-    })
+    e.alternatives
+        .get(index as usize)
+        .ok_or_else(|| out_of_range("index", format!("{index} is not below the {} alternatives", e.alternatives.len())))
 }
 
 /// `skb_estimate_pose` into a new estimate handle `*out` (the caller owns it) that also holds the
@@ -1053,7 +1054,10 @@ mod tests {
             assert!(n >= 2, "{n}");
             for (i, a) in core.alternatives.iter().enumerate() {
                 let (mut x, mut score) = ([0.0f64; 45], f64::NAN);
-                assert_eq!(skb_pose_estimate_copy_alternative_joints(e, i as u32, x.as_mut_ptr(), 45, &mut score), skb_status::SKB_OK);
+                assert_eq!(
+                    skb_pose_estimate_copy_alternative_joints(e, i as u32, x.as_mut_ptr(), 45, &mut score),
+                    skb_status::SKB_OK
+                );
                 assert_eq!(x.to_vec(), a.joints.iter().flatten().copied().collect::<Vec<_>>());
                 assert_eq!(score, a.score);
                 let (mut limbs, mut count) = ([u32::MAX; 8], usize::MAX);
@@ -1074,13 +1078,24 @@ mod tests {
             assert_eq!(p.joints, once.joints);
             assert_eq!(skb_pose_flip_limb(e, limb.index() as u32, &mut outcome), skb_status::SKB_OK);
             assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
-            let back = p.joints.iter().flatten().zip(core.joints.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let back = p
+                .joints
+                .iter()
+                .flatten()
+                .zip(core.joints.iter().flatten())
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
             assert!(back < 1e-12, "{back}");
             // Picking alternative 1 takes its joints.
             assert_eq!(skb_pose_estimate_pick(e, 1), skb_status::SKB_OK);
             assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
-            let picked =
-                p.joints.iter().flatten().zip(core.alternatives[1].joints.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let picked = p
+                .joints
+                .iter()
+                .flatten()
+                .zip(core.alternatives[1].joints.iter().flatten())
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
             assert!(picked < 1e-12, "{picked}");
             skb_pose_estimate_free(e);
             skb_pose_dictionary_free(d);

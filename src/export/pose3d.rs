@@ -88,7 +88,10 @@ pub fn parse_pose3d(text: &str) -> Result<Pose3dDoc> {
         let alts = alts.as_array().ok_or_else(|| bad("\"alternatives\" is not an array".into()))?;
         for (i, a) in alts.iter().enumerate() {
             let what = format!("pose3d JSON: alternative {i}");
-            let j = parse_joint_object(a.get("joints").ok_or_else(|| bad(format!("alternative {i} has no joints")))?, &what)?;
+            let j = parse_joint_object(
+                a.get("joints").ok_or_else(|| bad(format!("alternative {i} has no joints")))?,
+                &what,
+            )?;
             let score = a
                 .get("score")
                 .and_then(Value::as_f64)
@@ -100,9 +103,7 @@ pub fn parse_pose3d(text: &str) -> Result<Pose3dDoc> {
                 .ok_or_else(|| bad(format!("alternative {i}: \"flipped\" missing")))?
                 .iter()
                 .map(|n| {
-                    n.as_str()
-                        .and_then(Limb::parse)
-                        .ok_or_else(|| bad(format!("alternative {i}: unknown limb {n}")))
+                    n.as_str().and_then(Limb::parse).ok_or_else(|| bad(format!("alternative {i}: unknown limb {n}")))
                 })
                 .collect::<Result<Vec<Limb>>>()?;
             alternatives.push(Alternative { joints: j, score, flipped });

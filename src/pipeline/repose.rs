@@ -89,7 +89,8 @@ fn check_moved(j: &Joints2, width: usize, height: usize) -> Option<ReposeOutcome
         }
     }
     let span = |a: usize| {
-        let (lo, hi) = vis.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &k| (l.min(j.xy[k][a]), h.max(j.xy[k][a])));
+        let (lo, hi) =
+            vis.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &k| (l.min(j.xy[k][a]), h.max(j.xy[k][a])));
         hi - lo
     };
     let limit = COINCIDE_FRACTION * span(0).hypot(span(1));

@@ -197,7 +197,8 @@ fn with_alternatives(
     let candidates: Vec<&[f64]> =
         cols.iter().filter(|&&k| k < ex.ncols()).map(|&k| &ex.as_slice()[k * n..(k + 1) * n]).collect();
     let x: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(est.joints[j]));
-    let costs = super::alternatives::depth_costs(&est.joints, &est.camera, prob.objective(&est.camera, &x), &candidates, hint);
+    let costs =
+        super::alternatives::depth_costs(&est.joints, &est.camera, prob.objective(&est.camera, &x), &candidates, hint);
     super::alternatives::with_alternatives(est, costs)
 }
 
