@@ -153,12 +153,13 @@ _active = None
 @dataclasses.dataclass
 class _Live:
     """The current body's library result, kept open to re-pose the body without re-fitting its
-    shape (flip_limb, the live re-pose): the result, the package module, the armature's and
-    body's names, the rig options and sketch size it was built with, and the marker pixels it was
-    last posed to."""
+    shape (flip_limb, the live re-pose): the result, the package module, the pose dictionary, the
+    armature's and body's names, the rig options and sketch size it was built with, and the
+    marker pixels it was last posed to."""
 
     result: object
     skb: object
+    dictionary: object
     armature: str
     body: str
     rig_options: object
@@ -223,7 +224,7 @@ def live_update():
     if np.allclose(xy, _live.xy, atol=0.01):
         return None
     t = time.perf_counter()
-    outcome = _live.result.repose(_live.skb.Joints2D(xy, visible))
+    outcome = _live.result.repose(_live.skb.Joints2D(xy, visible), dictionary=_live.dictionary)
     _live.xy = xy
     if outcome == "done":
         ms = _repose_scene(t)
@@ -397,7 +398,7 @@ def _finish():
                 kept = _build(bpy.context, a.skb, req, job.result)
             arm, body = build.current_body()
             xy, _ = build.read_markers(build.find_plane(), a.skb.JOINT_NAMES)  # where the body is posed to
-            _set_live(_Live(result, a.skb, arm.name, body.name, req.rig_options, req.width, req.height, xy))
+            _set_live(_Live(result, a.skb, job.result["dictionary"], arm.name, body.name, req.rig_options, req.width, req.height, xy))
             result = None
             level, text = "INFO", _summary(req, job.result, time.perf_counter() - a.t0, kept)
             _undo_push(f"Sketchbody: {req.label}")

@@ -100,6 +100,18 @@ def _detected_confidence(skb, image, used, progress, cancel):
     return np.full(len(used.xy), float(det.score))
 
 
+_dictionary = {}  # the package's embedded pose dictionary, parsed once per loaded package
+
+
+def pose_dictionary(skb):
+    """The embedded pose dictionary (the one run_pipeline uses by default), parsed on the first
+    call for this package module and kept: the live re-pose needs it on every marker move."""
+    d = _dictionary.get(id(skb))
+    if d is None:
+        d = _dictionary[id(skb)] = skb.PoseDictionary()
+    return d
+
+
 def posed_data(result, mesh, rig_options, width, height):
     """What re-posing the fitted body changes (the run's `compute`, and flip_limb / the live
     re-pose, which keep the shape): `camera`, `pixels` (the posed vertices projected, sketch
@@ -120,8 +132,9 @@ def compute(skb, req, progress, cancel):
     `cancel` event; returns the dict build.py needs: rig, quads, uvs, face_uvs, seen, camera,
     pixels, width, height, sketch_uv, gender, gender_value, low_evidence, edge_support,
     joints (Joints2D used), confidence (15,), detection (skb.FigureInfo or None), body_height
-    (the rest mesh's height, metres, as the CLI reports it) and `result` (the open skb.Result,
-    kept by the add-on to re-pose the body without re-fitting it; the receiver closes it)."""
+    (the rest mesh's height, metres, as the CLI reports it), `result` (the open skb.Result,
+    kept by the add-on to re-pose the body without re-fitting it; the receiver closes it) and
+    `dictionary` (pose_dictionary: parsed here, off Blender's main thread)."""
     share = 0.9 if req.joints is None else 1.0  # the rest: the detector's per-joint confidences
     result = skb.run_pipeline(req.image, joints=req.joints, fit_options=req.fit_options,
                               progress=lambda f: progress(share * f), cancel=cancel)
@@ -141,7 +154,7 @@ def compute(skb, req, progress, cancel):
     except BaseException:
         result.close()
         raise
-    data["result"] = result
+    data["result"], data["dictionary"] = result, pose_dictionary(skb)
     return data
 
 

@@ -441,7 +441,10 @@ drawn = []
 panel = bpy.types.SKETCHBODY_PT_panel
 panel.draw(type("P", (), {"layout": StubLayout(drawn)})(), bpy.context)
 ops = [t for k, t in drawn if k == "operator"]
-check("panel draws its settings and four operators", len(ops) == 4 and ("prop", "image") in drawn, ", ".join(ops))
+flips = [t for t in ops if t in mod.LIMB_LABELS.values()]
+check("panel draws its settings, four operators and a flip button per limb",
+      len(ops) == 12 and flips == list(mod.LIMB_LABELS.values()) and ("prop", "image") in drawn
+      and ("prop", "live_repose") in drawn, ", ".join(ops))
 
 def pixels(path):
     im = bpy.data.images.load(path)
