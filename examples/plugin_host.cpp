@@ -134,6 +134,25 @@ int main(int argc, char **argv) {
                "gender value in 0..1, confidence in 0.5..1, gender its nearer end");
         expect(std::isfinite(r.score(g)), "the fit's score");
 
+        // Re-posing the fitted body without re-fitting its shape: a limb's depth flipped there
+        // and back, a depth reading picked, moved joints, and a joint dragged off the sketch.
+        expect(r.num_alternatives() >= 2, "the pose lists depth readings");
+        uint32_t flipped = SKB_NUM_LIMBS;
+        for (uint32_t l = 0; l < SKB_NUM_LIMBS && flipped == SKB_NUM_LIMBS; ++l)
+            if (r.flip_limb(l) == SKB_REPOSE_DONE) flipped = l;
+        const std::vector<float> flipped_posed = r.vertices(true);
+        expect(flipped < SKB_NUM_LIMBS && flipped_posed != posed && r.vertices(false) == rest,
+               "a flipped limb re-poses the body, its rest shape kept");
+        expect(r.flip_limb(flipped) == SKB_REPOSE_DONE && r.pick_alternative(1) == SKB_REPOSE_DONE,
+               "flip back, pick a reading");
+        skb_joints2d moved = joints;
+        moved.xy[4][0] -= 20.0;
+        expect(r.repose(moved) == SKB_REPOSE_DONE && r.vertices(false) == rest, "moved joints re-pose the body");
+        moved.xy[4][0] = -50.0;
+        const std::vector<float> before_off = r.vertices(true);
+        expect(r.repose(moved) == SKB_REPOSE_JOINT_OUTSIDE_IMAGE && r.vertices(true) == before_off,
+               "a joint off the sketch changes nothing");
+
         // Cancellation: the first fit progress report cancels; the call returns promptly.
         sketchbody::FitOptions slow;
         slow.samples(200).iterations(100).gender(SKB_GENDER_MALE);

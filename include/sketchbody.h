@@ -155,6 +155,83 @@
 #define SKB_POSE_GROUPS 6
 
 /**
+ * `SKB_LIMB_*`: a limb bone whose depth can be flipped, the index of `skb_pose_flip_limb` and of
+ * `skb_pose_estimate_copy_alternative_flipped`: right upper arm (shoulder → elbow).
+ */
+#define SKB_LIMB_R_UPPER_ARM 0
+
+/**
+ * Right forearm (elbow → wrist).
+ */
+#define SKB_LIMB_R_FOREARM 1
+
+/**
+ * Left upper arm.
+ */
+#define SKB_LIMB_L_UPPER_ARM 2
+
+/**
+ * Left forearm.
+ */
+#define SKB_LIMB_L_FOREARM 3
+
+/**
+ * Right thigh (hip → knee).
+ */
+#define SKB_LIMB_R_THIGH 4
+
+/**
+ * Right shin (knee → ankle).
+ */
+#define SKB_LIMB_R_SHIN 5
+
+/**
+ * Left thigh.
+ */
+#define SKB_LIMB_L_THIGH 6
+
+/**
+ * Left shin.
+ */
+#define SKB_LIMB_L_SHIN 7
+
+/**
+ * Number of limb bones (`SKB_LIMB_*` are below it).
+ */
+#define SKB_NUM_LIMBS 8
+
+/**
+ * Most alternatives of a pose estimate (the estimate itself included).
+ */
+#define SKB_MAX_ALTERNATIVES 8
+
+/**
+ * `*outcome` of `skb_pose_flip_limb` and the re-pose functions: done.
+ */
+#define SKB_REPOSE_DONE 0
+
+/**
+ * The limb lies in the picture plane (its depth offset is at most 5 % of its length): no
+ * depth to flip; nothing changed.
+ */
+#define SKB_REPOSE_NO_DEPTH 1
+
+/**
+ * A visible moved joint lies outside the sketch; nothing changed.
+ */
+#define SKB_REPOSE_JOINT_OUTSIDE_IMAGE 2
+
+/**
+ * Two visible moved joints lie on each other (within 1 % of the figure's size); nothing changed.
+ */
+#define SKB_REPOSE_JOINTS_COINCIDE 3
+
+/**
+ * No plausible body explains the moved joints; nothing changed.
+ */
+#define SKB_REPOSE_IMPLAUSIBLE 4
+
+/**
  * Largest joints JSON the readers accept, in bytes (1 MiB; a joints file is about 2 kB).
  */
 #define SKB_JOINTS_JSON_MAX_BYTES 1048576
@@ -458,6 +535,16 @@ typedef struct skb_mesh skb_mesh;
 typedef struct skb_pose_dictionary skb_pose_dictionary;
 
 /**
+ * A 3-D pose estimate with its ranked depth readings ("alternatives": the first is the estimate
+ * itself, the others flip limbs toward or away from the camera, best first; the score is px²,
+ * lower = better, see docs/formats.md "3-D pose JSON"). Made by `skb_pose_estimate_new` or
+ * `skb_result_pose_estimate`; free with `skb_pose_estimate_free`. Reading it from several
+ * threads at once is safe; `skb_pose_flip_limb` and `skb_pose_estimate_pick` change it and must
+ * not run while another thread uses it.
+ */
+typedef struct skb_pose_estimate skb_pose_estimate;
+
+/**
  * Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
  * α = 0.8 toward the level target, sx = sy, 4 bases, 0.5 px, refinement on, prior 0.1 m,
  * 12 exemplar starts, 64 limb candidates, blend 30 px², free-joint refinement at 0.014 m).
@@ -475,7 +562,9 @@ typedef struct skb_rasterizer skb_rasterizer;
 
 /**
  * The result of `skb_run_pipeline`, owned by the caller (free with `skb_result_free`). It owns
- * all its data (nothing refers to the inputs). Immutable: several threads may read it at once.
+ * all its data (nothing refers to the inputs). Several threads may read it at once; only the
+ * re-pose functions (`skb_result_pick_alternative`, `skb_result_flip_limb`,
+ * `skb_result_repose_joints`) change it, in place, and must not run while another thread uses it.
  */
 typedef struct skb_result skb_result;
 
@@ -1398,6 +1487,74 @@ skb_status skb_pose_refine(const struct skb_pose_dictionary *dict,
                            struct skb_pose3d *out);
 
 /**
+ * `skb_estimate_pose` into a new estimate handle `*out` (the caller owns it) that also holds the
+ * ranked alternatives. `opts` may be NULL. Same errors as `skb_estimate_pose`; on error `*out`
+ * is untouched. Thread-safe.
+ */
+skb_status skb_pose_estimate_new(const struct skb_pose_dictionary *dict,
+                                 const struct skb_joints2d *joints,
+                                 const struct skb_pose_options *opts,
+                                 struct skb_pose_estimate **out);
+
+/**
+ * Frees an estimate. NULL is a no-op. Do not use it afterwards.
+ */
+void skb_pose_estimate_free(struct skb_pose_estimate *est);
+
+/**
+ * The estimate's current pose and camera into `*out` (after flips and picks, the chosen
+ * reading's joints; the camera, bases and RMS are unchanged by them).
+ */
+skb_status skb_pose_estimate_pose(const struct skb_pose_estimate *est, struct skb_pose3d *out);
+
+/**
+ * The number of alternatives (1..=`SKB_MAX_ALTERNATIVES`; 0 for an estimate without them) into
+ * `*count`.
+ */
+skb_status skb_pose_estimate_num_alternatives(const struct skb_pose_estimate *est, uint32_t *count);
+
+/**
+ * Copies alternative `index`'s 15 joints (x, y, z doubles, metres, the frame of
+ * `skb_pose3d.joints`) into `dst` (`dst_len` ≥ 45) and its score (px², lower = better) into
+ * `*score` (may be NULL). Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the count; on error
+ * nothing is written.
+ */
+skb_status skb_pose_estimate_copy_alternative_joints(const struct skb_pose_estimate *est,
+                                                     uint32_t index,
+                                                     double *dst,
+                                                     size_t dst_len,
+                                                     double *score);
+
+/**
+ * The limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`, ascending):
+ * their number into `*count` (may be NULL) and, when `dst` is not NULL, the limbs into `dst`
+ * (`dst_len` ≥ count; `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors:
+ * `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the count.
+ */
+skb_status skb_pose_estimate_copy_alternative_flipped(const struct skb_pose_estimate *est,
+                                                      uint32_t index,
+                                                      uint32_t *dst,
+                                                      size_t dst_len,
+                                                      size_t *count);
+
+/**
+ * Flips the depth of `limb` (`SKB_LIMB_*`) of the estimate in place and re-solves (the image and
+ * every bone length are kept; the alternatives are re-ranked relative to the new pose; a few
+ * microseconds). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH`
+ * for a limb lying in the picture plane (nothing changed). Flipping the same limb twice returns
+ * the original. Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Not thread-safe on
+ * one estimate.
+ */
+skb_status skb_pose_flip_limb(struct skb_pose_estimate *est, uint32_t limb, uint32_t *outcome);
+
+/**
+ * Makes alternative `index` the estimate's pose (0 keeps it): its limbs flipped in place, the
+ * alternatives re-ranked relative to it. Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the
+ * count (nothing changed). Not thread-safe on one estimate.
+ */
+skb_status skb_pose_estimate_pick(struct skb_pose_estimate *est, uint32_t index);
+
+/**
  * Reads a `sketchbody-joints2d` file into `*out` (joints listed in `missing` get
  * `visible = 0`). `path` is NUL-terminated UTF-8 and must name a regular file of at most
  * `SKB_JOINTS_JSON_MAX_BYTES` (a FIFO, a device or a folder is refused without blocking). A
@@ -1923,6 +2080,54 @@ skb_status skb_result_shape_weights(const struct skb_result *result,
  * for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
  */
 skb_status skb_result_mesh(const struct skb_result *result, struct skb_mesh **out);
+
+/**
+ * The result's 3-D pose (`SKB_JOINTS_ESTIMATED`) with its ranked alternatives as a new estimate
+ * handle `*out` (the caller owns it; `skb_pose_estimate_free`): list the readings with
+ * `skb_pose_estimate_num_alternatives` / `skb_pose_estimate_copy_alternative_joints` /
+ * `skb_pose_estimate_copy_alternative_flipped`. A copy: flipping it does not change the result
+ * (use `skb_result_flip_limb` / `skb_result_pick_alternative` for that).
+ */
+skb_status skb_result_pose_estimate(const struct skb_result *result,
+                                    struct skb_pose_estimate **out);
+
+/**
+ * Re-poses the result in place to its pose's alternative `index` (`skb_result_pose_estimate`
+ * lists them; 0 = the current pose): IK and skinning of the fitted rest body, whose shape
+ * weights, proportions and rest mesh are kept; the camera and 2-D joints are kept. A few ms.
+ * `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`. Errors: `SKB_ERR_OUT_OF_RANGE` for
+ * `index` ≥ the count (nothing changed). Changes `result`: do not call while another thread
+ * uses it.
+ */
+skb_status skb_result_pick_alternative(struct skb_result *result,
+                                       uint32_t index,
+                                       uint32_t *outcome);
+
+/**
+ * Flips the depth of `limb` (`SKB_LIMB_*`) of the result's pose and re-poses the fitted body in
+ * place (as `skb_result_pick_alternative`). `*outcome` (may be NULL) receives
+ * `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH` for a limb lying in the picture plane (nothing
+ * changed). Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Changes `result`: do
+ * not call while another thread uses it.
+ */
+skb_status skb_result_flip_limb(struct skb_result *result, uint32_t limb, uint32_t *outcome);
+
+/**
+ * Re-poses the fitted body in place for moved 2-D joints `joints` (pixels of the result's
+ * sketch; issue 50's live correction): the 3-D pose is re-estimated with `dict` (NULL: the
+ * embedded dictionary; pass the one given to `skb_run_pipeline`) and the run's pose options,
+ * without an image depth cue, then IK and skinning of the fitted rest body (shape weights,
+ * proportions and rest mesh kept) and the camera's scales refitted to its skeleton. About
+ * 5–10 ms (docs/benchmarks.md, "Re-pose"). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`,
+ * or, with nothing changed: `SKB_REPOSE_JOINT_OUTSIDE_IMAGE` (a visible joint outside the
+ * sketch or not finite), `SKB_REPOSE_JOINTS_COINCIDE` (two visible joints on each other),
+ * `SKB_REPOSE_IMPLAUSIBLE` (no plausible body explains them). With the result's own given joints the mesh is the run's. Changes `result`:
+ * do not call while another thread uses it.
+ */
+skb_status skb_result_repose_joints(struct skb_result *result,
+                                    const struct skb_pose_dictionary *dict,
+                                    const struct skb_joints2d *joints,
+                                    uint32_t *outcome);
 
 /**
  * Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as 8-bit RGB into `*out` (caller

@@ -423,6 +423,37 @@ public:
         check(skb_result_mesh(r_.get(), &raw));
         return Mesh(raw);
     }
+    /// The number of ranked depth readings of the result's pose (alternative 0 is the pose).
+    uint32_t num_alternatives() const {
+        skb_pose_estimate *e = nullptr;
+        check(skb_result_pose_estimate(r_.get(), &e));
+        Handle<skb_pose_estimate, skb_pose_estimate_free> h(e);
+        uint32_t n = 0;
+        check(skb_pose_estimate_num_alternatives(h.get(), &n));
+        return n;
+    }
+    /// Re-poses the fitted body in place to depth reading `index`, its shape kept
+    /// (skb_result_pick_alternative). Returns the SKB_REPOSE_* outcome.
+    uint32_t pick_alternative(uint32_t index) {
+        uint32_t o = 0;
+        check(skb_result_pick_alternative(r_.get(), index, &o));
+        return o;
+    }
+    /// Flips limb `limb`'s depth (SKB_LIMB_*) and re-poses the fitted body in place, its shape
+    /// kept (skb_result_flip_limb). Returns SKB_REPOSE_DONE or SKB_REPOSE_NO_DEPTH.
+    uint32_t flip_limb(uint32_t limb) {
+        uint32_t o = 0;
+        check(skb_result_flip_limb(r_.get(), limb, &o));
+        return o;
+    }
+    /// Re-poses the fitted body in place for moved 2-D joints, its shape kept (the live
+    /// correction; skb_result_repose_joints with the embedded dictionary). Returns the
+    /// SKB_REPOSE_* outcome (anything but SKB_REPOSE_DONE changed nothing).
+    uint32_t repose(const skb_joints2d &joints) {
+        uint32_t o = 0;
+        check(skb_result_repose_joints(r_.get(), nullptr, &joints, &o));
+        return o;
+    }
     const skb_result *get() const noexcept { return r_.get(); }
 
 private:

@@ -315,6 +315,8 @@ fn camera_refit_recovers_the_scale_of_the_body_skeleton() {
         base_parts: None,
         factors: sketchbody::pose::figure::BodyFactors::default(),
         plausible: true,
+        alternatives: Vec::new(),
+        depth_costs: None,
     };
     let fixed = refit_camera(&est, &rest, &j).unwrap();
     assert!((fixed.camera.sx - 300.0).abs() < 1e-6 && (fixed.camera.sy - 310.0).abs() < 1e-6, "{:?}", fixed.camera);

@@ -11,7 +11,8 @@ use sketchbody_core::detect::landmark::LandmarkNet;
 use sketchbody_core::error::Error;
 use sketchbody_core::image::{load_image, to_gray, GrayImage};
 use sketchbody_core::pipeline::{
-    run_pipeline_progressive, FigureJoints, GivenJoints, InterimBody, JointsSource, PipelineOptions, PipelineResult,
+    repose, run_pipeline_progressive, FigureJoints, GivenJoints, InterimBody, JointsSource, PipelineOptions,
+    PipelineResult, ReposeOutcome, ReposeRequest,
 };
 use sketchbody_core::pose::dict_io;
 use sketchbody_core::skeleton::NUM_JOINTS;
@@ -41,7 +42,9 @@ pub struct skb_gray_image {
 }
 
 /// The result of `skb_run_pipeline`, owned by the caller (free with `skb_result_free`). It owns
-/// all its data (nothing refers to the inputs). Immutable: several threads may read it at once.
+/// all its data (nothing refers to the inputs). Several threads may read it at once; only the
+/// re-pose functions (`skb_result_pick_alternative`, `skb_result_flip_limb`,
+/// `skb_result_repose_joints`) change it, in place, and must not run while another thread uses it.
 pub struct skb_result {
     model: Arc<BodyModel>,
     pub(crate) inner: PipelineResult,
@@ -591,6 +594,140 @@ pub unsafe extern "C" fn skb_result_mesh(result: *const skb_result, out: *mut *m
             let mesh = skb_mesh { model: Arc::clone(&res.model), gender: r.gender, rest, weights: r.weights.clone(), posed: Some(Box::new(posed)) };
             try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
             skb_status::SKB_OK
+        }
+    }
+}
+
+/// The result's 3-D pose (`SKB_JOINTS_ESTIMATED`) with its ranked alternatives as a new estimate
+/// handle `*out` (the caller owns it; `skb_pose_estimate_free`): list the readings with
+/// `skb_pose_estimate_num_alternatives` / `skb_pose_estimate_copy_alternative_joints` /
+/// `skb_pose_estimate_copy_alternative_flipped`. A copy: flipping it does not change the result
+/// (use `skb_result_flip_limb` / `skb_result_pick_alternative` for that).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_pose_estimate(
+    result: *const skb_result,
+    out: *mut *mut super::pose::skb_pose_estimate,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_result_pose_estimate` (lib.rs § Safety): `result`, `out` are NULL or
+    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let out = try_status!(out_slot(out));
+            let d = try_core!(dict_io::embedded_shared());
+            let prior_weight = sketchbody_core::pose::problem::Problem::new(d, &r.joints2d, r.posing_options.pose.prior)
+                .map(|p| p.prior_w)
+                .unwrap_or(0.0);
+            give(out, super::pose::skb_pose_estimate { inner: r.pose.clone(), prior_weight })
+        }
+    }
+}
+
+/// `*outcome` code of a re-pose.
+fn outcome_code(o: ReposeOutcome) -> u32 {
+    use super::pose::*;
+    match o {
+        ReposeOutcome::Reposed => SKB_REPOSE_DONE,
+        ReposeOutcome::NoDepth => SKB_REPOSE_NO_DEPTH,
+        ReposeOutcome::JointOutsideImage { .. } => SKB_REPOSE_JOINT_OUTSIDE_IMAGE,
+        ReposeOutcome::JointsCoincide { .. } => SKB_REPOSE_JOINTS_COINCIDE,
+        ReposeOutcome::Implausible => SKB_REPOSE_IMPLAUSIBLE,
+    }
+}
+
+/// Runs a re-pose on `result` in place and writes its outcome.
+unsafe fn repose_c(
+    result: *mut skb_result,
+    dict: *const skb_pose_dictionary,
+    request: ReposeRequest,
+    outcome: *mut u32,
+) -> skb_status {
+    // SAFETY: forwarded from the callers' header contracts: `result`, `dict`, `outcome` are NULL or valid.
+    unsafe {
+        let res = match try_mut(result, "result") {
+            Ok(r) => r,
+            Err(s) => return s,
+        };
+        let d = match opt_ref(dict) {
+            Some(d) => &d.inner,
+            None => match dict_io::embedded_shared() {
+                Ok(d) => d,
+                Err(e) => return super::error::fail(&e),
+            },
+        };
+        match repose(&mut res.inner, d, request) {
+            Ok(o) => {
+                write_opt(outcome, outcome_code(o));
+                skb_status::SKB_OK
+            }
+            Err(e) => super::error::fail(&e),
+        }
+    }
+}
+
+/// Re-poses the result in place to its pose's alternative `index` (`skb_result_pose_estimate`
+/// lists them; 0 = the current pose): IK and skinning of the fitted rest body, whose shape
+/// weights, proportions and rest mesh are kept; the camera and 2-D joints are kept. A few ms.
+/// `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`. Errors: `SKB_ERR_OUT_OF_RANGE` for
+/// `index` ≥ the count (nothing changed). Changes `result`: do not call while another thread
+/// uses it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_pick_alternative(
+    result: *mut skb_result,
+    index: u32,
+    outcome: *mut u32,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_result_pick_alternative` (lib.rs § Safety): `result`, `outcome` are NULL
+    // or valid during the call; the ptr.rs helpers check NULL before each borrow.
+    unsafe {
+        ffi_boundary! {
+            repose_c(result, std::ptr::null(), ReposeRequest::Alternative(index as usize), outcome)
+        }
+    }
+}
+
+/// Flips the depth of `limb` (`SKB_LIMB_*`) of the result's pose and re-poses the fitted body in
+/// place (as `skb_result_pick_alternative`). `*outcome` (may be NULL) receives
+/// `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH` for a limb lying in the picture plane (nothing
+/// changed). Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Changes `result`: do
+/// not call while another thread uses it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_flip_limb(result: *mut skb_result, limb: u32, outcome: *mut u32) -> skb_status {
+    // SAFETY: the header contract of `skb_result_flip_limb` (lib.rs § Safety): `result`, `outcome` are NULL or valid
+    // during the call; the ptr.rs helpers check NULL before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let l = try_status!(super::pose::limb_in(limb));
+            repose_c(result, std::ptr::null(), ReposeRequest::Flip(l), outcome)
+        }
+    }
+}
+
+/// Re-poses the fitted body in place for moved 2-D joints `joints` (pixels of the result's
+/// sketch; issue 50's live correction): the 3-D pose is re-estimated with `dict` (NULL: the
+/// embedded dictionary; pass the one given to `skb_run_pipeline`) and the run's pose options,
+/// without an image depth cue, then IK and skinning of the fitted rest body (shape weights,
+/// proportions and rest mesh kept) and the camera's scales refitted to its skeleton. About
+/// 5–10 ms (docs/benchmarks.md, "Re-pose"). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`,
+/// or, with nothing changed: `SKB_REPOSE_JOINT_OUTSIDE_IMAGE` (a visible joint outside the
+/// sketch or not finite), `SKB_REPOSE_JOINTS_COINCIDE` (two visible joints on each other),
+/// `SKB_REPOSE_IMPLAUSIBLE` (no plausible body explains them). With the result's own given joints the mesh is the run's. Changes `result`:
+/// do not call while another thread uses it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_repose_joints(
+    result: *mut skb_result,
+    dict: *const skb_pose_dictionary,
+    joints: *const skb_joints2d,
+    outcome: *mut u32,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_result_repose_joints` (lib.rs § Safety): `result`, `dict`, `joints`,
+    // `outcome` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL before
+    // each borrow.
+    unsafe {
+        ffi_boundary! {
+            let j = joints_in(try_status!(try_ref(joints, "joints")));
+            repose_c(result, dict, ReposeRequest::Joints(&j), outcome)
         }
     }
 }

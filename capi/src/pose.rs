@@ -1,5 +1,6 @@
 //! The 3-D pose step (paper §II-B): `skb_pose_dictionary`, `skb_pose_options`,
-//! `skb_estimate_pose` and the fixed-basis refinement `skb_pose_refine`.
+//! `skb_estimate_pose`, the fixed-basis refinement `skb_pose_refine`, and the estimate handle
+//! `skb_pose_estimate` with its ranked depth readings and `skb_pose_flip_limb`.
 
 use std::ffi::c_char;
 use std::path::Path;
@@ -10,7 +11,10 @@ use sketchbody_core::camera::WeakPerspective;
 use sketchbody_core::error::Error;
 use sketchbody_core::pose::dictionary::POSE_DIM;
 use sketchbody_core::pose::options::RotationTarget;
-use sketchbody_core::pose::{dict_io, estimate_pose, refine_pose, Dictionary, PoseEstimate, PoseOptions};
+use sketchbody_core::pose::{
+    dict_io, estimate_pose, flip_limb, pick_alternative, refine_pose, Dictionary, FlipStatus, Limb, PoseEstimate,
+    PoseOptions,
+};
 use sketchbody_core::skeleton::{Joints2, NUM_BONES};
 
 use super::error::fail;
@@ -663,9 +667,242 @@ pub unsafe extern "C" fn skb_pose_refine(
                 base_parts: None,
                 factors: sketchbody_core::pose::figure::BodyFactors::default(),
                 plausible: true,
+                alternatives: Vec::new(),
+                depth_costs: None,
             };
             let e = try_core!(refine_pose(&d.inner, &j, &o, &start_est));
             *out = pose_out(&e, prior_weight(&d.inner, &j, &o));
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// `SKB_LIMB_*`: a limb bone whose depth can be flipped, the index of `skb_pose_flip_limb` and of
+/// `skb_pose_estimate_copy_alternative_flipped`: right upper arm (shoulder → elbow).
+pub const SKB_LIMB_R_UPPER_ARM: u32 = 0;
+/// Right forearm (elbow → wrist).
+pub const SKB_LIMB_R_FOREARM: u32 = 1;
+/// Left upper arm.
+pub const SKB_LIMB_L_UPPER_ARM: u32 = 2;
+/// Left forearm.
+pub const SKB_LIMB_L_FOREARM: u32 = 3;
+/// Right thigh (hip → knee).
+pub const SKB_LIMB_R_THIGH: u32 = 4;
+/// Right shin (knee → ankle).
+pub const SKB_LIMB_R_SHIN: u32 = 5;
+/// Left thigh.
+pub const SKB_LIMB_L_THIGH: u32 = 6;
+/// Left shin.
+pub const SKB_LIMB_L_SHIN: u32 = 7;
+/// Number of limb bones (`SKB_LIMB_*` are below it).
+pub const SKB_NUM_LIMBS: u32 = 8;
+/// Most alternatives of a pose estimate (the estimate itself included).
+pub const SKB_MAX_ALTERNATIVES: u32 = 8;
+
+/// `*outcome` of `skb_pose_flip_limb` and the re-pose functions: done.
+pub const SKB_REPOSE_DONE: u32 = 0;
+/// The limb lies in the picture plane (its depth offset is at most 5 % of its length): no
+/// depth to flip; nothing changed.
+pub const SKB_REPOSE_NO_DEPTH: u32 = 1;
+/// A visible moved joint lies outside the sketch; nothing changed.
+pub const SKB_REPOSE_JOINT_OUTSIDE_IMAGE: u32 = 2;
+/// Two visible moved joints lie on each other (within 1 % of the figure's size); nothing changed.
+pub const SKB_REPOSE_JOINTS_COINCIDE: u32 = 3;
+/// No plausible body explains the moved joints; nothing changed.
+pub const SKB_REPOSE_IMPLAUSIBLE: u32 = 4;
+
+const _: () = assert!(
+    SKB_NUM_LIMBS as usize == Limb::ALL.len()
+        && SKB_MAX_ALTERNATIVES as usize == sketchbody_core::pose::alternatives::MAX_ALTERNATIVES
+        && SKB_LIMB_L_SHIN as usize == Limb::LShin as usize
+        && SKB_LIMB_R_THIGH as usize == Limb::RThigh as usize
+);
+
+/// A 3-D pose estimate with its ranked depth readings ("alternatives": the first is the estimate
+/// itself, the others flip limbs toward or away from the camera, best first; the score is px²,
+/// lower = better, see docs/formats.md "3-D pose JSON"). Made by `skb_pose_estimate_new` or
+/// `skb_result_pose_estimate`; free with `skb_pose_estimate_free`. Reading it from several
+/// threads at once is safe; `skb_pose_flip_limb` and `skb_pose_estimate_pick` change it and must
+/// not run while another thread uses it.
+pub struct skb_pose_estimate {
+    pub(crate) inner: PoseEstimate,
+    pub(crate) prior_weight: f64,
+}
+
+pub(crate) fn limb_in(limb: u32) -> Result<Limb, skb_status> {
+    Limb::from_index(limb as usize)
+        .ok_or_else(|| out_of_range("limb", format!("{limb} is not below {SKB_NUM_LIMBS} (SKB_LIMB_*)")))
+}
+
+fn alternative_at(e: &PoseEstimate, index: u32) -> Result<&sketchbody_core::pose::Alternative, skb_status> {
+    e.alternatives
+        .get(index as usize)
+        .ok_or_else(|| out_of_range("index", format!("{index} is not below the {} alternatives", e.alternatives.len())))
+}
+
+/// `skb_estimate_pose` into a new estimate handle `*out` (the caller owns it) that also holds the
+/// ranked alternatives. `opts` may be NULL. Same errors as `skb_estimate_pose`; on error `*out`
+/// is untouched. Thread-safe.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_estimate_new(
+    dict: *const skb_pose_dictionary,
+    joints: *const skb_joints2d,
+    opts: *const skb_pose_options,
+    out: *mut *mut skb_pose_estimate,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_estimate_new` (lib.rs § Safety): `dict`, `joints`, `opts`, `out` are
+    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
+    // each borrow.
+    unsafe {
+        ffi_boundary! {
+            let d = try_status!(try_ref(dict, "dict"));
+            let joints = try_status!(try_ref(joints, "joints"));
+            let out = try_status!(out_slot(out));
+            let (e, pose) = try_status!(estimate_out(d, joints, opt_ref(opts)));
+            give(out, skb_pose_estimate { inner: e, prior_weight: pose.prior_weight })
+        }
+    }
+}
+
+/// Frees an estimate. NULL is a no-op. Do not use it afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_estimate_free(est: *mut skb_pose_estimate) {
+    // SAFETY: the header requires `est` to be NULL or a live handle from its constructor, freed once; NULL is
+    // ignored.
+    unsafe { free_box(est) }
+}
+
+/// The estimate's current pose and camera into `*out` (after flips and picks, the chosen
+/// reading's joints; the camera, bases and RMS are unchanged by them).
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_estimate_pose(est: *const skb_pose_estimate, out: *mut skb_pose3d) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_estimate_pose` (lib.rs § Safety): `est`, `out` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let e = try_status!(try_ref(est, "est"));
+            try_status!(write_out(out, pose_out(&e.inner, e.prior_weight), "out"));
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// The number of alternatives (1..=`SKB_MAX_ALTERNATIVES`; 0 for an estimate without them) into
+/// `*count`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_estimate_num_alternatives(
+    est: *const skb_pose_estimate,
+    count: *mut u32,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_estimate_num_alternatives` (lib.rs § Safety): `est`, `count` are NULL
+    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
+    // borrow.
+    unsafe {
+        ffi_boundary! {
+            let e = try_status!(try_ref(est, "est"));
+            try_status!(write_out(count, e.inner.alternatives.len() as u32, "count"));
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// Copies alternative `index`'s 15 joints (x, y, z doubles, metres, the frame of
+/// `skb_pose3d.joints`) into `dst` (`dst_len` ≥ 45) and its score (px², lower = better) into
+/// `*score` (may be NULL). Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the count; on error
+/// nothing is written.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_joints(
+    est: *const skb_pose_estimate,
+    index: u32,
+    dst: *mut f64,
+    dst_len: usize,
+    score: *mut f64,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_estimate_copy_alternative_joints` (lib.rs § Safety): `est`, `dst`,
+    // `score` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and
+    // lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let e = try_status!(try_ref(est, "est"));
+            let a = try_status!(alternative_at(&e.inner, index));
+            let out = try_status!(out_slice(dst, dst_len, 45, "dst"));
+            for (o, p) in out.chunks_exact_mut(3).zip(&a.joints) {
+                o.copy_from_slice(p);
+            }
+            write_opt(score, a.score);
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// The limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`, ascending):
+/// their number into `*count` (may be NULL) and, when `dst` is not NULL, the limbs into `dst`
+/// (`dst_len` ≥ count; `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors:
+/// `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the count.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_flipped(
+    est: *const skb_pose_estimate,
+    index: u32,
+    dst: *mut u32,
+    dst_len: usize,
+    count: *mut usize,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_estimate_copy_alternative_flipped` (lib.rs § Safety): `est`, `dst`,
+    // `count` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and
+    // lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let e = try_status!(try_ref(est, "est"));
+            let a = try_status!(alternative_at(&e.inner, index));
+            let n = a.flipped.len();
+            if !dst.is_null() {
+                let out = try_status!(out_slice(dst, dst_len, n, "dst"));
+                for (o, l) in out.iter_mut().zip(&a.flipped) {
+                    *o = l.index() as u32;
+                }
+            }
+            write_opt(count, n);
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// Flips the depth of `limb` (`SKB_LIMB_*`) of the estimate in place and re-solves (the image and
+/// every bone length are kept; the alternatives are re-ranked relative to the new pose; a few
+/// microseconds). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH`
+/// for a limb lying in the picture plane (nothing changed). Flipping the same limb twice returns
+/// the original. Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Not thread-safe on
+/// one estimate.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_flip_limb(est: *mut skb_pose_estimate, limb: u32, outcome: *mut u32) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_flip_limb` (lib.rs § Safety): `est`, `outcome` are NULL or valid for
+    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let e = try_status!(try_mut(est, "est"));
+            let l = try_status!(limb_in(limb));
+            let (next, status) = flip_limb(&e.inner, l);
+            e.inner = next;
+            write_opt(outcome, match status { FlipStatus::Flipped => SKB_REPOSE_DONE, FlipStatus::NoDepth => SKB_REPOSE_NO_DEPTH });
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// Makes alternative `index` the estimate's pose (0 keeps it): its limbs flipped in place, the
+/// alternatives re-ranked relative to it. Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the
+/// count (nothing changed). Not thread-safe on one estimate.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_estimate_pick(est: *mut skb_pose_estimate, index: u32) -> skb_status {
+    // SAFETY: the header contract of `skb_pose_estimate_pick` (lib.rs § Safety): `est` is NULL or valid during the
+    // call; the ptr.rs helpers check NULL before the borrow.
+    unsafe {
+        ffi_boundary! {
+            let e = try_status!(try_mut(est, "est"));
+            try_status!(alternative_at(&e.inner, index));
+            if let Some(p) = pick_alternative(&e.inner, index as usize) {
+                e.inner = p;
+            }
             skb_status::SKB_OK
         }
     }
@@ -793,6 +1030,75 @@ mod tests {
             skb_pose_options_free(std::ptr::null_mut());
             skb_pose_dictionary_free(d);
             skb_pose_dictionary_free(std::ptr::null_mut());
+        }
+    }
+
+    #[test]
+    fn estimate_handle_lists_the_cores_alternatives_and_flips_like_it() {
+        let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/examples/sketch_joints.json");
+        let core_j = sketchbody_core::export::joints2d::load_joints2d(Path::new(root)).unwrap();
+        let mut j = skb_joints2d { xy: core_j.xy, visible: [0; 15], reserved: 0 };
+        for (v, &c) in j.visible.iter_mut().zip(&core_j.visible) {
+            *v = u8::from(c);
+        }
+        let core = estimate_pose(&dict_io::embedded().unwrap(), &core_j, &PoseOptions::default()).unwrap();
+        // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
+        unsafe {
+            let mut d = std::ptr::null_mut();
+            assert_eq!(skb_pose_dictionary_new_default(&mut d), skb_status::SKB_OK);
+            let mut e = std::ptr::null_mut();
+            assert_eq!(skb_pose_estimate_new(d, &j, std::ptr::null(), &mut e), skb_status::SKB_OK);
+            let mut n = 0u32;
+            assert_eq!(skb_pose_estimate_num_alternatives(e, &mut n), skb_status::SKB_OK);
+            assert_eq!(n as usize, core.alternatives.len());
+            assert!(n >= 2, "{n}");
+            for (i, a) in core.alternatives.iter().enumerate() {
+                let (mut x, mut score) = ([0.0f64; 45], f64::NAN);
+                assert_eq!(
+                    skb_pose_estimate_copy_alternative_joints(e, i as u32, x.as_mut_ptr(), 45, &mut score),
+                    skb_status::SKB_OK
+                );
+                assert_eq!(x.to_vec(), a.joints.iter().flatten().copied().collect::<Vec<_>>());
+                assert_eq!(score, a.score);
+                let (mut limbs, mut count) = ([u32::MAX; 8], usize::MAX);
+                assert_eq!(
+                    skb_pose_estimate_copy_alternative_flipped(e, i as u32, limbs.as_mut_ptr(), 8, &mut count),
+                    skb_status::SKB_OK
+                );
+                assert_eq!(limbs[..count].to_vec(), a.flipped.iter().map(|l| l.index() as u32).collect::<Vec<_>>());
+            }
+            // Flipping alternative 1's first limb twice: there and back, as the core does.
+            let limb = core.alternatives[1].flipped[0];
+            let mut outcome = u32::MAX;
+            let mut p: skb_pose3d = std::mem::zeroed();
+            assert_eq!(skb_pose_flip_limb(e, limb.index() as u32, &mut outcome), skb_status::SKB_OK);
+            assert_eq!(outcome, SKB_REPOSE_DONE);
+            assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
+            let once = flip_limb(&core, limb).0;
+            assert_eq!(p.joints, once.joints);
+            assert_eq!(skb_pose_flip_limb(e, limb.index() as u32, &mut outcome), skb_status::SKB_OK);
+            assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
+            let back = p
+                .joints
+                .iter()
+                .flatten()
+                .zip(core.joints.iter().flatten())
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(back < 1e-12, "{back}");
+            // Picking alternative 1 takes its joints.
+            assert_eq!(skb_pose_estimate_pick(e, 1), skb_status::SKB_OK);
+            assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
+            let picked = p
+                .joints
+                .iter()
+                .flatten()
+                .zip(core.alternatives[1].joints.iter().flatten())
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(picked < 1e-12, "{picked}");
+            skb_pose_estimate_free(e);
+            skb_pose_dictionary_free(d);
         }
     }
 }

@@ -72,6 +72,44 @@ fn pose_writes_joints_camera_and_bases() {
     assert_eq!(v["base_exemplars"].as_array().map(|a| a.len()), Some(5));
     let rms = v["reprojection_rms_px"].as_f64().unwrap();
     assert!(rms < 8.0, "rms {rms}");
+    // The ranked depth readings, read by the library's reader and, independently, here: the
+    // first is the estimate itself, every one a full joint object, scores ascending after it.
+    let text = std::fs::read_to_string(dir.join("out.json")).unwrap();
+    let doc = sketchbody::export::pose3d::parse_pose3d(&text).unwrap();
+    let alts = v["alternatives"].as_array().unwrap();
+    assert!(!alts.is_empty() && alts.len() <= 8, "{}", alts.len());
+    assert_eq!(doc.alternatives.len(), alts.len());
+    assert_eq!(alts[0]["joints"], v["joints"]);
+    assert_eq!(alts[0]["flipped"].as_array().unwrap().len(), 0);
+    let names = ["r_upper_arm", "r_forearm", "l_upper_arm", "l_forearm", "r_thigh", "r_shin", "l_thigh", "l_shin"];
+    let mut last = f64::NEG_INFINITY;
+    for (i, (a, parsed)) in alts.iter().zip(&doc.alternatives).enumerate() {
+        let joints = a["joints"].as_object().unwrap();
+        assert_eq!(joints.len(), 15);
+        for (k, name) in JOINT_NAMES.iter().enumerate() {
+            let xyz: Vec<f64> = joints[*name].as_array().unwrap().iter().map(|c| c.as_f64().unwrap()).collect();
+            assert_eq!(xyz, parsed.joints[k].to_vec(), "alternative {i} {name}");
+        }
+        let score = a["score"].as_f64().unwrap();
+        assert_eq!(score, parsed.score);
+        if i > 0 {
+            assert!(score >= last, "alternative {i}: {score} < {last}");
+            last = score;
+            assert!(!a["flipped"].as_array().unwrap().is_empty());
+        }
+        let flipped: Vec<&str> = a["flipped"].as_array().unwrap().iter().map(|n| n.as_str().unwrap()).collect();
+        assert!(flipped.iter().all(|n| names.contains(n)), "{flipped:?}");
+        assert_eq!(flipped, parsed.flipped.iter().map(|l| l.name()).collect::<Vec<_>>());
+    }
+    assert_eq!(doc.joints, doc.alternatives[0].joints);
+    // A file without alternatives (written before they existed) reads as none; a bad limb name
+    // is refused.
+    let mut old = v.clone();
+    old.as_object_mut().unwrap().remove("alternatives");
+    assert!(sketchbody::export::pose3d::parse_pose3d(&old.to_string()).unwrap().alternatives.is_empty());
+    let mut bad = v.clone();
+    bad["alternatives"][0]["flipped"] = serde_json::json!(["tail"]);
+    assert!(sketchbody::export::pose3d::parse_pose3d(&bad.to_string()).is_err());
 }
 
 #[test]

@@ -72,6 +72,12 @@ fn run_writes_every_output() {
     let pose: serde_json::Value = serde_json::from_slice(&std::fs::read(out_dir.join("pose3d.json")).unwrap()).unwrap();
     assert_eq!(pose["format"], "sketchbody-pose3d");
     assert!(pose["camera"]["sx"].as_f64().unwrap() > 100.0);
+    let alts = sketchbody::export::pose3d::parse_pose3d(
+        &String::from_utf8(std::fs::read(out_dir.join("pose3d.json")).unwrap()).unwrap(),
+    )
+    .unwrap()
+    .alternatives;
+    assert!(!alts.is_empty() && alts.len() <= 8 && alts[0].flipped.is_empty(), "{}", alts.len());
     let obj = std::fs::read_to_string(out_dir.join("body.obj")).unwrap();
     assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 13380);
     assert!(obj.contains("\nmtllib body.mtl\n"));

@@ -25,8 +25,8 @@ from .detect import Detection, DetectOptions, Detector, FigureInfo, detect
 from .images import canny, gaussian_blur, load_image, load_rgb_image, render_sketch, write_png
 from .mesh import ExportOptions, Mesh, Rig, quat_to_matrix
 from .pipeline import FitOptions, Result, fit_shape, run_pipeline
-from .pose import (JOINT_NAMES, PROPORTION_GROUPS, Camera, Joints2D, Pose3D, PoseDictionary, PoseOptions,
-                   estimate_pose, refine_pose)
+from .pose import (JOINT_NAMES, LIMB_NAMES, PROPORTION_GROUPS, Alternative, Camera, Joints2D, Pose3D,
+                   PoseDictionary, PoseEstimate, PoseOptions, estimate_pose, estimate_pose_alternatives, refine_pose)
 
 __version__ = _bindings.SKB_VERSION_STRING
 
@@ -45,11 +45,11 @@ def library_path():
 
 
 __all__ = [
-    "AUTO", "FEMALE", "MALE", "JOINT_NAMES", "NUM_JOINTS", "NUM_RIG_BONES", "PROPORTION_GROUPS",
-    "Camera", "Cancelled", "Context", "Detection", "DetectOptions", "Detector", "ExportOptions", "FigureInfo",
+    "AUTO", "FEMALE", "MALE", "JOINT_NAMES", "LIMB_NAMES", "NUM_JOINTS", "NUM_RIG_BONES", "PROPORTION_GROUPS",
+    "Alternative", "Camera", "Cancelled", "Context", "Detection", "DetectOptions", "Detector", "ExportOptions", "FigureInfo",
     "FitOptions",
-    "Joints2D", "LibraryNotFoundError", "Mesh", "NoFigure", "Pose3D", "PoseDictionary", "PoseOptions", "Result",
-    "Rig", "SketchbodyError", "Status", "canny", "default_context", "detect", "estimate_pose", "fit_shape",
+    "Joints2D", "LibraryNotFoundError", "Mesh", "NoFigure", "Pose3D", "PoseDictionary", "PoseEstimate", "PoseOptions", "Result",
+    "Rig", "SketchbodyError", "Status", "canny", "default_context", "detect", "estimate_pose", "estimate_pose_alternatives", "fit_shape",
     "gaussian_blur", "library_path", "load_image", "load_rgb_image", "quat_to_matrix", "refine_pose",
     "render_sketch", "run_pipeline", "status_text", "version", "write_png",
 ]

@@ -14,7 +14,7 @@ from .context import AUTO, FEMALE, MALE, default_context, gender_name
 from .detect import FigureInfo
 from .images import as_image, load_rgb_image
 from .mesh import Mesh
-from .pose import Camera, Joints2D, PoseOptions, _dict_arg, joints2d_arg
+from .pose import REPOSE_OUTCOMES, Camera, Joints2D, PoseEstimate, PoseOptions, _dict_arg, joints2d_arg, limb_index
 
 _WHICH = {"rest": B.SKB_JOINTS_REST, "posed": B.SKB_JOINTS_POSED, "estimated": B.SKB_JOINTS_ESTIMATED}
 
@@ -54,8 +54,9 @@ class FitOptions(OptionsBase):
 
 
 class Result(Handle):
-    """The result of run_pipeline: the fitted body posed to the sketch. Owns all its data;
-    read-only, so several threads may read it at once. Free with close() or `with`."""
+    """The result of run_pipeline: the fitted body posed to the sketch. Owns all its data.
+    Several threads may read it at once; only the re-pose methods (pick_alternative, flip_limb,
+    repose) change it, in place. Free with close() or `with`."""
 
     _free_fn = "skb_result_free"
 
@@ -203,6 +204,43 @@ class Result(Handle):
         """A new Mesh of the result (fitted rest shape, posed as in the result) for UVs,
         normals, triangles, the rig and export (write_glb, write_obj, write_preview)."""
         return Mesh(new_handle("skb_result_mesh", B.skb_mesh, self._p))
+
+    def pose_estimate(self):
+        """A copy of the result's 3-D pose with its ranked depth readings (PoseEstimate;
+        `.alternatives`). Flipping the copy does not change the result: use flip_limb()."""
+        return PoseEstimate(new_handle("skb_result_pose_estimate", B.skb_pose_estimate, self._p))
+
+    @property
+    def alternatives(self):
+        """The ranked depth readings of the result's pose (list of Alternative, best first;
+        [0] is the current pose)."""
+        with self.pose_estimate() as e:
+            return e.alternatives
+
+    def pick_alternative(self, index):
+        """Re-poses the fitted body in place to alternative `index` (shape kept). Returns "done"."""
+        o = ctypes.c_uint32()
+        call("skb_result_pick_alternative", self._p, A.index(index, "index", 0, 2**32 - 1), ctypes.byref(o))
+        return REPOSE_OUTCOMES[o.value]
+
+    def flip_limb(self, limb):
+        """Flips one limb's depth (LIMB_NAMES name or index) and re-poses the fitted body in place
+        (shape kept). Returns "done" or "no_depth" (the limb lies in the picture plane)."""
+        o = ctypes.c_uint32()
+        call("skb_result_flip_limb", self._p, limb_index(limb), ctypes.byref(o))
+        return REPOSE_OUTCOMES[o.value]
+
+    def repose(self, joints, dictionary=None):
+        """Re-poses the fitted body in place for moved 2-D joints (Joints2D, path, dict or
+        (15, 2) array; the live correction while a joint is dragged): the 3-D pose is
+        re-estimated, the shape kept. Returns "done", or with nothing changed
+        "joint_outside_image", "joints_coincide" or "implausible". Not while another thread
+        reads the result."""
+        j = joints2d_arg(joints).to_struct()
+        d = _dict_arg(dictionary)
+        o = ctypes.c_uint32()
+        call("skb_result_repose_joints", self._p, d._p, ctypes.byref(j), ctypes.byref(o))
+        return REPOSE_OUTCOMES[o.value]
 
 
 class _Interim:

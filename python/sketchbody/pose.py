@@ -276,3 +276,86 @@ def refine_pose(joints, start, options=None, dictionary=None):
     with options_handle(options, PoseOptions) as h:
         call("skb_pose_refine", d._p, ctypes.byref(j), h, ctypes.byref(start.raw), ctypes.byref(out))
     return Pose3D.from_struct(out)
+
+
+LIMB_NAMES = ("r_upper_arm", "r_forearm", "l_upper_arm", "l_forearm", "r_thigh", "r_shin", "l_thigh", "l_shin")
+"""The limb bones whose depth can be flipped, in SKB_LIMB_* order."""
+
+REPOSE_OUTCOMES = {
+    B.SKB_REPOSE_DONE: "done",
+    B.SKB_REPOSE_NO_DEPTH: "no_depth",
+    B.SKB_REPOSE_JOINT_OUTSIDE_IMAGE: "joint_outside_image",
+    B.SKB_REPOSE_JOINTS_COINCIDE: "joints_coincide",
+    B.SKB_REPOSE_IMPLAUSIBLE: "implausible",
+}
+"""Outcome names of flip_limb and the Result re-pose methods ("done", or what left it unchanged)."""
+
+
+def limb_index(limb):
+    """SKB_LIMB_* of a limb name (LIMB_NAMES) or index."""
+    if isinstance(limb, str):
+        if limb not in LIMB_NAMES:
+            raise ValueError(f"unknown limb {limb!r}; expected one of {LIMB_NAMES}")
+        return LIMB_NAMES.index(limb)
+    return A.index(limb, "limb", 0, len(LIMB_NAMES) - 1)
+
+
+@dataclasses.dataclass
+class Alternative:
+    """One depth reading of a pose: `joints` (15, 3) metres (the frame of Pose3D.joints),
+    `score` (px², lower = better; docs/formats.md "3-D pose JSON"), `flipped` the limb names
+    flipped relative to the current pose."""
+
+    joints: np.ndarray
+    score: float
+    flipped: tuple
+
+
+class PoseEstimate(Handle):
+    """A 3-D pose estimate with its ranked depth readings (skb_pose_estimate): `pose` (Pose3D),
+    `alternatives` (best first; [0] is the pose itself), flip_limb() and pick() change it in
+    place. Made by estimate_pose_alternatives() or Result.pose_estimate()."""
+
+    _free_fn = "skb_pose_estimate_free"
+
+    @property
+    def pose(self):
+        out = B.skb_pose3d()
+        call("skb_pose_estimate_pose", self._p, ctypes.byref(out))
+        return Pose3D.from_struct(out)
+
+    @property
+    def alternatives(self):
+        """The ranked alternatives (list of Alternative, at most 8)."""
+        n = ctypes.c_uint32()
+        call("skb_pose_estimate_num_alternatives", self._p, ctypes.byref(n))
+        out = []
+        for i in range(n.value):
+            j = np.empty((15, 3), dtype=np.float64)
+            score = ctypes.c_double()
+            call("skb_pose_estimate_copy_alternative_joints", self._p, i, A.ptr(j), j.size, ctypes.byref(score))
+            limbs = (ctypes.c_uint32 * len(LIMB_NAMES))()
+            count = ctypes.c_size_t()
+            call("skb_pose_estimate_copy_alternative_flipped", self._p, i, limbs, len(LIMB_NAMES), ctypes.byref(count))
+            out.append(Alternative(j, score.value, tuple(LIMB_NAMES[limbs[k]] for k in range(count.value))))
+        return out
+
+    def flip_limb(self, limb):
+        """Flips one limb's depth (a LIMB_NAMES name or index) in place; returns "done" or
+        "no_depth" (the limb lies in the picture plane; nothing changed)."""
+        o = ctypes.c_uint32()
+        call("skb_pose_flip_limb", self._p, limb_index(limb), ctypes.byref(o))
+        return REPOSE_OUTCOMES[o.value]
+
+    def pick(self, index):
+        """Makes alternative `index` the pose (in place)."""
+        call("skb_pose_estimate_pick", self._p, A.index(index, "index", 0, 2**32 - 1))
+
+
+def estimate_pose_alternatives(joints, options=None, dictionary=None):
+    """estimate_pose as a PoseEstimate handle: the pose with its ranked depth readings
+    (`.alternatives`) and flip_limb()."""
+    j = joints2d_arg(joints).to_struct()
+    d = _dict_arg(dictionary)
+    with options_handle(options, PoseOptions) as h:
+        return PoseEstimate(new_handle("skb_pose_estimate_new", B.skb_pose_estimate, d._p, ctypes.byref(j), h))

@@ -19,29 +19,31 @@ pub fn parse_joints3_json(text: &str) -> Result<Joints3> {
             return Err(Error::CorruptData(format!("joints JSON: units {u} (expected \"m\")")));
         }
     }
-    let joints = doc
-        .get("joints")
-        .and_then(Value::as_object)
-        .ok_or_else(|| Error::CorruptData("joints JSON: no \"joints\" object".into()))?;
+    let joints = doc.get("joints").ok_or_else(|| Error::CorruptData("joints JSON: no \"joints\" object".into()))?;
+    parse_joint_object(joints, "joints JSON")
+}
+
+/// The 15 joints of a joint object `{"head": [x, y, z], ...}` (every canonical name once, no
+/// other key); errors name `what` and the missing, unknown or malformed joint.
+pub fn parse_joint_object(joints: &Value, what: &str) -> Result<Joints3> {
+    let joints =
+        joints.as_object().ok_or_else(|| Error::CorruptData(format!("{what}: the joints are not an object")))?;
     if let Some(name) = joints.keys().find(|n| !JOINT_NAMES.contains(&n.as_str())) {
-        return Err(Error::CorruptData(format!("joints JSON: unknown joint {name:?}")));
+        return Err(Error::CorruptData(format!("{what}: unknown joint {name:?}")));
     }
     let mut out = [[0.0; 3]; NUM_JOINTS];
     for (j, name) in JOINT_NAMES.iter().enumerate() {
         let v = joints
             .get(*name)
             .and_then(Value::as_array)
-            .ok_or_else(|| Error::CorruptData(format!("joints JSON: joint {name:?} missing")))?;
+            .ok_or_else(|| Error::CorruptData(format!("{what}: joint {name:?} missing")))?;
         if v.len() != 3 {
-            return Err(Error::CorruptData(format!(
-                "joints JSON: joint {name:?} has {} coordinates, expected 3",
-                v.len()
-            )));
+            return Err(Error::CorruptData(format!("{what}: joint {name:?} has {} coordinates, expected 3", v.len())));
         }
         for (k, c) in v.iter().enumerate() {
-            out[j][k] = c.as_f64().ok_or_else(|| {
-                Error::CorruptData(format!("joints JSON: joint {name:?} coordinate {k} is not a number"))
-            })?;
+            out[j][k] = c
+                .as_f64()
+                .ok_or_else(|| Error::CorruptData(format!("{what}: joint {name:?} coordinate {k} is not a number")))?;
         }
     }
     Ok(out)

@@ -6,6 +6,7 @@
 //! - [`joints`]: the 2-D joints source (the caller's joints, or the detector's).
 //! - [`figure`]: the single-figure detector refereed by the pose step.
 //! - [`overlay`]: the overlay picture (sketch, joints, bones, fitted silhouette outline).
+//! - [`repose`]: re-posing a finished result (a depth reading, a flipped limb, moved joints) without re-fitting its shape.
 //!
 //! Gender: given a gender ([`PipelineOptions::gender`]), that gender's space is fitted. Without
 //! one, with given joints the default fits both gendered spaces and a classifier chooses
@@ -21,6 +22,7 @@ pub mod figure;
 pub mod interim;
 pub mod joints;
 pub mod overlay;
+pub mod repose;
 
 use std::time::Instant;
 
@@ -39,6 +41,7 @@ pub use body_fit::{calibrated_weights, fit_body, refit_camera, rest_body, BodyCh
 pub use detected::{DetectedJointsFit, DEFAULT_DEPTH_HINT};
 pub use interim::{InterimBody, InterimStage};
 pub use joints::{DetectedJoints, FigureJoints, GivenJoints, JointsSource};
+pub use repose::{repose, Posing, ReposeOutcome, ReposeRequest};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
 pub const MIN_SKETCH_SIDE: usize = 32;
@@ -222,6 +225,8 @@ pub struct PipelineResult {
     pub posed_vertices: Vec<[f32; 3]>,
     /// Posed joints of the mesh (model frame, metres).
     pub posed_joints: crate::skeleton::Joints3,
+    /// The options of the pose and posing steps, for [`repose`].
+    pub posing_options: Posing,
     /// Stage timings.
     pub timings: Timings,
 }
@@ -412,6 +417,7 @@ pub fn run_pipeline_progressive(
         calibrated: body.calibrated,
         ik_pose: body.ik_pose,
         posed_vertices: body.posed_vertices,
+        posing_options: Posing { pose: options.pose, retarget: fit.retarget, skinning: fit.skinning },
         timings,
     })
 }

@@ -2,6 +2,7 @@
 //! joints, by projected matching pursuit over a dictionary of action-specific basis poses.
 //!
 //! - [`motion`]: motion tables (canonical-joint CSV), pose normalisation, mirroring.
+//! - [`alternatives`]: the ranked depth readings of an estimate and the flip of one limb's depth.
 //! - [`blend`]: posterior-mean blend of the exemplar starts' hypotheses.
 //! - [`depth_hint`]: relative joint depths from an image cue, weighing the solver's choices.
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
@@ -23,6 +24,7 @@
 //! Units: 3-D joints are metres of a 1.75 m person (every pose is normalised to that stature,
 //! see [`motion::normalize_pose`]); 2-D joints are image pixels (origin top-left, y down).
 
+pub mod alternatives;
 pub mod blend;
 pub mod camera_fit;
 pub mod depth_hint;
@@ -42,6 +44,7 @@ pub mod qcls;
 pub mod refine;
 pub mod straighten;
 
+pub use alternatives::{flip_limb, pick_alternative, Alternative, FlipStatus, Limb};
 pub use depth_hint::DepthHint;
 pub use dictionary::{Dictionary, LearnParams};
 pub use options::PoseOptions;

@@ -14,6 +14,7 @@
 
 use nalgebra::{DVector, Vector3};
 
+use super::alternatives::{Alternative, DepthCosts};
 use super::camera_fit::{fit_camera, CameraPrior};
 use super::depth_hint::{hint_cost, DepthHint};
 use super::dictionary::Dictionary;
@@ -54,6 +55,13 @@ pub struct PoseEstimate {
     /// [`IMPLAUSIBLE_RMS`] of the visible joints' extent, or a factor sits at its range's end.
     /// The estimate is still the best found.
     pub plausible: bool,
+    /// The ranked depth readings ([`super::alternatives`]): `[0]` is this estimate itself, the
+    /// others flip limbs in depth, best first; at most [`super::alternatives::MAX_ALTERNATIVES`].
+    /// Empty for an estimate not made by [`estimate_pose`] (e.g. [`super::refine_pose`]'s).
+    pub alternatives: Vec<Alternative>,
+    /// The scores of every reading ([`super::alternatives::DepthCosts`]), kept so that
+    /// [`super::alternatives::flip_limb`] re-ranks without the dictionary; `None` with no alternatives.
+    pub depth_costs: Option<DepthCosts>,
 }
 
 /// Reprojection RMS, as a fraction of the visible joints' bounding-box diagonal, above which an
@@ -86,6 +94,8 @@ pub(crate) fn finish(prob: &Problem, cam: WeakPerspective, bases: Vec<usize>, we
         base_parts: None,
         factors: BodyFactors::default(),
         plausible: true,
+        alternatives: Vec::new(),
+        depth_costs: None,
     }
 }
 
@@ -161,7 +171,35 @@ pub fn estimate_pose_with_factor_prior(
     let first = estimate_fixed(dict, joints, opts, hints.of(joints).as_ref())?;
     let est = if opts.proportions { with_proportions(dict, joints, opts, first, &hints, factor_prior) } else { first };
     let est = with_straight_limbs(dict, joints, opts, est);
+    let est = with_alternatives(dict, joints, opts, hints.of(joints).as_ref(), est);
     finite_estimate(flag_plausibility(joints, est))
+}
+
+/// `est` with its ranked depth readings ([`super::alternatives`]): the limb candidates are the
+/// solver's (the first [`PoseOptions::limb_candidates`] exemplars of the affine ranking of
+/// `joints`) and the exemplars `est` started from; none without exemplar starts.
+fn with_alternatives(
+    dict: &Dictionary,
+    joints: &Joints2,
+    opts: &PoseOptions,
+    hint: Option<&DepthHint>,
+    est: PoseEstimate,
+) -> PoseEstimate {
+    let Ok(prob) = Problem::new(dict, joints, 0.0) else { return est };
+    let ex = &dict.exemplars;
+    let mut cols: Vec<usize> = est.base_parts.map(|p| p.to_vec()).unwrap_or_default();
+    if opts.starts > 0 && opts.limb_candidates > 0 && ex.ncols() > 0 {
+        cols.extend(super::exemplar::affine_ranking(&prob, opts.limb_candidates).into_iter().map(|r| r.0));
+    }
+    cols.sort_unstable();
+    cols.dedup();
+    let n = ex.nrows();
+    let candidates: Vec<&[f64]> =
+        cols.iter().filter(|&&k| k < ex.ncols()).map(|&k| &ex.as_slice()[k * n..(k + 1) * n]).collect();
+    let x: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(est.joints[j]));
+    let costs =
+        super::alternatives::depth_costs(&est.joints, &est.camera, prob.objective(&est.camera, &x), &candidates, hint);
+    super::alternatives::with_alternatives(est, costs)
 }
 
 /// `e`, or [`Error::NonFinite`] naming its first NaN or infinite joint, camera value, RMS,
@@ -172,7 +210,9 @@ fn finite_estimate(e: PoseEstimate) -> Result<PoseEstimate> {
         .chain([("camera sx", c.sx), ("camera sy", c.sy), ("camera t", c.t[0]), ("camera t", c.t[1])])
         .chain(c.r.iter().map(|&v| ("camera rotation", v)))
         .chain([("pose RMS", e.rms), ("length excess", e.length_excess)])
-        .chain(e.weights.iter().map(|&v| ("basis weight", v)));
+        .chain(e.weights.iter().map(|&v| ("basis weight", v)))
+        .chain(e.alternatives.iter().flat_map(|a| a.joints.iter().flatten().map(|&v| ("alternative joint", v))))
+        .chain(e.alternatives.iter().map(|a| ("alternative score", a.score)));
     for (name, v) in named {
         crate::error::ensure_finite(name, v)?;
     }
@@ -757,8 +797,9 @@ pub(crate) mod tests {
         let j = observe(&d, &truth(), 1.0);
         let plain = estimate_pose(&d, &j, &options()).unwrap();
         let refined = estimate_pose(&d, &j, &PoseOptions { refine: true, ..options() }).unwrap();
+        // (refine_pose lists no depth readings; estimate_pose adds them after the refinement.)
         assert_eq!(
-            refined,
+            PoseEstimate { alternatives: Vec::new(), depth_costs: None, ..refined.clone() },
             crate::pose::refine_pose(&d, &j, &PoseOptions { refine: true, ..options() }, &plain).unwrap()
         );
         assert!(refined.rms < plain.rms - 1e-4, "{} vs {}", refined.rms, plain.rms);

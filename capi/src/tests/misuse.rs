@@ -2316,6 +2316,252 @@ fn prototypes(header: &str) -> Vec<(String, Vec<(String, String)>)> {
     out
 }
 
+/// The pose estimate handle with its alternatives and the re-pose of a result (issues 46, 50).
+/// Runs last: it flips a limb of the shared result twice (back to where it was).
+fn alternatives_rows(t: &mut Table, fx: &Fx) {
+    let d = fx.dict as *const skb_pose_dictionary;
+    let o = fx.pose_opts as *const skb_pose_options;
+    let j = fx.joints;
+    // SAFETY: live handles, locals, canaries of the sizes passed, or NULL where tested.
+    unsafe {
+        let e = "skb_pose_estimate_new";
+        let mut c = Canary::of::<*mut skb_pose_estimate>(1);
+        t.check(
+            e,
+            "dict",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_pose_estimate_new(ptr::null(), &j, o, c.ptr()),
+            c.intact(),
+        );
+        t.check(
+            e,
+            "joints",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_pose_estimate_new(d, ptr::null(), o, c.ptr()),
+            c.intact(),
+        );
+        t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, skb_pose_estimate_new(d, &j, o, ptr::null_mut()), true);
+        let mut bone = j;
+        bone.xy[3] = bone.xy[2];
+        t.check(
+            e,
+            "joints",
+            Kind::Other,
+            SKB_ERR_COINCIDENT_JOINTS,
+            skb_pose_estimate_new(d, &bone, o, c.ptr()),
+            c.intact(),
+        );
+        let mut est: *mut skb_pose_estimate = ptr::null_mut();
+        t.check(e, "opts", Kind::Null, SKB_OK, skb_pose_estimate_new(d, &j, ptr::null(), &mut est), true);
+        t.free("skb_pose_estimate_free", "est", skb_pose_estimate_free);
+        let ec = est as *const skb_pose_estimate;
+        t.getter("skb_pose_estimate_pose", "est", "out", skb_pose_estimate_pose, ec);
+        t.getter("skb_pose_estimate_num_alternatives", "est", "count", skb_pose_estimate_num_alternatives, ec);
+        let mut n = 0u32;
+        assert_eq!(skb_pose_estimate_num_alternatives(ec, &mut n), SKB_OK);
+        assert!(n >= 2, "the example's estimate has alternatives: {n}");
+
+        let e = "skb_pose_estimate_copy_alternative_joints";
+        let f = |h: *const skb_pose_estimate, i: u32, dst: *mut f64, len: usize, score: *mut f64| {
+            skb_pose_estimate_copy_alternative_joints(h, i, dst, len, score)
+        };
+        let mut c = Canary::of::<f64>(45);
+        let mut s = Canary::of::<f64>(1);
+        t.check(
+            e,
+            "est",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            f(ptr::null(), 0, c.ptr(), 45, s.ptr()),
+            c.intact() && s.intact(),
+        );
+        t.check(
+            e,
+            "index",
+            Kind::Max,
+            SKB_ERR_OUT_OF_RANGE,
+            f(ec, u32::MAX, c.ptr(), 45, s.ptr()),
+            c.intact() && s.intact(),
+        );
+        t.check(
+            e,
+            "index",
+            Kind::Other,
+            SKB_ERR_OUT_OF_RANGE,
+            f(ec, n, c.ptr(), 45, s.ptr()),
+            c.intact() && s.intact(),
+        );
+        t.check(e, "dst", Kind::Null, SKB_ERR_NULL_POINTER, f(ec, 0, ptr::null_mut(), 45, s.ptr()), s.intact());
+        t.check(
+            e,
+            "dst_len",
+            Kind::Max,
+            SKB_ERR_OUT_OF_RANGE,
+            f(ec, 0, c.ptr(), usize::MAX, s.ptr()),
+            c.intact() && s.intact(),
+        );
+        t.check(
+            e,
+            "dst_len",
+            Kind::Other,
+            SKB_ERR_BUFFER_TOO_SMALL,
+            f(ec, 0, c.ptr(), 44, s.ptr()),
+            c.intact() && s.intact(),
+        );
+        t.check(e, "score", Kind::Null, SKB_OK, f(ec, 1, c.ptr(), 45, ptr::null_mut()), true);
+        t.check(e, "score", Kind::Other, SKB_OK, f(ec, 1, c.ptr(), 45, s.ptr()), true);
+
+        let e = "skb_pose_estimate_copy_alternative_flipped";
+        let f = |h: *const skb_pose_estimate, i: u32, dst: *mut u32, len: usize, count: *mut usize| {
+            skb_pose_estimate_copy_alternative_flipped(h, i, dst, len, count)
+        };
+        let mut c = Canary::of::<u32>(8);
+        let mut k = Canary::of::<usize>(1);
+        t.check(
+            e,
+            "est",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            f(ptr::null(), 1, c.ptr(), 8, k.ptr()),
+            c.intact() && k.intact(),
+        );
+        t.check(
+            e,
+            "index",
+            Kind::Max,
+            SKB_ERR_OUT_OF_RANGE,
+            f(ec, u32::MAX, c.ptr(), 8, k.ptr()),
+            c.intact() && k.intact(),
+        );
+        t.check(
+            e,
+            "dst_len",
+            Kind::Max,
+            SKB_ERR_OUT_OF_RANGE,
+            f(ec, 1, c.ptr(), usize::MAX, k.ptr()),
+            c.intact() && k.intact(),
+        );
+        t.check(
+            e,
+            "dst_len",
+            Kind::Other,
+            SKB_ERR_BUFFER_TOO_SMALL,
+            f(ec, 1, c.ptr(), 0, k.ptr()),
+            c.intact() && k.intact(),
+        );
+        t.check(e, "dst", Kind::Null, SKB_OK, f(ec, 1, ptr::null_mut(), 0, k.ptr()), true);
+        t.check(e, "count", Kind::Null, SKB_OK, f(ec, 1, c.ptr(), 8, ptr::null_mut()), true);
+
+        let e = "skb_pose_flip_limb";
+        let mut oc = Canary::of::<u32>(1);
+        t.check(
+            e,
+            "est",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_pose_flip_limb(ptr::null_mut(), 0, oc.ptr()),
+            oc.intact(),
+        );
+        t.check(e, "limb", Kind::Max, SKB_ERR_OUT_OF_RANGE, skb_pose_flip_limb(est, u32::MAX, oc.ptr()), oc.intact());
+        t.check(
+            e,
+            "limb",
+            Kind::Other,
+            SKB_ERR_OUT_OF_RANGE,
+            skb_pose_flip_limb(est, SKB_NUM_LIMBS, oc.ptr()),
+            oc.intact(),
+        );
+        t.check(e, "outcome", Kind::Null, SKB_OK, skb_pose_flip_limb(est, SKB_LIMB_L_THIGH, ptr::null_mut()), true);
+        t.check(e, "outcome", Kind::Other, SKB_OK, skb_pose_flip_limb(est, SKB_LIMB_L_THIGH, oc.ptr()), true);
+
+        let e = "skb_pose_estimate_pick";
+        t.check(e, "est", Kind::Null, SKB_ERR_NULL_POINTER, skb_pose_estimate_pick(ptr::null_mut(), 0), true);
+        t.check(e, "index", Kind::Max, SKB_ERR_OUT_OF_RANGE, skb_pose_estimate_pick(est, u32::MAX), true);
+        t.check(e, "index", Kind::Other, SKB_OK, skb_pose_estimate_pick(est, 0), true);
+        skb_pose_estimate_free(est);
+
+        let r = fx.result;
+        let e = "skb_result_pose_estimate";
+        let mut c = Canary::of::<*mut skb_pose_estimate>(1);
+        t.check(
+            e,
+            "result",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_result_pose_estimate(ptr::null(), c.ptr()),
+            c.intact(),
+        );
+        t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_pose_estimate(r, ptr::null_mut()), true);
+        t.check(e, "out", Kind::Other, SKB_OK, skb_result_pose_estimate(r, c.ptr()), true);
+        skb_pose_estimate_free(*c.ptr::<*mut skb_pose_estimate>());
+
+        let e = "skb_result_pick_alternative";
+        let mut oc = Canary::of::<u32>(1);
+        t.check(
+            e,
+            "result",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_result_pick_alternative(ptr::null_mut(), 0, oc.ptr()),
+            oc.intact(),
+        );
+        t.check(
+            e,
+            "index",
+            Kind::Max,
+            SKB_ERR_OUT_OF_RANGE,
+            skb_result_pick_alternative(r, u32::MAX, oc.ptr()),
+            oc.intact(),
+        );
+        t.check(e, "outcome", Kind::Null, SKB_OK, skb_result_pick_alternative(r, 0, ptr::null_mut()), true);
+
+        let e = "skb_result_flip_limb";
+        t.check(
+            e,
+            "result",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_result_flip_limb(ptr::null_mut(), 0, oc.ptr()),
+            oc.intact(),
+        );
+        t.check(e, "limb", Kind::Max, SKB_ERR_OUT_OF_RANGE, skb_result_flip_limb(r, u32::MAX, oc.ptr()), oc.intact());
+        t.check(e, "outcome", Kind::Null, SKB_OK, skb_result_flip_limb(r, SKB_LIMB_L_THIGH, ptr::null_mut()), true);
+        t.check(e, "outcome", Kind::Other, SKB_OK, skb_result_flip_limb(r, SKB_LIMB_L_THIGH, oc.ptr()), true);
+
+        let e = "skb_result_repose_joints";
+        let mut oc = Canary::of::<u32>(1);
+        let mut rj = skb_joints2d { xy: [[0.0; 2]; 15], visible: [0; 15], reserved: 0 };
+        assert_eq!(skb_result_joints2d(r, &mut rj), SKB_OK);
+        t.check(
+            e,
+            "result",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_result_repose_joints(ptr::null_mut(), d, &rj, oc.ptr()),
+            oc.intact(),
+        );
+        t.check(
+            e,
+            "joints",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_result_repose_joints(r, d, ptr::null(), oc.ptr()),
+            oc.intact(),
+        );
+        t.check(e, "dict", Kind::Null, SKB_OK, skb_result_repose_joints(r, ptr::null(), &rj, oc.ptr()), true);
+        let mut outside = rj;
+        outside.xy[4] = [f64::NAN, 0.0];
+        let mut code = u32::MAX;
+        t.check(e, "joints", Kind::Other, SKB_OK, skb_result_repose_joints(r, d, &outside, &mut code), true);
+        if code != SKB_REPOSE_JOINT_OUTSIDE_IMAGE {
+            t.failures.push(format!("{e}: a NaN joint gave outcome {code}, want SKB_REPOSE_JOINT_OUTSIDE_IMAGE"));
+        }
+        t.check(e, "outcome", Kind::Null, SKB_OK, skb_result_repose_joints(r, d, &rj, ptr::null_mut()), true);
+    }
+}
+
 /// The rows a parameter needs, by its C type.
 fn needed_kinds(ty: &str) -> Vec<Kind> {
     if ty.contains('*') || ty == "skb_progress_fn" {
@@ -2351,6 +2597,7 @@ fn every_export_is_in_the_misuse_table_and_fails_cleanly() {
     detect_rows(&mut t, &fx);
     joints_file_rows(&mut t, &fx);
     texture_rows(&mut t, &fx);
+    alternatives_rows(&mut t, &fx);
 
     // Coverage against the header: every export, every parameter's kinds.
     let header = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../include/sketchbody.h")).unwrap();

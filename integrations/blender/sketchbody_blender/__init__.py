@@ -115,6 +115,10 @@ class SketchbodySettings(bpy.types.PropertyGroup):
                     "right) is below this are highlighted (red, larger); 0.75 is the library's low-confidence level")
     progress: FloatProperty(name="Progress", subtype="FACTOR", min=0.0, max=1.0, get=lambda self: running_fraction(),
                             description="The running fit's fraction done (read-only)")
+    live_repose: BoolProperty(
+        name="Live re-pose", default=True,
+        description="While a joint marker is moved, re-pose the body to it at once (3-D pose, IK and skinning; "
+                    "the shape is kept: 'Re-run from corrected joints' re-fits it)")
     status: StringProperty(name="Last run", description="What the last run reported")
     status_level: StringProperty(name="Last run's level", default="INFO",
                                  description="INFO, WARNING, ERROR or RUNNING")
@@ -144,6 +148,104 @@ class _Active:
 
 
 _active = None
+
+
+@dataclasses.dataclass
+class _Live:
+    """The current body's library result, kept open to re-pose the body without re-fitting its
+    shape (flip_limb, the live re-pose): the result, the package module, the pose dictionary, the
+    armature's and body's names, the rig options and sketch size it was built with, and the
+    marker pixels it was last posed to."""
+
+    result: object
+    skb: object
+    dictionary: object
+    armature: str
+    body: str
+    rig_options: object
+    width: int
+    height: int
+    xy: np.ndarray
+
+
+_live = None
+LIVE_SECONDS = 0.05  # how often the live re-pose looks at the markers
+LIMB_LABELS = {"r_upper_arm": "R upper arm", "r_forearm": "R forearm", "l_upper_arm": "L upper arm",
+               "l_forearm": "L forearm", "r_thigh": "R thigh", "r_shin": "R shin", "l_thigh": "L thigh",
+               "l_shin": "L shin"}
+
+
+def _set_live(live):
+    """Makes `live` (or None) the re-posable body, closing the former one's result."""
+    global _live
+    old, _live = _live, live
+    if old is not None and (live is None or old.result is not live.result):
+        old.result.close()
+
+
+def live_body():
+    """(armature, body) of the re-posable body, or None when there is none (no run, Clear, the
+    objects removed or replaced)."""
+    if _live is None:
+        return None
+    arm = bpy.data.objects.get(_live.armature)
+    if arm is None or not arm.get(build.CURRENT):
+        return None
+    return arm, bpy.data.objects.get(_live.body)
+
+
+def _repose_scene(seconds_since):
+    """Puts the kept result's current pose onto its body (work.posed_data, build.apply_pose);
+    returns the milliseconds since `seconds_since` (perf_counter)."""
+    arm, body = live_body()
+    with _live.result.mesh() as mesh:
+        data = work.posed_data(_live.result, mesh, _live.rig_options, _live.width, _live.height)
+    build.apply_pose(arm, body, data["rig"], data["sketch_uv"], data["seen"])
+    return 1e3 * (time.perf_counter() - seconds_since)
+
+
+def live_update():
+    """The live re-pose (a bpy.app.timers callback; scripts may call it): when a joint marker of
+    the re-posable body has moved since the body was last posed, re-poses the body to the
+    markers at once (3-D pose, IK, skinning; the shape kept). A marker outside the sketch, on
+    another, or joints no body explains leave the body as it was and say so in the panel.
+    Returns the outcome ("done", the library's other outcomes, or None when nothing moved)."""
+    ctx = bpy.context
+    if _live is None or is_running() or live_body() is None or ctx.scene is None:
+        return None
+    st = _settings(ctx)
+    plane = build.find_plane()
+    if not st.live_repose or plane is None:
+        return None
+    try:
+        xy, visible = build.read_markers(plane, _live.skb.JOINT_NAMES)
+    except ValueError:
+        return None
+    if np.allclose(xy, _live.xy, atol=0.01):
+        return None
+    t = time.perf_counter()
+    outcome = _live.result.repose(_live.skb.Joints2D(xy, visible), dictionary=_live.dictionary)
+    _live.xy = xy
+    if outcome == "done":
+        ms = _repose_scene(t)
+        _set_status(ctx.scene, "INFO", f"Sketchbody: re-posed to the markers in {ms:.0f} ms (shape kept; "
+                                       "'Re-run from corrected joints' re-fits it)")
+    else:
+        why = {"joint_outside_image": "a joint marker is outside the sketch",
+               "joints_coincide": "two joint markers lie on each other",
+               "implausible": "no plausible body explains the markers"}[outcome]
+        _set_status(ctx.scene, "WARNING", f"Sketchbody: {why}; the body keeps its last pose")
+    _redraw()
+    return outcome
+
+
+def _live_tick():
+    """The timer around live_update (never raises: a timer that raises is dropped)."""
+    try:
+        live_update()
+    except Exception as e:  # noqa: BLE001 - reported in the panel
+        _set_status(bpy.context.scene, "ERROR", f"Sketchbody: live re-pose failed: {e}")
+    return LIVE_SECONDS
 
 
 def is_running():
@@ -285,6 +387,7 @@ def _finish():
     a, _active = _active, None
     _cursor_progress(None)
     job, req = a.job, a.req
+    result = job.result.pop("result", None) if isinstance(job.result, dict) else None
     if isinstance(job.error, a.skb.Cancelled):
         level, text = "WARNING", f"Sketchbody: {req.label} cancelled; the scene is unchanged"
     elif job.error is not None:
@@ -293,10 +396,16 @@ def _finish():
         try:
             with _main_context():
                 kept = _build(bpy.context, a.skb, req, job.result)
+            arm, body = build.current_body()
+            xy, _ = build.read_markers(build.find_plane(), a.skb.JOINT_NAMES)  # where the body is posed to
+            _set_live(_Live(result, a.skb, job.result["dictionary"], arm.name, body.name, req.rig_options, req.width, req.height, xy))
+            result = None
             level, text = "INFO", _summary(req, job.result, time.perf_counter() - a.t0, kept)
             _undo_push(f"Sketchbody: {req.label}")
         except Exception as e:  # noqa: BLE001 - reported, never a traceback
             level, text = "ERROR", work.describe_error(a.skb, e, req)
+    if result is not None:
+        result.close()
     _set_status(bpy.context.scene, level, text)
     _redraw()
     return level, text
@@ -510,6 +619,39 @@ class SKETCHBODY_OT_clear(_Reporting, bpy.types.Operator):
     def run(self, context):
         _object_mode(context)
         build.clear(context.scene)
+        _set_live(None)
+        return {"FINISHED"}
+
+
+class SKETCHBODY_OT_flip_limb(_Reporting, bpy.types.Operator):
+    """Flip this limb's depth (toward / away from the viewer: one view cannot tell them apart)
+    and re-pose the body at once; its shape is kept"""
+
+    bl_idname = "sketchbody.flip_limb"
+    bl_label = "Flip limb forward/back"
+    bl_options = {"REGISTER"}
+
+    limb: EnumProperty(name="Limb", items=[(k, v, f"Flip the {v.lower()}'s depth") for k, v in LIMB_LABELS.items()])
+
+    @classmethod
+    def poll(cls, context):
+        return live_body() is not None and not is_running()
+
+    def run(self, context):
+        if live_body() is None:
+            raise UserError("No body to re-pose: run 'Sketch to body' first")
+        _object_mode(context)
+        t = time.perf_counter()
+        outcome = _live.result.flip_limb(self.limb)
+        label = LIMB_LABELS[self.limb]
+        if outcome == "no_depth":
+            text = f"Sketchbody: the {label.lower()} lies in the picture plane: no depth to flip; the body is unchanged"
+            level = "WARNING"
+        else:
+            ms = _repose_scene(t)
+            level, text = "INFO", f"Sketchbody: {label.lower()} flipped in depth, body re-posed in {ms:.0f} ms (shape kept)"
+        _set_status(context.scene, level, text)
+        self.report({level}, text)
         return {"FINISHED"}
 
 
@@ -580,9 +722,25 @@ class SKETCHBODY_PT_panel(bpy.types.Panel):
                 box.label(text=f"Red: low confidence ({len(low)})", icon="ERROR")
             box.label(text="Orange: moved (used by the last re-run)")
             box.prop(st, "threshold")
+            box.prop(st, "live_repose")
         box.operator(SKETCHBODY_OT_rerun.bl_idname, icon="FILE_REFRESH")
         box.operator(SKETCHBODY_OT_save_joints.bl_idname, icon="EXPORT")
+        _draw_flips(layout)
         layout.operator(SKETCHBODY_OT_clear.bl_idname, icon="TRASH")
+
+
+def _draw_flips(layout):
+    """The per-limb "flip forward/back" buttons (a limb's depth), two per row."""
+    box = layout.box()
+    box.label(text="Limb depth: flip forward/back", icon="MOD_MIRROR")
+    if live_body() is None:
+        box.label(text="Run 'Sketch to body' first")
+        return
+    names = list(LIMB_LABELS)
+    for i in range(0, len(names), 2):
+        row = box.row(align=True)
+        for limb in names[i:i + 2]:
+            row.operator(SKETCHBODY_OT_flip_limb.bl_idname, text=LIMB_LABELS[limb]).limb = limb
 
 
 def _draw_status(layout, st):
@@ -599,7 +757,8 @@ def _draw_status(layout, st):
 
 
 CLASSES = (SketchbodyPreferences, SketchbodySettings, SKETCHBODY_OT_sketch_to_body, SKETCHBODY_OT_rerun,
-           SKETCHBODY_OT_cancel, SKETCHBODY_OT_clear, SKETCHBODY_OT_save_joints, SKETCHBODY_PT_panel)
+           SKETCHBODY_OT_cancel, SKETCHBODY_OT_clear, SKETCHBODY_OT_flip_limb, SKETCHBODY_OT_save_joints,
+           SKETCHBODY_PT_panel)
 
 
 def register():
@@ -609,6 +768,8 @@ def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.Scene.sketchbody = PointerProperty(type=SketchbodySettings)
+    if not bpy.app.timers.is_registered(_live_tick):
+        bpy.app.timers.register(_live_tick, first_interval=LIVE_SECONDS, persistent=True)
 
 
 def unregister():
@@ -618,6 +779,9 @@ def unregister():
         _active = None
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
+    if bpy.app.timers.is_registered(_live_tick):
+        bpy.app.timers.unregister(_live_tick)
+    _set_live(None)
     del bpy.types.Scene.sketchbody
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

@@ -428,6 +428,36 @@ def _mesh_from_arrays(name, vertices, quads, uv_layers):
     return me
 
 
+def _pose_bones(arm, names, rest_local, posed_local):
+    """Poses the armature's bones `names` by the rig's matrices (rig_matrices)."""
+    for b, name in enumerate(names):
+        pb = arm.pose.bones[name]
+        pb.rotation_mode = "QUATERNION"
+        pb.matrix_basis = Matrix((np.linalg.inv(rest_local[b]) @ posed_local[b]).tolist())
+
+
+def _set_seen(me, seen):
+    """The colour attribute SEEN of mesh `me` from per-vertex `seen` (0..1)."""
+    seen = np.clip(np.asarray(seen, dtype=np.float32), 0.0, 1.0)
+    me.color_attributes[SEEN].data.foreach_set("color", np.repeat(seen[:, None], 4, axis=1).ravel())
+
+
+def apply_pose(arm, body, rig, sketch_uv, seen):
+    """Re-poses a built body in place (a flipped limb, a live re-pose: the shape unchanged): the
+    armature's bones from `rig` (made with the options the body was built with), the mesh's
+    "sketch" UVs and SEEN colours from the re-posed projection. The rest mesh, vertex groups,
+    modifiers and material stay; a mesh whose vertex count the artist changed keeps its UVs."""
+    rest_local, posed_local, _ = rig_matrices(rig)
+    _pose_bones(arm, list(rig.bone_names), rest_local, posed_local)
+    me = body.data if body is not None else None
+    if me is not None and len(me.vertices) == len(sketch_uv) and "sketch" in me.uv_layers and SEEN in me.color_attributes:
+        loops = np.empty(len(me.loops), dtype=np.int32)
+        me.loops.foreach_get("vertex_index", loops)
+        me.uv_layers["sketch"].data.foreach_set("uv", np.asarray(sketch_uv, dtype=np.float32)[loops].ravel())
+        _set_seen(me, seen)
+        me.update()
+
+
 def build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image, run):
     """The armature (53 bones from the rig's names, parents and rest transforms, posed by its
     local rotations) and the skinned mesh (the rig's bind-pose vertices, vertex groups with the
@@ -481,18 +511,14 @@ def _build_body(scene, rig, quads, uvs, face_uvs, sketch_uv, seen, image, run, m
     finally:
         bpy.ops.object.mode_set(mode="OBJECT")
 
-    for b, name in enumerate(names):
-        pb = arm.pose.bones[name]
-        pb.rotation_mode = "QUATERNION"
-        pb.matrix_basis = Matrix((np.linalg.inv(rest_local[b]) @ posed_local[b]).tolist())
+    _pose_bones(arm, names, rest_local, posed_local)
 
     me = _mesh_from_arrays(BODY, rig.rest_vertices, quads,
                            {"sketch": sketch_uv, "MakeHuman": (uvs, face_uvs)})
     me.uv_layers["sketch"].active = True
     me.uv_layers["sketch"].active_render = True
-    attr = me.color_attributes.new(SEEN, "FLOAT_COLOR", "POINT")
-    seen = np.clip(np.asarray(seen, dtype=np.float32), 0.0, 1.0)
-    attr.data.foreach_set("color", np.repeat(seen[:, None], 4, axis=1).ravel())
+    me.color_attributes.new(SEEN, "FLOAT_COLOR", "POINT")
+    _set_seen(me, seen)
     me.materials.append(_image_material(BODY_MATERIAL, image, uv_map="sketch", seen_attribute=SEEN, fresh=True))
     body = bpy.data.objects.new(BODY, me)
     made.append(body)

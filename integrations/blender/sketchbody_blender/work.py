@@ -100,33 +100,61 @@ def _detected_confidence(skb, image, used, progress, cancel):
     return np.full(len(used.xy), float(det.score))
 
 
+_dictionary = {}  # the package's embedded pose dictionary, parsed once per loaded package
+
+
+def pose_dictionary(skb):
+    """The embedded pose dictionary (the one run_pipeline uses by default), parsed on the first
+    call for this package module and kept: the live re-pose needs it on every marker move."""
+    d = _dictionary.get(id(skb))
+    if d is None:
+        d = _dictionary[id(skb)] = skb.PoseDictionary()
+    return d
+
+
+def posed_data(result, mesh, rig_options, width, height):
+    """What re-posing the fitted body changes (the run's `compute`, and flip_limb / the live
+    re-pose, which keep the shape): `camera`, `pixels` (the posed vertices projected, sketch
+    pixels), `rig` (posed, with `rig_options`), `seen` (per vertex, how squarely the sketch's
+    camera sees it, 0..1) and `sketch_uv` (the projection as UVs of a `width` x `height` sketch).
+    `mesh` is `result.mesh()`, made after the last re-pose."""
+    camera = result.camera()
+    pixels = camera.project(result.vertices(posed=True))
+    # How squarely the sketch's camera sees each vertex: the posed normal's component toward the
+    # viewer (+Z of the camera frame), full from 0.2 on, none when facing away.
+    toward_viewer = (mesh.normals(posed=True) @ camera.r.T)[:, 2]
+    return dict(camera=camera, pixels=pixels, rig=mesh.rig(rig_options), seen=np.clip(toward_viewer / 0.2, 0.0, 1.0),
+                sketch_uv=np.stack([pixels[:, 0] / width, 1.0 - pixels[:, 1] / height], axis=1))
+
+
 def compute(skb, req, progress, cancel):
     """Runs the pipeline for `req` (worker thread; no bpy) with `progress(fraction)` and the
     `cancel` event; returns the dict build.py needs: rig, quads, uvs, face_uvs, seen, camera,
     pixels, width, height, sketch_uv, gender, gender_value, low_evidence, edge_support,
-    joints (Joints2D used), confidence (15,), detection (skb.FigureInfo or None) and
-    body_height (the rest mesh's height, metres, as the CLI reports it)."""
+    joints (Joints2D used), confidence (15,), detection (skb.FigureInfo or None), body_height
+    (the rest mesh's height, metres, as the CLI reports it), `result` (the open skb.Result,
+    kept by the add-on to re-pose the body without re-fitting it; the receiver closes it) and
+    `dictionary` (pose_dictionary: parsed here, off Blender's main thread)."""
     share = 0.9 if req.joints is None else 1.0  # the rest: the detector's per-joint confidences
-    with skb.run_pipeline(req.image, joints=req.joints, fit_options=req.fit_options,
-                          progress=lambda f: progress(share * f), cancel=cancel) as result:
-        camera = result.camera()
-        data = dict(camera=camera, pixels=camera.project(result.vertices(posed=True)), gender=result.gender,
-                    gender_value=result.gender_value()[0], joints=result.joints2d(), detection=result.detection())
+    result = skb.run_pipeline(req.image, joints=req.joints, fit_options=req.fit_options,
+                              progress=lambda f: progress(share * f), cancel=cancel)
+    try:
+        data = dict(gender=result.gender, gender_value=result.gender_value()[0], joints=result.joints2d(),
+                    detection=result.detection(), width=req.width, height=req.height)
         data["low_evidence"], data["edge_support"] = result.evidence()
         data["body_height"] = float(np.ptp(result.vertices(posed=False)[:, 1]))
         with result.mesh() as mesh:
-            data.update(rig=mesh.rig(req.rig_options), quads=mesh.faces(), uvs=mesh.uvs(), face_uvs=mesh.face_uvs())
-            # How squarely the sketch's camera sees each vertex: the posed normal's component
-            # toward the viewer (+Z of the camera frame), full from 0.2 on, none when facing away.
-            toward_viewer = (mesh.normals(posed=True) @ camera.r.T)[:, 2]
-            data["seen"] = np.clip(toward_viewer / 0.2, 0.0, 1.0)
-    if req.joints is None:
-        data["confidence"] = _detected_confidence(skb, req.image, data["joints"],
-                                                  lambda f: progress(share + (1 - share) * f), cancel)
-    else:
-        data["confidence"] = np.asarray(req.confidence, dtype=np.float64)
-    w, h, pixels = req.width, req.height, data["pixels"]
-    data.update(width=w, height=h, sketch_uv=np.stack([pixels[:, 0] / w, 1.0 - pixels[:, 1] / h], axis=1))
+            data.update(quads=mesh.faces(), uvs=mesh.uvs(), face_uvs=mesh.face_uvs())
+            data.update(posed_data(result, mesh, req.rig_options, req.width, req.height))
+        if req.joints is None:
+            data["confidence"] = _detected_confidence(skb, req.image, data["joints"],
+                                                      lambda f: progress(share + (1 - share) * f), cancel)
+        else:
+            data["confidence"] = np.asarray(req.confidence, dtype=np.float64)
+    except BaseException:
+        result.close()
+        raise
+    data["result"], data["dictionary"] = result, pose_dictionary(skb)
     return data
 
 

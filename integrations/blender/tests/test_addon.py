@@ -353,6 +353,74 @@ check("result changed after the correction", moved.max() > 0.02 and len(skb_obje
       f"{np.linalg.norm(hand_after - hand_before) * 100:.1f} cm; {len(skb_objects())} SKB objects")
 
 
+def library_posed_blender():
+    """The kept result's posed vertices as the library skins them, in the armature's frame
+    (glTF x, -z, y), with the body's rig options."""
+    with mod._live.result.mesh() as m:
+        v = np.asarray(m.rig(mod._live.rig_options).posed_vertices, dtype=np.float64)
+    return np.stack([v[:, 0], -v[:, 2], v[:, 1]], axis=1)
+
+
+def body2_posed():
+    return evaluated_vertices(body2) - armature_offset(arm2)
+
+
+def body2_rest():
+    return np.array([v.co[:] for v in body2.data.vertices])
+
+
+# Depth readings (issue 46): flip a limb forward/back; the body re-posed at once, its shape kept.
+rest2 = body2_rest()
+before_flip = body2_posed()
+flip_results = {}
+for limb in mod.LIMB_LABELS:
+    res, err = run_op(bpy.ops.sketchbody.flip_limb, limb=limb)
+    flip_results[limb] = (res, st.status)
+    if res == {"FINISHED"} and st.status_level == "INFO":
+        break
+flipped_limb = limb
+after_flip = body2_posed()
+flip_move = np.linalg.norm(after_flip - before_flip, axis=1).max()
+report["flip_limb"] = {"limb": flipped_limb, "max_vertex_move_m": float(flip_move), "status": st.status}
+check("flip a limb: the body re-posed, its rest shape kept, Blender's deformation = the library's",
+      "flipped in depth" in st.status and flip_move > 0.01 and np.array_equal(body2_rest(), rest2)
+      and np.linalg.norm(after_flip - library_posed_blender(), axis=1).max() < 1e-3,
+      f"{flipped_limb}: vertices moved up to {flip_move * 100:.1f} cm; {st.status}")
+check("limbs tried before it lie in the picture plane and say so",
+      all("no depth to flip" in text for limb, (res, text) in flip_results.items() if limb != flipped_limb),
+      str({k: v[1][:60] for k, v in flip_results.items()}))
+res, err = run_op(bpy.ops.sketchbody.flip_limb, limb=flipped_limb)
+check("flipping it back restores the pose", res == {"FINISHED"}
+      and np.linalg.norm(body2_posed() - before_flip, axis=1).max() < 1e-4, st.status)
+
+# The live re-pose (issue 50): the body follows a moved marker at once, shape kept; a marker
+# off the sketch leaves the body as it was, with a status.
+check("live re-pose: nothing moved, nothing done", mod.live_update() is None)
+elbow = markers[names.index("r_elbow")]
+elbow_loc = elbow.location.copy()
+elbow.location.x -= 25 * s
+bpy.context.view_layer.update()
+t = time.perf_counter()
+outcome = mod.live_update()
+live_posed = body2_posed()
+report["live_repose_ms"] = 1e3 * (time.perf_counter() - t)
+live_move = np.linalg.norm(live_posed - before_flip, axis=1).max()
+check("live re-pose follows a moved marker, shape kept",
+      outcome == "done" and live_move > 0.01 and "re-posed" in st.status and np.array_equal(body2_rest(), rest2)
+      and np.linalg.norm(live_posed - library_posed_blender(), axis=1).max() < 1e-3,
+      f"{report['live_repose_ms']:.0f} ms to the updated mesh; moved up to {live_move * 100:.1f} cm; {st.status}")
+elbow.location.x -= 10 * plane["skb_width"] * plane["skb_metres_per_px"]
+bpy.context.view_layer.update()
+outcome = mod.live_update()
+check("live re-pose: a marker off the sketch keeps the body and says so",
+      outcome == "joint_outside_image" and "outside the sketch" in st.status
+      and np.linalg.norm(body2_posed() - live_posed, axis=1).max() < 1e-6, st.status)
+elbow.location = elbow_loc
+bpy.context.view_layer.update()
+check("live re-pose: the marker back, the body back", mod.live_update() == "done"
+      and np.linalg.norm(body2_posed() - before_flip, axis=1).max() < 1e-3, st.status)
+
+
 
 class StubLayout:
     """Stands in for a UI layout (background mode draws no panels): records the labels and
@@ -373,7 +441,10 @@ drawn = []
 panel = bpy.types.SKETCHBODY_PT_panel
 panel.draw(type("P", (), {"layout": StubLayout(drawn)})(), bpy.context)
 ops = [t for k, t in drawn if k == "operator"]
-check("panel draws its settings and four operators", len(ops) == 4 and ("prop", "image") in drawn, ", ".join(ops))
+flips = [t for t in ops if t in mod.LIMB_LABELS.values()]
+check("panel draws its settings, four operators and a flip button per limb",
+      len(ops) == 12 and flips == list(mod.LIMB_LABELS.values()) and ("prop", "image") in drawn
+      and ("prop", "live_repose") in drawn, ", ".join(ops))
 
 def pixels(path):
     im = bpy.data.images.load(path)

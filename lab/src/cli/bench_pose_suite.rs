@@ -143,6 +143,12 @@ struct Scores {
     failed: usize,
     implausible: usize,
     cpu: f64,
+    /// Limb direction error of the best of the alternatives (an oracle), summed like `limb`.
+    best_of: f64,
+    /// Limb direction error of the alternative with the lowest score.
+    lowest: f64,
+    /// Alternatives per estimate, summed.
+    alts: usize,
 }
 
 impl Scores {
@@ -157,12 +163,15 @@ impl Scores {
         self.failed += o.failed;
         self.implausible += o.implausible;
         self.cpu += o.cpu;
+        self.best_of += o.best_of;
+        self.lowest += o.lowest;
+        self.alts += o.alts;
     }
 
     fn print(&self, set: &str, props: &str, view: &str, sigma: f64) {
         let d = self.n.max(1) as f64;
         println!(
-            "{:<10} {:<9} {:<7} {:>5.1} {:>8.1} {:>8.2} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>9.1} {:>9.1} {:>6} {:>7.2}",
+            "{:<10} {:<9} {:<7} {:>5.1} {:>8.1} {:>8.2} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>9.1} {:>9.1} {:>6} {:>7.2} {:>8.2} {:>8.2} {:>5.1}",
             set,
             props,
             view,
@@ -176,9 +185,17 @@ impl Scores {
             self.hinges.straight_extra_deg(),
             100.0 * self.implausible as f64 / d,
             self.failed,
-            1e3 * self.cpu / self.calls.max(1) as f64
+            1e3 * self.cpu / self.calls.max(1) as f64,
+            self.best_of / d,
+            self.lowest / d,
+            self.alts as f64 / d
         );
     }
+}
+
+/// Mean of one estimate's limb direction errors.
+fn sc_limb_of(errs: &[f64; 8]) -> f64 {
+    errs.iter().sum::<f64>() / errs.len() as f64
 }
 
 fn dump_err(e: std::io::Error) -> CliError {
@@ -254,7 +271,7 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
         println!("set {}: {} cases from {} clips ({})", s.name, s.frames.len(), s.clips.len(), s.clips.join(","));
     }
     println!(
-        "{:<10} {:<9} {:<7} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>6} {:>7}",
+        "{:<10} {:<9} {:<7} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>6} {:>7} {:>8} {:>8} {:>5}",
         "set",
         "props",
         "view",
@@ -268,7 +285,10 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
         "straight+",
         "implaus %",
         "failed",
-        "cpu ms"
+        "cpu ms",
+        "best-of",
+        "lowest",
+        "alts"
     );
     let normal = Normal::new(0.0, 1.0).map_err(|e| CliError(e.to_string()))?;
     let mut all_categories = std::collections::BTreeMap::<(usize, usize, usize), Scores>::new();
@@ -325,6 +345,21 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
                         sc.lean += torso_lean_error_deg(&est.joints, &est.camera.r, &gt, &cam.r);
                         sc.hinges.add(&est.joints, &gt);
                         sc.implausible += usize::from(!est.plausible);
+                        // The alternatives: the best one's limb error (an oracle) and the
+                        // lowest-scored one's.
+                        let mean = |x: &Joints3| {
+                            limb_direction_errors(x, &gt).map_or(f64::NAN, |e| e.iter().sum::<f64>() / e.len() as f64)
+                        };
+                        let alt_errs: Vec<f64> = est.alternatives.iter().map(|a| mean(&a.joints)).collect();
+                        let first = sc_limb_of(&errs);
+                        sc.best_of += alt_errs.iter().copied().fold(first, f64::min);
+                        sc.lowest += est
+                            .alternatives
+                            .iter()
+                            .zip(&alt_errs)
+                            .min_by(|a, b| a.0.score.total_cmp(&b.0.score))
+                            .map_or(first, |(_, e)| *e);
+                        sc.alts += est.alternatives.len();
                         sc.n += 1;
                     }
                     sc.print(&set.name, props, view, sigma);

@@ -125,6 +125,8 @@ fn truth_pose(t: &GroundTruth, stem: &str) -> Result<PoseEstimate, CliError> {
         base_parts: None,
         factors: sketchbody::pose::figure::BodyFactors::default(),
         plausible: true,
+        alternatives: Vec::new(),
+        depth_costs: None,
     })
 }
 
