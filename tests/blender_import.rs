@@ -11,8 +11,9 @@ use std::process::Command;
 use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
+use sketchbody::body::rig::shape_keys::{key_name, ShapeKey};
 use sketchbody::body::rig::RiggedMesh;
-use sketchbody::body::rig::{Naming, RigOptions, RigScene, RIG_BONES};
+use sketchbody::body::rig::{Naming, PoseAs, RigOptions, RigScene, RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 #[path = "common/frames.rs"]
 mod frames;
@@ -141,4 +142,119 @@ fn check_fbx_report(text: &str, vertices: usize) {
     assert!(f("bone_head_gap") < 1e-4 && f("posed_bone_head_gap") < 1e-4, "{text}");
     assert!(f("posed_moved") > 0.05, "the pose moves the body: {text}");
     assert!(r["images"].as_array().unwrap().iter().any(|i| i[1] == 8 && i[2] == 8 && i[3] == true), "{text}");
+}
+
+/// The twist bones (issue 49) as Blender 3.4's glTF importer brings them in, with Unreal's
+/// names and the sketch's pose as the rest (`PoseAs::Rest`): 59 bones, each twist bone a child
+/// of its limb (`upperarm_twist_01_r` of `upperarm_r`, …), no action, the rest mesh already
+/// posed (the posed and rest meshes the same), and the elbow still bending the forearm while the
+/// upper arm's twist-bone half stays.
+#[test]
+fn blender_imports_the_twist_bones_with_the_pose_as_rest() {
+    if blender_missing("Blender twist-bone import") {
+        return;
+    }
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("blender-twist-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = BodyModel::embedded().unwrap();
+    let body = RiggedMesh::from_model(&model, Gender::Male, &[]).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let pose = solve(&body.joints, &random_pose(&body.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+    let options =
+        RigOptions { naming: Naming::Unreal, twist_bones: true, pose_as: PoseAs::Rest, ..RigOptions::default() };
+    let scene = RigScene::build(model.rig(), &body, &pose, &options).unwrap();
+    let glb = dir.join("body.glb");
+    write_glb(&glb, &body, &scene, None).unwrap();
+    let parents: serde_json::Map<String, serde_json::Value> = (0..scene.names.len())
+        .map(|b| (scene.names[b].clone(), scene.armature.parents[b].map(|p| scene.names[p].clone()).into()))
+        .collect();
+    assert_eq!(parents["lowerarm_twist_01_l"], "lowerarm_l");
+    assert_eq!(parents["thigh_twist_01_r"], "thigh_r");
+    let expected = serde_json::json!({"parents": parents, "elbow": "lowerarm_r", "upper_arm": "upperarm_twist_01_r"});
+    std::fs::write(dir.join("expected.json"), expected.to_string()).unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/check_glb.py");
+    let out = blender(&script, &[&glb, &dir.join("expected.json"), &dir.join("report.json")]);
+    assert!(
+        out.status.success(),
+        "blender failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    println!("{text}");
+    let r: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let f = |k: &str| r[k].as_f64().unwrap();
+    assert_eq!(r["bones"].as_u64(), Some(59), "{text}");
+    assert_eq!(r["hierarchy_matches"], true, "{text}");
+    assert_eq!(r["actions"], serde_json::json!([]), "{text}");
+    assert_eq!(r["unweighted_vertices"].as_u64(), Some(0));
+    assert!(f("posed_min_z").abs() < 0.005 && f("rest_min_z").abs() < 0.005, "{text}");
+    assert!(f("rest_posed_gap") < 1e-4, "the rest mesh is the posed body: {text}");
+    assert!(r["forearm_vertices"].as_u64().unwrap() > 100 && f("forearm_mean_move") > 0.02, "{text}");
+    assert!(r["upper_arm_vertices"].as_u64().unwrap() > 20 && f("upper_arm_max_move") < 0.005, "{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Shape keys (issue 49) as Blender 3.4's glTF and FBX importers bring them in: a basis and one
+/// key per shape dimension, every key at 0, each key's displacement of every vertex the one
+/// written within 0.1 mm (in Blender's metres, Z up; the FBX in centimetres, Z up, converted by
+/// Blender), and the twist bones and IK targets present and parented as written.
+#[test]
+fn blender_imports_the_shape_keys() {
+    if blender_missing("Blender shape-key import") {
+        return;
+    }
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("blender-keys-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = BodyModel::embedded().unwrap();
+    let body = RiggedMesh::from_model(&model, Gender::Female, &[]).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(6);
+    let pose = solve(&body.joints, &random_pose(&body.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+    let space = model.space(Gender::Female);
+    let keys: Vec<ShapeKey> = (0..4)
+        .map(|k| {
+            let sd = space.variances()[k].sqrt() as f32;
+            let b = space.basis_vector(k).unwrap();
+            ShapeKey { name: key_name(k), deltas: b.chunks_exact(3).map(|c| [c[0] * sd, c[1] * sd, c[2] * sd]).collect() }
+        })
+        .collect();
+    let options = RigOptions { naming: Naming::Unreal, twist_bones: true, ik_targets: true, ..RigOptions::default() };
+    let scene = RigScene::build_with_shape_keys(model.rig(), &body, &pose, &options, &keys).unwrap();
+    // Blender's world: metres, Z up: (x, y, z) of the model frame is (x, -z, y).
+    let z_up = |p: [f32; 3]| [p[0] as f64, -p[2] as f64, p[1] as f64];
+    let rest: Vec<[f64; 3]> = scene.rest_vertices.iter().map(|&p| z_up(p)).collect();
+    let key_map: serde_json::Map<String, serde_json::Value> = scene
+        .shape_keys
+        .iter()
+        .map(|k| (k.name.clone(), serde_json::json!(k.deltas.iter().map(|&d| z_up(d)).collect::<Vec<_>>())))
+        .collect();
+    std::fs::write(dir.join("expected.json"), serde_json::json!({"rest": rest, "keys": key_map}).to_string()).unwrap();
+    let glb = dir.join("body.glb");
+    write_glb(&glb, &body, &scene, None).unwrap();
+    let fbx = dir.join("body.fbx");
+    sketchbody::export::fbx::write_fbx(&fbx, &body, &scene, None, &FRAMES[3]).unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/check_keys.py");
+    for file in [&glb, &fbx] {
+        let report = dir.join("report.json");
+        let out = blender(&script, &[file, &dir.join("expected.json"), &report]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "blender failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+        let text = std::fs::read_to_string(&report).unwrap();
+        println!("{}: {text}", file.display());
+        let r: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!((r["meshes"].as_u64(), r["armatures"].as_u64()), (Some(1), Some(1)), "{text}");
+        let names: Vec<&str> = r["keys"].as_array().unwrap().iter().map(|k| k[0].as_str().unwrap()).collect();
+        assert_eq!(names, ["Basis", "shape_01", "shape_02", "shape_03", "shape_04"], "{text}");
+        assert!(r["keys"].as_array().unwrap().iter().all(|k| k[1].as_f64() == Some(0.0)), "{text}");
+        assert!(r["rest_gap"].as_f64().unwrap() < 1e-4, "{text}");
+        let gaps = r["key_gaps"].as_object().unwrap();
+        assert_eq!(gaps.len(), 4, "{text}");
+        assert!(gaps.values().all(|g| g.as_f64().unwrap() < 1e-4), "{text}");
+        let bones = r["bones"].as_object().unwrap();
+        assert_eq!(bones.len(), scene.names.len(), "{text}");
+        assert_eq!(bones["upperarm_twist_01_l"], "upperarm_l");
+        assert_eq!(bones["ik_hand_r"], "ik_hand_gun");
+        assert_eq!(bones["ik_foot_root"], "root");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -14,8 +14,9 @@ use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Vector3};
 use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
+use sketchbody::body::rig::shape_keys::{key_name, ShapeKey};
 use sketchbody::body::rig::RiggedMesh;
-use sketchbody::body::rig::{RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
+use sketchbody::body::rig::{PoseAs, RigOptions, RigScene, NUM_RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::fbx::node::{file_bytes, s, Node, Prop};
 use sketchbody::export::fbx::{fbx_bytes, write_fbx};
@@ -206,6 +207,8 @@ fn an_independent_reader_finds_the_skinned_posed_body() {
 
 /// The file of `scene` in `frame` read back: settings, bones, geometry, skin, pose, texture.
 fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
+    let nb = scene.armature.len();
+    let parents = &scene.armature.parents;
     let png = b"\x89PNG\r\n\x1a\n-not-really".to_vec();
     let bytes = fbx_bytes(mesh, scene, Some(&png), frame).unwrap();
     let root = parse(&bytes);
@@ -243,13 +246,13 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     }
     // The bones: 53 LimbNode models named as the scene's, parented as the rig.
     let bones: Vec<&Rec> = objects.all("Model").filter(|m| m.text(2) == "LimbNode").collect();
-    assert_eq!(bones.len(), NUM_RIG_BONES);
+    assert_eq!(bones.len(), nb);
     let index: HashMap<String, usize> = scene.names.iter().enumerate().map(|(i, n)| (n.clone(), i)).collect();
     let bone_of: HashMap<i64, usize> = bones.iter().map(|m| (m.int(0), index[&name_of(m).0])).collect();
-    assert_eq!(bone_of.len(), NUM_RIG_BONES, "distinct bone names");
+    assert_eq!(bone_of.len(), nb, "distinct bone names");
     for (&id, &b) in &bone_of {
         let up = parent[&id];
-        match RIG_BONES[b].parent {
+        match parents[b] {
             Some(p) => assert_eq!(bone_of.get(&up), Some(&p), "parent of {}", scene.names[b]),
             None => assert_eq!(by_id[&up].text(2), "Null", "the root bone hangs from the armature"),
         }
@@ -276,7 +279,7 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     // The skin: one skin on the geometry, one cluster per bone, weights summing to 1.
     let skin_id = children[&geom.int(0)].iter().copied().find(|c| by_id[c].text(2) == "Skin").unwrap();
     let clusters = &children[&skin_id];
-    assert_eq!(clusters.len(), NUM_RIG_BONES);
+    assert_eq!(clusters.len(), nb);
     let mut sums = vec![0.0f64; n];
     let mut influences: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
     let mut bind: HashMap<usize, Matrix4<f64>> = HashMap::new();
@@ -300,8 +303,8 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     }
     assert!(sums.iter().all(|s| (s - 1.0).abs() < 1e-5), "weights sum to 1 per vertex");
     // The pose: compose the bones' local transforms (Euler XYZ degrees: Rz Ry Rx) down the tree.
-    let mut global = vec![Matrix4::identity(); NUM_RIG_BONES];
-    let order: Vec<usize> = (0..NUM_RIG_BONES).collect(); // parents come first in RIG_BONES
+    let mut global = vec![Matrix4::identity(); nb];
+    let order: Vec<usize> = (0..nb).collect(); // parents come first
     let model_of: HashMap<usize, &Rec> = bones.iter().map(|m| (bone_of[&m.int(0)], *m)).collect();
     for &b in &order {
         let m = model_of[&b];
@@ -311,7 +314,7 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
             * Rotation3::from_axis_angle(&Vector3::y_axis(), r[1].to_radians())
             * Rotation3::from_axis_angle(&Vector3::x_axis(), r[0].to_radians());
         let local = Translation3::new(t[0], t[1], t[2]).to_homogeneous() * rot.to_homogeneous();
-        global[b] = match RIG_BONES[b].parent {
+        global[b] = match parents[b] {
             Some(p) => global[p] * local,
             None => local,
         };
@@ -340,8 +343,8 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     assert!(normal_gap < 1e-6, "{frame:?}: normals differ by {normal_gap}");
     // The bind pose lists the mesh, the armature and every bone.
     let pose = objects.all("Pose").next().unwrap();
-    assert_eq!(pose.kid("NbPoseNodes").int(0) as usize, NUM_RIG_BONES + 2);
-    assert_eq!(pose.all("PoseNode").count(), NUM_RIG_BONES + 2);
+    assert_eq!(pose.kid("NbPoseNodes").int(0) as usize, nb + 2);
+    assert_eq!(pose.all("PoseNode").count(), nb + 2);
     // The texture: material -> texture (DiffuseColor) -> video holding the PNG.
     let (tex, mat_id, prop) = property_links.first().unwrap().clone();
     assert_eq!(
@@ -473,10 +476,10 @@ fn node_heads(node: &serde_json::Value, parent: &Matrix4<f64>, out: &mut HashMap
 /// transforms.
 fn posed_heads(scene: &RigScene) -> Vec<[f64; 3]> {
     let locals = sketchbody::export::rigged::posed_locals(scene);
-    let mut global: Vec<Matrix4<f64>> = Vec::with_capacity(NUM_RIG_BONES);
+    let mut global: Vec<Matrix4<f64>> = Vec::with_capacity(locals.len());
     for (b, (t, q)) in locals.iter().enumerate() {
         let local = Translation3::from(*t).to_homogeneous() * q.to_homogeneous();
-        let g = RIG_BONES[b].parent.map_or(local, |p| global[p] * local);
+        let g = scene.armature.parents[b].map_or(local, |p| global[p] * local);
         global.push(g);
     }
     global.iter().map(|g| [g[(0, 3)], g[(1, 3)], g[(2, 3)]]).collect()
@@ -505,4 +508,125 @@ fn records_and_footer_lay_out_as_documented() {
     assert_eq!(file.len() % 16, 0);
     assert_eq!(&file[file.len() - 16..file.len() - 12], &[0xf8, 0x5a, 0x8c, 0x6a]);
     assert_eq!(u(file.len() - 140), 7400);
+}
+
+/// Shape keys of the mean body: the first `n` principal components of its space, one standard
+/// deviation each (model frame).
+fn mean_keys(model: &BodyModel, gender: Gender, n: usize) -> Vec<ShapeKey> {
+    let space = model.space(gender);
+    (0..n)
+        .map(|k| {
+            let sd = space.variances()[k].sqrt() as f32;
+            let b = space.basis_vector(k).unwrap();
+            ShapeKey { name: key_name(k), deltas: b.chunks_exact(3).map(|c| [c[0] * sd, c[1] * sd, c[2] * sd]).collect() }
+        })
+        .collect()
+}
+
+/// The rig options of issue 49 read back by the independent reader: twist bones, IK targets and
+/// shape keys with the pose as the rest, in every unit and up axis (the bones, skin, bind pose
+/// and body as [`check_file`] reads them; no animation stack); each blend shape's channel and
+/// shape geometry holding the key's displacements in the file's frame; and with the pose as
+/// both, the animation stack `a_pose` whose single keys, composed down the tree with the bind
+/// matrices, give back the A-pose body.
+#[test]
+fn twist_bones_ik_targets_shape_keys_and_the_pose_as_rest_read_back() {
+    let model = BodyModel::embedded().unwrap();
+    let mesh = RiggedMesh::from_model(&model, Gender::Female, &[]).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+    let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+    let keys = mean_keys(&model, Gender::Female, 3);
+    let options = |pose_as| RigOptions { twist_bones: true, ik_targets: true, pose_as, ..RigOptions::default() };
+    let rest = RigScene::build_with_shape_keys(model.rig(), &mesh, &pose, &options(PoseAs::Rest), &keys).unwrap();
+    assert_eq!(rest.armature.len(), NUM_RIG_BONES + 6 + 7);
+    for frame in FRAMES {
+        check_file(&mesh, &rest, &frame);
+        let root = parse(&fbx_bytes(&mesh, &rest, None, &frame).unwrap());
+        let objects = root.kid("Objects");
+        assert!(objects.all("AnimationStack").next().is_none(), "the pose as rest has no animation");
+        let shapes: Vec<&Rec> = objects.all("Geometry").filter(|g| g.text(2) == "Shape").collect();
+        assert_eq!(shapes.len(), keys.len());
+        let channels: Vec<&Rec> =
+            objects.all("Deformer").filter(|d| d.text(2) == "BlendShapeChannel").collect();
+        assert_eq!(channels.len(), keys.len());
+        assert!(channels.iter().all(|c| matches!(c.kid("DeformPercent").props[0], Value::Float(x) if x == 0.0)));
+        let unit = metres_to_unit(&frame);
+        for (shape, key) in shapes.iter().zip(&rest.shape_keys) {
+            assert_eq!(name_of(shape).0, key.name);
+            let idx = shape.kid("Indexes").ints();
+            let v = shape.kid("Vertices").floats();
+            assert_eq!((idx.len(), v.len()), (mesh.vertices.len(), 3 * mesh.vertices.len()));
+            let gap = idx
+                .iter()
+                .map(|&i| {
+                    let i = i as usize;
+                    let got = Vector3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+                    let d = key.deltas[i];
+                    // A displacement turns and scales as a point from the origin does.
+                    (got - in_frame(&frame, d)).norm() / unit
+                })
+                .fold(0.0, f64::max);
+            assert!(gap < 1e-6, "{frame:?}: {} differs by {gap} m", key.name);
+        }
+    }
+    // The pose as both: the clip back to the A-pose.
+    let both = RigScene::build(model.rig(), &mesh, &pose, &options(PoseAs::Both)).unwrap();
+    let frame = FRAMES[3];
+    let root = parse(&fbx_bytes(&mesh, &both, None, &frame).unwrap());
+    let objects = root.kid("Objects");
+    let stack = objects.all("AnimationStack").next().expect("an animation stack");
+    assert_eq!(name_of(stack).0, "a_pose");
+    let by_id: HashMap<i64, &Rec> = objects.kids.iter().map(|o| (o.int(0), o)).collect();
+    let bones: HashMap<i64, usize> = objects
+        .all("Model")
+        .filter(|m| m.text(2) == "LimbNode")
+        .map(|m| (m.int(0), both.names.iter().position(|n| *n == name_of(m).0).unwrap()))
+        .collect();
+    // Each bone's T and R curve nodes, each axis's single key.
+    let nb = both.armature.len();
+    let mut keyed = vec![[[f64::NAN; 3]; 2]; nb];
+    let mut curve_of: HashMap<i64, (usize, usize)> = HashMap::new();
+    for c in root.kid("Connections").all("C").filter(|c| c.text(0) == "OP") {
+        let (child, parent, prop) = (c.int(1), c.int(2), c.text(3));
+        if let (Some(&b), "Lcl Translation" | "Lcl Rotation") = (bones.get(&parent), prop.as_str()) {
+            curve_of.insert(child, (b, usize::from(prop == "Lcl Rotation")));
+        }
+    }
+    assert_eq!(curve_of.len(), 2 * nb, "a T and an R curve node per bone");
+    for c in root.kid("Connections").all("C").filter(|c| c.text(0) == "OP") {
+        if let Some(&(b, k)) = curve_of.get(&c.int(2)) {
+            let axis = ["d|X", "d|Y", "d|Z"].iter().position(|a| *a == c.text(3)).unwrap();
+            let curve = by_id[&c.int(1)];
+            assert_eq!(curve.kid("KeyTime").ints(), [0]);
+            keyed[b][k][axis] = curve.kid("KeyValueFloat").floats()[0];
+        }
+    }
+    let mut global = vec![Matrix4::identity(); nb];
+    for b in 0..nb {
+        let [t, r] = keyed[b];
+        let rot = Rotation3::from_axis_angle(&Vector3::z_axis(), r[2].to_radians())
+            * Rotation3::from_axis_angle(&Vector3::y_axis(), r[1].to_radians())
+            * Rotation3::from_axis_angle(&Vector3::x_axis(), r[0].to_radians());
+        let local = Translation3::new(t[0], t[1], t[2]).to_homogeneous() * rot.to_homogeneous();
+        global[b] = both.armature.parents[b].map_or(local, |p| global[p] * local);
+    }
+    let unit = metres_to_unit(&frame);
+    let mut worst = 0.0f64;
+    for (v, w) in both.skin.iter().enumerate() {
+        let x = Point3::from(in_frame(&frame, both.rest_vertices[v]));
+        let mut p = Vector3::zeros();
+        for (b, wt) in w.influences() {
+            let bind = frame_bind(&both, b, &frame);
+            p += (global[b] * bind.try_inverse().unwrap()).transform_point(&x).coords * wt as f64;
+        }
+        let a = mesh.vertices[v];
+        let want = in_frame(&frame, [0, 1, 2].map(|c| (a[c] as f64 + both.offset[c]) as f32));
+        worst = worst.max((p - want).norm() / unit);
+    }
+    assert!(worst < 1e-4, "the a_pose clip gives back the A-pose body within {worst} m");
+}
+
+/// Bone `b`'s bind matrix in `frame`.
+fn frame_bind(scene: &RigScene, b: usize, frame: &ExportFrame) -> Matrix4<f64> {
+    frame.global(&sketchbody::export::rigged::bind_transform(scene, b)).to_homogeneous()
 }

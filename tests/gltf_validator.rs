@@ -13,7 +13,7 @@ use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions, Pose};
 use sketchbody::body::procedural::random_pose;
 use sketchbody::body::rig::RiggedMesh;
-use sketchbody::body::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
+use sketchbody::body::rig::{Naming, Placement, PoseAs, RestPose, RigOptions, RigScene};
 use sketchbody::body::skin::{skin, SkinMethod};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::camera::WeakPerspective;
@@ -68,7 +68,9 @@ fn exported_glb_files_have_no_validator_errors() {
     let posed = solve(&body.joints, &random_pose(&body.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
     let retargeted =
         solve(&body.joints, &random_pose(&body.joints, &mut rng, 0.2), &IkOptions { retarget: true }).unwrap();
-    let opts = |naming, rest_pose, placement| RigOptions { naming, rest_pose, placement };
+    let opts = |naming, rest_pose, placement| RigOptions { naming, rest_pose, placement, ..RigOptions::default() };
+    let rig =
+        |twist_bones, pose_as| RigOptions { naming: Naming::Unreal, twist_bones, pose_as, ..RigOptions::default() };
     // A synthetic colour "sketch" seen through a front camera, for the textured case.
     let (w, h) = (256usize, 512usize);
     let sketch =
@@ -84,7 +86,10 @@ fn exported_glb_files_have_no_validator_errors() {
         ("posed", posed.clone(), opts(Naming::Project, RestPose::APose, Placement::Floor), false),
         ("retargeted-pelvis-unreal", retargeted, opts(Naming::Unreal, RestPose::APose, Placement::Pelvis), false),
         ("tpose-mixamo", posed.clone(), opts(Naming::Mixamo, RestPose::TPose, Placement::Floor), false),
-        ("textured", posed, opts(Naming::Project, RestPose::APose, Placement::Floor), true),
+        ("textured", posed.clone(), opts(Naming::Project, RestPose::APose, Placement::Floor), true),
+        ("twist-bones", posed.clone(), rig(true, PoseAs::Action), false),
+        ("pose-as-rest", posed.clone(), rig(true, PoseAs::Rest), false),
+        ("pose-as-both", posed, rig(false, PoseAs::Both), false),
     ];
     for (name, pose, o, textured) in &cases {
         let path = out.join(format!("{name}.glb"));

@@ -1,13 +1,13 @@
-//! `skb_export_options`: the production rig's export options (bone names, rest pose, origin;
-//! the FBX and USD files' unit and up axis) for `skb_mesh_write_glb_with_options`,
-//! `skb_export_fbx` and `skb_export_usd`. Opaque; set through setters; each writer writes
-//! atomically.
+//! `skb_export_options`: the production rig's export options (bone names, rest pose, origin,
+//! twist bones, how the pose is carried, IK targets; the FBX and USD files' unit and up axis) for
+//! `skb_mesh_write_glb_with_options`, `skb_export_fbx` and `skb_export_usd`. Opaque; set
+//! through setters; each writer writes atomically.
 
 use std::ffi::c_char;
 
 use sketchbody_core::body::ik::Pose;
 use sketchbody_core::body::rig::RiggedMesh;
-use sketchbody_core::body::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
+use sketchbody_core::body::rig::{Naming, Placement, PoseAs, RestPose, RigOptions, RigScene};
 use sketchbody_core::error::Error;
 use sketchbody_core::export::fbx::write_fbx;
 use sketchbody_core::export::frame::{ExportFrame, Units, UpAxis};
@@ -33,6 +33,13 @@ pub const SKB_REST_T_POSE: u32 = 1;
 pub const SKB_ORIGIN_FLOOR: u32 = 0;
 /// Origin at the rest pelvis joint.
 pub const SKB_ORIGIN_PELVIS: u32 = 1;
+/// The pose as an action (the default): the rest is the A- or T-pose, the bones stand in the
+/// pose, also a one-frame clip "pose".
+pub const SKB_POSE_AS_ACTION: u32 = 0;
+/// The pose as the rest (bind) pose, no clip.
+pub const SKB_POSE_AS_REST: u32 = 1;
+/// The pose as the rest pose plus a one-frame clip "a_pose" / "t_pose" holding the A- or T-pose.
+pub const SKB_POSE_AS_BOTH: u32 = 2;
 /// FBX and USD length unit: metres (the default; one file unit is 1 m).
 pub const SKB_UNITS_METRES: u32 = 0;
 /// FBX and USD length unit: centimetres (one file unit is 1 cm; coordinates 100× the metres).
@@ -43,7 +50,8 @@ pub const SKB_UP_Y: u32 = 0;
 pub const SKB_UP_Z: u32 = 1;
 
 /// Export options of the rigged body (docs/formats.md, "body.glb", "body.fbx", "body.usda").
-/// Create with `skb_export_options_new` (defaults: project names, A-pose, floor, metres, Y up),
+/// Create with `skb_export_options_new` (defaults: project names, A-pose, floor, no twist bones,
+/// the pose as an action, no IK targets, metres, Y up),
 /// free with `skb_export_options_free`. Not shared between threads while being set.
 pub struct skb_export_options {
     pub(crate) rig: RigOptions,
@@ -149,6 +157,64 @@ pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_opt
                     SKB_ORIGIN_PELVIS => Placement::Pelvis,
                     _ => return Err(Error::OutOfRange { name: "origin", detail: format!("{origin} (expected 0 floor, 1 pelvis)") }),
                 };
+                Ok(())
+            })
+        }
+    }
+}
+
+/// Adds the twist bones (`on` true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones
+/// after the 53, sharing the limbs' skin so that a twist spreads along the limb; docs/formats.md,
+/// "Twist bones") or not (false, the default: MakeHuman's 53 bones). Every rigged writer and
+/// `skb_mesh_rig_new` follow it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_twist_bones(opts: *mut skb_export_options, on: bool) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_twist_bones` (lib.rs § Safety): `opts` is NULL or
+    // valid during the call; the ptr.rs helpers check NULL before the borrow.
+    unsafe {
+        ffi_boundary! {
+            set(opts, |o| {
+                o.twist_bones = on;
+                Ok(())
+            })
+        }
+    }
+}
+
+/// Sets how the pose is carried: `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or
+/// `SKB_POSE_AS_BOTH` (docs/formats.md, "glTF 2.0 binary export", the pose); anything else is
+/// `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_mesh_rig_new` follow
+/// it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_pose_as(opts: *mut skb_export_options, pose_as: u32) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_pose_as` (lib.rs § Safety): `opts` is NULL or valid
+    // during the call; the ptr.rs helpers check NULL before the borrow.
+    unsafe {
+        ffi_boundary! {
+            set(opts, |o| {
+                o.pose_as = match pose_as {
+                    SKB_POSE_AS_ACTION => PoseAs::Action,
+                    SKB_POSE_AS_REST => PoseAs::Rest,
+                    SKB_POSE_AS_BOTH => PoseAs::Both,
+                    _ => return Err(Error::OutOfRange { name: "pose as", detail: format!("{pose_as} (expected 0 action, 1 rest, 2 both)") }),
+                };
+                Ok(())
+            })
+        }
+    }
+}
+
+/// Adds the IK target bones (`on` true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and
+/// feet under `ik_hand_root` / `ik_foot_root`, after the other bones; docs/formats.md, "IK
+/// targets") or not (false, the default). Every rigged writer and `skb_mesh_rig_new` follow it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_ik_targets(opts: *mut skb_export_options, on: bool) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_ik_targets` (lib.rs § Safety): `opts` is NULL or
+    // valid during the call; the ptr.rs helpers check NULL before the borrow.
+    unsafe {
+        ffi_boundary! {
+            set(opts, |o| {
+                o.ik_targets = on;
                 Ok(())
             })
         }

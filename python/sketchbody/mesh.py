@@ -21,13 +21,21 @@ class ExportOptions(OptionsBase):
     """The rigged export's conventions (None: the defaults). naming: "project", "mixamo" or
     "unreal"; rest_pose: "a" or "t"; origin: "floor" or "pelvis"; for write_fbx and write_usd
     only (the GLB is always metres, Y up, as glTF specifies): units "m" or "cm", up_axis "y"
-    (the body facing +Z) or "z" (the body facing -Y)."""
+    (the body facing +Z) or "z" (the body facing -Y); twist_bones: True adds the 6 twist bones
+    of the upper arms, forearms and thighs (default False: the 53 bones); pose_as: "action"
+    (default: the rest is the A- or T-pose, the bones posed, a one-frame clip "pose"), "rest"
+    (the pose is the rest pose, no clip) or "both" (the pose as rest plus a clip "a_pose" or
+    "t_pose"); ik_targets: True adds the 7 non-deforming IK target bones at the hands and
+    feet."""
 
     naming: Optional[str] = None
     rest_pose: Optional[str] = None
     origin: Optional[str] = None
     units: Optional[str] = None
     up_axis: Optional[str] = None
+    twist_bones: Optional[bool] = None
+    pose_as: Optional[str] = None
+    ik_targets: Optional[bool] = None
 
     _c_prefix = "skb_export_options"
     _enums = {
@@ -36,6 +44,7 @@ class ExportOptions(OptionsBase):
         "origin": {"floor": B.SKB_ORIGIN_FLOOR, "pelvis": B.SKB_ORIGIN_PELVIS},
         "units": {"m": B.SKB_UNITS_METRES, "cm": B.SKB_UNITS_CENTIMETRES},
         "up_axis": {"y": B.SKB_UP_Y, "z": B.SKB_UP_Z},
+        "pose_as": {"action": B.SKB_POSE_AS_ACTION, "rest": B.SKB_POSE_AS_REST, "both": B.SKB_POSE_AS_BOTH},
     }
 
 

@@ -20,6 +20,7 @@ mod detected;
 pub mod figure;
 pub mod joints;
 pub mod overlay;
+pub mod shape_keys;
 
 use std::time::Instant;
 

@@ -1041,6 +1041,17 @@ fn write_rows(t: &mut Table, fx: &Fx) {
         SKB_ERR_OUT_OF_RANGE,
         0,
     );
+    t.set_bool("skb_export_options_set_twist_bones", skb_export_options_set_twist_bones, o);
+    t.set_bool("skb_export_options_set_ik_targets", skb_export_options_set_ik_targets, o);
+    t.set_int(
+        "skb_export_options_set_pose_as",
+        "pose_as",
+        skb_export_options_set_pose_as,
+        o,
+        u32::MAX,
+        SKB_ERR_OUT_OF_RANGE,
+        0,
+    );
     t.set_int(
         "skb_export_options_set_units",
         "units",
@@ -1062,6 +1073,8 @@ fn write_rows(t: &mut Table, fx: &Fx) {
     // SAFETY: restores the defaults on the live options.
     unsafe {
         skb_export_options_set_naming(o, 0);
+        skb_export_options_set_twist_bones(o, false);
+        skb_export_options_set_ik_targets(o, false);
         skb_export_options_set_units(o, SKB_UNITS_METRES);
         skb_export_options_set_up_axis(o, SKB_UP_Y);
     }
