@@ -215,7 +215,10 @@ fn blender_imports_the_shape_keys() {
         .map(|k| {
             let sd = space.variances()[k].sqrt() as f32;
             let b = space.basis_vector(k).unwrap();
-            ShapeKey { name: key_name(k), deltas: b.chunks_exact(3).map(|c| [c[0] * sd, c[1] * sd, c[2] * sd]).collect() }
+            ShapeKey {
+                name: key_name(k),
+                deltas: b.chunks_exact(3).map(|c| [c[0] * sd, c[1] * sd, c[2] * sd]).collect(),
+            }
         })
         .collect();
     let options = RigOptions { naming: Naming::Unreal, twist_bones: true, ik_targets: true, ..RigOptions::default() };

@@ -274,18 +274,23 @@ fn mean_keys(model: &BodyModel, gender: Gender, n: usize) -> Vec<ShapeKey> {
         .map(|k| {
             let sd = space.variances()[k].sqrt() as f32;
             let b = space.basis_vector(k).unwrap();
-            ShapeKey { name: key_name(k), deltas: b.chunks_exact(3).map(|c| [c[0] * sd, c[1] * sd, c[2] * sd]).collect() }
+            ShapeKey {
+                name: key_name(k),
+                deltas: b.chunks_exact(3).map(|c| [c[0] * sd, c[1] * sd, c[2] * sd]).collect(),
+            }
         })
         .collect()
 }
 
-/// A scene with twist bones, IK targets and three shape keys, the pose as `pose_as`.
+/// A scene with twist bones, IK targets and three shape keys (Mixamo names: paths escaped), the
+/// pose as `pose_as`.
 fn rich_scene(pose_as: PoseAs) -> (RiggedMesh, RigScene) {
     let model = BodyModel::embedded().unwrap();
     let mesh = RiggedMesh::from_model(&model, Gender::Male, &[]).unwrap();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
     let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
-    let options = RigOptions { naming: Naming::Unreal, twist_bones: true, ik_targets: true, pose_as, ..RigOptions::default() };
+    let options =
+        RigOptions { naming: Naming::Mixamo, twist_bones: true, ik_targets: true, pose_as, ..RigOptions::default() };
     let keys = mean_keys(&model, Gender::Male, 3);
     let scene = RigScene::build_with_shape_keys(model.rig(), &mesh, &pose, &options, &keys).unwrap();
     (mesh, scene)
@@ -319,7 +324,11 @@ fn twist_bones_ik_targets_and_shape_keys_read_back() {
                 .deltas
                 .iter()
                 .enumerate()
-                .map(|(i, &d)| (Vector3::new(offsets[k][3 * i], offsets[k][3 * i + 1], offsets[k][3 * i + 2]) - in_frame(&frame, d)).norm())
+                .map(|(i, &d)| {
+                    (Vector3::new(offsets[k][3 * i], offsets[k][3 * i + 1], offsets[k][3 * i + 2])
+                        - in_frame(&frame, d))
+                    .norm()
+                })
                 .fold(0.0, f64::max);
             assert!(gap * metres < 1e-6, "{frame:?}: {} differs by {gap}", key.name);
         }

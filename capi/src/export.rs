@@ -51,10 +51,12 @@ pub const SKB_UP_Z: u32 = 1;
 
 /// Export options of the rigged body (docs/formats.md, "body.glb", "body.fbx", "body.usda").
 /// Create with `skb_export_options_new` (defaults: project names, A-pose, floor, no twist bones,
-/// the pose as an action, no IK targets, metres, Y up),
+/// the pose as an action, no IK targets, no shape keys, metres, Y up),
 /// free with `skb_export_options_free`. Not shared between threads while being set.
 pub struct skb_export_options {
     pub(crate) rig: RigOptions,
+    /// Write the mesh's shape dimensions as shape keys ([`ShapeOrigin::keys`]).
+    pub(crate) shape_keys: bool,
     /// Unit and up axis of the FBX and USD writers (the GLB is always metres, Y up).
     pub(crate) frame: ExportFrame,
 }
@@ -67,7 +69,7 @@ pub unsafe extern "C" fn skb_export_options_new(out: *mut *mut skb_export_option
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
-            give(out, skb_export_options { rig: RigOptions::default(), frame: ExportFrame::default() })
+            give(out, skb_export_options { rig: RigOptions::default(), shape_keys: false, frame: ExportFrame::default() })
         }
     }
 }
@@ -221,6 +223,26 @@ pub unsafe extern "C" fn skb_export_options_set_ik_targets(opts: *mut skb_export
     }
 }
 
+/// Adds the mesh's shape dimensions as shape keys (`on` true: one key `shape_01`, `shape_02`, …
+/// per PCA weight of the mesh, or the space's default count for the mean shape, each the
+/// displacement one standard deviation of its component makes, through the body's bone-length
+/// factors and its scaling to its height; glTF morph targets, FBX blend shapes, USD
+/// BlendShapes, all at 0; docs/formats.md, "Shape keys") or not (false, the default). Every
+/// rigged writer and `skb_mesh_rig_new` follow it (`skb_rig_shape_key_count`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_shape_keys(opts: *mut skb_export_options, on: bool) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_shape_keys` (lib.rs § Safety): `opts` is NULL or
+    // valid during the call; the ptr.rs helpers check NULL before the borrow.
+    unsafe {
+        ffi_boundary! {
+            set_all(opts, |o| {
+                o.shape_keys = on;
+                Ok(())
+            })
+        }
+    }
+}
+
 /// Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
 /// `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
 /// is always in metres (glTF's specification) and `skb_mesh_rig_new` in the model frame.
@@ -264,6 +286,25 @@ pub unsafe extern "C" fn skb_export_options_set_up_axis(opts: *mut skb_export_op
     }
 }
 
+/// The rigged mesh of `m` and its scene in the mesh's current pose (the rest pose if never
+/// posed) with `opts` (`None`: the defaults), with the mesh's shape keys when asked. Errors:
+/// the scene's and the keys'.
+pub(crate) fn rig_scene(
+    m: &skb_mesh,
+    opts: Option<&skb_export_options>,
+) -> sketchbody_core::Result<(RiggedMesh, RigScene)> {
+    let options = opts.map_or_else(RigOptions::default, |o| o.rig);
+    let keys = match opts {
+        Some(o) if o.shape_keys => m.shape.keys(&m.model)?,
+        _ => Vec::new(),
+    };
+    let rest_pose = Pose::rest(&m.rest.joints);
+    let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
+    let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
+    let scene = RigScene::build_with_shape_keys(m.model.rig(), &rigged, pose, &options, &keys)?;
+    Ok((rigged, scene))
+}
+
 /// A core writer of the rigged scene: path, rigged mesh, scene, the FBX/USD frame.
 type RiggedWriter = fn(&std::path::Path, &RiggedMesh, &RigScene, &ExportFrame) -> sketchbody_core::Result<()>;
 
@@ -284,11 +325,9 @@ unsafe fn write_rigged(
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
             let path = try_status!(path_arg(path, "path"));
-            let (options, frame) = opt_ref(opts).map_or_else(Default::default, |o| (o.rig, o.frame));
-            let rest_pose = Pose::rest(&m.rest.joints);
-            let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
-            let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
-            let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
+            let o = opt_ref(opts);
+            let (rigged, scene) = try_core!(rig_scene(m, o));
+            let frame = o.map_or_else(ExportFrame::default, |o| o.frame);
             try_core!(write(path, &rigged, &scene, &frame));
             skb_status::SKB_OK
         }

@@ -10,15 +10,14 @@ use std::ffi::c_char;
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use sketchbody_core::body::ik::Pose;
-use sketchbody_core::body::rig::{vertex_normals, RiggedMesh};
-use sketchbody_core::body::rig::{RigOptions, RigPose, RigScene, NUM_RIG_BONES};
+use sketchbody_core::body::rig::vertex_normals;
+use sketchbody_core::body::rig::{RigPose, RigScene, NUM_RIG_BONES};
 use sketchbody_core::error::Error;
 
 use super::body::{copy_skin_weights, skb_mesh};
 use super::error::fail;
-use super::export::skb_export_options;
-use super::ptr::{free_box, give, out_slice, out_slot, try_ref, write_out};
+use super::export::{rig_scene, skb_export_options};
+use super::ptr::{free_box, give, opt_ref, out_slice, out_slot, try_ref, write_out};
 use super::status::skb_status;
 
 /// Number of bones of the production rig (MakeHuman's `game_engine` skeleton); a rig built with
@@ -75,18 +74,11 @@ pub unsafe extern "C" fn skb_mesh_rig_new(
     ffi_boundary! {
         // SAFETY: `mesh` is NULL or a live mesh handle (the API's contract), only read here.
         let m = try_status!(unsafe { try_ref(mesh, "mesh") });
-        let options = if opts.is_null() {
-            RigOptions::default()
-        } else {
-            // SAFETY: `opts` is non-NULL, so live export options (the API's contract), only read.
-            try_status!(unsafe { try_ref(opts, "opts") }).rig
-        };
+        // SAFETY: `opts` is NULL or live export options (the API's contract), only read.
+        let o = unsafe { opt_ref(opts) };
         // SAFETY: `out` is NULL or valid for writing one pointer.
         let out = try_status!(unsafe { out_slot(out) });
-        let rest_pose = Pose::rest(&m.rest.joints);
-        let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
-        let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
-        let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
+        let (_, scene) = try_core!(rig_scene(m, o));
         let arm = &scene.armature;
         let rest_rot = RigPose::rest(arm.len()).local_rotations(arm);
         let rest_local = arm
@@ -284,6 +276,43 @@ pub unsafe extern "C" fn skb_rig_copy_rest_vertices(rig: *const skb_rig, dst: *m
         let r = try_status!(unsafe { try_ref(rig, "rig") });
         // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
         unsafe { copy_rows(&r.scene.rest_vertices, dst, dst_len) }
+    }
+}
+
+/// Number of shape keys (0 unless the options asked for them, `skb_export_options_set_shape_keys`)
+/// into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_shape_key_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `out` is NULL or valid for writing one `usize`.
+        try_status!(unsafe { write_out(out, r.scene.shape_keys.len(), "out") });
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies shape key `key`'s displacement of each rest vertex (`skb_rig_copy_rest_vertices`'
+/// order and frame; x, y, z floats, metres; the key at value 1 adds them, the base is the fitted
+/// body) into `dst` of `dst_len` floats (at least 3 × vertex count). Key `k` is named
+/// `shape_NN` with NN = k + 1 in two digits (the GLB's `extras.targetNames`, the FBX and USD
+/// shapes' names). Errors: `key` ≥ `skb_rig_shape_key_count` (`SKB_ERR_OUT_OF_RANGE`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_shape_key(
+    rig: *const skb_rig,
+    key: usize,
+    dst: *mut f32,
+    dst_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        let keys = &r.scene.shape_keys;
+        let Some(k) = keys.get(key) else {
+            return fail(&Error::OutOfRange { name: "shape key", detail: format!("{key} >= {}", keys.len()) });
+        };
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
+        unsafe { copy_rows(&k.deltas, dst, dst_len) }
     }
 }
 

@@ -26,7 +26,8 @@ class ExportOptions(OptionsBase):
     (default: the rest is the A- or T-pose, the bones posed, a one-frame clip "pose"), "rest"
     (the pose is the rest pose, no clip) or "both" (the pose as rest plus a clip "a_pose" or
     "t_pose"); ik_targets: True adds the 7 non-deforming IK target bones at the hands and
-    feet."""
+    feet; shape_keys: True adds the mesh's shape dimensions as shape keys at 0 (one per shape
+    weight, each one standard deviation of its component)."""
 
     naming: Optional[str] = None
     rest_pose: Optional[str] = None
@@ -36,6 +37,7 @@ class ExportOptions(OptionsBase):
     twist_bones: Optional[bool] = None
     pose_as: Optional[str] = None
     ik_targets: Optional[bool] = None
+    shape_keys: Optional[bool] = None
 
     _c_prefix = "skb_export_options"
     _enums = {

@@ -66,3 +66,51 @@ pub fn with_ik_targets(armature: &Armature) -> Armature {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Isometry3, Translation3};
+    use rand::SeedableRng;
+
+    use super::*;
+    use crate::body::ik::{solve, IkOptions};
+    use crate::body::procedural::random_pose;
+    use crate::body::rig::{Naming, RigOptions, RigScene, RiggedMesh};
+    use crate::body::{BodyModel, Gender};
+    use crate::export::rigged::posed_locals;
+
+    /// The local transforms every writer takes ([`posed_locals`]), composed down the tree, stand
+    /// each IK target exactly where the bone it follows is (head and frame), in a random pose,
+    /// with twist bones before them; the targets are named and parented as documented.
+    #[test]
+    fn targets_stand_on_their_bones_in_the_pose() {
+        let model = BodyModel::embedded().unwrap();
+        let mesh = RiggedMesh::from_model(&model, Gender::Male, &[]).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+        let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+        let options =
+            RigOptions { naming: Naming::Unreal, twist_bones: true, ik_targets: true, ..RigOptions::default() };
+        let scene = RigScene::build(model.rig(), &mesh, &pose, &options).unwrap();
+        let arm = &scene.armature;
+        let base = arm.len() - NUM_IK_BONES;
+        assert_eq!(
+            scene.names[base..],
+            ["ik_foot_root", "ik_foot_r", "ik_foot_l", "ik_hand_root", "ik_hand_gun", "ik_hand_r", "ik_hand_l"]
+        );
+        assert_eq!(arm.parents[base + 6], Some(base + 4));
+        assert_eq!(arm.parents[base], Some(0));
+        let mut global: Vec<Isometry3<f64>> = Vec::with_capacity(arm.len());
+        for (b, (t, q)) in posed_locals(&scene).into_iter().enumerate() {
+            let local = Isometry3::from_parts(Translation3::from(t), q);
+            global.push(arm.parents[b].map_or(local, |p| global[p] * local));
+        }
+        for (k, bone) in IK_BONES.iter().enumerate() {
+            let (g, f) = (global[base + k], global[bone.follows]);
+            let gap = (g.translation.vector - f.translation.vector).norm();
+            assert!(gap < 1e-9 && g.rotation.angle_to(&f.rotation) < 1e-9, "{}: {gap} m", scene.names[base + k]);
+        }
+        // The hand moved: the targets are not left at the rest.
+        let hand = global[IK_BONES[5].follows].translation.vector;
+        assert!((hand - arm.heads[IK_BONES[5].follows]).norm() > 0.05);
+    }
+}

@@ -322,7 +322,7 @@ mod tests {
         assert_eq!(Naming::Unreal.bone_name(0).unwrap(), "root");
         assert_eq!(Naming::Unreal.bone_name(2).unwrap(), "spine_01");
         assert_eq!(Naming::Unreal.bone_name(54).unwrap(), "lowerarm_twist_01_r");
-        assert_eq!(Naming::Mixamo.bone_name(56).unwrap(), "mixamorig:LeftArmTwist");
+        assert_eq!(Naming::Mixamo.bone_name(55).unwrap(), "mixamorig:LeftArmTwist");
         assert!(Naming::Project.bone_name(59).is_none());
         assert_eq!(Naming::Unreal.ik_bone_name(5).unwrap(), "ik_hand_r");
         assert!(Naming::Unreal.ik_bone_name(7).is_none());
