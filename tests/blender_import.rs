@@ -80,8 +80,8 @@ fn blender_imports_one_rigged_mesh_that_bends_at_the_elbow() {
     assert_eq!(r["hierarchy_matches"], true, "{text}");
     assert_eq!(r["unweighted_vertices"].as_u64(), Some(0));
     assert!(f("posed_min_z").abs() < 0.005 && f("rest_min_z").abs() < 0.005, "{text}");
-    assert!(r["forearm_vertices"].as_u64().unwrap() > 100 && f("forearm_mean_move") > 0.02, "{text}");
-    assert!(r["upper_arm_vertices"].as_u64().unwrap() > 20 && f("upper_arm_max_move") < 0.005, "{text}");
+    assert!(r["forearm_vertices"].as_u64().unwrap() > 50 && f("forearm_mean_move") > 0.02, "{text}");
+    assert!(r["upper_arm_vertices"].as_u64().unwrap() > 10 && f("upper_arm_max_move") < 0.005, "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -190,15 +190,18 @@ fn blender_imports_the_twist_bones_with_the_pose_as_rest() {
     assert_eq!(r["unweighted_vertices"].as_u64(), Some(0));
     assert!(f("posed_min_z").abs() < 0.005 && f("rest_min_z").abs() < 0.005, "{text}");
     assert!(f("rest_posed_gap") < 1e-4, "the rest mesh is the posed body: {text}");
-    assert!(r["forearm_vertices"].as_u64().unwrap() > 100 && f("forearm_mean_move") > 0.02, "{text}");
-    assert!(r["upper_arm_vertices"].as_u64().unwrap() > 20 && f("upper_arm_max_move") < 0.005, "{text}");
+    assert!(r["forearm_vertices"].as_u64().unwrap() > 50 && f("forearm_mean_move") > 0.02, "{text}");
+    assert!(r["upper_arm_vertices"].as_u64().unwrap() > 10 && f("upper_arm_max_move") < 0.005, "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Shape keys (issue 49) as Blender 3.4's glTF and FBX importers bring them in: a basis and one
 /// key per shape dimension, every key at 0, each key's displacement of every vertex the one
 /// written within 0.1 mm (in Blender's metres, Z up; the FBX in centimetres, Z up, converted by
-/// Blender), and the twist bones and IK targets present and parented as written.
+/// Blender), and the twist bones and IK targets present and parented as written. Then the same
+/// body with the pose as the rest (`PoseAs::Rest`): Blender's rest mesh is the posed body of the
+/// pose as an action (what the action's glTF shows) within 0.1 mm, its keys the keys carried
+/// into that rest.
 #[test]
 fn blender_imports_the_shape_keys() {
     if blender_missing("Blender shape-key import") {
@@ -221,43 +224,56 @@ fn blender_imports_the_shape_keys() {
             }
         })
         .collect();
-    let options = RigOptions { naming: Naming::Unreal, twist_bones: true, ik_targets: true, ..RigOptions::default() };
-    let scene = RigScene::build_with_shape_keys(model.rig(), &body, &pose, &options, &keys).unwrap();
+    let options = |pose_as| RigOptions {
+        naming: Naming::Unreal,
+        twist_bones: true,
+        ik_targets: true,
+        pose_as,
+        ..RigOptions::default()
+    };
+    let action = RigScene::build_with_shape_keys(model.rig(), &body, &pose, &options(PoseAs::Action), &keys).unwrap();
+    let rest = RigScene::build_with_shape_keys(model.rig(), &body, &pose, &options(PoseAs::Rest), &keys).unwrap();
     // Blender's world: metres, Z up: (x, y, z) of the model frame is (x, -z, y).
     let z_up = |p: [f32; 3]| [p[0] as f64, -p[2] as f64, p[1] as f64];
-    let rest: Vec<[f64; 3]> = scene.rest_vertices.iter().map(|&p| z_up(p)).collect();
-    let key_map: serde_json::Map<String, serde_json::Value> = scene
-        .shape_keys
-        .iter()
-        .map(|k| (k.name.clone(), serde_json::json!(k.deltas.iter().map(|&d| z_up(d)).collect::<Vec<_>>())))
-        .collect();
-    std::fs::write(dir.join("expected.json"), serde_json::json!({"rest": rest, "keys": key_map}).to_string()).unwrap();
-    let glb = dir.join("body.glb");
-    write_glb(&glb, &body, &scene, None).unwrap();
-    let fbx = dir.join("body.fbx");
-    sketchbody::export::fbx::write_fbx(&fbx, &body, &scene, None, &FRAMES[3]).unwrap();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/check_keys.py");
-    for file in [&glb, &fbx] {
-        let report = dir.join("report.json");
-        let out = blender(&script, &[file, &dir.join("expected.json"), &report]);
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        assert!(out.status.success(), "blender failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-        let text = std::fs::read_to_string(&report).unwrap();
-        println!("{}: {text}", file.display());
-        let r: serde_json::Value = serde_json::from_str(&text).unwrap();
-        assert_eq!((r["meshes"].as_u64(), r["armatures"].as_u64()), (Some(1), Some(1)), "{text}");
-        let names: Vec<&str> = r["keys"].as_array().unwrap().iter().map(|k| k[0].as_str().unwrap()).collect();
-        assert_eq!(names, ["Basis", "shape_01", "shape_02", "shape_03", "shape_04"], "{text}");
-        assert!(r["keys"].as_array().unwrap().iter().all(|k| k[1].as_f64() == Some(0.0)), "{text}");
-        assert!(r["rest_gap"].as_f64().unwrap() < 1e-4, "{text}");
-        let gaps = r["key_gaps"].as_object().unwrap();
-        assert_eq!(gaps.len(), 4, "{text}");
-        assert!(gaps.values().all(|g| g.as_f64().unwrap() < 1e-4), "{text}");
-        let bones = r["bones"].as_object().unwrap();
-        assert_eq!(bones.len(), scene.names.len(), "{text}");
-        assert_eq!(bones["upperarm_twist_01_l"], "upperarm_l");
-        assert_eq!(bones["ik_hand_r"], "ik_hand_gun");
-        assert_eq!(bones["ik_foot_root"], "root");
+    // (scene written, the rest Blender should find: the action's rest, then its posed body)
+    for (label, scene, want_rest) in
+        [("action", &action, &action.rest_vertices), ("rest", &rest, &action.posed_vertices)]
+    {
+        let expected_rest: Vec<[f64; 3]> = want_rest.iter().map(|&p| z_up(p)).collect();
+        let key_map: serde_json::Map<String, serde_json::Value> = scene
+            .shape_keys
+            .iter()
+            .map(|k| (k.name.clone(), serde_json::json!(k.deltas.iter().map(|&d| z_up(d)).collect::<Vec<_>>())))
+            .collect();
+        let expected = dir.join(format!("expected-{label}.json"));
+        std::fs::write(&expected, serde_json::json!({"rest": expected_rest, "keys": key_map}).to_string()).unwrap();
+        let glb = dir.join(format!("body-{label}.glb"));
+        write_glb(&glb, &body, scene, None).unwrap();
+        let fbx = dir.join(format!("body-{label}.fbx"));
+        sketchbody::export::fbx::write_fbx(&fbx, &body, scene, None, &FRAMES[3]).unwrap();
+        for file in [&glb, &fbx] {
+            let report = dir.join("report.json");
+            let out = blender(&script, &[file, &expected, &report]);
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            assert!(out.status.success(), "blender failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+            let text = std::fs::read_to_string(&report).unwrap();
+            println!("{}: {text}", file.display());
+            let r: serde_json::Value = serde_json::from_str(&text).unwrap();
+            assert_eq!((r["meshes"].as_u64(), r["armatures"].as_u64()), (Some(1), Some(1)), "{text}");
+            let names: Vec<&str> = r["keys"].as_array().unwrap().iter().map(|k| k[0].as_str().unwrap()).collect();
+            assert_eq!(names, ["Basis", "shape_01", "shape_02", "shape_03", "shape_04"], "{text}");
+            assert!(r["keys"].as_array().unwrap().iter().all(|k| k[1].as_f64() == Some(0.0)), "{text}");
+            assert!(r["rest_gap"].as_f64().unwrap() < 1e-4, "{label}: Blender's rest mesh: {text}");
+            let gaps = r["key_gaps"].as_object().unwrap();
+            assert_eq!(gaps.len(), 4, "{text}");
+            assert!(gaps.values().all(|g| g.as_f64().unwrap() < 1e-4), "{text}");
+            let bones = r["bones"].as_object().unwrap();
+            assert_eq!(bones.len(), scene.names.len(), "{text}");
+            assert_eq!(bones["upperarm_twist_01_l"], "upperarm_l");
+            assert_eq!(bones["ik_hand_r"], "ik_hand_gun");
+            assert_eq!(bones["ik_foot_root"], "root");
+        }
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

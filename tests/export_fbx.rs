@@ -458,6 +458,103 @@ fn assimp_reads_the_fbx() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// assimp on the issue-49 options: twist bones, IK targets and three shape keys, the pose as an
+/// action (Z up, centimetres): assimp finds a bone per cluster (66, the IK targets' empty), every
+/// bone's node, the IK targets included, at the scene's posed head within 0.1 mm, and the three
+/// blend shapes as animation meshes (through its glTF export: each target's displacement of
+/// every vertex the key's within 0.1 mm).
+#[test]
+fn assimp_reads_twist_bones_ik_targets_and_shape_keys() {
+    if Command::new("assimp").arg("version").output().map(|o| !o.status.success()).unwrap_or(true) {
+        if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
+            panic!("assimp is not installed (assimp-utils), but SKB_REQUIRE_SHARED_DATA is set");
+        }
+        eprintln!("SKIPPED assimp FBX check: assimp is not installed");
+        return;
+    }
+    let model = BodyModel::embedded().unwrap();
+    let mesh = RiggedMesh::from_model(&model, Gender::Male, &[]).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(14);
+    let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+    let options = RigOptions { twist_bones: true, ik_targets: true, ..RigOptions::default() };
+    let keys = mean_keys(&model, Gender::Male, 3);
+    let scene = RigScene::build_with_shape_keys(model.rig(), &mesh, &pose, &options, &keys).unwrap();
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("assimp-rig-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("body.fbx");
+    let frame = FRAMES[3];
+    write_fbx(&path, &mesh, &scene, None, &frame).unwrap();
+    let out = Command::new("assimp").arg("info").arg(&path).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    println!("{text}");
+    assert!(out.status.success(), "assimp failed:\n{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    let json = dir.join("body.json");
+    let out = Command::new("assimp").arg("export").arg(&path).arg(&json).arg("-fassjson").output().unwrap();
+    assert!(out.status.success(), "assimp export failed: {}", String::from_utf8_lossy(&out.stderr));
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(doc["meshes"][0]["bones"].as_array().unwrap().len(), scene.names.len());
+    // The blend shapes as assimp's glTF exporter writes the animation meshes it read: each
+    // target's displacement of each vertex (matched to the scene's by its rest position).
+    let gltf = dir.join("body.gltf");
+    let out = Command::new("assimp").arg("export").arg(&path).arg(&gltf).arg("-fgltf2").output().unwrap();
+    assert!(out.status.success(), "assimp glTF export failed: {}", String::from_utf8_lossy(&out.stderr));
+    let g: serde_json::Value = serde_json::from_slice(&std::fs::read(&gltf).unwrap()).unwrap();
+    let bin = std::fs::read(dir.join(g["buffers"][0]["uri"].as_str().unwrap())).unwrap();
+    let vec3s = |accessor: &serde_json::Value| -> Vec<Vector3<f64>> {
+        let a = &g["accessors"][accessor.as_u64().unwrap() as usize];
+        let view = &g["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+        let start = view["byteOffset"].as_u64().unwrap_or(0) as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let f = |i: usize| f32::from_le_bytes(bin[start + 4 * i..start + 4 * i + 4].try_into().unwrap()) as f64;
+        (0..a["count"].as_u64().unwrap() as usize).map(|i| Vector3::new(f(3 * i), f(3 * i + 1), f(3 * i + 2))).collect()
+    };
+    let primitive = &g["meshes"][0]["primitives"][0];
+    let targets = primitive["targets"].as_array().expect("assimp read the blend shapes");
+    assert_eq!(targets.len(), keys.len());
+    let unit = metres_to_unit(&frame);
+    let rest: Vec<Vector3<f64>> = scene.rest_vertices.iter().map(|&p| in_frame(&frame, p)).collect();
+    let cell = |p: &Vector3<f64>| [p.x, p.y, p.z].map(|c| (c / (1e-3 * unit)).round() as i64);
+    let mut by_cell: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (i, p) in rest.iter().enumerate() {
+        by_cell.entry(cell(p)).or_default().push(i);
+    }
+    let points = vec3s(&primitive["attributes"]["POSITION"]);
+    let matched: Vec<Vec<usize>> = points
+        .iter()
+        .map(|p| {
+            let near = by_cell.get(&cell(p)).cloned().unwrap_or_default();
+            let near: Vec<usize> = near.into_iter().filter(|&i| (rest[i] - p).norm() < 1e-4 * unit).collect();
+            if near.is_empty() {
+                (0..rest.len()).filter(|&i| (rest[i] - p).norm() < 1e-4 * unit).collect()
+            } else {
+                near
+            }
+        })
+        .collect();
+    assert!(matched.iter().all(|m| !m.is_empty()), "every assimp vertex is a rest vertex");
+    for (target, key) in targets.iter().zip(&scene.shape_keys) {
+        let d = vec3s(&target["POSITION"]);
+        let gap = d
+            .iter()
+            .zip(&matched)
+            .map(|(d, m)| m.iter().map(|&i| (d - in_frame(&frame, key.deltas[i])).norm()).fold(f64::INFINITY, f64::min))
+            .fold(0.0, f64::max)
+            / unit;
+        println!("assimp: {} within {gap:.2e} m", key.name);
+        assert!(gap < 1e-4, "assimp's {} differs by {gap} m", key.name);
+    }
+    let mut found = HashMap::new();
+    node_heads(&doc["rootnode"], &Matrix4::identity(), &mut found);
+    let heads = posed_heads(&scene);
+    let mut worst = 0.0f64;
+    for (b, name) in scene.names.iter().enumerate() {
+        let got = found.get(name).unwrap_or_else(|| panic!("assimp has no node {name}"));
+        worst = worst.max((got - in_frame(&frame, heads[b].map(|c| c as f32))).norm() / unit);
+    }
+    println!("assimp: {} bone nodes, posed heads within {worst:.2e} m", scene.names.len());
+    assert!(worst < 1e-4, "assimp's posed bone heads differ by {worst} m");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Each node's global translation (`transformation`: 16 row-major numbers) by name, composed
 /// from `parent`.
 fn node_heads(node: &serde_json::Value, parent: &Matrix4<f64>, out: &mut HashMap<String, Vector3<f64>>) {

@@ -33,15 +33,16 @@ pub struct RigArgs {
     /// ik_hand_root / ik_foot_root, Unreal's names under --naming unreal).
     #[arg(long)]
     ik_targets: bool,
-    /// `run`: the fitted body's shape dimensions as shape keys (glTF morph targets, FBX blend
-    /// shapes, USD BlendShapes), each one standard deviation of its component, at 0
-    /// (`--shape-keys false`: none).
+    /// The body's shape dimensions as shape keys (glTF morph targets, FBX blend shapes, USD
+    /// BlendShapes): one per shape weight (the fit's for `run`, --weights' for `body`; the
+    /// space's default count for the mean shape), each one standard deviation of its
+    /// component, at 0 (`--shape-keys false`: none).
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     shape_keys: bool,
 }
 
 impl RigArgs {
-    /// Whether `run` writes shape keys.
+    /// Whether the rigged files carry shape keys.
     pub fn shape_keys(&self) -> bool {
         self.shape_keys
     }

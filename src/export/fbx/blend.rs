@@ -1,8 +1,10 @@
 //! The FBX blend shapes of the scene's shape keys ([`crate::body::rig::shape_keys`]): one
 //! `Deformer` `BlendShape` on the body's geometry and per key a `Deformer` `BlendShapeChannel`
 //! (`DeformPercent` 0, the base being the fitted body; `FullWeights` 100) holding a `Geometry`
-//! `Shape` whose `Indexes` are every vertex and whose `Vertices` are the key's displacements in
-//! the file's frame (turned and scaled as positions, no offset).
+//! `Shape` whose `Indexes` are every vertex, whose `Vertices` are the key's displacements in
+//! the file's frame (turned and scaled as positions, no offset) and whose `Normals` (the normals'
+//! displacements) are zero: a key keeps the base mesh's normals, as Blender's own FBX exporter
+//! writes them; assimp's reader requires the element.
 use nalgebra::Vector3;
 
 use super::node::{object_name, s, Node, Prop};
@@ -52,6 +54,7 @@ pub fn blend_objects(scene: &RigScene, frame: &ExportFrame, geometry: i64) -> (V
                     Node::new("Version", vec![Prop::I32(100)]),
                     Node::new("Indexes", vec![Prop::I32s((0..n as i32).collect())]),
                     Node::new("Vertices", vec![Prop::F64s(deltas)]),
+                    Node::new("Normals", vec![Prop::F64s(vec![0.0; 3 * n])]),
                 ],
             ),
         );
