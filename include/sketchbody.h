@@ -1048,9 +1048,11 @@ skb_status skb_export_options_set_up_axis(struct skb_export_options *opts, uint3
 
 /**
  * Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
- * scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
- * pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
- * "pose". See docs/formats.md. Written atomically. Only reads `mesh` and `opts`.
+ * scene, the rest mesh skinned to MakeHuman's 53-bone rig (plus the twist bones and IK targets
+ * the options add), posed by the current pose (the rest pose if never posed) as bone rotations
+ * with the root's translation, plus a one-frame clip "pose" (or the pose as the rest, as the
+ * options say; the options' shape keys as morph targets). See docs/formats.md. Written
+ * atomically. Only reads `mesh` and `opts`.
  */
 skb_status skb_mesh_write_glb_with_options(const struct skb_mesh *mesh,
                                            const char *path,

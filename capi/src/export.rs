@@ -335,9 +335,11 @@ unsafe fn write_rigged(
 }
 
 /// Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
-/// scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
-/// pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
-/// "pose". See docs/formats.md. Written atomically. Only reads `mesh` and `opts`.
+/// scene, the rest mesh skinned to MakeHuman's 53-bone rig (plus the twist bones and IK targets
+/// the options add), posed by the current pose (the rest pose if never posed) as bone rotations
+/// with the root's translation, plus a one-frame clip "pose" (or the pose as the rest, as the
+/// options say; the options' shape keys as morph targets). See docs/formats.md. Written
+/// atomically. Only reads `mesh` and `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_glb_with_options(
     mesh: *const skb_mesh,

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "11b758a416788d5fd859ad68655bd3031db3be5d99059418e3fc10f2bd4d272e"
+HEADER_SHA256 = "f1135c7463a9a41328e6cf874d62a6a84ff55b0c5d48d116ae93b3d72dad6e5f"
 
 # ---- constants (#define) ----
 
@@ -1307,9 +1307,11 @@ FUNCTIONS["skb_export_options_set_up_axis"] = (
 )
 
 # Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
-# scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
-# pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
-# "pose". See docs/formats.md. Written atomically. Only reads `mesh` and `opts`.
+# scene, the rest mesh skinned to MakeHuman's 53-bone rig (plus the twist bones and IK targets
+# the options add), posed by the current pose (the rest pose if never posed) as bone rotations
+# with the root's translation, plus a one-frame clip "pose" (or the pose as the rest, as the
+# options say; the options' shape keys as morph targets). See docs/formats.md. Written
+# atomically. Only reads `mesh` and `opts`.
 FUNCTIONS["skb_mesh_write_glb_with_options"] = (
     ctypes.c_uint32,
     [

@@ -314,6 +314,29 @@ class PipelineTest(unittest.TestCase):
         self.assertTrue(all(n.startswith("mixamorig:") for n in mix.bone_names[1:]), mix.bone_names[:3])
         np.testing.assert_allclose(mix.root_translation, 0, atol=1e-12)
 
+    def test_rig_an_animator_keeps(self):
+        """Twist bones, IK targets, the pose as the rest and shape keys (issue 49)."""
+        opts = skb.ExportOptions(naming="unreal", twist_bones=True, ik_targets=True, pose_as="rest", shape_keys=True)
+        with self.r.mesh() as m:
+            rig = m.rig(opts)
+            action = m.rig(skb.ExportOptions(naming="unreal"))
+            n = len(m.shape_weights())
+            with self.assertRaises(ValueError):
+                m.rig(skb.ExportOptions(pose_as="keyed"))
+        b = skb._bindings
+        nb = b.SKB_NUM_RIG_BONES + b.SKB_NUM_TWIST_BONES + b.SKB_NUM_IK_BONES
+        self.assertEqual((len(rig.bone_names), len(rig.parents)), (nb, nb))
+        self.assertEqual(rig.bone_names[rig.parents[rig.bone_names.index("upperarm_twist_01_l")]], "upperarm_l")
+        self.assertEqual(rig.bone_names[rig.parents[rig.bone_names.index("ik_hand_r")]], "ik_hand_gun")
+        # The pose as the rest: the rest vertices are the action's posed body.
+        np.testing.assert_allclose(rig.rest_vertices, action.posed_vertices, atol=1e-4)
+        np.testing.assert_allclose(rig.posed_vertices, action.posed_vertices, atol=1e-4)
+        # One key per fitted shape weight.
+        self.assertGreater(n, 0)
+        self.assertEqual(sorted(rig.shape_keys), [f"shape_{k:02d}" for k in range(1, n + 1)])
+        self.assertTrue(all(d.shape == (NV, 3) and np.abs(d).max() > 1e-3 for d in rig.shape_keys.values()))
+        self.assertEqual(action.shape_keys, {})
+
     def test_export(self):
         with self.r.mesh() as m, tempfile.TemporaryDirectory() as tmp:
             glb, obj, png = (os.path.join(tmp, n) for n in ("b.glb", "b.obj", "p.png"))
