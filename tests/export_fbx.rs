@@ -14,13 +14,14 @@ use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Vector3};
 use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
-use sketchbody::body::rig::shape_keys::{key_name, ShapeKey};
+use sketchbody::body::rig::shape_keys::ShapeKey;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::body::rig::{PoseAs, RigOptions, RigScene, NUM_RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::fbx::node::{file_bytes, s, Node, Prop};
 use sketchbody::export::fbx::{fbx_bytes, write_fbx};
 use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
+use sketchbody::pipeline::shape_keys::ShapeOrigin;
 
 #[path = "common/frames.rs"]
 mod frames;
@@ -385,6 +386,19 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// True (after printing SKIPPED) when assimp is not installed; panics instead when
+/// SKB_REQUIRE_SHARED_DATA is set.
+fn assimp_missing() -> bool {
+    if Command::new("assimp").arg("version").output().map(|o| o.status.success()).unwrap_or(false) {
+        return false;
+    }
+    if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
+        panic!("assimp is not installed (assimp-utils), but SKB_REQUIRE_SHARED_DATA is set");
+    }
+    eprintln!("SKIPPED assimp FBX check: assimp is not installed");
+    true
+}
+
 /// A second, independent reader: assimp (`assimp info`, Debian's assimp-utils) loads the FBX
 /// and finds one mesh with every vertex, the 53 bones, the material and the embedded texture;
 /// then, for each unit and up axis, `assimp export` to assimp's JSON (assimp applies no unit or
@@ -395,11 +409,7 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
 /// prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
 #[test]
 fn assimp_reads_the_fbx() {
-    if Command::new("assimp").arg("version").output().map(|o| !o.status.success()).unwrap_or(true) {
-        if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
-            panic!("assimp is not installed (assimp-utils), but SKB_REQUIRE_SHARED_DATA is set");
-        }
-        eprintln!("SKIPPED assimp FBX check: assimp is not installed");
+    if assimp_missing() {
         return;
     }
     let (mesh, scene) = scene(Gender::Female, 6);
@@ -465,11 +475,7 @@ fn assimp_reads_the_fbx() {
 /// every vertex the key's within 0.1 mm).
 #[test]
 fn assimp_reads_twist_bones_ik_targets_and_shape_keys() {
-    if Command::new("assimp").arg("version").output().map(|o| !o.status.success()).unwrap_or(true) {
-        if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
-            panic!("assimp is not installed (assimp-utils), but SKB_REQUIRE_SHARED_DATA is set");
-        }
-        eprintln!("SKIPPED assimp FBX check: assimp is not installed");
+    if assimp_missing() {
         return;
     }
     let model = BodyModel::embedded().unwrap();
@@ -608,19 +614,10 @@ fn records_and_footer_lay_out_as_documented() {
 }
 
 /// Shape keys of the mean body: the first `n` principal components of its space, one standard
-/// deviation each (model frame).
+/// deviation each (model frame), as the library makes them.
 fn mean_keys(model: &BodyModel, gender: Gender, n: usize) -> Vec<ShapeKey> {
-    let space = model.space(gender);
-    (0..n)
-        .map(|k| {
-            let sd = space.variances()[k].sqrt() as f32;
-            let b = space.basis_vector(k).unwrap();
-            ShapeKey {
-                name: key_name(k),
-                deltas: b.chunks_exact(3).map(|c| [c[0] * sd, c[1] * sd, c[2] * sd]).collect(),
-            }
-        })
-        .collect()
+    let origin = ShapeOrigin { space: gender.into(), weights: Vec::new(), proportions: None, scale: 1.0 };
+    origin.keys(model).unwrap().into_iter().take(n).collect()
 }
 
 /// The rig options of issue 49 read back by the independent reader: twist bones, IK targets and

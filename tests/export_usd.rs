@@ -20,11 +20,12 @@ use nalgebra::{Matrix4, Point3, Quaternion, Translation3, UnitQuaternion, Vector
 use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
-use sketchbody::body::rig::shape_keys::{key_name, ShapeKey};
+use sketchbody::body::rig::shape_keys::ShapeKey;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::body::rig::{Naming, PoseAs, RigOptions, RigScene};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
+use sketchbody::pipeline::shape_keys::ShapeOrigin;
 
 #[path = "common/frames.rs"]
 mod frames;
@@ -267,19 +268,10 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
 }
 
 /// Shape keys of the mean body: the first `n` principal components of its space, one standard
-/// deviation each (model frame).
+/// deviation each (model frame), as the library makes them.
 fn mean_keys(model: &BodyModel, gender: Gender, n: usize) -> Vec<ShapeKey> {
-    let space = model.space(gender);
-    (0..n)
-        .map(|k| {
-            let sd = space.variances()[k].sqrt() as f32;
-            let b = space.basis_vector(k).unwrap();
-            ShapeKey {
-                name: key_name(k),
-                deltas: b.chunks_exact(3).map(|c| [c[0] * sd, c[1] * sd, c[2] * sd]).collect(),
-            }
-        })
-        .collect()
+    let origin = ShapeOrigin { space: gender.into(), weights: Vec::new(), proportions: None, scale: 1.0 };
+    origin.keys(model).unwrap().into_iter().take(n).collect()
 }
 
 /// A scene with twist bones, IK targets and three shape keys (Mixamo names: paths escaped), the

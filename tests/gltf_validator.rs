@@ -14,7 +14,7 @@ use nalgebra::Matrix3;
 use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions, Pose};
 use sketchbody::body::procedural::random_pose;
-use sketchbody::body::rig::shape_keys::{key_name, ShapeKey};
+use sketchbody::body::rig::shape_keys::ShapeKey;
 use sketchbody::body::rig::RiggedMesh;
 use sketchbody::body::rig::{Naming, Placement, PoseAs, RestPose, RigOptions, RigScene};
 use sketchbody::body::skin::{skin, SkinMethod};
@@ -23,6 +23,7 @@ use sketchbody::camera::WeakPerspective;
 use sketchbody::export::gltf::write_glb;
 use sketchbody::export::texture::project_sketch;
 use sketchbody::image::{encode_png, RgbImage};
+use sketchbody::pipeline::shape_keys::ShapeOrigin;
 
 const VALIDATOR: &str = "gltf-validator@2.0.0-dev.3.10";
 
@@ -80,17 +81,9 @@ fn exported_glb_files_have_no_validator_errors() {
         ..RigOptions::default()
     };
     // Shape keys for the issue-49 cases: the first three components, one standard deviation each.
-    let space = model.space(Gender::Female);
-    let keys: Vec<ShapeKey> = (0..3)
-        .map(|k| {
-            let sd = space.variances()[k].sqrt() as f32;
-            let b = space.basis_vector(k).unwrap();
-            ShapeKey {
-                name: key_name(k),
-                deltas: b.chunks_exact(3).map(|c| [c[0] * sd, c[1] * sd, c[2] * sd]).collect(),
-            }
-        })
-        .collect();
+    // Shape keys: the first 3 components of the mean body, one standard deviation each.
+    let origin = ShapeOrigin { space: Gender::Female.into(), weights: Vec::new(), proportions: None, scale: 1.0 };
+    let keys: Vec<ShapeKey> = origin.keys(&model).unwrap().into_iter().take(3).collect();
     // A synthetic colour "sketch" seen through a front camera, for the textured case.
     let (w, h) = (256usize, 512usize);
     let sketch =

@@ -5,9 +5,8 @@
 //! the file's frame (turned and scaled as positions, no offset) and whose `Normals` (the normals'
 //! displacements) are zero: a key keeps the base mesh's normals, as Blender's own FBX exporter
 //! writes them; assimp's reader requires the element.
-use nalgebra::Vector3;
-
 use super::node::{object_name, s, Node, Prop};
+use super::scene::flat_points;
 use crate::body::rig::RigScene;
 use crate::export::frame::ExportFrame;
 
@@ -40,14 +39,8 @@ pub fn blend_objects(scene: &RigScene, frame: &ExportFrame, geometry: i64) -> (V
     let mut links = vec![connect(BLEND_SHAPE, geometry)];
     let n = scene.rest_vertices.len();
     for (k, key) in keys.iter().enumerate() {
-        let deltas: Vec<f64> = key
-            .deltas
-            .iter()
-            .flat_map(|d| {
-                let v = frame.point(Vector3::new(d[0] as f64, d[1] as f64, d[2] as f64));
-                [v.x, v.y, v.z]
-            })
-            .collect();
+        // A displacement turns and scales as a position does (no offset: none is applied).
+        let deltas = flat_points(&key.deltas, frame);
         objects.push(
             Node::new("Geometry", vec![Prop::I64(shape(k)), object_name(&key.name, "Geometry"), s("Shape")]).with(
                 vec![

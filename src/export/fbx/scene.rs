@@ -128,18 +128,22 @@ fn definitions(bones: usize, textured: bool, animation: &[(&'static str, i32)], 
     Node::new("Definitions", vec![]).with(children)
 }
 
-/// The mesh geometry: polygons (a quad whose last two corners agree is a triangle), normals per
-/// vertex, UVs per polygon corner (v up, FBX's convention), one material for all; positions
-/// and normals in `frame`.
-fn geometry(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) -> Node {
-    let vertices: Vec<f64> = scene
-        .rest_vertices
+/// `points` (model frame, metres) in `frame`, flattened x, y, z: an FBX `Vertices` array.
+pub(super) fn flat_points(points: &[[f32; 3]], frame: &ExportFrame) -> Vec<f64> {
+    points
         .iter()
         .flat_map(|p| {
             let q = frame.point(Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64));
             [q.x, q.y, q.z]
         })
-        .collect();
+        .collect()
+}
+
+/// The mesh geometry: polygons (a quad whose last two corners agree is a triangle), normals per
+/// vertex, UVs per polygon corner (v up, FBX's convention), one material for all; positions
+/// and normals in `frame`.
+fn geometry(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) -> Node {
+    let vertices = flat_points(&scene.rest_vertices, frame);
     let mut polygon = Vec::with_capacity(mesh.quads.len() * 4);
     let mut uv_index = Vec::with_capacity(mesh.quads.len() * 4);
     for (f, q) in mesh.quads.iter().enumerate() {
