@@ -706,7 +706,8 @@ class TextureTest(unittest.TestCase):
     `sketchbody run` with a small fit, then the same job here (colour sketch, the same fit
     settings): Result.texture written by write_png is the CLI's body_texture.png byte for byte,
     Mesh.texture with the result's mesh and camera the same pixels, Mesh.write_usd with
-    ExportOptions(units="cm", up_axis="z") the CLI's points and metadata."""
+    ExportOptions(units="cm", up_axis="z", twist_bones=True, shape_keys=True) (the CLI's
+    defaults) the CLI's points, metadata, bind transforms and shape keys."""
 
     SIZE = 128
 
@@ -746,7 +747,8 @@ class TextureTest(unittest.TestCase):
     def test_units_and_up_axis(self):
         usd = os.path.join(self.tmp.name, "c.usda")
         with self.r.mesh() as m:
-            m.write_usd(usd, skb.ExportOptions(units="cm", up_axis="z"))
+            # The CLI's defaults: twist bones and shape keys on (the C API's are off).
+            m.write_usd(usd, skb.ExportOptions(units="cm", up_axis="z", twist_bones=True, shape_keys=True))
             fbx = os.path.join(self.tmp.name, "c.fbx")
             m.write_fbx(fbx, skb.ExportOptions(units="cm", up_axis="z"))
             with open(fbx, "rb") as f:
@@ -768,6 +770,8 @@ class TextureTest(unittest.TestCase):
         line = lambda lines, key: next(x for x in lines if key in x)  # noqa: E731
         self.assertEqual(line(ours, "point3f[] points"), line(cli, "point3f[] points"))
         self.assertEqual(line(ours, "bindTransforms"), line(cli, "bindTransforms"))
+        self.assertEqual(line(ours, "skel:blendShapes"), line(cli, "skel:blendShapes"))
+        self.assertEqual(line(ours, "vector3f[] offsets"), line(cli, "vector3f[] offsets"))
 
     def test_bad_texture_arguments(self):
         with self.assertRaises(ValueError):
