@@ -99,6 +99,22 @@
 #define SKB_ORIGIN_PELVIS 1
 
 /**
+ * The pose as an action (the default): the rest is the A- or T-pose, the bones stand in the
+ * pose, also a one-frame clip "pose".
+ */
+#define SKB_POSE_AS_ACTION 0
+
+/**
+ * The pose as the rest (bind) pose, no clip.
+ */
+#define SKB_POSE_AS_REST 1
+
+/**
+ * The pose as the rest pose plus a one-frame clip "a_pose" / "t_pose" holding the A- or T-pose.
+ */
+#define SKB_POSE_AS_BOTH 2
+
+/**
  * FBX and USD length unit: metres (the default; one file unit is 1 m).
  */
 #define SKB_UNITS_METRES 0
@@ -119,15 +135,28 @@
 #define SKB_UP_Z 1
 
 /**
- * Number of bones of the production rig (MakeHuman's `game_engine` skeleton).
+ * Number of bones of the production rig (MakeHuman's `game_engine` skeleton); a rig built with
+ * twist bones (`skb_export_options_set_twist_bones`) has `SKB_NUM_RIG_BONES` +
+ * `SKB_NUM_TWIST_BONES` (`skb_rig_bone_count`).
  */
 #define SKB_NUM_RIG_BONES 53
+
+/**
+ * Number of twist bones (upper arms, forearms, thighs) `skb_export_options_set_twist_bones`
+ * adds after the 53.
+ */
+#define SKB_NUM_TWIST_BONES 6
 
 /**
  * Doubles per bone in `skb_rig_copy_rest_transforms`: translation x, y, z then rotation
  * quaternion x, y, z, w (glTF's order).
  */
 #define SKB_RIG_TRANSFORM_LEN 7
+
+/**
+ * Number of IK target bones `skb_export_options_set_ik_targets` adds after the others.
+ */
+#define SKB_NUM_IK_BONES 7
 
 /**
  * Length of a pose vector (x, y, z of each joint in canonical order).
@@ -497,7 +526,8 @@ typedef struct skb_detector skb_detector;
 
 /**
  * Export options of the rigged body (docs/formats.md, "body.glb", "body.fbx", "body.usda").
- * Create with `skb_export_options_new` (defaults: project names, A-pose, floor, metres, Y up),
+ * Create with `skb_export_options_new` (defaults: project names, A-pose, floor, no twist bones,
+ * the pose as an action, no IK targets, no shape keys, metres, Y up),
  * free with `skb_export_options_free`. Not shared between threads while being set.
  */
 typedef struct skb_export_options skb_export_options;
@@ -1083,6 +1113,39 @@ skb_status skb_export_options_set_rest_pose(struct skb_export_options *opts, uin
 skb_status skb_export_options_set_origin(struct skb_export_options *opts, uint32_t origin);
 
 /**
+ * Adds the twist bones (`on` true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones
+ * after the 53, sharing the limbs' skin so that a twist spreads along the limb; docs/formats.md,
+ * "Twist bones") or not (false, the default: MakeHuman's 53 bones). Every rigged writer and
+ * `skb_mesh_rig_new` follow it.
+ */
+skb_status skb_export_options_set_twist_bones(struct skb_export_options *opts, bool on);
+
+/**
+ * Sets how the pose is carried: `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or
+ * `SKB_POSE_AS_BOTH` (docs/formats.md, "glTF 2.0 binary export", the pose); anything else is
+ * `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_mesh_rig_new` follow
+ * it.
+ */
+skb_status skb_export_options_set_pose_as(struct skb_export_options *opts, uint32_t pose_as);
+
+/**
+ * Adds the IK target bones (`on` true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and
+ * feet under `ik_hand_root` / `ik_foot_root`, after the other bones; docs/formats.md, "IK
+ * targets") or not (false, the default). Every rigged writer and `skb_mesh_rig_new` follow it.
+ */
+skb_status skb_export_options_set_ik_targets(struct skb_export_options *opts, bool on);
+
+/**
+ * Adds the mesh's shape dimensions as shape keys (`on` true: one key `shape_01`, `shape_02`, …
+ * per PCA weight of the mesh, or the space's default count for the mean shape, each the
+ * displacement one standard deviation of its component makes, through the body's bone-length
+ * factors and its scaling to its height; glTF morph targets, FBX blend shapes, USD
+ * BlendShapes, all at 0; docs/formats.md, "Shape keys") or not (false, the default). Every
+ * rigged writer and `skb_mesh_rig_new` follow it (`skb_rig_shape_key_count`).
+ */
+skb_status skb_export_options_set_shape_keys(struct skb_export_options *opts, bool on);
+
+/**
  * Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
  * `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
  * is always in metres (glTF's specification) and `skb_mesh_rig_new` in the model frame.
@@ -1099,9 +1162,11 @@ skb_status skb_export_options_set_up_axis(struct skb_export_options *opts, uint3
 
 /**
  * Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
- * scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
- * pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
- * "pose". See docs/formats.md. Written atomically. Only reads `mesh` and `opts`.
+ * scene, the rest mesh skinned to MakeHuman's 53-bone rig (plus the twist bones and IK targets
+ * the options add), posed by the current pose (the rest pose if never posed) as bone rotations
+ * with the root's translation, plus a one-frame clip "pose" (or the pose as the rest, as the
+ * options say; the options' shape keys as morph targets). See docs/formats.md. Written
+ * atomically. Only reads `mesh` and `opts`.
  */
 skb_status skb_mesh_write_glb_with_options(const struct skb_mesh *mesh,
                                            const char *path,
@@ -1145,7 +1210,8 @@ skb_status skb_mesh_rig_new(const struct skb_mesh *mesh,
 void skb_rig_free(struct skb_rig *rig);
 
 /**
- * Number of bones (`SKB_NUM_RIG_BONES`) into `*out`.
+ * Number of bones (`SKB_NUM_RIG_BONES`, plus `SKB_NUM_TWIST_BONES` with twist bones and
+ * `SKB_NUM_IK_BONES` with IK targets) into `*out`.
  */
 skb_status skb_rig_bone_count(const struct skb_rig *rig, size_t *out);
 
@@ -1155,7 +1221,7 @@ skb_status skb_rig_bone_count(const struct skb_rig *rig, size_t *out);
 skb_status skb_rig_vertex_count(const struct skb_rig *rig, size_t *out);
 
 /**
- * Copies the name of bone `bone` (0 .. `SKB_NUM_RIG_BONES`−1; the GLB node's name in the chosen
+ * Copies the name of bone `bone` (0 .. `skb_rig_bone_count`−1; the GLB node's name in the chosen
  * convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least the name's length
  * + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
  */
@@ -1166,7 +1232,7 @@ skb_status skb_rig_copy_bone_name(const struct skb_rig *rig,
 
 /**
  * Copies each bone's parent index (−1 for the root, bone 0) into `dst` of `dst_len` integers
- * (at least `SKB_NUM_RIG_BONES`). Parents come before their children; the order is the GLB's
+ * (at least `skb_rig_bone_count`). Parents come before their children; the order is the GLB's
  * node and joint order.
  */
 skb_status skb_rig_copy_parents(const struct skb_rig *rig, int32_t *dst, size_t dst_len);
@@ -1178,7 +1244,7 @@ skb_status skb_rig_copy_parents(const struct skb_rig *rig, int32_t *dst, size_t 
  * frame; bone frames have Y along the bone, X the bend axis MakeHuman's roll gives). The rest
  * is the rig's (A- or T-pose, placed at the chosen origin): the GLB's bind pose. Composing
  * `parent · T(t) · R(q)` from the root gives each bone's rest frame and head. `dst` holds
- * `dst_len` doubles (at least 7 × `SKB_NUM_RIG_BONES`).
+ * `dst_len` doubles (at least 7 × `skb_rig_bone_count`).
  */
 skb_status skb_rig_copy_rest_transforms(const struct skb_rig *rig, double *dst, size_t dst_len);
 
@@ -1187,7 +1253,7 @@ skb_status skb_rig_copy_rest_transforms(const struct skb_rig *rig, double *dst, 
  * quaternion x, y, z, w; the root's relative to the model frame): the GLB nodes' `rotation`,
  * what a DCC shows as the pose bones' rotations. With the rest translations of
  * `skb_rig_copy_rest_transforms` (the root's plus `skb_rig_copy_root_translation`) they give the
- * posed skeleton. `dst` holds `dst_len` doubles (at least 4 × `SKB_NUM_RIG_BONES`).
+ * posed skeleton. `dst` holds `dst_len` doubles (at least 4 × `skb_rig_bone_count`).
  */
 skb_status skb_rig_copy_local_rotations(const struct skb_rig *rig, double *dst, size_t dst_len);
 
@@ -1201,7 +1267,7 @@ skb_status skb_rig_copy_root_translation(const struct skb_rig *rig, double *dst,
 /**
  * Copies the posed bone heads (x, y, z doubles per bone, metres, the export's frame) as the
  * library computes them (the rig's forward kinematics, what a glTF viewer shows) into `dst` of
- * `dst_len` doubles (at least 3 × `SKB_NUM_RIG_BONES`).
+ * `dst_len` doubles (at least 3 × `skb_rig_bone_count`).
  */
 skb_status skb_rig_copy_posed_heads(const struct skb_rig *rig, double *dst, size_t dst_len);
 
@@ -1221,6 +1287,24 @@ skb_status skb_rig_copy_offset(const struct skb_rig *rig, double *dst, size_t ds
 skb_status skb_rig_copy_rest_vertices(const struct skb_rig *rig, float *dst, size_t dst_len);
 
 /**
+ * Number of shape keys (0 unless the options asked for them, `skb_export_options_set_shape_keys`)
+ * into `*out`.
+ */
+skb_status skb_rig_shape_key_count(const struct skb_rig *rig, size_t *out);
+
+/**
+ * Copies shape key `key`'s displacement of each rest vertex (`skb_rig_copy_rest_vertices`'
+ * order and frame; x, y, z floats, metres; the key at value 1 adds them, the base is the fitted
+ * body) into `dst` of `dst_len` floats (at least 3 × vertex count). Key `k` is named
+ * `shape_NN` with NN = k + 1 in two digits (the GLB's `extras.targetNames`, the FBX and USD
+ * shapes' names). Errors: `key` ≥ `skb_rig_shape_key_count` (`SKB_ERR_OUT_OF_RANGE`).
+ */
+skb_status skb_rig_copy_shape_key(const struct skb_rig *rig,
+                                  size_t key,
+                                  float *dst,
+                                  size_t dst_len);
+
+/**
  * Copies the rig's posed vertices (the rig's own linear blend skinning of the rest vertices,
  * as a glTF viewer shows the GLB; x, y, z floats, metres) into `dst` of `dst_len` floats (at
  * least 3 × vertex count).
@@ -1228,7 +1312,7 @@ skb_status skb_rig_copy_rest_vertices(const struct skb_rig *rig, float *dst, siz
 skb_status skb_rig_copy_posed_vertices(const struct skb_rig *rig, float *dst, size_t dst_len);
 
 /**
- * Copies the skin weights to the 53 rig bones: for vertex v, slots `4v .. 4v+3` of `bones`
+ * Copies the skin weights to the rig's bones: for vertex v, slots `4v .. 4v+3` of `bones`
  * (indices into the rig's bone order) and `weights` (summing to 1; unused slots bone 0, weight
  * 0). Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count).
  */

@@ -204,14 +204,18 @@ std::vector<T> copy_out(F f, const H *handle, size_t n) {
 }
 }  // namespace detail
 
-/// Options of the production rig (skb_export_options): bone names, rest pose, origin; the FBX
-/// and USD files' unit and up axis (the GLB and the in-memory rig stay metres, Y up).
+/// Options of the production rig (skb_export_options): bone names, rest pose, origin, twist
+/// bones, how the pose is carried, IK targets; the FBX and USD files' unit and up axis (the GLB
+/// and the in-memory rig stay metres, Y up).
 struct RigOptions {
     uint32_t naming = SKB_NAMING_PROJECT;     // SKB_NAMING_*
     uint32_t rest_pose = SKB_REST_A_POSE;     // SKB_REST_*
     uint32_t origin = SKB_ORIGIN_FLOOR;       // SKB_ORIGIN_*
     uint32_t units = SKB_UNITS_METRES;        // SKB_UNITS_* (FBX, USD)
     uint32_t up_axis = SKB_UP_Y;              // SKB_UP_* (FBX, USD)
+    bool twist_bones = false;                 // + SKB_NUM_TWIST_BONES twist bones
+    uint32_t pose_as = SKB_POSE_AS_ACTION;    // SKB_POSE_AS_*
+    bool ik_targets = false;                  // + SKB_NUM_IK_BONES IK target bones
 };
 
 namespace detail {
@@ -224,6 +228,9 @@ inline Handle<skb_export_options, skb_export_options_free> export_options(const 
     check(skb_export_options_set_origin(h.get(), o.origin));
     check(skb_export_options_set_units(h.get(), o.units));
     check(skb_export_options_set_up_axis(h.get(), o.up_axis));
+    check(skb_export_options_set_twist_bones(h.get(), o.twist_bones));
+    check(skb_export_options_set_pose_as(h.get(), o.pose_as));
+    check(skb_export_options_set_ik_targets(h.get(), o.ik_targets));
     return h;
 }
 }  // namespace detail

@@ -14,12 +14,14 @@ use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Vector3};
 use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
+use sketchbody::body::rig::shape_keys::ShapeKey;
 use sketchbody::body::rig::RiggedMesh;
-use sketchbody::body::rig::{RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
+use sketchbody::body::rig::{PoseAs, RigOptions, RigScene, NUM_RIG_BONES};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::fbx::node::{file_bytes, s, Node, Prop};
 use sketchbody::export::fbx::{fbx_bytes, write_fbx};
 use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
+use sketchbody::pipeline::shape_keys::ShapeOrigin;
 
 #[path = "common/frames.rs"]
 mod frames;
@@ -206,6 +208,8 @@ fn an_independent_reader_finds_the_skinned_posed_body() {
 
 /// The file of `scene` in `frame` read back: settings, bones, geometry, skin, pose, texture.
 fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
+    let nb = scene.armature.len();
+    let parents = &scene.armature.parents;
     let png = b"\x89PNG\r\n\x1a\n-not-really".to_vec();
     let bytes = fbx_bytes(mesh, scene, Some(&png), frame).unwrap();
     let root = parse(&bytes);
@@ -243,13 +247,13 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     }
     // The bones: 53 LimbNode models named as the scene's, parented as the rig.
     let bones: Vec<&Rec> = objects.all("Model").filter(|m| m.text(2) == "LimbNode").collect();
-    assert_eq!(bones.len(), NUM_RIG_BONES);
+    assert_eq!(bones.len(), nb);
     let index: HashMap<String, usize> = scene.names.iter().enumerate().map(|(i, n)| (n.clone(), i)).collect();
     let bone_of: HashMap<i64, usize> = bones.iter().map(|m| (m.int(0), index[&name_of(m).0])).collect();
-    assert_eq!(bone_of.len(), NUM_RIG_BONES, "distinct bone names");
+    assert_eq!(bone_of.len(), nb, "distinct bone names");
     for (&id, &b) in &bone_of {
         let up = parent[&id];
-        match RIG_BONES[b].parent {
+        match parents[b] {
             Some(p) => assert_eq!(bone_of.get(&up), Some(&p), "parent of {}", scene.names[b]),
             None => assert_eq!(by_id[&up].text(2), "Null", "the root bone hangs from the armature"),
         }
@@ -276,7 +280,7 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     // The skin: one skin on the geometry, one cluster per bone, weights summing to 1.
     let skin_id = children[&geom.int(0)].iter().copied().find(|c| by_id[c].text(2) == "Skin").unwrap();
     let clusters = &children[&skin_id];
-    assert_eq!(clusters.len(), NUM_RIG_BONES);
+    assert_eq!(clusters.len(), nb);
     let mut sums = vec![0.0f64; n];
     let mut influences: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
     let mut bind: HashMap<usize, Matrix4<f64>> = HashMap::new();
@@ -300,8 +304,8 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     }
     assert!(sums.iter().all(|s| (s - 1.0).abs() < 1e-5), "weights sum to 1 per vertex");
     // The pose: compose the bones' local transforms (Euler XYZ degrees: Rz Ry Rx) down the tree.
-    let mut global = vec![Matrix4::identity(); NUM_RIG_BONES];
-    let order: Vec<usize> = (0..NUM_RIG_BONES).collect(); // parents come first in RIG_BONES
+    let mut global = vec![Matrix4::identity(); nb];
+    let order: Vec<usize> = (0..nb).collect(); // parents come first
     let model_of: HashMap<usize, &Rec> = bones.iter().map(|m| (bone_of[&m.int(0)], *m)).collect();
     for &b in &order {
         let m = model_of[&b];
@@ -311,7 +315,7 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
             * Rotation3::from_axis_angle(&Vector3::y_axis(), r[1].to_radians())
             * Rotation3::from_axis_angle(&Vector3::x_axis(), r[0].to_radians());
         let local = Translation3::new(t[0], t[1], t[2]).to_homogeneous() * rot.to_homogeneous();
-        global[b] = match RIG_BONES[b].parent {
+        global[b] = match parents[b] {
             Some(p) => global[p] * local,
             None => local,
         };
@@ -340,8 +344,8 @@ fn check_file(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     assert!(normal_gap < 1e-6, "{frame:?}: normals differ by {normal_gap}");
     // The bind pose lists the mesh, the armature and every bone.
     let pose = objects.all("Pose").next().unwrap();
-    assert_eq!(pose.kid("NbPoseNodes").int(0) as usize, NUM_RIG_BONES + 2);
-    assert_eq!(pose.all("PoseNode").count(), NUM_RIG_BONES + 2);
+    assert_eq!(pose.kid("NbPoseNodes").int(0) as usize, nb + 2);
+    assert_eq!(pose.all("PoseNode").count(), nb + 2);
     // The texture: material -> texture (DiffuseColor) -> video holding the PNG.
     let (tex, mat_id, prop) = property_links.first().unwrap().clone();
     assert_eq!(
@@ -382,6 +386,19 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// True (after printing SKIPPED) when assimp is not installed; panics instead when
+/// SKB_REQUIRE_SHARED_DATA is set.
+fn assimp_missing() -> bool {
+    if Command::new("assimp").arg("version").output().map(|o| o.status.success()).unwrap_or(false) {
+        return false;
+    }
+    if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
+        panic!("assimp is not installed (assimp-utils), but SKB_REQUIRE_SHARED_DATA is set");
+    }
+    eprintln!("SKIPPED assimp FBX check: assimp is not installed");
+    true
+}
+
 /// A second, independent reader: assimp (`assimp info`, Debian's assimp-utils) loads the FBX
 /// and finds one mesh with every vertex, the 53 bones, the material and the embedded texture;
 /// then, for each unit and up axis, `assimp export` to assimp's JSON (assimp applies no unit or
@@ -392,11 +409,7 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
 /// prints SKIPPED, or fails when SKB_REQUIRE_SHARED_DATA is set.
 #[test]
 fn assimp_reads_the_fbx() {
-    if Command::new("assimp").arg("version").output().map(|o| !o.status.success()).unwrap_or(true) {
-        if std::env::var_os("SKB_REQUIRE_SHARED_DATA").is_some() {
-            panic!("assimp is not installed (assimp-utils), but SKB_REQUIRE_SHARED_DATA is set");
-        }
-        eprintln!("SKIPPED assimp FBX check: assimp is not installed");
+    if assimp_missing() {
         return;
     }
     let (mesh, scene) = scene(Gender::Female, 6);
@@ -455,6 +468,99 @@ fn assimp_reads_the_fbx() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// assimp on the issue-49 options: twist bones, IK targets and three shape keys, the pose as an
+/// action (Z up, centimetres): assimp finds a bone per cluster (66, the IK targets' empty), every
+/// bone's node, the IK targets included, at the scene's posed head within 0.1 mm, and the three
+/// blend shapes as animation meshes (through its glTF export: each target's displacement of
+/// every vertex the key's within 0.1 mm).
+#[test]
+fn assimp_reads_twist_bones_ik_targets_and_shape_keys() {
+    if assimp_missing() {
+        return;
+    }
+    let model = BodyModel::embedded().unwrap();
+    let mesh = RiggedMesh::from_model(&model, Gender::Male, &[]).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(14);
+    let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+    let options = RigOptions { twist_bones: true, ik_targets: true, ..RigOptions::default() };
+    let keys = mean_keys(&model, Gender::Male, 3);
+    let scene = RigScene::build_with_shape_keys(model.rig(), &mesh, &pose, &options, &keys).unwrap();
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("assimp-rig-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("body.fbx");
+    let frame = FRAMES[3];
+    write_fbx(&path, &mesh, &scene, None, &frame).unwrap();
+    let out = Command::new("assimp").arg("info").arg(&path).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    println!("{text}");
+    assert!(out.status.success(), "assimp failed:\n{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    let json = dir.join("body.json");
+    let out = Command::new("assimp").arg("export").arg(&path).arg(&json).arg("-fassjson").output().unwrap();
+    assert!(out.status.success(), "assimp export failed: {}", String::from_utf8_lossy(&out.stderr));
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(doc["meshes"][0]["bones"].as_array().unwrap().len(), scene.names.len());
+    // The blend shapes as assimp's glTF exporter writes the animation meshes it read: each
+    // target's displacement of each vertex (matched to the scene's by its rest position).
+    let gltf = dir.join("body.gltf");
+    let out = Command::new("assimp").arg("export").arg(&path).arg(&gltf).arg("-fgltf2").output().unwrap();
+    assert!(out.status.success(), "assimp glTF export failed: {}", String::from_utf8_lossy(&out.stderr));
+    let g: serde_json::Value = serde_json::from_slice(&std::fs::read(&gltf).unwrap()).unwrap();
+    let bin = std::fs::read(dir.join(g["buffers"][0]["uri"].as_str().unwrap())).unwrap();
+    let vec3s = |accessor: &serde_json::Value| -> Vec<Vector3<f64>> {
+        let a = &g["accessors"][accessor.as_u64().unwrap() as usize];
+        let view = &g["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+        let start = view["byteOffset"].as_u64().unwrap_or(0) as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let f = |i: usize| f32::from_le_bytes(bin[start + 4 * i..start + 4 * i + 4].try_into().unwrap()) as f64;
+        (0..a["count"].as_u64().unwrap() as usize).map(|i| Vector3::new(f(3 * i), f(3 * i + 1), f(3 * i + 2))).collect()
+    };
+    let primitive = &g["meshes"][0]["primitives"][0];
+    let targets = primitive["targets"].as_array().expect("assimp read the blend shapes");
+    assert_eq!(targets.len(), keys.len());
+    let unit = metres_to_unit(&frame);
+    let rest: Vec<Vector3<f64>> = scene.rest_vertices.iter().map(|&p| in_frame(&frame, p)).collect();
+    let cell = |p: &Vector3<f64>| [p.x, p.y, p.z].map(|c| (c / (1e-3 * unit)).round() as i64);
+    let mut by_cell: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (i, p) in rest.iter().enumerate() {
+        by_cell.entry(cell(p)).or_default().push(i);
+    }
+    let points = vec3s(&primitive["attributes"]["POSITION"]);
+    let matched: Vec<Vec<usize>> = points
+        .iter()
+        .map(|p| {
+            let near = by_cell.get(&cell(p)).cloned().unwrap_or_default();
+            let near: Vec<usize> = near.into_iter().filter(|&i| (rest[i] - p).norm() < 1e-4 * unit).collect();
+            if near.is_empty() {
+                (0..rest.len()).filter(|&i| (rest[i] - p).norm() < 1e-4 * unit).collect()
+            } else {
+                near
+            }
+        })
+        .collect();
+    assert!(matched.iter().all(|m| !m.is_empty()), "every assimp vertex is a rest vertex");
+    for (target, key) in targets.iter().zip(&scene.shape_keys) {
+        let d = vec3s(&target["POSITION"]);
+        let gap = d
+            .iter()
+            .zip(&matched)
+            .map(|(d, m)| m.iter().map(|&i| (d - in_frame(&frame, key.deltas[i])).norm()).fold(f64::INFINITY, f64::min))
+            .fold(0.0, f64::max)
+            / unit;
+        println!("assimp: {} within {gap:.2e} m", key.name);
+        assert!(gap < 1e-4, "assimp's {} differs by {gap} m", key.name);
+    }
+    let mut found = HashMap::new();
+    node_heads(&doc["rootnode"], &Matrix4::identity(), &mut found);
+    let heads = posed_heads(&scene);
+    let mut worst = 0.0f64;
+    for (b, name) in scene.names.iter().enumerate() {
+        let got = found.get(name).unwrap_or_else(|| panic!("assimp has no node {name}"));
+        worst = worst.max((got - in_frame(&frame, heads[b].map(|c| c as f32))).norm() / unit);
+    }
+    println!("assimp: {} bone nodes, posed heads within {worst:.2e} m", scene.names.len());
+    assert!(worst < 1e-4, "assimp's posed bone heads differ by {worst} m");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Each node's global translation (`transformation`: 16 row-major numbers) by name, composed
 /// from `parent`.
 fn node_heads(node: &serde_json::Value, parent: &Matrix4<f64>, out: &mut HashMap<String, Vector3<f64>>) {
@@ -473,10 +579,10 @@ fn node_heads(node: &serde_json::Value, parent: &Matrix4<f64>, out: &mut HashMap
 /// transforms.
 fn posed_heads(scene: &RigScene) -> Vec<[f64; 3]> {
     let locals = sketchbody::export::rigged::posed_locals(scene);
-    let mut global: Vec<Matrix4<f64>> = Vec::with_capacity(NUM_RIG_BONES);
+    let mut global: Vec<Matrix4<f64>> = Vec::with_capacity(locals.len());
     for (b, (t, q)) in locals.iter().enumerate() {
         let local = Translation3::from(*t).to_homogeneous() * q.to_homogeneous();
-        let g = RIG_BONES[b].parent.map_or(local, |p| global[p] * local);
+        let g = scene.armature.parents[b].map_or(local, |p| global[p] * local);
         global.push(g);
     }
     global.iter().map(|g| [g[(0, 3)], g[(1, 3)], g[(2, 3)]]).collect()
@@ -505,4 +611,118 @@ fn records_and_footer_lay_out_as_documented() {
     assert_eq!(file.len() % 16, 0);
     assert_eq!(&file[file.len() - 16..file.len() - 12], &[0xf8, 0x5a, 0x8c, 0x6a]);
     assert_eq!(u(file.len() - 140), 7400);
+}
+
+/// Shape keys of the mean body: the first `n` principal components of its space, one standard
+/// deviation each (model frame), as the library makes them.
+fn mean_keys(model: &BodyModel, gender: Gender, n: usize) -> Vec<ShapeKey> {
+    let origin = ShapeOrigin { space: gender.into(), weights: Vec::new(), proportions: None, scale: 1.0 };
+    origin.keys(model).unwrap().into_iter().take(n).collect()
+}
+
+/// The rig options of issue 49 read back by the independent reader: twist bones, IK targets and
+/// shape keys with the pose as the rest, in every unit and up axis (the bones, skin, bind pose
+/// and body as [`check_file`] reads them; no animation stack); each blend shape's channel and
+/// shape geometry holding the key's displacements in the file's frame; and with the pose as
+/// both, the animation stack `a_pose` whose single keys, composed down the tree, stand every
+/// bone at its A-pose bind transform (the pose as an action's).
+#[test]
+fn twist_bones_ik_targets_shape_keys_and_the_pose_as_rest_read_back() {
+    let model = BodyModel::embedded().unwrap();
+    let mesh = RiggedMesh::from_model(&model, Gender::Female, &[]).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+    let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+    let keys = mean_keys(&model, Gender::Female, 3);
+    let options = |pose_as| RigOptions { twist_bones: true, ik_targets: true, pose_as, ..RigOptions::default() };
+    let rest = RigScene::build_with_shape_keys(model.rig(), &mesh, &pose, &options(PoseAs::Rest), &keys).unwrap();
+    assert_eq!(rest.armature.len(), NUM_RIG_BONES + 6 + 7);
+    for frame in FRAMES {
+        check_file(&mesh, &rest, &frame);
+        let root = parse(&fbx_bytes(&mesh, &rest, None, &frame).unwrap());
+        let objects = root.kid("Objects");
+        assert!(objects.all("AnimationStack").next().is_none(), "the pose as rest has no animation");
+        let shapes: Vec<&Rec> = objects.all("Geometry").filter(|g| g.text(2) == "Shape").collect();
+        assert_eq!(shapes.len(), keys.len());
+        let channels: Vec<&Rec> = objects.all("Deformer").filter(|d| d.text(2) == "BlendShapeChannel").collect();
+        assert_eq!(channels.len(), keys.len());
+        assert!(channels.iter().all(|c| matches!(c.kid("DeformPercent").props[0], Value::Float(x) if x == 0.0)));
+        let unit = metres_to_unit(&frame);
+        for (shape, key) in shapes.iter().zip(&rest.shape_keys) {
+            assert_eq!(name_of(shape).0, key.name);
+            let idx = shape.kid("Indexes").ints();
+            let v = shape.kid("Vertices").floats();
+            assert_eq!((idx.len(), v.len()), (mesh.vertices.len(), 3 * mesh.vertices.len()));
+            let gap = idx
+                .iter()
+                .map(|&i| {
+                    let i = i as usize;
+                    let got = Vector3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+                    let d = key.deltas[i];
+                    // A displacement turns and scales as a point from the origin does.
+                    (got - in_frame(&frame, d)).norm() / unit
+                })
+                .fold(0.0, f64::max);
+            assert!(gap < 1e-6, "{frame:?}: {} differs by {gap} m", key.name);
+        }
+    }
+    // The pose as both: the clip back to the A-pose.
+    let both = RigScene::build(model.rig(), &mesh, &pose, &options(PoseAs::Both)).unwrap();
+    let frame = FRAMES[3];
+    let root = parse(&fbx_bytes(&mesh, &both, None, &frame).unwrap());
+    let objects = root.kid("Objects");
+    let stack = objects.all("AnimationStack").next().expect("an animation stack");
+    assert_eq!(name_of(stack).0, "a_pose");
+    let by_id: HashMap<i64, &Rec> = objects.kids.iter().map(|o| (o.int(0), o)).collect();
+    let bones: HashMap<i64, usize> = objects
+        .all("Model")
+        .filter(|m| m.text(2) == "LimbNode")
+        .map(|m| (m.int(0), both.names.iter().position(|n| *n == name_of(m).0).unwrap()))
+        .collect();
+    // Each bone's T and R curve nodes, each axis's single key.
+    let nb = both.armature.len();
+    let mut keyed = vec![[[f64::NAN; 3]; 2]; nb];
+    let mut curve_of: HashMap<i64, (usize, usize)> = HashMap::new();
+    for c in root.kid("Connections").all("C").filter(|c| c.text(0) == "OP") {
+        let (child, parent, prop) = (c.int(1), c.int(2), c.text(3));
+        if let (Some(&b), "Lcl Translation" | "Lcl Rotation") = (bones.get(&parent), prop.as_str()) {
+            curve_of.insert(child, (b, usize::from(prop == "Lcl Rotation")));
+        }
+    }
+    assert_eq!(curve_of.len(), 2 * nb, "a T and an R curve node per bone");
+    for c in root.kid("Connections").all("C").filter(|c| c.text(0) == "OP") {
+        if let Some(&(b, k)) = curve_of.get(&c.int(2)) {
+            let axis = ["d|X", "d|Y", "d|Z"].iter().position(|a| *a == c.text(3)).unwrap();
+            let curve = by_id[&c.int(1)];
+            assert_eq!(curve.kid("KeyTime").ints(), [0]);
+            keyed[b][k][axis] = curve.kid("KeyValueFloat").floats()[0];
+        }
+    }
+    let mut global = vec![Matrix4::identity(); nb];
+    for b in 0..nb {
+        let [t, r] = keyed[b];
+        let rot = Rotation3::from_axis_angle(&Vector3::z_axis(), r[2].to_radians())
+            * Rotation3::from_axis_angle(&Vector3::y_axis(), r[1].to_radians())
+            * Rotation3::from_axis_angle(&Vector3::x_axis(), r[0].to_radians());
+        let local = Translation3::new(t[0], t[1], t[2]).to_homogeneous() * rot.to_homogeneous();
+        global[b] = both.armature.parents[b].map_or(local, |p| global[p] * local);
+    }
+    // The clip stands every bone where the A-pose rest (the pose as an action's bind pose) has
+    // it. (Skinning the posed rest by it does not give the A-pose mesh back exactly: linear
+    // blend skinning's blend of inverses is not the inverse of its blend.)
+    let action = RigScene::build(model.rig(), &mesh, &pose, &options(PoseAs::Action)).unwrap();
+    let unit = metres_to_unit(&frame);
+    let (mut worst_t, mut worst_r) = (0.0f64, 0.0f64);
+    for (b, g) in global.iter().enumerate() {
+        let want = frame_bind(&action, b, &frame);
+        let dt = (g.fixed_view::<3, 1>(0, 3) - want.fixed_view::<3, 1>(0, 3)).norm() / unit;
+        let dr = (g.fixed_view::<3, 3>(0, 0) - want.fixed_view::<3, 3>(0, 0)).abs().max();
+        worst_t = worst_t.max(dt);
+        worst_r = worst_r.max(dr);
+    }
+    assert!(worst_t < 1e-4 && worst_r < 1e-5, "the a_pose clip's bones: {worst_t} m, rotation {worst_r}");
+}
+
+/// Bone `b`'s bind matrix in `frame`.
+fn frame_bind(scene: &RigScene, b: usize, frame: &ExportFrame) -> Matrix4<f64> {
+    frame.global(&sketchbody::export::rigged::bind_transform(scene, b)).to_homogeneous()
 }

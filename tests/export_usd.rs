@@ -20,10 +20,12 @@ use nalgebra::{Matrix4, Point3, Quaternion, Translation3, UnitQuaternion, Vector
 use rand::SeedableRng;
 use sketchbody::body::ik::{solve, IkOptions};
 use sketchbody::body::procedural::random_pose;
+use sketchbody::body::rig::shape_keys::ShapeKey;
 use sketchbody::body::rig::RiggedMesh;
-use sketchbody::body::rig::{Naming, RigOptions, RigScene, NUM_RIG_BONES, RIG_BONES};
+use sketchbody::body::rig::{Naming, PoseAs, RigOptions, RigScene};
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::export::frame::{ExportFrame, Units, UpAxis};
+use sketchbody::pipeline::shape_keys::ShapeOrigin;
 
 #[path = "common/frames.rs"]
 mod frames;
@@ -99,10 +101,12 @@ fn check_layer(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     assert_eq!(strings(value(&text, "upAxis")), [up]);
     assert_eq!(numbers(value(&text, "metersPerUnit")), [metres]);
     // The skeleton: 53 joints, paths that nest as the rig, the convention's names kept.
+    let nb = scene.armature.len();
+    let parents = &scene.armature.parents;
     let joints = strings(value(&text, "uniform token[] joints"));
-    assert_eq!(joints.len(), NUM_RIG_BONES);
-    for (b, bone) in RIG_BONES.iter().enumerate() {
-        if let Some(p) = bone.parent {
+    assert_eq!(joints.len(), nb);
+    for (b, parent) in parents.iter().enumerate() {
+        if let Some(p) = *parent {
             assert_eq!(joints[b].rsplit_once('/').unwrap().0, joints[p], "path of joint {b}");
         }
         assert!(joints[b].chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '/'), "{}", joints[b]);
@@ -111,9 +115,9 @@ fn check_layer(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     assert!(scene.names[0].contains(':'), "the Mixamo names need escaping in paths");
     let bind = matrices(value(&text, "uniform matrix4d[] bindTransforms"));
     let rest = matrices(value(&text, "uniform matrix4d[] restTransforms"));
-    assert_eq!((bind.len(), rest.len()), (NUM_RIG_BONES, NUM_RIG_BONES));
-    for (b, bone) in RIG_BONES.iter().enumerate() {
-        let composed = bone.parent.map_or(rest[b], |p| bind[p] * rest[b]);
+    assert_eq!((bind.len(), rest.len()), (nb, nb));
+    for (b, parent) in parents.iter().enumerate() {
+        let composed = parent.map_or(rest[b], |p| bind[p] * rest[b]);
         assert!((composed - bind[b]).abs().max() < 1e-9, "rest transforms compose to bind transforms at {b}");
     }
     // The mesh.
@@ -132,16 +136,16 @@ fn check_layer(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
     let jw = numbers(value(&text, "float[] primvars:skel:jointWeights"));
     assert_eq!((ji.len(), jw.len()), (4 * n, 4 * n));
     assert!(jw.chunks(4).all(|w| (w.iter().sum::<f64>() - 1.0).abs() < 1e-5), "weights sum to 1 per vertex");
-    assert!(ji.iter().all(|&j| j >= 0.0 && (j as usize) < NUM_RIG_BONES));
+    assert!(ji.iter().all(|&j| j >= 0.0 && (j as usize) < nb));
     assert!(text.contains("asset inputs:file = @body_texture.png@"));
     // The pose: the animation's local transforms composed down the tree, times inverse bind.
     let t = numbers(value(&text, "float3[] translations"));
     let r = numbers(value(&text, "quatf[] rotations"));
-    let mut global = vec![Matrix4::identity(); NUM_RIG_BONES];
-    for (b, bone) in RIG_BONES.iter().enumerate() {
+    let mut global = vec![Matrix4::identity(); nb];
+    for (b, parent) in parents.iter().enumerate() {
         let q = UnitQuaternion::from_quaternion(Quaternion::new(r[4 * b], r[4 * b + 1], r[4 * b + 2], r[4 * b + 3]));
         let local = Translation3::new(t[3 * b], t[3 * b + 1], t[3 * b + 2]).to_homogeneous() * q.to_homogeneous();
-        global[b] = bone.parent.map_or(local, |p| global[p] * local);
+        global[b] = parent.map_or(local, |p| global[p] * local);
     }
     let mut worst = 0.0f64;
     let mut rest_worst = 0.0f64;
@@ -187,6 +191,11 @@ fn usd_core_validates_and_skins_the_layer() {
     for frame in [FRAMES[0], FRAMES[3]] {
         check_with_usd_core(&python, &mesh, &scene, &frame);
     }
+    // Twist bones, IK targets and shape keys; the pose as an action and as the rest.
+    for pose_as in [PoseAs::Action, PoseAs::Rest] {
+        let (mesh, scene) = rich_scene(pose_as);
+        check_with_usd_core(&python, &mesh, &scene, &FRAMES[3]);
+    }
 }
 
 /// usd-core on the layer of `scene` in `frame`: validators, UsdSkel's skinning, and UsdGeom's
@@ -200,7 +209,9 @@ fn check_with_usd_core(python: &std::path::Path, mesh: &RiggedMesh, scene: &RigS
     let usda = dir.join("body.usda");
     write_usda(&usda, mesh, scene, true, frame).unwrap();
     let posed: Vec<[f64; 3]> = scene.posed_vertices.iter().map(|&p| in_frame(frame, p).into()).collect();
-    let expected = serde_json::json!({"posed": posed});
+    let keys: Vec<Vec<[f64; 3]>> =
+        scene.shape_keys.iter().map(|k| k.deltas.iter().map(|&d| in_frame(frame, d).into()).collect()).collect();
+    let expected = serde_json::json!({"posed": posed, "keys": keys});
     std::fs::write(dir.join("expected.json"), expected.to_string()).unwrap();
     let script = common::repo_root().join("tests/usd/check_usd.py");
     let out = Command::new(python).arg(&script).arg(&usda).arg(dir.join("expected.json")).output().unwrap();
@@ -211,8 +222,11 @@ fn check_with_usd_core(python: &std::path::Path, mesh: &RiggedMesh, scene: &RigS
     assert!(r["validators"].as_u64().unwrap() >= 20, "{stdout}");
     assert_eq!(r["errors"], serde_json::json!([]), "{stdout}");
     assert_eq!((r["bindings"].as_u64(), r["targets"].as_u64()), (Some(1), Some(1)), "{stdout}");
-    assert_eq!(r["joints"].as_array().unwrap().len(), NUM_RIG_BONES);
-    assert_eq!((r["has_animation"].as_bool(), r["skinned"].as_bool()), (Some(true), Some(true)), "{stdout}");
+    assert_eq!(r["joints"].as_array().unwrap().len(), scene.armature.len());
+    let animated = scene.pose_as == PoseAs::Action;
+    assert_eq!((r["has_animation"].as_bool(), r["skinned"].as_bool()), (Some(animated), Some(true)), "{stdout}");
+    assert_eq!(r["blend_shapes"].as_u64(), Some(scene.shape_keys.len() as u64), "{stdout}");
+    assert!(r["blend_gap"].as_f64().unwrap() < 1e-5, "{stdout}");
     assert_eq!(r["points"].as_u64(), Some(mesh.vertices.len() as u64));
     // metersPerUnit converts the gap to metres: within 0.1 mm in either unit.
     let (up, metres) = match frame.units {
@@ -251,4 +265,78 @@ fn an_unwritable_path_or_a_mismatched_scene_writes_nothing() {
     ));
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Shape keys of the mean body: the first `n` principal components of its space, one standard
+/// deviation each (model frame), as the library makes them.
+fn mean_keys(model: &BodyModel, gender: Gender, n: usize) -> Vec<ShapeKey> {
+    let origin = ShapeOrigin { space: gender.into(), weights: Vec::new(), proportions: None, scale: 1.0 };
+    origin.keys(model).unwrap().into_iter().take(n).collect()
+}
+
+/// A scene with twist bones, IK targets and three shape keys (Mixamo names: paths escaped), the
+/// pose as `pose_as`.
+fn rich_scene(pose_as: PoseAs) -> (RiggedMesh, RigScene) {
+    let model = BodyModel::embedded().unwrap();
+    let mesh = RiggedMesh::from_model(&model, Gender::Male, &[]).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
+    let pose = solve(&mesh.joints, &random_pose(&mesh.joints, &mut rng, 0.0), &IkOptions::default()).unwrap();
+    let options =
+        RigOptions { naming: Naming::Mixamo, twist_bones: true, ik_targets: true, pose_as, ..RigOptions::default() };
+    let keys = mean_keys(&model, Gender::Male, 3);
+    let scene = RigScene::build_with_shape_keys(model.rig(), &mesh, &pose, &options, &keys).unwrap();
+    (mesh, scene)
+}
+
+/// Twist bones, IK targets and shape keys read back by the independent reader: the skeleton,
+/// skin and pose as [`check_layer`] reads them in every unit and up axis, the blend shapes
+/// named and targeted on the mesh, listed at weight 0 by the animation, each `BlendShape`'s
+/// offsets the key's displacements in the layer's frame; with the pose as the rest no animation
+/// and the points the posed body; with both, an `a_pose` animation not bound to the skeleton.
+#[test]
+fn twist_bones_ik_targets_and_shape_keys_read_back() {
+    let (mesh, scene) = rich_scene(PoseAs::Action);
+    for frame in FRAMES {
+        check_layer(&mesh, &scene, &frame);
+        let text = usda_string(&mesh, &scene, false, &frame).unwrap();
+        let names: Vec<String> = scene.shape_keys.iter().map(|k| k.name.clone()).collect();
+        assert_eq!(strings(value(&text, "uniform token[] skel:blendShapes")), names);
+        assert_eq!(strings(value(&text, "uniform token[] blendShapes")), names);
+        assert_eq!(numbers(value(&text, "float[] blendShapeWeights")), [0.0, 0.0, 0.0]);
+        let targets = value(&text, "rel skel:blendShapeTargets");
+        let offsets: Vec<Vec<f64>> =
+            text.split(" offsets = ").skip(1).map(|rest| numbers(value(&format!(" x = {rest}"), "x"))).collect();
+        assert_eq!(offsets.len(), 3);
+        let metres = 1.0 / frames::metres_to_unit(&frame);
+        for (k, key) in scene.shape_keys.iter().enumerate() {
+            assert!(targets.contains(&format!("</body/mesh/{}>", key.name)), "{targets}");
+            assert!(text.contains(&format!("def BlendShape \"{}\"", key.name)));
+            assert_eq!(offsets[k].len(), 3 * mesh.vertices.len());
+            let gap = key
+                .deltas
+                .iter()
+                .enumerate()
+                .map(|(i, &d)| {
+                    (Vector3::new(offsets[k][3 * i], offsets[k][3 * i + 1], offsets[k][3 * i + 2])
+                        - in_frame(&frame, d))
+                    .norm()
+                })
+                .fold(0.0, f64::max);
+            assert!(gap * metres < 1e-6, "{frame:?}: {} differs by {gap}", key.name);
+        }
+    }
+    let (mesh, rest) = rich_scene(PoseAs::Rest);
+    let text = usda_string(&mesh, &rest, false, &FRAMES[0]).unwrap();
+    assert!(!text.contains("SkelAnimation") && !text.contains("skel:animationSource"));
+    let points = numbers(value(&text, "point3f[] points"));
+    let gap = rest
+        .posed_vertices
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (0..3).map(|c| (points[3 * i + c] - p[c] as f64).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    assert!(gap < 1e-6, "the rest points are the posed body: {gap}");
+    let (mesh, both) = rich_scene(PoseAs::Both);
+    let text = usda_string(&mesh, &both, false, &FRAMES[0]).unwrap();
+    assert!(text.contains("def SkelAnimation \"a_pose\"") && !text.contains("skel:animationSource"));
 }

@@ -39,7 +39,7 @@ fn run(options: &PipelineOptions) -> (sketchbody::pipeline::PipelineResult, Vec<
         seen.push(Seen {
             stage: b.stage,
             gender: b.gender,
-            weights: b.weights.to_vec(),
+            weights: b.shape.weights.clone(),
             rest: b.rest.vertices.clone(),
             posed: b.posed_vertices.to_vec(),
         })

@@ -4,8 +4,9 @@
 use std::sync::Arc;
 
 use sketchbody_core::body::ik::Pose;
-use sketchbody_core::body::{BodyModel, Gender, RestShape, MAX_INFLUENCES};
+use sketchbody_core::body::{BodyModel, Gender, RestShape, ShapeChoice, MAX_INFLUENCES};
 use sketchbody_core::error::Error;
+use sketchbody_core::pipeline::shape_keys::ShapeOrigin;
 use sketchbody_core::skeleton::{NUM_BONES, NUM_JOINTS};
 
 use super::error::fail;
@@ -49,9 +50,9 @@ pub struct skb_mesh {
     pub(crate) model: Arc<BodyModel>,
     pub(crate) gender: Gender,
     pub(crate) rest: RestShape,
-    /// The PCA shape weights the rest shape was made from (metres; may be shorter than the
-    /// component count).
-    pub(crate) weights: Vec<f64>,
+    /// How the rest shape was made: its space, the PCA shape weights (metres; may be shorter
+    /// than the component count), bone-length factors and scale (for its shape keys).
+    pub(crate) shape: ShapeOrigin,
     /// The current pose and posed vertices (`None`: rest pose), set by `skb_mesh_pose`.
     pub(crate) posed: Option<Box<Posed>>,
 }
@@ -151,7 +152,8 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
                 try_status!(try_slice_of(weights, n, "weights")).iter().map(|&x| x as f64).collect()
             };
             let rest = try_core!(space.synthesize(&w));
-            give(out, skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, weights: w, posed: None })
+            let shape = ShapeOrigin { space: ShapeChoice::Gendered(g), weights: w, proportions: None, scale: 1.0 };
+            give(out, skb_mesh { model: Arc::clone(&ctx.model), gender: g, rest, shape, posed: None })
         }
     }
 }
@@ -368,7 +370,7 @@ pub unsafe extern "C" fn skb_mesh_shape_weight_count(mesh: *const skb_mesh, out:
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
-            try_status!(write_out(out, m.weights.len(), "out"));
+            try_status!(write_out(out, m.shape.weights.len(), "out"));
             skb_status::SKB_OK
         }
     }
@@ -388,8 +390,9 @@ pub unsafe extern "C" fn skb_mesh_copy_shape_weights(
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
-            let out = try_status!(out_slice(dst, dst_len, m.weights.len(), "dst"));
-            out[..m.weights.len()].copy_from_slice(&m.weights);
+            let w = &m.shape.weights;
+            let out = try_status!(out_slice(dst, dst_len, w.len(), "dst"));
+            out[..w.len()].copy_from_slice(w);
             skb_status::SKB_OK
         }
     }

@@ -1,13 +1,13 @@
-//! `skb_export_options`: the production rig's export options (bone names, rest pose, origin;
-//! the FBX and USD files' unit and up axis) for `skb_mesh_write_glb_with_options`,
-//! `skb_export_fbx` and `skb_export_usd`. Opaque; set through setters; each writer writes
-//! atomically.
+//! `skb_export_options`: the production rig's export options (bone names, rest pose, origin,
+//! twist bones, how the pose is carried, IK targets; the FBX and USD files' unit and up axis) for
+//! `skb_mesh_write_glb_with_options`, `skb_export_fbx` and `skb_export_usd`. Opaque; set
+//! through setters; each writer writes atomically.
 
 use std::ffi::c_char;
 
 use sketchbody_core::body::ik::Pose;
 use sketchbody_core::body::rig::RiggedMesh;
-use sketchbody_core::body::rig::{Naming, Placement, RestPose, RigOptions, RigScene};
+use sketchbody_core::body::rig::{Naming, Placement, PoseAs, RestPose, RigOptions, RigScene};
 use sketchbody_core::error::Error;
 use sketchbody_core::export::fbx::write_fbx;
 use sketchbody_core::export::frame::{ExportFrame, Units, UpAxis};
@@ -33,6 +33,13 @@ pub const SKB_REST_T_POSE: u32 = 1;
 pub const SKB_ORIGIN_FLOOR: u32 = 0;
 /// Origin at the rest pelvis joint.
 pub const SKB_ORIGIN_PELVIS: u32 = 1;
+/// The pose as an action (the default): the rest is the A- or T-pose, the bones stand in the
+/// pose, also a one-frame clip "pose".
+pub const SKB_POSE_AS_ACTION: u32 = 0;
+/// The pose as the rest (bind) pose, no clip.
+pub const SKB_POSE_AS_REST: u32 = 1;
+/// The pose as the rest pose plus a one-frame clip "a_pose" / "t_pose" holding the A- or T-pose.
+pub const SKB_POSE_AS_BOTH: u32 = 2;
 /// FBX and USD length unit: metres (the default; one file unit is 1 m).
 pub const SKB_UNITS_METRES: u32 = 0;
 /// FBX and USD length unit: centimetres (one file unit is 1 cm; coordinates 100× the metres).
@@ -43,10 +50,13 @@ pub const SKB_UP_Y: u32 = 0;
 pub const SKB_UP_Z: u32 = 1;
 
 /// Export options of the rigged body (docs/formats.md, "body.glb", "body.fbx", "body.usda").
-/// Create with `skb_export_options_new` (defaults: project names, A-pose, floor, metres, Y up),
+/// Create with `skb_export_options_new` (defaults: project names, A-pose, floor, no twist bones,
+/// the pose as an action, no IK targets, no shape keys, metres, Y up),
 /// free with `skb_export_options_free`. Not shared between threads while being set.
 pub struct skb_export_options {
     pub(crate) rig: RigOptions,
+    /// Write the mesh's shape dimensions as shape keys ([`ShapeOrigin::keys`]).
+    pub(crate) shape_keys: bool,
     /// Unit and up axis of the FBX and USD writers (the GLB is always metres, Y up).
     pub(crate) frame: ExportFrame,
 }
@@ -59,7 +69,7 @@ pub unsafe extern "C" fn skb_export_options_new(out: *mut *mut skb_export_option
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
-            give(out, skb_export_options { rig: RigOptions::default(), frame: ExportFrame::default() })
+            give(out, skb_export_options { rig: RigOptions::default(), shape_keys: false, frame: ExportFrame::default() })
         }
     }
 }
@@ -155,6 +165,84 @@ pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_opt
     }
 }
 
+/// Adds the twist bones (`on` true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones
+/// after the 53, sharing the limbs' skin so that a twist spreads along the limb; docs/formats.md,
+/// "Twist bones") or not (false, the default: MakeHuman's 53 bones). Every rigged writer and
+/// `skb_mesh_rig_new` follow it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_twist_bones(opts: *mut skb_export_options, on: bool) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_twist_bones` (lib.rs § Safety): `opts` is NULL or
+    // valid during the call; the ptr.rs helpers check NULL before the borrow.
+    unsafe {
+        ffi_boundary! {
+            set(opts, |o| {
+                o.twist_bones = on;
+                Ok(())
+            })
+        }
+    }
+}
+
+/// Sets how the pose is carried: `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or
+/// `SKB_POSE_AS_BOTH` (docs/formats.md, "glTF 2.0 binary export", the pose); anything else is
+/// `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_mesh_rig_new` follow
+/// it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_pose_as(opts: *mut skb_export_options, pose_as: u32) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_pose_as` (lib.rs § Safety): `opts` is NULL or valid
+    // during the call; the ptr.rs helpers check NULL before the borrow.
+    unsafe {
+        ffi_boundary! {
+            set(opts, |o| {
+                o.pose_as = match pose_as {
+                    SKB_POSE_AS_ACTION => PoseAs::Action,
+                    SKB_POSE_AS_REST => PoseAs::Rest,
+                    SKB_POSE_AS_BOTH => PoseAs::Both,
+                    _ => return Err(Error::OutOfRange { name: "pose as", detail: format!("{pose_as} (expected 0 action, 1 rest, 2 both)") }),
+                };
+                Ok(())
+            })
+        }
+    }
+}
+
+/// Adds the IK target bones (`on` true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and
+/// feet under `ik_hand_root` / `ik_foot_root`, after the other bones; docs/formats.md, "IK
+/// targets") or not (false, the default). Every rigged writer and `skb_mesh_rig_new` follow it.
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_ik_targets(opts: *mut skb_export_options, on: bool) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_ik_targets` (lib.rs § Safety): `opts` is NULL or
+    // valid during the call; the ptr.rs helpers check NULL before the borrow.
+    unsafe {
+        ffi_boundary! {
+            set(opts, |o| {
+                o.ik_targets = on;
+                Ok(())
+            })
+        }
+    }
+}
+
+/// Adds the mesh's shape dimensions as shape keys (`on` true: one key `shape_01`, `shape_02`, …
+/// per PCA weight of the mesh, or the space's default count for the mean shape, each the
+/// displacement one standard deviation of its component makes, through the body's bone-length
+/// factors and its scaling to its height; glTF morph targets, FBX blend shapes, USD
+/// BlendShapes, all at 0; docs/formats.md, "Shape keys") or not (false, the default). Every
+/// rigged writer and `skb_mesh_rig_new` follow it (`skb_rig_shape_key_count`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_export_options_set_shape_keys(opts: *mut skb_export_options, on: bool) -> skb_status {
+    // SAFETY: the header contract of `skb_export_options_set_shape_keys` (lib.rs § Safety): `opts` is NULL or
+    // valid during the call; the ptr.rs helpers check NULL before the borrow.
+    unsafe {
+        ffi_boundary! {
+            set_all(opts, |o| {
+                o.shape_keys = on;
+                Ok(())
+            })
+        }
+    }
+}
+
 /// Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
 /// `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
 /// is always in metres (glTF's specification) and `skb_mesh_rig_new` in the model frame.
@@ -198,6 +286,25 @@ pub unsafe extern "C" fn skb_export_options_set_up_axis(opts: *mut skb_export_op
     }
 }
 
+/// The rigged mesh of `m` and its scene in the mesh's current pose (the rest pose if never
+/// posed) with `opts` (`None`: the defaults), with the mesh's shape keys when asked. Errors:
+/// the scene's and the keys'.
+pub(crate) fn rig_scene(
+    m: &skb_mesh,
+    opts: Option<&skb_export_options>,
+) -> sketchbody_core::Result<(RiggedMesh, RigScene)> {
+    let options = opts.map_or_else(RigOptions::default, |o| o.rig);
+    let keys = match opts {
+        Some(o) if o.shape_keys => m.shape.keys(&m.model)?,
+        _ => Vec::new(),
+    };
+    let rest_pose = Pose::rest(&m.rest.joints);
+    let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
+    let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
+    let scene = RigScene::build_with_shape_keys(m.model.rig(), &rigged, pose, &options, &keys)?;
+    Ok((rigged, scene))
+}
+
 /// A core writer of the rigged scene: path, rigged mesh, scene, the FBX/USD frame.
 type RiggedWriter = fn(&std::path::Path, &RiggedMesh, &RigScene, &ExportFrame) -> sketchbody_core::Result<()>;
 
@@ -218,11 +325,9 @@ unsafe fn write_rigged(
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
             let path = try_status!(path_arg(path, "path"));
-            let (options, frame) = opt_ref(opts).map_or_else(Default::default, |o| (o.rig, o.frame));
-            let rest_pose = Pose::rest(&m.rest.joints);
-            let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
-            let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
-            let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
+            let o = opt_ref(opts);
+            let (rigged, scene) = try_core!(rig_scene(m, o));
+            let frame = o.map_or_else(ExportFrame::default, |o| o.frame);
             try_core!(write(path, &rigged, &scene, &frame));
             skb_status::SKB_OK
         }
@@ -230,9 +335,11 @@ unsafe fn write_rigged(
 }
 
 /// Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
-/// scene, the rest mesh skinned to MakeHuman's 53-bone rig, posed by the current pose (the rest
-/// pose if never posed) as bone rotations with the root's translation, plus a one-frame clip
-/// "pose". See docs/formats.md. Written atomically. Only reads `mesh` and `opts`.
+/// scene, the rest mesh skinned to MakeHuman's 53-bone rig (plus the twist bones and IK targets
+/// the options add), posed by the current pose (the rest pose if never posed) as bone rotations
+/// with the root's translation, plus a one-frame clip "pose" (or the pose as the rest, as the
+/// options say; the options' shape keys as morph targets). See docs/formats.md. Written
+/// atomically. Only reads `mesh` and `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_glb_with_options(
     mesh: *const skb_mesh,

@@ -10,6 +10,7 @@ use sketchbody_core::camera::WeakPerspective;
 use sketchbody_core::error::Error;
 use sketchbody_core::fit::{FitOptions, MatchScore};
 use sketchbody_core::image::to_gray;
+use sketchbody_core::pipeline::shape_keys::ShapeOrigin;
 use sketchbody_core::pipeline::{fit_body, BodyChoice};
 use sketchbody_core::skeleton::{Joints3, NUM_JOINTS};
 
@@ -384,12 +385,13 @@ pub unsafe extern "C" fn skb_fit_shape(
             let choice = BodyChoice { gender, ..BodyChoice::default() };
             let body = try_core!(fit_body(&ctx.model, &pose, &cam, &edge_map, None, &fit_opts, &choice, &mut cb));
             write_opt(score, body.score);
+            let shape = try_core!(ShapeOrigin::of_fit(&body));
             let posed = Posed { pose: body.ik_pose, vertices: body.posed_vertices };
             let mesh = skb_mesh {
                 model: Arc::clone(&ctx.model),
                 gender: body.gender,
                 rest: body.rest,
-                weights: body.weights,
+                shape,
                 posed: Some(Box::new(posed)),
             };
             try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));

@@ -10,6 +10,7 @@ use sketchbody_core::detect::figure::FigureOptions;
 use sketchbody_core::detect::landmark::LandmarkNet;
 use sketchbody_core::error::Error;
 use sketchbody_core::image::{load_image, to_gray, GrayImage};
+use sketchbody_core::pipeline::shape_keys::ShapeOrigin;
 use sketchbody_core::pipeline::{
     repose, run_pipeline_progressive, FigureJoints, GivenJoints, InterimBody, JointsSource, PipelineOptions,
     PipelineResult, ReposeOutcome, ReposeRequest,
@@ -175,7 +176,7 @@ fn interim_closure(
             model: Arc::clone(&model),
             gender: b.gender,
             rest: b.rest.clone(),
-            weights: b.weights.to_vec(),
+            shape: b.shape.clone(),
             posed: Some(Box::new(posed)),
         };
         // SAFETY: the caller of the exported function promised a valid callback and `user`;
@@ -591,7 +592,8 @@ pub unsafe extern "C" fn skb_result_mesh(result: *const skb_result, out: *mut *m
             let r = &res.inner;
             let rest = sketchbody_core::body::RestShape { vertices: r.mesh.vertices.clone(), joints: r.mesh.joints };
             let posed = Posed { pose: r.ik_pose.clone(), vertices: r.posed_vertices.clone() };
-            let mesh = skb_mesh { model: Arc::clone(&res.model), gender: r.gender, rest, weights: r.weights.clone(), posed: Some(Box::new(posed)) };
+            let shape = try_core!(ShapeOrigin::of_result(r));
+            let mesh = skb_mesh { model: Arc::clone(&res.model), gender: r.gender, rest, shape, posed: Some(Box::new(posed)) };
             try_status!(write_out(out, Box::into_raw(Box::new(mesh)), "out"));
             skb_status::SKB_OK
         }

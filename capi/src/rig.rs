@@ -10,23 +10,31 @@ use std::ffi::c_char;
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use sketchbody_core::body::ik::Pose;
-use sketchbody_core::body::rig::{vertex_normals, RiggedMesh};
-use sketchbody_core::body::rig::{RigOptions, RigPose, RigScene, NUM_RIG_BONES, RIG_BONES};
+use sketchbody_core::body::rig::vertex_normals;
+use sketchbody_core::body::rig::{RigPose, RigScene, NUM_RIG_BONES};
 use sketchbody_core::error::Error;
 
 use super::body::{copy_skin_weights, skb_mesh};
 use super::error::fail;
-use super::export::skb_export_options;
-use super::ptr::{free_box, give, out_slice, out_slot, try_ref, write_out};
+use super::export::{rig_scene, skb_export_options};
+use super::ptr::{free_box, give, opt_ref, out_slice, out_slot, try_ref, write_out};
 use super::status::skb_status;
 
-/// Number of bones of the production rig (MakeHuman's `game_engine` skeleton).
+/// Number of bones of the production rig (MakeHuman's `game_engine` skeleton); a rig built with
+/// twist bones (`skb_export_options_set_twist_bones`) has `SKB_NUM_RIG_BONES` +
+/// `SKB_NUM_TWIST_BONES` (`skb_rig_bone_count`).
 pub const SKB_NUM_RIG_BONES: u32 = 53;
+/// Number of twist bones (upper arms, forearms, thighs) `skb_export_options_set_twist_bones`
+/// adds after the 53.
+pub const SKB_NUM_TWIST_BONES: u32 = 6;
 /// Doubles per bone in `skb_rig_copy_rest_transforms`: translation x, y, z then rotation
 /// quaternion x, y, z, w (glTF's order).
 pub const SKB_RIG_TRANSFORM_LEN: u32 = 7;
 const _: () = assert!(SKB_NUM_RIG_BONES as usize == NUM_RIG_BONES);
+/// Number of IK target bones `skb_export_options_set_ik_targets` adds after the others.
+pub const SKB_NUM_IK_BONES: u32 = 7;
+const _: () = assert!(SKB_NUM_TWIST_BONES as usize == sketchbody_core::body::rig::twist::NUM_TWIST_BONES);
+const _: () = assert!(SKB_NUM_IK_BONES as usize == sketchbody_core::body::rig::ik_targets::NUM_IK_BONES);
 
 /// The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb_with_options` writes for
 /// the same mesh and options. Create with `skb_mesh_rig_new`, release with `skb_rig_free`; it does
@@ -66,25 +74,19 @@ pub unsafe extern "C" fn skb_mesh_rig_new(
     ffi_boundary! {
         // SAFETY: `mesh` is NULL or a live mesh handle (the API's contract), only read here.
         let m = try_status!(unsafe { try_ref(mesh, "mesh") });
-        let options = if opts.is_null() {
-            RigOptions::default()
-        } else {
-            // SAFETY: `opts` is non-NULL, so live export options (the API's contract), only read.
-            try_status!(unsafe { try_ref(opts, "opts") }).rig
-        };
+        // SAFETY: `opts` is NULL or live export options (the API's contract), only read.
+        let o = unsafe { opt_ref(opts) };
         // SAFETY: `out` is NULL or valid for writing one pointer.
         let out = try_status!(unsafe { out_slot(out) });
-        let rest_pose = Pose::rest(&m.rest.joints);
-        let pose = m.posed.as_ref().map_or(&rest_pose, |p| &p.pose);
-        let rigged = RiggedMesh::from_rest(&m.model, &m.rest);
-        let scene = try_core!(RigScene::build(m.model.rig(), &rigged, pose, &options));
+        let (_, scene) = try_core!(rig_scene(m, o));
         let arm = &scene.armature;
-        let rest_rot = RigPose::rest().local_rotations(arm);
-        let rest_local = RIG_BONES
+        let rest_rot = RigPose::rest(arm.len()).local_rotations(arm);
+        let rest_local = arm
+            .parents
             .iter()
             .enumerate()
-            .map(|(b, bone)| {
-                let t = match bone.parent {
+            .map(|(b, parent)| {
+                let t = match *parent {
                     None => arm.heads[b],
                     Some(p) => arm.frames[p].inverse() * (arm.heads[b] - arm.heads[p]),
                 };
@@ -103,7 +105,8 @@ pub unsafe extern "C" fn skb_rig_free(rig: *mut skb_rig) {
     unsafe { free_box(rig) }
 }
 
-/// Number of bones (`SKB_NUM_RIG_BONES`) into `*out`.
+/// Number of bones (`SKB_NUM_RIG_BONES`, plus `SKB_NUM_TWIST_BONES` with twist bones and
+/// `SKB_NUM_IK_BONES` with IK targets) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_bone_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
     ffi_boundary! {
@@ -127,7 +130,7 @@ pub unsafe extern "C" fn skb_rig_vertex_count(rig: *const skb_rig, out: *mut usi
     }
 }
 
-/// Copies the name of bone `bone` (0 .. `SKB_NUM_RIG_BONES`−1; the GLB node's name in the chosen
+/// Copies the name of bone `bone` (0 .. `skb_rig_bone_count`−1; the GLB node's name in the chosen
 /// convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least the name's length
 /// + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
 #[no_mangle]
@@ -141,7 +144,7 @@ pub unsafe extern "C" fn skb_rig_copy_bone_name(
         // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
         let Some(name) = r.scene.names.get(bone) else {
-            return fail(&Error::OutOfRange { name: "bone", detail: format!("{bone} >= {NUM_RIG_BONES}") });
+            return fail(&Error::OutOfRange { name: "bone", detail: format!("{bone} >= {}", r.scene.names.len()) });
         };
         let bytes = name.as_bytes();
         // SAFETY: `dst` is NULL or valid for writes of `dst_len` bytes.
@@ -155,17 +158,18 @@ pub unsafe extern "C" fn skb_rig_copy_bone_name(
 }
 
 /// Copies each bone's parent index (−1 for the root, bone 0) into `dst` of `dst_len` integers
-/// (at least `SKB_NUM_RIG_BONES`). Parents come before their children; the order is the GLB's
+/// (at least `skb_rig_bone_count`). Parents come before their children; the order is the GLB's
 /// node and joint order.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_parents(rig: *const skb_rig, dst: *mut i32, dst_len: usize) -> skb_status {
     ffi_boundary! {
         // SAFETY: `rig` is NULL or a live rig handle, only read.
-        try_status!(unsafe { try_ref(rig, "rig") });
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        let parents = &r.scene.armature.parents;
         // SAFETY: `dst` is NULL or valid for writes of `dst_len` integers.
-        let o = try_status!(unsafe { out_slice(dst, dst_len, NUM_RIG_BONES, "dst") });
-        for (o, bone) in o.iter_mut().zip(&RIG_BONES) {
-            *o = bone.parent.map_or(-1, |p| p as i32);
+        let o = try_status!(unsafe { out_slice(dst, dst_len, parents.len(), "dst") });
+        for (o, parent) in o.iter_mut().zip(parents) {
+            *o = parent.map_or(-1, |p| p as i32);
         }
         skb_status::SKB_OK
     }
@@ -177,7 +181,7 @@ pub unsafe extern "C" fn skb_rig_copy_parents(rig: *const skb_rig, dst: *mut i32
 /// frame; bone frames have Y along the bone, X the bend axis MakeHuman's roll gives). The rest
 /// is the rig's (A- or T-pose, placed at the chosen origin): the GLB's bind pose. Composing
 /// `parent · T(t) · R(q)` from the root gives each bone's rest frame and head. `dst` holds
-/// `dst_len` doubles (at least 7 × `SKB_NUM_RIG_BONES`).
+/// `dst_len` doubles (at least 7 × `skb_rig_bone_count`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_rest_transforms(
     rig: *const skb_rig,
@@ -188,7 +192,7 @@ pub unsafe extern "C" fn skb_rig_copy_rest_transforms(
         // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
         // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
-        let o = try_status!(unsafe { out_slice(dst, dst_len, 7 * NUM_RIG_BONES, "dst") });
+        let o = try_status!(unsafe { out_slice(dst, dst_len, 7 * r.rest_local.len(), "dst") });
         for (o, (t, q)) in o.chunks_exact_mut(7).zip(&r.rest_local) {
             o[..3].copy_from_slice(t.as_slice());
             o[3..].copy_from_slice(q.quaternion().coords.as_slice());
@@ -201,7 +205,7 @@ pub unsafe extern "C" fn skb_rig_copy_rest_transforms(
 /// quaternion x, y, z, w; the root's relative to the model frame): the GLB nodes' `rotation`,
 /// what a DCC shows as the pose bones' rotations. With the rest translations of
 /// `skb_rig_copy_rest_transforms` (the root's plus `skb_rig_copy_root_translation`) they give the
-/// posed skeleton. `dst` holds `dst_len` doubles (at least 4 × `SKB_NUM_RIG_BONES`).
+/// posed skeleton. `dst` holds `dst_len` doubles (at least 4 × `skb_rig_bone_count`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_local_rotations(
     rig: *const skb_rig,
@@ -236,7 +240,7 @@ pub unsafe extern "C" fn skb_rig_copy_root_translation(
 
 /// Copies the posed bone heads (x, y, z doubles per bone, metres, the export's frame) as the
 /// library computes them (the rig's forward kinematics, what a glTF viewer shows) into `dst` of
-/// `dst_len` doubles (at least 3 × `SKB_NUM_RIG_BONES`).
+/// `dst_len` doubles (at least 3 × `skb_rig_bone_count`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_posed_heads(rig: *const skb_rig, dst: *mut f64, dst_len: usize) -> skb_status {
     ffi_boundary! {
@@ -275,6 +279,43 @@ pub unsafe extern "C" fn skb_rig_copy_rest_vertices(rig: *const skb_rig, dst: *m
     }
 }
 
+/// Number of shape keys (0 unless the options asked for them, `skb_export_options_set_shape_keys`)
+/// into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_shape_key_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        // SAFETY: `out` is NULL or valid for writing one `usize`.
+        try_status!(unsafe { write_out(out, r.scene.shape_keys.len(), "out") });
+        skb_status::SKB_OK
+    }
+}
+
+/// Copies shape key `key`'s displacement of each rest vertex (`skb_rig_copy_rest_vertices`'
+/// order and frame; x, y, z floats, metres; the key at value 1 adds them, the base is the fitted
+/// body) into `dst` of `dst_len` floats (at least 3 × vertex count). Key `k` is named
+/// `shape_NN` with NN = k + 1 in two digits (the GLB's `extras.targetNames`, the FBX and USD
+/// shapes' names). Errors: `key` ≥ `skb_rig_shape_key_count` (`SKB_ERR_OUT_OF_RANGE`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_copy_shape_key(
+    rig: *const skb_rig,
+    key: usize,
+    dst: *mut f32,
+    dst_len: usize,
+) -> skb_status {
+    ffi_boundary! {
+        // SAFETY: `rig` is NULL or a live rig handle, only read.
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        let keys = &r.scene.shape_keys;
+        let Some(k) = keys.get(key) else {
+            return fail(&Error::OutOfRange { name: "shape key", detail: format!("{key} >= {}", keys.len()) });
+        };
+        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
+        unsafe { copy_rows(&k.deltas, dst, dst_len) }
+    }
+}
+
 /// Copies the rig's posed vertices (the rig's own linear blend skinning of the rest vertices,
 /// as a glTF viewer shows the GLB; x, y, z floats, metres) into `dst` of `dst_len` floats (at
 /// least 3 × vertex count).
@@ -288,7 +329,7 @@ pub unsafe extern "C" fn skb_rig_copy_posed_vertices(rig: *const skb_rig, dst: *
     }
 }
 
-/// Copies the skin weights to the 53 rig bones: for vertex v, slots `4v .. 4v+3` of `bones`
+/// Copies the skin weights to the rig's bones: for vertex v, slots `4v .. 4v+3` of `bones`
 /// (indices into the rig's bone order) and `weights` (summing to 1; unused slots bone 0, weight
 /// 0). Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count).
 #[no_mangle]

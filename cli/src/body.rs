@@ -14,6 +14,7 @@ use sketchbody::export::joints::load_joints3_json;
 use sketchbody::export::obj::write_obj;
 use sketchbody::fsutil::OutputSet;
 use sketchbody::image::save_png;
+use sketchbody::pipeline::shape_keys::ShapeOrigin;
 use sketchbody::render::preview::preview;
 
 use crate::rig_args::RigArgs;
@@ -77,7 +78,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let mut outputs = OutputSet::new();
     let out = outputs.stage(&a.out)?;
     if ext.as_deref() == Some("glb") {
-        write_glb(&out, &mesh, &RigScene::build(model.rig(), &mesh, &pose, &rig_options)?, None)?;
+        let keys = if a.rig.shape_keys() {
+            let origin =
+                ShapeOrigin { space: gender.into(), weights: a.weights.clone(), proportions: None, scale: 1.0 };
+            origin.keys(&model)?
+        } else {
+            Vec::new()
+        };
+        let scene = RigScene::build_with_shape_keys(model.rig(), &mesh, &pose, &rig_options, &keys)?;
+        write_glb(&out, &mesh, &scene, None)?;
     } else {
         write_obj(&out, &posed, &mesh.quads, mesh.uvs.as_ref())?;
     }

@@ -31,6 +31,7 @@ use sketchbody::export::texture::{check_texture_size, project_sketch};
 use sketchbody::fsutil::{write_atomic, StagingDir};
 use sketchbody::image::{encode_png, load_rgb_image, save_png, to_gray};
 use sketchbody::pipeline::overlay::overlay;
+use sketchbody::pipeline::shape_keys::shape_keys;
 use sketchbody::pipeline::{
     run_pipeline_progressive, FigureJoints, GivenJoints, InterimBody, InterimStage, JointsSource, PipelineOptions,
     PipelineResult,
@@ -431,7 +432,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         texture_img.as_ref().map(|(img, uvs)| SurfaceTexture::for_quads(img, &r.mesh.quads, uvs)).transpose()?;
     let views =
         compare_preview(&sketch_rgb, &r.posed_vertices, &tris, surface.as_ref(), &r.pose.camera, a.preview_size)?;
-    let scene = RigScene::build(model.rig(), &r.mesh, &r.ik_pose, &rig_options)?;
+    let keys = if a.rig.shape_keys() { shape_keys(&model, &r)? } else { Vec::new() };
+    let scene = RigScene::build_with_shape_keys(model.rig(), &r.mesh, &r.ik_pose, &rig_options, &keys)?;
     let texture = texture_img.as_ref().map(|(img, _)| encode_png(&img.view())).transpose()?;
     let frame = ExportFrame { units: a.units, up: a.up };
     write_rigged(&a.format, |name| staging.path(name), &r.mesh, &scene, texture.as_deref(), &frame)?;

@@ -160,7 +160,11 @@ class CliFailed(Exception):
 
 
 _CLI_FIT = {"height": "--height", "samples": "--samples", "iterations": "--iterations", "seed": "--seed"}
-_CLI_EXPORT = {"naming": "--naming", "rest_pose": "--rest-pose", "origin": "--origin"}
+_CLI_EXPORT = {"naming": "--naming", "rest_pose": "--rest-pose", "origin": "--origin",
+               "twist_bones": "--twist-bones", "pose_as": "--pose-as", "ik_targets": "--ik-targets",
+               "shape_keys": "--shape-keys"}
+# Options the CLI takes as a bare flag (present: on).
+_CLI_SWITCHES = {"ik_targets"}
 _CLI_GENDER = {"female": "f", "f": "f", "male": "m", "m": "m", "auto": None}
 
 
@@ -174,14 +178,19 @@ def _option_arguments(options, flags, what):
             continue
         if field.name not in flags:
             raise ValueError(f"{what}.{field.name} is not passed to `sketchbody run` by the batch's --cli mode")
-        args += [flags[field.name], str(value)]
+        if field.name in _CLI_SWITCHES:
+            args += [flags[field.name]] if value else []
+        elif isinstance(value, bool):
+            args += [flags[field.name], str(value).lower()]
+        else:
+            args += [flags[field.name], str(value)]
     return args
 
 
 def cli_arguments(job, out, fit_options=None, export_options=None, preview_size=512):
     """The `sketchbody run` arguments that convert `job` into the folder `out` with the options
     the package path would use (gender, height, samples, iterations, seed; naming, rest pose,
-    origin; the preview's size)."""
+    origin, twist bones, pose as, IK targets, shape keys; the preview's size)."""
     args = ["run", job.sketch, "--out", out, "--quiet"]
     if job.joints:
         args += ["--joints", job.joints]

@@ -21,13 +21,23 @@ class ExportOptions(OptionsBase):
     """The rigged export's conventions (None: the defaults). naming: "project", "mixamo" or
     "unreal"; rest_pose: "a" or "t"; origin: "floor" or "pelvis"; for write_fbx and write_usd
     only (the GLB is always metres, Y up, as glTF specifies): units "m" or "cm", up_axis "y"
-    (the body facing +Z) or "z" (the body facing -Y)."""
+    (the body facing +Z) or "z" (the body facing -Y); twist_bones: True adds the 6 twist bones
+    of the upper arms, forearms and thighs (default False: the 53 bones); pose_as: "action"
+    (default: the rest is the A- or T-pose, the bones posed, a one-frame clip "pose"), "rest"
+    (the pose is the rest pose, no clip) or "both" (the pose as rest plus a clip "a_pose" or
+    "t_pose"); ik_targets: True adds the 7 non-deforming IK target bones at the hands and
+    feet; shape_keys: True adds the mesh's shape dimensions as shape keys at 0 (one per shape
+    weight, each one standard deviation of its component)."""
 
     naming: Optional[str] = None
     rest_pose: Optional[str] = None
     origin: Optional[str] = None
     units: Optional[str] = None
     up_axis: Optional[str] = None
+    twist_bones: Optional[bool] = None
+    pose_as: Optional[str] = None
+    ik_targets: Optional[bool] = None
+    shape_keys: Optional[bool] = None
 
     _c_prefix = "skb_export_options"
     _enums = {
@@ -36,20 +46,24 @@ class ExportOptions(OptionsBase):
         "origin": {"floor": B.SKB_ORIGIN_FLOOR, "pelvis": B.SKB_ORIGIN_PELVIS},
         "units": {"m": B.SKB_UNITS_METRES, "cm": B.SKB_UNITS_CENTIMETRES},
         "up_axis": {"y": B.SKB_UP_Y, "z": B.SKB_UP_Z},
+        "pose_as": {"action": B.SKB_POSE_AS_ACTION, "rest": B.SKB_POSE_AS_REST, "both": B.SKB_POSE_AS_BOTH},
     }
 
 
 @dataclasses.dataclass
 class Rig:
-    """The 53-bone rig of a mesh in one pose, as the GLB has it (all numpy copies; no handle).
+    """The rig of a mesh in one pose, as the GLB has it (all numpy copies; no handle): B bones,
+    53 (MakeHuman's) then the 6 twist bones and the 7 IK targets when ExportOptions asks for them.
 
-    bone_names: list of 53 str; parents: (53,) int32, -1 for the root, parents first;
+    bone_names: list of B str; parents: (B,) int32, -1 for the root, parents first;
     rest_translations (53, 3) and rest_rotations (53, 4) quaternions x, y, z, w: each bone's
     rest transform relative to its parent (the bind pose); local_rotations (53, 4): the posed
     rotation relative to the parent (what a DCC shows as pose-bone rotations);
     root_translation (3,): the root's translation in the pose; offset (3,): model frame ->
     export frame; posed_heads (53, 3); rest_vertices / posed_vertices (N, 3) float32;
-    skin_bones (N, 4) uint32 (indices into the 53 bones) and skin_weights (N, 4) float32.
+    skin_bones (N, 4) uint32 (indices into the B bones) and skin_weights (N, 4) float32;
+    shape_keys: {name: (N, 3) float32}, each key's displacement of the rest vertices at value 1
+    (empty unless ExportOptions(shape_keys=True)).
     Rebuilding: G_b = G_parent . T(t_b) . R(q_b) (root: T(t_0 + root_translation) . R(q_0));
     bone b's posed head is G_b's translation."""
 
@@ -65,9 +79,10 @@ class Rig:
     posed_vertices: np.ndarray
     skin_bones: np.ndarray
     skin_weights: np.ndarray
+    shape_keys: dict
 
     def posed_global_transforms(self):
-        """(53, 4, 4) posed bone-to-export-frame matrices rebuilt from the rest translations,
+        """(B, 4, 4) posed bone-to-export-frame matrices rebuilt from the rest translations,
         the local rotations and the root translation (the C API's documented recipe)."""
         out = np.zeros((len(self.parents), 4, 4))
         for b, p in enumerate(self.parents):
@@ -282,6 +297,13 @@ class _RigHandle(Handle):
         bones = np.empty((nv, 4), dtype=np.uint32)
         weights = np.empty((nv, 4), dtype=np.float32)
         call("skb_rig_copy_skin_weights", self._p, A.ptr(bones), A.ptr(weights), bones.size)
+        nk = ctypes.c_size_t()
+        call("skb_rig_shape_key_count", self._p, ctypes.byref(nk))
+        keys = {}
+        for k in range(nk.value):
+            d = np.empty((nv, 3), dtype=np.float32)
+            call("skb_rig_copy_shape_key", self._p, k, A.ptr(d), d.size)
+            keys[f"shape_{k + 1:02d}"] = d
         return Rig(
             bone_names=names,
             parents=self._copy("skb_rig_copy_parents", (nb,), np.int32),
@@ -295,4 +317,5 @@ class _RigHandle(Handle):
             posed_vertices=self._copy("skb_rig_copy_posed_vertices", (nv, 3), np.float32),
             skin_bones=bones,
             skin_weights=weights,
+            shape_keys=keys,
         )

@@ -97,6 +97,10 @@ class FindAndConvertTest(unittest.TestCase):
                                 "--gender", "m", "--samples", "8", "--height", "1.8", "--seed", "3",
                                 "--naming", "unreal", "--rest-pose", "t", "--preview-size", "64"])
         self.assertNotIn("--gender", batch.cli_arguments(job, "/o", FitOptions(gender="auto")))
+        rig = ExportOptions(twist_bones=False, pose_as="rest", ik_targets=True, shape_keys=True)
+        self.assertEqual(batch.cli_arguments(job, "/o", None, rig)[7:],
+                         ["--twist-bones", "false", "--pose-as", "rest", "--ik-targets", "--shape-keys", "true",
+                          "--preview-size", "512"])
         with self.assertRaises(ValueError):  # an option `run` is not given: said, not dropped
             batch.cli_arguments(job, "/o", FitOptions(score="paper"))
 

@@ -340,6 +340,29 @@ class PipelineTest(unittest.TestCase):
         self.assertTrue(all(n.startswith("mixamorig:") for n in mix.bone_names[1:]), mix.bone_names[:3])
         np.testing.assert_allclose(mix.root_translation, 0, atol=1e-12)
 
+    def test_rig_an_animator_keeps(self):
+        """Twist bones, IK targets, the pose as the rest and shape keys (issue 49)."""
+        opts = skb.ExportOptions(naming="unreal", twist_bones=True, ik_targets=True, pose_as="rest", shape_keys=True)
+        with self.r.mesh() as m:
+            rig = m.rig(opts)
+            action = m.rig(skb.ExportOptions(naming="unreal"))
+            n = len(m.shape_weights())
+            with self.assertRaises(ValueError):
+                m.rig(skb.ExportOptions(pose_as="keyed"))
+        b = skb._bindings
+        nb = b.SKB_NUM_RIG_BONES + b.SKB_NUM_TWIST_BONES + b.SKB_NUM_IK_BONES
+        self.assertEqual((len(rig.bone_names), len(rig.parents)), (nb, nb))
+        self.assertEqual(rig.bone_names[rig.parents[rig.bone_names.index("upperarm_twist_01_l")]], "upperarm_l")
+        self.assertEqual(rig.bone_names[rig.parents[rig.bone_names.index("ik_hand_r")]], "ik_hand_gun")
+        # The pose as the rest: the rest vertices are the action's posed body.
+        np.testing.assert_allclose(rig.rest_vertices, action.posed_vertices, atol=1e-4)
+        np.testing.assert_allclose(rig.posed_vertices, action.posed_vertices, atol=1e-4)
+        # One key per fitted shape weight.
+        self.assertGreater(n, 0)
+        self.assertEqual(sorted(rig.shape_keys), [f"shape_{k:02d}" for k in range(1, n + 1)])
+        self.assertTrue(all(d.shape == (NV, 3) and np.abs(d).max() > 1e-3 for d in rig.shape_keys.values()))
+        self.assertEqual(action.shape_keys, {})
+
     def test_export(self):
         with self.r.mesh() as m, tempfile.TemporaryDirectory() as tmp:
             glb, obj, png = (os.path.join(tmp, n) for n in ("b.glb", "b.obj", "p.png"))
@@ -709,7 +732,8 @@ class TextureTest(unittest.TestCase):
     `sketchbody run` with a small fit, then the same job here (colour sketch, the same fit
     settings): Result.texture written by write_png is the CLI's body_texture.png byte for byte,
     Mesh.texture with the result's mesh and camera the same pixels, Mesh.write_usd with
-    ExportOptions(units="cm", up_axis="z") the CLI's points and metadata."""
+    ExportOptions(units="cm", up_axis="z", twist_bones=True, shape_keys=True) (the CLI's
+    defaults) the CLI's points, metadata, bind transforms and shape keys."""
 
     SIZE = 128
 
@@ -749,7 +773,8 @@ class TextureTest(unittest.TestCase):
     def test_units_and_up_axis(self):
         usd = os.path.join(self.tmp.name, "c.usda")
         with self.r.mesh() as m:
-            m.write_usd(usd, skb.ExportOptions(units="cm", up_axis="z"))
+            # The CLI's defaults: twist bones and shape keys on (the C API's are off).
+            m.write_usd(usd, skb.ExportOptions(units="cm", up_axis="z", twist_bones=True, shape_keys=True))
             fbx = os.path.join(self.tmp.name, "c.fbx")
             m.write_fbx(fbx, skb.ExportOptions(units="cm", up_axis="z"))
             with open(fbx, "rb") as f:
@@ -771,6 +796,8 @@ class TextureTest(unittest.TestCase):
         line = lambda lines, key: next(x for x in lines if key in x)  # noqa: E731
         self.assertEqual(line(ours, "point3f[] points"), line(cli, "point3f[] points"))
         self.assertEqual(line(ours, "bindTransforms"), line(cli, "bindTransforms"))
+        self.assertEqual(line(ours, "skel:blendShapes"), line(cli, "skel:blendShapes"))
+        self.assertEqual(line(ours, "vector3f[] offsets"), line(cli, "vector3f[] offsets"))
 
     def test_bad_texture_arguments(self):
         with self.assertRaises(ValueError):

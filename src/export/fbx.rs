@@ -1,6 +1,6 @@
 //! Binary FBX 7.4 (.fbx) of the rigged body, the same content as the glTF
 //! ([`crate::export::gltf`]): the rest mesh (polygons, normals, UVs) skinned to MakeHuman's
-//! 53-bone armature with its bind pose, the bones in the body's pose, and the texture embedded
+//! 53-bone armature (and any twist bones) with its bind pose, the bones in the body's pose, and the texture embedded
 //! (and named `body_texture.png`, the file the CLI writes beside). Units and axes as the
 //! [`ExportFrame`] chooses: metres (`UnitScaleFactor` 100, i.e. 1 unit = 100 cm) or centimetres
 //! (`UnitScaleFactor` 1); Y up with Z front, or Z up with −Y front; X the third axis
@@ -14,6 +14,8 @@ use crate::export::frame::ExportFrame;
 use crate::export::rigged::check_scene;
 use crate::fsutil::write_atomic;
 
+pub mod anim;
+pub mod blend;
 pub mod node;
 pub mod scene;
 

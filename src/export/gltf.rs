@@ -2,11 +2,14 @@
 //! texture) skinned (`JOINTS_0`, `WEIGHTS_0`, inverse bind matrices) to MakeHuman's 53-bone
 //! production armature ([`crate::body::rig`]), posed: the nodes carry the body's pose as bone
 //! rotations, with a translation on the root only; the same pose is also a one-frame animation
-//! clip named "pose" (STEP interpolation, time 0).
+//! clip named "pose" (STEP interpolation, time 0); see [`crate::body::rig::PoseAs`] for the
+//! other ways. Shape keys, when the scene has them, are morph targets (`POSITION` displacements,
+//! weights 0, names in the mesh's `extras.targetNames`).
 //!
-//! Nodes 0..53 are the bones in [`crate::body::rig::RIG_BONES`] order, named in the chosen convention,
-//! each placed at its bone's head with its rest frame (local +Y along the bone, MakeHuman's roll);
-//! node 53 is the mesh. The scene's roots are the root bone (at the floor by default) and the
+//! Nodes 0..53 are the bones in [`crate::body::rig::RIG_BONES`] order, then any twist bones
+//! ([`crate::body::rig::twist`]), named in the chosen convention, each placed at its bone's head
+//! with its rest frame (local +Y along the bone, MakeHuman's roll); the node after the bones is
+//! the mesh. The scene's roots are the root bone (at the floor by default) and the
 //! mesh. UVs are written with v flipped (glTF's texture origin is the top-left).
 use std::collections::HashMap;
 use std::path::Path;
@@ -14,10 +17,10 @@ use std::path::Path;
 use nalgebra::{UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
+use crate::body::rig::RigScene;
 use crate::body::rig::{vertex_normals, RiggedMesh};
-use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
 use crate::error::{Error, Result};
-use crate::export::rigged::{bind_transform, check_scene, posed_locals};
+use crate::export::rigged::{bind_transform, check_scene, pose_locals, posed_locals};
 use crate::fsutil::write_atomic;
 
 const ARRAY_BUFFER: u32 = 34962;
@@ -142,6 +145,25 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
     let a =
         bin.add(&f32_bytes(weights), Some(ARRAY_BUFFER), json!({"componentType": FLOAT, "count": n, "type": "VEC4"}));
     attributes.insert("WEIGHTS_0".into(), json!(a));
+    // Morph targets: each shape key's displacement per glTF vertex (weights 0: the base is
+    // the fitted body).
+    let mut targets = Vec::with_capacity(scene.shape_keys.len());
+    for key in &scene.shape_keys {
+        let d: Vec<[f32; 3]> = source.iter().map(|&(v, _)| key.deltas[v as usize]).collect();
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for p in &d {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let a = bin.add(
+            &f32_bytes(d.iter().flatten().copied()),
+            Some(ARRAY_BUFFER),
+            json!({"componentType": FLOAT, "count": n, "type": "VEC3", "min": lo, "max": hi}),
+        );
+        targets.push(json!({"POSITION": a}));
+    }
     let idx: Vec<u8> = tris.iter().flat_map(|i| i.to_le_bytes()).collect();
     let indices = bin.add(
         &idx,
@@ -149,16 +171,18 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
         json!({"componentType": UNSIGNED_INT, "count": tris.len(), "type": "SCALAR"}),
     );
     // Inverse bind matrices: the inverse of each bone's rest transform [F_b | h_b].
-    let ibm = f32_bytes((0..NUM_RIG_BONES).flat_map(|b| {
+    let bones = scene.armature.len();
+    let parents = &scene.armature.parents;
+    let ibm = f32_bytes((0..bones).flat_map(|b| {
         let m = bind_transform(scene, b).inverse().to_homogeneous();
         m.as_slice().iter().map(|&c| c as f32).collect::<Vec<_>>()
     }));
-    let ibm = bin.add(&ibm, None, json!({"componentType": FLOAT, "count": NUM_RIG_BONES, "type": "MAT4"}));
+    let ibm = bin.add(&ibm, None, json!({"componentType": FLOAT, "count": bones, "type": "MAT4"}));
 
     let locals = posed_locals(scene);
-    let mut nodes = Vec::with_capacity(NUM_RIG_BONES + 1);
+    let mut nodes = Vec::with_capacity(bones + 1);
     for (b, name) in scene.names.iter().enumerate() {
-        let children: Vec<usize> = (0..NUM_RIG_BONES).filter(|&c| RIG_BONES[c].parent == Some(b)).collect();
+        let children: Vec<usize> = (0..bones).filter(|&c| parents[c] == Some(b)).collect();
         let mut node =
             json!({"name": name, "translation": vec_json(&locals[b].0), "rotation": quat_json(&locals[b].1)});
         if !children.is_empty() {
@@ -168,31 +192,47 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
     }
     nodes.push(json!({"name": "body", "mesh": 0, "skin": 0}));
     // The one-frame clip: every bone's rotation and the root's translation at t = 0.
-    let time = bin.add(
-        &f32_bytes([0.0]),
-        None,
-        json!({"componentType": FLOAT, "count": 1, "type": "SCALAR", "min": [0.0], "max": [0.0]}),
-    );
-    let mut samplers = Vec::with_capacity(NUM_RIG_BONES + 1);
-    let mut channels = Vec::with_capacity(NUM_RIG_BONES + 1);
-    for (b, (_, q)) in locals.iter().enumerate() {
-        let c = q.quaternion().coords.normalize();
-        let out = bin.add(
-            &f32_bytes([c[0], c[1], c[2], c[3]].map(|x| x as f32)),
+    let mut animations = Vec::new();
+    if let Some(clip) = &scene.clip {
+        let clip_locals = pose_locals(scene, &clip.pose);
+        let time = bin.add(
+            &f32_bytes([0.0]),
             None,
-            json!({"componentType": FLOAT, "count": 1, "type": "VEC4"}),
+            json!({"componentType": FLOAT, "count": 1, "type": "SCALAR", "min": [0.0], "max": [0.0]}),
+        );
+        let mut samplers = Vec::with_capacity(bones + 1);
+        let mut channels = Vec::with_capacity(bones + 1);
+        for (b, (_, q)) in clip_locals.iter().enumerate() {
+            let c = q.quaternion().coords.normalize();
+            let out = bin.add(
+                &f32_bytes([c[0], c[1], c[2], c[3]].map(|x| x as f32)),
+                None,
+                json!({"componentType": FLOAT, "count": 1, "type": "VEC4"}),
+            );
+            samplers.push(json!({"input": time, "output": out, "interpolation": "STEP"}));
+            channels.push(json!({"sampler": samplers.len() - 1, "target": {"node": b, "path": "rotation"}}));
+        }
+        let t = clip_locals[0].0;
+        let out = bin.add(
+            &f32_bytes([t.x, t.y, t.z].map(|x| x as f32)),
+            None,
+            json!({"componentType": FLOAT, "count": 1, "type": "VEC3"}),
         );
         samplers.push(json!({"input": time, "output": out, "interpolation": "STEP"}));
-        channels.push(json!({"sampler": samplers.len() - 1, "target": {"node": b, "path": "rotation"}}));
+        channels.push(json!({"sampler": samplers.len() - 1, "target": {"node": 0, "path": "translation"}}));
+        // IK targets move with the bones they follow: their translations are keyed too.
+        for b in (1..bones).filter(|&b| scene.armature.follows[b].is_some()) {
+            let t = clip_locals[b].0;
+            let out = bin.add(
+                &f32_bytes([t.x, t.y, t.z].map(|x| x as f32)),
+                None,
+                json!({"componentType": FLOAT, "count": 1, "type": "VEC3"}),
+            );
+            samplers.push(json!({"input": time, "output": out, "interpolation": "STEP"}));
+            channels.push(json!({"sampler": samplers.len() - 1, "target": {"node": b, "path": "translation"}}));
+        }
+        animations.push(json!({"name": clip.name, "samplers": samplers, "channels": channels}));
     }
-    let t = locals[0].0;
-    let out = bin.add(
-        &f32_bytes([t.x, t.y, t.z].map(|x| x as f32)),
-        None,
-        json!({"componentType": FLOAT, "count": 1, "type": "VEC3"}),
-    );
-    samplers.push(json!({"input": time, "output": out, "interpolation": "STEP"}));
-    channels.push(json!({"sampler": samplers.len() - 1, "target": {"node": 0, "path": "translation"}}));
 
     let mut material = json!({"name": "skin", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.7, 0.65, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}, "doubleSided": true});
     let mut extra = serde_json::Map::new();
@@ -215,16 +255,24 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
     let mut doc = json!({
         "asset": {"version": "2.0", "generator": format!("sketchbody {}", crate::VERSION)},
         "scene": 0,
-        "scenes": [{"name": "body", "nodes": [0, NUM_RIG_BONES]}],
+        "scenes": [{"name": "body", "nodes": [0, bones]}],
         "nodes": nodes,
-        "skins": [{"name": "armature", "inverseBindMatrices": ibm, "skeleton": 0, "joints": (0..NUM_RIG_BONES).collect::<Vec<_>>()}],
+        "skins": [{"name": "armature", "inverseBindMatrices": ibm, "skeleton": 0, "joints": (0..bones).collect::<Vec<_>>()}],
         "meshes": [{"name": "body", "primitives": [{"attributes": attributes, "indices": indices, "mode": 4, "material": 0}]}],
         "materials": [material],
-        "animations": [{"name": "pose", "samplers": samplers, "channels": channels}],
         "buffers": [{"byteLength": bin.data.len()}],
         "bufferViews": bin.views,
         "accessors": bin.accessors,
     });
+    if !animations.is_empty() {
+        doc["animations"] = json!(animations);
+    }
+    if !targets.is_empty() {
+        let names: Vec<&str> = scene.shape_keys.iter().map(|k| k.name.as_str()).collect();
+        doc["meshes"][0]["primitives"][0]["targets"] = json!(targets);
+        doc["meshes"][0]["weights"] = json!(vec![0.0; targets.len()]);
+        doc["meshes"][0]["extras"] = json!({"targetNames": names});
+    }
     for (k, v) in extra {
         doc[k] = v;
     }
@@ -262,7 +310,7 @@ mod tests {
     use super::*;
     use crate::body::ik::{solve, IkOptions};
     use crate::body::procedural::random_pose;
-    use crate::body::rig::RigOptions;
+    use crate::body::rig::{RigOptions, NUM_RIG_BONES, RIG_BONES};
     use crate::body::{BodyModel, Gender};
     use nalgebra::{Isometry3, Translation3};
     use rand::SeedableRng;

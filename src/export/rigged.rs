@@ -3,7 +3,7 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 use crate::body::rig::RiggedMesh;
-use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
+use crate::body::rig::{RigPose, RigScene};
 use crate::error::{Error, Result};
 
 /// Checks that `scene` was built for `mesh`: a valid mesh, one rest vertex and one skin entry per
@@ -31,17 +31,25 @@ pub fn bind_transform(scene: &RigScene, b: usize) -> Isometry3<f64> {
 }
 
 /// Each bone's posed transform relative to its parent (the root's relative to the model
-/// frame), in [`RIG_BONES`] order: the rotation the pose gives it and its head's offset from the
-/// parent's head in the parent's rest frame (the root: its head plus the pose's translation),
-/// metres.
+/// frame), in the armature's order: the rotation the pose gives it and its head's offset from the
+/// parent's head in the parent's rest frame (the root: its head plus the pose's translation; an
+/// IK target: its posed head in its parent's posed frame), metres.
 pub fn posed_locals(scene: &RigScene) -> Vec<(Vector3<f64>, UnitQuaternion<f64>)> {
+    pose_locals(scene, &scene.pose)
+}
+
+/// As [`posed_locals`] for another pose of the scene's armature (a clip's).
+pub fn pose_locals(scene: &RigScene, pose: &RigPose) -> Vec<(Vector3<f64>, UnitQuaternion<f64>)> {
     let arm = &scene.armature;
-    let local = scene.pose.local_rotations(arm);
-    (0..NUM_RIG_BONES)
+    let local = pose.local_rotations(arm);
+    let heads = pose.heads(arm);
+    (0..arm.len())
         .map(|b| {
-            let t = match RIG_BONES[b].parent {
-                None => arm.heads[b] + scene.pose.root_translation,
-                Some(p) => arm.frames[p].inverse() * (arm.heads[b] - arm.heads[p]),
+            let t = match (arm.parents[b], arm.follows[b]) {
+                (None, _) => arm.heads[b] + pose.root_translation,
+                // A helper that follows another bone: its posed head in its parent's posed frame.
+                (Some(p), Some(_)) => (pose.rotations[p] * arm.frames[p]).inverse() * (heads[b] - heads[p]),
+                (Some(p), None) => arm.frames[p].inverse() * (arm.heads[b] - arm.heads[p]),
             };
             (t, local[b])
         })

@@ -1,5 +1,5 @@
 //! USD (UsdSkel) text layer (.usda) of the rigged body, the same content as the glTF
-//! ([`crate::export::gltf`]): a `SkelRoot` "body" holding the `Skeleton` (53 joints, their
+//! ([`crate::export::gltf`]): a `SkelRoot` "body" holding the `Skeleton` (53 joints and any twist bones, their
 //! bind transforms in skeleton space and rest transforms relative to their parents), a
 //! `SkelAnimation` "pose" (the body's pose as the joints' local translations, rotations and
 //! scales, unsampled: a static pose, not a keyed clip) bound as the skeleton's animation
@@ -15,10 +15,10 @@ use std::path::Path;
 use nalgebra::{Matrix4, UnitQuaternion, Vector3};
 
 use crate::body::rig::{vertex_normals, RiggedMesh};
-use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
+use crate::body::rig::{PoseAs, RigScene};
 use crate::error::Result;
 use crate::export::frame::{ExportFrame, UpAxis};
-use crate::export::rigged::{bind_transform, check_scene, posed_locals};
+use crate::export::rigged::{bind_transform, check_scene, pose_locals};
 use crate::fsutil::write_atomic;
 
 /// The texture file the material reads, relative to the layer (the CLI writes it beside).
@@ -35,11 +35,11 @@ fn path_element(name: &str) -> String {
 }
 
 /// Each joint's path: its ancestors' path elements and its own, joined by `/`.
-fn joint_paths(names: &[String]) -> Vec<String> {
-    let mut paths: Vec<String> = Vec::with_capacity(NUM_RIG_BONES);
-    for (b, bone) in RIG_BONES.iter().enumerate() {
+fn joint_paths(names: &[String], parents: &[Option<usize>]) -> Vec<String> {
+    let mut paths: Vec<String> = Vec::with_capacity(parents.len());
+    for (b, parent) in parents.iter().enumerate() {
         let own = path_element(&names[b]);
-        paths.push(match bone.parent {
+        paths.push(match *parent {
             Some(p) => format!("{}/{own}", paths[p]),
             None => own,
         });
@@ -86,25 +86,19 @@ fn points_in(points: &[[f32; 3]], frame: &ExportFrame) -> Vec<[f32; 3]> {
 }
 
 fn skeleton(out: &mut String, scene: &RigScene, frame: &ExportFrame) {
-    let paths = joint_paths(&scene.names);
+    let parents = &scene.armature.parents;
+    let bones = parents.len();
+    let paths = joint_paths(&scene.names, parents);
     let joints = list(&paths, |p| quoted(p));
     let global = |b: usize| frame.global(&bind_transform(scene, b));
-    let bind = list(0..NUM_RIG_BONES, |b| matrix(&global(b).to_homogeneous()));
-    let rest = list(0..NUM_RIG_BONES, |b| {
-        let local = match RIG_BONES[b].parent {
+    let bind = list(0..bones, |b| matrix(&global(b).to_homogeneous()));
+    let rest = list(0..bones, |b| {
+        let local = match parents[b] {
             Some(p) => global(p).inverse() * global(b),
             None => global(b),
         };
         matrix(&local.to_homogeneous())
     });
-    let locals: Vec<(Vector3<f64>, UnitQuaternion<f64>)> = posed_locals(scene)
-        .into_iter()
-        .enumerate()
-        .map(|(b, (t, q))| match RIG_BONES[b].parent {
-            None => frame.root_local(t, q),
-            Some(_) => frame.child_local(t, q),
-        })
-        .collect();
     let _ = write!(
         out,
         r#"    def Skeleton "skeleton" (
@@ -115,23 +109,53 @@ fn skeleton(out: &mut String, scene: &RigScene, frame: &ExportFrame) {
         uniform token[] jointNames = {names}
         uniform matrix4d[] bindTransforms = {bind}
         uniform matrix4d[] restTransforms = {rest}
-        rel skel:animationSource = </body/skeleton/pose>
-
-        def SkelAnimation "pose"
+"#,
+        names = list(&scene.names, |n| quoted(n)),
+    );
+    if let Some(clip) = &scene.clip {
+        let locals: Vec<(Vector3<f64>, UnitQuaternion<f64>)> = pose_locals(scene, &clip.pose)
+            .into_iter()
+            .enumerate()
+            .map(|(b, (t, q))| match parents[b] {
+                None => frame.root_local(t, q),
+                Some(_) => frame.child_local(t, q),
+            })
+            .collect();
+        if scene.pose_as == PoseAs::Action {
+            let _ = writeln!(out, "        rel skel:animationSource = </body/skeleton/{}>", clip.name);
+        }
+        let _ = write!(
+            out,
+            r#"
+        def SkelAnimation "{name}"
         {{
             uniform token[] joints = {joints}
             float3[] translations = {translations}
             quatf[] rotations = {rotations}
-            half3[] scales = {scales}
+            half3[] scales = {scales}{weights}
         }}
-    }}
-
 "#,
-        names = list(&scene.names, |n| quoted(n)),
-        translations = list(&locals, |(t, _)| format!("({}, {}, {})", t.x as f32, t.y as f32, t.z as f32)),
-        rotations = list(&locals, |(_, q)| quat(q)),
-        scales = list(0..NUM_RIG_BONES, |_| "(1, 1, 1)".to_string()),
-    );
+            name = clip.name,
+            translations = list(&locals, |(t, _)| format!("({}, {}, {})", t.x as f32, t.y as f32, t.z as f32)),
+            rotations = list(&locals, |(_, q)| quat(q)),
+            scales = list(0..bones, |_| "(1, 1, 1)".to_string()),
+            weights = animated_weights(scene),
+        );
+    }
+    out.push_str("    }\n\n");
+}
+
+/// The animation's blend-shape attributes: every key at weight 0 (empty without keys).
+fn animated_weights(scene: &RigScene) -> String {
+    let keys = &scene.shape_keys;
+    if keys.is_empty() {
+        return String::new();
+    }
+    format!(
+        "\n            uniform token[] blendShapes = {}\n            float[] blendShapeWeights = {}",
+        list(keys, |k| quoted(&path_element(&k.name))),
+        list(keys, |_| "0".to_string())
+    )
 }
 
 fn mesh_prim(out: &mut String, mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) {
@@ -206,7 +230,31 @@ fn mesh_prim(out: &mut String, mesh: &RiggedMesh, scene: &RigScene, frame: &Expo
             uv_indices = list(&uv_indices, |i| i.to_string()),
         );
     }
+    blend_shapes(out, scene, frame);
     out.push_str("    }\n\n");
+}
+
+/// The mesh's blend shapes (one `BlendShape` child per shape key: its displacements of every
+/// point, in `frame`) and the binding attributes naming them; nothing without keys.
+fn blend_shapes(out: &mut String, scene: &RigScene, frame: &ExportFrame) {
+    let keys = &scene.shape_keys;
+    if keys.is_empty() {
+        return;
+    }
+    let _ = write!(
+        out,
+        "        uniform token[] skel:blendShapes = {}\n        rel skel:blendShapeTargets = {}\n",
+        list(keys, |k| quoted(&path_element(&k.name))),
+        list(keys, |k| format!("</body/mesh/{}>", path_element(&k.name))),
+    );
+    for k in keys {
+        let offsets = list(&points_in(&k.deltas, frame), |p| format!("({}, {}, {})", p[0], p[1], p[2]));
+        let _ = write!(
+            out,
+            "\n        def BlendShape \"{}\"\n        {{\n            uniform vector3f[] offsets = {offsets}\n        }}\n",
+            path_element(&k.name)
+        );
+    }
 }
 
 fn material(out: &mut String, textured: bool) {

@@ -6,6 +6,8 @@ use crate::body::ik::Pose;
 use crate::body::{Gender, RestShape};
 use crate::camera::WeakPerspective;
 
+use super::shape_keys::ShapeOrigin;
+
 /// Which interim body [`InterimBody`] is, in the order a run reports them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum InterimStage {
@@ -28,7 +30,7 @@ impl InterimStage {
 }
 
 /// A body shown before the final one; borrowed for the callback's duration.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct InterimBody<'a> {
     /// Which interim body this is.
     pub stage: InterimStage,
@@ -36,8 +38,9 @@ pub struct InterimBody<'a> {
     pub gender: Gender,
     /// The rest shape (model frame, metres).
     pub rest: &'a RestShape,
-    /// The PCA shape weights it was made from (metres; empty for the mean shape).
-    pub weights: &'a [f64],
+    /// How `rest` was made from the shape space (its weights, metres, are empty for the mean
+    /// shape), for its shape keys.
+    pub shape: ShapeOrigin,
     /// Its pose: the IK solution that poses `rest` to the estimated 3-D pose.
     pub pose: &'a Pose,
     /// The posed vertices (model frame, metres), in `rest`'s order.

@@ -23,6 +23,7 @@ pub mod interim;
 pub mod joints;
 pub mod overlay;
 pub mod repose;
+pub mod shape_keys;
 
 use std::time::Instant;
 
@@ -372,7 +373,7 @@ pub fn run_pipeline_progressive(
             choice.gender.unwrap_or(if evidence.male_probability > 0.5 { Gender::Male } else { Gender::Female });
         let mean = BodyChoice { gender: Some(gender), mean_shape: true, ..choice };
         let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &mean, &mut |_| true)?;
-        show(&interim_of(&body, InterimStage::MeanShape));
+        show(&interim_of(&body, InterimStage::MeanShape)?);
     }
     let (body, classified) = if classify {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
@@ -423,16 +424,16 @@ pub fn run_pipeline_progressive(
 }
 
 /// The interim view of a fitted `body` at `stage`.
-fn interim_of(body: &FittedBody, stage: InterimStage) -> InterimBody<'_> {
-    InterimBody {
+fn interim_of(body: &FittedBody, stage: InterimStage) -> Result<InterimBody<'_>> {
+    Ok(InterimBody {
         stage,
         gender: body.gender,
         rest: &body.rest,
-        weights: &body.weights,
+        shape: shape_keys::ShapeOrigin::of_fit(body)?,
         pose: &body.ik_pose,
         posed_vertices: &body.posed_vertices,
         camera: &body.camera,
-    }
+    })
 }
 
 /// What the gender decision's fits read of the sketch: the estimated pose and camera, the
@@ -505,7 +506,7 @@ fn classify_and_fit(
     let mut last_pair = bodies.split_off(deciding_fits - 2);
     let mut body = if refit(chosen)? {
         if let Some(show) = interim {
-            show(&interim_of(&last_pair[chosen.index()], InterimStage::DecidingFit));
+            show(&interim_of(&last_pair[chosen.index()], InterimStage::DecidingFit)?);
         }
         let body = fit_one(chosen, fit, deciding_fits as f32)?;
         fits.extend(body.fits.iter().cloned());

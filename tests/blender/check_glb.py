@@ -46,8 +46,10 @@ def world_coords():
 
 
 posed = world_coords()
+rest = [mesh.matrix_world @ v.co for v in mesh.data.vertices]
 report["posed_min_z"] = min(c.z for c in posed)
-report["rest_min_z"] = min((mesh.matrix_world @ v.co).z for v in mesh.data.vertices)
+report["rest_min_z"] = min(c.z for c in rest)
+report["rest_posed_gap"] = max((a - b).length for a, b in zip(posed, rest))
 # The elbow bone: its direction against the forearm (its child's head minus its head).
 eb = arm.data.bones[expected["elbow"]]
 report["elbow_bone_length"] = eb.length

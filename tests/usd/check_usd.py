@@ -3,15 +3,19 @@
 # not the usdchecker script), then UsdSkel's own skinning of the mesh by the skeleton and its
 # animation, compared with the expected posed points (in the layer's own units and axes); the
 # stage's up axis and metres per unit as UsdGeom reads them, and the SkelRoot's authored extent
-# size. Prints a JSON report.
-# Usage: python check_usd.py IN.usda EXPECTED.json   (EXPECTED.json: {"posed": [[x, y, z], ...]})
+# size; the blend shapes bound to the mesh against the expected displacements. Prints a JSON
+# report.
+# Usage: python check_usd.py IN.usda EXPECTED.json
+#   (EXPECTED.json: {"posed": [[x, y, z], ...], "keys": [[[dx, dy, dz], ...], ...]})
 import json
 import sys
 
 from pxr import Usd, UsdGeom, UsdSkel, UsdValidation
 
 path, expected_path = sys.argv[1:3]
-posed = json.load(open(expected_path))["posed"]
+expected = json.load(open(expected_path))
+posed = expected["posed"]
+keys = expected.get("keys", [])
 report = {}
 stage = Usd.Stage.Open(path)
 validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
@@ -39,4 +43,14 @@ for binding in bindings:
         report["skinned"] = bool(target.ComputeSkinnedPoints(xforms, points, Usd.TimeCode.Default()))
         report["points"] = len(points)
         report["posed_gap"] = max(max(abs(a - b) for a, b in zip(p, q)) for p, q in zip(points, posed))
+        # The blend shapes UsdSkel binds to the mesh, against the expected displacements.
+        binding_api = UsdSkel.BindingAPI(target.GetPrim())
+        shapes = binding_api.GetBlendShapesAttr().Get() or []
+        shape_targets = binding_api.GetBlendShapeTargetsRel().GetTargets()
+        report["blend_shapes"] = len(shapes)
+        gap = 0.0
+        for path, want in zip(shape_targets, keys):
+            offsets = UsdSkel.BlendShape(stage.GetPrimAtPath(path)).GetOffsetsAttr().Get()
+            gap = max(gap, max(max(abs(a - b) for a, b in zip(o, w)) for o, w in zip(offsets, want)))
+        report["blend_gap"] = gap
 print(json.dumps(report))

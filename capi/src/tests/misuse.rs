@@ -1041,6 +1041,18 @@ fn write_rows(t: &mut Table, fx: &Fx) {
         SKB_ERR_OUT_OF_RANGE,
         0,
     );
+    t.set_bool("skb_export_options_set_twist_bones", skb_export_options_set_twist_bones, o);
+    t.set_bool("skb_export_options_set_ik_targets", skb_export_options_set_ik_targets, o);
+    t.set_bool("skb_export_options_set_shape_keys", skb_export_options_set_shape_keys, o);
+    t.set_int(
+        "skb_export_options_set_pose_as",
+        "pose_as",
+        skb_export_options_set_pose_as,
+        o,
+        u32::MAX,
+        SKB_ERR_OUT_OF_RANGE,
+        0,
+    );
     t.set_int(
         "skb_export_options_set_units",
         "units",
@@ -1062,6 +1074,10 @@ fn write_rows(t: &mut Table, fx: &Fx) {
     // SAFETY: restores the defaults on the live options.
     unsafe {
         skb_export_options_set_naming(o, 0);
+        skb_export_options_set_twist_bones(o, false);
+        skb_export_options_set_ik_targets(o, false);
+        skb_export_options_set_shape_keys(o, false);
+        skb_export_options_set_pose_as(o, SKB_POSE_AS_ACTION);
         skb_export_options_set_units(o, SKB_UNITS_METRES);
         skb_export_options_set_up_axis(o, SKB_UP_Y);
     }
@@ -1259,6 +1275,19 @@ fn rig_rows(t: &mut Table, fx: &Fx) {
     t.copy("skb_rig_copy_posed_vertices", "rig", "dst", "dst_len", skb_rig_copy_posed_vertices, rig, 3 * nv);
     two_buffer_rows(t, "skb_rig_copy_skin_weights", "rig", skb_rig_copy_skin_weights, rig, 4 * nv);
     t.indexed_copy("skb_rig_copy_bone_name", "rig", "bone", skb_rig_copy_bone_name, rig, 0, usize::MAX, 64, 1);
+    t.getter("skb_rig_shape_key_count", "rig", "out", skb_rig_shape_key_count, rig);
+    // A rig with shape keys for the key's copy.
+    let mut keyed: *mut skb_rig = ptr::null_mut();
+    // SAFETY: live mesh and options; `keyed` receives a rig freed below.
+    unsafe {
+        assert_eq!(skb_export_options_set_shape_keys(fx.export_opts, true), SKB_OK);
+        assert_eq!(skb_mesh_rig_new(fx.mesh, fx.export_opts, &mut keyed), SKB_OK);
+        assert_eq!(skb_export_options_set_shape_keys(fx.export_opts, false), SKB_OK);
+    }
+    let k = keyed as *const skb_rig;
+    t.indexed_copy("skb_rig_copy_shape_key", "rig", "key", skb_rig_copy_shape_key, k, 0, usize::MAX, 3 * fx.nv, 1);
+    // SAFETY: the rig made above, freed once.
+    unsafe { skb_rig_free(keyed) };
 }
 
 fn dictionary_rows(t: &mut Table, fx: &Fx) {

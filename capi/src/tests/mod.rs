@@ -7,5 +7,6 @@ mod header;
 mod misuse;
 mod pose;
 mod reliability;
+mod rig;
 mod soak;
 mod thread_stress;

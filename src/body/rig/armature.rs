@@ -22,9 +22,16 @@ pub const ROOT_LENGTH: f64 = 0.1;
 /// Bones shorter than this (metres) are rejected as degenerate.
 pub const MIN_RIG_BONE_LENGTH: f64 = 1e-5;
 
-/// The rest armature of one body. Owns its data; indices follow [`RIG_BONES`].
+/// The rest armature of one body. Owns its data; indices follow [`RIG_BONES`], then any bones
+/// an export adds ([`super::extra`]: twist bones, IK targets), every parent before its children.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Armature {
+    /// Each bone's parent index (`None` for the root).
+    pub parents: Vec<Option<usize>>,
+    /// For a helper bone that follows another in every pose (an IK target,
+    /// [`super::ik_targets`]), that bone's index: its posed head is that bone's, not forward
+    /// kinematics'. `None` for every other bone.
+    pub follows: Vec<Option<usize>>,
     /// Bone heads (where each bone rotates), metres, model frame.
     pub heads: Vec<Vector3<f64>>,
     /// Bone tails, metres, model frame.
@@ -76,12 +83,25 @@ impl Armature {
         let frames = (0..NUM_RIG_BONES)
             .map(|b| bone_frame(&heads[b], &tails[b], rig.rolls[b] as f64))
             .collect::<Result<Vec<_>>>()?;
-        Ok(Armature { heads, tails, frames })
+        let parents = RIG_BONES.iter().map(|b| b.parent).collect();
+        Ok(Armature { parents, follows: vec![None; NUM_RIG_BONES], heads, tails, frames })
+    }
+
+    /// Number of bones.
+    pub fn len(&self) -> usize {
+        self.parents.len()
+    }
+
+    /// True for an armature without bones.
+    pub fn is_empty(&self) -> bool {
+        self.parents.is_empty()
     }
 
     /// Every point moved by `offset` (metres).
     pub fn translated(&self, offset: &Vector3<f64>) -> Armature {
         Armature {
+            parents: self.parents.clone(),
+            follows: self.follows.clone(),
             heads: self.heads.iter().map(|h| h + offset).collect(),
             tails: self.tails.iter().map(|t| t + offset).collect(),
             frames: self.frames.clone(),
@@ -101,9 +121,9 @@ pub struct RigPose {
 }
 
 impl RigPose {
-    /// The rest pose.
-    pub fn rest() -> RigPose {
-        RigPose { rotations: vec![UnitQuaternion::identity(); NUM_RIG_BONES], root_translation: Vector3::zeros() }
+    /// The rest pose of an armature of `bones` bones.
+    pub fn rest(bones: usize) -> RigPose {
+        RigPose { rotations: vec![UnitQuaternion::identity(); bones], root_translation: Vector3::zeros() }
     }
 
     /// The production pose driven by a canonical IK pose (made from the same body's rest
@@ -145,11 +165,12 @@ impl RigPose {
 
     /// Posed bone heads by forward kinematics from `armature`'s rest heads.
     pub fn heads(&self, armature: &Armature) -> Vec<Vector3<f64>> {
-        let mut out: Vec<Vector3<f64>> = Vec::with_capacity(NUM_RIG_BONES);
-        for (b, bone) in RIG_BONES.iter().enumerate() {
-            let h = match bone.parent {
-                None => armature.heads[b] + self.root_translation,
-                Some(p) => out[p] + self.rotations[p] * (armature.heads[b] - armature.heads[p]),
+        let mut out: Vec<Vector3<f64>> = Vec::with_capacity(armature.len());
+        for (b, parent) in armature.parents.iter().enumerate() {
+            let h = match (armature.follows[b], *parent) {
+                (Some(f), _) => out[f],
+                (None, None) => armature.heads[b] + self.root_translation,
+                (None, Some(p)) => out[p] + self.rotations[p] * (armature.heads[b] - armature.heads[p]),
             };
             out.push(h);
         }
@@ -159,17 +180,20 @@ impl RigPose {
     /// The armature in this pose, as a new rest armature (heads and tails moved, frames turned).
     pub fn posed_armature(&self, armature: &Armature) -> Armature {
         let heads = self.heads(armature);
-        let tails = (0..NUM_RIG_BONES).map(|b| heads[b] + self.rotations[b] * (armature.tails[b] - armature.heads[b]));
+        let n = armature.len();
+        let tails = (0..n).map(|b| heads[b] + self.rotations[b] * (armature.tails[b] - armature.heads[b]));
         Armature {
+            parents: armature.parents.clone(),
+            follows: armature.follows.clone(),
             tails: tails.collect(),
-            frames: (0..NUM_RIG_BONES).map(|b| self.rotations[b] * armature.frames[b]).collect(),
+            frames: (0..n).map(|b| self.rotations[b] * armature.frames[b]).collect(),
             heads,
         }
     }
 
     /// Linear blend skinning of rest `vertices` with the rig's `skin` weights: each bone moves a
     /// point `x` to `h'_b + Q_b (x − h_b)`. Errors: a weight list of the wrong length or a bone
-    /// index ≥ 53 ([`Error::OutOfRange`]).
+    /// index beyond the armature's ([`Error::OutOfRange`]).
     pub fn skin(&self, armature: &Armature, vertices: &[[f32; 3]], skin: &[VertexWeights]) -> Result<Vec<[f32; 3]>> {
         if skin.len() != vertices.len() {
             return Err(Error::OutOfRange {
@@ -190,8 +214,8 @@ impl RigPose {
                     if wt == 0.0 {
                         continue;
                     }
-                    if b >= NUM_RIG_BONES {
-                        return Err(Error::OutOfRange { name: "rig bone", detail: format!("{b} >= {NUM_RIG_BONES}") });
+                    if b >= mats.len() {
+                        return Err(Error::OutOfRange { name: "rig bone", detail: format!("{b} >= {}", mats.len()) });
                     }
                     p += (heads[b] + mats[b] * (x - armature.heads[b])) * wt as f64;
                 }
@@ -226,11 +250,12 @@ impl RigPose {
     /// (`(G_parent)⁻¹ G_b` with `G = Q F`; the root's relative to the model frame): the values a
     /// DCC shows as the pose bones' rotations.
     pub fn local_rotations(&self, armature: &Armature) -> Vec<UnitQuaternion<f64>> {
-        let g: Vec<UnitQuaternion<f64>> = (0..NUM_RIG_BONES).map(|b| self.rotations[b] * armature.frames[b]).collect();
-        RIG_BONES
+        let g: Vec<UnitQuaternion<f64>> = (0..armature.len()).map(|b| self.rotations[b] * armature.frames[b]).collect();
+        armature
+            .parents
             .iter()
             .enumerate()
-            .map(|(b, bone)| match bone.parent {
+            .map(|(b, parent)| match *parent {
                 None => g[b],
                 Some(p) => g[p].inverse() * g[b],
             })

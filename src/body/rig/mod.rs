@@ -8,16 +8,22 @@
 //! - [`bones`]: the bone table (names, parents, drivers).
 //! - [`data`]: what the body model stores ([`RigData`]).
 //! - [`armature`]: one body's rest armature and poses.
+//! - [`ik_targets`]: the optional IK target bones at the hands and feet.
+//! - [`shape_keys`]: the fitted body's shape dimensions as shape keys.
+//! - [`twist`]: the twist bones an export may add (upper arms, forearms, thighs).
 //! - [`scene`]: everything an export writes (rest mesh, armature, pose) for the chosen options.
 
 pub mod armature;
 pub mod bones;
 pub mod data;
+pub mod ik_targets;
 pub mod mesh;
 pub mod scene;
+pub mod shape_keys;
+pub mod twist;
 
 pub use armature::{Armature, RigPose};
 pub use bones::{RigBone, NUM_RIG_BONES, RIG_BONES};
 pub use data::{PointRegressor, RigData};
 pub use mesh::{quads_to_triangles, scale_to_height, vertex_normals, y_extent, FaceUvs, RiggedMesh, VertexWeights};
-pub use scene::{Naming, Placement, RestPose, RigOptions, RigScene};
+pub use scene::{Clip, Naming, Placement, PoseAs, RestPose, RigOptions, RigScene};

@@ -24,6 +24,10 @@ pub enum Prop {
     Raw(Vec<u8>),
     /// `i`: an array of 32-bit integers.
     I32s(Vec<i32>),
+    /// `l`: an array of 64-bit integers (key times).
+    I64s(Vec<i64>),
+    /// `f`: an array of floats (key values).
+    F32s(Vec<f32>),
     /// `d`: an array of doubles.
     F64s(Vec<f64>),
 }
@@ -171,6 +175,8 @@ fn write_prop(out: &mut Vec<u8>, prop: &Prop) -> Result<()> {
             out.extend_from_slice(b);
         }
         Prop::I32s(v) => write_array(out, b'i', v.len(), v.iter().flat_map(|x| x.to_le_bytes()))?,
+        Prop::I64s(v) => write_array(out, b'l', v.len(), v.iter().flat_map(|x| x.to_le_bytes()))?,
+        Prop::F32s(v) => write_array(out, b'f', v.len(), v.iter().flat_map(|x| x.to_le_bytes()))?,
         Prop::F64s(v) => write_array(out, b'd', v.len(), v.iter().flat_map(|x| x.to_le_bytes()))?,
     }
     Ok(())

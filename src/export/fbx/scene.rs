@@ -1,14 +1,15 @@
 //! The FBX scene of a rigged body: header and global settings (the [`ExportFrame`]'s unit and
 //! axes), the mesh geometry (polygons, per-vertex normals, per-corner UVs), a `Null` "armature"
-//! holding the 53 `LimbNode` bones in their posed local transforms, the skin (one cluster per
+//! holding the `LimbNode` bones (MakeHuman's 53, then any twist bones) in their posed local transforms, the skin (one cluster per
 //! bone with the bind matrices), the bind pose, and a material with the embedded texture; then
 //! the connections. Every position, normal and transform is written in the frame's axes and
 //! unit.
 use nalgebra::{Matrix4, Vector3};
 
 use super::node::{object_name, p, s, Node, Prop, VERSION};
+use super::{anim, blend};
 use crate::body::rig::{vertex_normals, RiggedMesh};
-use crate::body::rig::{RigScene, NUM_RIG_BONES, RIG_BONES};
+use crate::body::rig::{PoseAs, RigScene};
 use crate::export::frame::{ExportFrame, UpAxis};
 use crate::export::rigged::{bind_transform, posed_locals};
 
@@ -106,13 +107,15 @@ fn header(frame: &ExportFrame) -> Vec<Node> {
     ]
 }
 
-fn definitions(textured: bool) -> Node {
-    let n = NUM_RIG_BONES as i32;
-    let mut types = vec![("GlobalSettings", 1), ("Model", n + 2), ("NodeAttribute", n + 1), ("Geometry", 1)];
-    types.extend([("Material", 1), ("Deformer", n + 1), ("Pose", 1)]);
+fn definitions(bones: usize, textured: bool, animation: &[(&'static str, i32)], shapes: [i32; 2]) -> Node {
+    let n = bones as i32;
+    let mut types =
+        vec![("GlobalSettings", 1), ("Model", n + 2), ("NodeAttribute", n + 1), ("Geometry", 1 + shapes[0])];
+    types.extend([("Material", 1), ("Deformer", n + 1 + shapes[1]), ("Pose", 1)]);
     if textured {
         types.extend([("Texture", 1), ("Video", 1)]);
     }
+    types.extend_from_slice(animation);
     let mut children = vec![
         Node::new("Version", vec![Prop::I32(100)]),
         Node::new("Count", vec![Prop::I32(types.iter().map(|t| t.1).sum())]),
@@ -125,18 +128,22 @@ fn definitions(textured: bool) -> Node {
     Node::new("Definitions", vec![]).with(children)
 }
 
-/// The mesh geometry: polygons (a quad whose last two corners agree is a triangle), normals per
-/// vertex, UVs per polygon corner (v up, FBX's convention), one material for all; positions
-/// and normals in `frame`.
-fn geometry(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) -> Node {
-    let vertices: Vec<f64> = scene
-        .rest_vertices
+/// `points` (model frame, metres) in `frame`, flattened x, y, z: an FBX `Vertices` array.
+pub(super) fn flat_points(points: &[[f32; 3]], frame: &ExportFrame) -> Vec<f64> {
+    points
         .iter()
         .flat_map(|p| {
             let q = frame.point(Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64));
             [q.x, q.y, q.z]
         })
-        .collect();
+        .collect()
+}
+
+/// The mesh geometry: polygons (a quad whose last two corners agree is a triangle), normals per
+/// vertex, UVs per polygon corner (v up, FBX's convention), one material for all; positions
+/// and normals in `frame`.
+fn geometry(mesh: &RiggedMesh, scene: &RigScene, frame: &ExportFrame) -> Node {
+    let vertices = flat_points(&scene.rest_vertices, frame);
     let mut polygon = Vec::with_capacity(mesh.quads.len() * 4);
     let mut uv_index = Vec::with_capacity(mesh.quads.len() * 4);
     for (f, q) in mesh.quads.iter().enumerate() {
@@ -213,7 +220,7 @@ fn skeleton(scene: &RigScene, frame: &ExportFrame) -> Vec<Node> {
     };
     let mut nodes = vec![model(ARMATURE, "armature", "Null", vec![]), attr(ARMATURE_ATTR, "armature", "Null", "Null")];
     for (b, &(t, q)) in posed_locals(scene).iter().enumerate() {
-        let (t, q) = match RIG_BONES[b].parent {
+        let (t, q) = match scene.armature.parents[b] {
             None => frame.root_local(t, q),
             Some(_) => frame.child_local(t, q),
         };
@@ -232,7 +239,7 @@ fn skeleton(scene: &RigScene, frame: &ExportFrame) -> Vec<Node> {
 /// moves none), `TransformLink` the bone's bind matrix, `Transform` its inverse (the mesh sits
 /// at the origin unrotated); in `frame`.
 fn skin(scene: &RigScene, frame: &ExportFrame) -> Vec<Node> {
-    let mut per_bone: Vec<(Vec<i32>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); NUM_RIG_BONES];
+    let mut per_bone: Vec<(Vec<i32>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); scene.armature.len()];
     for (v, w) in scene.skin.iter().enumerate() {
         for k in 0..w.bones.len() {
             if w.weights[k] > 0.0 {
@@ -277,12 +284,13 @@ fn bind_pose(scene: &RigScene, frame: &ExportFrame) -> Node {
     let mut children = vec![
         Node::new("Type", vec![s("BindPose")]),
         Node::new("Version", vec![Prop::I32(100)]),
-        Node::new("NbPoseNodes", vec![Prop::I32(NUM_RIG_BONES as i32 + 2)]),
+        Node::new("NbPoseNodes", vec![Prop::I32(scene.armature.len() as i32 + 2)]),
         entry(MESH_MODEL, Matrix4::identity()),
         entry(ARMATURE, Matrix4::identity()),
     ];
     children.extend(
-        (0..NUM_RIG_BONES).map(|b| entry(bone_model(b), frame.global(&bind_transform(scene, b)).to_homogeneous())),
+        (0..scene.armature.len())
+            .map(|b| entry(bone_model(b), frame.global(&bind_transform(scene, b)).to_homogeneous())),
     );
     Node::new("Pose", vec![Prop::I64(BIND_POSE), object_name("BindPose", "Pose"), s("BindPose")]).with(children)
 }
@@ -322,14 +330,14 @@ fn material(texture_png: Option<&[u8]>) -> Vec<Node> {
     nodes
 }
 
-fn connections(textured: bool) -> Node {
+fn connections(parents: &[Option<usize>], textured: bool) -> Node {
     let mut c = vec![connect(MESH_MODEL, 0), connect(ARMATURE, 0), connect(ARMATURE_ATTR, ARMATURE)];
-    for (b, bone) in RIG_BONES.iter().enumerate() {
-        c.push(connect(bone_model(b), bone.parent.map_or(ARMATURE, bone_model)));
+    for (b, parent) in parents.iter().enumerate() {
+        c.push(connect(bone_model(b), parent.map_or(ARMATURE, bone_model)));
         c.push(connect(bone_attr(b), bone_model(b)));
     }
     c.extend([connect(GEOMETRY, MESH_MODEL), connect(MATERIAL, MESH_MODEL), connect(SKIN, GEOMETRY)]);
-    for b in 0..NUM_RIG_BONES {
+    for b in 0..parents.len() {
         c.push(connect(cluster(b), SKIN));
         c.push(connect(bone_model(b), cluster(b)));
     }
@@ -347,10 +355,22 @@ pub fn document(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>,
     objects.extend(skin(scene, frame));
     objects.push(bind_pose(scene, frame));
     objects.extend(material(texture_png));
+    let mut links = connections(&scene.armature.parents, texture_png.is_some());
+    // The pose as rest: the bones stand at rest; with `Both`, the clip is an animation stack.
+    let mut counts = Vec::new();
+    if let Some(clip) = scene.clip.as_ref().filter(|_| scene.pose_as == PoseAs::Both) {
+        let (anim, anim_links, anim_counts) = anim::clip_objects(scene, clip, frame, bone_model);
+        objects.extend(anim);
+        links.children.extend(anim_links);
+        counts = anim_counts;
+    }
+    let (shapes, shape_links, shape_counts) = blend::blend_objects(scene, frame, GEOMETRY);
+    objects.extend(shapes);
+    links.children.extend(shape_links);
     let mut nodes = header(frame);
-    nodes.push(definitions(texture_png.is_some()));
+    nodes.push(definitions(scene.armature.len(), texture_png.is_some(), &counts, shape_counts));
     nodes.push(Node::new("Objects", vec![]).with(objects));
-    nodes.push(connections(texture_png.is_some()));
+    nodes.push(links);
     nodes
 }
 
@@ -361,7 +381,7 @@ mod tests {
     use super::*;
     use crate::body::ik::{solve, IkOptions};
     use crate::body::procedural::random_pose;
-    use crate::body::rig::RigOptions;
+    use crate::body::rig::{RigOptions, NUM_RIG_BONES};
     use crate::body::{BodyModel, Gender};
     use rand::SeedableRng;
 
