@@ -35,6 +35,7 @@ mod rig;
 mod pose;
 mod joints_io;
 mod detect;
+mod facing;
 mod fit;
 mod pipeline;
 mod texture;
@@ -47,6 +48,7 @@ mod tests;
 // Rust-side list cannot drift from the header: the header is generated from the same items.
 pub use body::*;
 pub use detect::*;
+pub use facing::*;
 pub use error::*;
 pub use export::*;
 pub use fit::*;
