@@ -2045,8 +2045,9 @@ void skb_sketch_options_free(struct skb_sketch_options *opts);
 skb_status skb_sketch_options_set_style(struct skb_sketch_options *opts, uint32_t style);
 
 /**
- * Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; each within ±90°)
- * instead of random near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+ * Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; yaw within ±180°
+ * (±180° a back view, −90° a left profile), pitch and roll within ±90°) instead of random
+ * near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
  */
 skb_status skb_sketch_options_set_camera(struct skb_sketch_options *opts,
                                          double yaw_deg,

@@ -496,7 +496,12 @@ pub(crate) unsafe fn outputs<'a>(
 }
 
 /// Writes joints and confidences.
-pub(crate) fn write_joints(j: &sketchbody_core::skeleton::Joints2, c: &[f64; NUM_JOINTS], xy: &mut [f64], cf: &mut [f64]) {
+pub(crate) fn write_joints(
+    j: &sketchbody_core::skeleton::Joints2,
+    c: &[f64; NUM_JOINTS],
+    xy: &mut [f64],
+    cf: &mut [f64],
+) {
     for k in 0..NUM_JOINTS {
         xy[2 * k] = j.xy[k][0];
         xy[2 * k + 1] = j.xy[k][1];

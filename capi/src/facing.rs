@@ -6,8 +6,8 @@
 use sketchbody_core::detect::facing::{swap_sides, Facing, FacingEstimate};
 use sketchbody_core::error::Error;
 
-use super::detect::{figure_info, figure_of, outputs, skb_detect_options, skb_figure_info, write_joints};
 use super::body::skb_context;
+use super::detect::{figure_info, figure_of, outputs, skb_detect_options, skb_figure_info, write_joints};
 use super::image::{skb_image, view_of};
 use super::pipeline::skb_result;
 use super::pose::{joints_in, skb_joints2d};

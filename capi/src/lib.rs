@@ -48,9 +48,9 @@ mod tests;
 // Rust-side list cannot drift from the header: the header is generated from the same items.
 pub use body::*;
 pub use detect::*;
-pub use facing::*;
 pub use error::*;
 pub use export::*;
+pub use facing::*;
 pub use fit::*;
 pub use image::*;
 pub use joints_io::*;

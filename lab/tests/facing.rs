@@ -29,8 +29,14 @@ fn evidence(seed: u64, yaw_deg: f64, hair: Hair) -> (Evidence, [[f64; 2]; 15]) {
     };
     let s = renderer.render(&req).unwrap();
     let view = ImageView::gray(&s.pixels, 384, 384).unwrap();
-    let e = gather(&view, &Model::embedded().unwrap(), &LandmarkNet::embedded().unwrap(), Backend::Auto, &FigureOptions::default())
-        .unwrap();
+    let e = gather(
+        &view,
+        &Model::embedded().unwrap(),
+        &LandmarkNet::embedded().unwrap(),
+        Backend::Auto,
+        &FigureOptions::default(),
+    )
+    .unwrap();
     (e, s.truth.joints2d.as_slice().try_into().unwrap())
 }
 

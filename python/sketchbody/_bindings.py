@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "2b9da56cccc5f7ba5a62068008f57369d43d2e03fd7b8f8ec57592611c467018"
+HEADER_SHA256 = "7e3b733cf6f9a2a26ce061168b8a998b717a90ff85844a7c5a3fd08d002c5ece"
 
 # ---- constants (#define) ----
 
@@ -3396,8 +3396,9 @@ FUNCTIONS["skb_sketch_options_set_style"] = (
     ),
 )
 
-# Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; each within ±90°)
-# instead of random near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+# Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; yaw within ±180°
+# (±180° a back view, −90° a left profile), pitch and roll within ±90°) instead of random
+# near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
 FUNCTIONS["skb_sketch_options_set_camera"] = (
     ctypes.c_uint32,
     [

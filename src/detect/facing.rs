@@ -474,11 +474,13 @@ mod tests {
     fn features_read_the_labellings_the_face_and_the_head_ink() {
         let f = front();
         let b = swap_sides(&f);
-        let x = facing_features(&FacingInput { sketch: Some(&f), blazepose: Some(&b), landmarks: None, head_ink: None });
+        let x =
+            facing_features(&FacingInput { sketch: Some(&f), blazepose: Some(&b), landmarks: None, head_ink: None });
         assert_eq!(x[0], 1.0);
         assert_eq!((x[1], x[4]), (1.0, 1.0));
         assert!(x[2] > 0.4 && x[5] < -0.4 && x[3] == x[2] && x[6] == -x[5]);
-        let none = facing_features(&FacingInput { sketch: None, blazepose: None, landmarks: None, head_ink: Some(0.3) });
+        let none =
+            facing_features(&FacingInput { sketch: None, blazepose: None, landmarks: None, head_ink: Some(0.3) });
         assert_eq!(none[1..12], [0.0; 11]);
         assert_eq!(none[12], 0.3);
         // The head's inside: an empty circle outline is no ink, a filled head all ink.

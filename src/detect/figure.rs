@@ -13,9 +13,9 @@
 //! (PCK@0.2), and the figure's confidence is their mean, the expected fraction of correct joints.
 
 use super::calibration::{clamp_score, joint_features, log_odds, predict, presence_features, sigmoid, Calibration};
+use super::facing::{self, FacingEstimate, FacingInput, FacingModel};
 use super::landmark::roi::Roi;
 use super::landmark::{detect_blazepose, retry_from, BlazePoseDetection, BlazePoseOptions, LandmarkNet};
-use super::facing::{self, FacingEstimate, FacingInput, FacingModel};
 use super::{detect, DetectOptions, Detection, Model};
 use crate::error::{Error, Result};
 use crate::image::ImageView;
@@ -163,7 +163,11 @@ pub struct Evidence {
 
 /// The head ink of `image` for the candidates of `e` ([`Evidence::head_ink`]).
 pub fn head_ink_of(image: &ImageView<'_>, e: &Evidence) -> Option<f64> {
-    let j = e.blazepose.as_ref().map(|b| &b.joints).or_else(|| e.sketch.as_ref().and_then(|v| v.first()).map(|d| &d.joints));
+    let j = e
+        .blazepose
+        .as_ref()
+        .map(|b| &b.joints)
+        .or_else(|| e.sketch.as_ref().and_then(|v| v.first()).map(|d| &d.joints));
     j.and_then(|j| facing::head_ink(image, j))
 }
 

@@ -120,7 +120,8 @@ pub fn detection_json(f: &Figure) -> Value {
 /// or `unknown`), the probability of each of the four, and whether the labelling rule swapped
 /// the detector's left and right.
 pub fn facing_json(f: &FacingEstimate) -> Value {
-    let p: Map<String, Value> = FACINGS.iter().zip(f.probabilities).map(|(k, p)| (k.name().to_string(), json!(p))).collect();
+    let p: Map<String, Value> =
+        FACINGS.iter().zip(f.probabilities).map(|(k, p)| (k.name().to_string(), json!(p))).collect();
     json!({"facing": f.facing.name(), "probabilities": p, "swapped": f.swapped})
 }
 
@@ -264,7 +265,10 @@ mod tests {
     /// malformed entry; a file without them reads as having none.
     #[test]
     fn facing_and_alternatives_round_trip() {
-        let j = Joints2 { xy: std::array::from_fn(|k| [100.0 + 3.0 * k as f64, 20.0 * k as f64]), visible: [true; NUM_JOINTS] };
+        let j = Joints2 {
+            xy: std::array::from_fn(|k| [100.0 + 3.0 * k as f64, 20.0 * k as f64]),
+            visible: [true; NUM_JOINTS],
+        };
         let e = crate::detect::facing::estimate(&j, [0.7, 0.1, 0.15, 0.05], true);
         let mut v = joints2d_json(&j).unwrap();
         assert_eq!(parse_facing(&v).unwrap(), None);
@@ -277,7 +281,10 @@ mod tests {
         let f = parse_facing(&back).unwrap().unwrap();
         assert_eq!(f, ReportedFacing { facing: Facing::Front, probabilities: [0.7, 0.1, 0.15, 0.05], swapped: true });
         let alts = parse_alternatives(&back).unwrap();
-        assert_eq!(alts, vec![Alternative { swap: "left_right".into(), score: e.alternative_score, joints: e.alternative }]);
+        assert_eq!(
+            alts,
+            vec![Alternative { swap: "left_right".into(), score: e.alternative_score, joints: e.alternative }]
+        );
         assert_eq!(alts[0].joints.xy[crate::skeleton::joint::L_WRIST], j.xy[crate::skeleton::joint::R_WRIST]);
         let mut wrong = back.clone();
         wrong["facing"]["facing"] = json!("up");

@@ -53,7 +53,11 @@ impl View {
             View::Profile => rng.random_range(70.0..=110.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 },
             View::AnyYaw => rng.random_range(-180.0..=180.0),
         };
-        Some(CameraAngles { yaw_deg: yaw, pitch_deg: rng.random_range(-10.0..=10.0), roll_deg: rng.random_range(-5.0..=5.0) })
+        Some(CameraAngles {
+            yaw_deg: yaw,
+            pitch_deg: rng.random_range(-10.0..=10.0),
+            roll_deg: rng.random_range(-5.0..=5.0),
+        })
     }
 
     fn label(self) -> &'static str {
@@ -125,6 +129,18 @@ fn truth_joints(t: &GroundTruth, i: usize) -> Result<[[f64; 2]; NUM_JOINTS], Cli
     t.joints2d.as_slice().try_into().map_err(|_| CliError(format!("sketch {i}: {} true joints", t.joints2d.len())))
 }
 
+/// The sketches of a rendered dataset folder: its `STEM.png` files that have a `STEM.json`, in
+/// file-name order.
+pub fn dataset_images(dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, CliError> {
+    let mut v: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| CliError(format!("{}: {e}", dir.display())))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "png") && p.with_extension("json").is_file())
+        .collect();
+    v.sort();
+    Ok(v)
+}
+
 /// Builds image `i` of `spec` with its truth.
 fn image_of(
     spec: &SetSpec,
@@ -188,12 +204,7 @@ pub fn gather_set(spec: &SetSpec, ctx: &SetContext<'_>, options: &FigureOptions)
     };
     let stems = match spec {
         SetSpec::Dataset { dir, n } => {
-            let mut v: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
-                .map_err(|e| CliError(format!("{}: {e}", dir.display())))?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "png") && p.with_extension("json").is_file())
-                .collect();
-            v.sort();
+            let mut v = dataset_images(dir)?;
             if v.len() < *n {
                 return Err(CliError(format!("{}: {} samples, {n} asked", dir.display(), v.len())));
             }

@@ -20,7 +20,7 @@ use crate::backend_sets::{gather_set, SetContext, SetSpec, View};
 use sketchbody_cli::CliError;
 
 /// The set names `--sets` takes.
-pub const SET_NAMES: &str = "synthetic, back (back views), profile, art (art styles), faceless (no hair), dataset:DIR (a rendered dataset folder, e.g. the Blender set), parse, xdog, pencil, flat, negatives, and the training filters npr-sobel, npr-charcoal, npr-marker";
+pub const SET_NAMES: &str = "synthetic, back (back views), profile, art (art styles), faceless (no hair), dataset:DIR (every sketch of a rendered dataset folder, e.g. the Blender set), parse, xdog, pencil, flat, negatives, and the training filters npr-sobel, npr-charcoal, npr-marker";
 
 /// The benchmark sets named in `names` (comma separated, from [`SET_NAMES`]); the PARSE sets
 /// take photos `photos` (the test split 101-305 for the benchmark).
@@ -36,6 +36,7 @@ pub fn benchmark_sets(
     let mut out = Vec::new();
     for name in names.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         if let Some(dir) = name.strip_prefix("dataset:") {
+            let n = crate::backend_sets::dataset_images(std::path::Path::new(dir))?.len();
             out.push(SetSpec::Dataset { dir: dir.into(), n });
             continue;
         }
@@ -44,7 +45,9 @@ pub fn benchmark_sets(
             "back" => out.push(SetSpec::Synthetic { seed, n, size, hair, view: View::Back, art: false }),
             "profile" => out.push(SetSpec::Synthetic { seed, n, size, hair, view: View::Profile, art: false }),
             "art" => out.push(SetSpec::Synthetic { seed, n, size, hair, view: View::Random, art: true }),
-            "faceless" => out.push(SetSpec::Synthetic { seed, n, size, hair: Some(Hair::None), view: View::Random, art: false }),
+            "faceless" => {
+                out.push(SetSpec::Synthetic { seed, n, size, hair: Some(Hair::None), view: View::Random, art: false })
+            }
             "parse" => out.push(SetSpec::Parse { first, last, style: None, npr: None }),
             "negatives" => out.extend(NegativePage::ALL.map(|kind| SetSpec::Negative { kind, n: 60, seed })),
             other => match (other.parse::<Stylisation>(), other.strip_prefix("npr-").and_then(PhotoNpr::from_name)) {

@@ -49,8 +49,8 @@ pub struct Args {
     /// The backends' proxy benchmark instead of the models' PCK: comma-separated sets from
     /// synthetic (the held-out sketches above), back, profile (the same renderer's back views
     /// and profiles, yaw 180° ± 20° and ±(70°..110°)), art (painted in art styles), faceless
-    /// (hair none), dataset:DIR (the first --n samples of a rendered dataset folder, e.g. the
-    /// Blender set), parse (PARSE test photos 101-305), xdog, pencil, flat (those photos
+    /// (hair none), dataset:DIR (every sketch of a rendered dataset folder, e.g. the Blender
+    /// set), parse (PARSE test photos 101-305), xdog, pencil, flat (those photos
     /// stylised), negatives (blank, text and clutter pages); prints PCK, the no-figure rate and
     /// time per set for fmp, blazepose, auto (also without averaging the joints the backends
     /// agree on, by confidence alone and per limb) and the strict variants; for auto with and

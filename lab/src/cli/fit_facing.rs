@@ -43,7 +43,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let r = renderer(a.mocap.as_deref())?;
     let parse = PathBuf::new();
     let ctx = SetContext { renderer: &r, parse_dir: &parse, model: &model, net: &net };
-    let mut specs = vec![SetSpec::Synthetic { seed: a.seed, n: a.n, size: 512, hair: None, view: View::AnyYaw, art: false }];
+    let mut specs =
+        vec![SetSpec::Synthetic { seed: a.seed, n: a.n, size: 512, hair: None, view: View::AnyYaw, art: false }];
     if a.art > 0 {
         specs.push(SetSpec::Synthetic {
             seed: a.seed + 1000,

@@ -6,6 +6,7 @@
 
 use crate::detect::calibration_fit::fit_logistic;
 use sketchbody::detect::calibration::{Calibration, JointModels, PresenceModels};
+use sketchbody::detect::facing::{swap_sides, Facing};
 use sketchbody::detect::figure::{
     features, gather, presence_log_odds, retry_blazepose_from_sketch, Backend, Evidence, FigureOptions,
 };
@@ -14,7 +15,6 @@ use sketchbody::detect::Model;
 use sketchbody::error::{Error, Result};
 use sketchbody::image::ImageView;
 use sketchbody::pipeline::figure::decide;
-use sketchbody::detect::facing::{swap_sides, Facing};
 use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 
 use super::metrics::{pck, pck_normaliser};
