@@ -1,9 +1,10 @@
 //! The figure's facing (issue 51): front, back, left or right profile, decided from the evidence
 //! the image holds, and the left/right labelling that follows from it. The evidence
-//! ([`facing_features`]): which way each backend labelled the figure (its handedness, the
-//! character's left shoulder and hip on the image's right or left of the right ones), BlazePose's
-//! face landmarks (their visibility, the nose beside the ears) and its depth of the shoulders,
-//! and the ink inside the head (hair drawn over a head seen from behind, or a face). A
+//! ([`facing_features`]): how far apart each backend put the two sides (small for a profile),
+//! BlazePose's face landmarks (their visibility, the nose beside the ears) and its depth of the
+//! shoulders, and the ink inside the head and the direction of its strokes (hair drawn over a
+//! head seen from behind, or a face). Which side a backend labelled left is not evidence: both
+//! label a faceless outline either way. A
 //! multinomial logistic model ([`FacingModel`], fitted by `sketchbody-lab fit-facing` on rendered
 //! sketches of every yaw, embedded from `assets/facing_model.json`) turns them into the four
 //! probabilities; under [`DECIDE`] the facing is [`Facing::Unknown`].
@@ -132,13 +133,11 @@ pub struct FacingModel {
 }
 
 /// The features of [`facing_features`], in order.
-pub const FEATURES: [&str; 13] = [
+pub const FEATURES: [&str; 12] = [
     "bias",
     "sketch_present",
-    "sketch_handedness",
     "sketch_spread",
     "blazepose_present",
-    "blazepose_handedness",
     "blazepose_spread",
     "nose_visibility",
     "eye_mouth_visibility",
@@ -146,6 +145,7 @@ pub const FEATURES: [&str; 13] = [
     "nose_offset",
     "shoulder_depth",
     "head_ink",
+    "head_strokes_along",
 ];
 
 /// Number of [`FEATURES`].
@@ -259,68 +259,85 @@ pub struct FacingInput<'a> {
     pub blazepose: Option<&'a Joints2>,
     /// BlazePose's landmarks (at least the 33 pose landmarks), image px.
     pub landmarks: Option<&'a [super::landmark::Landmark]>,
-    /// The fraction of the head's inside that is ink ([`head_ink`]).
-    pub head_ink: Option<f64>,
+    /// The ink inside the head ([`head_ink`]).
+    pub head_ink: Option<HeadInk>,
 }
 
-/// The features of [`FEATURES`] (absent evidence as 0; each backend's presence as 1 or 0).
+/// The features of [`FEATURES`] (absent evidence as 0, the strokes' direction as 0.5; each
+/// backend's presence as 1 or 0). None of them reads which side a backend labelled left: a
+/// backend's labelling of a faceless outline is no evidence of its facing.
 pub fn facing_features(input: &FacingInput<'_>) -> [f64; NUM_FEATURES] {
     let mut x = [0.0; NUM_FEATURES];
     x[0] = 1.0;
     if let Some(s) = input.sketch {
-        let h = handedness(s);
-        (x[1], x[2], x[3]) = (1.0, h, h.abs());
+        (x[1], x[2]) = (1.0, handedness(s).abs());
     }
     if let Some(b) = input.blazepose {
-        let h = handedness(b);
-        (x[4], x[5], x[6]) = (1.0, h, h.abs());
+        (x[3], x[4]) = (1.0, handedness(b).abs());
     }
     if let (Some(l), Some(b)) = (input.landmarks, input.blazepose) {
         if l.len() >= super::landmark::NUM_POSE_LANDMARKS {
             let (len, across) = torso_frame(b);
-            x[7] = l[mp::NOSE].visibility;
-            x[8] = mp::EYES_MOUTH.iter().map(|&i| l[i].visibility).sum::<f64>() / mp::EYES_MOUTH.len() as f64;
-            x[9] = l[mp::L_EAR].visibility - l[mp::R_EAR].visibility;
+            x[5] = l[mp::NOSE].visibility;
+            x[6] = mp::EYES_MOUTH.iter().map(|&i| l[i].visibility).sum::<f64>() / mp::EYES_MOUTH.len() as f64;
+            x[7] = l[mp::L_EAR].visibility - l[mp::R_EAR].visibility;
             let ears = [0.5 * (l[mp::L_EAR].x + l[mp::R_EAR].x), 0.5 * (l[mp::L_EAR].y + l[mp::R_EAR].y)];
             let off = ((l[mp::NOSE].x - ears[0]) * across[0] + (l[mp::NOSE].y - ears[1]) * across[1]) / (0.25 * len);
-            x[10] = if off.is_finite() { off.clamp(-2.0, 2.0) } else { 0.0 };
+            x[8] = if off.is_finite() { off.clamp(-2.0, 2.0) } else { 0.0 };
             let dz = (l[mp::L_SHOULDER].z - l[mp::R_SHOULDER].z) / len;
-            x[11] = if dz.is_finite() { dz.clamp(-2.0, 2.0) } else { 0.0 };
+            x[9] = if dz.is_finite() { dz.clamp(-2.0, 2.0) } else { 0.0 };
         }
     }
-    x[12] = input.head_ink.unwrap_or(0.0);
+    let head = input.head_ink.unwrap_or(HeadInk { ink: 0.0, along: 0.5 });
+    (x[10], x[11]) = (head.ink, head.along);
     x
 }
 
-/// The fraction of dark pixels (gray under 128) of `image` inside the disk at the head joint
-/// of `j` whose radius is 0.3 × the head-to-neck distance: the inside of the head, where a face
-/// or hair drawn over the back of the head are, not its outline. `None` for a disk of under
-/// 2 px radius or outside the image.
-pub fn head_ink(image: &ImageView<'_>, j: &Joints2) -> Option<f64> {
+/// The ink inside a figure's head ([`head_ink`]): where a face, or hair drawn over the back of
+/// the head, is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeadInk {
+    /// The fraction of dark pixels (gray under 128), in [0, 1].
+    pub ink: f64,
+    /// The share of the gray gradient's magnitude across the head's axis (neck to head): strokes
+    /// running along the axis, as hair seen from behind, give values near 1, the horizontal
+    /// strokes of eyes, brows and mouth low ones; 0.5 without gradient. In [0, 1].
+    pub along: f64,
+}
+
+/// The ink of `image` inside the disk at the head joint of `j` whose radius is 0.3 × the
+/// head-to-neck distance: the inside of the head, not its outline. `None` for a disk of under
+/// 2 px radius or one with no pixel inside the image.
+pub fn head_ink(image: &ImageView<'_>, j: &Joints2) -> Option<HeadInk> {
     let (h, n) = (j.xy[joint::HEAD], j.xy[joint::NECK]);
-    let r = 0.3 * (h[0] - n[0]).hypot(h[1] - n[1]);
+    let len = (h[0] - n[0]).hypot(h[1] - n[1]);
+    let r = 0.3 * len;
     if !(r >= 2.0) || !h[0].is_finite() || !h[1].is_finite() {
         return None;
     }
-    let (w, hgt) = (image.width() as f64, image.height() as f64);
-    let (x0, x1) = ((h[0] - r).floor().max(0.0), (h[0] + r).ceil().min(w));
-    let (y0, y1) = ((h[1] - r).floor().max(0.0), (h[1] + r).ceil().min(hgt));
-    let (mut ink, mut all) = (0usize, 0usize);
-    let mut y = y0;
-    while y < y1 {
-        let mut x = x0;
-        while x < x1 {
-            if (x + 0.5 - h[0]).hypot(y + 0.5 - h[1]) <= r {
-                all += 1;
-                if gray_at(image, x as usize, y as usize) < 128 {
-                    ink += 1;
-                }
+    let axis = [(h[0] - n[0]) / len, (h[1] - n[1]) / len];
+    let (w, hgt) = (image.width(), image.height());
+    let lo = |c: f64| (c - r).floor().max(0.0) as usize;
+    let hi = |c: f64, m: usize| ((c + r).ceil().max(0.0) as usize).min(m);
+    let (mut ink, mut all, mut across, mut along_axis) = (0usize, 0usize, 0.0, 0.0);
+    for y in lo(h[1])..hi(h[1], hgt) {
+        for x in lo(h[0])..hi(h[0], w) {
+            if (x as f64 + 0.5 - h[0]).hypot(y as f64 + 0.5 - h[1]) > r {
+                continue;
             }
-            x += 1.0;
+            all += 1;
+            ink += usize::from(gray_at(image, x, y) < 128);
+            if x == 0 || y == 0 || x + 1 >= w || y + 1 >= hgt {
+                continue;
+            }
+            let gx = f64::from(gray_at(image, x + 1, y)) - f64::from(gray_at(image, x - 1, y));
+            let gy = f64::from(gray_at(image, x, y + 1)) - f64::from(gray_at(image, x, y - 1));
+            along_axis += (gx * axis[0] + gy * axis[1]).abs();
+            across += (gx * axis[1] - gy * axis[0]).abs();
         }
-        y += 1.0;
     }
-    (all > 0).then(|| ink as f64 / all as f64)
+    let total = across + along_axis;
+    (all > 0).then(|| HeadInk { ink: ink as f64 / all as f64, along: if total > 0.0 { across / total } else { 0.5 } })
 }
 
 /// The gray value of pixel (`x`, `y`) of a 1, 3 or 4 channel image.
@@ -471,18 +488,21 @@ mod tests {
     }
 
     #[test]
-    fn features_read_the_labellings_the_face_and_the_head_ink() {
+    fn features_read_the_spread_the_face_and_the_head_ink() {
         let f = front();
         let b = swap_sides(&f);
         let x =
             facing_features(&FacingInput { sketch: Some(&f), blazepose: Some(&b), landmarks: None, head_ink: None });
         assert_eq!(x[0], 1.0);
-        assert_eq!((x[1], x[4]), (1.0, 1.0));
-        assert!(x[2] > 0.4 && x[5] < -0.4 && x[3] == x[2] && x[6] == -x[5]);
+        assert_eq!((x[1], x[3]), (1.0, 1.0));
+        // Either labelling gives the same features: only the spread of the sides is read.
+        assert!(x[2] > 0.4 && x[2] == x[4]);
+        assert_eq!(x[11], 0.5);
+        let head = HeadInk { ink: 0.3, along: 0.8 };
         let none =
-            facing_features(&FacingInput { sketch: None, blazepose: None, landmarks: None, head_ink: Some(0.3) });
-        assert_eq!(none[1..12], [0.0; 11]);
-        assert_eq!(none[12], 0.3);
+            facing_features(&FacingInput { sketch: None, blazepose: None, landmarks: None, head_ink: Some(head) });
+        assert_eq!(none[1..10], [0.0; 9]);
+        assert_eq!((none[10], none[11]), (0.3, 0.8));
         // The head's inside: an empty circle outline is no ink, a filled head all ink.
         let (w, h) = (400usize, 460usize);
         let mut px = vec![255u8; w * h];
@@ -496,9 +516,18 @@ mod tests {
             }
         }
         let v = ImageView::gray(&px, w, h).unwrap();
-        assert_eq!(head_ink(&v, &f), Some(0.0));
+        assert_eq!(head_ink(&v, &f), Some(HeadInk { ink: 0.0, along: 0.5 }));
         let filled: Vec<u8> = px.iter().map(|_| 0).collect();
-        assert_eq!(head_ink(&ImageView::gray(&filled, w, h).unwrap(), &f), Some(1.0));
+        assert_eq!(head_ink(&ImageView::gray(&filled, w, h).unwrap(), &f), Some(HeadInk { ink: 1.0, along: 0.5 }));
+        // Strokes along the head's axis (hair seen from behind) and across it (a mouth, brows).
+        let stripes = |vertical: bool| -> Vec<u8> {
+            (0..w * h).map(|i| if (if vertical { i % w } else { i / w }) % 6 == 0 { 0 } else { 255 }).collect()
+        };
+        let (v_px, h_px) = (stripes(true), stripes(false));
+        let along = head_ink(&ImageView::gray(&v_px, w, h).unwrap(), &f).unwrap();
+        let across = head_ink(&ImageView::gray(&h_px, w, h).unwrap(), &f).unwrap();
+        assert!(along.along > 0.99 && across.along < 0.01, "{along:?} {across:?}");
+        assert!((along.ink - 1.0 / 6.0).abs() < 0.05);
         let mut tiny = f;
         tiny.xy[joint::NECK] = [c[0], c[1] + 3.0];
         assert_eq!(head_ink(&v, &tiny), None);

@@ -156,13 +156,13 @@ pub struct Evidence {
     pub sketch_threshold: f64,
     /// BlazePose's figure (any pose flag), `None` when it did not run or found no ink.
     pub blazepose: Option<BlazePoseDetection>,
-    /// The fraction of the head's inside that is ink ([`facing::head_ink`] at BlazePose's
+    /// The ink inside the head ([`facing::head_ink`] at BlazePose's
     /// head, else the sketch model's), `None` without a candidate: evidence of the facing.
-    pub head_ink: Option<f64>,
+    pub head_ink: Option<facing::HeadInk>,
 }
 
 /// The head ink of `image` for the candidates of `e` ([`Evidence::head_ink`]).
-pub fn head_ink_of(image: &ImageView<'_>, e: &Evidence) -> Option<f64> {
+pub fn head_ink_of(image: &ImageView<'_>, e: &Evidence) -> Option<facing::HeadInk> {
     let j = e
         .blazepose
         .as_ref()

@@ -16,6 +16,7 @@ use sketchbody::skeleton::NUM_JOINTS;
 use sketchbody_lab::detect::parse_eval::read_labels;
 use sketchbody_lab::eval::backends::{gather_sample, Sample};
 use sketchbody_lab::eval::detector::held_out_request;
+use sketchbody_lab::eval::facing::torso_yaw_deg;
 use sketchbody_lab::render::photo_npr::{photo_npr, PhotoNpr};
 use sketchbody_lab::render::stylise::{negative_page, stylise, NegativePage, Stylisation};
 
@@ -162,14 +163,14 @@ fn image_of(
             };
             let rgb = s.pixels.iter().flat_map(|&g| [g; 3]).collect();
             let truth = truth_joints(&s.truth, i)?;
-            (RgbImage::from_vec(size, size, rgb)?, Some(truth), Some(s.truth.camera.angles.yaw_deg))
+            (RgbImage::from_vec(size, size, rgb)?, Some(truth), torso_yaw_deg(&s.truth))
         }
         SetSpec::Dataset { .. } => {
             let png = &stems[i];
             let json = png.with_extension("json");
             let text = std::fs::read_to_string(&json).map_err(|e| CliError(format!("{}: {e}", json.display())))?;
             let t = GroundTruth::from_json(&text, &json.display().to_string())?;
-            (load_rgb_image(png)?, Some(truth_joints(&t, i)?), Some(t.camera.angles.yaw_deg))
+            (load_rgb_image(png)?, Some(truth_joints(&t, i)?), torso_yaw_deg(&t))
         }
         &SetSpec::Parse { first, style, npr, .. } => {
             let name = format!("im{:04}.jpg", first + i);

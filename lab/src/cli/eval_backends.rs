@@ -7,12 +7,17 @@
 use std::path::Path;
 
 use sketchbody::detect::calibration::Calibration;
+use sketchbody::detect::facing::Facing;
 use sketchbody::detect::facing::FacingModel;
 use sketchbody::detect::figure::{Backend, FigureOptions, Fusion};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::Model;
+use sketchbody::pipeline::figure::decide;
 use sketchbody::render::sketch::{Hair, SketchRenderer};
-use sketchbody_lab::eval::backends::{expected_calibration_error, reliability, score_set, Sample, GROSS_JOINTS};
+use sketchbody_lab::eval::backends::{
+    expected_calibration_error, is_swap, reliability, score_set, Sample, GROSS_JOINTS,
+};
+use sketchbody_lab::eval::facing::misread;
 use sketchbody_lab::render::photo_npr::PhotoNpr;
 use sketchbody_lab::render::stylise::{NegativePage, Stylisation};
 
@@ -21,6 +26,57 @@ use sketchbody_cli::CliError;
 
 /// The set names `--sets` takes.
 pub const SET_NAMES: &str = "synthetic, back (back views), profile, art (art styles), faceless (no hair), dataset:DIR (every sketch of a rendered dataset folder, e.g. the Blender set), parse, xdog, pencil, flat, negatives, and the training filters npr-sobel, npr-charcoal, npr-marker";
+
+/// The facing model of a benchmark run and its diagnostics.
+#[derive(Clone, Debug, Default)]
+pub struct FacingEval {
+    /// Replaces the embedded facing model (`None`: the embedded one).
+    pub model: Option<FacingModel>,
+    /// Print each sketch whose facing is misread ([`misread`]) or whose answer is a left/right
+    /// swap, with its probabilities and features.
+    pub cases: bool,
+}
+
+/// Prints the sketches of `samples` whose facing `model` misreads and those `auto` (with
+/// `options`) answers with a left/right swap.
+fn print_facing_cases(
+    samples: &[Sample],
+    model: &FacingModel,
+    cal: &Calibration,
+    options: &FigureOptions,
+) -> Result<(), CliError> {
+    let name = |f: Facing| f.name();
+    for m in misread(samples, model) {
+        let p = m.probabilities;
+        let x: Vec<String> = m.features[1..].iter().map(|v| format!("{v:.2}")).collect();
+        println!(
+            "{:<26}       misread {}: torso yaw {:.0}° ({}), decided {} (p {:.2} {:.2} {:.2} {:.2}), features {}",
+            "",
+            m.index,
+            m.yaw_deg,
+            name(Facing::of_yaw(m.yaw_deg)),
+            name(m.decided),
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            x.join(" ")
+        );
+    }
+    for (i, s) in samples.iter().enumerate() {
+        let (Some(t), Ok(f)) = (&s.truth, decide(&s.evidence, cal, options, None)) else { continue };
+        if is_swap(t, &f.joints) {
+            println!(
+                "{:<26}       swap {i}: torso yaw {}, facing {}, swapped by the rule {}",
+                "",
+                s.yaw_deg.map_or("-".into(), |y| format!("{y:.0}°")),
+                name(f.facing.facing),
+                f.facing.swapped
+            );
+        }
+    }
+    Ok(())
+}
 
 /// The benchmark sets named in `names` (comma separated, from [`SET_NAMES`]); the PARSE sets
 /// take photos `photos` (the test split 101-305 for the benchmark).
@@ -75,11 +131,11 @@ fn presence_sweep(samples: &[Sample], cal: &Calibration, thresholds: &[f64]) -> 
 
 /// Runs the evaluation on `specs` and prints the tables; each of `others` (name, calibration)
 /// adds an `auto` row per set, scored on the same detections; `net` is the landmark backend's
-/// network; `facing_model` replaces the embedded facing model (`None`: the embedded one).
+/// network; `facing` the facing model and its diagnostics.
 #[allow(clippy::too_many_arguments)]
 pub fn run_sets(
     specs: &[SetSpec],
-    facing_model: Option<FacingModel>,
+    facing: FacingEval,
     renderer: &SketchRenderer,
     parse_dir: &Path,
     cal: &Calibration,
@@ -88,7 +144,11 @@ pub fn run_sets(
     net: &LandmarkNet,
 ) -> Result<(), CliError> {
     let ctx = SetContext { renderer, parse_dir, model, net };
-    let options = FigureOptions { facing_model, ..FigureOptions::default() };
+    let options = FigureOptions { facing_model: facing.model, ..FigureOptions::default() };
+    let facing_model = match &options.facing_model {
+        Some(m) => m.clone(),
+        None => FacingModel::embedded()?.clone(),
+    };
     let averaged = options.average_agreement;
     let configs = [
         (Backend::Fmp, false, Fusion::PerImage, averaged, "fmp"),
@@ -141,6 +201,9 @@ pub fn run_sets(
                 100.0 * s.facing[1],
                 100.0 * s.facing[2]
             );
+        }
+        if facing.cases {
+            print_facing_cases(&samples, &facing_model, cal, &options)?;
         }
         let sweep = presence_sweep(&samples, cal, &[0.5, 0.2, 0.1, 0.05])?;
         println!("{:<26}       auto by min presence (PCK@0.2 / no figure): {sweep}", "");

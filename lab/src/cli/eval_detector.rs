@@ -65,6 +65,10 @@ pub struct Args {
     /// A facing model JSON for `--sets` (as `fit-facing` writes it) instead of the embedded one.
     #[arg(long)]
     facing_model: Option<PathBuf>,
+    /// With `--sets`: also list each sketch whose facing is misread or whose answer is a
+    /// left/right swap, with the facing's probabilities and features.
+    #[arg(long)]
+    facing_cases: bool,
     /// A calibration JSON for `--sets` (as `calibrate-detector` writes it) instead of the
     /// embedded one.
     #[arg(long)]
@@ -156,7 +160,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         };
         return crate::eval_backends::run_sets(
             &specs,
-            facing,
+            crate::eval_backends::FacingEval { model: facing, cases: a.facing_cases },
             &renderer(a.mocap.as_deref())?,
             &a.parse,
             &cal,

@@ -1,5 +1,5 @@
 //! `sketchbody-lab fit-facing --out assets/facing_model.json`: fits the facing model
-//! (`detect::facing`) on rendered sketches of every yaw (their camera's yaw gives the true
+//! (`detect::facing`) on rendered sketches of every yaw (their torso's yaw gives the true
 //! facing), of a seed no benchmark set uses.
 
 use std::path::PathBuf;
@@ -60,12 +60,19 @@ pub fn run(a: Args) -> Result<(), CliError> {
         samples.extend(gather_set(s, &ctx, &FigureOptions::default())?);
     }
     let provenance = format!(
-        "sketchbody-lab fit-facing --n {} --art {} --seed {} --ridge {}; {} sketches",
+        "sketchbody-lab fit-facing --n {} --art {} --seed {} --ridge {}; {} sketches of any yaw rendered by the \
+         library's sketch renderer (seeds {} and {}; the benchmark's sets use seed 2, the Blender set another \
+         renderer), labelled by their torso's yaw. Data: the embedded body model (MakeHuman data, CC0), poses of the \
+         clips of {} (by default the DeepMimic clips, MIT licence), BlazePose's outputs (Apache-2.0, assets/pose_landmark_full.LICENSE); the file \
+         holds the coefficients only, no image or motion data.",
         a.n,
         a.art,
         a.seed,
         a.ridge,
-        samples.len()
+        samples.len(),
+        a.seed,
+        a.seed + 1000,
+        a.mocap.as_ref().map_or("mocap/deepmimic".into(), |p| p.display().to_string())
     );
     let m = fit_facing(&samples, a.ridge, &provenance)?;
     eprintln!("decided facing on the fitting sketches (rows: true front, back, left, right; columns: decided front, back, left, right, unknown):");

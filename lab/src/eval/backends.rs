@@ -32,7 +32,8 @@ pub struct Sample {
     /// Wall time on this image of the sketch model, of BlazePose alone and of `Auto`'s retry
     /// of BlazePose from the sketch model's box, s.
     pub seconds: [f64; 3],
-    /// The camera's yaw of a rendered sketch, degrees (its true facing:
+    /// The yaw of a rendered figure's torso as the camera sees it, degrees
+    /// ([`super::facing::torso_yaw_deg`]; its true facing:
     /// [`sketchbody::detect::facing::Facing::of_yaw`]); `None` when unknown.
     pub yaw_deg: Option<f64>,
 }

@@ -1,12 +1,35 @@
 //! Fitting the facing model ([`sketchbody::detect::facing::FacingModel`]): a multinomial
-//! logistic regression of the true facing (from a rendered sketch's camera yaw) on the facing
+//! logistic regression of the true facing (from a rendered figure's torso yaw,
+//! [`torso_yaw_deg`]) on the facing
 //! features of each sketch's evidence, with an L2 penalty on every coefficient but the bias.
 
 use sketchbody::detect::facing::{Facing, FacingModel, FACING_MODEL_FORMAT, FEATURES, NUM_FEATURES};
 use sketchbody::detect::figure::evidence_facing_features;
 use sketchbody::error::{Error, Result};
 
+use sketchbody::render::sketch::GroundTruth;
+use sketchbody::skeleton::joint;
+
 use super::backends::Sample;
+
+/// The yaw in degrees of the posed figure's torso as the camera sees it (as
+/// [`sketchbody::render::sketch::CameraAngles::yaw_deg`]: 0 facing the viewer, ±180 seen from
+/// behind, −90 a left profile): the direction of (left shoulder − right shoulder) × (neck −
+/// pelvis) in the camera's frame. The camera's own yaw is not the figure's when the pose turns
+/// the body (a spin, a cartwheel). `None` for a truth without 15 joints or a degenerate torso.
+pub fn torso_yaw_deg(t: &GroundTruth) -> Option<f64> {
+    let j = &t.joints3d;
+    if j.len() != sketchbody::skeleton::NUM_JOINTS {
+        return None;
+    }
+    let d = |a: usize, b: usize| [j[a][0] - j[b][0], j[a][1] - j[b][1], j[a][2] - j[b][2]];
+    let (s, u) = (d(joint::L_SHOULDER, joint::R_SHOULDER), d(joint::NECK, joint::PELVIS));
+    let fwd = [s[1] * u[2] - s[2] * u[1], s[2] * u[0] - s[0] * u[2], s[0] * u[1] - s[1] * u[0]];
+    let r = &t.camera.r;
+    let c = |row: usize| r[row][0] * fwd[0] + r[row][1] * fwd[1] + r[row][2] * fwd[2];
+    let (x, z) = (c(0), c(2));
+    (x.hypot(z) > 1e-12).then(|| x.atan2(z).to_degrees())
+}
 
 /// Gradient steps of [`fit_multinomial`].
 const STEPS: usize = 4000;
@@ -103,9 +126,65 @@ pub fn confusion(samples: &[Sample], model: &FacingModel) -> [[usize; 5]; 4] {
     t
 }
 
+/// A sketch whose facing `model` gets wrong or leaves undecided ([`misread`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Misread {
+    /// Its index in the samples.
+    pub index: usize,
+    /// Its torso's yaw, degrees.
+    pub yaw_deg: f64,
+    /// The facing decided (`Unknown` when none).
+    pub decided: Facing,
+    /// The four probabilities.
+    pub probabilities: [f64; 4],
+    /// Its facing features.
+    pub features: [f64; NUM_FEATURES],
+}
+
+/// The samples with a yaw and evidence of a figure whose decided facing under `model` is not
+/// the true one.
+pub fn misread(samples: &[Sample], model: &FacingModel) -> Vec<Misread> {
+    let mut out = Vec::new();
+    for (index, s) in samples.iter().enumerate() {
+        let Some(yaw_deg) = s.yaw_deg else { continue };
+        if s.evidence.sketch.is_none() && s.evidence.blazepose.is_none() {
+            continue;
+        }
+        let features = evidence_facing_features(&s.evidence);
+        let probabilities = model.probabilities(&features);
+        let decided = sketchbody::detect::facing::decided(&probabilities);
+        if decided != Facing::of_yaw(yaw_deg) {
+            out.push(Misread { index, yaw_deg, decided, probabilities, features });
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A procedural (upright, unturned) figure's torso yaw is the camera's.
+    #[test]
+    fn the_torso_yaw_follows_the_camera_of_an_unturned_figure() {
+        use sketchbody::render::sketch::{CameraAngles, SketchRenderer, SketchRequest};
+        let r =
+            SketchRenderer::new(std::sync::Arc::new(sketchbody::body::BodyModel::embedded().unwrap()), None).unwrap();
+        for (seed, yaw) in [(1u64, 0.0f64), (2, 180.0), (3, -90.0), (4, 60.0)] {
+            let req = SketchRequest {
+                camera: Some(CameraAngles { yaw_deg: yaw, pitch_deg: 0.0, roll_deg: 0.0 }),
+                ..SketchRequest::random(seed, 128)
+            };
+            let t = r.render(&req).unwrap().truth;
+            let got = torso_yaw_deg(&t).unwrap();
+            let diff = (got - yaw + 540.0).rem_euclid(360.0) - 180.0;
+            assert!(diff.abs() < 25.0, "camera yaw {yaw}: torso yaw {got}");
+            assert_eq!(Facing::of_yaw(got), Facing::of_yaw(yaw));
+        }
+        let mut t = r.render(&SketchRequest::random(5, 64)).unwrap().truth;
+        t.joints3d.pop();
+        assert_eq!(torso_yaw_deg(&t), None);
+    }
 
     /// Classes separated by one feature are recovered, the probabilities follow it, and a
     /// class without rows is refused.
