@@ -50,5 +50,11 @@ int main(void) {
     FIELD(skb_figure_info, presence);
     FIELD(skb_figure_info, other_figures);
     FIELD(skb_figure_info, reserved);
+    SIZE(skb_facing_info);
+    FIELD(skb_facing_info, facing);
+    FIELD(skb_facing_info, swapped);
+    FIELD(skb_facing_info, probabilities);
+    FIELD(skb_facing_info, alternative_score);
+    FIELD(skb_facing_info, alternative);
     return 0;
 }

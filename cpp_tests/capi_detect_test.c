@@ -91,6 +91,24 @@ int main(void) {
     CHECK(info.presence >= 0.5 && info.presence <= 1.0 && info.reserved == 0);
     printf("figure: backend %u, confidence %.3f, presence %.3f, low %u, %u other figure(s)\n", info.backend,
            info.confidence, info.presence, info.low_confidence, info.other_figures);
+    /* The same detection with its facing: the same joints, four probabilities summing to 1, the
+     * alternative the joints with left and right swapped (as skb_joints2d_swap_sides gives). */
+    skb_facing_info facing;
+    double xy2[30], conf2[15];
+    CHECK(skb_detect_facing(ctx, &g_img, NULL, xy2, 30, conf2, 15, &info, &facing) == SKB_OK);
+    CHECK(memcmp(xy, xy2, sizeof xy) == 0 && facing.facing <= SKB_FACING_UNKNOWN && facing.swapped <= 1u);
+    double psum = facing.probabilities[0] + facing.probabilities[1] + facing.probabilities[2] + facing.probabilities[3];
+    CHECK(fabs(psum - 1.0) < 1e-9 && facing.alternative_score >= 0.0 && facing.alternative_score <= 1.0);
+    skb_joints2d mine, swapped;
+    memcpy(mine.xy, xy2, sizeof xy2);
+    memset(mine.visible, 1, sizeof mine.visible);
+    mine.reserved = 0;
+    CHECK(skb_joints2d_swap_sides(&mine, &swapped) == SKB_OK);
+    CHECK(memcmp(swapped.xy, facing.alternative.xy, sizeof swapped.xy) == 0);
+    CHECK(swapped.xy[4][0] == xy2[14] && swapped.xy[0][0] == xy2[0]); /* r_wrist <- l_wrist; head stays */
+    printf("facing %u (front %.2f, back %.2f, left %.2f, right %.2f), swapped %u, alternative %.2f\n", facing.facing,
+           facing.probabilities[0], facing.probabilities[1], facing.probabilities[2], facing.probabilities[3],
+           facing.swapped, facing.alternative_score);
 
     skb_detect_options *o = NULL;
     CHECK(skb_detect_options_new(&o) == SKB_OK);

@@ -292,6 +292,32 @@
 #define SKB_LOW_CONFIDENCE 0.75
 
 /**
+ * Facing: toward the viewer (the character's right on the image's left).
+ */
+#define SKB_FACING_FRONT 0
+
+/**
+ * Facing: away from the viewer (the character's right on the image's right).
+ */
+#define SKB_FACING_BACK 1
+
+/**
+ * Facing: a left profile (the character's left side toward the viewer).
+ */
+#define SKB_FACING_LEFT 2
+
+/**
+ * Facing: a right profile (the character's right side toward the viewer).
+ */
+#define SKB_FACING_RIGHT 3
+
+/**
+ * Facing: undecided (no facing reaches probability 0.6); the joints carry the front's
+ * labelling unless a profile is likelier than front and back together.
+ */
+#define SKB_FACING_UNKNOWN 4
+
+/**
  * `skb_fit_options_set_score`: the paper's eq. 7 (IoU of the silhouette with the edge map).
  */
 #define SKB_SCORE_PAPER 0
@@ -812,6 +838,34 @@ typedef struct skb_figure_info {
    */
   uint32_t reserved;
 } skb_figure_info;
+
+/**
+ * The facing of a detected figure. Plain data, 304 bytes; its layout is part of the ABI.
+ */
+typedef struct skb_facing_info {
+  /**
+   * `SKB_FACING_*`.
+   */
+  uint32_t facing;
+  /**
+   * 1 when the joints are the detector's with left and right swapped (a labelling that
+   * implied a back view without evidence of one, or the reverse), else 0.
+   */
+  uint32_t swapped;
+  /**
+   * Probabilities of front, back, left and right profile, summing to 1.
+   */
+  double probabilities[4];
+  /**
+   * The probability that `alternative` is the right labelling, in [0, 1].
+   */
+  double alternative_score;
+  /**
+   * The joints with left and right swapped (pass them to `skb_run` with given joints, or to
+   * the pose step, to take them).
+   */
+  struct skb_joints2d alternative;
+} skb_facing_info;
 
 /**
  * Interim-body callback of `skb_run_pipeline_progressive`: called on the calling thread with
@@ -1821,6 +1875,34 @@ skb_status skb_detect_figure(const struct skb_context *ctx,
                              struct skb_figure_info *info);
 
 /**
+ * As `skb_detect_figure` (the same arguments and statuses), with the figure's facing and the
+ * swapped labelling in `*facing` as well. On any failure nothing is written. Thread-safe.
+ */
+skb_status skb_detect_facing(const struct skb_context *ctx,
+                             const struct skb_image *image,
+                             const struct skb_detect_options *opts,
+                             double *joints_xy,
+                             size_t joints_len,
+                             double *confidence,
+                             size_t confidence_len,
+                             struct skb_figure_info *info,
+                             struct skb_facing_info *facing);
+
+/**
+ * The facing of the figure behind `result`'s detected joints, with the swapped labelling, into
+ * `*facing`. `SKB_ERR_OUT_OF_RANGE` when the result's joints were given, not detected (nothing
+ * written). Thread-safe on a shared result.
+ */
+skb_status skb_result_facing(const struct skb_result *result, struct skb_facing_info *facing);
+
+/**
+ * `*joints` with left and right swapped (each joint takes its mirror's position and
+ * visibility; head, neck and pelvis stay) into `*out`, which may be `joints` itself. Errors:
+ * `SKB_ERR_NULL_POINTER`. Thread-safe.
+ */
+skb_status skb_joints2d_swap_sides(const struct skb_joints2d *joints, struct skb_joints2d *out);
+
+/**
  * Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
  */
 skb_status skb_fit_options_new(struct skb_fit_options **out);
@@ -2304,8 +2386,9 @@ void skb_sketch_options_free(struct skb_sketch_options *opts);
 skb_status skb_sketch_options_set_style(struct skb_sketch_options *opts, uint32_t style);
 
 /**
- * Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; each within ±90°)
- * instead of random near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+ * Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; yaw within ±180°
+ * (±180° a back view, −90° a left profile), pitch and roll within ±90°) instead of random
+ * near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
  */
 skb_status skb_sketch_options_set_camera(struct skb_sketch_options *opts,
                                          double yaw_deg,

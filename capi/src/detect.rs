@@ -429,7 +429,7 @@ pub unsafe extern "C" fn skb_detect_figure(
 
 /// The single-figure detection of `view` with `ctx`'s embedded models and `opts` (`None`:
 /// defaults).
-fn figure_of(
+pub(crate) fn figure_of(
     ctx: &skb_context,
     view: &sketchbody_core::image::ImageView<'_>,
     opts: Option<&skb_detect_options>,
@@ -476,7 +476,7 @@ pub(crate) fn embedded_detector(ctx: &skb_context) -> Result<&Model, Error> {
 ///
 /// # Safety
 /// Each pointer must be NULL or valid for writes of its length, with no other live reference.
-unsafe fn outputs<'a>(
+pub(crate) unsafe fn outputs<'a>(
     joints_xy: *mut f64,
     joints_len: usize,
     confidence: *mut f64,
@@ -496,7 +496,12 @@ unsafe fn outputs<'a>(
 }
 
 /// Writes joints and confidences.
-fn write_joints(j: &sketchbody_core::skeleton::Joints2, c: &[f64; NUM_JOINTS], xy: &mut [f64], cf: &mut [f64]) {
+pub(crate) fn write_joints(
+    j: &sketchbody_core::skeleton::Joints2,
+    c: &[f64; NUM_JOINTS],
+    xy: &mut [f64],
+    cf: &mut [f64],
+) {
     for k in 0..NUM_JOINTS {
         xy[2 * k] = j.xy[k][0];
         xy[2 * k + 1] = j.xy[k][1];

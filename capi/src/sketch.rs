@@ -67,8 +67,9 @@ pub unsafe extern "C" fn skb_sketch_options_set_style(opts: *mut skb_sketch_opti
     }
 }
 
-/// Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; each within ±90°)
-/// instead of random near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+/// Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; yaw within ±180°
+/// (±180° a back view, −90° a left profile), pitch and roll within ±90°) instead of random
+/// near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_set_camera(
     opts: *mut skb_sketch_options,

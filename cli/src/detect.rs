@@ -9,7 +9,9 @@ use serde_json::{json, Map, Value};
 use sketchbody::detect::figure::{Backend, FigureOptions, AVERAGE_AGREEMENT};
 use sketchbody::detect::landmark::LandmarkNet;
 use sketchbody::detect::{detect, DetectOptions, Detection, Model, PARSE_JOINT_NAMES};
-use sketchbody::export::joints2d::{detection_json as figure_json, LOW_CONFIDENCE_HINT};
+use sketchbody::export::joints2d::{
+    alternatives_json, detection_json as figure_json, facing_json, facing_summary, LOW_CONFIDENCE_HINT,
+};
 use sketchbody::image::{load_rgb_image, RgbImage};
 use sketchbody::pipeline::figure::detect_figure;
 use sketchbody::skeleton::Joints2;
@@ -208,13 +210,16 @@ pub fn run(a: Args) -> Result<(), CliError> {
     doc["joints"] = Value::Object(joints);
     doc["confidence"] = Value::Object(conf);
     doc["detection"] = figure_json(&f);
+    doc["facing"] = facing_json(&f.facing);
+    doc["alternatives"] = alternatives_json(&f.facing)?;
     doc["others"] = json!(f.others.iter().map(detection_json).collect::<Vec<_>>());
     write_outputs(&a, &img, &doc, &f.joints, &f.joint_confidence)?;
     println!(
-        "{} figure ({} joint(s) averaged with the other backend's), confidence {:.2}, {} other figure(s); joints written to {}",
+        "{} figure ({} joint(s) averaged with the other backend's), confidence {:.2}, {}, {} other figure(s); joints written to {}",
         f.backend.name(),
         f.averaged.iter().filter(|a| **a).count(),
         f.confidence,
+        facing_summary(&f.facing),
         f.others.len(),
         a.out.display()
     );

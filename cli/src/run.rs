@@ -176,11 +176,12 @@ fn report(
     if let Some(f) = &r.detection {
         let _ = writeln!(
             s,
-            "- detection: backend {} ({} of 15 joints averaged with the other backend's, where the two agree), confidence {:.2} (expected fraction of joints within 0.2 × the figure's size), presence {:.2}{}",
+            "- detection: backend {} ({} of 15 joints averaged with the other backend's, where the two agree), confidence {:.2} (expected fraction of joints within 0.2 × the figure's size), presence {:.2}, {}{}",
             f.backend.name(),
             f.averaged.iter().filter(|a| **a).count(),
             f.confidence,
             f.presence,
+            sketchbody::export::joints2d::facing_summary(&f.facing),
             if f.low_confidence { format!("; **{LOW_CONFIDENCE_HINT}**") } else { String::new() }
         );
     }

@@ -107,6 +107,22 @@ fn detect_defaults_to_the_embedded_model_and_reports_no_figure() {
     // On the clean example both backends find every joint: all are their mean, unless asked not.
     let averaged = j["detection"]["averaged_joints"].as_array().unwrap();
     assert_eq!(averaged.len(), 15, "{}", j["detection"]);
+    // The example, a faceless outline facing the viewer: not read as seen from behind, the
+    // front's labelling (the character's right shoulder on the image's left), and the swapped
+    // labelling offered as the less likely alternative.
+    use sketchbody::export::joints2d::{parse_alternatives, parse_facing, parse_joints2d};
+    let facing = parse_facing(&j).unwrap().expect("a detection reports its facing");
+    assert!(facing.facing != sketchbody::detect::facing::Facing::Back, "{:?}", facing);
+    assert!((facing.probabilities.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+    let x = |name: &str| j["joints"][name][0].as_f64().unwrap();
+    assert!(x("r_shoulder") < x("l_shoulder") && x("r_hip") < x("l_hip"));
+    let alts = parse_alternatives(&j).unwrap();
+    assert_eq!(alts.len(), 1);
+    assert!(alts[0].swap == "left_right" && alts[0].score < 0.5, "{:?}", alts[0].score);
+    let joints = parse_joints2d(&j).unwrap();
+    assert_eq!(alts[0].joints, sketchbody::detect::facing::swap_sides(&joints));
+    let out_line = String::from_utf8_lossy(&res.stdout);
+    assert!(out_line.contains(&format!("facing {}", facing.facing.name())), "{out_line}");
     let plain = dir.join("plain.json");
     let mut plain_cmd = cli();
     plain_cmd.args(["detect", "--min-cell", "4"]).arg(&sketch).arg("--out").arg(&plain);

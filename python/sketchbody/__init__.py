@@ -21,7 +21,7 @@ from . import _bindings
 from ._lib import (LIBRARY_PATH, Cancelled, LibraryNotFoundError, NoFigure, SketchbodyError, Status, lib,
                    status_text)
 from .context import AUTO, FEMALE, MALE, Context, default_context
-from .detect import Detection, DetectOptions, Detector, FigureInfo, detect
+from .detect import Detection, DetectOptions, Detector, Facing, FigureInfo, detect
 from .images import canny, gaussian_blur, load_image, load_rgb_image, render_sketch, write_png
 from .mesh import ExportOptions, Mesh, Rig, quat_to_matrix
 from .pipeline import FitOptions, Result, fit_shape, run_pipeline
@@ -46,8 +46,8 @@ def library_path():
 
 __all__ = [
     "AUTO", "FEMALE", "MALE", "JOINT_NAMES", "LIMB_NAMES", "NUM_JOINTS", "NUM_RIG_BONES", "PROPORTION_GROUPS",
-    "Alternative", "Camera", "Cancelled", "Context", "Detection", "DetectOptions", "Detector", "ExportOptions", "FigureInfo",
-    "FitOptions",
+    "Alternative", "Camera", "Cancelled", "Context", "Detection", "DetectOptions", "Detector", "ExportOptions", "Facing",
+    "FigureInfo", "FitOptions",
     "Joints2D", "LibraryNotFoundError", "Mesh", "NoFigure", "Pose3D", "PoseDictionary", "PoseEstimate", "PoseOptions", "Result",
     "Rig", "SketchbodyError", "Status", "canny", "default_context", "detect", "estimate_pose", "estimate_pose_alternatives", "fit_shape",
     "gaussian_blur", "library_path", "load_image", "load_rgb_image", "quat_to_matrix", "refine_pose",

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "da3123ce804363b3df479adcc6ee15fbed88efe3529925f9a94fe65622aa5904"
+HEADER_SHA256 = "2f03cc9dc2fcf3d94985c6615128a64c8d232e64c515ef702379478bc2431a94"
 
 # ---- constants (#define) ----
 
@@ -133,6 +133,17 @@ SKB_DETECTOR_BLAZEPOSE = 2
 # A figure confidence under this is low: show the joints to the user for correction (the
 # core's `detect::figure::LOW_CONFIDENCE`; a test keeps them equal).
 SKB_LOW_CONFIDENCE = 0.75
+# Facing: toward the viewer (the character's right on the image's left).
+SKB_FACING_FRONT = 0
+# Facing: away from the viewer (the character's right on the image's right).
+SKB_FACING_BACK = 1
+# Facing: a left profile (the character's left side toward the viewer).
+SKB_FACING_LEFT = 2
+# Facing: a right profile (the character's right side toward the viewer).
+SKB_FACING_RIGHT = 3
+# Facing: undecided (no facing reaches probability 0.6); the joints carry the front's
+# labelling unless a profile is likelier than front and back together.
+SKB_FACING_UNKNOWN = 4
 # `skb_fit_options_set_score`: the paper's eq. 7 (IoU of the silhouette with the edge map).
 SKB_SCORE_PAPER = 0
 # `skb_fit_options_set_score`: IoU with the figure region filled from the closed strokes.
@@ -227,6 +238,11 @@ CONSTANTS = {
     "SKB_DETECTOR_FMP": 1,
     "SKB_DETECTOR_BLAZEPOSE": 2,
     "SKB_LOW_CONFIDENCE": 0.75,
+    "SKB_FACING_FRONT": 0,
+    "SKB_FACING_BACK": 1,
+    "SKB_FACING_LEFT": 2,
+    "SKB_FACING_RIGHT": 3,
+    "SKB_FACING_UNKNOWN": 4,
     "SKB_SCORE_PAPER": 0,
     "SKB_SCORE_FILLED_IOU": 1,
     "SKB_SCORE_CHAMFER": 2,
@@ -560,6 +576,17 @@ class skb_figure_info(ctypes.Structure):
     ]
 
 
+# The facing of a detected figure. Plain data, 304 bytes; its layout is part of the ABI.
+class skb_facing_info(ctypes.Structure):
+    _fields_ = [
+        ("facing", ctypes.c_uint32),  # `SKB_FACING_*`.
+        ("swapped", ctypes.c_uint32),  # 1 when the joints are the detector's with left and right swapped (a labelling that
+        ("probabilities", (ctypes.c_double * 4)),  # Probabilities of front, back, left and right profile, summing to 1.
+        ("alternative_score", ctypes.c_double),  # The probability that `alternative` is the right labelling, in [0, 1].
+        ("alternative", skb_joints2d),  # The joints with left and right swapped (pass them to `skb_run` with given joints, or to
+    ]
+
+
 # C field types of each struct (the drift test compiles offsetof/sizeof checks from these).
 STRUCT_FIELDS = {
     "skb_image": (
@@ -606,6 +633,13 @@ STRUCT_FIELDS = {
         ("presence", "double"),
         ("other_figures", "uint32_t"),
         ("reserved", "uint32_t"),
+    ),
+    "skb_facing_info": (
+        ("facing", "uint32_t"),
+        ("swapped", "uint32_t"),
+        ("probabilities", "double[4]"),
+        ("alternative_score", "double"),
+        ("alternative", "struct skb_joints2d"),
     ),
 }
 
@@ -2787,6 +2821,67 @@ FUNCTIONS["skb_detect_figure"] = (
     ),
 )
 
+# As `skb_detect_figure` (the same arguments and statuses), with the figure's facing and the
+# swapped labelling in `*facing` as well. On any failure nothing is written. Thread-safe.
+FUNCTIONS["skb_detect_facing"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_context),
+        ctypes.POINTER(skb_image),
+        ctypes.POINTER(skb_detect_options),
+        ctypes.POINTER(ctypes.c_double),
+        ctypes.c_size_t,
+        ctypes.POINTER(ctypes.c_double),
+        ctypes.c_size_t,
+        ctypes.POINTER(skb_figure_info),
+        ctypes.POINTER(skb_facing_info),
+    ],
+    "skb_status",
+    (
+        ("ctx", "const struct skb_context *"),
+        ("image", "const struct skb_image *"),
+        ("opts", "const struct skb_detect_options *"),
+        ("joints_xy", "double *"),
+        ("joints_len", "size_t"),
+        ("confidence", "double *"),
+        ("confidence_len", "size_t"),
+        ("info", "struct skb_figure_info *"),
+        ("facing", "struct skb_facing_info *"),
+    ),
+)
+
+# The facing of the figure behind `result`'s detected joints, with the swapped labelling, into
+# `*facing`. `SKB_ERR_OUT_OF_RANGE` when the result's joints were given, not detected (nothing
+# written). Thread-safe on a shared result.
+FUNCTIONS["skb_result_facing"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.POINTER(skb_facing_info),
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("facing", "struct skb_facing_info *"),
+    ),
+)
+
+# `*joints` with left and right swapped (each joint takes its mirror's position and
+# visibility; head, neck and pelvis stay) into `*out`, which may be `joints` itself. Errors:
+# `SKB_ERR_NULL_POINTER`. Thread-safe.
+FUNCTIONS["skb_joints2d_swap_sides"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_joints2d),
+        ctypes.POINTER(skb_joints2d),
+    ],
+    "skb_status",
+    (
+        ("joints", "const struct skb_joints2d *"),
+        ("out", "struct skb_joints2d *"),
+    ),
+)
+
 # Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
 FUNCTIONS["skb_fit_options_new"] = (
     ctypes.c_uint32,
@@ -3791,8 +3886,9 @@ FUNCTIONS["skb_sketch_options_set_style"] = (
     ),
 )
 
-# Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; each within ±90°)
-# instead of random near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+# Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; yaw within ±180°
+# (±180° a back view, −90° a left profile), pitch and roll within ±90°) instead of random
+# near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
 FUNCTIONS["skb_sketch_options_set_camera"] = (
     ctypes.c_uint32,
     [

@@ -58,6 +58,34 @@ class Detection:
     backend: Optional[str] = None
     presence: Optional[float] = None
     low_confidence: Optional[bool] = None
+    facing: Optional["Facing"] = None
+
+
+FACINGS = ("front", "back", "left", "right")
+_FACING_NAMES = {B.SKB_FACING_FRONT: "front", B.SKB_FACING_BACK: "back", B.SKB_FACING_LEFT: "left",
+                 B.SKB_FACING_RIGHT: "right", B.SKB_FACING_UNKNOWN: "unknown"}
+
+
+@dataclasses.dataclass
+class Facing:
+    """Which way the detected figure faces: `facing` "front", "back", "left" (a left profile:
+    the character's left side toward the viewer), "right" or "unknown" (no facing reaches
+    probability 0.6); `probabilities` {facing: p} over the four (summing to 1); `swapped` (the
+    joints are the detector's with left and right swapped: a labelling that implied a back view
+    without evidence of one, or the reverse); `alternative` (Joints2D: the joints with left and
+    right swapped) and `alternative_score` (the probability that it is the right labelling)."""
+
+    facing: str
+    probabilities: dict
+    swapped: bool
+    alternative: Joints2D
+    alternative_score: float
+
+    @classmethod
+    def from_struct(cls, f):
+        """From a filled skb_facing_info."""
+        return cls(_FACING_NAMES.get(f.facing, "?"), dict(zip(FACINGS, list(f.probabilities))), bool(f.swapped),
+                   Joints2D.from_struct(f.alternative), f.alternative_score)
 
 
 @dataclasses.dataclass
@@ -108,14 +136,14 @@ def detect(image, options=None, context=None):
     with options_handle(options, DetectOptions) as h:
         xy = np.empty((15, 2), dtype=np.float64)
         conf = np.empty(15, dtype=np.float64)
-        info = B.skb_figure_info()
-        st = lib.skb_detect_figure(ctx._p, ctypes.byref(view), h, A.ptr(xy), xy.size, A.ptr(conf), conf.size,
-                                   ctypes.byref(info))
+        info, facing = B.skb_figure_info(), B.skb_facing_info()
+        st = lib.skb_detect_facing(ctx._p, ctypes.byref(view), h, A.ptr(xy), xy.size, A.ptr(conf), conf.size,
+                                   ctypes.byref(info), ctypes.byref(facing))
         del keep
         if st != B.SKB_OK:
-            raise error(st, "skb_detect_figure")
+            raise error(st, "skb_detect_facing")
         return Detection(Joints2D(xy), conf, info.confidence, _BACKEND_NAMES.get(info.backend, "?"),
-                         info.presence, bool(info.low_confidence))
+                         info.presence, bool(info.low_confidence), Facing.from_struct(facing))
 
 
 class Detector(Handle):

@@ -11,7 +11,7 @@ from . import _bindings as B
 from ._lib import Handle, Progress, call, error, lib, new_handle
 from ._options import OptionsBase, options_handle
 from .context import AUTO, FEMALE, MALE, default_context, gender_name
-from .detect import FigureInfo
+from .detect import Facing, FigureInfo
 from .images import as_image, load_rgb_image
 from .mesh import Mesh
 from .pose import REPOSE_OUTCOMES, Camera, Joints2D, PoseEstimate, PoseOptions, _dict_arg, joints2d_arg, limb_index
@@ -117,6 +117,17 @@ class Result(Handle):
         if st != B.SKB_OK:
             raise error(st, "skb_result_detection")
         return FigureInfo.from_struct(info)
+
+    def facing(self):
+        """The facing of the detected figure behind the joints (Facing: facing, probabilities,
+        swapped, the swapped labelling and its score), or None when the joints were given."""
+        f = B.skb_facing_info()
+        st = lib.skb_result_facing(self._p, ctypes.byref(f))
+        if st == B.SKB_ERR_OUT_OF_RANGE:
+            return None
+        if st != B.SKB_OK:
+            raise error(st, "skb_result_facing")
+        return Facing.from_struct(f)
 
     def evidence(self):
         """(low_evidence: bool, edge_support: fraction of the fitted outline near a stroke)."""

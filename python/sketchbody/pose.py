@@ -91,6 +91,15 @@ class Joints2D:
     def from_struct(cls, s):
         return cls(np.ctypeslib.as_array(s.xy).copy(), np.array(list(s.visible), dtype=bool) != 0)
 
+    def swap_sides(self):
+        """These joints with left and right swapped (each joint takes its mirror's position and
+        visibility; head, neck and pelvis stay): the other labelling of a figure, e.g. a
+        detection's alternative (skb_joints2d_swap_sides)."""
+        s = self.to_struct()
+        out = B.skb_joints2d()
+        call("skb_joints2d_swap_sides", ctypes.byref(s), ctypes.byref(out))
+        return Joints2D.from_struct(out)
+
 
 def joints2d_arg(j, name="joints"):
     """A Joints2D from a Joints2D, a joints JSON path, a {name: (x, y)} dict or a (15, 2) array."""

@@ -228,10 +228,12 @@ class PipelineTest(unittest.TestCase):
     def test_detection_of_given_and_detected_joints(self):
         # Given joints: no detection behind them.
         self.assertIsNone(self.r.detection())
+        self.assertIsNone(self.r.facing())
         self.assertFalse(self.r.detected)
         # No joints: the library detects them as the CLI's `run` does, and says so.
         with skb.run_pipeline(SKETCH, fit_options=skb.FitOptions(samples=8, iterations=1)) as r:
             info = r.detection()
+            facing = r.facing()
             self.assertTrue(r.detected)
             used = r.joints2d().xy
         self.assertIsInstance(info, skb.FigureInfo)
@@ -241,6 +243,11 @@ class PipelineTest(unittest.TestCase):
         self.assertEqual(info.low_confidence, info.confidence < 0.75)
         self.assertTrue(0.5 <= info.presence <= 1.0)
         np.testing.assert_allclose(used, det.joints.xy, atol=1e-9)
+        # The result's facing is the detection's: the same decision and probabilities.
+        self.assertIsInstance(facing, skb.Facing)
+        self.assertEqual(facing.facing, det.facing.facing)
+        self.assertEqual(facing.probabilities, det.facing.probabilities)
+        np.testing.assert_allclose(facing.alternative.xy, det.facing.alternative.xy, atol=1e-9)
 
     def test_progress_is_monotonic_and_ends_at_one(self):
         p = Example.progress
@@ -559,6 +566,27 @@ class DetectTest(unittest.TestCase):
             self.assertLess(np.median(np.linalg.norm(b.joints.xy - truth, axis=1)), 20)
         with self.assertRaises(ValueError):
             skb.DetectOptions(backend="openpose").handle()
+
+    def test_facing_and_the_swapped_labelling(self):
+        # The example faces the viewer (a faceless outline): the front's labelling, the
+        # character's right shoulder on the image's left; the alternative is the same joints with
+        # left and right swapped, less likely than the reported ones.
+        d = skb.detect(SKETCH)
+        f = d.facing
+        self.assertIn(f.facing, ("front", "back", "left", "right", "unknown"))
+        self.assertEqual(set(f.probabilities), {"front", "back", "left", "right"})
+        self.assertAlmostEqual(sum(f.probabilities.values()), 1.0, places=9)
+        self.assertNotEqual(f.facing, "back")
+        names = list(skb.JOINT_NAMES)
+        xy = d.joints.xy
+        self.assertLess(xy[names.index("r_shoulder")][0], xy[names.index("l_shoulder")][0])
+        alt = f.alternative.xy
+        np.testing.assert_array_equal(alt[names.index("r_wrist")], xy[names.index("l_wrist")])
+        np.testing.assert_array_equal(alt[names.index("head")], xy[names.index("head")])
+        self.assertLess(f.alternative_score, 0.5)
+        # Joints2D.swap_sides is the same swap, and twice is the identity.
+        np.testing.assert_array_equal(d.joints.swap_sides().xy, alt)
+        np.testing.assert_array_equal(d.joints.swap_sides().swap_sides().xy, xy)
 
     def test_detect_errors(self):
         with self.assertRaises(skb.SketchbodyError) as cm:

@@ -13,6 +13,7 @@
 //! (PCK@0.2), and the figure's confidence is their mean, the expected fraction of correct joints.
 
 use super::calibration::{clamp_score, joint_features, log_odds, predict, presence_features, sigmoid, Calibration};
+use super::facing::{self, FacingEstimate, FacingInput, FacingModel};
 use super::landmark::roi::Roi;
 use super::landmark::{detect_blazepose, retry_from, BlazePoseDetection, BlazePoseOptions, LandmarkNet};
 use super::{detect, DetectOptions, Detection, Model};
@@ -118,6 +119,14 @@ pub struct FigureOptions {
     /// ([`Figure::averaged`]); 0 = off ([`detect_figure`] refuses a negative or non-finite
     /// value). Default [`AVERAGE_AGREEMENT`].
     pub average_agreement: f64,
+    /// Label left and right by the decided facing ([`facing::target_handedness`]): a candidate
+    /// labelled as seen from behind without evidence of a back view is swapped to the front's
+    /// labelling, one labelled as facing the viewer of a figure decided as seen from behind to
+    /// the back's. `false` keeps the backends' labellings (the facing is still reported).
+    /// Default `true`.
+    pub facing_rule: bool,
+    /// The facing model; `None` (default) the embedded one ([`FacingModel::embedded`]).
+    pub facing_model: Option<FacingModel>,
 }
 
 impl Default for FigureOptions {
@@ -130,6 +139,8 @@ impl Default for FigureOptions {
             min_presence: DEFAULT_MIN_PRESENCE,
             fusion: Fusion::PerImage,
             average_agreement: AVERAGE_AGREEMENT,
+            facing_rule: true,
+            facing_model: None,
         }
     }
 }
@@ -145,6 +156,19 @@ pub struct Evidence {
     pub sketch_threshold: f64,
     /// BlazePose's figure (any pose flag), `None` when it did not run or found no ink.
     pub blazepose: Option<BlazePoseDetection>,
+    /// The ink inside the head ([`facing::head_ink`] at BlazePose's
+    /// head, else the sketch model's), `None` without a candidate: evidence of the facing.
+    pub head_ink: Option<facing::HeadInk>,
+}
+
+/// The head ink of `image` for the candidates of `e` ([`Evidence::head_ink`]).
+pub fn head_ink_of(image: &ImageView<'_>, e: &Evidence) -> Option<facing::HeadInk> {
+    let j = e
+        .blazepose
+        .as_ref()
+        .map(|b| &b.joints)
+        .or_else(|| e.sketch.as_ref().and_then(|v| v.first()).map(|d| &d.joints));
+    j.and_then(|j| facing::head_ink(image, j))
 }
 
 /// Runs the backends `backend` names on `image` (1, 3 or 4 channels) and collects their
@@ -182,10 +206,11 @@ pub fn gather(
     };
     let (sketch, blazepose) = rayon::join(run_sketch, run_blazepose);
     let (sketch, blazepose) = (sketch?, blazepose?);
-    let evidence = Evidence { sketch, sketch_threshold: model.thresh, blazepose };
+    let mut evidence = Evidence { sketch, sketch_threshold: model.thresh, blazepose, head_ink: None };
     if backend == Backend::Auto {
         return retry_blazepose_from_sketch(image, net, evidence, options);
     }
+    evidence.head_ink = head_ink_of(image, &evidence);
     Ok(evidence)
 }
 
@@ -193,15 +218,15 @@ pub fn gather(
 /// `retry_below`) retries from the boxes of the sketch model's [`SKETCH_ROIS`] best figures
 /// ([`crate::detect::landmark::retry_from`], kept at a pose flag ≥ [`SKETCH_ROI_ACCEPT`]): a
 /// figure small on a busy page, which the ink box frames loosely, is framed by the sketch model's
-/// search. The evidence is returned as it is without both backends' candidates. Errors: the
-/// network's.
+/// search. The evidence is returned as it is without both backends' candidates; its head ink
+/// is measured at the candidates returned. Errors: the network's.
 pub fn retry_blazepose_from_sketch(
     image: &ImageView<'_>,
     net: &LandmarkNet,
     evidence: Evidence,
     options: &FigureOptions,
 ) -> Result<Evidence> {
-    let Evidence { sketch, sketch_threshold, blazepose } = evidence;
+    let Evidence { sketch, sketch_threshold, blazepose, .. } = evidence;
     let blazepose = match (blazepose, &sketch) {
         (Some(b), Some(s)) => {
             let rois: Vec<Roi> = s.iter().take(SKETCH_ROIS).filter_map(|d| Roi::from_box(d.bbox).ok()).collect();
@@ -209,7 +234,9 @@ pub fn retry_blazepose_from_sketch(
         }
         (b, _) => b,
     };
-    Ok(Evidence { sketch, sketch_threshold, blazepose })
+    let mut e = Evidence { sketch, sketch_threshold, blazepose, head_ink: None };
+    e.head_ink = head_ink_of(image, &e);
+    Ok(e)
 }
 
 /// The figure [`detect_figure`] returns.
@@ -249,6 +276,9 @@ pub struct Figure {
     /// with the chosen ones (median distance ≤ [`DEPTH_AGREEMENT`] of the figure's size); `None`
     /// otherwise. The same figure as `joints`, read by the network that also gives depths.
     pub landmark_joints: Option<(Joints2, [f64; NUM_JOINTS])>,
+    /// The figure's facing, its probabilities, whether the labelling rule swapped the joints,
+    /// and the other labelling with its score.
+    pub facing: FacingEstimate,
 }
 
 /// [`FigureOptions::average_agreement`]'s default: two backends' joints closer than this fraction
@@ -263,11 +293,13 @@ pub const DEPTH_AGREEMENT: f64 = 0.1;
 
 /// BlazePose's depths as seen from `chosen`: per joint where its 2-D joint agrees
 /// ([`Figure::landmark_depth`]) and its whole figure when most joints do
-/// ([`Figure::landmark_joints`]). Both empty without a BlazePose pass.
+/// ([`Figure::landmark_joints`]), its sides swapped first when `swapped` (the labelling rule
+/// swapped its candidate). Both empty without a BlazePose pass.
 #[allow(clippy::type_complexity)]
 fn landmark_view(
     evidence: &Evidence,
     chosen: &Joints2,
+    swapped: bool,
 ) -> ([Option<f64>; NUM_JOINTS], Option<(Joints2, [f64; NUM_JOINTS])>) {
     let none = ([None; NUM_JOINTS], None);
     let Some(b) = &evidence.blazepose else { return none };
@@ -275,10 +307,14 @@ fn landmark_view(
     if z.len() < super::landmark::NUM_POSE_LANDMARKS {
         return none;
     }
-    let depth = super::landmark::joints::canonical_depth(&z);
-    let (dist, median) = agreement(chosen, &b.joints);
+    let mut depth = super::landmark::joints::canonical_depth(&z);
+    let mut joints = b.joints;
+    if swapped {
+        (depth, joints) = (facing::mirror_values(&depth), facing::swap_sides(&joints));
+    }
+    let (dist, median) = agreement(chosen, &joints);
     let per_joint = std::array::from_fn(|j| (dist[j] <= DEPTH_AGREEMENT && depth[j].is_finite()).then_some(depth[j]));
-    let whole = (median <= DEPTH_AGREEMENT && depth.iter().all(|d| d.is_finite())).then_some((b.joints, depth));
+    let whole = (median <= DEPTH_AGREEMENT && depth.iter().all(|d| d.is_finite())).then_some((joints, depth));
     (per_joint, whole)
 }
 
@@ -393,6 +429,24 @@ struct Scored {
     joints: Joints2,
     conf: [f64; NUM_JOINTS],
     raw_score: f64,
+    /// The labelling rule swapped its sides.
+    swapped: bool,
+}
+
+/// The facing features of `evidence` ([`facing::facing_features`] of its candidates).
+pub fn evidence_facing_features(evidence: &Evidence) -> [f64; facing::NUM_FEATURES] {
+    let input = FacingInput {
+        sketch: evidence.sketch.as_ref().and_then(|v| v.first()).map(|d| &d.joints),
+        blazepose: evidence.blazepose.as_ref().map(|b| &b.joints),
+        landmarks: evidence.blazepose.as_ref().map(|b| b.pass.landmarks.as_slice()),
+        head_ink: evidence.head_ink,
+    };
+    facing::facing_features(&input)
+}
+
+/// The facing probabilities of `evidence` under `model`.
+pub fn facing_probabilities(evidence: &Evidence, model: &FacingModel) -> [f64; 4] {
+    model.probabilities(&evidence_facing_features(evidence))
 }
 
 /// The log-odds of a figure that [`decide`] thresholds for features `f`: when both backends
@@ -436,8 +490,22 @@ pub fn decide(
         for j in 0..NUM_JOINTS {
             conf[j] = predict(w, &rows[j])?;
         }
-        cands.push(Scored { backend: c.backend, joints: c.joints, conf, raw_score: c.raw_score });
+        cands.push(Scored { backend: c.backend, joints: c.joints, conf, raw_score: c.raw_score, swapped: false });
     }
+    let model = match &options.facing_model {
+        Some(m) => m,
+        None => FacingModel::embedded()?,
+    };
+    let probabilities = facing_probabilities(evidence, model);
+    if options.facing_rule {
+        let target = facing::target_handedness(facing::decided(&probabilities), &probabilities);
+        for c in &mut cands {
+            if facing::needs_swap(&c.joints, target) {
+                (c.joints, c.conf, c.swapped) = (facing::swap_sides(&c.joints), facing::mirror_values(&c.conf), true);
+            }
+        }
+    }
+    let blazepose_swapped = cands.iter().any(|c| c.backend == Backend::BlazePose && c.swapped);
     let presence = presence_log_odds(&f, cal)?.map_or(0.0, sigmoid);
     let sketch_threshold = options.sketch.threshold.unwrap_or(evidence.sketch_threshold);
     if options.strict {
@@ -463,6 +531,7 @@ pub fn decide(
         }
         if from[0] > 0 && from[1] > 0 {
             mixed.backend = Backend::Auto;
+            mixed.swapped = cands[0].swapped || cands[1].swapped;
         } else if from[1] > 0 {
             mixed = Scored { ..cands[1] };
         }
@@ -502,7 +571,8 @@ pub fn decide(
         None => [false; NUM_JOINTS],
     };
     let confidence = mean(&best.conf);
-    let (landmark_depth, landmark_joints) = landmark_view(evidence, &best.joints);
+    let (landmark_depth, landmark_joints) = landmark_view(evidence, &best.joints, blazepose_swapped);
+    let facing = facing::estimate(&best.joints, probabilities, best.swapped);
     Ok(Figure {
         backend: best.backend,
         joints: best.joints,
@@ -515,6 +585,7 @@ pub fn decide(
         averaged,
         landmark_depth,
         landmark_joints,
+        facing,
     })
 }
 
@@ -643,6 +714,7 @@ mod tests {
             sketch: Some(vec![sketch(score, standing(0.0), [fmp_conf; NUM_JOINTS])]),
             sketch_threshold: THRESH,
             blazepose: Some(blazepose(flag, standing(50.0), [bp_conf; NUM_JOINTS])),
+            head_ink: None,
         }
     }
 
@@ -652,6 +724,7 @@ mod tests {
             sketch: Some(vec![sketch(THRESH + 1.0, fmp, [0.9; NUM_JOINTS])]),
             sketch_threshold: THRESH,
             blazepose: Some(blazepose(0.9, bp, [0.6; NUM_JOINTS])),
+            head_ink: None,
         }
     }
 
@@ -707,7 +780,7 @@ mod tests {
         assert_eq!(no_figure(decide(&both(THRESH - 0.1, 0.9, 0.3, 0.9), &cal, &o, None)), (THRESH - 0.1, THRESH));
         let bp_only = Evidence { sketch: None, ..both(0.0, 0.9, 0.3, 0.9) };
         assert_eq!(no_figure(decide(&bp_only, &cal, &o, None)), (0.3, 0.5));
-        let neither = Evidence { sketch: None, sketch_threshold: THRESH, blazepose: None };
+        let neither = Evidence { sketch: None, sketch_threshold: THRESH, blazepose: None, head_ink: None };
         assert_eq!(no_figure(decide(&neither, &cal, &o, None)), (f64::NEG_INFINITY, THRESH));
         // Not strict, the low-flag BlazePose figure is kept when the presence says so.
         let lenient = FigureOptions { min_presence: 0.0, ..FigureOptions::default() };
@@ -833,7 +906,7 @@ mod tests {
         let list = [THRESH + 1.0, THRESH + 0.2, THRESH, THRESH - 0.1]
             .map(|s| sketch(s, standing(0.0), [0.76; NUM_JOINTS]))
             .to_vec();
-        let e = Evidence { sketch: Some(list.clone()), sketch_threshold: THRESH, blazepose: None };
+        let e = Evidence { sketch: Some(list.clone()), sketch_threshold: THRESH, blazepose: None, head_ink: None };
         let f = decide(&e, &cal, &o, None).unwrap();
         assert_eq!(f.others, list[1..3].to_vec());
         assert_eq!(f.raw_score, THRESH + 1.0);

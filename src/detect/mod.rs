@@ -10,6 +10,7 @@ pub mod conv;
 pub mod dt;
 pub mod dtwin;
 pub mod embedded;
+pub mod facing;
 pub mod figure;
 pub mod fastconv;
 pub mod format;

@@ -1,12 +1,14 @@
 //! 2-D joint files (`sketchbody-joints2d`, version 1; docs/formats.md): the 15 canonical joints in
 //! pixels (origin at the top-left image corner, y down) and an optional `missing` list of joints
-//! whose positions are guesses. Read by `sketchbody pose` and `sketchbody run --joints`, written
-//! by `sketchbody detect` and `sketchbody run`.
+//! whose positions are guesses; from a detection also the figure's `facing` and the
+//! `alternatives` (the labelling with left and right swapped). Read by `sketchbody pose` and
+//! `sketchbody run --joints`, written by `sketchbody detect` and `sketchbody run`.
 
 use std::path::Path;
 
 use serde_json::{json, Map, Value};
 
+use crate::detect::facing::{Facing, FacingEstimate, FACINGS};
 use crate::detect::figure::Figure;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -114,12 +116,110 @@ pub fn detection_json(f: &Figure) -> Value {
     v
 }
 
+/// The `facing` object of a joints file: the decided facing (`front`, `back`, `left`, `right`
+/// or `unknown`), the probability of each of the four, and whether the labelling rule swapped
+/// the detector's left and right.
+pub fn facing_json(f: &FacingEstimate) -> Value {
+    let p: Map<String, Value> =
+        FACINGS.iter().zip(f.probabilities).map(|(k, p)| (k.name().to_string(), json!(p))).collect();
+    json!({"facing": f.facing.name(), "probabilities": p, "swapped": f.swapped})
+}
+
+/// The `alternatives` list of a joints file: the labelling with left and right swapped (its
+/// joints, its score, the probability that it is the right labelling, and `"swap":
+/// "left_right"`). Errors on a non-finite coordinate.
+pub fn alternatives_json(f: &FacingEstimate) -> Result<Value> {
+    let joints = joints2d_json(&f.alternative)?["joints"].take();
+    Ok(json!([{"swap": "left_right", "score": f.alternative_score, "joints": joints}]))
+}
+
+/// One line on the facing for reports: the decided facing, the four probabilities, and a note
+/// when the labelling rule swapped the detector's sides.
+pub fn facing_summary(f: &FacingEstimate) -> String {
+    let p = &f.probabilities;
+    format!(
+        "facing {} (front {:.2}, back {:.2}, left {:.2}, right {:.2}){}",
+        f.facing.name(),
+        p[0],
+        p[1],
+        p[2],
+        p[3],
+        if f.swapped { "; left and right swapped from the detector's labelling" } else { "" }
+    )
+}
+
+/// The facing a joints file reports ([`facing_json`]), read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReportedFacing {
+    /// The decided facing.
+    pub facing: Facing,
+    /// Probabilities of front, back, left and right.
+    pub probabilities: [f64; 4],
+    /// The labelling rule swapped the detector's sides.
+    pub swapped: bool,
+}
+
+/// One alternative labelling of a joints file ([`alternatives_json`]), read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Alternative {
+    /// What changed: `left_right`.
+    pub swap: String,
+    /// The probability that it is the right labelling, in [0, 1].
+    pub score: f64,
+    /// Its joints (the `missing` joints of the file as the main joints'), px.
+    pub joints: Joints2,
+}
+
+/// The `facing` of a `sketchbody-joints2d` document, `None` when it has none. Errors
+/// ([`Error::CorruptData`]): a malformed `facing` object.
+pub fn parse_facing(v: &Value) -> Result<Option<ReportedFacing>> {
+    let Some(f) = v.get("facing") else { return Ok(None) };
+    let name = f.get("facing").and_then(Value::as_str).ok_or_else(|| bad("\"facing\" needs a \"facing\" name"))?;
+    let facing = Facing::from_name(name).map_err(|e| bad(e.to_string()))?;
+    let probs = f.get("probabilities").ok_or_else(|| bad("\"facing\" needs \"probabilities\""))?;
+    let mut probabilities = [0.0; 4];
+    for (k, face) in FACINGS.iter().enumerate() {
+        probabilities[k] = probs
+            .get(face.name())
+            .and_then(Value::as_f64)
+            .filter(|p| (0.0..=1.0).contains(p))
+            .ok_or_else(|| bad(format!("facing probability {:?} must be a number in [0, 1]", face.name())))?;
+    }
+    let swapped = f.get("swapped").and_then(Value::as_bool).ok_or_else(|| bad("\"facing\" needs \"swapped\""))?;
+    Ok(Some(ReportedFacing { facing, probabilities, swapped }))
+}
+
+/// The `alternatives` of a `sketchbody-joints2d` document (empty when it has none). Errors
+/// ([`Error::CorruptData`]): a malformed list, alternative or joint.
+pub fn parse_alternatives(v: &Value) -> Result<Vec<Alternative>> {
+    let Some(list) = v.get("alternatives") else { return Ok(Vec::new()) };
+    let list = list.as_array().ok_or_else(|| bad("\"alternatives\" must be a list"))?;
+    list.iter()
+        .map(|a| {
+            let swap = a.get("swap").and_then(Value::as_str).ok_or_else(|| bad("an alternative needs \"swap\""))?;
+            let score = a
+                .get("score")
+                .and_then(Value::as_f64)
+                .filter(|s| (0.0..=1.0).contains(s))
+                .ok_or_else(|| bad("an alternative's \"score\" must be a number in [0, 1]"))?;
+            let mut doc = json!({"format": JOINTS2D_FORMAT, "version": 1, "joints": a.get("joints").cloned().unwrap_or(Value::Null)});
+            if let Some(m) = v.get("missing") {
+                doc["missing"] = m.clone();
+            }
+            Ok(Alternative { swap: swap.to_string(), score, joints: parse_joints2d(&doc)? })
+        })
+        .collect()
+}
+
 /// Writes [`joints2d_json`] to `path` atomically (pretty-printed, newline-terminated), with the
-/// detection behind the joints as `detection` ([`detection_json`]) when given.
+/// detection behind the joints as `detection` ([`detection_json`]), its `facing`
+/// ([`facing_json`]) and `alternatives` ([`alternatives_json`]) when given.
 pub fn write_joints2d_with(path: &Path, j: &Joints2, detection: Option<&Figure>) -> Result<()> {
     let mut v = joints2d_json(j)?;
     if let Some(f) = detection {
         v["detection"] = detection_json(f);
+        v["facing"] = facing_json(&f.facing);
+        v["alternatives"] = alternatives_json(&f.facing)?;
     }
     let mut bytes = serde_json::to_vec_pretty(&v).map_err(|e| Error::CorruptData(e.to_string()))?;
     bytes.push(b'\n');
@@ -159,6 +259,45 @@ mod tests {
         nan.xy[0][0] = f64::NAN;
         assert!(matches!(joints2d_json(&nan), Err(Error::NonFinite { .. })));
         assert!(matches!(load_joints2d(Path::new("/nonexistent/j.json")), Err(Error::Io { .. })));
+    }
+
+    /// The facing and the swapped labelling round-trip through their readers, which name a
+    /// malformed entry; a file without them reads as having none.
+    #[test]
+    fn facing_and_alternatives_round_trip() {
+        let j = Joints2 {
+            xy: std::array::from_fn(|k| [100.0 + 3.0 * k as f64, 20.0 * k as f64]),
+            visible: [true; NUM_JOINTS],
+        };
+        let e = crate::detect::facing::estimate(&j, [0.7, 0.1, 0.15, 0.05], true);
+        let mut v = joints2d_json(&j).unwrap();
+        assert_eq!(parse_facing(&v).unwrap(), None);
+        assert!(parse_alternatives(&v).unwrap().is_empty());
+        v["facing"] = facing_json(&e);
+        v["alternatives"] = alternatives_json(&e).unwrap();
+        let text = serde_json::to_string_pretty(&v).unwrap();
+        let back: Value = crate::strict_json::from_str(&text).unwrap();
+        assert_eq!(parse_joints2d(&back).unwrap(), j, "the joints' reader ignores the facing");
+        let f = parse_facing(&back).unwrap().unwrap();
+        assert_eq!(f, ReportedFacing { facing: Facing::Front, probabilities: [0.7, 0.1, 0.15, 0.05], swapped: true });
+        let alts = parse_alternatives(&back).unwrap();
+        assert_eq!(
+            alts,
+            vec![Alternative { swap: "left_right".into(), score: e.alternative_score, joints: e.alternative }]
+        );
+        assert_eq!(alts[0].joints.xy[crate::skeleton::joint::L_WRIST], j.xy[crate::skeleton::joint::R_WRIST]);
+        let mut wrong = back.clone();
+        wrong["facing"]["facing"] = json!("up");
+        assert!(parse_facing(&wrong).unwrap_err().to_string().contains("facing \"up\""));
+        let mut wrong = back.clone();
+        wrong["facing"]["probabilities"]["back"] = json!(1.5);
+        assert!(parse_facing(&wrong).unwrap_err().to_string().contains("\"back\""));
+        let mut wrong = back.clone();
+        wrong["alternatives"][0]["joints"]["neck"] = json!([1.0]);
+        assert!(parse_alternatives(&wrong).unwrap_err().to_string().contains("neck must be [x, y]"));
+        let mut wrong = back;
+        wrong["alternatives"] = json!({});
+        assert!(parse_alternatives(&wrong).is_err());
     }
 
     /// Issue 52 finding 11: a key given twice is refused (it used to take the last value

@@ -16,6 +16,6 @@ pub use blur::{gaussian_blur, gaussian_kernel_size};
 pub use canny::{canny, canny_into, CannyParams};
 pub use decode::load_image;
 pub use encode::{encode_png, save_png};
-pub use gray::to_gray;
+pub use gray::{rgb_to_gray_pixel, to_gray};
 pub use rgb::{decode_rgb_image, load_rgb_image, over_white, RgbImage};
 pub use view::{GrayImage, ImageView};

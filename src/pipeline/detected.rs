@@ -127,6 +127,11 @@ mod tests {
             averaged: [false; NUM_JOINTS],
             landmark_depth: [None; NUM_JOINTS],
             landmark_joints: None,
+            facing: crate::detect::facing::estimate(
+                &crate::skeleton::Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] },
+                [0.25; 4],
+                false,
+            ),
         }
     }
 

@@ -1648,6 +1648,63 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
         // The fixture's result was run from given joints: there is no detection to report.
         t.check(e, "result", Kind::Other, SKB_ERR_OUT_OF_RANGE, skb_result_detection(r, ip), inf.intact());
     }
+    let e = "skb_result_facing";
+    let mut fac = Canary::of::<skb_facing_info>(1);
+    let fp = fac.ptr();
+    // SAFETY: live result or NULL; the canary holds one facing struct.
+    unsafe {
+        t.check(e, "result", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_facing(ptr::null(), fp), fac.intact());
+        t.check(e, "facing", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_facing(r, ptr::null_mut()), true);
+        // Given joints: no detection, no facing.
+        t.check(e, "result", Kind::Other, SKB_ERR_OUT_OF_RANGE, skb_result_facing(r, fp), fac.intact());
+    }
+    let o = fx.detect_opts as *const skb_detect_options;
+    let e = "skb_detect_facing";
+    #[allow(clippy::type_complexity)]
+    let call = |c: *const skb_context,
+                i: *const skb_image,
+                o: *const skb_detect_options,
+                xy: *mut f64,
+                xl: usize,
+                cf: *mut f64,
+                cl: usize,
+                info: *mut skb_figure_info,
+                facing: *mut skb_facing_info| {
+        // SAFETY: as above.
+        unsafe { skb_detect_facing(c, i, o, xy, xl, cf, cl, info, facing) }
+    };
+    let (mut xy, mut cf, mut inf, mut fac) = (
+        Canary::of::<f64>(30),
+        Canary::of::<f64>(15),
+        Canary::of::<skb_figure_info>(1),
+        Canary::of::<skb_facing_info>(1),
+    );
+    let (xp, cp, ip, fp) = (xy.ptr(), cf.ptr(), inf.ptr(), fac.ptr());
+    let rows: Vec<(&'static str, Kind, skb_status, skb_status)> = vec![
+        ("ctx", Kind::Null, SKB_ERR_NULL_POINTER, call(ptr::null(), &im, o, xp, 30, cp, 15, ip, fp)),
+        ("image", Kind::Null, SKB_ERR_NULL_POINTER, call(ctx, ptr::null(), o, xp, 30, cp, 15, ip, fp)),
+        ("joints_xy", Kind::Null, SKB_ERR_NULL_POINTER, call(ctx, &im, o, ptr::null_mut(), 30, cp, 15, ip, fp)),
+        ("confidence", Kind::Null, SKB_ERR_NULL_POINTER, call(ctx, &im, o, xp, 30, ptr::null_mut(), 15, ip, fp)),
+        ("info", Kind::Null, SKB_ERR_NULL_POINTER, call(ctx, &im, o, xp, 30, cp, 15, ptr::null_mut(), fp)),
+        ("facing", Kind::Null, SKB_ERR_NULL_POINTER, call(ctx, &im, o, xp, 30, cp, 15, ip, ptr::null_mut())),
+        ("joints_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, call(ctx, &im, o, xp, usize::MAX, cp, 15, ip, fp)),
+        ("joints_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, call(ctx, &im, o, xp, 29, cp, 15, ip, fp)),
+        ("confidence_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, call(ctx, &im, o, xp, 30, cp, usize::MAX, ip, fp)),
+        ("confidence_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, call(ctx, &im, o, xp, 30, cp, 14, ip, fp)),
+        ("image", Kind::Other, SKB_ERR_IMAGE_TOO_SMALL, call(ctx, &small_im, o, xp, 30, cp, 15, ip, fp)),
+        ("opts", Kind::Null, SKB_ERR_IMAGE_TOO_SMALL, call(ctx, &small_im, ptr::null(), xp, 30, cp, 15, ip, fp)),
+    ];
+    for (param, kind, want, got) in rows {
+        t.check(e, param, kind, want, got, xy.intact() && cf.intact() && inf.intact() && fac.intact());
+    }
+    let e = "skb_joints2d_swap_sides";
+    let mut sw = Canary::of::<skb_joints2d>(1);
+    let swp = sw.ptr();
+    // SAFETY: the fixture's joints or NULL; the canary holds one joints struct.
+    unsafe {
+        t.check(e, "joints", Kind::Null, SKB_ERR_NULL_POINTER, skb_joints2d_swap_sides(ptr::null(), swp), sw.intact());
+        t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, skb_joints2d_swap_sides(&fx.joints, ptr::null_mut()), true);
+    }
     let o = fx.detect_opts;
     t.set_int(
         "skb_detect_options_set_backend",
@@ -1833,7 +1890,15 @@ fn fit_option_rows(t: &mut Table, fx: &Fx) {
             "yaw_deg",
             Kind::Other,
             SKB_ERR_OUT_OF_RANGE,
-            skb_sketch_options_set_camera(o, 91.0, 0.0, 0.0),
+            skb_sketch_options_set_camera(o, 181.0, 0.0, 0.0),
+            true,
+        );
+        t.check(
+            e,
+            "pitch_deg",
+            Kind::Other,
+            SKB_ERR_OUT_OF_RANGE,
+            skb_sketch_options_set_camera(o, 0.0, 91.0, 0.0),
             true,
         );
         t.check(e, "yaw_deg", Kind::Other, SKB_OK, skb_sketch_options_set_camera(o, 10.0, 0.0, 0.0), true);

@@ -588,6 +588,33 @@ class SKETCHBODY_OT_rerun(_Reporting, bpy.types.Operator):
         return _start(self, context, skb, req)
 
 
+class SKETCHBODY_OT_swap_sides(_Reporting, bpy.types.Operator):
+    """Swap the joint markers' left and right (the detection's other labelling: a figure read
+    as seen from behind that faces the viewer, or the reverse) and fit a new body from them"""
+
+    bl_idname = "sketchbody.swap_sides"
+    bl_label = "Swap left/right"
+    bl_options = {"REGISTER"}
+
+    wait: WAIT
+
+    @classmethod
+    def poll(cls, context):
+        return build.find_plane() is not None and not is_running()
+
+    def run(self, context):
+        plane = build.find_plane()
+        if plane is None or "skb_image" not in plane:
+            raise UserError("No sketch in the scene: run 'Sketch to body' first")
+        skb = package.load(_preference_path(context))
+        try:
+            build.swap_markers(plane, skb)
+        except ValueError as e:
+            raise UserError(str(e))
+        context.view_layer.update()
+        return SKETCHBODY_OT_rerun.run(self, context)
+
+
 class SKETCHBODY_OT_cancel(bpy.types.Operator):
     """Stop the running Sketchbody fit (within one fit iteration); the scene stays as it was"""
 
@@ -724,6 +751,7 @@ class SKETCHBODY_PT_panel(bpy.types.Panel):
             box.prop(st, "threshold")
             box.prop(st, "live_repose")
         box.operator(SKETCHBODY_OT_rerun.bl_idname, icon="FILE_REFRESH")
+        box.operator(SKETCHBODY_OT_swap_sides.bl_idname, icon="ARROW_LEFTRIGHT")
         box.operator(SKETCHBODY_OT_save_joints.bl_idname, icon="EXPORT")
         _draw_flips(layout)
         layout.operator(SKETCHBODY_OT_clear.bl_idname, icon="TRASH")
@@ -757,7 +785,8 @@ def _draw_status(layout, st):
 
 
 CLASSES = (SketchbodyPreferences, SketchbodySettings, SKETCHBODY_OT_sketch_to_body, SKETCHBODY_OT_rerun,
-           SKETCHBODY_OT_cancel, SKETCHBODY_OT_clear, SKETCHBODY_OT_flip_limb, SKETCHBODY_OT_save_joints,
+           SKETCHBODY_OT_swap_sides, SKETCHBODY_OT_cancel, SKETCHBODY_OT_clear, SKETCHBODY_OT_flip_limb,
+           SKETCHBODY_OT_save_joints,
            SKETCHBODY_PT_panel)
 
 

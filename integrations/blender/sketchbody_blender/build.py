@@ -330,6 +330,23 @@ def find_markers(plane):
     return sorted((o for o in plane.children if "skb_joint" in o), key=lambda o: o["skb_index"])
 
 
+def swap_markers(plane, skb):
+    """Swaps the joint markers' left and right (each marker takes its mirror's position,
+    confidence and visibility; head, neck and pelvis stay), as the library's
+    Joints2D.swap_sides: the detection's other labelling, for a figure read as seen from behind
+    that faces the viewer, or the reverse."""
+    names = list(skb.JOINT_NAMES)
+    xy, visible = read_markers(plane, names)
+    swapped = skb.Joints2D(xy, visible).swap_sides()
+    markers = {o["skb_joint"]: o for o in find_markers(plane)}
+    conf = {n: (markers[n]["skb_confidence"], markers[n]["skb_visible"]) for n in names}
+    for i, n in enumerate(names):
+        m = markers[n]
+        m.location = pixel_to_plane(plane, swapped.xy[i]) + Vector((0.0, 0.0, m.location.z))
+        side = {"r_": "l_", "l_": "r_"}.get(n[:2])
+        m["skb_confidence"], m["skb_visible"] = conf[side + n[2:] if side else n]
+
+
 def read_markers(plane, names):
     """(xy (15, 2) pixels, visible (15,) bool) from the markers' current positions. A marker
     moved by more than half a pixel from where detection (or the joints file) put it is marked

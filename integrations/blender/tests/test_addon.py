@@ -442,8 +442,8 @@ panel = bpy.types.SKETCHBODY_PT_panel
 panel.draw(type("P", (), {"layout": StubLayout(drawn)})(), bpy.context)
 ops = [t for k, t in drawn if k == "operator"]
 flips = [t for t in ops if t in mod.LIMB_LABELS.values()]
-check("panel draws its settings, four operators and a flip button per limb",
-      len(ops) == 12 and flips == list(mod.LIMB_LABELS.values()) and ("prop", "image") in drawn
+check("panel draws its settings, five operators and a flip button per limb",
+      len(ops) == 13 and flips == list(mod.LIMB_LABELS.values()) and ("prop", "image") in drawn
       and ("prop", "live_repose") in drawn, ", ".join(ops))
 
 def pixels(path):
@@ -634,6 +634,24 @@ check("re-run of detected joints, none moved: detected again, the CLI's body",
       res == {"FINISHED"} and arm5 != arm4 and arm5["skb_detected"] and arm5["skb_gender"] == cli_gender
       and abs(arm5["skb_height_m"] - arm4["skb_height_m"]) < 1e-9 and "from detected joints" in st.status,
       f"{arm5['skb_gender']} {arm5['skb_height_m']:.3f} m; {st.status[:60]}")
+
+# Swap left/right (issue 51): the markers exchange sides (head, neck and pelvis stay, each
+# marker takes its mirror's confidence) and a body is fitted from them, the former one kept.
+jn = list(skb.JOINT_NAMES)
+plane = build.find_plane()
+xy_s, _ = build.read_markers(plane, skb.JOINT_NAMES)
+conf_s = [m["skb_confidence"] for m in build.find_markers(plane)]
+res, err = run_wait(bpy.ops.sketchbody.swap_sides)
+xy_t, _ = build.read_markers(plane, skb.JOINT_NAMES)
+conf_t = [m["skb_confidence"] for m in build.find_markers(plane)]
+arm6 = bpy.data.objects["SKB_Armature"]
+check("Swap left/right exchanges the markers' sides and fits a body from them",
+      res == {"FINISHED"} and arm6 != arm5 and not arm6["skb_detected"]
+      and np.allclose(xy_t[jn.index("r_wrist")], xy_s[jn.index("l_wrist")], atol=1e-3)
+      and np.allclose(xy_t[jn.index("l_knee")], xy_s[jn.index("r_knee")], atol=1e-3)
+      and np.allclose(xy_t[jn.index("head")], xy_s[jn.index("head")], atol=1e-3)
+      and conf_t[jn.index("r_elbow")] == conf_s[jn.index("l_elbow")],
+      f"{err.strip()}; r_wrist {xy_s[jn.index('r_wrist')]} -> {xy_t[jn.index('r_wrist')]}")
 
 res, err = run_op(bpy.ops.sketchbody.clear)
 check("Clear removes everything, the kept bodies too", res == {"FINISHED"} and skb_objects() == []

@@ -81,7 +81,14 @@ pub fn run(a: Args) -> Result<(), CliError> {
     };
     let r = renderer(a.mocap.as_deref())?;
     let ctx = SetContext { renderer: &r, parse_dir: &a.parse, model: &model, net: &net };
-    let mut specs = vec![SetSpec::Synthetic { seed: a.seed, n: a.synthetic, size: 512, hair: None }];
+    let mut specs = vec![SetSpec::Synthetic {
+        seed: a.seed,
+        n: a.synthetic,
+        size: 512,
+        hair: None,
+        view: crate::backend_sets::View::Random,
+        art: false,
+    }];
     specs.push(SetSpec::Parse { first: 1, last: a.parse_last, style: None, npr: None });
     if a.stylised {
         for s in Stylisation::ALL {

@@ -47,16 +47,28 @@ pub struct Args {
     #[arg(long)]
     by_style: bool,
     /// The backends' proxy benchmark instead of the models' PCK: comma-separated sets from
-    /// synthetic (the held-out sketches above), parse (PARSE test photos 101-305), xdog, pencil,
-    /// flat (those photos stylised), negatives (blank, text and clutter pages); prints PCK, the
-    /// no-figure rate and time per set for fmp, blazepose, auto (also without averaging the
-    /// joints the backends agree on, by confidence alone and per limb) and the strict variants,
-    /// and the reliability table of the calibrated confidences.
+    /// synthetic (the held-out sketches above), back, profile (the same renderer's back views
+    /// and profiles, yaw 180° ± 20° and ±(70°..110°)), art (painted in art styles), faceless
+    /// (hair none), dataset:DIR (every sketch of a rendered dataset folder, e.g. the Blender
+    /// set), parse (PARSE test photos 101-305), xdog, pencil, flat (those photos
+    /// stylised), negatives (blank, text and clutter pages); prints PCK, the no-figure rate and
+    /// time per set for fmp, blazepose, auto (also without averaging the joints the backends
+    /// agree on, by confidence alone and per limb) and the strict variants; for auto with and
+    /// without the facing's labelling rule the gross-failure rate (≥ 4 joints beyond 0.2 of the
+    /// figure's size), the left/right-swap rate and the facing's accuracy; and the reliability
+    /// table of the calibrated confidences.
     #[arg(long)]
     sets: Option<String>,
     /// The PARSE folder for `--sets`.
     #[arg(long, default_value = "../shared/data/parse")]
     parse: PathBuf,
+    /// A facing model JSON for `--sets` (as `fit-facing` writes it) instead of the embedded one.
+    #[arg(long)]
+    facing_model: Option<PathBuf>,
+    /// With `--sets`: also list each sketch whose facing is misread or whose answer is a
+    /// left/right swap, with the facing's probabilities and features.
+    #[arg(long)]
+    facing_cases: bool,
     /// A calibration JSON for `--sets` (as `calibrate-detector` writes it) instead of the
     /// embedded one.
     #[arg(long)]
@@ -139,8 +151,16 @@ pub fn run(a: Args) -> Result<(), CliError> {
             Some(p) => read_landmark_model(p)?,
             None => LandmarkNet::embedded()?,
         };
+        let facing = match &a.facing_model {
+            Some(p) => {
+                let text = std::fs::read_to_string(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
+                Some(sketchbody::detect::facing::FacingModel::from_json(&text)?)
+            }
+            None => None,
+        };
         return crate::eval_backends::run_sets(
             &specs,
+            crate::eval_backends::FacingEval { model: facing, cases: a.facing_cases },
             &renderer(a.mocap.as_deref())?,
             &a.parse,
             &cal,

@@ -15,6 +15,7 @@ mod eval;
 mod eval_backends;
 mod eval_detector;
 mod eval_parse;
+mod fit_facing;
 mod fit_landmark_joints;
 mod learn_poses;
 mod make_dataset;
@@ -69,6 +70,8 @@ enum Command {
     EvalDetector(eval_detector::Args),
     /// Fit the detector backends' calibrated confidences on a calibration set.
     CalibrateDetector(calibrate_detector::Args),
+    /// Fit the facing model (front, back, profiles) on rendered sketches of every yaw.
+    FitFacing(fit_facing::Args),
     /// Train a detector on synthetic concept sketches and write it as .skbd.
     TrainDetector(train_detector::Args),
     /// Train the gender classifier on run-dataset's gender features; confusion and calibration.
@@ -104,6 +107,7 @@ fn main() -> ExitCode {
         Command::EvalParse(a) => eval_parse::run(a),
         Command::EvalDetector(a) => eval_detector::run(a),
         Command::CalibrateDetector(a) => calibrate_detector::run(a),
+        Command::FitFacing(a) => fit_facing::run(a),
         Command::TrainDetector(a) => train_detector::run(a),
         Command::TrainGender(a) => train_gender::run(a),
         Command::CalibrateFit(a) => calibrate_fit::run(a),

@@ -4,9 +4,10 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use rand::SeedableRng;
 use sketchbody::body::{BodyModel, Gender};
 use sketchbody::render::sketch::truth::write_sample;
-use sketchbody::render::sketch::{MocapLibrary, SketchRenderer, SketchRequest, SketchStyle};
+use sketchbody::render::sketch::{CameraAngles, MocapLibrary, SketchRenderer, SketchRequest, SketchStyle};
 
 use sketchbody_cli::CliError;
 
@@ -35,6 +36,14 @@ pub struct Args {
     /// Also write the rest and posed meshes as OBJ.
     #[arg(long)]
     obj: bool,
+    /// Camera yaw in degrees, ±180 (0 a front view, 180 a back view, −90 a left profile), pitch
+    /// and roll 0, instead of random near-frontal angles.
+    #[arg(long, allow_negative_numbers = true)]
+    yaw: Option<f64>,
+    /// Hair style (none, short, long, spiky, bun, ponytail) instead of the style's own (a
+    /// random style is then drawn from the seed).
+    #[arg(long)]
+    hair: Option<String>,
 }
 
 /// Parses `N` or `WxH`.
@@ -90,8 +99,17 @@ pub fn run(a: Args) -> Result<(), CliError> {
     }
     let stem = a.out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let r = renderer(a.mocap.as_deref())?;
-    let req =
+    let mut req =
         SketchRequest { gender, style: a.clean.then(SketchStyle::default), ..SketchRequest::random(a.seed, width) };
+    if let Some(hair) = a.hair.as_deref().map(crate::train_detector::parse_hair).transpose()?.flatten() {
+        let mut style =
+            req.style.unwrap_or_else(|| SketchStyle::random(&mut rand_chacha::ChaCha8Rng::seed_from_u64(a.seed)));
+        style.hair = hair;
+        req.style = Some(style);
+    }
+    if let Some(yaw_deg) = a.yaw {
+        req.camera = Some(CameraAngles { yaw_deg, pitch_deg: 0.0, roll_deg: 0.0 });
+    }
     let req = SketchRequest { width, height, ..req };
     let t0 = std::time::Instant::now();
     let s = r.render(&req)?;

@@ -6,6 +6,7 @@
 
 use crate::detect::calibration_fit::fit_logistic;
 use sketchbody::detect::calibration::{Calibration, JointModels, PresenceModels};
+use sketchbody::detect::facing::{swap_sides, Facing};
 use sketchbody::detect::figure::{
     features, gather, presence_log_odds, retry_blazepose_from_sketch, Backend, Evidence, FigureOptions,
 };
@@ -14,7 +15,7 @@ use sketchbody::detect::Model;
 use sketchbody::error::{Error, Result};
 use sketchbody::image::ImageView;
 use sketchbody::pipeline::figure::decide;
-use sketchbody::skeleton::NUM_JOINTS;
+use sketchbody::skeleton::{Joints2, NUM_JOINTS};
 
 use super::metrics::{pck, pck_normaliser};
 
@@ -31,6 +32,10 @@ pub struct Sample {
     /// Wall time on this image of the sketch model, of BlazePose alone and of `Auto`'s retry
     /// of BlazePose from the sketch model's box, s.
     pub seconds: [f64; 3],
+    /// The yaw of a rendered figure's torso as the camera sees it, degrees
+    /// ([`super::facing::torso_yaw_deg`]; its true facing:
+    /// [`sketchbody::detect::facing::Facing::of_yaw`]); `None` when unknown.
+    pub yaw_deg: Option<f64>,
 }
 
 /// Runs both backends on `image` (timing each) and keeps their evidence with `truth`.
@@ -48,14 +53,20 @@ pub fn gather_sample(
     let bp = gather(image, model, net, Backend::BlazePose, options)?;
     let t2 = std::time::Instant::now();
     let blazepose_alone = bp.blazepose.clone();
-    let evidence = Evidence { sketch: fmp.sketch, sketch_threshold: fmp.sketch_threshold, blazepose: bp.blazepose };
+    let evidence = Evidence {
+        sketch: fmp.sketch,
+        sketch_threshold: fmp.sketch_threshold,
+        blazepose: bp.blazepose,
+        head_ink: None,
+    };
     let evidence = retry_blazepose_from_sketch(image, net, evidence, options)?;
     let t3 = std::time::Instant::now();
     let seconds = [t1 - t0, t2 - t1, t3 - t2].map(|d| d.as_secs_f64());
-    Ok(Sample { evidence, blazepose_alone, truth, seconds })
+    Ok(Sample { evidence, blazepose_alone, truth, seconds, yaw_deg: None })
 }
 
-/// The evidence `backend` would have gathered on sample `s`.
+/// The evidence `backend` would have gathered on sample `s` (the head ink as `Auto` measured
+/// it).
 fn restricted(s: &Sample, backend: Backend) -> Evidence {
     let e = &s.evidence;
     Evidence {
@@ -66,6 +77,7 @@ fn restricted(s: &Sample, backend: Backend) -> Evidence {
             Backend::BlazePose => s.blazepose_alone.clone(),
             Backend::Auto => e.blazepose.clone(),
         },
+        head_ink: e.head_ink,
     }
 }
 
@@ -77,6 +89,16 @@ fn correct(truth: &[[f64; 2]; NUM_JOINTS], joints: &[[f64; 2]; NUM_JOINTS]) -> [
         c[j] = (truth[j][0] - joints[j][0]).hypot(truth[j][1] - joints[j][1]) <= thr;
     }
     c
+}
+
+/// Joints wrong by this many or more make a sketch a gross failure ([`SetScore::gross`]).
+pub const GROSS_JOINTS: usize = 4;
+
+/// Whether `joints` is a left/right swap of `truth`: the labelling with left and right swapped
+/// puts at least [`GROSS_JOINTS`] more joints within 0.2 × the figure's size of the truth.
+pub fn is_swap(truth: &[[f64; 2]; NUM_JOINTS], joints: &Joints2) -> bool {
+    let count = |j: &[[f64; 2]; NUM_JOINTS]| correct(truth, j).iter().filter(|&&c| c).count();
+    count(&swap_sides(joints).xy) >= count(&joints.xy) + GROSS_JOINTS
 }
 
 /// Fits every model of a [`Calibration`] on `samples` (images with a figure and pages without):
@@ -202,6 +224,14 @@ pub struct SetScore {
     /// How often the answer came from fmp, blazepose, or limbs of both, as fractions of the
     /// answered images.
     pub chosen: [f64; 3],
+    /// Fraction of the images with a figure that have [`GROSS_JOINTS`] or more joints beyond
+    /// 0.2 × the figure's size (an image answered "no figure" counts); NaN without figures.
+    pub gross: f64,
+    /// Fraction of the images with a figure whose answer is a left/right swap ([`is_swap`]).
+    pub swaps: f64,
+    /// Over the images with a known yaw and an answer: the fractions whose reported facing is
+    /// the true one ([`Facing::of_yaw`]), `unknown`, and another facing; NaN without them.
+    pub facing: [f64; 3],
 }
 
 /// One bin of a reliability table: figures whose confidence fell in `[lo, hi)`.
@@ -225,6 +255,7 @@ pub fn score_set(samples: &[Sample], cal: &Calibration, options: &FigureOptions)
     let backend = options.backend;
     let (mut p1, mut p2, mut with, mut none, mut secs, mut chosen, mut answered) =
         (0.0, 0.0, 0usize, 0usize, 0.0, [0usize; 3], 0usize);
+    let (mut gross, mut swaps, mut facing, mut with_yaw) = (0usize, 0usize, [0usize; 3], 0usize);
     for s in samples {
         secs += match backend {
             Backend::Fmp => s.seconds[0],
@@ -247,10 +278,26 @@ pub fn score_set(samples: &[Sample], cal: &Calibration, options: &FigureOptions)
         }
         if let Some(t) = &s.truth {
             with += 1;
-            if let Some(f) = &fig {
-                p1 += pck(t, &f.joints.xy, 0.1)?;
-                p2 += pck(t, &f.joints.xy, 0.2)?;
+            match &fig {
+                Some(f) => {
+                    p1 += pck(t, &f.joints.xy, 0.1)?;
+                    p2 += pck(t, &f.joints.xy, 0.2)?;
+                    gross += usize::from(correct(t, &f.joints.xy).iter().filter(|&&c| !c).count() >= GROSS_JOINTS);
+                    swaps += usize::from(is_swap(t, &f.joints));
+                }
+                None => gross += 1,
             }
+        }
+        if let (Some(yaw), Some(f)) = (s.yaw_deg, &fig) {
+            with_yaw += 1;
+            let k = if f.facing.facing == Facing::of_yaw(yaw) {
+                0
+            } else if f.facing.facing == Facing::Unknown {
+                1
+            } else {
+                2
+            };
+            facing[k] += 1;
         }
     }
     let n = samples.len().max(1) as f64;
@@ -261,6 +308,9 @@ pub fn score_set(samples: &[Sample], cal: &Calibration, options: &FigureOptions)
         no_figure: none as f64 / n,
         seconds: secs / n,
         chosen: chosen.map(|c| c as f64 / a),
+        gross: if with == 0 { f64::NAN } else { gross as f64 / with as f64 },
+        swaps: if with == 0 { f64::NAN } else { swaps as f64 / with as f64 },
+        facing: facing.map(|c| if with_yaw == 0 { f64::NAN } else { c as f64 / with_yaw as f64 }),
     })
 }
 

@@ -5,6 +5,7 @@
 pub mod backends;
 pub mod by_style;
 pub mod detector;
+pub mod facing;
 pub mod metrics;
 pub mod score;
 

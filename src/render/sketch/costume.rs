@@ -307,6 +307,25 @@ impl Figure<'_> {
             }
             _ => out.push(cap),
         }
+        // Seen from behind, the hair covers the head: strands from the crown to the nape across
+        // the whole head (no face to draw).
+        let fwd3 = side3.cross(&up3);
+        if (self.cam.r * fwd3)[2] < 0.0 {
+            for _ in 0..rng.random_range(7..12) {
+                let th = rng.random_range(-1.2..1.2);
+                let (p0, p1) = (at(th * 0.5, 0.95), at(PI - th * rng.random_range(0.5..0.9), 0.9));
+                let bow = rng.random_range(0.05..0.15) * a * th.signum();
+                out.push(
+                    (0..=8)
+                        .map(|i| {
+                            let t = i as f64 / 8.0;
+                            let b = bow * 4.0 * t * (1.0 - t);
+                            [p0[0] + (p1[0] - p0[0]) * t + rx * b, p0[1] + (p1[1] - p0[1]) * t + ry * b]
+                        })
+                        .collect(),
+                );
+            }
+        }
         // Strands from the crown toward the forehead.
         for _ in 0..rng.random_range(2..5) {
             let th = rng.random_range(-1.0..1.0);

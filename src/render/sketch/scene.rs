@@ -29,10 +29,12 @@ pub fn random_proportions<R: Rng + ?Sized>(rng: &mut R, p_custom: f64) -> Propor
 }
 
 /// Camera angles in degrees: the rotation is `Rz(roll) · Rx(pitch) · Ry(yaw)` (yaw turns the
-/// figure about the vertical, pitch tips it toward the viewer, roll tilts the image).
+/// figure about the vertical, pitch tips it toward the viewer, roll tilts the image). Yaw 0 is a
+/// front view, ±180° a back view, −90° the figure's left side toward the viewer (a left profile)
+/// and +90° its right side.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CameraAngles {
-    /// Turn about +Y; random range ±30°.
+    /// Turn about +Y; random range ±30°, valid range ±180°.
     pub yaw_deg: f64,
     /// Turn about +X; random range ±10°.
     pub pitch_deg: f64,
@@ -50,14 +52,17 @@ impl CameraAngles {
         }
     }
 
-    /// The rotation matrix. Errors on non-finite angles or any angle beyond ±90°.
+    /// The rotation matrix. Errors on non-finite angles, a yaw beyond ±180° or a pitch or roll
+    /// beyond ±90°.
     pub fn rotation(&self) -> Result<Matrix3<f64>> {
-        for (name, v) in
-            [("camera yaw", self.yaw_deg), ("camera pitch", self.pitch_deg), ("camera roll", self.roll_deg)]
-        {
+        for (name, v, limit) in [
+            ("camera yaw", self.yaw_deg, 180.0),
+            ("camera pitch", self.pitch_deg, 90.0),
+            ("camera roll", self.roll_deg, 90.0),
+        ] {
             ensure_finite(name, v)?;
-            if v.abs() > 90.0 {
-                return Err(Error::OutOfRange { name, detail: format!("{v}° is beyond ±90°") });
+            if v.abs() > limit {
+                return Err(Error::OutOfRange { name, detail: format!("{v}° is beyond ±{limit}°") });
             }
         }
         let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), self.roll_deg.to_radians())
@@ -114,5 +119,13 @@ mod tests {
         assert!(CameraAngles { yaw_deg: f64::NAN, ..Default::default() }.rotation().is_err());
         let r = CameraAngles { yaw_deg: 30.0, pitch_deg: -10.0, roll_deg: 5.0 }.rotation().unwrap();
         assert!((r.determinant() - 1.0).abs() < 1e-12);
+        // A back view turns the figure's front (+Z) away from the viewer; a yaw of −90° shows its
+        // left side (+X); yaw beyond ±180° and pitch beyond ±90° are refused.
+        let back = CameraAngles { yaw_deg: 180.0, ..Default::default() }.rotation().unwrap();
+        assert!((back * Vector3::z())[2] < -0.999);
+        let left = CameraAngles { yaw_deg: -90.0, ..Default::default() }.rotation().unwrap();
+        assert!((left * Vector3::x())[2] > 0.999);
+        assert!(CameraAngles { yaw_deg: 181.0, ..Default::default() }.rotation().is_err());
+        assert!(CameraAngles { pitch_deg: 91.0, ..Default::default() }.rotation().is_err());
     }
 }
