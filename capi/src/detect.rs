@@ -410,26 +410,57 @@ pub unsafe extern "C" fn skb_detect_figure(
     info: *mut skb_figure_info,
 ) -> skb_status {
     // SAFETY: the header contract of `skb_detect_figure` (lib.rs § Safety): `ctx`, `image`, `opts`, `joints_xy`,
-    // `confidence`, `info` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check
-    // NULL and lengths before each borrow.
+    // `confidence`, `info` are NULL or valid for the documented lengths during the call, as `detect_figure_into` asks.
     unsafe {
         ffi_boundary! {
-            let ctx = try_status!(try_ref(ctx, "ctx"));
-            let view = try_status!(view_of(image));
-            let info = try_status!(try_mut(info, "info"));
-            let mut unused = 0.0;
-            let (xy, cf, _) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, &mut unused));
-            let f = try_core!(figure_of(ctx, &view, opt_ref(opts)));
-            write_joints(&f.joints, &f.joint_confidence, xy, cf);
-            *info = figure_info(&f);
-            skb_status::SKB_OK
+            detect_figure_into(ctx, image, opts, joints_xy, joints_len, confidence, confidence_len, info, None)
         }
+    }
+}
+
+/// The body of `skb_detect_figure` and of `skb_detect_facing` (`facing` `Some`: the figure's
+/// facing into it as well, NULL refused). Nothing is written on failure.
+///
+/// # Safety
+/// Each pointer must be NULL or valid for its documented length (the two functions' header
+/// contract), with no other live reference to an output.
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn detect_figure_into(
+    ctx: *const skb_context,
+    image: *const skb_image,
+    opts: *const skb_detect_options,
+    joints_xy: *mut f64,
+    joints_len: usize,
+    confidence: *mut f64,
+    confidence_len: usize,
+    info: *mut skb_figure_info,
+    facing: Option<*mut super::facing::skb_facing_info>,
+) -> skb_status {
+    // SAFETY: this function's `# Safety` contract, forwarded; the ptr.rs helpers check NULL and
+    // lengths before each borrow.
+    unsafe {
+        let ctx = try_status!(try_ref(ctx, "ctx"));
+        let view = try_status!(view_of(image));
+        let info = try_status!(try_mut(info, "info"));
+        let facing = match facing {
+            Some(p) => Some(try_status!(try_mut(p, "facing"))),
+            None => None,
+        };
+        let mut unused = 0.0;
+        let (xy, cf, _) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, &mut unused));
+        let f = try_core!(figure_of(ctx, &view, opt_ref(opts)));
+        write_joints(&f.joints, &f.joint_confidence, xy, cf);
+        *info = figure_info(&f);
+        if let Some(out) = facing {
+            *out = super::facing::facing_info(&f.facing);
+        }
+        skb_status::SKB_OK
     }
 }
 
 /// The single-figure detection of `view` with `ctx`'s embedded models and `opts` (`None`:
 /// defaults).
-pub(crate) fn figure_of(
+fn figure_of(
     ctx: &skb_context,
     view: &sketchbody_core::image::ImageView<'_>,
     opts: Option<&skb_detect_options>,
@@ -476,7 +507,7 @@ pub(crate) fn embedded_detector(ctx: &skb_context) -> Result<&Model, Error> {
 ///
 /// # Safety
 /// Each pointer must be NULL or valid for writes of its length, with no other live reference.
-pub(crate) unsafe fn outputs<'a>(
+unsafe fn outputs<'a>(
     joints_xy: *mut f64,
     joints_len: usize,
     confidence: *mut f64,
@@ -496,12 +527,7 @@ pub(crate) unsafe fn outputs<'a>(
 }
 
 /// Writes joints and confidences.
-pub(crate) fn write_joints(
-    j: &sketchbody_core::skeleton::Joints2,
-    c: &[f64; NUM_JOINTS],
-    xy: &mut [f64],
-    cf: &mut [f64],
-) {
+fn write_joints(j: &sketchbody_core::skeleton::Joints2, c: &[f64; NUM_JOINTS], xy: &mut [f64], cf: &mut [f64]) {
     for k in 0..NUM_JOINTS {
         xy[2 * k] = j.xy[k][0];
         xy[2 * k + 1] = j.xy[k][1];

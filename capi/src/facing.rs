@@ -7,8 +7,8 @@ use sketchbody_core::detect::facing::{swap_sides, Facing, FacingEstimate};
 use sketchbody_core::error::Error;
 
 use super::body::skb_context;
-use super::detect::{figure_info, figure_of, outputs, skb_detect_options, skb_figure_info, write_joints};
-use super::image::{skb_image, view_of};
+use super::detect::{detect_figure_into, skb_detect_options, skb_figure_info};
+use super::image::skb_image;
 use super::pipeline::skb_result;
 use super::pose::{joints_in, skb_joints2d};
 use super::ptr::*;
@@ -63,7 +63,7 @@ fn joints_out(j: &sketchbody_core::skeleton::Joints2) -> skb_joints2d {
 }
 
 /// The info struct of a facing estimate.
-fn facing_info(f: &FacingEstimate) -> skb_facing_info {
+pub(crate) fn facing_info(f: &FacingEstimate) -> skb_facing_info {
     skb_facing_info {
         facing: facing_code(f.facing),
         swapped: u32::from(f.swapped),
@@ -89,21 +89,11 @@ pub unsafe extern "C" fn skb_detect_facing(
     facing: *mut skb_facing_info,
 ) -> skb_status {
     // SAFETY: the header contract of `skb_detect_facing` (lib.rs § Safety): `ctx`, `image`, `opts`, `joints_xy`,
-    // `confidence`, `info`, `facing` are NULL or valid for the documented lengths during the call; the ptr.rs
-    // helpers check NULL and lengths before each borrow.
+    // `confidence`, `info`, `facing` are NULL or valid for the documented lengths during the call, as
+    // `detect_figure_into` asks.
     unsafe {
         ffi_boundary! {
-            let ctx = try_status!(try_ref(ctx, "ctx"));
-            let view = try_status!(view_of(image));
-            let info = try_status!(try_mut(info, "info"));
-            let facing = try_status!(try_mut(facing, "facing"));
-            let mut unused = 0.0;
-            let (xy, cf, _) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, &mut unused));
-            let f = try_core!(figure_of(ctx, &view, opt_ref(opts)));
-            write_joints(&f.joints, &f.joint_confidence, xy, cf);
-            *info = figure_info(&f);
-            *facing = facing_info(&f.facing);
-            skb_status::SKB_OK
+            detect_figure_into(ctx, image, opts, joints_xy, joints_len, confidence, confidence_len, info, Some(facing))
         }
     }
 }
