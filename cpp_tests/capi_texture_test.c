@@ -206,6 +206,9 @@ int main(int argc, char **argv) {
     CHECK(strstr(skb_last_error_message(), "up axis") != NULL);
     CHECK(skb_export_options_set_units(eo, SKB_UNITS_CENTIMETRES) == SKB_OK);
     CHECK(skb_export_options_set_up_axis(eo, SKB_UP_Z) == SKB_OK);
+    /* The CLI's run writes twist bones and shape keys by default; the C API asks for them. */
+    CHECK(skb_export_options_set_twist_bones(eo, true) == SKB_OK);
+    CHECK(skb_export_options_set_shape_keys(eo, true) == SKB_OK);
     snprintf(path, sizeof path, "%s/c.usda", dir);
     CHECK(skb_export_usd(mesh, path, eo) == SKB_OK);
     char *c_usd = slurp(path, NULL);
@@ -216,6 +219,10 @@ int main(int argc, char **argv) {
     CHECK(c_points && cli_points && strcmp(c_points, cli_points) == 0);
     char *c_bind = line_of(c_usd, "bindTransforms = "), *cli_bind = line_of(cli_usd, "bindTransforms = ");
     CHECK(c_bind && cli_bind && strcmp(c_bind, cli_bind) == 0);
+    char *c_keys = line_of(c_usd, "uniform token[] skel:blendShapes = "),
+         *cli_keys = line_of(cli_usd, "uniform token[] skel:blendShapes = ");
+    CHECK(c_keys && cli_keys && strcmp(c_keys, cli_keys) == 0);
+    free(c_keys), free(cli_keys);
     snprintf(path, sizeof path, "%s/c.fbx", dir);
     CHECK(skb_export_fbx(mesh, path, eo) == SKB_OK);
     size_t fbx_len = 0;
