@@ -94,7 +94,7 @@ test_package() {
     cpp_tests/capi_detect_test.c "${link[@]}" -lm -lpthread
   "$cc" -std=c11 "${cflags[@]}" -DSKB_CONSUMER_HOW='"windows-dll"' -o "$tests/consumer.exe" \
     cpp_tests/consumer/main.c "${link[@]}"
-  "$cxx" -std=c++17 "${cflags[@]}" -o "$tests/capi_cpp_test.exe" cpp_tests/capi_cpp_test.cpp "${link[@]}"
+  "$cxx" -std=c++17 "${cflags[@]}" -DSKB_SOURCE_DIR="\"Z:$PWD\"" -o "$tests/capi_cpp_test.exe" cpp_tests/capi_cpp_test.cpp "${link[@]}"
   "$cxx" -std=c++17 "${cflags[@]}" -o "$tests/plugin_host.exe" examples/plugin_host.cpp "${link[@]}"
   # An MSVC-style link: lld-link (rustup's rust-lld) takes sketchbody.lib, no C runtime involved.
   local lld
