@@ -1,28 +1,18 @@
 //! `pipeline::run_pipeline` on the example sketch: gender choice, determinism across thread
 //! counts, prompt cancellation, and the specific errors of bad input.
 
-use std::path::Path;
+#[path = "common/example.rs"]
+mod example;
+use example::inputs;
 
 use sketchbody::body::{BodyModel, Gender, ShapeChoice};
 use sketchbody::detect::figure::Figure;
 use sketchbody::detect::{DetectOptions, Model};
-use sketchbody::export::joints2d::load_joints2d;
 use sketchbody::fit::{BodyPart, FitOptions};
-use sketchbody::image::{load_image, GrayImage};
+use sketchbody::image::GrayImage;
 use sketchbody::pipeline::{run_pipeline, DetectedJoints, GivenJoints, JointsSource, PipelineOptions};
-use sketchbody::pose::dict_io;
 use sketchbody::skeleton::{joint, Joints2};
 use sketchbody::Error;
-
-fn inputs() -> (BodyModel, sketchbody::pose::Dictionary, GrayImage, Joints2) {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    (
-        BodyModel::embedded().unwrap(),
-        dict_io::embedded().unwrap(),
-        load_image(&root.join("assets/examples/sketch.png")).unwrap(),
-        load_joints2d(&root.join("assets/examples/sketch_joints.json")).unwrap(),
-    )
-}
 
 fn fast(gender: Option<Gender>) -> PipelineOptions {
     PipelineOptions {

@@ -1,27 +1,15 @@
 //! Interim bodies of a run (`run_pipeline_progressive`): what is shown before the final body,
 //! in order, and a result equal to `run_pipeline`'s.
 
-use std::path::Path;
+#[path = "common/example.rs"]
+mod example;
+use example::inputs;
 
-use sketchbody::body::{BodyModel, Gender};
-use sketchbody::export::joints2d::load_joints2d;
+use sketchbody::body::Gender;
 use sketchbody::fit::FitOptions;
-use sketchbody::image::{load_image, GrayImage};
 use sketchbody::pipeline::{
     run_pipeline, run_pipeline_progressive, GivenJoints, InterimBody, InterimStage, PipelineOptions,
 };
-use sketchbody::pose::dict_io;
-use sketchbody::skeleton::Joints2;
-
-fn inputs() -> (BodyModel, sketchbody::pose::Dictionary, GrayImage, Joints2) {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    (
-        BodyModel::embedded().unwrap(),
-        dict_io::embedded().unwrap(),
-        load_image(&root.join("assets/examples/sketch.png")).unwrap(),
-        load_joints2d(&root.join("assets/examples/sketch_joints.json")).unwrap(),
-    )
-}
 
 /// What a test keeps of an interim body.
 struct Seen {
