@@ -20,6 +20,7 @@ mod detected;
 pub mod figure;
 pub mod joints;
 pub mod overlay;
+pub mod views;
 
 use std::time::Instant;
 
@@ -31,12 +32,16 @@ use crate::fit::{
     gender_evidence, FitCalibration, FitOptions, GenderClassifier, GenderEvidence, MarginCombination, PartSupport,
 };
 use crate::image::{canny, CannyParams, GrayImage};
+use crate::pose::views::{triangulate, view_pose_for};
 use crate::pose::{estimate_pose_hinted, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::Joints2;
 
-pub use body_fit::{calibrated_weights, fit_body, refit_camera, rest_body, BodyChoice, FittedBody, GenderFit};
+pub use body_fit::{
+    calibrated_weights, fit_body, fit_body_views, refit_camera, rest_body, BodyChoice, BodyView, FittedBody, GenderFit,
+};
 pub use detected::{DetectedJointsFit, DEFAULT_DEPTH_HINT};
 pub use joints::{DetectedJoints, FigureJoints, GivenJoints, JointsSource};
+pub use views::{ViewInput, ViewResult};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
 pub const MIN_SKETCH_SIDE: usize = 32;
@@ -222,6 +227,12 @@ pub struct PipelineResult {
     pub posed_joints: crate::skeleton::Joints3,
     /// Stage timings.
     pub timings: Timings,
+    /// A turnaround's extra views, in the order given ([`run_pipeline_views`]; empty for one
+    /// view).
+    pub views: Vec<ViewResult>,
+    /// What the run warns about its views (they agree only roughly, different scales, an
+    /// outline little supported); empty for one view.
+    pub view_warnings: Vec<String>,
 }
 
 impl PipelineResult {
@@ -266,6 +277,30 @@ pub fn run_pipeline(
     options: &PipelineOptions,
     progress: &mut dyn FnMut(f32) -> bool,
 ) -> Result<PipelineResult> {
+    run_pipeline_views(model, dict, sketch, source, &[], options, progress)
+}
+
+/// [`run_pipeline`] on a turnaround: `sketch` is the front view, `views` the same character in
+/// the same pose from the side or the back (module [`views`]). Every view's joints enter the 3-D
+/// pose ([`crate::pose::views::triangulate`]; with [`PipelineOptions::given_pose`] only the
+/// views' cameras are fitted to it) and every view's outline the shape fit
+/// ([`fit_body_views`]). The result's [`PipelineResult::views`] hold each view's joints, edges
+/// and camera; [`PipelineResult::view_warnings`] what the run warns about them. With no views
+/// this is [`run_pipeline`].
+///
+/// Errors: [`run_pipeline`]'s, for every view's sketch and joints too; a front or repeated view
+/// label ([`Error::OutOfRange`] `view label`); views whose joints disagree beyond
+/// [`views::VIEWS_REFUSE`] ([`Error::OutOfRange`] `views`); a view's joints with fewer than two
+/// visible or no height ([`Error::Degenerate`]).
+pub fn run_pipeline_views(
+    model: &BodyModel,
+    dict: &Dictionary,
+    sketch: &GrayImage,
+    source: &dyn JointsSource,
+    views: &[ViewInput],
+    options: &PipelineOptions,
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<PipelineResult> {
     let t0 = Instant::now();
     let mut p = Progress { callback: progress };
     let mut timings = Timings::default();
@@ -293,6 +328,7 @@ pub fn run_pipeline(
     let t = Instant::now();
     let (joints2d, detection) = source.figure(sketch, &edges, dict)?;
     joints::check_in_image(&joints2d, w, h)?;
+    let prepared = views::prepare(views, &options.canny, dict)?;
     timings.joints = t.elapsed().as_secs_f64();
     p.report(0.04)?;
 
@@ -307,6 +343,22 @@ pub fn run_pipeline(
             estimate_pose_hinted(dict, &pose_joints, &options.pose, hint.as_ref())?
         }
     };
+    let (pose, views_pose, view_warnings) = if prepared.is_empty() {
+        (pose, None, Vec::new())
+    } else {
+        let vj = views::view_joints(&prepared);
+        let vp = match &options.given_pose {
+            Some(_) => view_pose_for(&pose, &joints2d, &vj)?,
+            None => triangulate(&pose, &joints2d, &vj)?,
+        };
+        let warnings = views::agreement(&prepared, &vp)?;
+        (PoseEstimate { joints: vp.joints, ..pose }, Some(vp), warnings)
+    };
+    let body_views: Vec<BodyView> = prepared
+        .iter()
+        .zip(views_pose.iter().flat_map(|vp| &vp.cameras))
+        .map(|(v, camera)| BodyView { camera, edges: &v.edges, joints2d: &v.joints2d })
+        .collect();
     timings.pose = t.elapsed().as_secs_f64();
     p.report(0.06)?;
 
@@ -344,20 +396,48 @@ pub fn run_pipeline(
     };
     let (body, classified) = if classify {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
-        let sketch = SketchInputs { pose: &pose, edges: &edges, joints2d: &joints2d };
+        let sketch = SketchInputs { pose: &pose, edges: &edges, joints2d: &joints2d, views: &body_views };
         let log_odds = classifier.log_odds(&evidence.features);
         let decision = Decision { dims: options.gender_decision_dims, seeds: options.gender_decision_seeds };
         let (body, male) = classify_and_fit(model, &sketch, &fit, &choice, decision, log_odds, &mut cb)?;
         (body, Some(male.max(1.0 - male)))
     } else {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
-        let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &choice, &mut cb)?;
+        let (j, c) = (&pose.joints, &pose.camera);
+        let body = fit_body_views(model, j, c, &edges, Some(&joints2d), &body_views, &fit, &choice, &mut cb)?;
         let male = evidence.male_probability;
         (body, detected_gender.map(|_| male.max(1.0 - male)))
     };
     timings.fit = body.fit_seconds;
     timings.posing = body.posing_seconds;
     let mesh = RiggedMesh::from_rest(model, &body.rest);
+    let view_support = body.fits.iter().rev().find(|g| g.space == body.space).and_then(|g| g.fit.as_ref());
+    let mut view_warnings = view_warnings;
+    let view_results: Vec<ViewResult> = prepared
+        .into_iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let vp = views_pose.as_ref().expect("views have a pose");
+            let support = view_support.and_then(|f| f.view_support.get(k).copied()).unwrap_or(f64::NAN);
+            if support < crate::fit::LOW_EVIDENCE_SUPPORT {
+                view_warnings.push(format!(
+                    "the {} view's strokes support only {:.0}% of the fitted outline in that view",
+                    v.label.name(),
+                    100.0 * support
+                ));
+            }
+            ViewResult {
+                label: v.label,
+                edges: v.edges,
+                joints2d: v.joints2d,
+                joints_source: v.joints_source,
+                camera: body.view_cameras[k],
+                residual: vp.residual[k + 1],
+                scale_ratio: vp.scale_ratio[k],
+                edge_support: support,
+            }
+        })
+        .collect();
     timings.total = t0.elapsed().as_secs_f64();
     p.report(1.0)?;
     Ok(PipelineResult {
@@ -386,6 +466,8 @@ pub fn run_pipeline(
         ik_pose: body.ik_pose,
         posed_vertices: body.posed_vertices,
         timings,
+        views: view_results,
+        view_warnings,
     })
 }
 
@@ -395,6 +477,8 @@ struct SketchInputs<'a> {
     pose: &'a PoseEstimate,
     edges: &'a GrayImage,
     joints2d: &'a Joints2,
+    /// A turnaround's extra views (empty for one view).
+    views: &'a [BodyView<'a>],
 }
 
 /// How [`classify_and_fit`] decides: the deciding fits' dimensions
@@ -439,7 +523,8 @@ fn classify_and_fit(
     let mut fit_one = |g: Gender, o: &FitOptions, step: f32| {
         let c = BodyChoice { gender: Some(g), ..*choice };
         let mut cb = |f: f32| progress((step + f) / steps);
-        fit_body(model, &sketch.pose.joints, &sketch.pose.camera, sketch.edges, Some(sketch.joints2d), o, &c, &mut cb)
+        let (pose, camera, j2) = (&sketch.pose.joints, &sketch.pose.camera, Some(sketch.joints2d));
+        fit_body_views(model, pose, camera, sketch.edges, j2, sketch.views, o, &c, &mut cb)
     };
     let mut bodies = Vec::with_capacity(deciding_fits);
     for k in 0..decision.seeds {

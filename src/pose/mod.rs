@@ -41,6 +41,7 @@ pub mod pursuit;
 pub mod qcls;
 pub mod refine;
 pub mod straighten;
+pub mod views;
 
 pub use depth_hint::DepthHint;
 pub use dictionary::{Dictionary, LearnParams};

@@ -164,7 +164,10 @@ impl GroundTruth {
                 return Err(Error::CorruptData(format!("{what}: view {}: joint lists must hold 15 entries", v.label)));
             }
             if v.image.contains(['/', '\\']) || v.image.is_empty() {
-                return Err(Error::CorruptData(format!("{what}: view {}: image {:?} is not a file name", v.label, v.image)));
+                return Err(Error::CorruptData(format!(
+                    "{what}: view {}: image {:?} is not a file name",
+                    v.label, v.image
+                )));
             }
         }
         Ok(t)
