@@ -370,14 +370,7 @@ def place_camera(posed, r, f_px, size, fill):
     centre = (posed.min(0) + posed.max(0)) / 2
     ext = ((posed - centre) @ r.T)[:, :2]
     span = max(np.ptp(ext[:, 0]), np.ptp(ext[:, 1]))
-    d = f_px * span / (fill * size)
-    for _ in range(60):
-        c = centre + r.T @ np.array([0.0, 0.0, d])
-        uv, depth = project(posed, r, c, f_px, size)
-        if depth.min() > 0 and uv.min() > 0.04 * size and uv.max() < 0.96 * size:
-            return c
-        d *= 1.05
-    raise RuntimeError("no camera distance fits the body in the image")
+    return place_at(posed, r, f_px, size, centre, f_px * span / (fill * size))
 
 
 def place_at(posed, r, f_px, size, centre, d):

@@ -1,5 +1,5 @@
 //! Views of a turnaround (a model sheet): the same character in the same pose drawn from the
-//! front, the side and the back. A labelled view's camera is the front camera turned about the
+//! front, either side and the back. A labelled view's camera is the front camera turned about the
 //! body's vertical axis (model +Y) by the label's yaw: `R_view = R_front · R_y(yaw)`, with
 //! `R_y(θ) = [[cos θ, 0, sin θ], [0, 1, 0], [−sin θ, 0, cos θ]]`.
 
@@ -15,28 +15,32 @@ pub enum ViewLabel {
     Front,
     /// The side view (yaw +90°): the character's right side, facing image right.
     Side,
+    /// The other side view (yaw −90°): the character's left side, facing image left.
+    SideLeft,
     /// The back view (yaw 180°).
     Back,
 }
 
 impl ViewLabel {
     /// Every label, front first.
-    pub const ALL: [ViewLabel; 3] = [ViewLabel::Front, ViewLabel::Side, ViewLabel::Back];
+    pub const ALL: [ViewLabel; 4] = [ViewLabel::Front, ViewLabel::Side, ViewLabel::SideLeft, ViewLabel::Back];
 
     /// The view's yaw relative to the front view, degrees.
     pub fn yaw_deg(self) -> f64 {
         match self {
             ViewLabel::Front => 0.0,
             ViewLabel::Side => 90.0,
+            ViewLabel::SideLeft => -90.0,
             ViewLabel::Back => 180.0,
         }
     }
 
-    /// `front`, `side` or `back`.
+    /// `front`, `side`, `side_left` or `back`.
     pub fn name(self) -> &'static str {
         match self {
             ViewLabel::Front => "front",
             ViewLabel::Side => "side",
+            ViewLabel::SideLeft => "side_left",
             ViewLabel::Back => "back",
         }
     }
@@ -45,8 +49,18 @@ impl ViewLabel {
     /// ([`Error::OutOfRange`]).
     pub fn parse(text: &str) -> Result<ViewLabel> {
         ViewLabel::ALL.into_iter().find(|l| l.name().eq_ignore_ascii_case(text.trim())).ok_or_else(|| {
-            Error::OutOfRange { name: "view label", detail: format!("{text:?} is not front, side or back") }
+            Error::OutOfRange { name: "view label", detail: format!("{text:?} is not front, side, side_left or back") }
         })
+    }
+
+    /// The side view facing the other way ([`ViewLabel::Side`] ↔ [`ViewLabel::SideLeft`]): the
+    /// label a side drawing has when its depth is mirrored; `None` for the front and back.
+    pub fn other_side(self) -> Option<ViewLabel> {
+        match self {
+            ViewLabel::Side => Some(ViewLabel::SideLeft),
+            ViewLabel::SideLeft => Some(ViewLabel::Side),
+            ViewLabel::Front | ViewLabel::Back => None,
+        }
     }
 
     /// `R_y(yaw)` of the label (module doc).
@@ -80,6 +94,13 @@ mod tests {
         // The back view mirrors the front's horizontal axis.
         let back = ViewLabel::Back.camera_from_front(&front);
         assert!((back.project(&Vector3::new(0.2, 0.0, 0.0))[0] - 30.0).abs() < 1e-9);
+        // The left side view: the nose lands left of the pelvis, the body's left nearer.
+        let left = ViewLabel::SideLeft.camera_from_front(&front);
+        assert!((left.project(&Vector3::new(0.0, 0.0, 0.1))[0] - 40.0).abs() < 1e-9);
+        assert!((left.r * Vector3::new(0.2, 0.0, 0.0)).z > (left.r * Vector3::new(-0.2, 0.0, 0.0)).z);
+        assert_eq!(ViewLabel::Side.other_side(), Some(ViewLabel::SideLeft));
+        assert_eq!(ViewLabel::SideLeft.other_side(), Some(ViewLabel::Side));
+        assert_eq!(ViewLabel::Back.other_side(), None);
     }
 
     #[test]

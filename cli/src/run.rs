@@ -109,8 +109,9 @@ pub struct Args {
     #[arg(long)]
     quiet: bool,
     /// Another view of the same character in the same pose (a turnaround), as LABEL=IMAGE with
-    /// LABEL side (turned +90°: the character's right side, facing image right) or back; SKETCH
-    /// is the front view. Repeat for several views.
+    /// LABEL side (turned +90°: the character's right side, facing image right), side_left
+    /// (turned −90°: the character's left side, facing image left) or back; SKETCH is the front
+    /// view. Repeat for several views.
     #[arg(long = "view", value_name = "LABEL=IMAGE")]
     views: Vec<String>,
     /// 2-D joints of a view, as LABEL=JOINTS.json (sketchbody-joints2d); a view without them gets
@@ -130,13 +131,14 @@ struct ViewArg {
 fn labelled(flag: &str, text: &str) -> Result<(ViewLabel, PathBuf), CliError> {
     let Some((label, path)) = text.split_once('=') else {
         return Err(CliError(format!(
-            "{flag} {text}: a view needs its label, as side=FILE or back=FILE (the front view is the main sketch)"
+            "{flag} {text}: a view needs its label, as side=FILE, side_left=FILE or back=FILE (the front view is \
+             the main sketch)"
         )));
     };
     let label = ViewLabel::parse(label).map_err(|e| CliError(format!("{flag} {text}: {e}")))?;
     if label == ViewLabel::Front {
         return Err(CliError(format!(
-            "{flag} {text}: the front view is the main sketch; extra views are side or back"
+            "{flag} {text}: the front view is the main sketch; extra views are side, side_left or back"
         )));
     }
     if path.is_empty() {
@@ -654,14 +656,18 @@ mod view_flags {
     #[test]
     fn views_need_a_known_label_once_and_joints_need_their_view() {
         let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
-        let ok = view_args(&s(&["side=s.png", "BACK=b.png"]), &s(&["side=s.json"])).unwrap();
-        assert_eq!(ok.iter().map(|v| v.label).collect::<Vec<_>>(), [ViewLabel::Side, ViewLabel::Back]);
+        let ok = view_args(&s(&["side=s.png", "BACK=b.png", "side_left=l.png"]), &s(&["side=s.json"]))
+            .unwrap_or_else(|e| panic!("{}", e.0));
+        assert_eq!(
+            ok.iter().map(|v| v.label).collect::<Vec<_>>(),
+            [ViewLabel::Side, ViewLabel::Back, ViewLabel::SideLeft]
+        );
         assert_eq!(ok[0].joints.as_deref(), Some(std::path::Path::new("s.json")));
         assert!(ok[1].joints.is_none());
         let err = |v: &[&str], j: &[&str]| view_args(&s(v), &s(j)).err().expect("an error").0;
         assert!(err(&["s.png"], &[]).contains("needs its label"));
         assert!(err(&["front=f.png"], &[]).contains("main sketch"));
-        assert!(err(&["three-quarter=t.png"], &[]).contains("not front, side or back"));
+        assert!(err(&["three-quarter=t.png"], &[]).contains("not front, side, side_left or back"));
         assert!(err(&["side=a.png", "side=b.png"], &[]).contains("two side views"));
         assert!(err(&["side=a.png"], &["back=b.json"]).contains("no --view back"));
         assert!(err(&["side="], &[]).contains("no file"));

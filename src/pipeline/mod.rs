@@ -32,7 +32,7 @@ use crate::fit::{
     gender_evidence, FitCalibration, FitOptions, GenderClassifier, GenderEvidence, MarginCombination, PartSupport,
 };
 use crate::image::{canny, CannyParams, GrayImage};
-use crate::pose::views::{triangulate, view_pose_for};
+use crate::pose::views::{side_facing, triangulate, view_pose_for};
 use crate::pose::{estimate_pose_hinted, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::Joints2;
 
@@ -290,7 +290,9 @@ pub fn run_pipeline(
 ///
 /// Errors: [`run_pipeline`]'s, for every view's sketch and joints too; a front or repeated view
 /// label ([`Error::OutOfRange`] `view label`); views whose joints disagree beyond
-/// [`views::VIEWS_REFUSE`] ([`Error::OutOfRange`] `views`); a view's joints with fewer than two
+/// [`views::VIEWS_REFUSE`], or only upside down, or a side view whose depth comes out mirrored
+/// (drawn facing the other way than its label: [`crate::pose::views::SideFacing::mirrored`])
+/// ([`Error::OutOfRange`] `views`); a view's joints with fewer than two
 /// visible or no height ([`Error::Degenerate`]).
 pub fn run_pipeline_views(
     model: &BodyModel,
@@ -347,16 +349,20 @@ pub fn run_pipeline_views(
         (pose, None, Vec::new())
     } else {
         let vj = views::view_joints(&prepared);
-        let vp = match &options.given_pose {
-            Some(_) => view_pose_for(&pose, &joints2d, &vj)?,
-            None => triangulate(&pose, &joints2d, &vj)?,
+        let (vp, facing) = match &options.given_pose {
+            Some(_) => (view_pose_for(&pose, &joints2d, &vj)?, vec![None; vj.len()]),
+            None => {
+                let vp = triangulate(&pose, &joints2d, &vj)?;
+                let facing = side_facing(&pose, &joints2d, &vj, &vp)?;
+                (vp, facing)
+            }
         };
-        let warnings = views::agreement(&prepared, &vp)?;
-        (PoseEstimate { joints: vp.joints, ..pose }, Some(vp), warnings)
+        let warnings = views::agreement(&prepared, &vp, &facing)?;
+        (PoseEstimate { joints: vp.joints, ..pose }, Some((vp, facing)), warnings)
     };
     let body_views: Vec<BodyView> = prepared
         .iter()
-        .zip(views_pose.iter().flat_map(|vp| &vp.cameras))
+        .zip(views_pose.iter().flat_map(|(vp, _)| &vp.cameras))
         .map(|(v, camera)| BodyView { camera, edges: &v.edges, joints2d: &v.joints2d })
         .collect();
     timings.pose = t.elapsed().as_secs_f64();
@@ -417,7 +423,7 @@ pub fn run_pipeline_views(
         .into_iter()
         .enumerate()
         .map(|(k, v)| {
-            let vp = views_pose.as_ref().expect("views have a pose");
+            let (vp, facing) = views_pose.as_ref().expect("views have a pose");
             let support = view_support.and_then(|f| f.view_support.get(k).copied()).unwrap_or(f64::NAN);
             if support < crate::fit::LOW_EVIDENCE_SUPPORT {
                 view_warnings.push(format!(
@@ -434,6 +440,7 @@ pub fn run_pipeline_views(
                 camera: body.view_cameras[k],
                 residual: vp.residual[k + 1],
                 scale_ratio: vp.scale_ratio[k],
+                facing: facing[k],
                 edge_support: support,
             }
         })

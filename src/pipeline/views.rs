@@ -6,12 +6,14 @@
 //! height is refused ([`Error::OutOfRange`] named `views`: another pose, another character or a
 //! wrong label; the run does not fall back to the front view alone); above [`VIEWS_WARN`] the
 //! run goes on with a warning. Views drawn at different sizes are scaled to each other by their
-//! joints; a size ratio beyond [`SCALE_WARN`] is reported.
+//! joints; a size ratio beyond [`SCALE_WARN`] is reported. A side view whose depth comes out
+//! mirrored ([`crate::pose::views::SideFacing::mirrored`]: drawn facing the other way than its
+//! label says) is refused, naming the label to use.
 
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
 use crate::image::{canny, CannyParams, GrayImage};
-use crate::pose::views::{ViewJoints, ViewsPose};
+use crate::pose::views::{SideFacing, ViewJoints, ViewsPose};
 use crate::pose::Dictionary;
 use crate::skeleton::Joints2;
 use crate::view::ViewLabel;
@@ -34,7 +36,7 @@ pub const SCALE_WARN: f64 = 1.15;
 /// One extra view of a turnaround given to [`super::run_pipeline_views`].
 #[derive(Clone, Copy)]
 pub struct ViewInput<'a> {
-    /// The view's label (side or back; the front view is the main sketch).
+    /// The view's label (side, side_left or back; the front view is the main sketch).
     pub label: ViewLabel,
     /// The view's gray sketch (0 ink … 255 paper).
     pub sketch: &'a GrayImage,
@@ -60,6 +62,9 @@ pub struct ViewResult {
     pub residual: f64,
     /// The view's drawn size over the front view's (1: the same scale).
     pub scale_ratio: f64,
+    /// For a side view, how its labelled and its other facing agree with the front view's pose
+    /// ([`crate::pose::views::side_facing`]); `None` for a back view or a given pose.
+    pub facing: Option<SideFacing>,
     /// Share of the fitted outline in this view within reach of a stroke
     /// ([`crate::fit::FitResult::view_support`]; NaN for the mean shape).
     pub edge_support: f64,
@@ -81,7 +86,7 @@ pub(super) fn prepare(views: &[ViewInput], canny_params: &CannyParams, dict: &Di
         if v.label == ViewLabel::Front {
             return Err(Error::OutOfRange {
                 name: "view label",
-                detail: "the front view is the main sketch; extra views are side or back".into(),
+                detail: "the front view is the main sketch; extra views are side, side_left or back".into(),
             });
         }
         if out.iter().any(|p| p.label == v.label) {
@@ -108,13 +113,33 @@ pub(super) fn view_joints(views: &[PreparedView]) -> Vec<ViewJoints<'_>> {
     views.iter().map(|v| ViewJoints { label: v.label, joints: &v.joints2d }).collect()
 }
 
-/// Refuses views that disagree beyond [`VIEWS_REFUSE`]; returns the warnings of the others.
-pub(super) fn agreement(views: &[PreparedView], pose: &ViewsPose) -> Result<Vec<String>> {
+/// Refuses views that disagree beyond [`VIEWS_REFUSE`] and side views drawn facing the other
+/// way (`facing`, per view); returns the warnings of the others.
+pub(super) fn agreement(
+    views: &[PreparedView],
+    pose: &ViewsPose,
+    facing: &[Option<SideFacing>],
+) -> Result<Vec<String>> {
     let mut warnings = Vec::new();
     let front = pose.residual.first().copied().unwrap_or(0.0);
     for (k, v) in views.iter().enumerate() {
         let (residual, ratio) = (pose.residual[k + 1].max(front), pose.scale_ratio[k]);
         let name = v.label.name();
+        if let (Some(f), Some(other)) = (facing.get(k).copied().flatten(), v.label.other_side()) {
+            if f.mirrored() {
+                return Err(Error::OutOfRange {
+                    name: "views",
+                    detail: format!(
+                        "the {name} view's depth comes out mirrored: its limbs miss the front view's pose by {:.0}° as \
+                         labelled and by {:.0}° as the other side; is it drawn facing image {}? Then label it {}",
+                        f.as_labelled_deg,
+                        f.other_side_deg,
+                        if other == ViewLabel::SideLeft { "left" } else { "right" },
+                        other.name()
+                    ),
+                });
+            }
+        }
         if residual > VIEWS_REFUSE {
             return Err(Error::OutOfRange {
                 name: "views",

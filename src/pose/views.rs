@@ -13,13 +13,20 @@
 //! Views that disagree (another pose, another character, a wrong label) leave a large
 //! reprojection residual: [`ViewsPose::residual`] is each view's RMS reprojection error as a
 //! fraction of that view's figure height, for the caller to report or refuse.
+//!
+//! A side view labelled with the wrong side (drawn facing image left but labelled
+//! [`ViewLabel::Side`], or the reverse) fits its joints as well as the right label: weak
+//! perspective projects both sides' views to mirror images, so the triangulation mirrors the
+//! body's depth instead. [`side_facing`] triangulates such a view both ways and compares each
+//! result's limbs with the front estimate's (whose depth comes from the pose dictionary): the
+//! caller refuses a view whose other side agrees clearly better ([`SideFacing::mirrored`]).
 
 use nalgebra::{Matrix3, Vector3};
 
 use super::PoseEstimate;
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
-use crate::skeleton::{Joints2, Joints3, NUM_JOINTS};
+use crate::skeleton::{Joints2, Joints3, BONES, LIMB_BONES, NUM_JOINTS};
 use crate::view::ViewLabel;
 
 /// Weight of the pull toward the front estimate, as a fraction of the front camera's vertical
@@ -28,6 +35,13 @@ const PRIOR_WEIGHT: f64 = 0.02;
 
 /// Alternations of cameras and joints.
 const ITERATIONS: usize = 40;
+
+/// [`SideFacing::mirrored`]: the other side's limbs must agree with the front estimate's by at
+/// least this many degrees more (mean over the limbs) than the labelled side's.
+pub const MIRROR_MARGIN_DEG: f64 = 10.0;
+
+/// [`SideFacing::mirrored`]: and by at most this fraction of the labelled side's disagreement.
+pub const MIRROR_RATIO: f64 = 0.5;
 
 /// One extra view's 2-D joints and label.
 #[derive(Clone, Copy, Debug)]
@@ -57,7 +71,8 @@ pub struct ViewsPose {
 /// Refines `front`'s pose with the extra `views` (module doc). `front_joints` are the front
 /// view's 2-D joints. Errors: a [`ViewLabel::Front`] among `views`, a view with fewer than two
 /// visible joints or joints without vertical extent ([`Error::Degenerate`]), non-finite joints
-/// ([`Error::NonFinite`]).
+/// ([`Error::NonFinite`]), a view whose joints fit the pose only upside down
+/// ([`Error::OutOfRange`] `views`).
 pub fn triangulate(front: &PoseEstimate, front_joints: &Joints2, views: &[ViewJoints]) -> Result<ViewsPose> {
     check(front_joints, "front")?;
     for v in views {
@@ -90,6 +105,66 @@ pub fn view_pose_for(front: &PoseEstimate, front_joints: &Joints2, views: &[View
     Ok(assess(joints, cameras, &front.camera, front_joints, views))
 }
 
+/// How a side view's two possible facings agree with the front estimate ([`side_facing`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SideFacing {
+    /// Mean angle between the triangulated limbs and the front estimate's, degrees, with the
+    /// view's label as given.
+    pub as_labelled_deg: f64,
+    /// The same with the view relabelled as the other side ([`ViewLabel::other_side`]).
+    pub other_side_deg: f64,
+}
+
+impl SideFacing {
+    /// `true` when the other side agrees clearly better ([`MIRROR_MARGIN_DEG`],
+    /// [`MIRROR_RATIO`]): the view's depth comes out mirrored, its label is likely the wrong
+    /// side.
+    pub fn mirrored(&self) -> bool {
+        self.other_side_deg + MIRROR_MARGIN_DEG < self.as_labelled_deg
+            && self.other_side_deg < MIRROR_RATIO * self.as_labelled_deg
+    }
+}
+
+/// For each of `views`, in order: for a side view ([`ViewLabel::Side`] or
+/// [`ViewLabel::SideLeft`]) how its labelled and its other facing agree with `front`'s limbs
+/// (module doc), the other views kept as labelled; `None` for a back view. `pose` is
+/// [`triangulate`]'s result for the labels as given. Errors as [`triangulate`]'s.
+pub fn side_facing(
+    front: &PoseEstimate,
+    front_joints: &Joints2,
+    views: &[ViewJoints],
+    pose: &ViewsPose,
+) -> Result<Vec<Option<SideFacing>>> {
+    let as_labelled_deg = limb_disagreement_deg(&pose.joints, &front.joints);
+    let mut out = Vec::with_capacity(views.len());
+    for (k, v) in views.iter().enumerate() {
+        let Some(other) = v.label.other_side() else {
+            out.push(None);
+            continue;
+        };
+        let mut flipped = views.to_vec();
+        flipped[k].label = other;
+        let p = triangulate(front, front_joints, &flipped)?;
+        out.push(Some(SideFacing { as_labelled_deg, other_side_deg: limb_disagreement_deg(&p.joints, &front.joints) }));
+    }
+    Ok(out)
+}
+
+/// Mean angle between the limb bones ([`LIMB_BONES`]) of `a` and `b`, degrees (one frame; a
+/// bone of zero length counts 0).
+pub fn limb_disagreement_deg(a: &Joints3, b: &Joints3) -> f64 {
+    let angle = |bone: usize| {
+        let (p, c) = BONES[bone];
+        let da = Vector3::from(a[c]) - Vector3::from(a[p]);
+        let db = Vector3::from(b[c]) - Vector3::from(b[p]);
+        match da.norm() * db.norm() {
+            n if n > 0.0 => (da.dot(&db) / n).clamp(-1.0, 1.0).acos().to_degrees(),
+            _ => 0.0,
+        }
+    };
+    LIMB_BONES.iter().map(|&bone| angle(bone)).sum::<f64>() / LIMB_BONES.len() as f64
+}
+
 /// The pose with its residuals and scale ratios.
 fn assess(
     joints: Joints3,
@@ -106,7 +181,7 @@ fn assess(
 
 /// View `v`'s camera: the `front` camera turned by its label, scale and translation fitted.
 fn fit_view(joints: &Joints3, front: &WeakPerspective, v: &ViewJoints, vertical_only: bool) -> Result<WeakPerspective> {
-    fit_camera_from(joints, &v.label.camera_from_front(front), v.joints, vertical_only)
+    fit_camera_from(joints, v.label, &v.label.camera_from_front(front), v.joints, vertical_only)
 }
 
 /// At least two visible, finite joints with some vertical extent.
@@ -130,9 +205,11 @@ fn extent(j: &Joints2) -> f64 {
 /// Scale (one for both axes) and translation of `turned` fitted in closed form so that
 /// `joints` project onto the visible `target` joints; with `vertical_only` the scale and the
 /// vertical translation come from the vertical coordinates alone (the horizontal translation
-/// then centres the horizontal ones). Errors: [`Error::Degenerate`] for a non-positive scale.
+/// then centres the horizontal ones). Errors: [`Error::Degenerate`] for a non-finite scale,
+/// [`Error::OutOfRange`] (`views`) for a non-positive one (view `label`'s figure upside down).
 fn fit_camera_from(
     joints: &Joints3,
+    label: ViewLabel,
     turned: &WeakPerspective,
     target: &Joints2,
     vertical_only: bool,
@@ -157,8 +234,18 @@ fn fit_camera_from(
         den += (ab[1] - mb).powi(2);
     }
     let s = num / den;
-    if !(s.is_finite() && s > 0.0) {
+    if !s.is_finite() {
         return Err(Error::Degenerate(format!("a view's fitted scale is {s}")));
+    }
+    if s <= 0.0 {
+        return Err(Error::OutOfRange {
+            name: "views",
+            detail: format!(
+                "the {} view disagrees with the front view: its joints match the front view's pose only upside down \
+                 (another figure or wrong joints)",
+                label.name()
+            ),
+        });
     }
     Ok(WeakPerspective { sx: s, sy: s, r: turned.r, t: [mu - s * ma, mv - s * mb] })
 }
@@ -282,13 +369,18 @@ mod tests {
         });
         let views = [ViewJoints { label: ViewLabel::Side, joints: &side }];
         let p = triangulate(&estimate(flat, cam), &front, &views).unwrap();
+        // No view measures where the body stands along the front camera's axis (the side
+        // camera's translation absorbs it): compare the joints after their mean offset.
+        let offset: Vector3<f64> =
+            (0..NUM_JOINTS).map(|k| Vector3::from(p.joints[k]) - Vector3::from(truth[k])).sum::<Vector3<f64>>()
+                / NUM_JOINTS as f64;
         for k in 0..NUM_JOINTS {
-            let e = (Vector3::from(p.joints[k]) - Vector3::from(truth[k])).norm();
+            let e = (Vector3::from(p.joints[k]) - offset - Vector3::from(truth[k])).norm();
             assert!(e < 2e-3, "joint {k} is {e} m off");
         }
         assert!((p.scale_ratio[0] - 0.8).abs() < 1e-3, "scale ratio {}", p.scale_ratio[0]);
         assert!(p.residual.iter().all(|r| *r < 1e-3), "residuals {:?}", p.residual);
-        assert!((p.cameras[0].t[0] - 300.0).abs() < 0.5 && (p.cameras[0].t[1] - 210.0).abs() < 0.5);
+        assert!((p.cameras[0].t[1] - 210.0).abs() < 0.5, "side camera {:?}", p.cameras[0].t);
         // Only the front view: nothing to triangulate with, the estimate stays.
         let alone = triangulate(&estimate(flat, cam), &front, &[]).unwrap();
         assert_eq!(alone.joints.map(|j| j.map(|v| (v * 1e6).round())), flat.map(|j| j.map(|v| (v * 1e6).round())));
@@ -314,6 +406,40 @@ mod tests {
                 .unwrap();
         assert!(p.residual[1] > 0.05, "residual {:?}", p.residual);
         assert!(q.residual[1] < 0.005, "residual {:?}", q.residual);
+    }
+
+    #[test]
+    fn a_side_view_labelled_with_the_wrong_side_is_found_mirrored() {
+        let truth = walking();
+        let cam = front_camera();
+        let front = project(&truth, &cam);
+        // The front estimate: the truth's depth roughly (each joint 3 cm off in depth, so its
+        // limbs point some 10° off the truth's).
+        let rough: Joints3 = std::array::from_fn(|k| {
+            let j = truth[k];
+            [j[0], j[1], j[2] + if k % 2 == 0 { 0.03 } else { -0.03 }]
+        });
+        let est = estimate(rough, cam);
+        for (drawn, label) in [(ViewLabel::Side, ViewLabel::Side), (ViewLabel::SideLeft, ViewLabel::SideLeft)] {
+            let side = project(&truth, &drawn.camera_from_front(&cam));
+            let right = [ViewJoints { label, joints: &side }];
+            let p = triangulate(&est, &front, &right).unwrap();
+            let f = side_facing(&est, &front, &right, &p).unwrap()[0].unwrap();
+            assert!(!f.mirrored() && f.as_labelled_deg < 15.0, "{label:?} drawn {drawn:?}: {f:?}");
+            // The same drawing under the other side's label fits its joints as well, but its
+            // depth comes out mirrored.
+            let wrong = [ViewJoints { label: label.other_side().unwrap(), joints: &side }];
+            let q = triangulate(&est, &front, &wrong).unwrap();
+            assert!(q.residual[1] < 0.02, "the mirrored fit leaves {:?}", q.residual);
+            let g = side_facing(&est, &front, &wrong, &q).unwrap()[0].unwrap();
+            assert!(g.mirrored(), "labelled {:?}, drawn {drawn:?}: {g:?}", wrong[0].label);
+            assert!((g.other_side_deg - f.as_labelled_deg).abs() < 1e-6);
+        }
+        // A back view has no other facing.
+        let back = project(&truth, &ViewLabel::Back.camera_from_front(&cam));
+        let views = [ViewJoints { label: ViewLabel::Back, joints: &back }];
+        let p = triangulate(&est, &front, &views).unwrap();
+        assert_eq!(side_facing(&est, &front, &views, &p).unwrap(), vec![None]);
     }
 
     #[test]

@@ -80,7 +80,7 @@ pub struct Args {
     #[arg(long)]
     threads: Option<usize>,
     /// Fit each sample as a turnaround with the dataset's extra views of these labels
-    /// (comma-separated: side, back); a sample without one of them fails.
+    /// (comma-separated: side, side_left, back); a sample without one of them fails.
     #[arg(long, value_delimiter = ',', value_parser = parse_view_label)]
     views: Vec<ViewLabel>,
 }
@@ -234,6 +234,7 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         "views": r.views.iter().map(|v| json!({
             "label": v.label.name(), "residual": v.residual, "scale_ratio": v.scale_ratio,
             "edge_support": finite(v.edge_support),
+            "facing": v.facing.map(|f| json!({"as_labelled_deg": f.as_labelled_deg, "other_side_deg": f.other_side_deg})),
         })).collect::<Vec<_>>(),
         "view_warnings": r.view_warnings,
         "seconds": r.timings.total,
