@@ -178,8 +178,9 @@ pub struct FitProblem<'a> {
     /// [`FitOptions::joint_weight`]; `None` turns the term off.
     pub joints2d: Option<&'a Joints2>,
     /// A turnaround's other views of the same posed body (empty: one view). A sample's score is
-    /// the sum of every view's score (its outline match less its joint term), so its
-    /// likelihood is the product of the views'.
+    /// the mean of every view's score (its outline match less its joint term), so
+    /// [`FitOptions::temperature`] and the calibrations trained on one-view fits mean the same
+    /// for a turnaround (docs/benchmarks.md, "Model sheets").
     pub views: &'a [FitView<'a>],
 }
 
@@ -452,7 +453,7 @@ impl Evaluator<'_> {
         Ok(out)
     }
 
-    /// Draws one shape's silhouette in every view and scores it (the sum over the views); the
+    /// Draws one shape's silhouette in every view and scores it (the mean over the views); the
     /// front view is drawn last, so `s.raster` and `s.joints_px` hold its silhouette and joints.
     /// `None` when it cannot be posed or lands outside an image. The edge support is left to
     /// [`Evaluator::evaluate`]: only the fit's result needs it, and it costs a tenth of a sample.
@@ -466,7 +467,7 @@ impl Evaluator<'_> {
             }
         }
         let front = self.score_view(&self.front, &pose, s)?;
-        Ok(if self.views.is_empty() { front } else { front.map(|f| f + views) })
+        Ok(if self.views.is_empty() { front } else { front.map(|f| (f + views) / (1 + self.views.len()) as f64) })
     }
 
     /// Synthesises, sizes and poses one shape into `s.posed`; returns its IK pose, `None` when
