@@ -158,7 +158,7 @@ pub(super) fn agreement(
                 100.0 * residual
             ));
         }
-        if ratio > SCALE_WARN || ratio < 1.0 / SCALE_WARN {
+        if !(1.0 / SCALE_WARN..=SCALE_WARN).contains(&ratio) {
             warnings.push(format!(
                 "the {name} view is drawn at {ratio:.2}x the front view's size; the views were scaled to each other by \
                  their joints"

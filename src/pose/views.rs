@@ -222,7 +222,8 @@ fn fit_camera_from(
         })
         .collect();
     let n = pts.len() as f64;
-    let mean = |f: &dyn Fn(&([f64; 2], [f64; 2])) -> f64| pts.iter().map(f).sum::<f64>() / n;
+    type Pair = ([f64; 2], [f64; 2]);
+    let mean = |f: &dyn Fn(&Pair) -> f64| pts.iter().map(f).sum::<f64>() / n;
     let (ma, mb, mu, mv) = (mean(&|p| p.0[0]), mean(&|p| p.0[1]), mean(&|p| p.1[0]), mean(&|p| p.1[1]));
     let (mut num, mut den) = (0.0, 0.0);
     for (ab, uv) in &pts {
