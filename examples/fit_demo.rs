@@ -51,6 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 camera: &cam,
                 edges: &edges,
                 joints2d: None,
+                views: &[],
             };
             let options = FitOptions { score, seed: 100 + i as u64, ..FitOptions::default() };
             let start = std::time::Instant::now();

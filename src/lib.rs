@@ -23,6 +23,7 @@ pub mod raster;
 pub mod render;
 pub mod skeleton;
 pub mod strict_json;
+pub mod view;
 
 pub use error::{Error, Result};
 

@@ -48,6 +48,7 @@ fn male_problem(c: &Case) -> FitProblem<'_> {
         camera: &c.camera,
         edges: &c.edges,
         joints2d: None,
+        views: &[],
     }
 }
 
@@ -78,6 +79,7 @@ fn default_dimensions_are_the_gendered_priors_all_and_the_blended_spaces_own() {
             camera: &c.camera,
             edges: &c.edges,
             joints2d: None,
+            views: &[],
         };
         let o = FitOptions { samples: 8, max_iterations: 1, raster_max_side: 64, ..FitOptions::default() };
         let r = fit_shape(&problem, &o, &mut |_| true).unwrap();
@@ -182,6 +184,7 @@ fn per_sample_cameras_ignore_the_problem_cameras_scale() {
         camera: &c.camera,
         edges: &c.edges,
         joints2d: Some(&truth_2d),
+        views: &[],
     };
     let off = FitProblem { camera: &wrong, ..right };
     let o = FitOptions { sample_camera: true, ..options() };
@@ -238,6 +241,7 @@ fn bone_factors_find_long_legs() {
         camera: &camera,
         edges: &edges,
         joints2d: Some(&j2),
+        views: &[],
     };
     let o = FitOptions {
         sample_camera: true,

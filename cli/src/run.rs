@@ -1,4 +1,6 @@
 //! `sketchbody run SKETCH --out DIR [--joints JOINTS.json] [--gender m|f] ...`: the main job.
+//! A turnaround adds its other views: `--view side=SIDE.png [--view-joints side=SIDE.json]
+//! [--view back=BACK.png ...]` (one body and one pose from every view; SKETCH is the front view).
 //! Edges → 2-D joints → 3-D pose and camera → shape fit, then every output is written into a
 //! staging folder and moved into DIR together (`fsutil::StagingDir`): a failed, cancelled or
 //! interrupted (Ctrl-C) run leaves no file of its own in DIR.
@@ -10,7 +12,7 @@
 //! `body.mtl` + `body_texture.png` (the texture, unless `--no-texture`), `joints2d.json`
 //! (sketchbody-joints2d), `pose3d.json` (sketchbody-pose3d: 3-D joints and camera),
 //! `overlay.png`, `preview.png` (sketch, body through the camera, blend, front, side),
-//! `report.md`.
+//! `report.md`; with views also `overlay_LABEL.png` and `joints2d_LABEL.json` per view.
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -33,11 +35,12 @@ use sketchbody::image::{encode_png, load_rgb_image, save_png, to_gray};
 use sketchbody::pipeline::overlay::overlay;
 use sketchbody::pipeline::shape_keys::shape_keys;
 use sketchbody::pipeline::{
-    run_pipeline_progressive, FigureJoints, GivenJoints, InterimBody, InterimStage, JointsSource, PipelineOptions,
-    PipelineResult,
+    run_pipeline_views, FigureJoints, GivenJoints, InterimBody, InterimStage, JointsSource, PipelineOptions,
+    PipelineResult, ViewInput,
 };
 use sketchbody::pose::dict_io;
 use sketchbody::render::preview::{compare_layout, compare_preview, SurfaceTexture};
+use sketchbody::view::ViewLabel;
 
 use crate::detect::NO_FIGURE_HINT;
 use crate::export_formats::{file_list, write_rigged, Format};
@@ -107,6 +110,87 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// Another view of the same character in the same pose (a turnaround), as LABEL=IMAGE with
+    /// LABEL side (turned +90°: the character's right side, facing image right), side_left
+    /// (turned −90°: the character's left side, facing image left) or back; SKETCH is the front
+    /// view. Repeat for several views.
+    #[arg(long = "view", value_name = "LABEL=IMAGE")]
+    views: Vec<String>,
+    /// 2-D joints of a view, as LABEL=JOINTS.json (sketchbody-joints2d); a view without them gets
+    /// the detector's.
+    #[arg(long = "view-joints", value_name = "LABEL=JSON")]
+    view_joints: Vec<String>,
+}
+
+/// One `--view` of the command line with its `--view-joints`.
+struct ViewArg {
+    label: ViewLabel,
+    image: PathBuf,
+    joints: Option<PathBuf>,
+}
+
+/// Splits `LABEL=PATH` of `flag`. Errors: no `=`, an unknown label, the front label.
+fn labelled(flag: &str, text: &str) -> Result<(ViewLabel, PathBuf), CliError> {
+    let Some((label, path)) = text.split_once('=') else {
+        return Err(CliError(format!(
+            "{flag} {text}: a view needs its label, as side=FILE, side_left=FILE or back=FILE (the front view is \
+             the main sketch)"
+        )));
+    };
+    let label = ViewLabel::parse(label).map_err(|e| CliError(format!("{flag} {text}: {e}")))?;
+    if label == ViewLabel::Front {
+        return Err(CliError(format!(
+            "{flag} {text}: the front view is the main sketch; extra views are side, side_left or back"
+        )));
+    }
+    if path.is_empty() {
+        return Err(CliError(format!("{flag} {text}: no file")));
+    }
+    Ok((label, PathBuf::from(path)))
+}
+
+/// Parses `--view` and `--view-joints`. Errors: a bad `LABEL=PATH`, a label given twice, joints
+/// for a view not given.
+fn view_args(views: &[String], joints: &[String]) -> Result<Vec<ViewArg>, CliError> {
+    let mut out: Vec<ViewArg> = Vec::new();
+    for v in views {
+        let (label, image) = labelled("--view", v)?;
+        if out.iter().any(|o| o.label == label) {
+            return Err(CliError(format!("--view: two {} views", label.name())));
+        }
+        out.push(ViewArg { label, image, joints: None });
+    }
+    for j in joints {
+        let (label, path) = labelled("--view-joints", j)?;
+        let Some(view) = out.iter_mut().find(|o| o.label == label) else {
+            return Err(CliError(format!("--view-joints {j}: no --view {}=IMAGE to go with it", label.name())));
+        };
+        if view.joints.replace(path).is_some() {
+            return Err(CliError(format!("--view-joints: two joint files for the {} view", label.name())));
+        }
+    }
+    Ok(out)
+}
+
+/// The joints source of an image: the given joints file, else the detectors on `rgb`.
+fn source_for<'a>(
+    joints: Option<&PathBuf>,
+    rgb: &'a sketchbody::image::RgbImage,
+    detectors: Option<(&'a Model, &'a LandmarkNet)>,
+    options: &'a FigureOptions,
+) -> Result<Box<dyn JointsSource + 'a>, CliError> {
+    Ok(match (joints, detectors) {
+        (Some(p), _) => Box::new(GivenJoints(load_joints2d(p)?)),
+        (None, Some((model, net))) => Box::new(FigureJoints { model, net, options, colour: Some(rgb.view()) }),
+        (None, None) => return Err(CliError("internal: the detector was not loaded".into())),
+    })
+}
+
+/// A loaded view: its arguments, colour and gray images.
+struct LoadedView {
+    arg: ViewArg,
+    rgb: sketchbody::image::RgbImage,
+    gray: sketchbody::image::GrayImage,
 }
 
 /// Set by Ctrl-C (see [`catch_interrupt`]).
@@ -158,10 +242,12 @@ impl Bar {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn report(
     a: &Args,
     opts: &PipelineOptions,
     r: &PipelineResult,
+    views: &[LoadedView],
     size: (usize, usize),
     firsts: &[(InterimStage, f64)],
     load_s: f64,
@@ -184,6 +270,29 @@ fn report(
             sketchbody::export::joints2d::facing_summary(&f.facing),
             if f.low_confidence { format!("; **{LOW_CONFIDENCE_HINT}**") } else { String::new() }
         );
+    }
+    if !views.is_empty() {
+        let _ = writeln!(s, "- views: {}: one body and one pose fitted to all of them", view_names(r));
+        for (v, vr) in views.iter().zip(&r.views) {
+            let joints = v.arg.joints.as_ref().map_or("detected".to_string(), |p| format!("`{}`", p.display()));
+            let _ = writeln!(
+                s,
+                "- {} view: `{}` ({}×{} px), 2-D joints {joints} (source: {}), drawn at {:.2}× the front view's size, \
+                 joints {:.1}% of the figure's height off the shared pose, {} of the fitted outline in this view within \
+                 reach of a stroke",
+                vr.label.name(),
+                v.arg.image.display(),
+                v.gray.width(),
+                v.gray.height(),
+                vr.joints_source,
+                vr.scale_ratio,
+                100.0 * vr.residual,
+                if vr.edge_support.is_finite() { format!("{:.0}%", 100.0 * vr.edge_support) } else { "-".into() }
+            );
+        }
+        for w in &r.view_warnings {
+            let _ = writeln!(s, "- **warning**: {w}");
+        }
     }
     let _ = writeln!(s, "- library: sketchbody {}\n", sketchbody::VERSION);
     let _ = writeln!(s, "## Options\n");
@@ -345,12 +454,19 @@ fn report(
         );
     }
     let tex = if a.no_texture { "" } else { " body.mtl, body_texture.png," };
+    let per_view: String =
+        r.views.iter().map(|v| format!(" overlay_{0}.png, joints2d_{0}.json,", v.label.name())).collect();
     let _ = writeln!(
         s,
-        "\n## Files\n\n{}, body.obj, body_rest.obj,{tex} joints2d.json, pose3d.json, overlay.png, preview.png, report.md",
+        "\n## Files\n\n{}, body.obj, body_rest.obj,{tex} joints2d.json, pose3d.json, overlay.png,{per_view} preview.png, report.md",
         file_list(&a.format)
     );
     s
+}
+
+/// `front+side+back`: the views of a turnaround result.
+fn view_names(r: &PipelineResult) -> String {
+    std::iter::once("front").chain(r.views.iter().map(|v| v.label.name())).collect::<Vec<_>>().join("+")
 }
 
 /// Parses `--gender`.
@@ -367,28 +483,35 @@ pub fn run(a: Args) -> Result<(), CliError> {
     };
     let sketch_rgb = load_rgb_image(&a.sketch)?;
     let sketch = to_gray(&sketch_rgb.view())?;
+    let loaded: Vec<LoadedView> = view_args(&a.views, &a.view_joints)?
+        .into_iter()
+        .map(|arg| {
+            let rgb = load_rgb_image(&arg.image).map_err(|e| CliError(format!("{}: {e}", arg.image.display())))?;
+            let gray = to_gray(&rgb.view())?;
+            Ok(LoadedView { arg, rgb, gray })
+        })
+        .collect::<Result<_, CliError>>()?;
     let rig_options = a.rig.options()?;
-    let detector: Model;
-    let net: LandmarkNet;
     let figure_options = FigureOptions {
         backend: a.detector,
         strict: a.strict_detection,
         average_agreement: a.average_agreement,
         ..FigureOptions::default()
     };
-    let source: Box<dyn JointsSource + '_> = match &a.joints {
-        Some(p) => Box::new(GivenJoints(load_joints2d(p)?)),
-        None => {
-            detector = Model::embedded()?;
-            net = LandmarkNet::embedded()?;
-            Box::new(FigureJoints {
-                model: &detector,
-                net: &net,
-                options: &figure_options,
-                colour: Some(sketch_rgb.view()),
-            })
-        }
-    };
+    let detecting = a.joints.is_none() || loaded.iter().any(|v| v.arg.joints.is_none());
+    let detector = detecting.then(Model::embedded).transpose()?;
+    let net = detecting.then(LandmarkNet::embedded).transpose()?;
+    let detectors = detector.as_ref().zip(net.as_ref());
+    let source = source_for(a.joints.as_ref(), &sketch_rgb, detectors, &figure_options)?;
+    let view_sources: Vec<Box<dyn JointsSource + '_>> = loaded
+        .iter()
+        .map(|v| source_for(v.arg.joints.as_ref(), &v.rgb, detectors, &figure_options))
+        .collect::<Result<_, _>>()?;
+    let view_inputs: Vec<ViewInput> = loaded
+        .iter()
+        .zip(&view_sources)
+        .map(|(v, s)| ViewInput { label: v.arg.label, sketch: &v.gray, source: s.as_ref() })
+        .collect();
     // Fail on output sizes that cannot be drawn, and on an unwritable output folder, before
     // the work.
     compare_layout(sketch_rgb.width(), sketch_rgb.height(), a.preview_size)?;
@@ -402,11 +525,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let t_run = Instant::now();
     let mut firsts: Vec<(InterimStage, f64)> = Vec::new();
     let mut note = |b: &InterimBody| firsts.push((b.stage, t_run.elapsed().as_secs_f64()));
-    let result = run_pipeline_progressive(
+    let result = run_pipeline_views(
         &model,
         &dict,
         &sketch,
         source.as_ref(),
+        &view_inputs,
         &opts,
         &mut |f| bar.update(f),
         Some(&mut note),
@@ -452,9 +576,23 @@ pub fn run(a: Args) -> Result<(), CliError> {
     pose_bytes.push(b'\n');
     write_atomic(&staging.path("pose3d.json"), &pose_bytes)?;
     save_png(&over.view(), &staging.path("overlay.png"))?;
+    for (v, vr) in loaded.iter().zip(&r.views) {
+        let name = vr.label.name();
+        let over = overlay(&v.gray, &vr.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &vr.camera)?;
+        save_png(&over.view(), &staging.path(&format!("overlay_{name}.png")))?;
+        write_joints2d_with(&staging.path(&format!("joints2d_{name}.json")), &vr.joints2d, None)?;
+    }
     save_png(&views.view(), &staging.path("preview.png"))?;
-    let text =
-        report(&a, &opts, &r, (sketch.width(), sketch.height()), &firsts, load_s, t_write.elapsed().as_secs_f64());
+    let text = report(
+        &a,
+        &opts,
+        &r,
+        &loaded,
+        (sketch.width(), sketch.height()),
+        &firsts,
+        load_s,
+        t_write.elapsed().as_secs_f64(),
+    );
     write_atomic(&staging.path("report.md"), text.as_bytes())?;
     staging.commit()?;
     // Fits in different dimensions (the gender decision's and the refit) carry their dimensions.
@@ -482,13 +620,17 @@ pub fn run(a: Args) -> Result<(), CliError> {
         format!("{} given", r.gender.name())
     };
     println!(
-        "{}: {gender}, {:.2} m tall, score {}{}, {:.2} s",
+        "{}: {gender}, {:.2} m tall, score {}{}{}, {:.2} s",
         a.out.display(),
         r.mesh.height(),
         scores.join(", "),
         if r.low_evidence { ", LOW EVIDENCE" } else { "" },
+        if r.views.is_empty() { String::new() } else { format!(", views {}", view_names(&r)) },
         t_all.elapsed().as_secs_f64()
     );
+    for w in &r.view_warnings {
+        eprintln!("sketchbody: warning: {w}");
+    }
     if let Some(f) = r.detection.as_ref().filter(|f| f.low_confidence) {
         eprintln!("sketchbody: detection confidence {:.2} ({}): {LOW_CONFIDENCE_HINT}", f.confidence, f.backend.name());
     }
@@ -542,5 +684,30 @@ mod part_lines {
         assert!(line.starts_with("**not trusted**: left_arm, right_leg ("), "{line}");
         let fine = PartSupport::from_counts(&[(9, 10), (8, 10), (0, 0), (5, 10), (7, 10), (6, 10)]);
         assert_eq!(not_trusted_line(&fine), None);
+    }
+}
+
+#[cfg(test)]
+mod view_flags {
+    use super::{view_args, ViewLabel};
+
+    #[test]
+    fn views_need_a_known_label_once_and_joints_need_their_view() {
+        let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        let ok = view_args(&s(&["side=s.png", "BACK=b.png", "side_left=l.png"]), &s(&["side=s.json"]))
+            .unwrap_or_else(|e| panic!("{}", e.0));
+        assert_eq!(
+            ok.iter().map(|v| v.label).collect::<Vec<_>>(),
+            [ViewLabel::Side, ViewLabel::Back, ViewLabel::SideLeft]
+        );
+        assert_eq!(ok[0].joints.as_deref(), Some(std::path::Path::new("s.json")));
+        assert!(ok[1].joints.is_none());
+        let err = |v: &[&str], j: &[&str]| view_args(&s(v), &s(j)).err().expect("an error").0;
+        assert!(err(&["s.png"], &[]).contains("needs its label"));
+        assert!(err(&["front=f.png"], &[]).contains("main sketch"));
+        assert!(err(&["three-quarter=t.png"], &[]).contains("not front, side, side_left or back"));
+        assert!(err(&["side=a.png", "side=b.png"], &[]).contains("two side views"));
+        assert!(err(&["side=a.png"], &["back=b.json"]).contains("no --view back"));
+        assert!(err(&["side="], &[]).contains("no file"));
     }
 }

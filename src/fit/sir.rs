@@ -177,6 +177,24 @@ pub struct FitProblem<'a> {
     /// The sketch's 2-D joints (image pixels), for the joint term of
     /// [`FitOptions::joint_weight`]; `None` turns the term off.
     pub joints2d: Option<&'a Joints2>,
+    /// A turnaround's other views of the same posed body (empty: one view). A sample's score is
+    /// the mean of every view's score (its outline match less its joint term), so
+    /// [`FitOptions::temperature`] and the calibrations trained on one-view fits mean the same
+    /// for a turnaround (docs/benchmarks.md, "Model sheets").
+    pub views: &'a [FitView<'a>],
+}
+
+/// One extra view of a turnaround in a [`FitProblem`]: the same posed body seen through its own
+/// camera in its own image.
+#[derive(Clone, Copy)]
+pub struct FitView<'a> {
+    /// The view's camera (image pixels of `edges`); its rotation is used as is, its scales and
+    /// translation refitted per sample like the front's ([`FitOptions::sample_camera`]).
+    pub camera: &'a WeakPerspective,
+    /// The view's edge map (non-zero = edge), image pixels.
+    pub edges: &'a GrayImage,
+    /// The view's 2-D joints (image pixels), for its joint term; `None` turns it off.
+    pub joints2d: Option<&'a Joints2>,
 }
 
 /// Per-iteration figures.
@@ -225,6 +243,9 @@ pub struct FitResult {
     /// raster pixels of a stroke (each boundary pixel belongs to the part of its nearest
     /// projected bone); all `None` when Y* cannot be drawn.
     pub part_support: PartSupport,
+    /// [`FitResult::edge_support`] of Y* in each of [`FitProblem::views`], in order (empty for
+    /// one view; 0 where Y* cannot be drawn).
+    pub view_support: Vec<f64>,
 }
 
 impl FitResult {
@@ -321,14 +342,61 @@ struct Evaluator<'a> {
     proxy: &'a FitProxy,
     space: &'a ShapeSpace,
     proxy_space: &'a ProxySpace,
-    raster_camera: WeakPerspective,
-    evidence: SketchEvidence,
-    /// Visible 2-D joints in raster pixels (index, position), empty when the term is off.
-    joints_px: Vec<(usize, [f64; 2])>,
+    /// The main (front) view.
+    front: ViewEvidence,
+    /// [`FitProblem::views`], in order.
+    views: Vec<ViewEvidence>,
     /// Full-mesh / proxy height of the mean shape (for [`FitOptions::height`]).
     height_correction: f64,
     /// PCA dimensions searched; a sample's entries after them are its log bone factors.
     dims: usize,
+}
+
+/// One view at raster resolution: its camera, its sketch evidence and its joints.
+struct ViewEvidence {
+    raster_camera: WeakPerspective,
+    evidence: SketchEvidence,
+    /// Visible 2-D joints in raster pixels (index, position), empty when the term is off.
+    joints_px: Vec<(usize, [f64; 2])>,
+}
+
+impl ViewEvidence {
+    /// The view of `camera`, `edges` and `joints2d` at the raster size of `options`, its figure
+    /// region seeded by the projected `pose`.
+    fn new(
+        pose: &Joints3,
+        camera: &WeakPerspective,
+        edges: &GrayImage,
+        joints2d: Option<&Joints2>,
+        options: &FitOptions,
+    ) -> Result<ViewEvidence> {
+        let (iw, ih) = (edges.width(), edges.height());
+        let f = (options.raster_max_side as f64 / iw.max(ih) as f64).min(1.0);
+        let (rw, rh) = (((iw as f64 * f).round() as usize).max(1), ((ih as f64 * f).round() as usize).max(1));
+        let cam = camera;
+        let raster_camera =
+            WeakPerspective { sx: cam.sx * f, sy: cam.sy * f, r: cam.r, t: [cam.t[0] * f, cam.t[1] * f] };
+        let skeleton_px: Vec<[f64; 2]> = BONES
+            .iter()
+            .flat_map(|&(a, b)| {
+                let (pa, pb) = (pose[a], pose[b]);
+                (0..=8).map(move |i| {
+                    let t = i as f64 / 8.0;
+                    nalgebra::Vector3::new(
+                        pa[0] + t * (pb[0] - pa[0]),
+                        pa[1] + t * (pb[1] - pa[1]),
+                        pa[2] + t * (pb[2] - pa[2]),
+                    )
+                })
+            })
+            .map(|p| raster_camera.project(&p))
+            .collect();
+        Ok(ViewEvidence {
+            raster_camera,
+            evidence: SketchEvidence::new(edges, rw, rh, &skeleton_px)?.with_inside_cap(options.inside_cap),
+            joints_px: joints_in_raster(joints2d, f)?,
+        })
+    }
 }
 
 /// Per-thread scratch.
@@ -353,21 +421,58 @@ impl Evaluator<'_> {
     fn evaluate(&self, y: &[f64], s: &mut Scratch) -> Result<Option<(f64, f64, PartSupport)>> {
         Ok(self.draw_and_score(y, s)?.map(|score| {
             let (mask, bounds) = (s.raster.mask(), s.raster.covered_bounds());
-            let support = self.evidence.edge_support(mask, bounds, EDGE_SUPPORT_RADIUS);
+            let support = self.front.evidence.edge_support(mask, bounds, EDGE_SUPPORT_RADIUS);
             let joints = &s.joints_px;
-            let counts =
-                self.evidence.edge_support_counts(mask, bounds, EDGE_SUPPORT_RADIUS, BodyPart::ALL.len(), |x, y| {
+            let counts = self.front.evidence.edge_support_counts(
+                mask,
+                bounds,
+                EDGE_SUPPORT_RADIUS,
+                BodyPart::ALL.len(),
+                |x, y| {
                     let part = nearest_part(joints, [x as f64 + 0.5, y as f64 + 0.5])?;
                     BodyPart::ALL.iter().position(|&p| p == part)
-                });
+                },
+            );
             (score, support, PartSupport::from_counts(&counts))
         }))
     }
 
-    /// Draws one shape's silhouette into `s.raster` and scores it; `None` when it cannot be
-    /// posed or lands outside the image. The edge support is left to [`Evaluator::evaluate`]:
-    /// only the fit's result needs it, and it costs a tenth of a sample.
+    /// [`FitResult::view_support`] of one shape (0 for a view it cannot be drawn in).
+    fn view_support(&self, y: &[f64], s: &mut Scratch) -> Result<Vec<f64>> {
+        if self.views.is_empty() {
+            return Ok(Vec::new());
+        }
+        let Some(pose) = self.pose_sample(y, s)? else { return Ok(vec![0.0; self.views.len()]) };
+        let mut out = Vec::with_capacity(self.views.len());
+        for v in &self.views {
+            out.push(match self.score_view(v, &pose, s)? {
+                Some(_) => v.evidence.edge_support(s.raster.mask(), s.raster.covered_bounds(), EDGE_SUPPORT_RADIUS),
+                None => 0.0,
+            });
+        }
+        Ok(out)
+    }
+
+    /// Draws one shape's silhouette in every view and scores it (the mean over the views); the
+    /// front view is drawn last, so `s.raster` and `s.joints_px` hold its silhouette and joints.
+    /// `None` when it cannot be posed or lands outside an image. The edge support is left to
+    /// [`Evaluator::evaluate`]: only the fit's result needs it, and it costs a tenth of a sample.
     fn draw_and_score(&self, y: &[f64], s: &mut Scratch) -> Result<Option<f64>> {
+        let Some(pose) = self.pose_sample(y, s)? else { return Ok(None) };
+        let mut views = 0.0;
+        for v in &self.views {
+            match self.score_view(v, &pose, s)? {
+                Some(score) => views += score,
+                None => return Ok(None),
+            }
+        }
+        let front = self.score_view(&self.front, &pose, s)?;
+        Ok(if self.views.is_empty() { front } else { front.map(|f| (f + views) / (1 + self.views.len()) as f64) })
+    }
+
+    /// Synthesises, sizes and poses one shape into `s.posed`; returns its IK pose, `None` when
+    /// it cannot be posed.
+    fn pose_sample(&self, y: &[f64], s: &mut Scratch) -> Result<Option<ik::Pose>> {
         let mut joints = self.proxy_space.synthesize_into(self.space, &y[..self.dims], &mut s.rest)?;
         if y.len() > self.dims {
             match apply_in_place(&mut s.rest, &mut joints, self.proxy.skin_weights(), &proportions_of(&y[self.dims..]))
@@ -385,17 +490,23 @@ impl Evaluator<'_> {
             Err(Error::NonFinite { .. }) => return Err(Error::NonFinite { name: "pose", value: f64::NAN }),
             Err(_) => return Ok(None),
         };
-        let camera = if self.options.sample_camera && !self.joints_px.is_empty() {
-            match self.raster_camera.refit_scale(&pose.joints, &self.joints_px) {
+        skin_into(&s.rest, self.proxy.skin_weights(), &pose, self.options.skinning, &mut s.posed)?;
+        Ok(Some(pose))
+    }
+
+    /// Draws the posed shape in `s.posed` (IK pose `pose`) in view `v` into `s.raster` and
+    /// scores it; `None` when the camera cannot be fitted or the body lands outside the image.
+    fn score_view(&self, v: &ViewEvidence, pose: &ik::Pose, s: &mut Scratch) -> Result<Option<f64>> {
+        let camera = if self.options.sample_camera && !v.joints_px.is_empty() {
+            match v.raster_camera.refit_scale(&pose.joints, &v.joints_px) {
                 Ok(c) => c,
                 Err(Error::Degenerate(_)) => return Ok(None),
                 Err(e) => return Err(e),
             }
         } else {
-            self.raster_camera
+            v.raster_camera
         };
-        skin_into(&s.rest, self.proxy.skin_weights(), &pose, self.options.skinning, &mut s.posed)?;
-        let (w, h) = (self.evidence.width(), self.evidence.height());
+        let (w, h) = (v.evidence.width(), v.evidence.height());
         match s.raster.rasterize_mask(&s.posed, self.proxy.triangles(), &camera, w, h, Facing::Front) {
             Ok(_) => {
                 for (px, j) in s.joints_px.iter_mut().zip(&pose.joints) {
@@ -403,8 +514,8 @@ impl Evaluator<'_> {
                 }
                 let (mask, bounds) = (s.raster.mask(), s.raster.covered_bounds());
                 Ok(Some(
-                    self.evidence.score_in(mask, bounds, self.options.score)
-                        - self.joint_penalty(&pose.joints, &camera),
+                    v.evidence.score_in(mask, bounds, self.options.score)
+                        - self.joint_penalty(v, &pose.joints, &camera),
                 ))
             }
             Err(Error::MeshOutsideImage { .. }) | Err(Error::OutOfRange { name: "projected vertex", .. }) => Ok(None),
@@ -416,11 +527,11 @@ impl Evaluator<'_> {
 impl Evaluator<'_> {
     /// `joint_weight ×` mean raster-pixel distance between the projected posed joints and the
     /// visible 2-D joints (0 when the term is off).
-    fn joint_penalty(&self, posed: &Joints3, camera: &WeakPerspective) -> f64 {
-        if self.joints_px.is_empty() || self.options.joint_weight == 0.0 {
+    fn joint_penalty(&self, v: &ViewEvidence, posed: &Joints3, camera: &WeakPerspective) -> f64 {
+        if v.joints_px.is_empty() || self.options.joint_weight == 0.0 {
             return 0.0;
         }
-        let total: f64 = self
+        let total: f64 = v
             .joints_px
             .iter()
             .map(|&(k, q)| {
@@ -428,7 +539,7 @@ impl Evaluator<'_> {
                 ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt()
             })
             .sum();
-        self.options.joint_weight * total / self.joints_px.len() as f64
+        self.options.joint_weight * total / v.joints_px.len() as f64
     }
 }
 
@@ -466,35 +577,19 @@ pub fn fit_shape(
     let sigma: Vec<f64> = space.variances()[..dims].iter().map(|l| options.transition_scale.powi(2) * l).collect();
     let transition = Transition::new(&prior, &sigma)?;
 
-    let (iw, ih) = (problem.edges.width(), problem.edges.height());
-    let f = (options.raster_max_side as f64 / iw.max(ih) as f64).min(1.0);
-    let (rw, rh) = (((iw as f64 * f).round() as usize).max(1), ((ih as f64 * f).round() as usize).max(1));
-    let cam = problem.camera;
-    let raster_camera = WeakPerspective { sx: cam.sx * f, sy: cam.sy * f, r: cam.r, t: [cam.t[0] * f, cam.t[1] * f] };
-    let skeleton_px: Vec<[f64; 2]> = BONES
-        .iter()
-        .flat_map(|&(a, b)| {
-            let (pa, pb) = (problem.pose[a], problem.pose[b]);
-            (0..=8).map(move |i| {
-                let t = i as f64 / 8.0;
-                nalgebra::Vector3::new(
-                    pa[0] + t * (pb[0] - pa[0]),
-                    pa[1] + t * (pb[1] - pa[1]),
-                    pa[2] + t * (pb[2] - pa[2]),
-                )
-            })
-        })
-        .map(|p| raster_camera.project(&p))
-        .collect();
+    let mut views = Vec::with_capacity(problem.views.len());
+    for v in problem.views {
+        v.camera.validate()?;
+        views.push(ViewEvidence::new(problem.pose, v.camera, v.edges, v.joints2d, options)?);
+    }
     let evaluator = Evaluator {
         problem,
         options,
         proxy,
         space,
         proxy_space,
-        raster_camera,
-        evidence: SketchEvidence::new(problem.edges, rw, rh, &skeleton_px)?.with_inside_cap(options.inside_cap),
-        joints_px: joints_in_raster(problem.joints2d, f)?,
+        front: ViewEvidence::new(problem.pose, problem.camera, problem.edges, problem.joints2d, options)?,
+        views,
         height_correction: {
             let mut proxy_mean = Vec::new();
             proxy_space.synthesize_into(space, &[], &mut proxy_mean)?;
@@ -617,6 +712,7 @@ pub fn fit_shape(
         }
     }
     clamp(&mut weighted_mean);
+    let view_support = evaluator.view_support(&weighted_mean, &mut Scratch::default())?;
     let (edge_support, part_support) = evaluator
         .evaluate(&weighted_mean, &mut Scratch::default())?
         .map_or((0.0, PartSupport::from_counts(&[])), |(_, support, parts)| (support, parts));
@@ -636,6 +732,7 @@ pub fn fit_shape(
         male_probability,
         edge_support,
         part_support,
+        view_support,
     })
 }
 

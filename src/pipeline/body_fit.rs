@@ -12,7 +12,7 @@ use crate::body::{BodyModel, Gender, RestShape, ShapeChoice};
 use crate::camera::WeakPerspective;
 use crate::error::{Error, Result};
 use crate::fit::{
-    fit_shape, FitCalibration, FitOptions, FitProblem, FitResult, GenderFeatures, HeightEvidence, PartSupport,
+    fit_shape, FitCalibration, FitOptions, FitProblem, FitResult, FitView, GenderFeatures, HeightEvidence, PartSupport,
     PRIOR_RANGE_SD,
 };
 use crate::image::GrayImage;
@@ -162,6 +162,9 @@ pub struct FittedBody {
     /// The camera refitted to the chosen body (see [`BodyChoice::keep_pose_scale`] and
     /// [`FitOptions::sample_camera`]), pixels.
     pub camera: WeakPerspective,
+    /// Each extra view's camera, refitted the same way ([`fit_body_views`]; empty for one
+    /// view), pixels of that view.
+    pub view_cameras: Vec<WeakPerspective>,
     /// The rest shape of [`FittedBody::weights`] with its bone-length factors applied and scaled
     /// to [`FitOptions::height`] when given, else to [`BodyChoice::calibration`]'s height when
     /// asked (model frame, metres).
@@ -180,6 +183,19 @@ pub struct FittedBody {
     pub fit_seconds: f64,
     /// Wall-clock seconds of posing the chosen shape (IK and skinning).
     pub posing_seconds: f64,
+}
+
+/// One extra view of a turnaround for [`fit_body_views`]: its camera (its rotation turned from
+/// the front's, [`crate::view::ViewLabel::camera_from_front`]), edge map and 2-D joints, image
+/// pixels of that view.
+#[derive(Clone, Copy)]
+pub struct BodyView<'a> {
+    /// The view's camera (image pixels).
+    pub camera: &'a WeakPerspective,
+    /// The view's edge map (255 edge, 0 not).
+    pub edges: &'a GrayImage,
+    /// The view's 2-D joints.
+    pub joints2d: &'a Joints2,
 }
 
 /// Fits the body to `edges` (255 edge, 0 not) under the 3-D `pose` (canonical joints, metres)
@@ -202,6 +218,26 @@ pub fn fit_body(
     choice: &BodyChoice,
     progress: &mut dyn FnMut(f32) -> bool,
 ) -> Result<FittedBody> {
+    fit_body_views(model, pose, camera, edges, joints2d, &[], options, choice, progress)
+}
+
+/// [`fit_body`] of a turnaround: the front view (`camera`, `edges`, `joints2d`) and the extra
+/// `views` of the same posed body. Each view's camera is refitted like the front's (to each
+/// body's skeleton, and with [`FitOptions::sample_camera`] to the chosen body's); the fit scores
+/// every view ([`crate::fit::FitProblem::views`]). The result's [`FittedBody::view_cameras`]
+/// hold the views' final cameras, in order. Errors as [`fit_body`]'s.
+#[allow(clippy::too_many_arguments)]
+pub fn fit_body_views(
+    model: &BodyModel,
+    pose: &Joints3,
+    camera: &WeakPerspective,
+    edges: &GrayImage,
+    joints2d: Option<&Joints2>,
+    views: &[BodyView],
+    options: &FitOptions,
+    choice: &BodyChoice,
+    progress: &mut dyn FnMut(f32) -> bool,
+) -> Result<FittedBody> {
     if choice.mean_shape && choice.gender.is_none() {
         return Err(Error::OutOfRange {
             name: "gender",
@@ -216,10 +252,22 @@ pub fn fit_body(
         }
         _ => *camera,
     };
+    let view_cameras: Vec<WeakPerspective> = views
+        .iter()
+        .map(|v| match choice.keep_pose_scale {
+            true => Ok(*v.camera),
+            false => refit_scale(pose, v.camera, &mean_skeleton(model, space, options.height)?, v.joints2d),
+        })
+        .collect::<Result<_>>()?;
+    let fit_views: Vec<FitView> = views
+        .iter()
+        .zip(&view_cameras)
+        .map(|(v, camera)| FitView { camera, edges: v.edges, joints2d: Some(v.joints2d) })
+        .collect();
     let fit = if choice.mean_shape {
         GenderFit { space, fit: None, score: f64::NAN, seconds: 0.0 }
     } else {
-        let problem = FitProblem { model, gender: space, pose, camera: &camera, edges, joints2d };
+        let problem = FitProblem { model, gender: space, pose, camera: &camera, edges, joints2d, views: &fit_views };
         let fit = fit_shape(&problem, options, &mut |f| progress(f.clamp(0.0, 1.0)))?;
         GenderFit { space, score: fit.best_score, fit: Some(fit), seconds: t.elapsed().as_secs_f64() }
     };
@@ -267,6 +315,14 @@ pub fn fit_body(
         Some(j2) if options.sample_camera && !choice.mean_shape => refit_scale(pose, &camera, &rest.joints, j2)?,
         _ => camera,
     };
+    let view_cameras = views
+        .iter()
+        .zip(view_cameras)
+        .map(|(v, c)| match options.sample_camera && !choice.mean_shape {
+            true => refit_scale(pose, &c, &rest.joints, v.joints2d),
+            false => Ok(c),
+        })
+        .collect::<Result<_>>()?;
     let ik_pose = ik::solve(&rest.joints, pose, &IkOptions { retarget: options.retarget })?;
     let posed_vertices = skin(&rest.vertices, model.skin_weights(), &ik_pose, options.skinning)?;
     Ok(FittedBody {
@@ -281,6 +337,7 @@ pub fn fit_body(
         part_support,
         score,
         camera,
+        view_cameras,
         rest,
         fit_height,
         calibrated: calibration.is_some(),

@@ -24,6 +24,7 @@ pub mod joints;
 pub mod overlay;
 pub mod repose;
 pub mod shape_keys;
+pub mod views;
 
 use std::time::Instant;
 
@@ -35,14 +36,18 @@ use crate::fit::{
     gender_evidence, FitCalibration, FitOptions, GenderClassifier, GenderEvidence, MarginCombination, PartSupport,
 };
 use crate::image::{canny, CannyParams, GrayImage};
+use crate::pose::views::{side_facing, triangulate, view_pose_for};
 use crate::pose::{estimate_pose_hinted, Dictionary, PoseEstimate, PoseOptions};
 use crate::skeleton::Joints2;
 
-pub use body_fit::{calibrated_weights, fit_body, refit_camera, rest_body, BodyChoice, FittedBody, GenderFit};
+pub use body_fit::{
+    calibrated_weights, fit_body, fit_body_views, refit_camera, rest_body, BodyChoice, BodyView, FittedBody, GenderFit,
+};
 pub use detected::{DetectedJointsFit, DEFAULT_DEPTH_HINT};
 pub use interim::{InterimBody, InterimStage};
 pub use joints::{DetectedJoints, FigureJoints, GivenJoints, JointsSource};
 pub use repose::{repose, Posing, ReposeOutcome, ReposeRequest};
+pub use views::{ViewInput, ViewResult};
 
 /// Smallest accepted sketch side, pixels (smaller sketches give [`Error::ImageTooSmall`]).
 pub const MIN_SKETCH_SIDE: usize = 32;
@@ -230,6 +235,12 @@ pub struct PipelineResult {
     pub posing_options: Posing,
     /// Stage timings.
     pub timings: Timings,
+    /// A turnaround's extra views, in the order given ([`run_pipeline_views`]; empty for one
+    /// view).
+    pub views: Vec<ViewResult>,
+    /// What the run warns about its views (they agree only roughly, different scales, an
+    /// outline little supported); empty for one view.
+    pub view_warnings: Vec<String>,
 }
 
 impl PipelineResult {
@@ -274,7 +285,7 @@ pub fn run_pipeline(
     options: &PipelineOptions,
     progress: &mut dyn FnMut(f32) -> bool,
 ) -> Result<PipelineResult> {
-    run_pipeline_progressive(model, dict, sketch, source, options, progress, None)
+    run_pipeline_views(model, dict, sketch, source, &[], options, progress, None)
 }
 
 /// [`run_pipeline`] that also hands `interim` (called from the calling thread) the bodies it has
@@ -288,6 +299,34 @@ pub fn run_pipeline_progressive(
     dict: &Dictionary,
     sketch: &GrayImage,
     source: &dyn JointsSource,
+    options: &PipelineOptions,
+    progress: &mut dyn FnMut(f32) -> bool,
+    interim: Option<&mut dyn FnMut(&InterimBody)>,
+) -> Result<PipelineResult> {
+    run_pipeline_views(model, dict, sketch, source, &[], options, progress, interim)
+}
+
+/// [`run_pipeline_progressive`] on a turnaround: `sketch` is the front view, `views` the same
+/// character in the same pose from the side or the back (module [`views`]). Every view's joints
+/// enter the 3-D pose ([`crate::pose::views::triangulate`]; with [`PipelineOptions::given_pose`]
+/// only the views' cameras are fitted to it) and every view's outline the shape fit
+/// ([`fit_body_views`]). The result's [`PipelineResult::views`] hold each view's joints, edges
+/// and camera; [`PipelineResult::view_warnings`] what the run warns about them. With no views
+/// this is [`run_pipeline_progressive`]. The interim bodies are the front view's.
+///
+/// Errors: [`run_pipeline`]'s, for every view's sketch and joints too; a front or repeated view
+/// label ([`Error::OutOfRange`] `view label`); views whose joints disagree beyond
+/// [`views::VIEWS_REFUSE`], or only upside down, or a side view whose depth comes out mirrored
+/// (drawn facing the other way than its label: [`crate::pose::views::SideFacing::mirrored`])
+/// ([`Error::OutOfRange`] `views`); a view's joints with fewer than two
+/// visible or no height ([`Error::Degenerate`]).
+#[allow(clippy::too_many_arguments)]
+pub fn run_pipeline_views(
+    model: &BodyModel,
+    dict: &Dictionary,
+    sketch: &GrayImage,
+    source: &dyn JointsSource,
+    views: &[ViewInput],
     options: &PipelineOptions,
     progress: &mut dyn FnMut(f32) -> bool,
     mut interim: Option<&mut dyn FnMut(&InterimBody)>,
@@ -319,6 +358,7 @@ pub fn run_pipeline_progressive(
     let t = Instant::now();
     let (joints2d, detection) = source.figure(sketch, &edges, dict)?;
     joints::check_in_image(&joints2d, w, h)?;
+    let prepared = views::prepare(views, &options.canny, dict)?;
     timings.joints = t.elapsed().as_secs_f64();
     p.report(0.04)?;
 
@@ -333,6 +373,28 @@ pub fn run_pipeline_progressive(
             estimate_pose_hinted(dict, &pose_joints, &options.pose, hint.as_ref())?
         }
     };
+    let (pose, views_pose, view_warnings) = if prepared.is_empty() {
+        (pose, None, Vec::new())
+    } else {
+        let vj = views::view_joints(&prepared);
+        let (vp, facing) = match &options.given_pose {
+            Some(_) => (view_pose_for(&pose, &joints2d, &vj)?, vec![None; vj.len()]),
+            None => {
+                let vp = triangulate(&pose, &joints2d, &vj)?;
+                let facing = side_facing(&pose, &joints2d, &vj, &vp)?;
+                (vp, facing)
+            }
+        };
+        let warnings = views::agreement(&prepared, &vp, &facing)?;
+        // The views measure depth: the front estimate's depth readings do not apply to it.
+        let joints = vp.joints;
+        (PoseEstimate { joints, alternatives: Vec::new(), depth_costs: None, ..pose }, Some((vp, facing)), warnings)
+    };
+    let body_views: Vec<BodyView> = prepared
+        .iter()
+        .zip(views_pose.iter().flat_map(|(vp, _)| &vp.cameras))
+        .map(|(v, camera)| BodyView { camera, edges: &v.edges, joints2d: &v.joints2d })
+        .collect();
     timings.pose = t.elapsed().as_secs_f64();
     p.report(0.06)?;
 
@@ -377,20 +439,49 @@ pub fn run_pipeline_progressive(
     }
     let (body, classified) = if classify {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
-        let sketch = SketchInputs { pose: &pose, edges: &edges, joints2d: &joints2d };
+        let sketch = SketchInputs { pose: &pose, edges: &edges, joints2d: &joints2d, views: &body_views };
         let log_odds = classifier.log_odds(&evidence.features);
         let decision = Decision { dims: options.gender_decision_dims, seeds: options.gender_decision_seeds };
         let (body, male) = classify_and_fit(model, &sketch, &fit, &choice, decision, log_odds, &mut cb, interim)?;
         (body, Some(male.max(1.0 - male)))
     } else {
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
-        let body = fit_body(model, &pose.joints, &pose.camera, &edges, Some(&joints2d), &fit, &choice, &mut cb)?;
+        let (j, c) = (&pose.joints, &pose.camera);
+        let body = fit_body_views(model, j, c, &edges, Some(&joints2d), &body_views, &fit, &choice, &mut cb)?;
         let male = evidence.male_probability;
         (body, detected_gender.map(|_| male.max(1.0 - male)))
     };
     timings.fit = body.fit_seconds;
     timings.posing = body.posing_seconds;
     let mesh = RiggedMesh::from_rest(model, &body.rest);
+    let view_support = body.fits.iter().rev().find(|g| g.space == body.space).and_then(|g| g.fit.as_ref());
+    let mut view_warnings = view_warnings;
+    let view_results: Vec<ViewResult> = prepared
+        .into_iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let (vp, facing) = views_pose.as_ref().expect("views have a pose");
+            let support = view_support.and_then(|f| f.view_support.get(k).copied()).unwrap_or(f64::NAN);
+            if support < crate::fit::LOW_EVIDENCE_SUPPORT {
+                view_warnings.push(format!(
+                    "the {} view's strokes support only {:.0}% of the fitted outline in that view",
+                    v.label.name(),
+                    100.0 * support
+                ));
+            }
+            ViewResult {
+                label: v.label,
+                edges: v.edges,
+                joints2d: v.joints2d,
+                joints_source: v.joints_source,
+                camera: body.view_cameras[k],
+                residual: vp.residual[k + 1],
+                scale_ratio: vp.scale_ratio[k],
+                facing: facing[k],
+                edge_support: support,
+            }
+        })
+        .collect();
     timings.total = t0.elapsed().as_secs_f64();
     p.report(1.0)?;
     Ok(PipelineResult {
@@ -420,6 +511,8 @@ pub fn run_pipeline_progressive(
         posed_vertices: body.posed_vertices,
         posing_options: Posing { pose: options.pose, retarget: fit.retarget, skinning: fit.skinning },
         timings,
+        views: view_results,
+        view_warnings,
     })
 }
 
@@ -442,6 +535,8 @@ struct SketchInputs<'a> {
     pose: &'a PoseEstimate,
     edges: &'a GrayImage,
     joints2d: &'a Joints2,
+    /// A turnaround's extra views (empty for one view).
+    views: &'a [BodyView<'a>],
 }
 
 /// How [`classify_and_fit`] decides: the deciding fits' dimensions
@@ -487,7 +582,8 @@ fn classify_and_fit(
     let mut fit_one = |g: Gender, o: &FitOptions, step: f32| {
         let c = BodyChoice { gender: Some(g), ..*choice };
         let mut cb = |f: f32| progress((step + f) / steps);
-        fit_body(model, &sketch.pose.joints, &sketch.pose.camera, sketch.edges, Some(sketch.joints2d), o, &c, &mut cb)
+        let (pose, camera, j2) = (&sketch.pose.joints, &sketch.pose.camera, Some(sketch.joints2d));
+        fit_body_views(model, pose, camera, sketch.edges, j2, sketch.views, o, &c, &mut cb)
     };
     let mut bodies = Vec::with_capacity(deciding_fits);
     for k in 0..decision.seeds {

@@ -43,6 +43,7 @@ pub mod pursuit;
 pub mod qcls;
 pub mod refine;
 pub mod straighten;
+pub mod views;
 
 pub use alternatives::{flip_limb, pick_alternative, Alternative, FlipStatus, Limb};
 pub use depth_hint::DepthHint;

@@ -20,6 +20,7 @@ mod fit_landmark_joints;
 mod learn_poses;
 mod make_dataset;
 mod negative_page;
+mod pose_error;
 mod render_sketch;
 mod run_dataset;
 mod shape_floor;
@@ -90,6 +91,8 @@ enum Command {
     /// The shape fit's floor on a dataset: each true rest mesh projected onto the body model's
     /// space of its gender, scored as eval scores a fit, beside the mean shape.
     ShapeFloor(shape_floor::Args),
+    /// The 3-D pose step's error on a run-dataset results folder (limb directions, PA-MPJPE).
+    PoseError(pose_error::Args),
 }
 
 fn main() -> ExitCode {
@@ -115,6 +118,7 @@ fn main() -> ExitCode {
         Command::Stylise(a) => stylise::run(a),
         Command::NegativePage(a) => negative_page::run(a),
         Command::ShapeFloor(a) => shape_floor::run(a),
+        Command::PoseError(a) => pose_error::run(a),
     };
     exit_code("sketchbody-lab", result)
 }

@@ -6,7 +6,11 @@
 //! atomically, the posed OBJ last. Samples whose `STEM_posed.obj` exists are skipped
 //! (resumable). Samples run in parallel (rayon); each fit's seed is the same `--seed`, so
 //! results do not depend on the thread count or the order. Ground-truth joints outside the
-//! image are marked missing.
+//! image are marked missing. With `--views side[,back]` each sample is fitted as a turnaround:
+//! the dataset's extra views of those labels (the truth's `views` list, e.g. from
+//! `VIEWS=side scripts/make-blender-set.sh`) join the front view, each with its true joints (or
+//! the detector's with `--detect`); STEM.json then also lists each view's residual, scale and
+//! outline support and the run's view warnings.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -22,10 +26,11 @@ use sketchbody::detect::Model;
 use sketchbody::export::obj::write_obj;
 use sketchbody::fsutil::write_atomic;
 use sketchbody::image::load_image;
-use sketchbody::pipeline::{run_pipeline, FigureJoints, GivenJoints, JointsSource, PipelineOptions};
+use sketchbody::pipeline::{run_pipeline_views, FigureJoints, GivenJoints, JointsSource, PipelineOptions, ViewInput};
 use sketchbody::pose::{dict_io, Dictionary, PoseEstimate};
 use sketchbody::render::sketch::truth::GroundTruth;
 use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
+use sketchbody::view::ViewLabel;
 use sketchbody_lab::eval::score::dataset_samples;
 
 use sketchbody_cli::fit_args::{score_name, FitArgs};
@@ -74,6 +79,18 @@ pub struct Args {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Fit each sample as a turnaround with the dataset's extra views of these labels
+    /// (comma-separated: side, side_left, back); a sample without one of them fails.
+    #[arg(long, value_delimiter = ',', value_parser = parse_view_label)]
+    views: Vec<ViewLabel>,
+}
+
+fn parse_view_label(s: &str) -> Result<ViewLabel, String> {
+    match ViewLabel::parse(s) {
+        Ok(ViewLabel::Front) => Err("the front view is the sample's own image".into()),
+        Ok(l) => Ok(l),
+        Err(e) => Err(e.to_string()),
+    }
 }
 
 enum GenderMode {
@@ -84,11 +101,16 @@ enum GenderMode {
 
 /// Ground-truth joints of a sample; joints outside the image are marked missing.
 fn truth_joints(t: &GroundTruth) -> Joints2 {
+    image_joints(&t.joints2d, t.width, t.height)
+}
+
+/// `xy` as joints, those outside a `w`×`h` image marked missing.
+fn image_joints(xy: &[[f64; 2]], w: usize, h: usize) -> Joints2 {
     let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
     for k in 0..NUM_JOINTS {
-        j.xy[k] = t.joints2d[k];
+        j.xy[k] = xy[k];
         let [x, y] = j.xy[k];
-        j.visible[k] = (0.0..=t.width as f64).contains(&x) && (0.0..=t.height as f64).contains(&y);
+        j.visible[k] = (0.0..=w as f64).contains(&x) && (0.0..=h as f64).contains(&y);
     }
     j
 }
@@ -105,6 +127,8 @@ struct Shared<'a> {
     true_height: bool,
     /// `--oracle-pose`.
     oracle_pose: bool,
+    /// `--views`.
+    views: Vec<ViewLabel>,
 }
 
 /// The ground truth's 3-D pose and camera as a pose estimate (for `--oracle-pose`).
@@ -148,13 +172,41 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
     if s.oracle_pose {
         opts.given_pose = Some(truth_pose(&truth, stem)?);
     }
-    let source: Box<dyn JointsSource + '_> = match &s.detector {
-        Some((model, net, options)) => Box::new(FigureJoints { model, net, options, colour: None }),
-        None => Box::new(GivenJoints(truth_joints(&truth))),
+    let source_of = |j: Joints2| -> Box<dyn JointsSource + '_> {
+        match &s.detector {
+            Some((model, net, options)) => Box::new(FigureJoints { model, net, options, colour: None }),
+            None => Box::new(GivenJoints(j)),
+        }
     };
-    let r =
-        run_pipeline(s.model, s.dict, &sketch, source.as_ref(), &opts, &mut |_| !INTERRUPTED.load(Ordering::SeqCst))
-            .map_err(|e| CliError(format!("sample {stem}: {e}")))?;
+    let source = source_of(truth_joints(&truth));
+    let mut view_images = Vec::with_capacity(s.views.len());
+    for &label in &s.views {
+        let v = truth.views.iter().find(|v| v.label == label.name()).ok_or_else(|| {
+            CliError(format!(
+                "sample {stem}: no {} view in its truth (render with VIEWS={})",
+                label.name(),
+                label.name()
+            ))
+        })?;
+        let img = load_image(&dataset.join(&v.image))?;
+        let joints = image_joints(&v.joints2d, img.width(), img.height());
+        view_images.push((label, img, source_of(joints)));
+    }
+    let views: Vec<ViewInput> = view_images
+        .iter()
+        .map(|(label, img, src)| ViewInput { label: *label, sketch: img, source: src.as_ref() })
+        .collect();
+    let r = run_pipeline_views(
+        s.model,
+        s.dict,
+        &sketch,
+        source.as_ref(),
+        &views,
+        &opts,
+        &mut |_| !INTERRUPTED.load(Ordering::SeqCst),
+        None,
+    )
+    .map_err(|e| CliError(format!("sample {stem}: {e}")))?;
     let rm = r.pose.camera.r;
     let finite = |x: f64| json!(if x.is_finite() { Some(x) } else { None });
     // One score per fitted space: the deciding fit's when the chosen gender was refitted.
@@ -187,6 +239,13 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         "proportions": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportions),
         "proportion_estimate": r.chosen_fit().and_then(|g| g.fit.as_ref()).and_then(|f| f.proportion_estimate),
         "landmark_depth": r.detection.as_ref().map(|f| f.landmark_depth),
+        "pose_joints3d": r.pose.joints,
+        "views": r.views.iter().map(|v| json!({
+            "label": v.label.name(), "residual": v.residual, "scale_ratio": v.scale_ratio,
+            "edge_support": finite(v.edge_support),
+            "facing": v.facing.map(|f| json!({"as_labelled_deg": f.as_labelled_deg, "other_side_deg": f.other_side_deg})),
+        })).collect::<Vec<_>>(),
+        "view_warnings": r.view_warnings,
         "seconds": r.timings.total,
     });
     write_atomic(&out.join(format!("{stem}.json")), doc.to_string().as_bytes())?;
@@ -217,7 +276,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         "format": "sketchbody-run-dataset-1", "dataset": a.dataset.display().to_string(), "samples": stems.len(),
         "gender": a.gender, "dictionary": a.dictionary.as_ref().map(|p| p.display().to_string()), "mean_shape": a.mean_shape, "detector": if a.detect { Some(a.detector.name()) } else { None }, "depth_hint": a.fit.depth_hint, "depth_prior": a.fit.depth_prior, "detected_joint_weight_scale": a.fit.detected_joint_weight_scale, "detected_proportions": a.fit.detected_proportions, "landmark_pose": a.fit.landmark_pose, "detected_classifier_gender": a.fit.detected_classifier_gender, "gender_evidence": a.fit.gender_evidence, "classify_gender": a.fit.classify_gender, "gender_decision_dims": a.fit.gender_decision_dims, "gender_decision_seeds": a.fit.gender_decision_seeds, "calibrate_fit": a.fit.calibrate_fit, "male_prior": a.fit.male_prior, "score": score_name(fit.score), "seed": fit.seed, "initial_factor": fit.initial_factor,
         "fit_samples": fit.samples, "iterations": fit.max_iterations, "transition_scale": fit.transition_scale,
-        "temperature": fit.temperature, "joint_weight": fit.joint_weight, "sample_camera": fit.sample_camera, "proportion_sd": fit.proportion_sd, "estimate_proportions": fit.estimate_proportions, "height": fit.height, "true_height": a.true_height, "oracle_pose": a.oracle_pose, "keep_pose_scale": a.fit.keep_pose_scale, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
+        "temperature": fit.temperature, "joint_weight": fit.joint_weight, "sample_camera": fit.sample_camera, "proportion_sd": fit.proportion_sd, "estimate_proportions": fit.estimate_proportions, "height": fit.height, "true_height": a.true_height, "oracle_pose": a.oracle_pose, "views": a.views.iter().map(|v| v.name()).collect::<Vec<_>>(), "keep_pose_scale": a.fit.keep_pose_scale, "raster_side": fit.raster_max_side, "tolerance": fit.tolerance, "version": sketchbody::VERSION,
     });
     write_atomic(&a.out.join("run.json"), manifest.to_string().as_bytes())?;
     let model = BodyModel::embedded()?;
@@ -239,6 +298,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         detector,
         true_height: a.true_height,
         oracle_pose: a.oracle_pose,
+        views: a.views.clone(),
     };
     let todo: Vec<&String> = stems.iter().filter(|s| !a.out.join(format!("{s}_posed.obj")).is_file()).collect();
     let pool = rayon::ThreadPoolBuilder::new()

@@ -81,6 +81,29 @@ pub struct GroundTruth {
     pub pose_source: String,
     /// The drawing style (includes proportions, costume and hair).
     pub style: SketchStyle,
+    /// A turnaround's other views of the same posed body (the sample's own image and truth are
+    /// the front view); empty (and absent from the JSON) for a single-view sample.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub views: Vec<ViewTruth>,
+}
+
+/// One extra view of a turnaround sample ([`GroundTruth::views`]): the same posed body with the
+/// camera turned `yaw_deg` about the body's vertical axis (model +Y), so its rotation is the
+/// front camera's times R_y(`yaw_deg`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ViewTruth {
+    /// `side` (yaw +90°: the body's right side, facing image right) or `back` (yaw +180°).
+    pub label: String,
+    /// The view's yaw relative to the front view, degrees.
+    pub yaw_deg: f64,
+    /// The view's gray sketch, a file name in the sample's folder (`STEM_LABEL.png`).
+    pub image: String,
+    /// 15 joints in the view's image, pixels (canonical order).
+    pub joints2d: Vec<[f64; 2]>,
+    /// Whether each joint is visible in the view.
+    pub visible: Vec<bool>,
+    /// The view's camera (projects [`GroundTruth::joints3d`]).
+    pub camera: CameraJson,
 }
 
 impl GroundTruth {
@@ -120,6 +143,7 @@ impl GroundTruth {
             height_m,
             pose_source,
             style,
+            views: Vec::new(),
         }
     }
 
@@ -134,6 +158,17 @@ impl GroundTruth {
         }
         if !(t.height_m.is_finite() && t.height_m > 0.0) {
             return Err(Error::CorruptData(format!("{what}: height_m {} is not positive", t.height_m)));
+        }
+        for v in &t.views {
+            if v.joints2d.len() != 15 || v.visible.len() != 15 {
+                return Err(Error::CorruptData(format!("{what}: view {}: joint lists must hold 15 entries", v.label)));
+            }
+            if v.image.contains(['/', '\\']) || v.image.is_empty() {
+                return Err(Error::CorruptData(format!(
+                    "{what}: view {}: image {:?} is not a file name",
+                    v.label, v.image
+                )));
+            }
         }
         Ok(t)
     }
