@@ -225,6 +225,53 @@ int main() {
         std::printf("capi_cpp_test: progressive run, %zu interim bodies; torso support %.2f\n", stages.size(), parts[1]);
     }
 
+    {
+        // A turnaround: the same body and pose rendered from the front and the side (yaw +90°),
+        // fitted as one body; the side view reads back with its label and the front camera turned
+        // by +90°; the side view labelled as the other side is refused (drawn facing the other way).
+        sketchbody::Context ctx;
+        skb_sketch_options *so = nullptr;
+        sketchbody::check(skb_sketch_options_new(&so));
+        const uint32_t size = 256;
+        std::vector<uint8_t> front(size * size), side(size * size);
+        double fxy[30], sxy[30];
+        uint8_t fvis[15], svis[15];
+        sketchbody::check(skb_sketch_options_set_camera(so, 0, 0, 0));
+        sketchbody::check(skb_render_sketch(ctx.get(), SKB_GENDER_FEMALE, nullptr, 0, nullptr, 11, size, size, so,
+                                            front.data(), size, front.size(), fxy, fvis));
+        sketchbody::check(skb_sketch_options_set_camera(so, 90, 0, 0));
+        sketchbody::check(skb_render_sketch(ctx.get(), SKB_GENDER_FEMALE, nullptr, 0, nullptr, 11, size, size, so,
+                                            side.data(), size, side.size(), sxy, svis));
+        skb_sketch_options_free(so);
+        skb_joints2d fj{}, sj{};
+        for (int k = 0; k < 15; ++k) {
+            fj.xy[k][0] = fxy[2 * k], fj.xy[k][1] = fxy[2 * k + 1], fj.visible[k] = 1;
+            sj.xy[k][0] = sxy[2 * k], sj.xy[k][1] = sxy[2 * k + 1], sj.visible[k] = 1;
+        }
+        const skb_image fi{front.data(), size, size, size, 1}, si{side.data(), size, size, size, 1};
+        sketchbody::FitOptions fit;
+        fit.samples(24).iterations(2);
+        const sketchbody::Result r = sketchbody::run_pipeline_views(ctx, fi, &fj, {{SKB_VIEW_SIDE, si, &sj}}, &fit);
+        const std::vector<skb_view_info> views = r.views();
+        CHECK(views.size() == 1 && views[0].label == SKB_VIEW_SIDE && views[0].joints_detected == 0);
+        const skb_camera c = r.camera();
+        // R_front^T R_side turns by 90° about the body's (tilted) vertical axis.
+        double rel[9] = {0};
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                for (int k = 0; k < 3; ++k) rel[3 * i + j] += c.r[3 * k + i] * views[0].camera.r[3 * k + j];
+        const double angle = std::acos(std::max(-1.0, std::min(1.0, (rel[0] + rel[4] + rel[8] - 1) / 2))) * 180 / M_PI;
+        const double ax = rel[7] - rel[5], ay = rel[2] - rel[6], az = rel[3] - rel[1];
+        CHECK(std::fabs(angle - 90) < 1e-6 && ay / std::sqrt(ax * ax + ay * ay + az * az) > 0.9);
+        CHECK(views[0].residual < 0.05 && views[0].edge_support > 0.3);
+        CHECK(sketchbody::run_pipeline(ctx, fi, &fj, &fit).views().empty());
+        CHECK(status_of([&] {
+                  sketchbody::run_pipeline_views(ctx, fi, &fj, {{SKB_VIEW_SIDE_LEFT, si, &sj}}, &fit);
+              }) == SKB_ERR_VIEWS_DISAGREE);
+        std::printf("capi_cpp_test: turnaround front + side, side residual %.3f, support %.2f\n", views[0].residual,
+                    views[0].edge_support);
+    }
+
     std::printf("%s (%d failed checks)\n", failures ? "FAIL" : "PASS", failures);
     return failures ? 1 : 0;
 }

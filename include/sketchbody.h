@@ -386,6 +386,26 @@
 #define SKB_NUM_BODY_PARTS 6
 
 /**
+ * View label: the front view (yaw 0°), the pipeline's main sketch; not accepted as an extra view.
+ */
+#define SKB_VIEW_FRONT 0
+
+/**
+ * View label: the side view (yaw +90°), the character's right side, facing image right.
+ */
+#define SKB_VIEW_SIDE 1
+
+/**
+ * View label: the other side view (yaw −90°), the character's left side, facing image left.
+ */
+#define SKB_VIEW_SIDE_LEFT 2
+
+/**
+ * View label: the back view (yaw 180°).
+ */
+#define SKB_VIEW_BACK 3
+
+/**
  * Largest texture side `skb_*_project_texture` accept, texels.
  */
 #define SKB_MAX_TEXTURE_SIZE 4096
@@ -519,6 +539,11 @@ enum skb_status
    * The sketch has no edges (blank, uniform or too faint).
    */
   SKB_ERR_BLANK_IMAGE = 25,
+  /**
+   * A turnaround's views do not show one character in one pose (their joints disagree, match
+   * only upside down, or a side view is drawn facing the other way than its label).
+   */
+  SKB_ERR_VIEWS_DISAGREE = 26,
 };
 #ifndef __cplusplus
 typedef uint32_t skb_status;
@@ -874,6 +899,89 @@ typedef struct skb_facing_info {
  * `skb_mesh_copy_posed_vertices`; do not free or keep it).
  */
 typedef void (*skb_interim_fn)(void *user, uint32_t stage, const struct skb_mesh *mesh);
+
+/**
+ * One extra view of a turnaround for `skb_run_pipeline_views`: its label (`SKB_VIEW_SIDE`,
+ * `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`), its sketch (1, 3 or 4 channels, dark strokes on light
+ * paper; any size: views drawn at another scale are scaled to the front by their joints) and its
+ * 2-D joints in that image's pixels (NULL: detected). The pointers are borrowed for the call only.
+ * Plain data; its layout is part of the ABI.
+ */
+typedef struct skb_view_input {
+  /**
+   * `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`.
+   */
+  uint32_t label;
+  /**
+   * Set to 0.
+   */
+  uint32_t reserved;
+  /**
+   * The view's sketch (not NULL).
+   */
+  const struct skb_image *sketch;
+  /**
+   * The view's 2-D joints, pixels of its sketch; NULL: the context's detector finds them.
+   */
+  const struct skb_joints2d *joints;
+} skb_view_input;
+
+/**
+ * What a turnaround run made of one extra view (`skb_result_view`). Plain data; its layout is
+ * part of the ABI.
+ */
+typedef struct skb_view_info {
+  /**
+   * The view's label (`SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`).
+   */
+  uint32_t label;
+  /**
+   * 1 when the view's joints were detected, 0 when given.
+   */
+  uint32_t joints_detected;
+  /**
+   * 1 when the detected joints are the detector's other labelling (left and right swapped),
+   * which fits the shared pose better; 0 otherwise.
+   */
+  uint32_t joints_swapped;
+  /**
+   * 0.
+   */
+  uint32_t reserved;
+  /**
+   * The 2-D joints used in the view, pixels of its sketch.
+   */
+  struct skb_joints2d joints;
+  /**
+   * The view's camera refitted to the body: projects the result's posed vertices and
+   * `SKB_JOINTS_POSED` onto the view's sketch.
+   */
+  struct skb_camera camera;
+  /**
+   * RMS distance of the view's joints from the shared pose seen through its camera, fraction
+   * of the figure's height (runs refuse views beyond 0.12 and warn beyond 0.05).
+   */
+  double residual;
+  /**
+   * The view's drawn size over the front view's (1: the same scale).
+   */
+  double scale_ratio;
+  /**
+   * Share of the fitted outline in this view within reach of a stroke, 0..1 (NaN for the
+   * mean shape).
+   */
+  double edge_support;
+  /**
+   * A side view: mean angle between its triangulated limbs and the front estimate's, degrees,
+   * as labelled; NaN for a back view or a given pose.
+   */
+  double facing_as_labelled_deg;
+  /**
+   * The same with the view taken as the other side; NaN as above. Much lower than
+   * `facing_as_labelled_deg` means the view is drawn facing the other way (runs refuse it).
+   */
+  double facing_other_side_deg;
+} skb_view_info;
 
 #ifdef __cplusplus
 extern "C" {
@@ -2294,6 +2402,60 @@ skb_status skb_result_repose_joints(struct skb_result *result,
                                     const struct skb_pose_dictionary *dict,
                                     const struct skb_joints2d *joints,
                                     uint32_t *outcome);
+
+/**
+ * `skb_run_pipeline_progressive` on a turnaround: `sketch` and `joints` are the front view,
+ * `views` (`view_count` entries; NULL when 0) the same character in the same pose from the side,
+ * the other side or the back. The views share one body and one pose: every view's joints enter
+ * the 3-D pose (depth from a side view), every view's outline the shape fit; each view has the
+ * front camera turned by its label's yaw, with its own scale and position. With `view_count` 0
+ * this is `skb_run_pipeline_progressive`. Read each view with `skb_result_view` and the run's
+ * warnings (views that agree only roughly, a view little supported by its strokes) with
+ * `skb_result_copy_view_warnings`. Arguments, ownership, threading, progress and cancel as
+ * `skb_run_pipeline_progressive` (the interim bodies are the front view's); the views' images
+ * and joints are only read during the call. Errors: `skb_run_pipeline`'s for any view's image
+ * and joints; a label not `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`, or one given
+ * twice (`SKB_ERR_OUT_OF_RANGE`); views that do not show one character in one pose (their joints
+ * miss the shared pose by more than 12 % of the figure's height, match it only upside down, or a
+ * side view drawn facing the other way than its label: `SKB_ERR_VIEWS_DISAGREE`, the message
+ * names the view and the reason; a turnaround is never silently fitted to the front alone).
+ */
+skb_status skb_run_pipeline_views(const struct skb_context *ctx,
+                                  const struct skb_image *sketch,
+                                  const struct skb_joints2d *joints,
+                                  const struct skb_view_input *views,
+                                  size_t view_count,
+                                  const struct skb_pose_dictionary *dict,
+                                  const struct skb_pose_options *pose_opts,
+                                  const struct skb_fit_options *fit_opts,
+                                  skb_progress_fn progress,
+                                  skb_interim_fn interim,
+                                  void *user,
+                                  struct skb_result **out);
+
+/**
+ * The number of extra views of a result into `*count` (0 for a one-view run).
+ */
+skb_status skb_result_view_count(const struct skb_result *result, size_t *count);
+
+/**
+ * Extra view `index` (0 .. `skb_result_view_count` − 1, in the order given) into `*out`.
+ * Errors: `index` out of range (`SKB_ERR_OUT_OF_RANGE`).
+ */
+skb_status skb_result_view(const struct skb_result *result,
+                           size_t index,
+                           struct skb_view_info *out);
+
+/**
+ * The run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing newline;
+ * empty when there are none or for a one-view run): their byte length without the terminating
+ * NUL into `*len` (may be NULL) and, when `dst` is not NULL, the text NUL-terminated into `dst`
+ * (`dst_len` ≥ length + 1).
+ */
+skb_status skb_result_copy_view_warnings(const struct skb_result *result,
+                                         char *dst,
+                                         size_t dst_len,
+                                         size_t *len);
 
 /**
  * Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as 8-bit RGB into `*out` (caller

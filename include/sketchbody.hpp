@@ -461,6 +461,23 @@ public:
         check(skb_result_repose_joints(r_.get(), nullptr, &joints, &o));
         return o;
     }
+    /// A turnaround's extra views, in the order given (empty for a one-view run).
+    std::vector<skb_view_info> views() const {
+        size_t n = 0;
+        check(skb_result_view_count(r_.get(), &n));
+        std::vector<skb_view_info> v(n);
+        for (size_t k = 0; k < n; ++k) check(skb_result_view(r_.get(), k, &v[k]));
+        return v;
+    }
+    /// What the run warns about its views, one per line (empty when none).
+    std::string view_warnings() const {
+        size_t n = 0;
+        check(skb_result_copy_view_warnings(r_.get(), nullptr, 0, &n));
+        std::string s(n + 1, '\0');
+        check(skb_result_copy_view_warnings(r_.get(), &s[0], s.size(), nullptr));
+        s.resize(n);
+        return s;
+    }
     const skb_result *get() const noexcept { return r_.get(); }
 
 private:
@@ -518,6 +535,32 @@ inline Result run_pipeline_progressive(const Context &ctx, const skb_image &sket
     check(skb_run_pipeline_progressive(ctx.get(), &sketch, joints, nullptr, nullptr, fit ? fit->get() : nullptr,
                                        &detail::progressive_progress, c.interim ? &detail::progressive_interim : nullptr,
                                        &c, &raw));
+    return Result(raw);
+}
+
+/// One extra view of a turnaround for run_pipeline_views: its label (SKB_VIEW_SIDE,
+/// SKB_VIEW_SIDE_LEFT, SKB_VIEW_BACK), its sketch and its joints (nullptr: detected); the
+/// image and joints are borrowed for the call.
+struct View {
+    uint32_t label;
+    skb_image sketch;
+    const skb_joints2d *joints = nullptr;
+};
+
+/// run_pipeline_progressive on a turnaround (skb_run_pipeline_views): `sketch` and `joints` the
+/// front view, `views` the same character in the same pose from the side or the back. Views that
+/// do not show one character in one pose throw Error with SKB_ERR_VIEWS_DISAGREE.
+inline Result run_pipeline_views(const Context &ctx, const skb_image &sketch, const skb_joints2d *joints,
+                                 const std::vector<View> &views, const FitOptions *fit = nullptr, Interim interim = {},
+                                 Progress progress = {}) {
+    std::vector<skb_view_input> in;
+    in.reserve(views.size());
+    for (const View &v : views) in.push_back(skb_view_input{v.label, 0, &v.sketch, v.joints});
+    skb_result *raw = nullptr;
+    detail::ProgressiveCallbacks c{std::move(progress), std::move(interim)};
+    check(skb_run_pipeline_views(ctx.get(), &sketch, joints, in.empty() ? nullptr : in.data(), in.size(), nullptr,
+                                 nullptr, fit ? fit->get() : nullptr, &detail::progressive_progress,
+                                 c.interim ? &detail::progressive_interim : nullptr, &c, &raw));
     return Result(raw);
 }
 

@@ -190,6 +190,11 @@ pub enum Error {
         /// Canny's high threshold.
         high: f64,
     },
+    /// A turnaround's views do not show one character in one pose: their joints disagree beyond
+    /// the limit, match only upside down, or a side view's depth comes out mirrored (drawn facing
+    /// the other way than its label). The text says which view and why.
+    #[error("the views disagree: {0}")]
+    ViewsDisagree(String),
 }
 
 /// `Result` with [`Error`].

@@ -21,6 +21,7 @@ pub mod pipeline;
 pub mod pose;
 pub mod raster;
 pub mod render;
+pub mod sheet;
 pub mod skeleton;
 pub mod strict_json;
 pub mod view;

@@ -89,10 +89,9 @@ fn a_side_view_fixes_the_pose_and_disagreeing_views_are_refused() {
         v.scale_ratio
     );
     assert!(v.edge_support > 0.3, "the side view's outline support {}", v.edge_support);
-    assert!(
-        (v.camera.r - two.pose.camera.r * ViewLabel::Side.turn()).norm() < 1e-9,
-        "the view's camera is the front's turned"
-    );
+    let rel = two.pose.camera.r.transpose() * v.camera.r;
+    let angle = ((rel.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees();
+    assert!((angle - 90.0).abs() < 1e-6, "the view's camera is the front's turned by 90°, not {angle}°");
 
     // A side view of another figure (its joints upside down) is refused, not fitted.
     let mut other = joints(&side);
@@ -102,7 +101,7 @@ fn a_side_view_fixes_the_pose_and_disagreeing_views_are_refused() {
     let wrong = GivenJoints(other);
     let bad = [ViewInput { label: ViewLabel::Side, sketch: &side_img, source: &wrong }];
     match run_pipeline_views(&model, &dict, &front_img, &fj, &bad, &options, &mut |_| true, None) {
-        Err(Error::OutOfRange { name: "views", detail }) => assert!(detail.contains("side view disagrees"), "{detail}"),
+        Err(Error::ViewsDisagree(detail)) => assert!(detail.contains("side view disagrees"), "{detail}"),
         other => panic!("expected the views to be refused, got {:?}", other.map(|r| r.view_warnings)),
     }
     // Labels: the front is the main sketch; a view twice is an error.
@@ -140,7 +139,7 @@ fn a_left_side_view_needs_its_label_and_is_refused_under_the_other() {
     // mirrored: refused, naming the label to use.
     let mislabelled = [ViewInput { label: ViewLabel::Side, sketch: &left_img, source: &lj }];
     match run_pipeline_views(&model, &dict, &front_img, &fj, &mislabelled, &options, &mut |_| true, None) {
-        Err(Error::OutOfRange { name: "views", detail }) => {
+        Err(Error::ViewsDisagree(detail)) => {
             assert!(detail.contains("mirrored") && detail.contains("label it side_left"), "{detail}")
         }
         other => panic!("expected the mislabelled side to be refused, got {:?}", other.map(|r| r.view_warnings)),

@@ -38,6 +38,7 @@ mod detect;
 mod facing;
 mod fit;
 mod pipeline;
+mod views;
 mod texture;
 mod sketch;
 
@@ -62,6 +63,7 @@ pub use sketch::*;
 pub use status::*;
 pub use texture::*;
 pub use version::*;
+pub use views::*;
 
 pub(crate) use error::{clear_last_error as error_reset, fail as error_fail};
 pub(crate) use panic::panic_status;

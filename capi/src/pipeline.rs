@@ -2,18 +2,20 @@
 //! with its owned result handle `skb_result`, and `skb_gray_image` (a decoded image file) so a
 //! host needs no image library of its own.
 
+use std::cell::OnceCell;
 use std::ffi::{c_char, c_void};
 use std::sync::Arc;
 
 use sketchbody_core::body::BodyModel;
 use sketchbody_core::detect::figure::FigureOptions;
 use sketchbody_core::detect::landmark::LandmarkNet;
+use sketchbody_core::detect::model::Model;
 use sketchbody_core::error::Error;
 use sketchbody_core::image::{load_image, to_gray, GrayImage};
 use sketchbody_core::pipeline::shape_keys::ShapeOrigin;
 use sketchbody_core::pipeline::{
-    repose, run_pipeline_progressive, FigureJoints, GivenJoints, InterimBody, JointsSource, PipelineOptions,
-    PipelineResult, ReposeOutcome, ReposeRequest,
+    repose, run_pipeline_views, FigureJoints, GivenJoints, InterimBody, JointsSource, PipelineOptions, PipelineResult,
+    ReposeOutcome, ReposeRequest, ViewInput,
 };
 use sketchbody_core::pose::dict_io;
 use sketchbody_core::skeleton::NUM_JOINTS;
@@ -27,6 +29,7 @@ use super::mesh_ops::skb_camera;
 use super::pose::{joints_in, skb_joints2d, skb_pose_dictionary, skb_pose_options};
 use super::ptr::*;
 use super::status::skb_status;
+use super::views::{skb_view_input, view_label};
 
 /// `skb_result_copy_joints3d`: the rest joints of the fitted shape.
 pub const SKB_JOINTS_REST: u32 = 0;
@@ -126,7 +129,7 @@ pub unsafe extern "C" fn skb_run_pipeline(
     out: *mut *mut skb_result,
 ) -> skb_status {
     // SAFETY: the header contract of `skb_run_pipeline` (lib.rs § Safety), forwarded.
-    unsafe { run(ctx, sketch, joints, dict, pose_opts, fit_opts, progress, None, user, out) }
+    unsafe { run(ctx, sketch, joints, &[], dict, pose_opts, fit_opts, progress, None, user, out) }
 }
 
 /// Interim-body callback of `skb_run_pipeline_progressive`: called on the calling thread with
@@ -161,7 +164,7 @@ pub unsafe extern "C" fn skb_run_pipeline_progressive(
     out: *mut *mut skb_result,
 ) -> skb_status {
     // SAFETY: the header contract of `skb_run_pipeline_progressive` (lib.rs § Safety), forwarded.
-    unsafe { run(ctx, sketch, joints, dict, pose_opts, fit_opts, progress, interim, user, out) }
+    unsafe { run(ctx, sketch, joints, &[], dict, pose_opts, fit_opts, progress, interim, user, out) }
 }
 
 /// Calls `f` with each interim body as a borrowed `skb_mesh` of `model`.
@@ -185,17 +188,18 @@ fn interim_closure(
     }
 }
 
-/// The two entry points' shared body.
+/// The entry points' shared body (`views`: a turnaround's extra views, empty for one view).
 ///
 /// # Safety
-/// `ctx`, `sketch`, `joints`, `dict`, `pose_opts`, `fit_opts`, `out` are NULL or valid for the
-/// documented lengths during the call; `progress` and `interim` are NULL or valid callbacks for
-/// `user`.
+/// `ctx`, `sketch`, `joints`, `dict`, `pose_opts`, `fit_opts`, `out` and every view's `sketch` and
+/// `joints` are NULL or valid for the documented lengths during the call; `progress` and
+/// `interim` are NULL or valid callbacks for `user`.
 #[allow(clippy::too_many_arguments)]
-unsafe fn run(
+pub(crate) unsafe fn run(
     ctx: *const skb_context,
     sketch: *const skb_image,
     joints: *const skb_joints2d,
+    views: &[skb_view_input],
     dict: *const skb_pose_dictionary,
     pose_opts: *const skb_pose_options,
     fit_opts: *const skb_fit_options,
@@ -204,29 +208,43 @@ unsafe fn run(
     user: *mut c_void,
     out: *mut *mut skb_result,
 ) -> skb_status {
-    // SAFETY: forwarded contract: `ctx`, `sketch`, `joints`, `dict`, `pose_opts`, `fit_opts`, `out` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
+    // SAFETY: forwarded contract: `ctx`, `sketch`, `joints`, `dict`, `pose_opts`, `fit_opts`, `out` and the
+    // views' pointers are NULL or valid for the documented lengths during the call; the ptr.rs helpers check
+    // NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));
             let colour = try_status!(view_of(sketch));
             let gray = try_core!(to_gray(&colour));
+            let mut view_images = Vec::with_capacity(views.len());
+            for v in views {
+                let label = try_status!(view_label(v.label));
+                let colour = try_status!(view_of(v.sketch));
+                let gray = try_core!(to_gray(&colour));
+                view_images.push((label, colour, gray, opt_ref(v.joints)));
+            }
             let out = try_status!(out_slot(out));
             let figure_options = FigureOptions::default();
-            let net;
-            let source: Box<dyn JointsSource + '_> = match opt_ref(joints) {
-                Some(j) => Box::new(GivenJoints(joints_in(j))),
-                None => {
-                    net = try_core!(LandmarkNet::embedded());
-                    Box::new(FigureJoints {
-                        model: try_core!(embedded_detector(ctx)),
-                        net: &net,
-                        options: &figure_options,
-                        colour: Some(colour),
-                    })
+            // The detector and landmark network, loaded when a view has no joints.
+            let detection: OnceCell<Result<(&Model, LandmarkNet), Error>> = OnceCell::new();
+            let source_for = |given: Option<&skb_joints2d>, colour| -> Result<Box<dyn JointsSource + '_>, Error> {
+                if let Some(j) = given {
+                    return Ok(Box::new(GivenJoints(joints_in(j))));
                 }
+                let loaded = detection.get_or_init(|| Ok((embedded_detector(ctx)?, LandmarkNet::embedded()?)));
+                let (model, net) = loaded.as_ref().map_err(|e| Error::CorruptData(format!("the embedded detector: {e}")))?;
+                Ok(Box::new(FigureJoints { model, net, options: &figure_options, colour: Some(colour) }))
             };
+            let source = try_core!(source_for(opt_ref(joints), colour));
+            let mut view_sources = Vec::with_capacity(view_images.len());
+            for (_, colour, _, given) in &view_images {
+                view_sources.push(try_core!(source_for(*given, *colour)));
+            }
+            let view_inputs: Vec<ViewInput> = view_images
+                .iter()
+                .zip(&view_sources)
+                .map(|((label, _, gray, _), source)| ViewInput { label: *label, sketch: gray, source: source.as_ref() })
+                .collect();
             let embedded;
             let d = match opt_ref(dict) {
                 Some(d) => &d.inner,
@@ -246,7 +264,7 @@ unsafe fn run(
             let mut cb = progress_closure(progress, user);
             let mut show = interim.map(|f| interim_closure(f, user, Arc::clone(&ctx.model)));
             let show = show.as_mut().map(|c| c as &mut dyn FnMut(&InterimBody));
-            let inner = try_core!(run_pipeline_progressive(&ctx.model, d, &gray, source.as_ref(), &options, &mut cb, show));
+            let inner = try_core!(run_pipeline_views(&ctx.model, d, &gray, source.as_ref(), &view_inputs, &options, &mut cb, show));
             give(out, skb_result { model: Arc::clone(&ctx.model), inner })
         }
     }

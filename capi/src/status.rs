@@ -62,6 +62,9 @@ pub enum skb_status {
     SKB_ERR_JOINT_OUTSIDE_IMAGE = 24,
     /// The sketch has no edges (blank, uniform or too faint).
     SKB_ERR_BLANK_IMAGE = 25,
+    /// A turnaround's views do not show one character in one pose (their joints disagree, match
+    /// only upside down, or a side view is drawn facing the other way than its label).
+    SKB_ERR_VIEWS_DISAGREE = 26,
 }
 
 impl From<&Error> for skb_status {
@@ -90,6 +93,7 @@ impl From<&Error> for skb_status {
             Error::ImageTooSmall { .. } => SKB_ERR_IMAGE_TOO_SMALL,
             Error::JointOutsideImage { .. } => SKB_ERR_JOINT_OUTSIDE_IMAGE,
             Error::BlankImage { .. } => SKB_ERR_BLANK_IMAGE,
+            Error::ViewsDisagree(_) => SKB_ERR_VIEWS_DISAGREE,
         }
     }
 }
@@ -125,6 +129,7 @@ pub extern "C" fn skb_status_str(status: u32) -> *const c_char {
         23 => b"retired: no 2-D joints given and no joint detector available\0",
         24 => b"a 2-D joint lies outside the image\0",
         25 => b"the sketch has no edges (blank or too faint)\0",
+        26 => b"the views do not show one character in one pose\0",
         _ => b"unknown status\0",
     };
     s.as_ptr().cast()
@@ -138,11 +143,11 @@ mod tests {
     fn every_status_has_its_own_text() {
         // SAFETY: skb_status_str returns a static NUL-terminated string for every code (never NULL).
         let text = |c: u32| unsafe { std::ffi::CStr::from_ptr(skb_status_str(c)) }.to_str().unwrap().to_owned();
-        let all: Vec<String> = (0..=25).map(text).collect();
+        let all: Vec<String> = (0..=26).map(text).collect();
         let unique: std::collections::HashSet<_> = all.iter().collect();
         assert_eq!(unique.len(), all.len());
         assert!(!all.contains(&"unknown status".to_owned()));
-        assert_eq!(text(26), "unknown status");
+        assert_eq!(text(27), "unknown status");
         assert_eq!(std::mem::size_of::<skb_status>(), 4);
     }
 }

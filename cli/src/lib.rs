@@ -13,6 +13,7 @@ pub mod ranges;
 pub mod rig_args;
 pub mod run;
 pub mod search_args;
+pub mod sheet;
 
 /// A failure to report: one line of text.
 pub struct CliError(pub String);

@@ -1,6 +1,7 @@
 //! `sketchbody run SKETCH --out DIR [--joints JOINTS.json] [--gender m|f] ...`: the main job.
 //! A turnaround adds its other views: `--view side=SIDE.png [--view-joints side=SIDE.json]
-//! [--view back=BACK.png ...]` (one body and one pose from every view; SKETCH is the front view).
+//! [--view back=BACK.png ...]` (one body and one pose from every view; SKETCH is the front view),
+//! or the whole sheet in one image: `--sheet [--views front,side,back]` (module `sheet`).
 //! Edges → 2-D joints → 3-D pose and camera → shape fit, then every output is written into a
 //! staging folder and moved into DIR together (`fsutil::StagingDir`): a failed, cancelled or
 //! interrupted (Ctrl-C) run leaves no file of its own in DIR.
@@ -40,6 +41,7 @@ use sketchbody::pipeline::{
 };
 use sketchbody::pose::dict_io;
 use sketchbody::render::preview::{compare_layout, compare_preview, SurfaceTexture};
+use sketchbody::skeleton::Joints2;
 use sketchbody::view::ViewLabel;
 
 use crate::detect::NO_FIGURE_HINT;
@@ -120,6 +122,16 @@ pub struct Args {
     /// the detector's.
     #[arg(long = "view-joints", value_name = "LABEL=JSON")]
     view_joints: Vec<String>,
+    /// SKETCH is a model sheet: its figures side by side (left to right, blank space between
+    /// them) are the views of one character in one pose. Each figure's view is the detector's
+    /// reading of its facing, or the labels of --views; --joints (the front figure's) and
+    /// --view-joints files are in the sheet's pixels.
+    #[arg(long, conflicts_with = "views")]
+    sheet: bool,
+    /// The views of a --sheet's figures in reading order, as front,side,back (labels front, side,
+    /// side_left, back).
+    #[arg(long = "views", value_name = "LABELS", requires = "sheet")]
+    sheet_views: Option<String>,
 }
 
 /// One `--view` of the command line with its `--view-joints`.
@@ -172,25 +184,100 @@ fn view_args(views: &[String], joints: &[String]) -> Result<Vec<ViewArg>, CliErr
     Ok(out)
 }
 
-/// The joints source of an image: the given joints file, else the detectors on `rgb`.
+/// The joints source of an image: its given joints, else the detectors on `rgb`.
 fn source_for<'a>(
-    joints: Option<&PathBuf>,
+    joints: Option<&(String, Joints2)>,
     rgb: &'a sketchbody::image::RgbImage,
     detectors: Option<(&'a Model, &'a LandmarkNet)>,
     options: &'a FigureOptions,
 ) -> Result<Box<dyn JointsSource + 'a>, CliError> {
     Ok(match (joints, detectors) {
-        (Some(p), _) => Box::new(GivenJoints(load_joints2d(p)?)),
+        (Some((_, j)), _) => Box::new(GivenJoints(*j)),
         (None, Some((model, net))) => Box::new(FigureJoints { model, net, options, colour: Some(rgb.view()) }),
         (None, None) => return Err(CliError("internal: the detector was not loaded".into())),
     })
 }
 
-/// A loaded view: its arguments, colour and gray images.
+/// A loaded view: its label, where it came from (for the report), its colour and gray images
+/// and its joints file's joints (in its pixels) when given.
 struct LoadedView {
-    arg: ViewArg,
+    label: ViewLabel,
+    image: String,
     rgb: sketchbody::image::RgbImage,
     gray: sketchbody::image::GrayImage,
+    joints: Option<(String, Joints2)>,
+}
+
+/// The run's images: the front view and the extra views (`--view` files or a `--sheet`'s figures).
+struct Inputs {
+    front: LoadedView,
+    views: Vec<LoadedView>,
+}
+
+/// Loads `--joints` or a view's joints file: its display name and joints.
+fn joints_file(p: &std::path::Path) -> Result<(String, Joints2), CliError> {
+    Ok((format!("`{}`", p.display()), load_joints2d(p)?))
+}
+
+/// The front sketch and the `--view` images with their joint files.
+fn load_views(a: &Args) -> Result<Inputs, CliError> {
+    let rgb = load_rgb_image(&a.sketch)?;
+    let gray = to_gray(&rgb.view())?;
+    let joints = a.joints.as_deref().map(joints_file).transpose()?;
+    let front = LoadedView { label: ViewLabel::Front, image: format!("`{}`", a.sketch.display()), rgb, gray, joints };
+    let views = view_args(&a.views, &a.view_joints)?
+        .into_iter()
+        .map(|arg| {
+            let rgb = load_rgb_image(&arg.image).map_err(|e| CliError(format!("{}: {e}", arg.image.display())))?;
+            let gray = to_gray(&rgb.view())?;
+            let joints = arg.joints.as_deref().map(joints_file).transpose()?;
+            Ok(LoadedView { label: arg.label, image: format!("`{}`", arg.image.display()), rgb, gray, joints })
+        })
+        .collect::<Result<_, CliError>>()?;
+    Ok(Inputs { front, views })
+}
+
+/// A `--sheet`'s figures as the front view and the extra views; joint files (in the sheet's
+/// pixels) moved into each figure's crop.
+fn load_sheet(
+    a: &Args,
+    detectors: Option<(&Model, &LandmarkNet)>,
+    figure_options: &FigureOptions,
+    dict: &sketchbody::pose::Dictionary,
+) -> Result<Inputs, CliError> {
+    let sheet = load_rgb_image(&a.sketch)?;
+    let labels = a.sheet_views.as_deref().map(crate::sheet::parse_views).transpose()?;
+    let crops = crate::sheet::sheet_views(&a.sketch, &sheet, labels.as_deref(), detectors, figure_options, dict)?;
+    let mut files: Vec<(ViewLabel, PathBuf)> = a.joints.iter().map(|p| (ViewLabel::Front, p.clone())).collect();
+    for j in &a.view_joints {
+        files.push(labelled("--view-joints", j)?);
+    }
+    let mut front = None;
+    let mut views = Vec::new();
+    for c in crops {
+        let joints = match files.iter().find(|(l, _)| *l == c.label) {
+            Some((_, p)) => {
+                let (name, j) = joints_file(p)?;
+                Some((format!("{name} (sheet pixels)"), c.from_sheet(&j)))
+            }
+            None => None,
+        };
+        let image = format!("`{}` ({} figure, {})", a.sketch.display(), c.label.name(), c.span());
+        let gray = to_gray(&c.rgb.view())?;
+        let v = LoadedView { label: c.label, image, rgb: c.rgb, gray, joints };
+        if v.label == ViewLabel::Front {
+            front = Some(v);
+        } else {
+            views.push(v);
+        }
+    }
+    for (l, p) in &files {
+        if *l != ViewLabel::Front && !views.iter().any(|v| v.label == *l) {
+            return Err(CliError(format!("--view-joints {}: the sheet has no {} view", p.display(), l.name())));
+        }
+    }
+    let front = front.ok_or_else(|| CliError(format!("{}: the sheet has no front view", a.sketch.display())))?;
+    Ok(Inputs { front, views })
 }
 
 /// Set by Ctrl-C (see [`catch_interrupt`]).
@@ -247,7 +334,7 @@ fn report(
     a: &Args,
     opts: &PipelineOptions,
     r: &PipelineResult,
-    views: &[LoadedView],
+    inputs: &Inputs,
     size: (usize, usize),
     firsts: &[(InterimStage, f64)],
     load_s: f64,
@@ -256,8 +343,8 @@ fn report(
     let mut s = String::new();
     let f = &opts.fit;
     let _ = writeln!(s, "# sketchbody run\n");
-    let _ = writeln!(s, "- sketch: `{}` ({}×{} px)", a.sketch.display(), size.0, size.1);
-    let joints = a.joints.as_ref().map_or("none".to_string(), |p| format!("`{}`", p.display()));
+    let _ = writeln!(s, "- sketch: {} ({}×{} px)", inputs.front.image, size.0, size.1);
+    let joints = inputs.front.joints.as_ref().map_or("none", |(name, _)| name.as_str());
     let _ = writeln!(s, "- 2-D joints: {joints} (source: {})", r.joints_source);
     if let Some(f) = &r.detection {
         let _ = writeln!(
@@ -271,17 +358,26 @@ fn report(
             if f.low_confidence { format!("; **{LOW_CONFIDENCE_HINT}**") } else { String::new() }
         );
     }
-    if !views.is_empty() {
+    if !inputs.views.is_empty() {
         let _ = writeln!(s, "- views: {}: one body and one pose fitted to all of them", view_names(r));
-        for (v, vr) in views.iter().zip(&r.views) {
-            let joints = v.arg.joints.as_ref().map_or("detected".to_string(), |p| format!("`{}`", p.display()));
+        if a.sheet {
+            let how = if a.sheet_views.is_some() { "as --views labels them" } else { "by the detector's facing" };
+            let _ =
+                writeln!(s, "- sheet: {} figures found left to right, their views named {how}", 1 + inputs.views.len());
+        }
+        for (v, vr) in inputs.views.iter().zip(&r.views) {
+            let joints = match (&v.joints, vr.swapped) {
+                (Some((name, _)), _) => name.as_str(),
+                (None, true) => "detected, left and right swapped (that labelling fits the shared pose better)",
+                (None, false) => "detected",
+            };
             let _ = writeln!(
                 s,
-                "- {} view: `{}` ({}×{} px), 2-D joints {joints} (source: {}), drawn at {:.2}× the front view's size, \
+                "- {} view: {} ({}×{} px), 2-D joints {joints} (source: {}), drawn at {:.2}× the front view's size, \
                  joints {:.1}% of the figure's height off the shared pose, {} of the fitted outline in this view within \
                  reach of a stroke",
                 vr.label.name(),
-                v.arg.image.display(),
+                v.image,
                 v.gray.width(),
                 v.gray.height(),
                 vr.joints_source,
@@ -481,16 +577,6 @@ pub fn run(a: Args) -> Result<(), CliError> {
         gender: parse_gender(a.gender.as_deref())?,
         ..a.fit.pipeline_options(a.fit.options()?, a.mean_shape)
     };
-    let sketch_rgb = load_rgb_image(&a.sketch)?;
-    let sketch = to_gray(&sketch_rgb.view())?;
-    let loaded: Vec<LoadedView> = view_args(&a.views, &a.view_joints)?
-        .into_iter()
-        .map(|arg| {
-            let rgb = load_rgb_image(&arg.image).map_err(|e| CliError(format!("{}: {e}", arg.image.display())))?;
-            let gray = to_gray(&rgb.view())?;
-            Ok(LoadedView { arg, rgb, gray })
-        })
-        .collect::<Result<_, CliError>>()?;
     let rig_options = a.rig.options()?;
     let figure_options = FigureOptions {
         backend: a.detector,
@@ -498,19 +584,41 @@ pub fn run(a: Args) -> Result<(), CliError> {
         average_agreement: a.average_agreement,
         ..FigureOptions::default()
     };
-    let detecting = a.joints.is_none() || loaded.iter().any(|v| v.arg.joints.is_none());
-    let detector = detecting.then(Model::embedded).transpose()?;
-    let net = detecting.then(LandmarkNet::embedded).transpose()?;
+    let dict = dict_io::embedded()?;
+    // A sheet is labelled by the detector's facing unless --views names its views.
+    let sheet_detection = a.sheet && a.sheet_views.is_none();
+    let mut detector = None;
+    let mut net = None;
+    if sheet_detection {
+        detector = Some(Model::embedded()?);
+        net = Some(LandmarkNet::embedded()?);
+    }
+    let inputs = if a.sheet {
+        load_sheet(&a, detector.as_ref().zip(net.as_ref()), &figure_options, &dict)?
+    } else {
+        load_views(&a)?
+    };
+    if inputs.front.joints.is_none() || inputs.views.iter().any(|v| v.joints.is_none()) {
+        if detector.is_none() {
+            detector = Some(Model::embedded()?);
+        }
+        if net.is_none() {
+            net = Some(LandmarkNet::embedded()?);
+        }
+    }
     let detectors = detector.as_ref().zip(net.as_ref());
-    let source = source_for(a.joints.as_ref(), &sketch_rgb, detectors, &figure_options)?;
-    let view_sources: Vec<Box<dyn JointsSource + '_>> = loaded
+    let (sketch_rgb, sketch) = (&inputs.front.rgb, &inputs.front.gray);
+    let source = source_for(inputs.front.joints.as_ref(), sketch_rgb, detectors, &figure_options)?;
+    let view_sources: Vec<Box<dyn JointsSource + '_>> = inputs
+        .views
         .iter()
-        .map(|v| source_for(v.arg.joints.as_ref(), &v.rgb, detectors, &figure_options))
+        .map(|v| source_for(v.joints.as_ref(), &v.rgb, detectors, &figure_options))
         .collect::<Result<_, _>>()?;
-    let view_inputs: Vec<ViewInput> = loaded
+    let view_inputs: Vec<ViewInput> = inputs
+        .views
         .iter()
         .zip(&view_sources)
-        .map(|(v, s)| ViewInput { label: v.arg.label, sketch: &v.gray, source: s.as_ref() })
+        .map(|(v, s)| ViewInput { label: v.label, sketch: &v.gray, source: s.as_ref() })
         .collect();
     // Fail on output sizes that cannot be drawn, and on an unwritable output folder, before
     // the work.
@@ -518,7 +626,6 @@ pub fn run(a: Args) -> Result<(), CliError> {
     check_texture_size(a.texture_size)?;
     let staging = StagingDir::new(&a.out).map_err(|e| CliError(format!("cannot write the output folder: {e}")))?;
     let model = BodyModel::embedded()?;
-    let dict = dict_io::embedded()?;
     let load_s = t_all.elapsed().as_secs_f64();
     catch_interrupt();
     let mut bar = Bar::new(a.quiet);
@@ -528,7 +635,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let result = run_pipeline_views(
         &model,
         &dict,
-        &sketch,
+        sketch,
         source.as_ref(),
         &view_inputs,
         &opts,
@@ -545,10 +652,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
     })?;
     let t_write = Instant::now();
     let tris = r.mesh.triangles();
-    let over = overlay(&sketch, &r.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &r.pose.camera)?;
+    let over = overlay(sketch, &r.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &r.pose.camera)?;
     let texture_img = match (&r.mesh.uvs, a.no_texture) {
         (Some(uvs), false) => Some((
-            project_sketch(&sketch_rgb, &r.posed_vertices, &r.mesh.quads, uvs, &r.pose.camera, a.texture_size)?.0,
+            project_sketch(sketch_rgb, &r.posed_vertices, &r.mesh.quads, uvs, &r.pose.camera, a.texture_size)?.0,
             uvs,
         )),
         _ => None,
@@ -556,7 +663,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let surface =
         texture_img.as_ref().map(|(img, uvs)| SurfaceTexture::for_quads(img, &r.mesh.quads, uvs)).transpose()?;
     let views =
-        compare_preview(&sketch_rgb, &r.posed_vertices, &tris, surface.as_ref(), &r.pose.camera, a.preview_size)?;
+        compare_preview(sketch_rgb, &r.posed_vertices, &tris, surface.as_ref(), &r.pose.camera, a.preview_size)?;
     let keys = if a.rig.shape_keys() { shape_keys(&model, &r)? } else { Vec::new() };
     let scene = RigScene::build_with_shape_keys(model.rig(), &r.mesh, &r.ik_pose, &rig_options, &keys)?;
     let texture = texture_img.as_ref().map(|(img, _)| encode_png(&img.view())).transpose()?;
@@ -576,7 +683,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     pose_bytes.push(b'\n');
     write_atomic(&staging.path("pose3d.json"), &pose_bytes)?;
     save_png(&over.view(), &staging.path("overlay.png"))?;
-    for (v, vr) in loaded.iter().zip(&r.views) {
+    for (v, vr) in inputs.views.iter().zip(&r.views) {
         let name = vr.label.name();
         let over = overlay(&v.gray, &vr.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &vr.camera)?;
         save_png(&over.view(), &staging.path(&format!("overlay_{name}.png")))?;
@@ -587,7 +694,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         &a,
         &opts,
         &r,
-        &loaded,
+        &inputs,
         (sketch.width(), sketch.height()),
         &firsts,
         load_s,

@@ -24,7 +24,7 @@ from .context import AUTO, FEMALE, MALE, Context, default_context
 from .detect import Detection, DetectOptions, Detector, Facing, FigureInfo, detect
 from .images import canny, gaussian_blur, load_image, load_rgb_image, render_sketch, write_png
 from .mesh import ExportOptions, Mesh, Rig, quat_to_matrix
-from .pipeline import FitOptions, Result, fit_shape, run_pipeline
+from .pipeline import VIEW_LABELS, FitOptions, Result, View, ViewInfo, fit_shape, run_pipeline
 from .pose import (JOINT_NAMES, LIMB_NAMES, PROPORTION_GROUPS, Alternative, Camera, Joints2D, Pose3D,
                    PoseDictionary, PoseEstimate, PoseOptions, estimate_pose, estimate_pose_alternatives, refine_pose)
 
@@ -51,5 +51,5 @@ __all__ = [
     "Joints2D", "LibraryNotFoundError", "Mesh", "NoFigure", "Pose3D", "PoseDictionary", "PoseEstimate", "PoseOptions", "Result",
     "Rig", "SketchbodyError", "Status", "canny", "default_context", "detect", "estimate_pose", "estimate_pose_alternatives", "fit_shape",
     "gaussian_blur", "library_path", "load_image", "load_rgb_image", "quat_to_matrix", "refine_pose",
-    "render_sketch", "run_pipeline", "status_text", "version", "write_png",
+    "render_sketch", "run_pipeline", "status_text", "version", "write_png", "VIEW_LABELS", "View", "ViewInfo",
 ]

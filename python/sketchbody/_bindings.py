@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "2f03cc9dc2fcf3d94985c6615128a64c8d232e64c515ef702379478bc2431a94"
+HEADER_SHA256 = "4bc227d537c029304bdae12d9117faec4b6ead9c4d83c145e8344d24b9b971e1"
 
 # ---- constants (#define) ----
 
@@ -173,6 +173,14 @@ SKB_INTERIM_MEAN_SHAPE = 0
 SKB_INTERIM_DECIDING_FIT = 1
 # Number of body parts `skb_result_part_support` reports.
 SKB_NUM_BODY_PARTS = 6
+# View label: the front view (yaw 0°), the pipeline's main sketch; not accepted as an extra view.
+SKB_VIEW_FRONT = 0
+# View label: the side view (yaw +90°), the character's right side, facing image right.
+SKB_VIEW_SIDE = 1
+# View label: the other side view (yaw −90°), the character's left side, facing image left.
+SKB_VIEW_SIDE_LEFT = 2
+# View label: the back view (yaw 180°).
+SKB_VIEW_BACK = 3
 # Largest texture side `skb_*_project_texture` accept, texels.
 SKB_MAX_TEXTURE_SIZE = 4096
 # The texture side `sketchbody run` uses by default (`--texture-size`), texels.
@@ -256,6 +264,10 @@ CONSTANTS = {
     "SKB_INTERIM_MEAN_SHAPE": 0,
     "SKB_INTERIM_DECIDING_FIT": 1,
     "SKB_NUM_BODY_PARTS": 6,
+    "SKB_VIEW_FRONT": 0,
+    "SKB_VIEW_SIDE": 1,
+    "SKB_VIEW_SIDE_LEFT": 2,
+    "SKB_VIEW_BACK": 3,
     "SKB_MAX_TEXTURE_SIZE": 4096,
     "SKB_DEFAULT_TEXTURE_SIZE": 1024,
     "SKB_SKETCH_STYLE_RANDOM": 0,
@@ -338,6 +350,9 @@ SKB_ERR_NO_JOINTS = 23
 SKB_ERR_JOINT_OUTSIDE_IMAGE = 24
 # The sketch has no edges (blank, uniform or too faint).
 SKB_ERR_BLANK_IMAGE = 25
+# A turnaround's views do not show one character in one pose (their joints disagree, match
+# only upside down, or a side view is drawn facing the other way than its label).
+SKB_ERR_VIEWS_DISAGREE = 26
 
 STATUS_NAMES = {
     0: "SKB_OK",
@@ -366,6 +381,7 @@ STATUS_NAMES = {
     23: "SKB_ERR_NO_JOINTS",
     24: "SKB_ERR_JOINT_OUTSIDE_IMAGE",
     25: "SKB_ERR_BLANK_IMAGE",
+    26: "SKB_ERR_VIEWS_DISAGREE",
 }
 
 # ---- opaque handles (use through POINTER(...)) ----
@@ -587,6 +603,38 @@ class skb_facing_info(ctypes.Structure):
     ]
 
 
+# One extra view of a turnaround for `skb_run_pipeline_views`: its label (`SKB_VIEW_SIDE`,
+# `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`), its sketch (1, 3 or 4 channels, dark strokes on light
+# paper; any size: views drawn at another scale are scaled to the front by their joints) and its
+# 2-D joints in that image's pixels (NULL: detected). The pointers are borrowed for the call only.
+# Plain data; its layout is part of the ABI.
+class skb_view_input(ctypes.Structure):
+    _fields_ = [
+        ("label", ctypes.c_uint32),  # `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`.
+        ("reserved", ctypes.c_uint32),  # Set to 0.
+        ("sketch", ctypes.POINTER(skb_image)),  # The view's sketch (not NULL).
+        ("joints", ctypes.POINTER(skb_joints2d)),  # The view's 2-D joints, pixels of its sketch; NULL: the context's detector finds them.
+    ]
+
+
+# What a turnaround run made of one extra view (`skb_result_view`). Plain data; its layout is
+# part of the ABI.
+class skb_view_info(ctypes.Structure):
+    _fields_ = [
+        ("label", ctypes.c_uint32),  # The view's label (`SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`).
+        ("joints_detected", ctypes.c_uint32),  # 1 when the view's joints were detected, 0 when given.
+        ("joints_swapped", ctypes.c_uint32),  # 1 when the detected joints are the detector's other labelling (left and right swapped),
+        ("reserved", ctypes.c_uint32),  # 0.
+        ("joints", skb_joints2d),  # The 2-D joints used in the view, pixels of its sketch.
+        ("camera", skb_camera),  # The view's camera refitted to the body: projects the result's posed vertices and
+        ("residual", ctypes.c_double),  # RMS distance of the view's joints from the shared pose seen through its camera, fraction
+        ("scale_ratio", ctypes.c_double),  # The view's drawn size over the front view's (1: the same scale).
+        ("edge_support", ctypes.c_double),  # Share of the fitted outline in this view within reach of a stroke, 0..1 (NaN for the
+        ("facing_as_labelled_deg", ctypes.c_double),  # A side view: mean angle between its triangulated limbs and the front estimate's, degrees,
+        ("facing_other_side_deg", ctypes.c_double),  # The same with the view taken as the other side; NaN as above. Much lower than
+    ]
+
+
 # C field types of each struct (the drift test compiles offsetof/sizeof checks from these).
 STRUCT_FIELDS = {
     "skb_image": (
@@ -640,6 +688,25 @@ STRUCT_FIELDS = {
         ("probabilities", "double[4]"),
         ("alternative_score", "double"),
         ("alternative", "struct skb_joints2d"),
+    ),
+    "skb_view_input": (
+        ("label", "uint32_t"),
+        ("reserved", "uint32_t"),
+        ("sketch", "const struct skb_image *"),
+        ("joints", "const struct skb_joints2d *"),
+    ),
+    "skb_view_info": (
+        ("label", "uint32_t"),
+        ("joints_detected", "uint32_t"),
+        ("joints_swapped", "uint32_t"),
+        ("reserved", "uint32_t"),
+        ("joints", "struct skb_joints2d"),
+        ("camera", "struct skb_camera"),
+        ("residual", "double"),
+        ("scale_ratio", "double"),
+        ("edge_support", "double"),
+        ("facing_as_labelled_deg", "double"),
+        ("facing_other_side_deg", "double"),
     ),
 }
 
@@ -3707,6 +3774,106 @@ FUNCTIONS["skb_result_repose_joints"] = (
         ("dict", "const struct skb_pose_dictionary *"),
         ("joints", "const struct skb_joints2d *"),
         ("outcome", "uint32_t *"),
+    ),
+)
+
+# `skb_run_pipeline_progressive` on a turnaround: `sketch` and `joints` are the front view,
+# `views` (`view_count` entries; NULL when 0) the same character in the same pose from the side,
+# the other side or the back. The views share one body and one pose: every view's joints enter
+# the 3-D pose (depth from a side view), every view's outline the shape fit; each view has the
+# front camera turned by its label's yaw, with its own scale and position. With `view_count` 0
+# this is `skb_run_pipeline_progressive`. Read each view with `skb_result_view` and the run's
+# warnings (views that agree only roughly, a view little supported by its strokes) with
+# `skb_result_copy_view_warnings`. Arguments, ownership, threading, progress and cancel as
+# `skb_run_pipeline_progressive` (the interim bodies are the front view's); the views' images
+# and joints are only read during the call. Errors: `skb_run_pipeline`'s for any view's image
+# and joints; a label not `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`, or one given
+# twice (`SKB_ERR_OUT_OF_RANGE`); views that do not show one character in one pose (their joints
+# miss the shared pose by more than 12 % of the figure's height, match it only upside down, or a
+# side view drawn facing the other way than its label: `SKB_ERR_VIEWS_DISAGREE`, the message
+# names the view and the reason; a turnaround is never silently fitted to the front alone).
+FUNCTIONS["skb_run_pipeline_views"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_context),
+        ctypes.POINTER(skb_image),
+        ctypes.POINTER(skb_joints2d),
+        ctypes.POINTER(skb_view_input),
+        ctypes.c_size_t,
+        ctypes.POINTER(skb_pose_dictionary),
+        ctypes.POINTER(skb_pose_options),
+        ctypes.POINTER(skb_fit_options),
+        skb_progress_fn,
+        skb_interim_fn,
+        ctypes.c_void_p,
+        ctypes.POINTER(ctypes.POINTER(skb_result)),
+    ],
+    "skb_status",
+    (
+        ("ctx", "const struct skb_context *"),
+        ("sketch", "const struct skb_image *"),
+        ("joints", "const struct skb_joints2d *"),
+        ("views", "const struct skb_view_input *"),
+        ("view_count", "size_t"),
+        ("dict", "const struct skb_pose_dictionary *"),
+        ("pose_opts", "const struct skb_pose_options *"),
+        ("fit_opts", "const struct skb_fit_options *"),
+        ("progress", "skb_progress_fn"),
+        ("interim", "skb_interim_fn"),
+        ("user", "void *"),
+        ("out", "struct skb_result **"),
+    ),
+)
+
+# The number of extra views of a result into `*count` (0 for a one-view run).
+FUNCTIONS["skb_result_view_count"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.POINTER(ctypes.c_size_t),
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("count", "size_t *"),
+    ),
+)
+
+# Extra view `index` (0 .. `skb_result_view_count` − 1, in the order given) into `*out`.
+# Errors: `index` out of range (`SKB_ERR_OUT_OF_RANGE`).
+FUNCTIONS["skb_result_view"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.c_size_t,
+        ctypes.POINTER(skb_view_info),
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("index", "size_t"),
+        ("out", "struct skb_view_info *"),
+    ),
+)
+
+# The run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing newline;
+# empty when there are none or for a one-view run): their byte length without the terminating
+# NUL into `*len` (may be NULL) and, when `dst` is not NULL, the text NUL-terminated into `dst`
+# (`dst_len` ≥ length + 1).
+FUNCTIONS["skb_result_copy_view_warnings"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.POINTER(ctypes.c_char),
+        ctypes.c_size_t,
+        ctypes.POINTER(ctypes.c_size_t),
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("dst", "char *"),
+        ("dst_len", "size_t"),
+        ("len", "size_t *"),
     ),
 )
 

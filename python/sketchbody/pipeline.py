@@ -18,6 +18,63 @@ from .pose import REPOSE_OUTCOMES, Camera, Joints2D, PoseEstimate, PoseOptions, 
 
 _WHICH = {"rest": B.SKB_JOINTS_REST, "posed": B.SKB_JOINTS_POSED, "estimated": B.SKB_JOINTS_ESTIMATED}
 
+#: Labels of a turnaround's extra views (`View.label`) and their library codes.
+VIEW_LABELS = {"side": B.SKB_VIEW_SIDE, "side_left": B.SKB_VIEW_SIDE_LEFT, "back": B.SKB_VIEW_BACK}
+_VIEW_NAMES = {code: name for name, code in VIEW_LABELS.items()}
+
+
+@dataclasses.dataclass
+class View:
+    """One extra view of a turnaround for run_pipeline(views=...): `label` "side" (the
+    character's right side, facing image right), "side_left" or "back"; `sketch` a numpy uint8
+    image or a PNG/JPEG path; `joints` its 2-D joints in that image's pixels (as run_pipeline's
+    `joints`; None: detected)."""
+
+    label: str
+    sketch: object
+    joints: object = None
+
+
+@dataclasses.dataclass
+class ViewInfo:
+    """What a turnaround run made of one extra view: its label, the 2-D joints used
+    (Joints2D, detected or given; `joints_swapped`: the detector's other left/right labelling,
+    which fits the shared pose better), its Camera (projects Result.vertices() onto the view's
+    sketch), `residual` (RMS distance of its joints from the shared pose, fraction of the
+    figure's height), `scale_ratio` (its drawn size over the front's), `edge_support` (share of
+    the fitted outline in the view near a stroke) and, for a side view, how its limbs agree with
+    the front's pose as labelled and as the other side (degrees; None for a back view)."""
+
+    label: str
+    joints: Joints2D
+    joints_detected: bool
+    joints_swapped: bool
+    camera: Camera
+    residual: float
+    scale_ratio: float
+    edge_support: float
+    facing_as_labelled_deg: Optional[float]
+    facing_other_side_deg: Optional[float]
+
+
+def _view_inputs(views):
+    """The C view inputs of `views` (View objects) and what must stay alive with them."""
+    views = list(views or [])
+    arr = (B.skb_view_input * max(len(views), 1))()
+    keep = []
+    for k, v in enumerate(views):
+        if not isinstance(v, View):
+            raise TypeError(f"views[{k}] must be a View, not {type(v).__name__}")
+        if v.label not in VIEW_LABELS:
+            raise ValueError(f"views[{k}].label must be one of {sorted(VIEW_LABELS)}, not {v.label!r}")
+        img, img_keep = as_image(v.sketch, f"views[{k}].sketch")
+        j = None if v.joints is None else joints2d_arg(v.joints).to_struct()
+        keep += [img, img_keep, j]
+        arr[k].label = VIEW_LABELS[v.label]
+        arr[k].sketch = ctypes.pointer(img)
+        arr[k].joints = None if j is None else ctypes.pointer(j)
+    return arr, len(views), keep
+
 
 @dataclasses.dataclass
 class FitOptions(OptionsBase):
@@ -164,6 +221,30 @@ class Result(Handle):
         call("skb_result_joints2d", self._p, ctypes.byref(s))
         return Joints2D.from_struct(s)
 
+    def views(self):
+        """A turnaround's extra views (list of ViewInfo, in the order given; empty for one view)."""
+        n = ctypes.c_size_t()
+        call("skb_result_view_count", self._p, ctypes.byref(n))
+        out = []
+        for k in range(n.value):
+            v = B.skb_view_info()
+            call("skb_result_view", self._p, k, ctypes.byref(v))
+            deg = (lambda x: None if np.isnan(x) else float(x))
+            out.append(ViewInfo(_VIEW_NAMES[v.label], Joints2D.from_struct(v.joints), bool(v.joints_detected),
+                                bool(v.joints_swapped), Camera.from_struct(v.camera), v.residual, v.scale_ratio, v.edge_support,
+                                deg(v.facing_as_labelled_deg), deg(v.facing_other_side_deg)))
+        return out
+
+    def view_warnings(self):
+        """What the run warns about its views (list of str: views that agree only roughly, a view
+        little supported by its strokes); empty for one view."""
+        n = ctypes.c_size_t()
+        call("skb_result_copy_view_warnings", self._p, None, 0, ctypes.byref(n))
+        buf = ctypes.create_string_buffer(n.value + 1)
+        call("skb_result_copy_view_warnings", self._p, buf, len(buf), None)
+        text = buf.value.decode("utf-8")
+        return text.split("\n") if text else []
+
     def joints3d(self, which="posed"):
         """(15, 3) float64 3-D joints, metres: "rest" (the fitted shape's), "posed" (the
         mesh's) or "estimated" (the pose step's, a 1.75 m person)."""
@@ -281,7 +362,7 @@ class _Interim:
 
 
 def run_pipeline(sketch, joints=None, fit_options=None, pose_options=None, dictionary=None, progress=None,
-                 cancel=None, context=None, interim=None):
+                 cancel=None, context=None, interim=None, views=None):
     """The main job: Canny edges of `sketch` (numpy uint8 image or a PNG/JPEG path), the 2-D
     joints (`joints`: Joints2D, a sketchbody-joints2d JSON path, a dict or a (15, 2) array;
     None: the embedded detector finds them), the 3-D pose and camera, the shape fit and the
@@ -296,21 +377,29 @@ def run_pipeline(sketch, joints=None, fit_options=None, pose_options=None, dicti
     the calling thread: "mean_shape" (the mean body posed to the estimated pose, right after the
     pose step), then "deciding_fit" (the chosen gender's first fit, when the gender is decided
     by fitting); `vertices` is an (N, 3) float32 copy of the posed vertices (metres, model
-    frame, the Result's vertex order), e.g. to draw a first body at once."""
+    frame, the Result's vertex order), e.g. to draw a first body at once.
+
+    `views` (optional): a turnaround's extra views of the same character in the same pose
+    (View objects: side, side_left, back; `sketch` is then the front view). The views share one
+    body and pose (depth from a side view; every view's outline in the shape fit); read them back
+    with Result.views() and Result.view_warnings(). Views that do not show one character in one
+    pose raise an Error with status_name "SKB_ERR_VIEWS_DISAGREE"."""
     ctx = context or default_context()
     view, keep = as_image(sketch, "sketch")
     j = None if joints is None else joints2d_arg(joints).to_struct()
     d = None if dictionary is None else _dict_arg(dictionary)
     prog = Progress(progress, cancel, always=interim is not None)
     shown = _Interim(interim, prog)
+    view_arr, view_count, view_keep = _view_inputs(views)
     out = ctypes.POINTER(B.skb_result)()
     with options_handle(fit_options, FitOptions) as fh, options_handle(pose_options, PoseOptions) as ph:
         try:
-            call("skb_run_pipeline_progressive", ctx._p, ctypes.byref(view), None if j is None else ctypes.byref(j),
-                 None if d is None else d._p, ph, fh, prog.fn, shown.fn, None, ctypes.byref(out))
+            call("skb_run_pipeline_views", ctx._p, ctypes.byref(view), None if j is None else ctypes.byref(j),
+                 view_arr, view_count, None if d is None else d._p, ph, fh, prog.fn, shown.fn, None,
+                 ctypes.byref(out))
         finally:
             prog.reraise()
-    del keep
+    del keep, view_keep
     return Result(out)
 
 

@@ -318,7 +318,7 @@ pub fn run_pipeline_progressive(
 /// label ([`Error::OutOfRange`] `view label`); views whose joints disagree beyond
 /// [`views::VIEWS_REFUSE`], or only upside down, or a side view whose depth comes out mirrored
 /// (drawn facing the other way than its label: [`crate::pose::views::SideFacing::mirrored`])
-/// ([`Error::OutOfRange`] `views`); a view's joints with fewer than two
+/// ([`Error::ViewsDisagree`]); a view's joints with fewer than two
 /// visible or no height ([`Error::Degenerate`]).
 #[allow(clippy::too_many_arguments)]
 pub fn run_pipeline_views(
@@ -358,7 +358,7 @@ pub fn run_pipeline_views(
     let t = Instant::now();
     let (joints2d, detection) = source.figure(sketch, &edges, dict)?;
     joints::check_in_image(&joints2d, w, h)?;
-    let prepared = views::prepare(views, &options.canny, dict)?;
+    let mut prepared = views::prepare(views, &options.canny, dict)?;
     timings.joints = t.elapsed().as_secs_f64();
     p.report(0.04)?;
 
@@ -376,6 +376,10 @@ pub fn run_pipeline_views(
     let (pose, views_pose, view_warnings) = if prepared.is_empty() {
         (pose, None, Vec::new())
     } else {
+        match &options.given_pose {
+            Some(_) => views::choose_labelling(&mut prepared, |vj| view_pose_for(&pose, &joints2d, vj)),
+            None => views::choose_labelling(&mut prepared, |vj| triangulate(&pose, &joints2d, vj)),
+        }
         let vj = views::view_joints(&prepared);
         let (vp, facing) = match &options.given_pose {
             Some(_) => (view_pose_for(&pose, &joints2d, &vj)?, vec![None; vj.len()]),
@@ -479,6 +483,7 @@ pub fn run_pipeline_views(
                 scale_ratio: vp.scale_ratio[k],
                 facing: facing[k],
                 edge_support: support,
+                swapped: v.swapped,
             }
         })
         .collect();

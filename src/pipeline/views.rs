@@ -3,7 +3,7 @@
 //!
 //! Agreement: after the pose is triangulated from every view ([`crate::pose::views`]), a view
 //! whose joints miss their triangulated positions by more than [`VIEWS_REFUSE`] of its figure
-//! height is refused ([`Error::OutOfRange`] named `views`: another pose, another character or a
+//! height is refused ([`Error::ViewsDisagree`]: another pose, another character or a
 //! wrong label; the run does not fall back to the front view alone); above [`VIEWS_WARN`] the
 //! run goes on with a warning. Views drawn at different sizes are scaled to each other by their
 //! joints; a size ratio beyond [`SCALE_WARN`] is reported. A side view whose depth comes out
@@ -68,6 +68,9 @@ pub struct ViewResult {
     /// Share of the fitted outline in this view within reach of a stroke
     /// ([`crate::fit::FitResult::view_support`]; NaN for the mean shape).
     pub edge_support: f64,
+    /// The view's detected joints are the detector's other labelling (left and right swapped),
+    /// which fits the shared pose better; `false` for given joints.
+    pub swapped: bool,
 }
 
 /// A view's edges and joints before the pose.
@@ -76,6 +79,10 @@ pub(super) struct PreparedView {
     pub edges: GrayImage,
     pub joints2d: Joints2,
     pub joints_source: String,
+    /// The detector's other labelling (left and right swapped); `None` for given joints.
+    pub alternative: Option<Joints2>,
+    /// `joints2d` is the detector's other labelling ([`choose_labelling`]).
+    pub swapped: bool,
 }
 
 /// Checks the labels (no front, none twice) and every view's size, edges and joints. Errors:
@@ -101,11 +108,34 @@ pub(super) fn prepare(views: &[ViewInput], canny_params: &CannyParams, dict: &Di
             let (a, b) = (canny_params.threshold1, canny_params.threshold2);
             return Err(Error::BlankImage { width: w, height: h, low: a.min(b), high: a.max(b) });
         }
-        let (joints2d, _) = v.source.figure(v.sketch, &edges, dict)?;
+        let (joints2d, detection) = v.source.figure(v.sketch, &edges, dict)?;
         check_in_image(&joints2d, w, h)?;
-        out.push(PreparedView { label: v.label, edges, joints2d, joints_source: v.source.name().to_string() });
+        let alternative = detection.map(|d| d.facing.alternative);
+        let joints_source = v.source.name().to_string();
+        out.push(PreparedView { label: v.label, edges, joints2d, joints_source, alternative, swapped: false });
     }
     Ok(out)
+}
+
+/// Detected views take the detector's other labelling (left and right swapped) where it fits the
+/// shared pose better: the detector reads a faceless figure as facing the viewer, which labels a
+/// back view's sides, and often a side view's near and far limbs, the other way round. Each
+/// detected view in turn is posed by `pose` (the other views as chosen so far) with both
+/// labellings and keeps the one with the smaller residual; a labelling the views cannot be posed
+/// with counts as the worse. Given joints are never changed.
+pub(super) fn choose_labelling(views: &mut [PreparedView], pose: impl Fn(&[ViewJoints]) -> Result<ViewsPose>) {
+    for k in 0..views.len() {
+        let Some(other) = views[k].alternative else { continue };
+        let residual = |views: &[PreparedView]| pose(&view_joints(views)).map_or(f64::INFINITY, |p| p.residual[k + 1]);
+        let as_detected = residual(views);
+        let detected = std::mem::replace(&mut views[k].joints2d, other);
+        if residual(views) < as_detected {
+            views[k].swapped = true;
+            views[k].alternative = Some(detected);
+        } else {
+            views[k].joints2d = detected;
+        }
+    }
 }
 
 /// The views' joints for [`crate::pose::views`].
@@ -127,29 +157,23 @@ pub(super) fn agreement(
         let name = v.label.name();
         if let (Some(f), Some(other)) = (facing.get(k).copied().flatten(), v.label.other_side()) {
             if f.mirrored() {
-                return Err(Error::OutOfRange {
-                    name: "views",
-                    detail: format!(
-                        "the {name} view's depth comes out mirrored: its limbs miss the front view's pose by {:.0}° as \
+                return Err(Error::ViewsDisagree(format!(
+                    "the {name} view's depth comes out mirrored: its limbs miss the front view's pose by {:.0}° as \
                          labelled and by {:.0}° as the other side; is it drawn facing image {}? Then label it {}",
-                        f.as_labelled_deg,
-                        f.other_side_deg,
-                        if other == ViewLabel::SideLeft { "left" } else { "right" },
-                        other.name()
-                    ),
-                });
+                    f.as_labelled_deg,
+                    f.other_side_deg,
+                    if other == ViewLabel::SideLeft { "left" } else { "right" },
+                    other.name()
+                )));
             }
         }
         if residual > VIEWS_REFUSE {
-            return Err(Error::OutOfRange {
-                name: "views",
-                detail: format!(
-                    "the {name} view disagrees with the front view: one pose seen from both misses their joints by {:.0}% \
+            return Err(Error::ViewsDisagree(format!(
+                "the {name} view disagrees with the front view: one pose seen from both misses their joints by {:.0}% \
                      of the figure's height (limit {:.0}%): a different pose or character, or a wrong label",
-                    100.0 * residual,
-                    100.0 * VIEWS_REFUSE
-                ),
-            });
+                100.0 * residual,
+                100.0 * VIEWS_REFUSE
+            )));
         }
         if residual > VIEWS_WARN {
             warnings.push(format!(
@@ -166,4 +190,42 @@ pub(super) fn agreement(
         }
     }
     Ok(warnings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::detect::facing::swap_sides;
+    use crate::pose::views::tests::{estimate, front_camera, project, walking};
+    use crate::pose::views::triangulate;
+
+    /// A prepared view of `joints` with the detector's `alternative` (none for given joints).
+    fn view(label: ViewLabel, joints: Joints2, alternative: Option<Joints2>) -> PreparedView {
+        let edges = GrayImage::filled(8, 8, 0).unwrap();
+        PreparedView { label, edges, joints2d: joints, joints_source: "test".into(), alternative, swapped: false }
+    }
+
+    #[test]
+    fn a_detected_back_view_labelled_as_facing_the_viewer_takes_the_swapped_labelling() {
+        let (truth, cam) = (walking(), front_camera());
+        let front = project(&truth, &cam);
+        let back = project(&truth, &ViewLabel::Back.camera_from_front(&cam));
+        let est = estimate(truth, cam);
+        let pose = |vj: &[ViewJoints]| triangulate(&est, &front, vj);
+        // The detector read the back view as facing the viewer: its sides are swapped.
+        let mut views = vec![view(ViewLabel::Back, swap_sides(&back), Some(back))];
+        choose_labelling(&mut views, pose);
+        assert!(views[0].swapped);
+        assert_eq!(views[0].joints2d, back);
+        // Read right, it stays.
+        let mut views = vec![view(ViewLabel::Back, back, Some(swap_sides(&back)))];
+        choose_labelling(&mut views, pose);
+        assert!(!views[0].swapped);
+        assert_eq!(views[0].joints2d, back);
+        // Given joints are never changed, even swapped ones.
+        let mut views = vec![view(ViewLabel::Back, swap_sides(&back), None)];
+        choose_labelling(&mut views, pose);
+        assert!(!views[0].swapped);
+        assert_eq!(views[0].joints2d, swap_sides(&back));
+    }
 }

@@ -72,7 +72,7 @@ pub struct ViewsPose {
 /// view's 2-D joints. Errors: a [`ViewLabel::Front`] among `views`, a view with fewer than two
 /// visible joints or joints without vertical extent ([`Error::Degenerate`]), non-finite joints
 /// ([`Error::NonFinite`]), a view whose joints fit the pose only upside down
-/// ([`Error::OutOfRange`] `views`).
+/// ([`Error::ViewsDisagree`]).
 pub fn triangulate(front: &PoseEstimate, front_joints: &Joints2, views: &[ViewJoints]) -> Result<ViewsPose> {
     check(front_joints, "front")?;
     for v in views {
@@ -81,12 +81,68 @@ pub fn triangulate(front: &PoseEstimate, front_joints: &Joints2, views: &[ViewJo
         }
         check(v.joints, v.label.name())?;
     }
+    if views.is_empty() {
+        return Ok(assess(front.joints, Vec::new(), &front.camera, front_joints, views));
+    }
+    // The turnaround's axis: the front estimate's vertical, tilted where the views agree better
+    // (coarse grid, then a finer one about the best; each tilt with a short alternation).
+    let mut best = (f64::INFINITY, Matrix3::identity());
+    let mut first_error = None;
+    let mut search = |tilts: Vec<Matrix3<f64>>, best: &mut (f64, Matrix3<f64>)| {
+        for axis in tilts {
+            match solve_about(front, front_joints, views, &axis, ITERATIONS / 4) {
+                Ok(p) => {
+                    let cost = p.residual.iter().map(|r| r * r).sum::<f64>();
+                    if cost < best.0 {
+                        *best = (cost, axis);
+                    }
+                }
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
+            }
+        }
+    };
+    search(tilt_grid(&Matrix3::identity(), TILT_COARSE_DEG, 3), &mut best);
+    let coarse = best.1;
+    search(tilt_grid(&coarse, TILT_COARSE_DEG / 3.0, 2), &mut best);
+    if !best.0.is_finite() {
+        return Err(first_error.unwrap_or_else(|| Error::Degenerate("no tilt of the views fits".into())));
+    }
+    solve_about(front, front_joints, views, &best.1, ITERATIONS)
+}
+
+/// Step of the coarse grid of the turnaround axis's tilt, degrees (the fine grid's is a third).
+const TILT_COARSE_DEG: f64 = 5.0;
+
+/// Tilts `centre` by `(2n+1)²` rotations about the model's X and Z axes, `step_deg` apart.
+fn tilt_grid(centre: &Matrix3<f64>, step_deg: f64, n: i32) -> Vec<Matrix3<f64>> {
+    let mut out = Vec::with_capacity(((2 * n + 1) * (2 * n + 1)) as usize);
+    for i in -n..=n {
+        for j in -n..=n {
+            let (a, b) = ((i as f64 * step_deg).to_radians(), (j as f64 * step_deg).to_radians());
+            out.push(centre * nalgebra::Rotation3::from_euler_angles(a, 0.0, b).into_inner());
+        }
+    }
+    out
+}
+
+/// The views' pose with the turnaround's axis `axis` (a rotation of the front estimate's model
+/// frame; identity: its +Y), alternating `iterations` times between the joints and the views'
+/// scales and translations.
+fn solve_about(
+    front: &PoseEstimate,
+    front_joints: &Joints2,
+    views: &[ViewJoints],
+    axis: &Matrix3<f64>,
+    iterations: usize,
+) -> Result<ViewsPose> {
     let mut joints = front.joints;
     let mut cameras: Vec<WeakPerspective> =
-        views.iter().map(|v| fit_view(&joints, &front.camera, v, true)).collect::<Result<_>>()?;
-    for _ in 0..ITERATIONS {
+        views.iter().map(|v| fit_view(&joints, &front.camera, axis, v, true)).collect::<Result<_>>()?;
+    for _ in 0..iterations {
         joints = solve_joints(front, front_joints, views, &cameras)?;
-        cameras = views.iter().map(|v| fit_view(&joints, &front.camera, v, false)).collect::<Result<_>>()?;
+        cameras = views.iter().map(|v| fit_view(&joints, &front.camera, axis, v, false)).collect::<Result<_>>()?;
     }
     Ok(assess(joints, cameras, &front.camera, front_joints, views))
 }
@@ -100,8 +156,10 @@ pub fn view_pose_for(front: &PoseEstimate, front_joints: &Joints2, views: &[View
         check(v.joints, v.label.name())?;
     }
     let joints = front.joints;
-    let cameras: Vec<WeakPerspective> =
-        views.iter().map(|v| fit_view(&joints, &front.camera, v, false)).collect::<Result<_>>()?;
+    let cameras: Vec<WeakPerspective> = views
+        .iter()
+        .map(|v| fit_view(&joints, &front.camera, &Matrix3::identity(), v, false))
+        .collect::<Result<_>>()?;
     Ok(assess(joints, cameras, &front.camera, front_joints, views))
 }
 
@@ -179,9 +237,17 @@ fn assess(
     ViewsPose { joints, cameras, residual, scale_ratio }
 }
 
-/// View `v`'s camera: the `front` camera turned by its label, scale and translation fitted.
-fn fit_view(joints: &Joints3, front: &WeakPerspective, v: &ViewJoints, vertical_only: bool) -> Result<WeakPerspective> {
-    fit_camera_from(joints, v.label, &v.label.camera_from_front(front), v.joints, vertical_only)
+/// View `v`'s camera: the `front` camera turned by its label about `axis`'s +Y (`axis` a rotation
+/// of the model frame), scale and translation fitted.
+fn fit_view(
+    joints: &Joints3,
+    front: &WeakPerspective,
+    axis: &Matrix3<f64>,
+    v: &ViewJoints,
+    vertical_only: bool,
+) -> Result<WeakPerspective> {
+    let turned = WeakPerspective { r: front.r * axis * v.label.turn() * axis.transpose(), ..*front };
+    fit_camera_from(joints, v.label, &turned, v.joints, vertical_only)
 }
 
 /// At least two visible, finite joints with some vertical extent.
@@ -206,7 +272,7 @@ fn extent(j: &Joints2) -> f64 {
 /// `joints` project onto the visible `target` joints; with `vertical_only` the scale and the
 /// vertical translation come from the vertical coordinates alone (the horizontal translation
 /// then centres the horizontal ones). Errors: [`Error::Degenerate`] for a non-finite scale,
-/// [`Error::OutOfRange`] (`views`) for a non-positive one (view `label`'s figure upside down).
+/// [`Error::ViewsDisagree`] for a non-positive one (view `label`'s figure upside down).
 fn fit_camera_from(
     joints: &Joints3,
     label: ViewLabel,
@@ -239,14 +305,11 @@ fn fit_camera_from(
         return Err(Error::Degenerate(format!("a view's fitted scale is {s}")));
     }
     if s <= 0.0 {
-        return Err(Error::OutOfRange {
-            name: "views",
-            detail: format!(
-                "the {} view disagrees with the front view: its joints match the front view's pose only upside down \
+        return Err(Error::ViewsDisagree(format!(
+            "the {} view disagrees with the front view: its joints match the front view's pose only upside down \
                  (another figure or wrong joints)",
-                label.name()
-            ),
-        });
+            label.name()
+        )));
     }
     Ok(WeakPerspective { sx: s, sy: s, r: turned.r, t: [mu - s * ma, mv - s * mb] })
 }
@@ -302,14 +365,14 @@ fn relative_residual(joints: &Joints3, cam: &WeakPerspective, j2: &Joints2) -> f
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::pose::figure::BodyFactors;
     use crate::skeleton::joint;
 
     /// A walking pose (metres, model frame: right side at −X, facing +Z): arms and legs swing in
     /// depth, which one front view cannot see.
-    fn walking() -> Joints3 {
+    pub(crate) fn walking() -> Joints3 {
         [
             [0.0, 0.65, 0.02],
             [0.0, 0.5, 0.0],
@@ -329,11 +392,11 @@ mod tests {
         ]
     }
 
-    fn project(j: &Joints3, cam: &WeakPerspective) -> Joints2 {
+    pub(crate) fn project(j: &Joints3, cam: &WeakPerspective) -> Joints2 {
         Joints2 { xy: std::array::from_fn(|k| cam.project(&Vector3::from(j[k]))), visible: [true; NUM_JOINTS] }
     }
 
-    fn estimate(joints: Joints3, camera: WeakPerspective) -> PoseEstimate {
+    pub(crate) fn estimate(joints: Joints3, camera: WeakPerspective) -> PoseEstimate {
         PoseEstimate {
             joints,
             camera,
@@ -350,7 +413,7 @@ mod tests {
         }
     }
 
-    fn front_camera() -> WeakPerspective {
+    pub(crate) fn front_camera() -> WeakPerspective {
         let r = nalgebra::Rotation3::from_euler_angles(0.05, 0.3, 0.02).into_inner();
         WeakPerspective { sx: 200.0, sy: 200.0, r, t: [256.0, 250.0] }
     }

@@ -10,3 +10,4 @@ mod reliability;
 mod rig;
 mod soak;
 mod thread_stress;
+mod views;

@@ -91,6 +91,17 @@ class SketchbodySettings(bpy.types.PropertyGroup):
     joints: StringProperty(
         name="Joints", subtype="FILE_PATH",
         description="Optional sketchbody-joints2d JSON file with the 15 2-D joints; empty: the embedded detector")
+    side_image: StringProperty(
+        name="Side view", subtype="FILE_PATH",
+        description="Optional: the same character in the same pose seen from the side (a turnaround sheet's side "
+                    "view, PNG or JPEG); its joints are detected. One body and one pose are fitted to every view")
+    side_faces: EnumProperty(
+        name="Side faces", default="RIGHT",
+        items=[("RIGHT", "Image right", "The character's right side: it faces image right (turned +90°)"),
+               ("LEFT", "Image left", "The character's left side: it faces image left (turned -90°)")])
+    back_image: StringProperty(
+        name="Back view", subtype="FILE_PATH",
+        description="Optional: the same character in the same pose seen from behind; its joints are detected")
     gender: EnumProperty(
         name="Gender", default="AUTO",
         items=[("AUTO", "Auto", "The library decides the gender (as the CLI without --gender)"),
@@ -269,6 +280,17 @@ def _fit_options(skb, st):
                           samples=st.samples, iterations=st.iterations)
 
 
+def _views(skb, st):
+    """The turnaround's extra views from the settings: [(label, absolute path)], each checked."""
+    views = []
+    for label, path in (("side" if st.side_faces == "RIGHT" else "side_left", st.side_image), ("back", st.back_image)):
+        if path:
+            full = _abspath(path)
+            work.check_image(skb, full, what=f"{label.replace('_', ' ')} view")
+            views.append((label, full))
+    return views
+
+
 def _rig_options(skb, st):
     """The package's ExportOptions (names, rest pose; origin on the floor) from the settings."""
     return skb.ExportOptions(naming=st.naming.lower(), rest_pose=st.rest_pose.lower(), origin="floor")
@@ -281,6 +303,11 @@ def _summary(req, data, seconds, kept):
     text = (f"Sketchbody: {data['gender']} body, {data['body_height']:.2f} m (gender value "
             f"{data['gender_value']:.2f}), from {source}, {len(data['rig'].rest_vertices)} vertices, "
             f"{len(data['rig'].bone_names)} bones, edge support {data['edge_support']:.2f}{low}, {seconds:.1f} s")
+    if data.get("views"):
+        parts = [f"{v.label.replace('_', ' ')} ({100 * v.residual:.0f}% off the shared pose)" for v in data["views"]]
+        text += "; views: front + " + ", ".join(parts)
+        for w in data.get("view_warnings", []):
+            text += f"; warning: {w}"
     if kept:
         text += f"; the former body is kept as {kept}"
     return text
@@ -545,7 +572,7 @@ class SKETCHBODY_OT_sketch_to_body(_Reporting, bpy.types.Operator):
         if st.joints:
             joints, confidence = work.read_joints_file(skb, _abspath(st.joints))
         req = work.Request("new", image_path, w, h, joints, confidence, _fit_options(skb, st),
-                           _rig_options(skb, st), context.scene.name, st.threshold)
+                           _rig_options(skb, st), context.scene.name, st.threshold, _views(skb, st))
         return _start(self, context, skb, req)
 
 
@@ -584,7 +611,7 @@ class SKETCHBODY_OT_rerun(_Reporting, bpy.types.Operator):
         else:
             joints, confidence = skb.Joints2D(xy, visible), np.array([m["skb_confidence"] for m in markers])
         req = work.Request("rerun", image_path, w, h, joints, confidence, _fit_options(skb, st),
-                           _rig_options(skb, st), context.scene.name, st.threshold)
+                           _rig_options(skb, st), context.scene.name, st.threshold, _views(skb, st))
         return _start(self, context, skb, req)
 
 
@@ -727,6 +754,11 @@ class SKETCHBODY_PT_panel(bpy.types.Panel):
         col = layout.column(align=True)
         col.prop(st, "image")
         col.prop(st, "joints")
+        col = layout.column(align=True)
+        col.prop(st, "side_image")
+        if st.side_image:
+            col.prop(st, "side_faces")
+        col.prop(st, "back_image")
         col = layout.column()
         col.prop(st, "gender")
         col.prop(st, "height")

@@ -28,7 +28,9 @@ class Request:
     the markers; the plane stays); `image` (absolute path) of `width` x `height` px; `joints`
     (skb.Joints2D, the user's) or None (the library detects them, as the CLI); `confidence`
     (15,) of the given joints (None when detected: the detector's); the package's `fit_options`
-    and `rig_options`; `scene` (name) and `threshold` (low-confidence level) for the build."""
+    and `rig_options`; `scene` (name) and `threshold` (low-confidence level) for the build;
+    `views` a turnaround's extra views [(label "side" / "side_left" / "back", absolute path)]
+    (their joints detected), empty for one view."""
 
     kind: str
     image: str
@@ -40,6 +42,7 @@ class Request:
     rig_options: object
     scene: str
     threshold: float
+    views: list = dataclasses.field(default_factory=list)
 
     @property
     def label(self):
@@ -47,20 +50,21 @@ class Request:
         return "Sketch to body" if self.kind == "new" else "Re-run"
 
 
-def check_image(skb, path):
-    """(width, height) of the sketch at `path`, decoded by the library as the pipeline will;
-    UserError with a specific message when it is missing or not a PNG/JPEG image."""
+def check_image(skb, path, what="sketch"):
+    """(width, height) of the image at `path` (`what`: "sketch" or a view's name), decoded by the
+    library as the pipeline will; UserError with a specific message when it is missing or not a
+    PNG/JPEG image."""
     if not path:
         raise UserError("Choose a sketch image first")
     if not os.path.isfile(path):
-        raise UserError(f"Sketch image not found: {path}")
+        raise UserError(f"{what[0].upper() + what[1:]} image not found: {path}")
     try:
         img = skb.load_image(path)
     except skb.SketchbodyError as e:
         if e.status_name == "SKB_ERR_IMAGE_TOO_LARGE":
-            raise UserError(f"The sketch {path} is too large for the library: {e.message}")
+            raise UserError(f"The {what} {path} is too large for the library: {e.message}")
         raise UserError(f"Not an image the library can read: {path} is not a PNG or JPEG file "
-                        f"({e.message}); choose the sketch's PNG or JPEG file as Sketch")
+                        f"({e.message}); choose the {what}'s PNG or JPEG file")
     return img.shape[1], img.shape[0]
 
 
@@ -136,11 +140,13 @@ def compute(skb, req, progress, cancel):
     kept by the add-on to re-pose the body without re-fitting it; the receiver closes it) and
     `dictionary` (pose_dictionary: parsed here, off Blender's main thread)."""
     share = 0.9 if req.joints is None else 1.0  # the rest: the detector's per-joint confidences
+    views = [skb.View(label, path) for label, path in req.views]
     result = skb.run_pipeline(req.image, joints=req.joints, fit_options=req.fit_options,
-                              progress=lambda f: progress(share * f), cancel=cancel)
+                              progress=lambda f: progress(share * f), cancel=cancel, views=views)
     try:
         data = dict(gender=result.gender, gender_value=result.gender_value()[0], joints=result.joints2d(),
-                    detection=result.detection(), width=req.width, height=req.height)
+                    detection=result.detection(), width=req.width, height=req.height, views=result.views(),
+                    view_warnings=result.view_warnings())
         data["low_evidence"], data["edge_support"] = result.evidence()
         data["body_height"] = float(np.ptp(result.vertices(posed=False)[:, 1]))
         with result.mesh() as mesh:
@@ -173,6 +179,9 @@ def describe_error(skb, error, req):
         return (f"No figure found in the sketch {where}: the detector sees no human figure on the page "
                 f"({error.message}). If there is one, give its 15 joints in a joints file "
                 "(sketchbody-joints2d JSON, e.g. from `sketchbody detect`) and correct them on the sketch")
+    if name == "SKB_ERR_VIEWS_DISAGREE":
+        return (f"The views do not show one character in one pose: {error.message}. Check each view's image "
+                "and, for the side view, which way it faces")
     if name == "SKB_ERR_IMAGE_TOO_SMALL":
         return f"The sketch {where} is too small: {error.message}"
     if name == "SKB_ERR_JOINT_OUTSIDE_IMAGE":

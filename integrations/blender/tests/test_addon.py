@@ -14,7 +14,8 @@
 # the new one beside it), renders the result beside the sketch plane (Workbench, 800x600) to
 # OUT.png (copied to DOCS.png when it differs visibly), runs the detector path and compares it
 # with the CLI's `run` on the same sketch (gender, height, rest vertices, and the CLI's body.glb
-# imported by Blender's glTF importer against the add-on's posed body), and finally clears.
+# imported by Blender's glTF importer against the add-on's posed body), fits a rendered
+# turnaround (front + side view) and refuses a mislabelled side view, and finally clears.
 # Needs the CLI: SKB_CLI, else target/release/sketchbody. Prints one line per check; any failure
 # raises, so Blender exits with status 1.
 import json
@@ -652,6 +653,27 @@ check("Swap left/right exchanges the markers' sides and fits a body from them",
       and np.allclose(xy_t[jn.index("head")], xy_s[jn.index("head")], atol=1e-3)
       and conf_t[jn.index("r_elbow")] == conf_s[jn.index("l_elbow")],
       f"{err.strip()}; r_wrist {xy_s[jn.index('r_wrist')]} -> {xy_t[jn.index('r_wrist')]}")
+
+# A turnaround (issue 48): the same figure and pose rendered from the front and the side (yaw
+# +90°) by the library's renderer, joints detected in both; one body from both views, named in
+# the report. The side view given as facing image left is refused with the views' message.
+front_img, _, _ = skb.render_sketch("female", 384, 384, seed=11, camera=(0, 0, 0), style="clean")
+side_img, _, _ = skb.render_sketch("female", 384, 384, seed=11, camera=(90, 0, 0), style="clean")
+front_png, side_png = os.path.join(out_dir, "turn_front.png"), os.path.join(out_dir, "turn_side.png")
+skb.write_png(front_img, front_png)
+skb.write_png(side_img, side_png)
+st.image, st.joints, st.side_image, st.side_faces = front_png, "", side_png, "RIGHT"
+res, err = run_wait(bpy.ops.sketchbody.sketch_to_body)
+check("a front and a side view give one body, the side view in the report",
+      res == {"FINISHED"} and "views: front + side" in st.status and "SKB_Armature" in bpy.data.objects,
+      st.status[-160:])
+st.side_faces = "LEFT"
+names_before = skb_objects()
+res, err = run_wait(bpy.ops.sketchbody.sketch_to_body)
+check("a side view facing the other way than its setting: the views' message, nothing new made",
+      st.status_level == "ERROR" and "do not show one character in one pose" in st.status
+      and skb_objects() == names_before, st.status[:200])
+st.side_image = ""
 
 res, err = run_op(bpy.ops.sketchbody.clear)
 check("Clear removes everything, the kept bodies too", res == {"FINISHED"} and skb_objects() == []

@@ -1,0 +1,221 @@
+//! Turnarounds (model sheets) from C: `skb_run_pipeline_views` fits one body to the front sketch
+//! and extra views of the same character in the same pose (side, other side, back), each with its
+//! own image and optional 2-D joints; the result's per-view getters.
+
+use std::ffi::{c_char, c_void};
+
+use sketchbody_core::error::Error;
+use sketchbody_core::view::ViewLabel;
+
+use super::body::skb_context;
+use super::error::fail;
+use super::fit::{skb_fit_options, skb_progress_fn};
+use super::image::skb_image;
+use super::mesh_ops::skb_camera;
+use super::pipeline::{run, skb_interim_fn, skb_result};
+use super::pose::{skb_joints2d, skb_pose_dictionary, skb_pose_options};
+use super::ptr::*;
+use super::status::skb_status;
+
+/// View label: the front view (yaw 0°), the pipeline's main sketch; not accepted as an extra view.
+pub const SKB_VIEW_FRONT: u32 = 0;
+/// View label: the side view (yaw +90°), the character's right side, facing image right.
+pub const SKB_VIEW_SIDE: u32 = 1;
+/// View label: the other side view (yaw −90°), the character's left side, facing image left.
+pub const SKB_VIEW_SIDE_LEFT: u32 = 2;
+/// View label: the back view (yaw 180°).
+pub const SKB_VIEW_BACK: u32 = 3;
+
+/// One extra view of a turnaround for `skb_run_pipeline_views`: its label (`SKB_VIEW_SIDE`,
+/// `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`), its sketch (1, 3 or 4 channels, dark strokes on light
+/// paper; any size: views drawn at another scale are scaled to the front by their joints) and its
+/// 2-D joints in that image's pixels (NULL: detected). The pointers are borrowed for the call only.
+/// Plain data; its layout is part of the ABI.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct skb_view_input {
+    /// `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`.
+    pub label: u32,
+    /// Set to 0.
+    pub reserved: u32,
+    /// The view's sketch (not NULL).
+    pub sketch: *const skb_image,
+    /// The view's 2-D joints, pixels of its sketch; NULL: the context's detector finds them.
+    pub joints: *const skb_joints2d,
+}
+
+/// What a turnaround run made of one extra view (`skb_result_view`). Plain data; its layout is
+/// part of the ABI.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct skb_view_info {
+    /// The view's label (`SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`).
+    pub label: u32,
+    /// 1 when the view's joints were detected, 0 when given.
+    pub joints_detected: u32,
+    /// 1 when the detected joints are the detector's other labelling (left and right swapped),
+    /// which fits the shared pose better; 0 otherwise.
+    pub joints_swapped: u32,
+    /// 0.
+    pub reserved: u32,
+    /// The 2-D joints used in the view, pixels of its sketch.
+    pub joints: skb_joints2d,
+    /// The view's camera refitted to the body: projects the result's posed vertices and
+    /// `SKB_JOINTS_POSED` onto the view's sketch.
+    pub camera: skb_camera,
+    /// RMS distance of the view's joints from the shared pose seen through its camera, fraction
+    /// of the figure's height (runs refuse views beyond 0.12 and warn beyond 0.05).
+    pub residual: f64,
+    /// The view's drawn size over the front view's (1: the same scale).
+    pub scale_ratio: f64,
+    /// Share of the fitted outline in this view within reach of a stroke, 0..1 (NaN for the
+    /// mean shape).
+    pub edge_support: f64,
+    /// A side view: mean angle between its triangulated limbs and the front estimate's, degrees,
+    /// as labelled; NaN for a back view or a given pose.
+    pub facing_as_labelled_deg: f64,
+    /// The same with the view taken as the other side; NaN as above. Much lower than
+    /// `facing_as_labelled_deg` means the view is drawn facing the other way (runs refuse it).
+    pub facing_other_side_deg: f64,
+}
+
+/// The core label of a C view label. Errors: not `SKB_VIEW_*` (`SKB_ERR_OUT_OF_RANGE`).
+pub(crate) fn view_label(label: u32) -> Result<ViewLabel, skb_status> {
+    let code = |l: ViewLabel| label_code(l) == label;
+    ViewLabel::ALL.into_iter().find(|&l| code(l)).ok_or_else(|| {
+        fail(&Error::OutOfRange { name: "view label", detail: format!("{label} is not one of SKB_VIEW_*") })
+    })
+}
+
+/// The `SKB_VIEW_*` code of a label.
+fn label_code(label: ViewLabel) -> u32 {
+    match label {
+        ViewLabel::Front => SKB_VIEW_FRONT,
+        ViewLabel::Side => SKB_VIEW_SIDE,
+        ViewLabel::SideLeft => SKB_VIEW_SIDE_LEFT,
+        ViewLabel::Back => SKB_VIEW_BACK,
+    }
+}
+
+/// `skb_run_pipeline_progressive` on a turnaround: `sketch` and `joints` are the front view,
+/// `views` (`view_count` entries; NULL when 0) the same character in the same pose from the side,
+/// the other side or the back. The views share one body and one pose: every view's joints enter
+/// the 3-D pose (depth from a side view), every view's outline the shape fit; each view has the
+/// front camera turned by its label's yaw, with its own scale and position. With `view_count` 0
+/// this is `skb_run_pipeline_progressive`. Read each view with `skb_result_view` and the run's
+/// warnings (views that agree only roughly, a view little supported by its strokes) with
+/// `skb_result_copy_view_warnings`. Arguments, ownership, threading, progress and cancel as
+/// `skb_run_pipeline_progressive` (the interim bodies are the front view's); the views' images
+/// and joints are only read during the call. Errors: `skb_run_pipeline`'s for any view's image
+/// and joints; a label not `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`, or one given
+/// twice (`SKB_ERR_OUT_OF_RANGE`); views that do not show one character in one pose (their joints
+/// miss the shared pose by more than 12 % of the figure's height, match it only upside down, or a
+/// side view drawn facing the other way than its label: `SKB_ERR_VIEWS_DISAGREE`, the message
+/// names the view and the reason; a turnaround is never silently fitted to the front alone).
+#[no_mangle]
+pub unsafe extern "C" fn skb_run_pipeline_views(
+    ctx: *const skb_context,
+    sketch: *const skb_image,
+    joints: *const skb_joints2d,
+    views: *const skb_view_input,
+    view_count: usize,
+    dict: *const skb_pose_dictionary,
+    pose_opts: *const skb_pose_options,
+    fit_opts: *const skb_fit_options,
+    progress: skb_progress_fn,
+    interim: skb_interim_fn,
+    user: *mut c_void,
+    out: *mut *mut skb_result,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_run_pipeline_views` (lib.rs § Safety): `views` is NULL (with
+    // `view_count` 0) or valid for `view_count` entries whose pointers are NULL or valid; the rest forwarded.
+    unsafe {
+        ffi_boundary! {
+            let views: &[skb_view_input] =
+                if view_count == 0 { &[] } else { try_status!(try_slice_of(views, view_count, "views")) };
+            run(ctx, sketch, joints, views, dict, pose_opts, fit_opts, progress, interim, user, out)
+        }
+    }
+}
+
+/// The number of extra views of a result into `*count` (0 for a one-view run).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_view_count(result: *const skb_result, count: *mut usize) -> skb_status {
+    // SAFETY: the header contract of `skb_result_view_count` (lib.rs § Safety): `result`, `count` are NULL or
+    // valid during the call; the ptr.rs helpers check NULL before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            try_status!(write_out(count, r.views.len(), "count"));
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// Extra view `index` (0 .. `skb_result_view_count` − 1, in the order given) into `*out`.
+/// Errors: `index` out of range (`SKB_ERR_OUT_OF_RANGE`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_view(
+    result: *const skb_result,
+    index: usize,
+    out: *mut skb_view_info,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_result_view` (lib.rs § Safety): `result`, `out` are NULL or valid
+    // during the call; the ptr.rs helpers check NULL before each borrow.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let Some(v) = r.views.get(index) else {
+                return fail(&Error::OutOfRange { name: "view index", detail: format!("{index} >= {}", r.views.len()) });
+            };
+            let c = &v.camera;
+            let (labelled, other) = v.facing.map_or((f64::NAN, f64::NAN), |f| (f.as_labelled_deg, f.other_side_deg));
+            let info = skb_view_info {
+                label: label_code(v.label),
+                joints_detected: u32::from(v.joints_source == "detector"),
+                joints_swapped: u32::from(v.swapped),
+                reserved: 0,
+                joints: skb_joints2d { xy: v.joints2d.xy, visible: v.joints2d.visible.map(u8::from), reserved: 0 },
+                camera: skb_camera { sx: c.sx, sy: c.sy, r: std::array::from_fn(|i| c.r[(i / 3, i % 3)]), t: c.t },
+                residual: v.residual,
+                scale_ratio: v.scale_ratio,
+                edge_support: v.edge_support,
+                facing_as_labelled_deg: labelled,
+                facing_other_side_deg: other,
+            };
+            try_status!(write_out(out, info, "out"));
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// The run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing newline;
+/// empty when there are none or for a one-view run): their byte length without the terminating
+/// NUL into `*len` (may be NULL) and, when `dst` is not NULL, the text NUL-terminated into `dst`
+/// (`dst_len` ≥ length + 1).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_copy_view_warnings(
+    result: *const skb_result,
+    dst: *mut c_char,
+    dst_len: usize,
+    len: *mut usize,
+) -> skb_status {
+    // SAFETY: the header contract of `skb_result_copy_view_warnings` (lib.rs § Safety): `result`, `dst`, `len`
+    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths.
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            let text = r.view_warnings.join("\n");
+            let bytes = text.as_bytes();
+            if !dst.is_null() {
+                let o = try_status!(out_slice(dst, dst_len, bytes.len() + 1, "dst"));
+                for (o, &c) in o.iter_mut().zip(bytes) {
+                    *o = c as c_char;
+                }
+                o[bytes.len()] = 0;
+            }
+            write_opt(len, bytes.len());
+            skb_status::SKB_OK
+        }
+    }
+}
