@@ -74,6 +74,10 @@ pub struct Args {
     /// between readings; 0 = off.
     #[arg(long, default_value_t = PoseOptions::default().depth_prior, value_parser = crate::ranges::real(0.0, sketchbody::pose::options::MAX_DEPTH_PRIOR, false))]
     depth_prior: f64,
+    /// Spread (m) of the free-joint step's pull of every bone's depth change toward the learned
+    /// depths'; 0 = off.
+    #[arg(long, default_value_t = PoseOptions::default().learned_depth_sd, value_parser = crate::ranges::real(0.0, 1.0, false))]
+    learned_depth_sd: f64,
     /// Straighten the arms and legs drawn straight that the solve bent by at most 60° in depth
     /// (the drawn proportions absorb the bend): for figures drawn standing or posing with
     /// straight limbs. Off by default (on unseen motion it straightens truly bent limbs too).
@@ -106,6 +110,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         knee_limits: !a.no_knee_limits,
         factor_prior: !a.no_factor_prior,
         depth_prior: a.depth_prior,
+        learned_depth_sd: a.learned_depth_sd,
         straight_limbs: a.straight_limbs,
     };
     let est = estimate_pose(&dict, &joints, &opts)?;

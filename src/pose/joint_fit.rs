@@ -10,7 +10,10 @@
 //! plus, with the plausibility priors ([`Priors`], [`super::plausibility`]) for a standing
 //! figure, its linear standing residuals (the ankles under the pelvis only when the estimate's
 //! stride in depth is at most [`STANDING_MAX_STRIDE`]), the depth part of the second term then
-//! at [`SIGMA_DEPTH_STANDING`]; knees left bent backwards are flipped in depth at the end.
+//! at [`SIGMA_DEPTH_STANDING`]; knees left bent backwards are flipped in depth at the end. With
+//! the learned depths ([`Priors::depths`], from the 2-D joints alone), every bone's depth change
+//! `Y_c.z − Y_p.z` is also pulled toward theirs at [`Priors::depth_sd`]:
+//! `Σ_bones (Y_c.z − Y_p.z − (d_c − d_p) / s)² / σ_d²` (s the camera's scale).
 //!
 //! with Ŷ and l̂ the estimate's joints and bone lengths, σ_px = `joint_noise` × the camera's
 //! scale (so the trade-off does not depend on the image size), σ_3d = [`SIGMA_3D`] and
@@ -74,7 +77,7 @@ impl JointProblem<'_> {
             .map(|(a, b)| self.wd * (a - b).xy().norm_squared() + self.wz * (a.z - b.z).powi(2))
             .sum();
         let bones: f64 = BONES.iter().zip(&self.len).map(|(&(p, c), l)| ((y[c] - y[p]).norm() - l).powi(2)).sum();
-        let linear: f64 = self.linear.iter().map(|r| r.w * r.c.dot(&(y[r.a] - y[r.b])).powi(2)).sum();
+        let linear: f64 = self.linear.iter().map(|r| r.w * (r.c.dot(&(y[r.a] - y[r.b])) - r.t).powi(2)).sum();
         self.wp * image + prior + self.wl * bones + linear
     }
 
@@ -98,7 +101,7 @@ impl JointProblem<'_> {
             }
         }
         for r in &self.linear {
-            let v = r.w * r.c.dot(&(y[r.a] - y[r.b]));
+            let v = r.w * (r.c.dot(&(y[r.a] - y[r.b])) - r.t);
             let cc = r.c * r.c.transpose() * r.w;
             for a in 0..3 {
                 g[3 * r.a + a] += v * r.c[a];
@@ -135,12 +138,18 @@ impl JointProblem<'_> {
 }
 
 /// Which plausibility priors ([`super::plausibility`]) the free-joint step applies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Priors {
     /// The standing prior, for figures the 2-D joints show standing on both feet.
     pub standing: bool,
     /// Knees bent backwards are flipped in depth.
     pub knee_limits: bool,
+    /// Depths toward the camera of every joint, px at the image's scale (only differences
+    /// count; the learned depths, [`super::factor_prior::FactorPrior::depth_hint`]): each bone's
+    /// depth change is pulled toward theirs at `depth_sd`. `None` = no pull.
+    pub depths: Option<[f64; NUM_JOINTS]>,
+    /// Spread of that pull, metres (> 0 to apply it).
+    pub depth_sd: f64,
 }
 
 /// Refines `est` for `prob` with 2-D joint noise `noise_m` metres (> 0; see the module doc) and
@@ -161,10 +170,20 @@ pub fn fit_joints(prob: &Problem, est: &PoseEstimate, noise_m: f64, priors: &Pri
         wd: 1.0 / (SIGMA_3D * SIGMA_3D),
         wl: 1.0 / (SIGMA_LEN * SIGMA_LEN),
         wz: if standing { 1.0 / (SIGMA_DEPTH_STANDING * SIGMA_DEPTH_STANDING) } else { 1.0 / (SIGMA_3D * SIGMA_3D) },
-        linear: if standing {
-            standing_residuals(&cam.r, stride_in_depth(&y0, &cam.r) <= STANDING_MAX_STRIDE)
-        } else {
-            Vec::new()
+        linear: {
+            let mut v = if standing {
+                standing_residuals(&cam.r, stride_in_depth(&y0, &cam.r) <= STANDING_MAX_STRIDE)
+            } else {
+                Vec::new()
+            };
+            if let Some(d) = priors.depths.filter(|_| priors.depth_sd > 0.0) {
+                let s = 0.5 * (cam.sx + cam.sy);
+                let w = 1.0 / (priors.depth_sd * priors.depth_sd);
+                for &(p, c) in BONES.iter() {
+                    v.push(LinearResidual { a: c, b: p, c: Vector3::z(), w, t: (d[c] - d[p]) / s });
+                }
+            }
+            v
         },
     };
     let mut y = y0;
@@ -269,5 +288,35 @@ mod tests {
         let exact = PoseEstimate { joints: truth, ..est.clone() };
         let again = fit_joints(&prob, &exact, 0.002, &Priors::default());
         assert_eq!(again.joints, exact.joints);
+    }
+
+    /// The learned depths pull each bone's depth change toward theirs: a forearm the depths put
+    /// 0.1 m nearer the viewer (relative to the elbow) than the estimate comes out nearer,
+    /// the image barely moves and the bone lengths are kept; without the pull nothing moves.
+    #[test]
+    fn the_learned_depths_pull_the_bones_depths() {
+        use crate::skeleton::joint::{R_ELBOW, R_WRIST};
+        let d = Dictionary::learn(&synthetic_clips(), &LearnParams::default(), "t".into()).unwrap();
+        let r = *Rotation3::from_euler_angles(0.0, 0.3, 0.0).matrix();
+        let cam = WeakPerspective { sx: 280.0, sy: 280.0, r, t: [250.0, 260.0] };
+        let x = vec_to_pose(d.mean.as_slice());
+        let j = Joints2 { xy: std::array::from_fn(|p| cam.project(&v(&x[p]))), visible: [true; NUM_JOINTS] };
+        let prob = Problem::new(&d, &j, 0.0).unwrap().with_base(pose_to_vec(&x));
+        let est = finish(&prob, cam, vec![], vec![]);
+        let s = 280.0;
+        let mut depths: [f64; NUM_JOINTS] = std::array::from_fn(|p| s * (r * v(&x[p])).z);
+        depths[R_WRIST] += 0.1 * s;
+        let forearm_z = |y: &crate::skeleton::Joints3| (r * (v(&y[R_WRIST]) - v(&y[R_ELBOW]))).z;
+        let pulled = Priors { depths: Some(depths), depth_sd: 0.05, ..Priors::default() };
+        let out = fit_joints(&prob, &est, 0.014, &pulled);
+        let moved = forearm_z(&out.joints) - forearm_z(&est.joints);
+        assert!(moved > 0.01, "forearm depth change {moved} m");
+        assert!(out.rms < 3.0, "rms {}", out.rms);
+        for &(p, c) in BONES.iter() {
+            let l = |y: &crate::skeleton::Joints3| (v(&y[c]) - v(&y[p])).norm();
+            assert!((l(&out.joints) - l(&est.joints)).abs() < 1e-12);
+        }
+        let off = Priors { depths: Some(depths), depth_sd: 0.0, ..Priors::default() };
+        assert_eq!(fit_joints(&prob, &est, 0.014, &off).joints, est.joints);
     }
 }

@@ -134,6 +134,11 @@ pub struct PoseOptions {
     /// the solver chooses between readings ([`super::depth_hint`]), used when the caller gives no
     /// image cue's depths; 0 = off.
     pub depth_prior: f64,
+    /// Spread, metres, of the free-joint step's pull of every bone's depth change (camera
+    /// frame) toward the learned depths' ([`super::joint_fit::Priors::depths`]), in
+    /// [0, 1]; 0 = off. Applies where the learned depths do ([`PoseOptions::depth_prior`] > 0,
+    /// not for a figure the standing prior takes as standing), with or without an image cue.
+    pub learned_depth_sd: f64,
     /// Straight limbs ([`super::straighten`]): the last step straightens the arms and legs
     /// drawn straight that are bent at most [`super::straighten::MAX_BEND_DEG`] in depth (the
     /// drawn proportions of the two bones absorb what the bend did). Off by default: it trades
@@ -150,7 +155,8 @@ impl Default for PoseOptions {
     /// yaw too), equal scales, up to 4 bases, 0.5 px, refined, prior 0.1 m,
     /// 12 exemplar starts recomposed from 64 limb candidates, blended at τ = 30 px² per joint,
     /// then the free-joint refinement at 0.014 m (4 px on a 500-px figure), with the proportions
-    /// estimated under the learned factor prior and the learned depths weighted 0.05.
+    /// estimated under the learned factor prior and the learned depths weighted 0.05 (and pulling
+    /// the free-joint step's bone depths at 0.05 m).
     fn default() -> Self {
         PoseOptions {
             kappa: 0.05,
@@ -170,6 +176,7 @@ impl Default for PoseOptions {
             knee_limits: true,
             factor_prior: true,
             depth_prior: 0.05,
+            learned_depth_sd: 0.05,
             straight_limbs: false,
         }
     }
@@ -185,6 +192,7 @@ impl PoseOptions {
         ensure_finite("blend", self.blend)?;
         ensure_finite("joint_noise", self.joint_noise)?;
         ensure_finite("depth_prior", self.depth_prior)?;
+        ensure_finite("learned_depth_sd", self.learned_depth_sd)?;
         let range = |name: &'static str, detail: String| Err(Error::OutOfRange { name, detail });
         if !(0.0..=MAX_KAPPA).contains(&self.kappa) {
             return range("kappa", format!("{} is not in [0, {MAX_KAPPA}]", self.kappa));
@@ -216,6 +224,9 @@ impl PoseOptions {
         if !(0.0..=MAX_DEPTH_PRIOR).contains(&self.depth_prior) {
             return range("depth_prior", format!("{} is not in [0, {MAX_DEPTH_PRIOR}]", self.depth_prior));
         }
+        if !(0.0..=1.0).contains(&self.learned_depth_sd) {
+            return range("learned_depth_sd", format!("{} m is not in [0, 1]", self.learned_depth_sd));
+        }
         Ok(())
     }
 }
@@ -243,6 +254,8 @@ mod tests {
             PoseOptions { depth_prior: -0.1, ..Default::default() },
             PoseOptions { depth_prior: f64::NAN, ..Default::default() },
             PoseOptions { depth_prior: 11.0, ..Default::default() },
+            PoseOptions { learned_depth_sd: -0.01, ..Default::default() },
+            PoseOptions { learned_depth_sd: f64::NAN, ..Default::default() },
         ];
         for o in bad {
             assert!(o.validate().is_err(), "{o:?}");

@@ -51,7 +51,7 @@ pub const SIGMA_GROUND: f64 = 0.02;
 /// standing figure, metres (instead of [`super::joint_fit::SIGMA_3D`]).
 pub const SIGMA_DEPTH_STANDING: f64 = 0.25;
 
-/// One linear residual `c · (y_a − y_b)` (camera-frame joints `y`; `b = None`: `c · y_a`) with
+/// One linear residual `c · (y_a − y_b) − t` (camera-frame joints `y`) with
 /// weight `w` = 1/σ².
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LinearResidual {
@@ -63,6 +63,8 @@ pub struct LinearResidual {
     pub c: Vector3<f64>,
     /// Weight, 1/m².
     pub w: f64,
+    /// Target value, metres: the residual is `c · (y_a − y_b) − t`.
+    pub t: f64,
 }
 
 fn angle_from_vertical(d: [f64; 2]) -> f64 {
@@ -119,14 +121,14 @@ pub fn standing_residuals(r: &Matrix3<f64>, feet: bool) -> Vec<LinearResidual> {
     let (x, y, z) = (r.column(0).into_owned(), r.column(1).into_owned(), r.column(2).into_owned());
     let w = |s: f64| 1.0 / (s * s);
     let mut out = vec![
-        LinearResidual { a: NECK, b: PELVIS, c: x, w: w(SIGMA_UPRIGHT) },
-        LinearResidual { a: NECK, b: PELVIS, c: z, w: w(SIGMA_UPRIGHT) },
-        LinearResidual { a: HEAD, b: NECK, c: z, w: w(SIGMA_HEAD) },
-        LinearResidual { a: R_ANKLE, b: L_ANKLE, c: y, w: w(SIGMA_GROUND) },
+        LinearResidual { a: NECK, b: PELVIS, c: x, w: w(SIGMA_UPRIGHT), t: 0.0 },
+        LinearResidual { a: NECK, b: PELVIS, c: z, w: w(SIGMA_UPRIGHT), t: 0.0 },
+        LinearResidual { a: HEAD, b: NECK, c: z, w: w(SIGMA_HEAD), t: 0.0 },
+        LinearResidual { a: R_ANKLE, b: L_ANKLE, c: y, w: w(SIGMA_GROUND), t: 0.0 },
     ];
     if feet {
-        out.push(LinearResidual { a: R_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET) });
-        out.push(LinearResidual { a: L_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET) });
+        out.push(LinearResidual { a: R_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET), t: 0.0 });
+        out.push(LinearResidual { a: L_ANKLE, b: PELVIS, c: z, w: w(SIGMA_FEET), t: 0.0 });
     }
     out
 }

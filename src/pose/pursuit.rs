@@ -168,7 +168,7 @@ pub fn estimate_pose_with_factor_prior(
     let hints =
         Hints { given: hint, prior: prior.filter(|_| opts.depth_prior > 0.0 && !standing), weight: opts.depth_prior };
     let factor_prior = prior.filter(|_| opts.factor_prior);
-    let first = estimate_fixed(dict, joints, opts, hints.of(joints).as_ref())?;
+    let first = estimate_fixed(dict, joints, opts, hints.of(joints).as_ref(), hints.learned(joints).as_ref())?;
     let est = if opts.proportions { with_proportions(dict, joints, opts, first, &hints, factor_prior) } else { first };
     let est = with_straight_limbs(dict, joints, opts, est);
     let est = with_alternatives(dict, joints, opts, hints.of(joints).as_ref(), est);
@@ -232,8 +232,13 @@ impl Hints<'_> {
     fn of(&self, joints: &Joints2) -> Option<DepthHint> {
         match self.given {
             Some(h) if h.weight > 0.0 => Some(*h),
-            _ => self.prior.and_then(|p| p.depth_hint(joints, self.weight)),
+            _ => self.learned(joints),
         }
+    }
+
+    /// The learned depths of the 2-D joints `joints`, whether or not an image cue is given.
+    fn learned(&self, joints: &Joints2) -> Option<DepthHint> {
+        self.prior.and_then(|p| p.depth_hint(joints, self.weight))
     }
 }
 
@@ -287,7 +292,7 @@ fn second_solve(
         return None;
     }
     let plain = f.unstylise_2d(joints);
-    let second = estimate_fixed(dict, &plain, opts, hints.of(&plain).as_ref()).ok()?;
+    let second = estimate_fixed(dict, &plain, opts, hints.of(&plain).as_ref(), hints.learned(&plain).as_ref()).ok()?;
     let x = f.apply(&second.joints);
     let xs: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(x[j]));
     let prob = Problem::new(dict, joints, 0.0).ok()?;
@@ -330,17 +335,19 @@ fn flag_plausibility(joints: &Joints2, est: PoseEstimate) -> PoseEstimate {
     PoseEstimate { plausible, ..est }
 }
 
-/// [`estimate_pose`] with the dictionary's proportions (no factors, no plausibility flag).
+/// [`estimate_pose`] with the dictionary's proportions (no factors, no plausibility flag);
+/// `hint` weighs the solver's choices, `learned` (the learned depths) pulls the free-joint step.
 fn estimate_fixed(
     dict: &Dictionary,
     joints: &Joints2,
     opts: &PoseOptions,
     hint: Option<&DepthHint>,
+    learned: Option<&DepthHint>,
 ) -> Result<PoseEstimate> {
     let prob = Problem::new(dict, joints, opts.prior)?;
     if opts.starts == 0 || dict.exemplars.ncols() == 0 {
         let cam = fit_camera(&prob.pose(&[], &[]), &prob.uv, &prob.vis, &CameraPrior::of(opts))?;
-        return Ok(with_joint_fit(&prob, opts, pursue(&prob, opts, cam, None)?));
+        return Ok(with_joint_fit(&prob, opts, pursue(&prob, opts, cam, None)?, learned));
     }
     let ranking =
         super::exemplar::affine_ranking(&prob, super::exemplar::shortlist_len(opts.starts).max(opts.limb_candidates));
@@ -380,13 +387,20 @@ fn estimate_fixed(
         (None, Some(e)) => return Err(e),
         (None, None) => return Err(crate::error::Error::Degenerate("no exemplar start admitted a camera".into())),
     };
-    Ok(with_joint_fit(&prob, opts, est))
+    Ok(with_joint_fit(&prob, opts, est, learned))
 }
 
-/// The free-joint refinement of `est` when [`PoseOptions::joint_noise`] > 0.
-fn with_joint_fit(prob: &Problem, opts: &PoseOptions, est: PoseEstimate) -> PoseEstimate {
+/// The free-joint refinement of `est` when [`PoseOptions::joint_noise`] > 0, pulled toward the
+/// learned depths `learned` at [`PoseOptions::learned_depth_sd`].
+fn with_joint_fit(prob: &Problem, opts: &PoseOptions, est: PoseEstimate, learned: Option<&DepthHint>) -> PoseEstimate {
     if opts.joint_noise > 0.0 {
-        let priors = super::joint_fit::Priors { standing: opts.standing_prior, knee_limits: opts.knee_limits };
+        let depths = learned.filter(|h| opts.learned_depth_sd > 0.0 && h.known.iter().all(|k| *k)).map(|h| h.depth);
+        let priors = super::joint_fit::Priors {
+            standing: opts.standing_prior,
+            knee_limits: opts.knee_limits,
+            depths,
+            depth_sd: opts.learned_depth_sd,
+        };
         super::joint_fit::fit_joints(prob, &est, opts.joint_noise, &priors)
     } else {
         est
@@ -658,6 +672,7 @@ pub(crate) mod tests {
             knee_limits: false,
             factor_prior: false,
             depth_prior: 0.0,
+            learned_depth_sd: 0.0,
             straight_limbs: false,
         }
     }

@@ -16,6 +16,7 @@ use sketchbody::pose::motion::{normalize_pose, read_motion_csv, REF_STATURE};
 use sketchbody::pose::options::{kappa_from_paper, RotationTarget, PAPER_ALPHA, PAPER_KAPPA};
 use sketchbody::pose::{dict_io, estimate_pose, Dictionary, PoseOptions};
 use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
+use sketchbody_lab::pose::factor_train::TrainParams;
 use sketchbody_lab::pose::learn::{body_model_skeletons, held_out_of, motion_files, retarget_frames, retarget_of};
 use sketchbody_lab::pose::metrics::{mpjpe, pa_mpjpe};
 
@@ -92,6 +93,10 @@ pub struct Args {
     /// off).
     #[arg(long)]
     depth_prior: Option<f64>,
+    /// Spread (m) of the free-joint step's pull toward the learned depths in configuration (d)
+    /// (default: the library's; 0 = off).
+    #[arg(long)]
+    learned_depth_sd: Option<f64>,
     /// Straight limbs on (`on`) or off (`off`) in configuration (d) (default: the library's).
     #[arg(long)]
     straight_limbs: Option<String>,
@@ -126,6 +131,20 @@ pub struct Args {
     /// With `--suite`: cases per set (evenly spaced over its held-out frames).
     #[arg(long, default_value_t = 360)]
     cases: usize,
+    /// With `--suite` and `--cmu-more`: leave-one-category-out validation instead
+    /// (`bench_pose_loco`): per action category, the dictionary and the learned priors are
+    /// retrained without it (on DeepMimic, CMU and the other categories) and it is scored.
+    #[arg(long)]
+    loco: bool,
+    /// With `--loco`: only these categories (comma-separated names; default: all eight).
+    #[arg(long, value_delimiter = ',')]
+    loco_categories: Vec<String>,
+    /// With `--loco`: projected samples each fold's learned priors train on.
+    #[arg(long, default_value_t = TrainParams::default().samples)]
+    loco_samples: usize,
+    /// With `--loco`: training passes of each fold's learned priors.
+    #[arg(long, default_value_t = TrainParams::default().epochs)]
+    loco_epochs: usize,
     /// With `--dataset`: only the first N samples.
     #[arg(long)]
     first: Option<usize>,
@@ -244,6 +263,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         knee_limits: def.knee_limits && !a.no_knee_limits,
         factor_prior: def.factor_prior && !a.no_factor_prior,
         depth_prior: a.depth_prior.unwrap_or(def.depth_prior),
+        learned_depth_sd: a.learned_depth_sd.unwrap_or(def.learned_depth_sd),
         straight_limbs: match a.straight_limbs.as_deref() {
             None => def.straight_limbs,
             Some("on") => true,
@@ -264,6 +284,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
             dump: a.dump.as_deref(),
             factor_prior: a.factor_prior.as_deref().map(FactorPrior::read).transpose()?,
         };
+        if a.loco {
+            let train = TrainParams { samples: a.loco_samples, epochs: a.loco_epochs, ..TrainParams::default() };
+            return crate::bench_pose_loco::run(&ours, &suite, &a.loco_categories, &train);
+        }
         return crate::bench_pose_suite::run(&dict, &ours, &suite);
     }
     if let Some(ds) = &a.dataset {
@@ -291,6 +315,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         knee_limits: false,
         factor_prior: false,
         depth_prior: 0.0,
+        learned_depth_sd: 0.0,
         straight_limbs: false,
     };
     let configs = [

@@ -41,7 +41,7 @@ pub(crate) struct Set {
     pub(crate) clips: Vec<String>,
     pub(crate) frames: Vec<Joints3>,
     /// One of `--cmu-more`'s action categories (summed into its "all" row).
-    category: bool,
+    pub(crate) category: bool,
 }
 
 /// The action categories of `cmu_more` (its README): set name and clip-name prefix.
@@ -132,7 +132,7 @@ pub(crate) fn camera<R: Rng>(rng: &mut R, side: bool) -> WeakPerspective {
 
 /// Sums over the cases of one row of the table.
 #[derive(Clone, Copy, Default)]
-struct Scores {
+pub(crate) struct Scores {
     pa: f64,
     limb: f64,
     over: usize,
@@ -152,7 +152,7 @@ struct Scores {
 }
 
 impl Scores {
-    fn merge(&mut self, o: &Scores) {
+    pub(crate) fn merge(&mut self, o: &Scores) {
         self.pa += o.pa;
         self.limb += o.limb;
         self.over += o.over;
@@ -226,9 +226,9 @@ pub struct Suite<'a> {
     pub factor_prior: Option<FactorPrior>,
 }
 
-/// Runs the suite with options `opts` (see [`Suite`]).
-pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), CliError> {
-    let (mocap, cmu, cases, sigmas, seed) = (suite.mocap, suite.cmu, suite.cases, suite.sigmas, suite.seed);
+/// The sets of the suite, in their order (the order fixes each set's random stream): the
+/// held-out DeepMimic clips, the held-out CMU subjects, one set per `cmu_more` category.
+pub(crate) fn suite_sets(dict: &Dictionary, suite: &Suite) -> Result<Vec<Set>, CliError> {
     let entries = match suite.clips {
         Some(c) => c.to_vec(),
         None => {
@@ -237,39 +237,20 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
             e
         }
     };
-    let mut dump = match suite.dump {
-        Some(p) => {
-            let mut f = std::io::BufWriter::new(std::fs::File::create(p).map_err(dump_err)?);
-            writeln!(
-                f,
-                "set,props,view,sigma,case,standing_2d,{},{},{}",
-                (0..8).map(|i| format!("limb{i}")).collect::<Vec<_>>().join(","),
-                GROUP_NAMES.map(|g| format!("est_{g}")).join(","),
-                GROUP_NAMES.map(|g| format!("true_{g}")).join(",")
-            )
-            .map_err(dump_err)?;
-            Some(f)
-        }
-        None => None,
-    };
     let skeletons = body_model_skeletons(&BodyModel::embedded()?);
     let held_out = |stem: &str| entries.iter().any(|e| clip_matches(e, stem));
-    let mut sets = vec![load_set("deepmimic", &[mocap.to_path_buf()], &held_out, &skeletons, cases)?];
-    if let Some(c) = cmu {
-        sets.push(load_set("cmu", std::slice::from_ref(c), &held_out, &skeletons, cases)?);
+    let mut sets = vec![load_set("deepmimic", &[suite.mocap.to_path_buf()], &held_out, &skeletons, suite.cases)?];
+    if let Some(c) = suite.cmu {
+        sets.push(load_set("cmu", std::slice::from_ref(c), &held_out, &skeletons, suite.cases)?);
     }
     if let Some(c) = suite.cmu_more {
-        sets.extend(category_sets(c, &skeletons, cases)?);
+        sets.extend(category_sets(c, &skeletons, suite.cases)?);
     }
-    println!(
-        "bench-pose --suite: {} bases in {} actions, {} exemplars; seed {seed}; options {opts:?}",
-        dict.num_bases(),
-        dict.actions.len(),
-        dict.exemplars.ncols()
-    );
-    for s in &sets {
-        println!("set {}: {} cases from {} clips ({})", s.name, s.frames.len(), s.clips.len(), s.clips.join(","));
-    }
+    Ok(sets)
+}
+
+/// Prints the table's header line.
+pub(crate) fn print_header() {
     println!(
         "{:<10} {:<9} {:<7} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>6} {:>7} {:>8} {:>8} {:>5}",
         "set",
@@ -290,9 +271,78 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
         "lowest",
         "alts"
     );
+}
+
+/// The summed scores of the category sets by (proportions, view, σ) index.
+pub(crate) type CategoryScores = std::collections::BTreeMap<(usize, usize, usize), Scores>;
+
+/// Prints one row per entry of `scores`, named `name`.
+pub(crate) fn print_category_rows(name: &str, scores: &CategoryScores, sigmas: &[f64]) {
+    for ((pi, vi, ni), sc) in scores {
+        sc.print(name, ["standard", "stylised"][*pi], ["frontal", "side"][*vi], sigmas[*ni]);
+    }
+}
+
+/// Runs the suite with options `opts` (see [`Suite`]).
+pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), CliError> {
+    let mut dump = match suite.dump {
+        Some(p) => {
+            let mut f = std::io::BufWriter::new(std::fs::File::create(p).map_err(dump_err)?);
+            writeln!(
+                f,
+                "set,props,view,sigma,case,standing_2d,{},{},{}",
+                (0..8).map(|i| format!("limb{i}")).collect::<Vec<_>>().join(","),
+                GROUP_NAMES.map(|g| format!("est_{g}")).join(","),
+                GROUP_NAMES.map(|g| format!("true_{g}")).join(",")
+            )
+            .map_err(dump_err)?;
+            Some(f)
+        }
+        None => None,
+    };
+    let sets = suite_sets(dict, suite)?;
+    println!(
+        "bench-pose --suite: {} bases in {} actions, {} exemplars; seed {}; options {opts:?}",
+        dict.num_bases(),
+        dict.actions.len(),
+        dict.exemplars.ncols(),
+        suite.seed
+    );
+    for s in &sets {
+        println!("set {}: {} cases from {} clips ({})", s.name, s.frames.len(), s.clips.len(), s.clips.join(","));
+    }
+    print_header();
+    let indexed: Vec<(usize, &Set)> = sets.iter().enumerate().collect();
+    let all_categories = score_sets(
+        dict,
+        opts,
+        &indexed,
+        suite,
+        suite.factor_prior.as_ref(),
+        dump.as_mut().map(|d| d as &mut dyn Write),
+    )?;
+    print_category_rows("categories", &all_categories, suite.sigmas);
+    if let Some(mut out) = dump {
+        out.flush().map_err(dump_err)?;
+    }
+    Ok(())
+}
+
+/// Scores each (index, set) of `sets` (the index fixes the set's random stream, as in
+/// [`suite_sets`]'s order) with `dict` and the learned priors `prior` (`None`: the embedded
+/// ones), printing one row per set, proportions, view and σ; returns the category sets' sums.
+pub(crate) fn score_sets(
+    dict: &Dictionary,
+    opts: &PoseOptions,
+    sets: &[(usize, &Set)],
+    suite: &Suite,
+    prior: Option<&FactorPrior>,
+    mut dump: Option<&mut dyn Write>,
+) -> Result<CategoryScores, CliError> {
+    let (sigmas, seed) = (suite.sigmas, suite.seed);
     let normal = Normal::new(0.0, 1.0).map_err(|e| CliError(e.to_string()))?;
-    let mut all_categories = std::collections::BTreeMap::<(usize, usize, usize), Scores>::new();
-    for (si, set) in sets.iter().enumerate() {
+    let mut all_categories = CategoryScores::new();
+    for &(si, set) in sets {
         for (pi, props) in ["standard", "stylised"].iter().enumerate() {
             for (vi, view) in ["frontal", "side"].iter().enumerate() {
                 // One stream per (set, proportions, view): the same cases for every sigma.
@@ -311,7 +361,7 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
                             j2.xy[p] = [q[0] + sigma * a, q[1] + sigma * b];
                         }
                         let c0 = thread_cpu_s();
-                        let res = match &suite.factor_prior {
+                        let res = match prior {
                             Some(p) => estimate_pose_with_factor_prior(dict, &j2, opts, None, Some(p)),
                             None => estimate_pose(dict, &j2, opts),
                         };
@@ -325,7 +375,7 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
                             sc.failed += 1;
                             continue;
                         };
-                        if let Some(out) = dump.as_mut() {
+                        if let Some(out) = dump.as_deref_mut() {
                             let truth = if pi == 1 { factors } else { BodyFactors::default() };
                             let vis = [true; NUM_JOINTS];
                             writeln!(
@@ -370,11 +420,5 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
             }
         }
     }
-    for ((pi, vi, ni), sc) in &all_categories {
-        sc.print("categories", ["standard", "stylised"][*pi], ["frontal", "side"][*vi], sigmas[*ni]);
-    }
-    if let Some(mut out) = dump {
-        out.flush().map_err(dump_err)?;
-    }
-    Ok(())
+    Ok(all_categories)
 }

@@ -6,6 +6,7 @@
 mod backend_sets;
 mod bench_pose;
 mod bench_pose_dataset;
+mod bench_pose_loco;
 mod bench_pose_suite;
 mod build_model;
 mod calibrate_detector;
