@@ -2,8 +2,7 @@
 //! faceless front outline reads as facing the viewer with the front's labelling; the same
 //! evidence with both backends' left and right swapped (a labelling that implies a back view
 //! without evidence of one) is swapped back; a back view drawn with hair over the head reads as
-//! seen from behind with the back's labelling; the reported alternative is the other labelling;
-//! where the sketch model does not recognise a drawing (a photo) the backends' labelling stands.
+//! seen from behind with the back's labelling; the reported alternative is the other labelling.
 
 use std::sync::Arc;
 
@@ -87,29 +86,4 @@ fn a_back_view_with_hair_over_the_head_reads_as_seen_from_behind() {
     assert_eq!(f.facing.facing, Facing::Back, "{:?}", f.facing.probabilities);
     assert!(handedness(&f.joints) < -0.1 && !is_swap(&truth, &f.joints), "{}", handedness(&f.joints));
     assert!(pck(&truth, &f.joints.xy, 0.2).unwrap() >= 0.8);
-}
-
-#[test]
-fn the_rule_leaves_the_labelling_of_an_image_the_sketch_model_does_not_recognise() {
-    let cal = Calibration::embedded().unwrap();
-    let o = FigureOptions::default();
-    let (e, truth) = evidence(41, 0.0, Hair::None);
-    let mut m = mirrored_labels(&e);
-    assert!(sketchbody::detect::figure::facing_in_domain(&m, m.sketch_threshold));
-    // The same candidates with the sketch model's figures under its own threshold, as on a photo.
-    let below = m.sketch_threshold - 1.0;
-    for d in m.sketch.iter_mut().flatten() {
-        d.score = d.score.min(below);
-    }
-    assert!(!sketchbody::detect::figure::facing_in_domain(&m, m.sketch_threshold));
-    let f = decide(&m, cal, &o, None).unwrap();
-    assert!(!f.facing.swapped && is_swap(&truth, &f.joints), "{:?}", f.facing);
-    let kept = decide(&m, cal, &FigureOptions { facing_rule: false, ..o.clone() }, None).unwrap();
-    assert_eq!(kept.joints, f.joints);
-    assert_eq!(kept.facing.probabilities, f.facing.probabilities);
-    // A threshold override the figures pass brings the rule back.
-    let lower =
-        FigureOptions { sketch: sketchbody::detect::DetectOptions { threshold: Some(below), ..o.sketch.clone() }, ..o };
-    let g = decide(&m, cal, &lower, None).unwrap();
-    assert!(g.facing.swapped && !is_swap(&truth, &g.joints), "{:?}", g.facing);
 }

@@ -12,9 +12,7 @@
 //! The labelling rule ([`target_handedness`]): a figure read as seen from behind gets the back
 //! view's labelling, every other figure whose front or back dominates its profiles the front's:
 //! with no evidence either way a figure faces the viewer, and a labelling that implies a back
-//! view without evidence of one is swapped back. The model was fitted on line drawings: the
-//! detector applies the rule only to images the sketch model recognises as a drawing
-//! (`figure::facing_in_domain`); on a photo the backends' labelling stands.
+//! view without evidence of one is swapped back.
 
 use std::sync::OnceLock;
 

@@ -122,9 +122,7 @@ pub struct FigureOptions {
     /// Label left and right by the decided facing ([`facing::target_handedness`]): a candidate
     /// labelled as seen from behind without evidence of a back view is swapped to the front's
     /// labelling, one labelled as facing the viewer of a figure decided as seen from behind to
-    /// the back's; only on images the sketch model recognises as a drawing
-    /// ([`facing_in_domain`]). `false` keeps the backends' labellings (the facing is still
-    /// reported).
+    /// the back's. `false` keeps the backends' labellings (the facing is still reported).
     /// Default `true`.
     pub facing_rule: bool,
     /// The facing model; `None` (default) the embedded one ([`FacingModel::embedded`]).
@@ -451,20 +449,6 @@ pub fn facing_probabilities(evidence: &Evidence, model: &FacingModel) -> [f64; 4
     model.probabilities(&evidence_facing_features(evidence))
 }
 
-/// Whether the labelling rule ([`FigureOptions::facing_rule`]) applies to `evidence`: the
-/// facing model was fitted on line drawings, so its verdict relabels a figure only where the
-/// sketch model recognises the image as a drawing of one, its best figure scoring at least
-/// `sketch_threshold` (its own threshold, or the options' override), or where the sketch model
-/// did not run (no evidence either way). Elsewhere (photos and stylised photos, whose best
-/// sketch-model figure stays under the threshold) the backends' labelling stands; the facing
-/// and its probabilities are still reported.
-pub fn facing_in_domain(evidence: &Evidence, sketch_threshold: f64) -> bool {
-    match &evidence.sketch {
-        None => true,
-        Some(found) => found.first().is_some_and(|d| d.score >= sketch_threshold),
-    }
-}
-
 /// The log-odds of a figure that [`decide`] thresholds for features `f`: when both backends
 /// found a candidate, the higher of the two-backend presence model's and BlazePose's own (a
 /// figure BlazePose alone is sure of is not refused because the sketch model, which does not
@@ -513,9 +497,7 @@ pub fn decide(
         None => FacingModel::embedded()?,
     };
     let probabilities = facing_probabilities(evidence, model);
-    let sketch_threshold = options.sketch.threshold.unwrap_or(evidence.sketch_threshold);
-    let facing_applies = facing_in_domain(evidence, sketch_threshold);
-    if options.facing_rule && facing_applies {
+    if options.facing_rule {
         let target = facing::target_handedness(facing::decided(&probabilities), &probabilities);
         for c in &mut cands {
             if facing::needs_swap(&c.joints, target) {
@@ -525,6 +507,7 @@ pub fn decide(
     }
     let blazepose_swapped = cands.iter().any(|c| c.backend == Backend::BlazePose && c.swapped);
     let presence = presence_log_odds(&f, cal)?.map_or(0.0, sigmoid);
+    let sketch_threshold = options.sketch.threshold.unwrap_or(evidence.sketch_threshold);
     if options.strict {
         cands.retain(|c| match c.backend {
             Backend::Fmp => c.raw_score >= sketch_threshold,
@@ -783,19 +766,6 @@ mod tests {
         assert_eq!(decide(&e, &cal, &o, Some(&pick_blazepose)).unwrap().backend, Backend::BlazePose);
         let failing = |_: &Joints2, _: &Joints2| -> Result<Option<usize>> { Err(Error::Degenerate("referee".into())) };
         assert!(matches!(decide(&e, &cal, &o, Some(&failing)), Err(Error::Degenerate(_))));
-    }
-
-    /// The labelling rule applies where the sketch model's best figure reaches the threshold
-    /// (exactly at it counts) or the sketch model did not run, not where it found nothing or
-    /// only figures under it.
-    #[test]
-    fn the_facing_applies_where_the_sketch_model_recognises_a_drawing() {
-        let e = both(THRESH, 0.9, 0.9, 0.9);
-        assert!(facing_in_domain(&e, THRESH));
-        assert!(!facing_in_domain(&e, THRESH + 0.01));
-        assert!(!facing_in_domain(&both(THRESH - 0.5, 0.9, 0.9, 0.9), THRESH));
-        assert!(facing_in_domain(&Evidence { sketch: None, ..e.clone() }, THRESH));
-        assert!(!facing_in_domain(&Evidence { sketch: Some(Vec::new()), ..e }, THRESH));
     }
 
     /// `strict`: a candidate counts only at or above its backend's own threshold (the sketch

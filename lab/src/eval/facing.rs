@@ -162,12 +162,12 @@ pub fn misread(samples: &[Sample], model: &FacingModel) -> Vec<Misread> {
 
 /// The columns of [`dump_rows`].
 pub const DUMP_HEADER: &str = "set,index,yaw_deg,true_facing,features,p_front,p_back,p_left,p_right,decided,\
-blazepose_filled,blazepose_flag,drawing,off_backend,off_handedness,off_pck,off_swapped_pck,on_pck,on_swapped";
+blazepose_filled,blazepose_flag,sketch_recognised,off_backend,off_handedness,off_pck,off_swapped_pck,on_pck,on_swapped";
 
 /// One CSV row per sample of `samples` (set `label`) with a figure: its facing features (space
 /// separated, [`sketchbody::detect::facing::FEATURES`] without the bias) and probabilities
 /// under `model`, BlazePose's kept pass (on the filled drawing, its pose flag), whether the
-/// facing applies ([`sketchbody::detect::figure::facing_in_domain`]), and `auto`'s
+/// sketch model's best figure reaches its own threshold (it recognises a drawing), and `auto`'s
 /// answer with `options` without and with the labelling rule: the backend, its handedness and
 /// PCK@0.2 of it and of its left/right swap (NaN for no answer). For choosing a labelling rule
 /// offline. Errors: the metrics' and [`decide`]'s but `NoFigure`.
@@ -217,10 +217,8 @@ pub fn dump_rows(
             sketchbody::detect::facing::decided(&p).name(),
             bp.is_some_and(|b| b.filled),
             bp.map_or(f64::NAN, |b| b.score),
-            sketchbody::detect::figure::facing_in_domain(
-                &s.evidence,
-                options.sketch.threshold.unwrap_or(s.evidence.sketch_threshold)
-            ),
+            s.evidence.sketch.as_ref().and_then(|v| v.first()).is_some_and(|d| d.score
+                >= options.sketch.threshold.unwrap_or(s.evidence.sketch_threshold)),
             off.as_ref().map_or("none", |f| f.backend.name()),
         ));
     }
