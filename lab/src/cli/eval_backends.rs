@@ -17,7 +17,7 @@ use sketchbody::render::sketch::{Hair, SketchRenderer};
 use sketchbody_lab::eval::backends::{
     expected_calibration_error, is_swap, reliability, score_set, Sample, GROSS_JOINTS,
 };
-use sketchbody_lab::eval::facing::misread;
+use sketchbody_lab::eval::facing::{dump_rows, misread, DUMP_HEADER};
 use sketchbody_lab::render::photo_npr::PhotoNpr;
 use sketchbody_lab::render::stylise::{NegativePage, Stylisation};
 
@@ -35,6 +35,8 @@ pub struct FacingEval {
     /// Print each sketch whose facing is misread ([`misread`]) or whose answer is a left/right
     /// swap, with its probabilities and features.
     pub cases: bool,
+    /// Write one CSV row per image with a figure here ([`dump_rows`]).
+    pub dump: Option<std::path::PathBuf>,
 }
 
 /// Prints the sketches of `samples` whose facing `model` misreads and those `auto` (with
@@ -163,6 +165,7 @@ pub fn run_sets(
     println!("PCK@0.1 / PCK@0.2, no-figure rate, mean ms per image (wall, images in parallel) per set and backend");
     println!("{:<26} {:>4}  {}", "set", "n", configs.map(|c| format!("{:<30}", c.4)).join(""));
     let mut positives: Vec<Sample> = Vec::new();
+    let mut dump = vec![DUMP_HEADER.to_string()];
     for spec in specs {
         let samples = gather_set(spec, &ctx, &options)?;
         let mut cells = Vec::new();
@@ -204,6 +207,10 @@ pub fn run_sets(
         }
         if facing.cases {
             print_facing_cases(&samples, &facing_model, cal, &options)?;
+        }
+        if let Some(path) = &facing.dump {
+            dump.extend(dump_rows(&spec.label(), &samples, &facing_model, cal, &options)?);
+            std::fs::write(path, dump.join("\n") + "\n").map_err(|e| CliError(format!("{}: {e}", path.display())))?;
         }
         let sweep = presence_sweep(&samples, cal, &[0.5, 0.2, 0.1, 0.05])?;
         println!("{:<26}       auto by min presence (PCK@0.2 / no figure): {sweep}", "");

@@ -69,6 +69,11 @@ pub struct Args {
     /// left/right swap, with the facing's probabilities and features.
     #[arg(long)]
     facing_cases: bool,
+    /// With `--sets`: write one CSV row per image with a figure (facing features and
+    /// probabilities, `auto`'s answer with and without the labelling rule and its PCK@0.2) to
+    /// this file, for choosing a labelling rule offline.
+    #[arg(long)]
+    facing_dump: Option<PathBuf>,
     /// A calibration JSON for `--sets` (as `calibrate-detector` writes it) instead of the
     /// embedded one.
     #[arg(long)]
@@ -160,7 +165,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         };
         return crate::eval_backends::run_sets(
             &specs,
-            crate::eval_backends::FacingEval { model: facing, cases: a.facing_cases },
+            crate::eval_backends::FacingEval { model: facing, cases: a.facing_cases, dump: a.facing_dump.clone() },
             &renderer(a.mocap.as_deref())?,
             &a.parse,
             &cal,

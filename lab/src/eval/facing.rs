@@ -160,6 +160,71 @@ pub fn misread(samples: &[Sample], model: &FacingModel) -> Vec<Misread> {
     out
 }
 
+/// The columns of [`dump_rows`].
+pub const DUMP_HEADER: &str = "set,index,yaw_deg,true_facing,features,p_front,p_back,p_left,p_right,decided,\
+blazepose_filled,blazepose_flag,sketch_recognised,off_backend,off_handedness,off_pck,off_swapped_pck,on_pck,on_swapped";
+
+/// One CSV row per sample of `samples` (set `label`) with a figure: its facing features (space
+/// separated, [`sketchbody::detect::facing::FEATURES`] without the bias) and probabilities
+/// under `model`, BlazePose's kept pass (on the filled drawing, its pose flag), whether the
+/// sketch model's best figure reaches its own threshold (it recognises a drawing), and `auto`'s
+/// answer with `options` without and with the labelling rule: the backend, its handedness and
+/// PCK@0.2 of it and of its left/right swap (NaN for no answer). For choosing a labelling rule
+/// offline. Errors: the metrics' and [`decide`]'s but `NoFigure`.
+pub fn dump_rows(
+    label: &str,
+    samples: &[Sample],
+    model: &FacingModel,
+    cal: &sketchbody::detect::calibration::Calibration,
+    options: &sketchbody::detect::figure::FigureOptions,
+) -> Result<Vec<String>> {
+    use sketchbody::detect::facing::{handedness, swap_sides};
+    let answer = |s: &Sample, rule: bool| {
+        let o = sketchbody::detect::figure::FigureOptions { facing_rule: rule, ..options.clone() };
+        match sketchbody::pipeline::figure::decide(&s.evidence, cal, &o, None) {
+            Ok(f) => Ok(Some(f)),
+            Err(Error::NoFigure { .. }) => Ok(None),
+            Err(e) => Err(e),
+        }
+    };
+    let mut rows = Vec::new();
+    for (i, s) in samples.iter().enumerate() {
+        let Some(t) = &s.truth else { continue };
+        let x = evidence_facing_features(&s.evidence);
+        let p = model.probabilities(&x);
+        let (off, on) = (answer(s, false)?, answer(s, true)?);
+        let pck2 = |j: &[[f64; 2]; sketchbody::skeleton::NUM_JOINTS]| super::metrics::pck(t, j, 0.2);
+        let (off_h, off_pck, off_sw) = match &off {
+            Some(f) => (handedness(&f.joints), pck2(&f.joints.xy)?, pck2(&swap_sides(&f.joints).xy)?),
+            None => (f64::NAN, f64::NAN, f64::NAN),
+        };
+        let (on_pck, on_swapped) = match &on {
+            Some(f) => (pck2(&f.joints.xy)?, f.facing.swapped),
+            None => (f64::NAN, false),
+        };
+        let feats: Vec<String> = x[1..].iter().map(|v| format!("{v:.4}")).collect();
+        let bp = s.evidence.blazepose.as_ref();
+        rows.push(format!(
+            "{},{i},{},{},{},{:.4},{:.4},{:.4},{:.4},{},{},{:.4},{},{},{off_h:.4},{off_pck:.4},{off_sw:.4},{on_pck:.4},{on_swapped}",
+            label.replace(',', ";"),
+            s.yaw_deg.map_or("".into(), |y| format!("{y:.1}")),
+            s.yaw_deg.map_or("", |y| Facing::of_yaw(y).name()),
+            feats.join(" "),
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            sketchbody::detect::facing::decided(&p).name(),
+            bp.is_some_and(|b| b.filled),
+            bp.map_or(f64::NAN, |b| b.score),
+            s.evidence.sketch.as_ref().and_then(|v| v.first()).is_some_and(|d| d.score
+                >= options.sketch.threshold.unwrap_or(s.evidence.sketch_threshold)),
+            off.as_ref().map_or("none", |f| f.backend.name()),
+        ));
+    }
+    Ok(rows)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
