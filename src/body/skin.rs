@@ -4,8 +4,8 @@
 //! dual-quaternion skinning blends their rigid parts as unit dual quaternions instead, which
 //! keeps volume at twisted or strongly bent joints (no "candy wrapper"). With retargeting the
 //! bone stretches are blended linearly first and the rigid parts by dual quaternions.
-//! Both run in parallel over vertices (rayon); every vertex is computed independently, so the
-//! result does not depend on the number of threads.
+//! Both run in parallel over vertices (rayon) for meshes above a few thousand vertices; every
+//! vertex is computed independently, so the result does not depend on the number of threads.
 
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use rayon::prelude::*;
@@ -120,10 +120,15 @@ fn dqs_vertex(bones: &[BoneXf; NUM_BONES], p: [f32; 3], w: &VertexWeights) -> [f
     [rotated.x + t.i, rotated.y + t.j, rotated.z + t.k]
 }
 
+/// Meshes of at most this many vertices are skinned on the calling thread (the shape fit's
+/// proxy, skinned inside an already parallel loop); larger ones in parallel chunks.
+const PARALLEL_MIN: usize = 4096;
+
 /// Skins `rest` vertices (metres, model frame) with `weights` (one entry per vertex) into
 /// `out` (resized to the vertex count). Errors when the lengths differ, and
 /// [`Error::NonFinite`] when a skinned coordinate overflows to infinity or NaN (a pose with huge
-/// joint positions): such a result is never reported as success. Parallel, deterministic.
+/// joint positions): such a result is never reported as success. Parallel above
+/// [`PARALLEL_MIN`] vertices; every vertex is computed alike either way (deterministic).
 pub fn skin_into(
     rest: &[[f32; 3]],
     weights: &[VertexWeights],
@@ -142,15 +147,22 @@ pub fn skin_into(
     }
     let bones = prepare(pose);
     out.resize(rest.len(), [0.0; 3]);
-    const CHUNK: usize = 1024;
-    out.par_chunks_mut(CHUNK).zip(rest.par_chunks(CHUNK).zip(weights.par_chunks(CHUNK))).for_each(|(o, (r, w))| {
+    let chunk = |o: &mut [[f32; 3]], r: &[[f32; 3]], w: &[VertexWeights]| {
         for ((o, &p), w) in o.iter_mut().zip(r).zip(w) {
             *o = match method {
                 SkinMethod::Linear => lbs_vertex(&bones, p, w),
                 SkinMethod::DualQuaternion => dqs_vertex(&bones, p, w),
             };
         }
-    });
+    };
+    const CHUNK: usize = 1024;
+    if rest.len() <= PARALLEL_MIN {
+        chunk(out, rest, weights);
+    } else {
+        out.par_chunks_mut(CHUNK)
+            .zip(rest.par_chunks(CHUNK).zip(weights.par_chunks(CHUNK)))
+            .for_each(|(o, (r, w))| chunk(o, r, w));
+    }
     if let Some(c) = out.iter().flatten().find(|c| !c.is_finite()) {
         return Err(Error::NonFinite { name: "skinned vertex coordinate", value: *c as f64 });
     }
