@@ -61,8 +61,7 @@ fn hi(v: i64) -> i64 {
 /// Draws (255) every pixel centre of a row-major `w`×`h` `mask` covered by a triangle of
 /// `tris` (indices into `fixed`, vertices snapped to 1/SUB px, already range-checked). Returns
 /// how many triangles were scanned (bounding box met a pixel centre, non-degenerate, and
-/// facing as asked). Integer arithmetic only, compiled for AVX2 when the processor has it
-/// (wider vector registers for the block tests; the same pixels either way).
+/// facing as asked).
 pub(super) fn draw_mask(
     fixed: &[[i32; 2]],
     tris: &[[u32; 3]],
@@ -71,27 +70,6 @@ pub(super) fn draw_mask(
     facing: Facing,
     mask: &mut [u8],
 ) -> usize {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor supports AVX2 (checked just above), the only requirement
-            // of calling a `target_feature(enable = "avx2")` function.
-            return unsafe { draw_mask_avx2(fixed, tris, w, h, facing, mask) };
-        }
-    }
-    draw_mask_body(fixed, tris, w, h, facing, mask)
-}
-
-/// [`draw_mask_body`] compiled for AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn draw_mask_avx2(fixed: &[[i32; 2]], tris: &[[u32; 3]], w: usize, h: usize, facing: Facing, mask: &mut [u8]) -> usize {
-    draw_mask_body(fixed, tris, w, h, facing, mask)
-}
-
-/// The portable body of [`draw_mask`].
-#[inline(always)]
-fn draw_mask_body(fixed: &[[i32; 2]], tris: &[[u32; 3]], w: usize, h: usize, facing: Facing, mask: &mut [u8]) -> usize {
     let (last_i, last_j) = (w as i64 - 1, h as i64 - 1);
     let mut scanned = 0;
     for t in tris {
