@@ -147,26 +147,32 @@ pub fn skin_into(
     }
     let bones = prepare(pose);
     out.resize(rest.len(), [0.0; 3]);
+    // Skins a chunk; `true` when every coordinate it wrote is finite.
     let chunk = |o: &mut [[f32; 3]], r: &[[f32; 3]], w: &[VertexWeights]| {
+        let mut finite = true;
         for ((o, &p), w) in o.iter_mut().zip(r).zip(w) {
             *o = match method {
                 SkinMethod::Linear => lbs_vertex(&bones, p, w),
                 SkinMethod::DualQuaternion => dqs_vertex(&bones, p, w),
             };
+            finite &= o[0].is_finite() & o[1].is_finite() & o[2].is_finite();
         }
+        finite
     };
     const CHUNK: usize = 1024;
-    if rest.len() <= PARALLEL_MIN {
-        chunk(out, rest, weights);
+    let finite = if rest.len() <= PARALLEL_MIN {
+        chunk(out, rest, weights)
     } else {
         out.par_chunks_mut(CHUNK)
             .zip(rest.par_chunks(CHUNK).zip(weights.par_chunks(CHUNK)))
-            .for_each(|(o, (r, w))| chunk(o, r, w));
+            .map(|(o, (r, w))| chunk(o, r, w))
+            .reduce(|| true, |a, b| a & b)
+    };
+    if finite {
+        return Ok(());
     }
-    if let Some(c) = out.iter().flatten().find(|c| !c.is_finite()) {
-        return Err(Error::NonFinite { name: "skinned vertex coordinate", value: *c as f64 });
-    }
-    Ok(())
+    let c = out.iter().flatten().find(|c| !c.is_finite()).map_or(f64::NAN, |&c| c as f64);
+    Err(Error::NonFinite { name: "skinned vertex coordinate", value: c })
 }
 
 /// [`skin_into`] into a new vector.
