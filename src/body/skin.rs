@@ -193,6 +193,29 @@ mod tests {
         a.iter().zip(b).map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f32>().sqrt()).fold(0.0, f32::max)
     }
 
+    /// A turn of vertices at the largest f32 overflows to infinity: a non-finite error, never a
+    /// result, on a mesh skinned on the calling thread and on one skinned in parallel chunks.
+    #[test]
+    fn overflowing_coordinates_are_an_error_at_any_mesh_size() {
+        let rest = rest_joints();
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.7);
+        let mut target = rest;
+        for p in target.iter_mut() {
+            let q = turn * Vector3::from(*p);
+            *p = [q.x, q.y, q.z];
+        }
+        let pose = solve(&rest, &target, &IkOptions::default()).unwrap();
+        for (rings, segs) in [(12, 8), (64, 48)] {
+            let mut mesh = capsule_humanoid(&rest, rings, segs);
+            assert_eq!(mesh.vertices.len() > PARALLEL_MIN, rings == 64, "{}", mesh.vertices.len());
+            mesh.vertices.iter_mut().for_each(|v| *v = [f32::MAX; 3]);
+            for method in [SkinMethod::Linear, SkinMethod::DualQuaternion] {
+                let got = skin(&mesh.vertices, &mesh.weights, &pose, method);
+                assert!(matches!(got, Err(Error::NonFinite { name: "skinned vertex coordinate", .. })), "{got:?}");
+            }
+        }
+    }
+
     #[test]
     fn rest_pose_and_rigid_motion_are_reproduced_by_both_methods() {
         let rest = rest_joints();
