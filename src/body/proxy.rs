@@ -66,10 +66,8 @@ impl ProxySpace {
                 continue;
             }
             let wf = w as f32;
-            for (o, b) in out.iter_mut().zip(self.basis[k * 3 * m..(k + 1) * 3 * m].chunks_exact(3)) {
-                o[0] += wf * b[0];
-                o[1] += wf * b[1];
-                o[2] += wf * b[2];
+            for (o, b) in out.as_flattened_mut().iter_mut().zip(&self.basis[k * 3 * m..(k + 1) * 3 * m]) {
+                *o += wf * b;
             }
             for (j, jb) in joints.iter_mut().zip(&self.joint_basis[k]) {
                 for c in 0..3 {

@@ -4,8 +4,8 @@
 //! dual-quaternion skinning blends their rigid parts as unit dual quaternions instead, which
 //! keeps volume at twisted or strongly bent joints (no "candy wrapper"). With retargeting the
 //! bone stretches are blended linearly first and the rigid parts by dual quaternions.
-//! Both run in parallel over vertices (rayon); every vertex is computed independently, so the
-//! result does not depend on the number of threads.
+//! Both run in parallel over vertices (rayon) for meshes above a few thousand vertices; every
+//! vertex is computed independently, so the result does not depend on the number of threads.
 
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use rayon::prelude::*;
@@ -120,10 +120,15 @@ fn dqs_vertex(bones: &[BoneXf; NUM_BONES], p: [f32; 3], w: &VertexWeights) -> [f
     [rotated.x + t.i, rotated.y + t.j, rotated.z + t.k]
 }
 
+/// Meshes of at most this many vertices are skinned on the calling thread (the shape fit's
+/// proxy, skinned inside an already parallel loop); larger ones in parallel chunks.
+const PARALLEL_MIN: usize = 4096;
+
 /// Skins `rest` vertices (metres, model frame) with `weights` (one entry per vertex) into
 /// `out` (resized to the vertex count). Errors when the lengths differ, and
 /// [`Error::NonFinite`] when a skinned coordinate overflows to infinity or NaN (a pose with huge
-/// joint positions): such a result is never reported as success. Parallel, deterministic.
+/// joint positions): such a result is never reported as success. Parallel above
+/// [`PARALLEL_MIN`] vertices; every vertex is computed alike either way (deterministic).
 pub fn skin_into(
     rest: &[[f32; 3]],
     weights: &[VertexWeights],
@@ -142,19 +147,32 @@ pub fn skin_into(
     }
     let bones = prepare(pose);
     out.resize(rest.len(), [0.0; 3]);
-    const CHUNK: usize = 1024;
-    out.par_chunks_mut(CHUNK).zip(rest.par_chunks(CHUNK).zip(weights.par_chunks(CHUNK))).for_each(|(o, (r, w))| {
+    // Skins a chunk; `true` when every coordinate it wrote is finite.
+    let chunk = |o: &mut [[f32; 3]], r: &[[f32; 3]], w: &[VertexWeights]| {
+        let mut finite = true;
         for ((o, &p), w) in o.iter_mut().zip(r).zip(w) {
             *o = match method {
                 SkinMethod::Linear => lbs_vertex(&bones, p, w),
                 SkinMethod::DualQuaternion => dqs_vertex(&bones, p, w),
             };
+            finite &= o[0].is_finite() & o[1].is_finite() & o[2].is_finite();
         }
-    });
-    if let Some(c) = out.iter().flatten().find(|c| !c.is_finite()) {
-        return Err(Error::NonFinite { name: "skinned vertex coordinate", value: *c as f64 });
+        finite
+    };
+    const CHUNK: usize = 1024;
+    let finite = if rest.len() <= PARALLEL_MIN {
+        chunk(out, rest, weights)
+    } else {
+        out.par_chunks_mut(CHUNK)
+            .zip(rest.par_chunks(CHUNK).zip(weights.par_chunks(CHUNK)))
+            .map(|(o, (r, w))| chunk(o, r, w))
+            .reduce(|| true, |a, b| a & b)
+    };
+    if finite {
+        return Ok(());
     }
-    Ok(())
+    let c = out.iter().flatten().find(|c| !c.is_finite()).map_or(f64::NAN, |&c| c as f64);
+    Err(Error::NonFinite { name: "skinned vertex coordinate", value: c })
 }
 
 /// [`skin_into`] into a new vector.
@@ -173,6 +191,29 @@ mod tests {
 
     fn max_dist(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
         a.iter().zip(b).map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f32>().sqrt()).fold(0.0, f32::max)
+    }
+
+    /// A turn of vertices at the largest f32 overflows to infinity: a non-finite error, never a
+    /// result, on a mesh skinned on the calling thread and on one skinned in parallel chunks.
+    #[test]
+    fn overflowing_coordinates_are_an_error_at_any_mesh_size() {
+        let rest = rest_joints();
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.7);
+        let mut target = rest;
+        for p in target.iter_mut() {
+            let q = turn * Vector3::from(*p);
+            *p = [q.x, q.y, q.z];
+        }
+        let pose = solve(&rest, &target, &IkOptions::default()).unwrap();
+        for (rings, segs) in [(12, 8), (64, 48)] {
+            let mut mesh = capsule_humanoid(&rest, rings, segs);
+            assert_eq!(mesh.vertices.len() > PARALLEL_MIN, rings == 64, "{}", mesh.vertices.len());
+            mesh.vertices.iter_mut().for_each(|v| *v = [f32::MAX; 3]);
+            for method in [SkinMethod::Linear, SkinMethod::DualQuaternion] {
+                let got = skin(&mesh.vertices, &mesh.weights, &pose, method);
+                assert!(matches!(got, Err(Error::NonFinite { name: "skinned vertex coordinate", .. })), "{got:?}");
+            }
+        }
     }
 
     #[test]

@@ -39,9 +39,10 @@ pub struct SketchEvidence {
     /// 1 where a pixel is not reachable from the image border without crossing a stroke (the
     /// drawing's outer outline filled: body and clothing alike).
     inside: Vec<u8>,
-    /// Cap of the chamfer distance of mask boundary pixels inside the outline
-    /// ([`SketchEvidence::with_inside_cap`]); [`CHAMFER_CAP`] = no distinction.
-    inside_cap: f32,
+    /// Per pixel, the distance a mask boundary pixel there costs in the chamfer: `distance`
+    /// capped at the inside cap ([`SketchEvidence::with_inside_cap`]) inside the outline, at
+    /// [`CHAMFER_CAP`] outside it.
+    chamfer_cost: Vec<f32>,
 }
 
 impl SketchEvidence {
@@ -73,7 +74,8 @@ impl SketchEvidence {
         let distance = distance_transform(&edges, width, height);
         let (figure, inside) = filled_figure(&edges, width, height, skeleton_px);
         let figure_count = figure.iter().filter(|&&f| f != 0).count();
-        Ok(Self { width, height, edges, edge_count, distance, figure, figure_count, inside, inside_cap: CHAMFER_CAP })
+        let chamfer_cost = distance.iter().map(|d| d.min(CHAMFER_CAP)).collect();
+        Ok(Self { width, height, edges, edge_count, distance, figure, figure_count, inside, chamfer_cost })
     }
 
     /// The clothing-robust chamfer: a mask boundary pixel inside the drawing's outer outline
@@ -84,7 +86,10 @@ impl SketchEvidence {
     /// lines, costume seams) count like any other stroke. `cap` ≥ [`CHAMFER_CAP`] (or not
     /// finite / not positive) keeps the plain chamfer.
     pub fn with_inside_cap(mut self, cap: f64) -> Self {
-        self.inside_cap = if cap.is_finite() && cap > 0.0 { (cap as f32).min(CHAMFER_CAP) } else { CHAMFER_CAP };
+        let inside_cap = if cap.is_finite() && cap > 0.0 { (cap as f32).min(CHAMFER_CAP) } else { CHAMFER_CAP };
+        for ((c, &d), &inside) in self.chamfer_cost.iter_mut().zip(&self.distance).zip(&self.inside) {
+            *c = d.min(if inside != 0 { inside_cap } else { CHAMFER_CAP });
+        }
         self
     }
 
@@ -126,22 +131,11 @@ impl SketchEvidence {
         counts
     }
 
-    /// Calls `f` with the index of every boundary pixel of `mask` inside `bounds`.
-    fn for_each_boundary(&self, mask: &[u8], bounds: Option<[usize; 4]>, mut f: impl FnMut(usize)) {
-        let (w, h) = (self.width, self.height);
-        let inside = |x: usize, y: usize| mask[y * w + x] != 0;
+    /// Calls `f` with the index of every boundary pixel of `mask` inside `bounds`, in row-major
+    /// order: a non-zero pixel on the raster's edge or with a zero 4-neighbour.
+    fn for_each_boundary(&self, mask: &[u8], bounds: Option<[usize; 4]>, f: impl FnMut(usize)) {
         if let Some([x0, y0, x1, y1]) = bounds {
-            for y in y0..=y1.min(h - 1) {
-                for x in x0..=x1.min(w - 1) {
-                    if !inside(x, y) {
-                        continue;
-                    }
-                    let border = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
-                    if border || !inside(x - 1, y) || !inside(x + 1, y) || !inside(x, y - 1) || !inside(x, y + 1) {
-                        f(y * w + x);
-                    }
-                }
-            }
+            for_each_boundary_in(mask, self.width, self.height, [x0, y0, x1, y1], f);
         }
     }
 
@@ -192,8 +186,7 @@ impl SketchEvidence {
     fn boundary_chamfer(&self, mask: &[u8], bounds: Option<[usize; 4]>) -> f64 {
         let (mut sum, mut n) = (0.0f64, 0usize);
         self.for_each_boundary(mask, bounds, |i| {
-            let cap = if self.inside[i] != 0 { self.inside_cap } else { CHAMFER_CAP };
-            sum += self.distance[i].min(cap) as f64;
+            sum += self.chamfer_cost[i] as f64;
             n += 1;
         });
         if n == 0 {
@@ -223,6 +216,62 @@ impl SketchEvidence {
             inter as f64 / union as f64
         }
     }
+}
+
+/// Calls `f` with the index of every boundary pixel of the row-major `w`×`h` `mask` in the
+/// inclusive box `[x0, y0, x1, y1]` (clipped to the raster), in row-major order: a non-zero pixel
+/// on the raster's edge or with a zero 4-neighbour. Eight pixels at a time where the whole
+/// group and its neighbours lie inside the raster (one word per neighbour, skipped when none of
+/// the eight is a boundary pixel), pixel by pixel elsewhere.
+fn for_each_boundary_in(mask: &[u8], w: usize, h: usize, [x0, y0, x1, y1]: [usize; 4], mut f: impl FnMut(usize)) {
+    let (x1, y1) = (x1.min(w - 1), y1.min(h - 1));
+    let set = |i: usize| mask[i] != 0;
+    for y in y0..=y1 {
+        let row = y * w;
+        let mut x = x0;
+        if y > 0 && y + 1 < h {
+            // Groups of 8 need x - 1 >= 0 and x + 8 <= w - 1 (both horizontal neighbours inside).
+            if x == 0 {
+                if set(row) {
+                    f(row);
+                }
+                x = 1;
+            }
+            while x + 8 <= x1 + 1 && x + 9 <= w {
+                let word = |i: usize| u64::from_le_bytes(mask[i..i + 8].try_into().expect("8 bytes"));
+                let centre = nonzero_bytes(word(row + x));
+                if centre != 0 {
+                    let interior = nonzero_bytes(word(row + x - 1))
+                        & nonzero_bytes(word(row + x + 1))
+                        & nonzero_bytes(word(row + x - w))
+                        & nonzero_bytes(word(row + x + w));
+                    let mut boundary = centre & !interior;
+                    while boundary != 0 {
+                        f(row + x + (boundary.trailing_zeros() / 8) as usize);
+                        boundary &= boundary - 1;
+                    }
+                }
+                x += 8;
+            }
+        }
+        for x in x..=x1 {
+            let i = row + x;
+            if !set(i) {
+                continue;
+            }
+            let border = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
+            if border || !set(i - 1) || !set(i + 1) || !set(i - w) || !set(i + w) {
+                f(i);
+            }
+        }
+    }
+}
+
+/// The high bit of every non-zero byte of `v`, the other bits clear.
+#[inline(always)]
+fn nonzero_bytes(v: u64) -> u64 {
+    const LOW7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
+    (((v & LOW7) + LOW7) | v) & !LOW7
 }
 
 /// Exact Euclidean distance (pixels) from every pixel to the nearest non-zero pixel of `src`
@@ -483,6 +532,37 @@ mod tests {
             (0..w * h).map(|i| ((2..=6).contains(&(i % w)) && (1..=4).contains(&(i / w))) as u8).collect();
         assert_eq!(boundary(&rect, Some([2, 1, 6, 4])), ring(2, 1, 6, 4));
         assert!(boundary(&rect, None).is_empty(), "no box: the mask is empty by contract");
+    }
+
+    /// The word-at-a-time boundary scan visits exactly the pixels, in the order, of the
+    /// pixel-by-pixel definition, on random masks of any values in random boxes (touching the
+    /// raster's edges or not).
+    #[test]
+    fn boundary_scan_matches_the_definition() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        for case in 0..400 {
+            let (w, h) = (rng.random_range(1..40usize), rng.random_range(1..30usize));
+            let density = [0.2, 0.6, 0.95][case % 3];
+            let mask: Vec<u8> =
+                (0..w * h).map(|_| if rng.random_bool(density) { rng.random_range(1..=255u8) } else { 0 }).collect();
+            let (xa, xb) = (rng.random_range(0..w), rng.random_range(0..w));
+            let (ya, yb) = (rng.random_range(0..h), rng.random_range(0..h));
+            let bounds = [xa.min(xb), ya.min(yb), xa.max(xb) + rng.random_range(0..3), ya.max(yb)];
+            let set = |x: usize, y: usize| mask[y * w + x] != 0;
+            let mut want = Vec::new();
+            for y in bounds[1]..=bounds[3].min(h - 1) {
+                for x in bounds[0]..=bounds[2].min(w - 1) {
+                    let border = x == 0 || y == 0 || x + 1 == w || y + 1 == h;
+                    if set(x, y) && (border || !set(x - 1, y) || !set(x + 1, y) || !set(x, y - 1) || !set(x, y + 1)) {
+                        want.push(y * w + x);
+                    }
+                }
+            }
+            let mut got = Vec::new();
+            for_each_boundary_in(&mask, w, h, bounds, |i| got.push(i));
+            assert_eq!(got, want, "case {case}: {w}x{h} {bounds:?}");
+        }
     }
 
     /// Edge support is the fraction of the mask's boundary within the radius of a stroke: 1 for
