@@ -165,6 +165,7 @@ pub unsafe extern "C" fn skb_result_view(
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
+            let slot = try_status!(try_mut(out, "out"));
             let Some(v) = r.views.get(index) else {
                 return fail(&Error::OutOfRange { name: "view index", detail: format!("{index} >= {}", r.views.len()) });
             };
@@ -183,7 +184,7 @@ pub unsafe extern "C" fn skb_result_view(
                 facing_as_labelled_deg: labelled,
                 facing_other_side_deg: other,
             };
-            try_status!(write_out(out, info, "out"));
+            *slot = info;
             skb_status::SKB_OK
         }
     }

@@ -1970,21 +1970,70 @@ fn long_call_rows(t: &mut Table, fx: &Fx) {
         unsafe { skb_fit_shape(ctx, j3.as_ptr(), 45, &cam, &blank_im, o, None, ptr::null_mut(), ptr::null_mut(), op) };
     t.check(e, "score", Kind::Null, SKB_ERR_BLANK_IMAGE, s, out.intact());
 
-    for (e, progressive) in [("skb_run_pipeline", false), ("skb_run_pipeline_progressive", true)] {
-        pipeline_rows(t, fx, ctx, &blank_im, e, progressive);
+    for (e, entry) in [
+        ("skb_run_pipeline", Entry::Plain),
+        ("skb_run_pipeline_progressive", Entry::Progressive),
+        ("skb_run_pipeline_views", Entry::Views),
+    ] {
+        pipeline_rows(t, fx, ctx, &blank_im, e, entry);
+    }
+    view_input_rows(t, fx, ctx);
+}
+
+/// Which entry point of the main job [`pipeline_rows`] calls.
+#[derive(Clone, Copy)]
+enum Entry {
+    /// `skb_run_pipeline`.
+    Plain,
+    /// `skb_run_pipeline_progressive` with an interim callback.
+    Progressive,
+    /// `skb_run_pipeline_views` with no views.
+    Views,
+}
+
+/// `skb_run_pipeline_views`' own parameters: the views array and count, and a view's fields.
+fn view_input_rows(t: &mut Table, fx: &Fx, ctx: *const skb_context) {
+    let e = "skb_run_pipeline_views";
+    let mut out = Canary::of::<*mut skb_result>(1);
+    let op = out.ptr();
+    let (sk, j) = (fx.sketch, fx.joints);
+    let run = |views: *const skb_view_input, n: usize| {
+        // SAFETY: live handles and locals; `views` NULL or holding `n` entries (larger counts are
+        // refused before use).
+        unsafe {
+            skb_run_pipeline_views(
+                ctx,
+                &sk,
+                &j,
+                views,
+                n,
+                fx.dict,
+                fx.pose_opts,
+                fx.fit_opts,
+                None,
+                Some(no_interim),
+                ptr::null_mut(),
+                op,
+            )
+        }
+    };
+    let view = |label: u32, sketch: *const skb_image| skb_view_input { label, reserved: 0, sketch, joints: &j };
+    let good = [view(SKB_VIEW_SIDE, &sk)];
+    let rows = [
+        ("views", Kind::Null, SKB_ERR_NULL_POINTER, run(ptr::null(), 1)),
+        ("view_count", Kind::Max, SKB_ERR_OUT_OF_RANGE, run(good.as_ptr(), usize::MAX)),
+        ("views.sketch", Kind::Null, SKB_ERR_NULL_POINTER, run([view(SKB_VIEW_SIDE, ptr::null())].as_ptr(), 1)),
+        ("views.label", Kind::Max, SKB_ERR_OUT_OF_RANGE, run([view(u32::MAX, &sk)].as_ptr(), 1)),
+        ("views.label", Kind::Other, SKB_ERR_OUT_OF_RANGE, run([view(SKB_VIEW_FRONT, &sk)].as_ptr(), 1)),
+    ];
+    for (param, kind, want, got) in rows {
+        t.check(e, param, kind, want, got, out.intact());
     }
 }
 
-/// The main job's rows for `skb_run_pipeline` or (`progressive`) `skb_run_pipeline_progressive`
-/// (with an interim callback: every row fails before a body exists).
-fn pipeline_rows(
-    t: &mut Table,
-    fx: &Fx,
-    ctx: *const skb_context,
-    blank_im: &skb_image,
-    e: &'static str,
-    progressive: bool,
-) {
+/// The main job's rows for `entry` (with an interim callback where it takes one: every row fails
+/// before a body exists).
+fn pipeline_rows(t: &mut Table, fx: &Fx, ctx: *const skb_context, blank_im: &skb_image, e: &'static str, entry: Entry) {
     let mut out = Canary::of::<*mut skb_result>(1);
     let op = out.ptr();
     let d = fx.dict as *const skb_pose_dictionary;
@@ -1999,10 +2048,15 @@ fn pipeline_rows(
                out: *mut *mut skb_result| {
         // SAFETY: live handles, locals or NULL; the interim callback only counts.
         unsafe {
-            if progressive {
-                skb_run_pipeline_progressive(c, s, j, d, po, fo, None, Some(no_interim), ptr::null_mut(), out)
-            } else {
-                skb_run_pipeline(c, s, j, d, po, fo, None, ptr::null_mut(), out)
+            match entry {
+                Entry::Plain => skb_run_pipeline(c, s, j, d, po, fo, None, ptr::null_mut(), out),
+                Entry::Progressive => {
+                    skb_run_pipeline_progressive(c, s, j, d, po, fo, None, Some(no_interim), ptr::null_mut(), out)
+                }
+                Entry::Views => {
+                    let none = ptr::null();
+                    skb_run_pipeline_views(c, s, j, none, 0, d, po, fo, None, Some(no_interim), ptr::null_mut(), out)
+                }
             }
         }
     };
@@ -2111,6 +2165,30 @@ fn result_rows(t: &mut Table, fx: &Fx) {
     t.copy("skb_result_part_support", "result", "dst", "dst_len", skb_result_part_support, r, 6);
     two_buffer_rows(t, "skb_result_copy_skin_weights", "result", skb_result_copy_skin_weights, r, 4 * nv);
     t.getter("skb_result_joints2d", "result", "out", skb_result_joints2d, r);
+    t.getter("skb_result_view_count", "result", "count", skb_result_view_count, r);
+    // SAFETY: live result or NULL; canaries of the sizes passed (the result has no views and no
+    // view warnings: the text is the empty string, one byte with its NUL).
+    unsafe {
+        let e = "skb_result_view";
+        let mut c = Canary::of::<skb_view_info>(1);
+        t.check(e, "result", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_view(ptr::null(), 0, c.ptr()), c.intact());
+        t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_view(r, 0, ptr::null_mut()), true);
+        t.check(e, "index", Kind::Max, SKB_ERR_OUT_OF_RANGE, skb_result_view(r, usize::MAX, c.ptr()), c.intact());
+        t.check(e, "index", Kind::Other, SKB_ERR_OUT_OF_RANGE, skb_result_view(r, 0, c.ptr()), c.intact());
+        let e = "skb_result_copy_view_warnings";
+        let f = |res: *const skb_result, dst: *mut std::ffi::c_char, len: usize, n: *mut usize| {
+            skb_result_copy_view_warnings(res, dst, len, n)
+        };
+        let mut b = Canary::of::<std::ffi::c_char>(1);
+        let mut n = Canary::of::<usize>(1);
+        let s = f(ptr::null(), b.ptr(), 1, n.ptr());
+        t.check(e, "result", Kind::Null, SKB_ERR_NULL_POINTER, s, b.intact() && n.intact());
+        t.check(e, "dst", Kind::Null, SKB_OK, f(r, ptr::null_mut(), 0, n.ptr()), true);
+        t.check(e, "len", Kind::Null, SKB_OK, f(r, b.ptr(), 1, ptr::null_mut()), true);
+        let mut b = Canary::of::<std::ffi::c_char>(1);
+        t.check(e, "dst_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, f(r, b.ptr(), usize::MAX, ptr::null_mut()), b.intact());
+        t.check(e, "dst_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, f(r, b.ptr(), 0, ptr::null_mut()), b.intact());
+    }
     t.getter("skb_result_camera", "result", "out", skb_result_camera, r);
     t.indexed_copy("skb_result_copy_joints3d", "result", "which", skb_result_copy_joints3d, r, 2, u32::MAX, 45, 44);
     // SAFETY: live result or NULL; canaries of the sizes passed.
