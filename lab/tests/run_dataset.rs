@@ -340,3 +340,48 @@ fn fit_landmark_joints_fits_symmetric_shifts_and_reports_each_set() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--shipped needs"), "{o:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `make-dataset --views side,back` draws each sample's body and pose again from the side and the
+/// back (the front camera turned +90° and 180° about the body's vertical), with each view's truth
+/// in the sample's JSON; `run-dataset --views side` fits the turnarounds.
+#[test]
+fn turnarounds_are_drawn_with_their_views_and_fitted() {
+    let dir = scratch("views");
+    let (ds, out) = (dir.join("ds"), dir.join("out"));
+    ok(&skb(&["make-dataset", "2", "--seed", "5", "--size", "256", "--views", "side,back", "--out", s(&ds)]));
+    for stem in ["000000", "000001"] {
+        let truth: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(ds.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let r = |c: &serde_json::Value| -> Vec<Vec<f64>> {
+            c["r"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|row| row.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect())
+                .collect()
+        };
+        let front = r(&truth["camera"]);
+        let views = truth["views"].as_array().unwrap();
+        assert_eq!(views.len(), 2);
+        for (v, (label, yaw)) in views.iter().zip([("side", 90.0f64), ("back", 180.0)]) {
+            assert_eq!(v["label"], label);
+            assert!(ds.join(v["image"].as_str().unwrap()).is_file(), "{stem}: {v}");
+            // R_view = R_front · R_y(yaw).
+            let (sn, cs) = yaw.to_radians().sin_cos();
+            let turn = [[cs, 0.0, sn], [0.0, 1.0, 0.0], [-sn, 0.0, cs]];
+            let view = r(&v["camera"]);
+            for i in 0..3 {
+                for j in 0..3 {
+                    let want: f64 = (0..3).map(|k| front[i][k] * turn[k][j]).sum();
+                    assert!((view[i][j] - want).abs() < 1e-9, "{stem} {label}: r[{i}][{j}] {} vs {want}", view[i][j]);
+                }
+            }
+        }
+    }
+    let fast = ["--samples", "16", "--iterations", "2"];
+    ok(&skb(&[&["run-dataset", s(&ds), "--out", s(&out), "--views", "side"][..], &fast].concat()));
+    let res: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("000000.json")).unwrap()).unwrap();
+    assert_eq!(res["views"].as_array().map(|v| v.len()), Some(1), "{res}");
+    let o = skb(&["make-dataset", "1", "--views", "front", "--out", s(&dir.join("bad"))]);
+    assert_eq!(o.status.code(), Some(2), "{o:?}");
+}

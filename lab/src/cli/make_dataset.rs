@@ -2,17 +2,24 @@
 //! Sample `i` is rendered from the seed `sample_seed(S, i)`, so the result does not depend on
 //! the number of threads; samples whose three files exist are skipped (resumable), and each file
 //! is written to a temporary name and renamed, so an interrupted run leaves no half-written
-//! sample. Layout: docs/dataset.md.
+//! sample. Layout: docs/dataset.md. `--views side[,back]` makes turnarounds: each sample also
+//! drawn from the side (the front camera turned +90° about the body's vertical) and the back,
+//! the same body, pose and drawing style, as `STEM_LABEL.png` with each view's truth in the
+//! sample's JSON (`views`, as the Blender set's).
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use rayon::prelude::*;
+use sketchbody::body::Gender;
 use sketchbody::fsutil::write_atomic;
-use sketchbody::render::sketch::truth::{sample_complete, sample_seed, write_sample};
-use sketchbody::render::sketch::SketchRequest;
+use sketchbody::image::{save_png, GrayImage};
+use sketchbody::render::sketch::truth::{sample_complete, sample_seed, write_sample, ViewTruth};
+use sketchbody::render::sketch::{CameraAngles, Sketch, SketchRenderer, SketchRequest};
+use sketchbody::skeleton::Joints3;
+use sketchbody::view::ViewLabel;
 
 use crate::render_sketch::{parse_size, renderer};
 use sketchbody_cli::CliError;
@@ -40,6 +47,61 @@ pub struct Args {
     /// Also write a contact sheet of the first 24 samples (6 × 4, half size) to this PNG.
     #[arg(long)]
     contact_sheet: Option<PathBuf>,
+    /// Turnarounds: each sample also drawn from these views (side, side_left, back), comma-separated.
+    #[arg(long, value_delimiter = ',', value_parser = parse_view)]
+    views: Vec<ViewLabel>,
+}
+
+/// Parses a `--views` label (not the front: every sample is drawn from the front).
+fn parse_view(text: &str) -> Result<ViewLabel, String> {
+    match ViewLabel::parse(text) {
+        Ok(ViewLabel::Front) => Err("the front view is every sample's own; give side, side_left or back".into()),
+        Ok(l) => Ok(l),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// `s` drawn again from each of `views` (the same body, pose and style; the front camera turned
+/// about the body's vertical by each label's yaw), each view's image written into `dir` as
+/// `STEM_LABEL.png` and its truth added to `s.truth.views`.
+fn add_views(
+    r: &SketchRenderer,
+    req: &SketchRequest,
+    s: &mut Sketch,
+    views: &[ViewLabel],
+    dir: &Path,
+    stem: &str,
+) -> Result<(), CliError> {
+    let gender = Gender::parse(&s.truth.gender)?;
+    let joints: Joints3 = std::array::from_fn(|k| s.truth.joints3d[k]);
+    let front = s.truth.camera.angles;
+    for &label in views {
+        let mut yaw = front.yaw_deg + label.yaw_deg();
+        if yaw > 180.0 {
+            yaw -= 360.0;
+        }
+        let vreq = SketchRequest {
+            gender: Some(gender),
+            shape_weights: Some(s.truth.shape_weights.clone()),
+            joints: Some(joints),
+            camera: Some(CameraAngles { yaw_deg: yaw, ..front }),
+            style: Some(s.truth.style.clone()),
+            ..req.clone()
+        };
+        let v = r.render(&vreq)?;
+        let image = format!("{stem}_{}.png", label.name());
+        let img = GrayImage::from_vec(v.truth.width, v.truth.height, v.pixels)?;
+        save_png(&img.view(), &dir.join(&image))?;
+        s.truth.views.push(ViewTruth {
+            label: label.name().into(),
+            yaw_deg: label.yaw_deg(),
+            image,
+            joints2d: v.truth.joints2d,
+            visible: v.truth.visible,
+            camera: v.truth.camera,
+        });
+    }
+    Ok(())
 }
 
 /// Tiles the first (up to) 24 sample images of `dir`, halved, 6 to a row, into a gray PNG.
@@ -89,6 +151,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let manifest = serde_json::json!({
         "format": "sketchbody-dataset-1", "samples": a.n, "seed": a.seed, "width": width, "height": height,
         "sample_seed": "splitmix64(splitmix64(seed) ^ index)", "version": sketchbody::VERSION,
+        "views": a.views.iter().map(|v| v.name()).collect::<Vec<_>>(),
     });
     write_atomic(&a.out.join("dataset.json"), manifest.to_string().as_bytes())?;
     let r = renderer(a.mocap.as_deref())?;
@@ -119,7 +182,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         todo.par_iter().try_for_each(|&i| {
             let req = SketchRequest::random(sample_seed(a.seed, i as u64), width);
             let req = SketchRequest { width, height, ..req };
-            let s = r.render(&req).map_err(|e| CliError(format!("sample {i}: {e}")))?;
+            let mut s = r.render(&req).map_err(|e| CliError(format!("sample {i}: {e}")))?;
+            add_views(&r, &req, &mut s, &a.views, &a.out, &stem(i))
+                .map_err(|e| CliError(format!("sample {i}: {}", e.0)))?;
             write_sample(&a.out, &stem(i), &s)?;
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             Ok(())
