@@ -232,13 +232,17 @@ impl Hints<'_> {
     fn of(&self, joints: &Joints2) -> Option<DepthHint> {
         match self.given {
             Some(h) if h.weight > 0.0 => Some(*h),
-            _ => self.learned(joints),
+            _ => self.prior.and_then(|p| p.depth_hint(joints, self.weight)),
         }
     }
 
-    /// The learned depths of the 2-D joints `joints`, whether or not an image cue is given.
+    /// The learned depths of the 2-D joints `joints` for the free-joint step's pull: none when an
+    /// image cue is given (the image's depths decide where it has them, not the learned prior).
     fn learned(&self, joints: &Joints2) -> Option<DepthHint> {
-        self.prior.and_then(|p| p.depth_hint(joints, self.weight))
+        match self.given {
+            Some(h) if h.weight > 0.0 => None,
+            _ => self.prior.and_then(|p| p.depth_hint(joints, self.weight)),
+        }
     }
 }
 
