@@ -158,6 +158,27 @@ pub(crate) unsafe fn out_slice<'a, T>(
     unsafe { try_slice_mut_of(p, len, name) }
 }
 
+/// Writes `text` NUL-terminated into `dst` of `len` bytes (at least `text.len() + 1`). Errors as
+/// [`out_slice`].
+///
+/// # Safety
+/// `dst` must be NULL or valid for writes of `len` bytes, with no other live reference.
+pub(crate) unsafe fn write_c_string(
+    dst: *mut c_char,
+    len: usize,
+    text: &str,
+    name: &'static str,
+) -> Result<(), skb_status> {
+    let bytes = text.as_bytes();
+    // SAFETY: forwarded contract.
+    let o = unsafe { out_slice(dst, len, bytes.len() + 1, name) }?;
+    for (o, &c) in o.iter_mut().zip(bytes) {
+        *o = c as c_char;
+    }
+    o[bytes.len()] = 0;
+    Ok(())
+}
+
 /// The optional fixed-size output array `p[0..len]`: `None` when `p` is NULL.
 ///
 /// # Safety

@@ -17,7 +17,7 @@ use sketchbody_core::error::Error;
 use super::body::{copy_skin_weights, skb_mesh};
 use super::error::fail;
 use super::export::{rig_scene, skb_export_options};
-use super::ptr::{free_box, give, opt_ref, out_slice, out_slot, try_ref, write_out};
+use super::ptr::{free_box, give, opt_ref, out_slice, out_slot, try_ref, write_c_string, write_out};
 use super::status::skb_status;
 
 /// Number of bones of the production rig (MakeHuman's `game_engine` skeleton); a rig built with
@@ -146,13 +146,8 @@ pub unsafe extern "C" fn skb_rig_copy_bone_name(
         let Some(name) = r.scene.names.get(bone) else {
             return fail(&Error::OutOfRange { name: "bone", detail: format!("{bone} >= {}", r.scene.names.len()) });
         };
-        let bytes = name.as_bytes();
         // SAFETY: `dst` is NULL or valid for writes of `dst_len` bytes.
-        let o = try_status!(unsafe { out_slice(dst, dst_len, bytes.len() + 1, "dst") });
-        for (o, &c) in o.iter_mut().zip(bytes) {
-            *o = c as c_char;
-        }
-        o[bytes.len()] = 0;
+        try_status!(unsafe { write_c_string(dst, dst_len, name, "dst") });
         skb_status::SKB_OK
     }
 }

@@ -207,15 +207,10 @@ pub unsafe extern "C" fn skb_result_copy_view_warnings(
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
             let text = r.view_warnings.join("\n");
-            let bytes = text.as_bytes();
             if !dst.is_null() {
-                let o = try_status!(out_slice(dst, dst_len, bytes.len() + 1, "dst"));
-                for (o, &c) in o.iter_mut().zip(bytes) {
-                    *o = c as c_char;
-                }
-                o[bytes.len()] = 0;
+                try_status!(write_c_string(dst, dst_len, &text, "dst"));
             }
-            write_opt(len, bytes.len());
+            write_opt(len, text.len());
             skb_status::SKB_OK
         }
     }
