@@ -58,9 +58,9 @@ configure_package_config_file(cmake/sketchbodyConfig.cmake.in
   "${CMAKE_CURRENT_BINARY_DIR}/sketchbodyConfig.cmake"
   INSTALL_DESTINATION "${SKB_CMAKE_DIR}"
   PATH_VARS CMAKE_INSTALL_INCLUDEDIR CMAKE_INSTALL_LIBDIR)
-# 0.x: a new minor version may break the ABI, so only the same minor version is compatible.
+# From 1.0 every minor version keeps the ABI (docs/c-api.md, "Compatibility policy").
 write_basic_package_version_file("${CMAKE_CURRENT_BINARY_DIR}/sketchbodyConfigVersion.cmake"
-  VERSION "${PROJECT_VERSION}" COMPATIBILITY SameMinorVersion)
+  VERSION "${PROJECT_VERSION}" COMPATIBILITY SameMajorVersion)
 install(FILES "${CMAKE_CURRENT_BINARY_DIR}/sketchbodyConfig.cmake"
               "${CMAKE_CURRENT_BINARY_DIR}/sketchbodyConfigVersion.cmake"
         DESTINATION "${SKB_CMAKE_DIR}" COMPONENT Development)

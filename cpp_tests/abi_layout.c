@@ -1,6 +1,6 @@
 /* Prints the layout of every public struct of sketchbody.h (size, and offset of each field) for
- * scripts/check-abi.sh, which compares it and the library's exported symbols with the pinned
- * manifest cpp_tests/abi_manifest.txt: an ABI change must be deliberate. */
+ * scripts/check-abi.sh, which compares it with the major version's baseline
+ * (abi/sketchbody-MAJOR.layout): a struct of a released header never changes. */
 #include <stddef.h>
 #include <stdio.h>
 

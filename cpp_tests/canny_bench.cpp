@@ -1,4 +1,4 @@
-// Benchmark (not a test): times cv::Canny and skb_canny on the same line drawings in one
+// Benchmark (not a test): times cv::Canny and skb_image_canny on the same line drawings in one
 // process, interleaved (OpenCV, ours, OpenCV, ours, ...), and prints the median of per-pair
 // time ratios ours/OpenCV. Usage: canny_bench [--threads N] [--reps R]
 // --threads 1 pins both libraries to one thread (cv::setNumThreads, RAYON_NUM_THREADS);
@@ -55,8 +55,8 @@ int main(int argc, char **argv) {
                     double a = now_ms();
                     cv::Canny(img, ref, 50, 150, 3, l2);
                     double b = now_ms();
-                    if (skb_canny(&src, 50, 150, 3, l2, dst.data(), (size_t)size, dst.size()) != SKB_OK) {
-                        std::printf("skb_canny failed: %s\n", skb_last_error_message());
+                    if (skb_image_canny(&src, 50, 150, 3, l2, dst.data(), (size_t)size, dst.size()) != SKB_OK) {
+                        std::printf("skb_image_canny failed: %s\n", skb_last_error_message());
                         return 1;
                     }
                     double c = now_ms();

@@ -42,10 +42,10 @@ long compare_one(const cv::Mat &ours_input, const cv::Mat &gray, Thresholds th, 
     std::vector<uint8_t> dst(dst_stride * h, 77);
     skb_image src{ours_input.data, (uint32_t)ours_input.cols, (uint32_t)ours_input.rows, (uint32_t)ours_input.step[0],
                   (uint32_t)ours_input.channels()};
-    skb_status st = skb_canny(&src, th.t1, th.t2, aperture, l2, dst.data(), dst_stride, dst.size());
+    skb_status st = skb_image_canny(&src, th.t1, th.t2, aperture, l2, dst.data(), dst_stride, dst.size());
     ++t.combos;
     if (st != SKB_OK) {
-        std::printf("FAIL %s: skb_canny returned %u: %s\n", name.c_str(), st, skb_last_error_message());
+        std::printf("FAIL %s: skb_image_canny returned %u: %s\n", name.c_str(), st, skb_last_error_message());
         ++t.failed_calls;
         return 1;
     }
@@ -76,7 +76,7 @@ long compare_blur(const cv::Mat &gray, double sigma, const std::string &name, in
     const size_t w = (size_t)gray.cols, h = (size_t)gray.rows;
     std::vector<uint8_t> dst(w * h);
     skb_image src{gray.data, (uint32_t)w, (uint32_t)h, (uint32_t)gray.step[0], 1};
-    if (skb_gaussian_blur(&src, sigma, dst.data(), w, dst.size()) != SKB_OK) {
+    if (skb_image_gaussian_blur(&src, sigma, dst.data(), w, dst.size()) != SKB_OK) {
         std::printf("FAIL blur %s: %s\n", name.c_str(), skb_last_error_message());
         return (long)(w * h);
     }

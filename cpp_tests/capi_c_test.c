@@ -21,13 +21,13 @@ static int untouched(const uint8_t *buf, size_t n) {
     return 1;
 }
 
-/* Calls skb_canny expecting `want`, then checks message, text and untouched output. */
+/* Calls skb_image_canny expecting `want`, then checks message, text and untouched output. */
 static void expect_canny(const char *what, const skb_image *src, double t1, double t2, int aperture, uint8_t *dst,
                          size_t stride, size_t len, skb_status want) {
     uint8_t buf[W * H * 4];
     memset(buf, SENTINEL, sizeof buf);
     uint8_t *out = dst ? buf : NULL;
-    skb_status got = skb_canny(src, t1, t2, aperture, false, out, stride, len);
+    skb_status got = skb_image_canny(src, t1, t2, aperture, false, out, stride, len);
     if (got != want) {
         fprintf(stderr, "%s: status %u, expected %u (%s)\n", what, got, want, skb_last_error_message());
         ++failures;
@@ -53,7 +53,7 @@ int main(void) {
     skb_image src = {step, W, H, W, 1};
     uint8_t edges[(W + 2) * H];
     memset(edges, SENTINEL, sizeof edges);
-    CHECK(skb_canny(&src, 50, 150, 3, false, edges, W + 2, sizeof edges) == SKB_OK);
+    CHECK(skb_image_canny(&src, 50, 150, 3, false, edges, W + 2, sizeof edges) == SKB_OK);
     CHECK(strcmp(skb_last_error_message(), "") == 0);
     for (int y = 0; y < H; ++y) {
         for (int x = 0; x < W; ++x) CHECK(edges[y * (W + 2) + x] == (x == 3 ? 255 : 0));
@@ -61,10 +61,10 @@ int main(void) {
     }
     /* Thresholds in either order give the same map; a threshold above every gradient gives none. */
     uint8_t swapped[W * H], none[W * H];
-    CHECK(skb_canny(&src, 150, 50, 3, false, swapped, W, sizeof swapped) == SKB_OK);
+    CHECK(skb_image_canny(&src, 150, 50, 3, false, swapped, W, sizeof swapped) == SKB_OK);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) CHECK(swapped[y * W + x] == edges[y * (W + 2) + x]);
-    CHECK(skb_canny(&src, 5000, 6000, 3, true, none, W, sizeof none) == SKB_OK);
+    CHECK(skb_image_canny(&src, 5000, 6000, 3, true, none, W, sizeof none) == SKB_OK);
     for (int i = 0; i < W * H; ++i) CHECK(none[i] == 0);
 
     /* RGB input with a row stride wider than the row. */
@@ -73,7 +73,7 @@ int main(void) {
         for (int x = 0; x < W; ++x) memset(&rgb[y][x * 3], x < 4 ? 0 : 255, 3);
     skb_image rgb_src = {&rgb[0][0], W, H, W * 3 + 4, 3};
     uint8_t rgb_edges[W * H];
-    CHECK(skb_canny(&rgb_src, 50, 150, 3, false, rgb_edges, W, sizeof rgb_edges) == SKB_OK);
+    CHECK(skb_image_canny(&rgb_src, 50, 150, 3, false, rgb_edges, W, sizeof rgb_edges) == SKB_OK);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) CHECK(rgb_edges[y * W + x] == edges[y * (W + 2) + x]);
 
@@ -105,14 +105,14 @@ int main(void) {
     uint8_t flat[W * H], blurred[W * H];
     memset(flat, 90, sizeof flat);
     skb_image flat_src = {flat, W, H, W, 1};
-    CHECK(skb_gaussian_blur(&flat_src, 1.5, blurred, W, sizeof blurred) == SKB_OK);
+    CHECK(skb_image_gaussian_blur(&flat_src, 1.5, blurred, W, sizeof blurred) == SKB_OK);
     for (int i = 0; i < W * H; ++i) CHECK(blurred[i] == 90);
     memset(blurred, SENTINEL, sizeof blurred);
-    CHECK(skb_gaussian_blur(&flat_src, 0.0, blurred, W, sizeof blurred) == SKB_ERR_OUT_OF_RANGE);
-    CHECK(skb_gaussian_blur(&flat_src, NAN, blurred, W, sizeof blurred) == SKB_ERR_NON_FINITE);
-    CHECK(skb_gaussian_blur(&rgb_src, 1.0, blurred, W, sizeof blurred) == SKB_ERR_UNSUPPORTED_CHANNELS);
-    CHECK(skb_gaussian_blur(&flat_src, 1.0, blurred, W, 3) == SKB_ERR_BUFFER_TOO_SMALL);
-    CHECK(skb_gaussian_blur(&flat_src, 1.0, NULL, W, sizeof blurred) == SKB_ERR_NULL_POINTER);
+    CHECK(skb_image_gaussian_blur(&flat_src, 0.0, blurred, W, sizeof blurred) == SKB_ERR_OUT_OF_RANGE);
+    CHECK(skb_image_gaussian_blur(&flat_src, NAN, blurred, W, sizeof blurred) == SKB_ERR_NON_FINITE);
+    CHECK(skb_image_gaussian_blur(&rgb_src, 1.0, blurred, W, sizeof blurred) == SKB_ERR_UNSUPPORTED_CHANNELS);
+    CHECK(skb_image_gaussian_blur(&flat_src, 1.0, blurred, W, 3) == SKB_ERR_BUFFER_TOO_SMALL);
+    CHECK(skb_image_gaussian_blur(&flat_src, 1.0, NULL, W, sizeof blurred) == SKB_ERR_NULL_POINTER);
     CHECK(untouched(blurred, sizeof blurred));
 
     /* Status texts: known codes have their own text, unknown ones say so. */

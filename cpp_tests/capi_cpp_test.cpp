@@ -237,10 +237,10 @@ int main() {
         double fxy[30], sxy[30];
         uint8_t fvis[15], svis[15];
         sketchbody::check(skb_sketch_options_set_camera(so, 0, 0, 0));
-        sketchbody::check(skb_render_sketch(ctx.get(), SKB_GENDER_FEMALE, nullptr, 0, nullptr, 11, size, size, so,
+        sketchbody::check(skb_context_render_sketch(ctx.get(), SKB_GENDER_FEMALE, nullptr, 0, nullptr, 11, size, size, so,
                                             front.data(), size, front.size(), fxy, fvis));
         sketchbody::check(skb_sketch_options_set_camera(so, 90, 0, 0));
-        sketchbody::check(skb_render_sketch(ctx.get(), SKB_GENDER_FEMALE, nullptr, 0, nullptr, 11, size, size, so,
+        sketchbody::check(skb_context_render_sketch(ctx.get(), SKB_GENDER_FEMALE, nullptr, 0, nullptr, 11, size, size, so,
                                             side.data(), size, side.size(), sxy, svis));
         skb_sketch_options_free(so);
         skb_joints2d fj{}, sj{};

@@ -1,10 +1,10 @@
-/* skb_detect from C (built -Wall -Wextra -Werror under ASan + UBSan): the context's embedded
+/* skb_context_detect from C (built -Wall -Wextra -Werror under ASan + UBSan): the context's embedded
  * backends find the figure of a rendered sketch (strided buffer) close to its true joints with
- * calibrated confidences, two threads get the same answer, skb_detect_figure reports the backend
+ * calibrated confidences, two threads get the same answer, skb_context_detect_figure reports the backend
  * kept and the low-confidence flag, options choose the backend, strictness, the threshold, the
  * searched scales, the figure range and the levels per octave, "no figure" returns
  * SKB_ERR_NO_FIGURE (a blank page; strict with an unreachable threshold, with the best raw score
- * from skb_detect and skb_detector_detect), and every error path returns its specific status
+ * from skb_context_detect and skb_detector_detect), and every error path returns its specific status
  * with a message and leaves the joints untouched. */
 #include <math.h>
 #include <pthread.h>
@@ -28,7 +28,7 @@ struct result {
 
 static void *detect_thread(void *arg) {
     struct result *r = arg;
-    r->st = skb_detect(g_ctx, &g_img, NULL, r->xy, 30, r->conf, 15, &r->score);
+    r->st = skb_context_detect(g_ctx, &g_img, NULL, r->xy, 30, r->conf, 15, &r->score);
     return NULL;
 }
 
@@ -55,7 +55,7 @@ int main(void) {
     uint8_t *px = malloc(LEN);
     memset(px, 255, LEN);
     double truth[30];
-    CHECK(skb_render_sketch(ctx, SKB_GENDER_MALE, NULL, 0, NULL, 21, W, H, so, px, STRIDE, LEN, truth, NULL) == SKB_OK);
+    CHECK(skb_context_render_sketch(ctx, SKB_GENDER_MALE, NULL, 0, NULL, 21, W, H, so, px, STRIDE, LEN, truth, NULL) == SKB_OK);
     g_ctx = ctx;
     g_img = (skb_image){px, W, H, STRIDE, 1};
 
@@ -84,7 +84,7 @@ int main(void) {
     skb_figure_info info;
     memset(&info, 0xAB, sizeof info);
     double xy[30], conf[15], score = 0.0;
-    CHECK(skb_detect_figure(ctx, &g_img, NULL, xy, 30, conf, 15, &info) == SKB_OK);
+    CHECK(skb_context_detect_figure(ctx, &g_img, NULL, xy, 30, conf, 15, &info) == SKB_OK);
     CHECK(memcmp(xy, a.xy, sizeof xy) == 0 && info.confidence == a.score);
     CHECK(info.backend == SKB_DETECTOR_FMP || info.backend == SKB_DETECTOR_BLAZEPOSE);
     CHECK(info.low_confidence == (info.confidence < SKB_LOW_CONFIDENCE ? 1u : 0u));
@@ -95,7 +95,7 @@ int main(void) {
      * alternative the joints with left and right swapped (as skb_joints2d_swap_sides gives). */
     skb_facing_info facing;
     double xy2[30], conf2[15];
-    CHECK(skb_detect_facing(ctx, &g_img, NULL, xy2, 30, conf2, 15, &info, &facing) == SKB_OK);
+    CHECK(skb_context_detect_facing(ctx, &g_img, NULL, xy2, 30, conf2, 15, &info, &facing) == SKB_OK);
     CHECK(memcmp(xy, xy2, sizeof xy) == 0 && facing.facing <= SKB_FACING_UNKNOWN && facing.swapped <= 1u);
     double psum = facing.probabilities[0] + facing.probabilities[1] + facing.probabilities[2] + facing.probabilities[3];
     CHECK(fabs(psum - 1.0) < 1e-9 && facing.alternative_score >= 0.0 && facing.alternative_score <= 1.0);
@@ -113,40 +113,40 @@ int main(void) {
     skb_detect_options *o = NULL;
     CHECK(skb_detect_options_new(&o) == SKB_OK);
     CHECK(skb_detect_options_set_backend(o, SKB_DETECTOR_BLAZEPOSE) == SKB_OK);
-    CHECK(skb_detect_figure(ctx, &g_img, o, xy, 30, conf, 15, &info) == SKB_OK);
+    CHECK(skb_context_detect_figure(ctx, &g_img, o, xy, 30, conf, 15, &info) == SKB_OK);
     CHECK(info.backend == SKB_DETECTOR_BLAZEPOSE && pck(truth, xy, 0.2) >= 0.6);
     printf("blazepose alone: PCK@0.2 %.2f, confidence %.3f\n", pck(truth, xy, 0.2), info.confidence);
     CHECK(skb_detect_options_set_backend(o, 3) == SKB_ERR_OUT_OF_RANGE);
     CHECK(skb_detect_options_set_backend(NULL, 0) == SKB_ERR_NULL_POINTER);
-    CHECK(skb_detect_options_set_strict(NULL, 1) == SKB_ERR_NULL_POINTER);
+    CHECK(skb_detect_options_set_strict(NULL, true) == SKB_ERR_NULL_POINTER);
     /* The sketch model's raw score, from a detector loaded by the caller (the embedded model's file). */
     skb_detector *det = NULL;
     CHECK(skb_detector_new_from_file(SKB_SOURCE_DIR "/assets/detector.skbd", &det) == SKB_OK);
     double raw = 0.0, score2 = 0.0;
-    CHECK(skb_detector_detect(det, &g_img, NAN, 0.0, xy, 30, conf, 15, &raw) == SKB_OK);
+    CHECK(skb_detector_detect(det, &g_img, NULL, NULL, NULL, xy, 30, conf, 15, &raw) == SKB_OK);
     /* Strict, the sketch model alone, a threshold above its best score: no figure, the score is
      * still reported, nothing else written. */
     CHECK(skb_detect_options_set_backend(o, SKB_DETECTOR_FMP) == SKB_OK);
-    CHECK(skb_detect_options_set_strict(o, 1) == SKB_OK);
+    CHECK(skb_detect_options_set_strict(o, true) == SKB_OK);
     CHECK(skb_detect_options_set_threshold(o, raw + 1.0) == SKB_OK);
     memset(xy, 0xAB, sizeof xy);
     double sentinel = xy[0];
-    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_ERR_NO_FIGURE);
+    CHECK(skb_context_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_ERR_NO_FIGURE);
     CHECK(fabs(score - raw) < 1e-9);
     CHECK(strstr(skb_last_error_message(), "no figure") != NULL);
     CHECK(memcmp(&xy[0], &sentinel, sizeof sentinel) == 0);
     printf("strict no figure ok: %s\n", skb_last_error_message());
     /* The same no-figure report from skb_detector_detect. */
-    CHECK(skb_detector_detect(det, &g_img, raw + 1.0, 0.0, xy, 30, conf, 15, &score2) == SKB_ERR_NO_FIGURE);
+    CHECK(skb_detector_detect(det, &g_img, o, NULL, NULL, xy, 30, conf, 15, &score2) == SKB_ERR_NO_FIGURE);
     CHECK(fabs(score2 - raw) < 1e-9);
     CHECK(memcmp(&xy[0], &sentinel, sizeof sentinel) == 0);
     skb_detector_free(det);
     skb_detector_free(NULL);
     printf("no figure from skb_detector_detect ok: score %.3f\n", raw);
-    CHECK(skb_detect_options_set_strict(o, 0) == SKB_OK);
+    CHECK(skb_detect_options_set_strict(o, false) == SKB_OK);
     CHECK(skb_detect_options_set_threshold(o, NAN) == SKB_OK);
     CHECK(skb_detect_options_set_levels_per_octave(o, 5) == SKB_OK);
-    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_OK);
+    CHECK(skb_context_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_OK);
     CHECK(pck(truth, xy, 0.2) >= 0.8);
     CHECK(skb_detect_options_set_levels_per_octave(o, 101) == SKB_ERR_OUT_OF_RANGE);
     CHECK(skb_detect_options_set_levels_per_octave(NULL, 5) == SKB_ERR_NULL_POINTER);
@@ -159,7 +159,7 @@ int main(void) {
     CHECK(skb_detect_options_set_threshold(NULL, 0.0) == SKB_ERR_NULL_POINTER);
     /* Scales of the figure only (its cells are about height / 40 px): same answer, less work. */
     CHECK(skb_detect_options_set_scales(o, 4.0, 16.0) == SKB_OK);
-    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_OK);
+    CHECK(skb_context_detect(ctx, &g_img, o, xy, 30, conf, 15, &score) == SKB_OK);
     CHECK(pck(truth, xy, 0.2) >= 0.8);
     CHECK(skb_detect_options_set_scales(o, 8.0, 8.0) == SKB_ERR_OUT_OF_RANGE);
     CHECK(skb_detect_options_set_scales(o, -1.0, 8.0) == SKB_ERR_OUT_OF_RANGE);
@@ -170,22 +170,22 @@ int main(void) {
     memset(blank, 255, LEN);
     skb_image page = {blank, W, H, STRIDE, 1};
     memset(xy, 0xAB, sizeof xy);
-    CHECK(skb_detect(ctx, &page, NULL, xy, 30, conf, 15, &score) == SKB_ERR_NO_FIGURE);
+    CHECK(skb_context_detect(ctx, &page, NULL, xy, 30, conf, 15, &score) == SKB_ERR_NO_FIGURE);
     CHECK(score >= 0.0 && score < 0.5 && memcmp(&xy[0], &sentinel, sizeof sentinel) == 0);
     printf("blank page: no figure, presence %.3f\n", score);
     free(blank);
 
     /* Error paths: nothing written. */
     memset(xy, 0xAB, sizeof xy);
-    CHECK(skb_detect(NULL, &g_img, o, xy, 30, conf, 15, &score) == SKB_ERR_NULL_POINTER);
-    CHECK(skb_detect(ctx, NULL, o, xy, 30, conf, 15, &score) == SKB_ERR_NULL_POINTER);
-    CHECK(skb_detect(ctx, &g_img, o, xy, 29, conf, 15, &score) == SKB_ERR_BUFFER_TOO_SMALL);
-    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 14, &score) == SKB_ERR_BUFFER_TOO_SMALL);
-    CHECK(skb_detect(ctx, &g_img, o, xy, 30, conf, 15, NULL) == SKB_ERR_NULL_POINTER);
+    CHECK(skb_context_detect(NULL, &g_img, o, xy, 30, conf, 15, &score) == SKB_ERR_NULL_POINTER);
+    CHECK(skb_context_detect(ctx, NULL, o, xy, 30, conf, 15, &score) == SKB_ERR_NULL_POINTER);
+    CHECK(skb_context_detect(ctx, &g_img, o, xy, 29, conf, 15, &score) == SKB_ERR_BUFFER_TOO_SMALL);
+    CHECK(skb_context_detect(ctx, &g_img, o, xy, 30, conf, 14, &score) == SKB_ERR_BUFFER_TOO_SMALL);
+    CHECK(skb_context_detect(ctx, &g_img, o, xy, 30, conf, 15, NULL) == SKB_ERR_NULL_POINTER);
     skb_image tiny = {px, 20, 20, STRIDE, 1};
-    CHECK(skb_detect(ctx, &tiny, o, xy, 30, conf, 15, &score) == SKB_ERR_IMAGE_TOO_SMALL);
+    CHECK(skb_context_detect(ctx, &tiny, o, xy, 30, conf, 15, &score) == SKB_ERR_IMAGE_TOO_SMALL);
     skb_image bad_stride = {px, W, H, W - 1, 1};
-    CHECK(skb_detect(ctx, &bad_stride, o, xy, 30, conf, 15, &score) == SKB_ERR_BAD_STRIDE);
+    CHECK(skb_context_detect(ctx, &bad_stride, o, xy, 30, conf, 15, &score) == SKB_ERR_BAD_STRIDE);
     CHECK(memcmp(&xy[0], &sentinel, sizeof sentinel) == 0);
     printf("error paths ok: %s\n", skb_last_error_message());
 

@@ -70,7 +70,7 @@ static void check_rig(const struct skb_mesh *mesh, uint32_t naming, uint32_t res
     CHECK(skb_export_options_set_rest_pose(opts, rest) == SKB_OK);
     CHECK(skb_export_options_set_origin(opts, origin) == SKB_OK);
     struct skb_rig *rig = NULL;
-    CHECK(skb_mesh_rig_new(mesh, opts, &rig) == SKB_OK);
+    CHECK(skb_rig_new_from_mesh(mesh, opts, &rig) == SKB_OK);
     skb_export_options_free(opts);
     if (rig == NULL) return;
 
@@ -223,9 +223,9 @@ int main(void) {
     CHECK(worst_posed_joint < 1e-4);
 
     struct skb_rig *rig = NULL;
-    CHECK(skb_mesh_rig_new(mesh, NULL, &rig) == SKB_OK);
-    CHECK(skb_mesh_rig_new(NULL, NULL, &rig) == SKB_ERR_NULL_POINTER);
-    CHECK(skb_mesh_rig_new(mesh, NULL, NULL) == SKB_ERR_NULL_POINTER);
+    CHECK(skb_rig_new_from_mesh(mesh, NULL, &rig) == SKB_OK);
+    CHECK(skb_rig_new_from_mesh(NULL, NULL, &rig) == SKB_ERR_NULL_POINTER);
+    CHECK(skb_rig_new_from_mesh(mesh, NULL, NULL) == SKB_ERR_NULL_POINTER);
     skb_rig_free(rig);
     skb_rig_free(NULL);
 

@@ -1,4 +1,4 @@
-/* skb_render_sketch from C (built -Wall -Wextra -Werror under ASan + UBSan): a rendered sketch
+/* skb_context_render_sketch from C (built -Wall -Wextra -Werror under ASan + UBSan): a rendered sketch
  * lands in a strided buffer without touching the row padding, the same seed gives the same
  * bytes (also from two threads at once), another seed gives another sketch, the joints lie in
  * the image, and every error path returns its specific status, sets a message and leaves the
@@ -20,7 +20,7 @@ static const skb_sketch_options *g_opts;
 
 /* Renders the seed-`seed` clean sketch of a female body into `px` (LEN bytes). */
 static skb_status render(uint64_t seed, uint8_t *px, double *joints, uint8_t *visible) {
-    return skb_render_sketch(g_ctx, SKB_GENDER_FEMALE, NULL, 0, NULL, seed, W, H, g_opts, px, STRIDE, LEN, joints,
+    return skb_context_render_sketch(g_ctx, SKB_GENDER_FEMALE, NULL, 0, NULL, seed, W, H, g_opts, px, STRIDE, LEN, joints,
                              visible);
 }
 
@@ -36,7 +36,7 @@ static int all_equal(const uint8_t *buf, size_t n, uint8_t v) {
     return 1;
 }
 
-/* Calls skb_render_sketch with the given arguments expecting `want`; checks message and that
+/* Calls skb_context_render_sketch with the given arguments expecting `want`; checks message and that
  * neither the pixels nor the joints were written. */
 static void expect_error(const char *what, const skb_context *ctx, uint32_t gender, const float *weights,
                          size_t n_weights, const double *joints3d, uint32_t w, uint32_t h, size_t stride, size_t len,
@@ -45,7 +45,7 @@ static void expect_error(const char *what, const skb_context *ctx, uint32_t gend
     double j2[30];
     memset(px, SENTINEL, LEN);
     memset(j2, SENTINEL, sizeof j2);
-    skb_status got = skb_render_sketch(ctx, gender, weights, n_weights, joints3d, 3, w, h, g_opts, px, stride, len,
+    skb_status got = skb_context_render_sketch(ctx, gender, weights, n_weights, joints3d, 3, w, h, g_opts, px, stride, len,
                                        j2, NULL);
     if (got != want) {
         fprintf(stderr, "%s: status %u, expected %u (%s)\n", what, got, want, skb_last_error_message());
@@ -108,7 +108,7 @@ int main(void) {
     CHECK(memcmp(a, b, LEN) == 0 && memcmp(a, c, LEN) == 0);
     CHECK(render(12, b, NULL, NULL) == SKB_OK);
     uint8_t *tight = malloc((H - 1) * STRIDE + W);
-    CHECK(skb_render_sketch(ctx, SKB_GENDER_FEMALE, NULL, 0, NULL, 11, W, H, opts, tight, STRIDE, (H - 1) * STRIDE + W,
+    CHECK(skb_context_render_sketch(ctx, SKB_GENDER_FEMALE, NULL, 0, NULL, 11, W, H, opts, tight, STRIDE, (H - 1) * STRIDE + W,
                             NULL, NULL) == SKB_OK);
     int rows_equal = 1;
     for (int y = 0; y < H; ++y) rows_equal &= memcmp(tight + y * STRIDE, a + y * STRIDE, W) == 0;
@@ -124,7 +124,7 @@ int main(void) {
     static const double tpose[45] = {0,    1.65, 0, 0,    1.5,  0, -0.2, 1.45, 0, -0.45, 1.45, 0, -0.7, 1.45, 0,
                                      0.2,  1.45, 0, 0.45, 1.45, 0, 0.7,  1.45, 0, 0,     1.0,  0, -0.1, 0.95, 0,
                                      -0.1, 0.5,  0, -0.1, 0.05, 0, 0.1,  0.95, 0, 0.1,   0.5,  0, 0.1,  0.05, 0};
-    CHECK(skb_render_sketch(ctx, SKB_GENDER_MALE, weights, 4, tpose, 4, W, H, opts, c, STRIDE, LEN, NULL, NULL) ==
+    CHECK(skb_context_render_sketch(ctx, SKB_GENDER_MALE, weights, 4, tpose, 4, W, H, opts, c, STRIDE, LEN, NULL, NULL) ==
           SKB_OK);
 
     double nan_joints[45];

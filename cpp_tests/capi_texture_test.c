@@ -1,10 +1,10 @@
 /* The CLI's textured result reproduced from C (built -Wall -Wextra -Werror under ASan + UBSan):
  * `sketchbody run` on the bundled example (given joints, male, a small fit, a 256-texel texture,
  * FBX and USD in centimetres, Z up) and the same job through the C API
- * (skb_rgb_image_load, skb_joints2d_read_json, skb_run_pipeline with the same fit settings,
+ * (skb_rgb_image_new_from_file, skb_joints2d_read_json, skb_pipeline_run with the same fit settings,
  * skb_result_project_texture, skb_image_write_png) must give the same body_texture.png, byte for
- * byte and pixel for pixel; skb_mesh_project_texture with skb_result_mesh and skb_result_camera
- * the same pixels; skb_export_usd / skb_export_fbx with skb_export_options_set_units(cm) and
+ * byte and pixel for pixel; skb_mesh_project_texture with skb_mesh_new_from_result and skb_result_camera
+ * the same pixels; skb_mesh_write_usd / skb_mesh_write_fbx with skb_export_options_set_units(cm) and
  * _set_up_axis(Z) the CLI's points and metadata (`metersPerUnit = 0.01`, `upAxis = "Z"`) and the
  * FBX's UnitScaleFactor 1 / UpAxis 2. Bad input: an unknown unit or axis, a texture size of 0,
  * a short buffer and an unwritable PNG path each give their status and write nothing.
@@ -119,7 +119,7 @@ int main(int argc, char **argv) {
     skb_context *ctx = NULL;
     CHECK(skb_context_new(&ctx) == SKB_OK);
     skb_rgb_image *rgb = NULL;
-    CHECK(skb_rgb_image_load(sketch, &rgb) == SKB_OK);
+    CHECK(skb_rgb_image_new_from_file(sketch, &rgb) == SKB_OK);
     skb_image view;
     CHECK(skb_rgb_image_view(rgb, &view) == SKB_OK);
     CHECK(view.channels == 3 && view.stride == 3 * view.width);
@@ -131,10 +131,10 @@ int main(int argc, char **argv) {
     CHECK(skb_fit_options_set_iterations(fit, 2) == SKB_OK);
     CHECK(skb_fit_options_set_gender(fit, SKB_GENDER_MALE) == SKB_OK);
     skb_result *result = NULL;
-    skb_status st = skb_run_pipeline(ctx, &view, &joints, NULL, NULL, fit, NULL, NULL, &result);
+    skb_status st = skb_pipeline_run(ctx, &view, &joints, NULL, NULL, fit, NULL, NULL, &result);
     CHECK(st == SKB_OK);
     if (st != SKB_OK) {
-        fprintf(stderr, "skb_run_pipeline: %s\n", skb_last_error_message());
+        fprintf(stderr, "skb_pipeline_run: %s\n", skb_last_error_message());
         return 1;
     }
 
@@ -159,7 +159,7 @@ int main(int argc, char **argv) {
            cli_png && c_png && cli_len == c_len && memcmp(cli_png, c_png, cli_len) == 0 ? "identical" : "DIFFERENT");
     /* Pixel for pixel, the CLI's file decoded by the library. */
     skb_rgb_image *cli_img = NULL;
-    CHECK(skb_rgb_image_load(cmd, &cli_img) == SKB_OK);
+    CHECK(skb_rgb_image_new_from_file(cmd, &cli_img) == SKB_OK);
     skb_image cv;
     CHECK(skb_rgb_image_view(cli_img, &cv) == SKB_OK);
     CHECK(cv.width == SIZE && cv.height == SIZE);
@@ -175,7 +175,7 @@ int main(int argc, char **argv) {
 
     /* The same from a mesh and camera of the result. */
     skb_mesh *mesh = NULL;
-    CHECK(skb_result_mesh(result, &mesh) == SKB_OK);
+    CHECK(skb_mesh_new_from_result(result, &mesh) == SKB_OK);
     skb_camera cam;
     CHECK(skb_result_camera(result, &cam) == SKB_OK);
     uint8_t *tex2 = malloc(3 * SIZE * SIZE);
@@ -210,7 +210,7 @@ int main(int argc, char **argv) {
     CHECK(skb_export_options_set_twist_bones(eo, true) == SKB_OK);
     CHECK(skb_export_options_set_shape_keys(eo, true) == SKB_OK);
     snprintf(path, sizeof path, "%s/c.usda", dir);
-    CHECK(skb_export_usd(mesh, path, eo) == SKB_OK);
+    CHECK(skb_mesh_write_usd(mesh, path, eo) == SKB_OK);
     char *c_usd = slurp(path, NULL);
     snprintf(cmd, sizeof cmd, "%s/body.usda", out);
     char *cli_usd = slurp(cmd, NULL);
@@ -224,7 +224,7 @@ int main(int argc, char **argv) {
     CHECK(c_keys && cli_keys && strcmp(c_keys, cli_keys) == 0);
     free(c_keys), free(cli_keys);
     snprintf(path, sizeof path, "%s/c.fbx", dir);
-    CHECK(skb_export_fbx(mesh, path, eo) == SKB_OK);
+    CHECK(skb_mesh_write_fbx(mesh, path, eo) == SKB_OK);
     size_t fbx_len = 0;
     char *fbx = slurp(path, &fbx_len);
     int32_t up = -1, front = -1, front_sign = 0;

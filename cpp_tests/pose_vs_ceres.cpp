@@ -3,9 +3,9 @@
 // Problems: frames of the held-out DeepMimic clips (root-centred, heading-aligned), seen by
 // random near-frontal weak-perspective cameras (yaw U(-30,30) deg, pitch U(-10,10) deg, roll
 // U(-5,5) deg, sx ~ 286 px/m +-10 %, sy = sx * U(0.95,1.05)), with 0 and 2 px Gaussian noise.
-// For each problem sketchbody's pursuit (skb_estimate_pose, refinement off) gives the basis
+// For each problem sketchbody's pursuit (skb_pose3d_estimate, refinement off) gives the basis
 // subset and the common starting point; then
-//   ours : skb_pose_refine (joint Levenberg-Marquardt, bound kept exactly),
+//   ours : skb_pose3d_refine (joint Levenberg-Marquardt, bound kept exactly),
 //   Ceres: angle-axis rotation, sx, sy, tx, ty and the weights, residuals of eq. (3) (plus the
 //          weight-prior residuals prior_weight * w_k / sigma_k when the options use a prior).
 // How Ceres imposes |g(w)| <= kappa * sum l^2 (g = sum of squared bone lengths - sum l^2): it
@@ -19,7 +19,7 @@
 // (12 blended exemplar starts, up to 4 bases, prior 0.1 m, alpha 0.8 toward the level target;
 // but independent sx and sy in both passes, as Ceres has them, and the free-joint refinement off,
 // as it is a step after eq. 3 that leaves the basis span). The model's base pose (mean or exemplar start) is the start's joints minus its bases,
-// as skb_pose_refine takes it.
+// as skb_pose3d_refine takes it.
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
@@ -309,10 +309,10 @@ int main(int argc, char** argv) {
   skb_pose_dictionary* dict = nullptr;
   if (!check(skb_pose_dictionary_new_default(&dict), "skb_pose_dictionary_new_default")) return 1;
   double lengths[14], sum_sq = 0;
-  check(skb_pose_dictionary_bone_lengths(dict, lengths, 14), "bone_lengths");
+  check(skb_pose_dictionary_copy_bone_lengths(dict, lengths, 14), "bone_lengths");
   for (double l : lengths) sum_sq += l * l;
   Pose mean;
-  check(skb_pose_dictionary_mean(dict, mean.data(), 45), "mean");
+  check(skb_pose_dictionary_copy_mean(dict, mean.data(), 45), "mean");
 
   bool all_pass = true;
   for (int pass = 0; pass < 2; ++pass) {
@@ -359,13 +359,13 @@ int main(int argc, char** argv) {
         if (problems % 7 == 3) m.j2.visible[problems % 15] = 0;  // some problems drop a joint
         check(skb_pose_options_set_refine(opts, false), "refine off");
         skb_pose3d start, ours;
-        if (!check(skb_estimate_pose(dict, &m.j2, opts, &start), "skb_estimate_pose")) return 1;
+        if (!check(skb_pose3d_estimate(dict, &m.j2, opts, &start), "skb_pose3d_estimate")) return 1;
         check(skb_pose_options_set_refine(opts, true), "refine on");
         if (start.num_bases == 0) continue;
         for (uint32_t k = 0; k < start.num_bases; ++k) {
           Pose b;
           double s;
-          check(skb_pose_dictionary_basis(dict, start.bases[k], b.data(), 45, &s), "basis");
+          check(skb_pose_dictionary_copy_basis(dict, start.bases[k], b.data(), 45, &s), "basis");
           m.basis.push_back(b);
           m.sigma.push_back(s);
         }
@@ -376,7 +376,7 @@ int main(int argc, char** argv) {
           for (uint32_t k = 0; k < start.num_bases; ++k) m.mean[i] -= start.weights[k] * m.basis[k][i];
         }
         auto t0 = std::chrono::steady_clock::now();
-        if (!check(skb_pose_refine(dict, &m.j2, opts, &start, &ours), "skb_pose_refine")) return 1;
+        if (!check(skb_pose3d_refine(dict, &m.j2, opts, &start, &ours), "skb_pose3d_refine")) return 1;
         auto t1 = std::chrono::steady_clock::now();
         CeresResult c;
         solve_ceres(m, start, false, 0, c);

@@ -3,12 +3,12 @@
  *
  *   repose_bench SKETCH JOINTS [REPS]
  *
- * Runs skb_run_pipeline once on SKETCH with JOINTS (the library's default fit), then times, REPS
+ * Runs skb_pipeline_run once on SKETCH with JOINTS (the library's default fit), then times, REPS
  * times each (default 41), with the calls interleaved so that a busy machine slows them alike:
  *   - skb_result_repose_joints: the right wrist moved by a few pixels back and forth (a drag);
  *   - skb_result_flip_limb: the first limb with depth flipped;
  *   - skb_result_pick_alternative: alternatives 1 and 0 in turn;
- *   - skb_pose_flip_limb on a pose estimate handle (no body);
+ *   - skb_pose_estimate_flip_limb on a pose estimate handle (no body);
  *   - skb_pose_estimate_new (the 3-D pose with its alternatives, no body).
  * Prints the median and the minimum of each, wall ms per call, and the process's CPU ms per call
  * (all threads: skinning runs on the library's thread pool).
@@ -22,7 +22,7 @@
 
 enum { KINDS = 5, MAX_REPS = 1001 };
 static const char *NAMES[KINDS] = {"skb_result_repose_joints (a dragged wrist)", "skb_result_flip_limb",
-                                   "skb_result_pick_alternative", "skb_pose_flip_limb (estimate handle)",
+                                   "skb_result_pick_alternative", "skb_pose_estimate_flip_limb (estimate handle)",
                                    "skb_pose_estimate_new (pose + alternatives)"};
 
 static double now(clockid_t clock) {
@@ -57,7 +57,7 @@ int main(int argc, char **argv) {
     skb_context *ctx = NULL;
     MUST(skb_context_new(&ctx));
     skb_gray_image *sketch = NULL;
-    MUST(skb_gray_image_load(argv[1], &sketch));
+    MUST(skb_gray_image_new_from_file(argv[1], &sketch));
     skb_image view;
     MUST(skb_gray_image_view(sketch, &view));
     skb_joints2d joints;
@@ -65,7 +65,7 @@ int main(int argc, char **argv) {
     skb_pose_dictionary *dict = NULL;
     MUST(skb_pose_dictionary_new_default(&dict));
     skb_result *result = NULL;
-    MUST(skb_run_pipeline(ctx, &view, &joints, dict, NULL, NULL, NULL, NULL, &result));
+    MUST(skb_pipeline_run(ctx, &view, &joints, dict, NULL, NULL, NULL, NULL, &result));
 
     uint32_t flip = SKB_NUM_LIMBS, outcome = 0;
     for (uint32_t l = 0; l < SKB_NUM_LIMBS && flip == SKB_NUM_LIMBS; l++) {
@@ -80,7 +80,7 @@ int main(int argc, char **argv) {
         return 1;
     }
     skb_pose_estimate *est = NULL;
-    MUST(skb_result_pose_estimate(result, &est));
+    MUST(skb_pose_estimate_new_from_result(result, &est));
 
     static double wall[KINDS][MAX_REPS], cpu[KINDS][MAX_REPS];
     skb_joints2d moved = joints;
@@ -102,7 +102,7 @@ int main(int argc, char **argv) {
                 MUST(skb_result_pick_alternative(result, (uint32_t)((r + 1) % 2), &outcome));
                 break;
             case 3:
-                MUST(skb_pose_flip_limb(est, flip, &outcome));
+                MUST(skb_pose_estimate_flip_limb(est, flip, &outcome));
                 break;
             default: {
                 skb_pose_estimate *e = NULL;

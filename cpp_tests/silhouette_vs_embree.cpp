@@ -1,4 +1,4 @@
-// Silhouette raster vs Embree: sketchbody's skb_rasterize_triangles against one Embree ray per
+// Silhouette raster vs Embree: sketchbody's skb_rasterizer_rasterize_triangles against one Embree ray per
 // pixel centre along the weak-perspective camera's view direction, on 100 random posed capsule
 // humanoids and 30 MakeHuman bodies from the embedded model (random shapes, poses via
 // skb_mesh_pose, cameras; every fifth partly outside the image) at 128², 512² and 1024². Passes when every image agrees on >= 99.99% of pixels and every disagreeing pixel
@@ -311,7 +311,7 @@ int main() {
       skb_camera c = unit;
       c.sx *= s, c.sy *= s, c.t[0] *= s, c.t[1] *= s;
       ours.assign((size_t)s * s, 7);
-      skb_status st = skb_rasterize_triangles(ras, m.v.data(), m.v.size() / 3, m.t.data(), m.t.size() / 3, &c, s, s,
+      skb_status st = skb_rasterizer_rasterize_triangles(ras, m.v.data(), m.v.size() / 3, m.t.data(), m.t.size() / 3, &c, s, s,
                                               ours.data(), s, ours.size());
       embree_mask(scene, m, c, s, s, ref);
       size_t ref_cov = std::count(ref.begin(), ref.end(), 255);
@@ -362,7 +362,7 @@ int main() {
     skb_camera c = random_camera(rng, 64, 64, false, m);
     c.t[0] += 10000;
     std::vector<uint8_t> mask(64 * 64, 7);
-    skb_status st = skb_rasterize_triangles(ras, m.v.data(), m.v.size() / 3, m.t.data(), m.t.size() / 3, &c, 64, 64,
+    skb_status st = skb_rasterizer_rasterize_triangles(ras, m.v.data(), m.v.size() / 3, m.t.data(), m.t.size() / 3, &c, 64, 64,
                                             mask.data(), 64, mask.size());
     bool ok = st == SKB_ERR_MESH_OUTSIDE_IMAGE && std::all_of(mask.begin(), mask.end(), [](uint8_t b) { return b == 7; });
     std::printf("wholly outside: status %u (%s), mask untouched: %s\n", st, skb_status_str(st), ok ? "yes" : "NO");
@@ -387,7 +387,7 @@ int main() {
       double best_ours = 1e30, best_build = 1e30, best_cast = 1e30, best_ours_cpu = 1e30, best_embree_cpu = 1e30;
       for (int rep = 0; rep < REPS; ++rep) {
         double t0 = now_s(), c0 = cpu_s();
-        skb_status st = skb_rasterize_triangles(ras, m.v.data(), m.v.size() / 3, m.t.data(), m.t.size() / 3, &c, s, s,
+        skb_status st = skb_rasterizer_rasterize_triangles(ras, m.v.data(), m.v.size() / 3, m.t.data(), m.t.size() / 3, &c, s, s,
                                                 ours.data(), s, ours.size());
         double t1 = now_s(), c1 = cpu_s();
         RTCScene scene = build_scene(dev, m);

@@ -136,7 +136,7 @@ int main(int argc, char **argv) {
 
         // Re-posing the fitted body without re-fitting its shape: a limb's depth flipped there
         // and back, a depth reading picked, moved joints, and a joint dragged off the sketch.
-        expect(r.num_alternatives() >= 2, "the pose lists depth readings");
+        expect(r.alternative_count() >= 2, "the pose lists depth readings");
         uint32_t flipped = SKB_NUM_LIMBS;
         for (uint32_t l = 0; l < SKB_NUM_LIMBS && flipped == SKB_NUM_LIMBS; ++l)
             if (r.flip_limb(l) == SKB_REPOSE_DONE) flipped = l;

@@ -11,12 +11,12 @@
 /**
  * Major version of the library this header belongs to.
  */
-#define SKB_VERSION_MAJOR 0
+#define SKB_VERSION_MAJOR 1
 
 /**
  * Minor version of the library this header belongs to.
  */
-#define SKB_VERSION_MINOR 1
+#define SKB_VERSION_MINOR 0
 
 /**
  * Patch version of the library this header belongs to.
@@ -184,7 +184,7 @@
 #define SKB_POSE_GROUPS 6
 
 /**
- * `SKB_LIMB_*`: a limb bone whose depth can be flipped, the index of `skb_pose_flip_limb` and of
+ * `SKB_LIMB_*`: a limb bone whose depth can be flipped, the index of `skb_pose_estimate_flip_limb` and of
  * `skb_pose_estimate_copy_alternative_flipped`: right upper arm (shoulder → elbow).
  */
 #define SKB_LIMB_R_UPPER_ARM 0
@@ -235,7 +235,7 @@
 #define SKB_MAX_ALTERNATIVES 8
 
 /**
- * `*outcome` of `skb_pose_flip_limb` and the re-pose functions: done.
+ * `*outcome` of `skb_pose_estimate_flip_limb` and the re-pose functions: done.
  */
 #define SKB_REPOSE_DONE 0
 
@@ -266,7 +266,7 @@
 #define SKB_JOINTS_JSON_MAX_BYTES 1048576
 
 /**
- * Backend of `skb_detect`: both the sketch model and BlazePose, one candidate per image (the
+ * Backend of `skb_context_detect`: both the sketch model and BlazePose, one candidate per image (the
  * default): on a drawing the sketch model recognises (its score above its own threshold), the
  * one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
  * higher calibrated confidence. Each joint the two backends put within 0.08 of the figure's
@@ -276,12 +276,12 @@
 #define SKB_DETECTOR_AUTO 0
 
 /**
- * Backend of `skb_detect`: the flexible-mixture-of-parts sketch model alone.
+ * Backend of `skb_context_detect`: the flexible-mixture-of-parts sketch model alone.
  */
 #define SKB_DETECTOR_FMP 1
 
 /**
- * Backend of `skb_detect`: MediaPipe's BlazePose landmark model alone.
+ * Backend of `skb_context_detect`: MediaPipe's BlazePose landmark model alone.
  */
 #define SKB_DETECTOR_BLAZEPOSE 2
 
@@ -381,7 +381,7 @@
 #define SKB_INTERIM_DECIDING_FIT 1
 
 /**
- * Number of body parts `skb_result_part_support` reports.
+ * Number of body parts `skb_result_copy_part_support` reports.
  */
 #define SKB_NUM_BODY_PARTS 6
 
@@ -527,7 +527,7 @@ enum skb_status
    */
   SKB_ERR_IMAGE_TOO_SMALL = 22,
   /**
-   * Retired, no longer returned: before the embedded detector landed, `skb_run_pipeline`
+   * Retired, no longer returned: before the embedded detector landed, `skb_pipeline_run`
    * without joints failed with it; now the detector finds them.
    */
   SKB_ERR_NO_JOINTS = 23,
@@ -551,7 +551,7 @@ typedef uint32_t skb_status;
 
 /**
  * The library context: holds the body model (the embedded one for [`skb_context_new`]) and the
- * embedded 2-D detector (decoded on first use by `skb_detect`). Create with `skb_context_new`,
+ * embedded 2-D detector (decoded on first use by `skb_context_detect`). Create with `skb_context_new`,
  * release with `skb_context_free`. Immutable after creation (the detector is initialised once,
  * thread-safely), so one context may be used from several threads at once. Meshes keep the
  * model alive on their own: a context may be freed before the meshes made from it.
@@ -559,7 +559,7 @@ typedef uint32_t skb_status;
 typedef struct skb_context skb_context;
 
 /**
- * Options of [`skb_detect`]: backend, strictness, the sketch model's score threshold and
+ * Options of [`skb_context_detect`]: backend, strictness, the sketch model's score threshold and
  * searched scales. Create with `skb_detect_options_new` (backend `SKB_DETECTOR_AUTO`, not
  * strict, the model's threshold, the sketch search range: figures from 1/2 of the shorter image
  * side to the longer side, at 7 pyramid levels per octave), release with
@@ -584,9 +584,9 @@ typedef struct skb_detector skb_detector;
 typedef struct skb_export_options skb_export_options;
 
 /**
- * Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
+ * Options of `skb_context_fit_shape` and `skb_pipeline_run`'s fit. Created with the library defaults
  * (200 samples after a first iteration of 1600 halved each iteration, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
- * weight 1.0 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
+ * weight 1.0 (used by `skb_pipeline_run`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
  * dimension, gender automatic, height unknown, per-sample cameras on, bone-length factors with
  * prior sd 0.1). Every setter validates its value and leaves the options
  * unchanged on error. Not synchronised: do not change it while another thread uses it; reading
@@ -596,7 +596,7 @@ typedef struct skb_fit_options skb_fit_options;
 
 /**
  * A decoded image file, 8-bit gray (colour converted with OpenCV's weights). Create with
- * `skb_gray_image_load`, view with `skb_gray_image_view`, free with `skb_gray_image_free`.
+ * `skb_gray_image_new_from_file`, view with `skb_gray_image_view`, free with `skb_gray_image_free`.
  * Immutable: several threads may read it at once.
  */
 typedef struct skb_gray_image skb_gray_image;
@@ -619,14 +619,14 @@ typedef struct skb_pose_dictionary skb_pose_dictionary;
  * A 3-D pose estimate with its ranked depth readings ("alternatives": the first is the estimate
  * itself, the others flip limbs toward or away from the camera, best first; the score is px²,
  * lower = better, see docs/formats.md "3-D pose JSON"). Made by `skb_pose_estimate_new` or
- * `skb_result_pose_estimate`; free with `skb_pose_estimate_free`. Reading it from several
- * threads at once is safe; `skb_pose_flip_limb` and `skb_pose_estimate_pick` change it and must
+ * `skb_pose_estimate_new_from_result`; free with `skb_pose_estimate_free`. Reading it from several
+ * threads at once is safe; `skb_pose_estimate_flip_limb` and `skb_pose_estimate_pick_alternative` change it and must
  * not run while another thread uses it.
  */
 typedef struct skb_pose_estimate skb_pose_estimate;
 
 /**
- * Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
+ * Options of `skb_pose3d_estimate` / `skb_pose3d_refine`. Created with defaults (κ = 0.05 relative,
  * α = 0.8 toward the level target, sx = sy, 4 bases, 0.5 px, refinement on, prior 0.1 m,
  * 12 exemplar starts, 64 limb candidates, blend 30 px², free-joint refinement at 0.014 m).
  * Not synchronised: do not change it
@@ -642,7 +642,7 @@ typedef struct skb_pose_options skb_pose_options;
 typedef struct skb_rasterizer skb_rasterizer;
 
 /**
- * The result of `skb_run_pipeline`, owned by the caller (free with `skb_result_free`). It owns
+ * The result of `skb_pipeline_run`, owned by the caller (free with `skb_result_free`). It owns
  * all its data (nothing refers to the inputs). Several threads may read it at once; only the
  * re-pose functions (`skb_result_pick_alternative`, `skb_result_flip_limb`,
  * `skb_result_repose_joints`) change it, in place, and must not run while another thread uses it.
@@ -652,20 +652,20 @@ typedef struct skb_result skb_result;
 /**
  * A decoded image file, 8-bit RGB (gray expanded, palettes resolved, transparency composited
  * over white, EXIF orientation applied): the sketch as `sketchbody run` reads it for the
- * texture. Create with `skb_rgb_image_load`, view with `skb_rgb_image_view`, free with
+ * texture. Create with `skb_rgb_image_new_from_file`, view with `skb_rgb_image_view`, free with
  * `skb_rgb_image_free`. Immutable: several threads may read it at once.
  */
 typedef struct skb_rgb_image skb_rgb_image;
 
 /**
- * The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb_with_options` writes for
- * the same mesh and options. Create with `skb_mesh_rig_new`, release with `skb_rig_free`; it does
+ * The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb` writes for
+ * the same mesh and options. Create with `skb_rig_new_from_mesh`, release with `skb_rig_free`; it does
  * not follow later `skb_mesh_pose` calls. Read-only, so several threads may use it at once.
  */
 typedef struct skb_rig skb_rig;
 
 /**
- * Options of [`skb_render_sketch`]: the style and the camera angles. Create with
+ * Options of [`skb_context_render_sketch`]: the style and the camera angles. Create with
  * `skb_sketch_options_new` (random style, random near-frontal camera), release with
  * `skb_sketch_options_free`. Setters need exclusive use; a configured handle may be read by
  * several threads at once.
@@ -805,7 +805,7 @@ typedef struct skb_pose3d {
 } skb_pose3d;
 
 /**
- * The drawn proportions and plausibility of an estimate (`skb_estimate_pose_figure`).
+ * The drawn proportions and plausibility of an estimate (`skb_pose3d_estimate_figure`).
  */
 typedef struct skb_pose_figure {
   /**
@@ -834,7 +834,7 @@ typedef struct skb_pose_figure {
 typedef int (*skb_progress_fn)(void *user, float fraction);
 
 /**
- * What `skb_detect_figure` and `skb_result_detection` report beside the joints.
+ * What `skb_context_detect_figure` and `skb_result_detection` report beside the joints.
  */
 typedef struct skb_figure_info {
   /**
@@ -893,7 +893,7 @@ typedef struct skb_facing_info {
 } skb_facing_info;
 
 /**
- * Interim-body callback of `skb_run_pipeline_progressive`: called on the calling thread with
+ * Interim-body callback of `skb_pipeline_run_progressive`: called on the calling thread with
  * the caller's `user`, the stage (`SKB_INTERIM_MEAN_SHAPE`, `SKB_INTERIM_DECIDING_FIT`) and a
  * posed mesh borrowed for the call only (read it with the mesh getters, e.g.
  * `skb_mesh_copy_posed_vertices`; do not free or keep it).
@@ -901,7 +901,7 @@ typedef struct skb_facing_info {
 typedef void (*skb_interim_fn)(void *user, uint32_t stage, const struct skb_mesh *mesh);
 
 /**
- * One extra view of a turnaround for `skb_run_pipeline_views`: its label (`SKB_VIEW_SIDE`,
+ * One extra view of a turnaround for `skb_pipeline_run_views`: its label (`SKB_VIEW_SIDE`,
  * `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`), its sketch (1, 3 or 4 channels, dark strokes on light
  * paper; any size: views drawn at another scale are scaled to the front by their joints) and its
  * 2-D joints in that image's pixels (NULL: detected). The pointers are borrowed for the call only.
@@ -991,6 +991,8 @@ extern "C" {
  * Static, NUL-terminated English text for a status code; "unknown status" for numbers this
  * version does not know. Never NULL; never free it. Thread-safe.
  */
+/* ===== Status codes and their text ===== */
+
 const char *skb_status_str(uint32_t status);
 
 /**
@@ -998,12 +1000,16 @@ const char *skb_status_str(uint32_t status);
  * The pointer stays valid until the next sketchbody call on the same thread; do not free it.
  * Never NULL.
  */
+/* ===== Error messages ===== */
+
 const char *skb_last_error_message(void);
 
 /**
  * The version of the loaded library, `"MAJOR.MINOR.PATCH"` (compare with the header's
  * `SKB_VERSION_STRING`). Static; never NULL; never free it. Thread-safe.
  */
+/* ===== Version ===== */
+
 const char *skb_version(void);
 
 /**
@@ -1015,31 +1021,35 @@ const char *skb_version(void);
  * `dst_stride * (height - 1) + width`. Thresholds may be given in either order; `aperture` is
  * 3, 5 or 7. On error nothing is written. Thread-safe; runs on the rayon thread pool.
  */
-skb_status skb_canny(const struct skb_image *src,
-                     double threshold1,
-                     double threshold2,
-                     int32_t aperture,
-                     bool l2_gradient,
-                     uint8_t *dst,
-                     size_t dst_stride,
-                     size_t dst_len);
+/* ===== Image functions: Canny, Gaussian blur ===== */
+
+skb_status skb_image_canny(const struct skb_image *src,
+                           double threshold1,
+                           double threshold2,
+                           int32_t aperture,
+                           bool l2_gradient,
+                           uint8_t *dst,
+                           size_t dst_stride,
+                           size_t dst_len);
 
 /**
  * Gaussian blur of a 1-channel `src` with standard deviation `sigma` pixels (0 < sigma <= 1024),
  * compatible with OpenCV 4.x `cv::GaussianBlur(src, dst, cv::Size(0, 0), sigma)`. Output
- * layout as in [`skb_canny`]. On error nothing is written. Thread-safe.
+ * layout as in [`skb_image_canny`]. On error nothing is written. Thread-safe.
  */
-skb_status skb_gaussian_blur(const struct skb_image *src,
-                             double sigma,
-                             uint8_t *dst,
-                             size_t dst_stride,
-                             size_t dst_len);
+skb_status skb_image_gaussian_blur(const struct skb_image *src,
+                                   double sigma,
+                                   uint8_t *dst,
+                                   size_t dst_stride,
+                                   size_t dst_len);
 
 /**
  * Creates a context holding the body model compiled into the library. On success `*out`
  * receives a new context the caller owns (release with `skb_context_free`); on failure `*out`
  * is untouched. Thread-safe.
  */
+/* ===== The body model (skb_context) and meshes (skb_mesh) ===== */
+
 skb_status skb_context_new(struct skb_context **out);
 
 /**
@@ -1051,7 +1061,7 @@ void skb_context_free(struct skb_context *ctx);
  * Number of principal components of `gender`'s shape space (the most weights
  * `skb_mesh_new_from_shape` accepts) into `*out`. Thread-safe.
  */
-skb_status skb_context_num_components(const struct skb_context *ctx, uint32_t gender, size_t *out);
+skb_status skb_context_component_count(const struct skb_context *ctx, uint32_t gender, size_t *out);
 
 /**
  * The default fitting dimension of `gender`'s shape space (components holding 96% of the
@@ -1140,7 +1150,7 @@ skb_status skb_mesh_copy_skin_weights(const struct skb_mesh *mesh,
 
 /**
  * Number of PCA shape weights the mesh was made from (as given to `skb_mesh_new_from_shape`,
- * or found by `skb_fit_shape`) into `*out`.
+ * or found by `skb_context_fit_shape`) into `*out`.
  */
 skb_status skb_mesh_shape_weight_count(const struct skb_mesh *mesh, size_t *out);
 
@@ -1154,6 +1164,8 @@ skb_status skb_mesh_copy_shape_weights(const struct skb_mesh *mesh, double *dst,
  * Creates a rasteriser and stores it in `*out` (caller owns it; free with
  * [`skb_rasterizer_free`]).
  */
+/* ===== Posing, rasterising and writing meshes ===== */
+
 skb_status skb_rasterizer_new(struct skb_rasterizer **out);
 
 /**
@@ -1173,17 +1185,17 @@ void skb_rasterizer_free(struct skb_rasterizer *r);
  * entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
  * Arrays are only read during the call. Thread-safe with distinct rasterisers.
  */
-skb_status skb_rasterize_triangles(struct skb_rasterizer *rasterizer,
-                                   const float *verts,
-                                   size_t nverts,
-                                   const uint32_t *tris,
-                                   size_t ntris,
-                                   const struct skb_camera *cam,
-                                   uint32_t w,
-                                   uint32_t h,
-                                   uint8_t *mask,
-                                   size_t mask_stride,
-                                   size_t mask_len);
+skb_status skb_rasterizer_rasterize_triangles(struct skb_rasterizer *rasterizer,
+                                              const float *verts,
+                                              size_t nverts,
+                                              const uint32_t *tris,
+                                              size_t ntris,
+                                              const struct skb_camera *cam,
+                                              uint32_t w,
+                                              uint32_t h,
+                                              uint8_t *mask,
+                                              size_t mask_stride,
+                                              size_t mask_len);
 
 /**
  * Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,
@@ -1214,7 +1226,7 @@ skb_status skb_mesh_copy_posed_joints(const struct skb_mesh *mesh, double *dst, 
 
 /**
  * Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
- * [`skb_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
+ * [`skb_rasterizer_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
  */
 skb_status skb_mesh_rasterize(const struct skb_mesh *mesh,
                               struct skb_rasterizer *rasterizer,
@@ -1233,18 +1245,12 @@ skb_status skb_mesh_rasterize(const struct skb_mesh *mesh,
 skb_status skb_mesh_write_obj(const struct skb_mesh *mesh, const char *path, bool posed);
 
 /**
- * Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with the default export options
- * (`skb_mesh_write_glb_with_options` with NULL options): one scene, the rest mesh skinned to
- * MakeHuman's 53-bone rig with project names, posed by the current pose (the rest pose if never
- * posed), origin on the floor. See docs/formats.md. Written atomically. Only reads `mesh`.
- */
-skb_status skb_mesh_write_glb(const struct skb_mesh *mesh, const char *path);
-
-/**
  * Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
  * `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
  */
 skb_status skb_mesh_write_preview(const struct skb_mesh *mesh, const char *path, uint32_t size);
+
+/* ===== Export options; FBX and USD ===== */
 
 /**
  * Creates export options with the defaults into `*out` (the caller owns them).
@@ -1278,22 +1284,23 @@ skb_status skb_export_options_set_origin(struct skb_export_options *opts, uint32
  * Adds the twist bones (`on` true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones
  * after the 53, sharing the limbs' skin so that a twist spreads along the limb; docs/formats.md,
  * "Twist bones") or not (false, the default: MakeHuman's 53 bones). Every rigged writer and
- * `skb_mesh_rig_new` follow it.
+ * `skb_rig_new_from_mesh` follow it.
  */
 skb_status skb_export_options_set_twist_bones(struct skb_export_options *opts, bool on);
 
 /**
  * Sets how the pose is carried: `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or
  * `SKB_POSE_AS_BOTH` (docs/formats.md, "glTF 2.0 binary export", the pose); anything else is
- * `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_mesh_rig_new` follow
+ * `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_rig_new_from_mesh` follow
  * it.
  */
-skb_status skb_export_options_set_pose_as(struct skb_export_options *opts, uint32_t pose_as);
+skb_status skb_export_options_set_pose_as(struct skb_export_options *opts,
+                                          uint32_t pose_as);
 
 /**
  * Adds the IK target bones (`on` true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and
  * feet under `ik_hand_root` / `ik_foot_root`, after the other bones; docs/formats.md, "IK
- * targets") or not (false, the default). Every rigged writer and `skb_mesh_rig_new` follow it.
+ * targets") or not (false, the default). Every rigged writer and `skb_rig_new_from_mesh` follow it.
  */
 skb_status skb_export_options_set_ik_targets(struct skb_export_options *opts, bool on);
 
@@ -1303,14 +1310,14 @@ skb_status skb_export_options_set_ik_targets(struct skb_export_options *opts, bo
  * displacement one standard deviation of its component makes, through the body's bone-length
  * factors and its scaling to its height; glTF morph targets, FBX blend shapes, USD
  * BlendShapes, all at 0; docs/formats.md, "Shape keys") or not (false, the default). Every
- * rigged writer and `skb_mesh_rig_new` follow it (`skb_rig_shape_key_count`).
+ * rigged writer and `skb_rig_new_from_mesh` follow it (`skb_rig_shape_key_count`).
  */
 skb_status skb_export_options_set_shape_keys(struct skb_export_options *opts, bool on);
 
 /**
  * Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
  * `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
- * is always in metres (glTF's specification) and `skb_mesh_rig_new` in the model frame.
+ * is always in metres (glTF's specification) and `skb_rig_new_from_mesh` in the model frame.
  */
 skb_status skb_export_options_set_units(struct skb_export_options *opts, uint32_t units);
 
@@ -1318,7 +1325,7 @@ skb_status skb_export_options_set_units(struct skb_export_options *opts, uint32_
  * Sets the up axis of the FBX and USD files: `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model
  * frame turned +90° about X: Z up, the body facing −Y); anything else is
  * `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB is always Y up (glTF's specification)
- * and `skb_mesh_rig_new` in the model frame.
+ * and `skb_rig_new_from_mesh` in the model frame.
  */
 skb_status skb_export_options_set_up_axis(struct skb_export_options *opts, uint32_t up);
 
@@ -1330,31 +1337,33 @@ skb_status skb_export_options_set_up_axis(struct skb_export_options *opts, uint3
  * options say; the options' shape keys as morph targets). See docs/formats.md. Written
  * atomically. Only reads `mesh` and `opts`.
  */
-skb_status skb_mesh_write_glb_with_options(const struct skb_mesh *mesh,
-                                           const char *path,
-                                           const struct skb_export_options *opts);
+skb_status skb_mesh_write_glb(const struct skb_mesh *mesh,
+                              const char *path,
+                              const struct skb_export_options *opts);
 
 /**
  * Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
- * same rigged, posed body as `skb_mesh_write_glb_with_options` (the bones' local transforms
+ * same rigged, posed body as `skb_mesh_write_glb` (the bones' local transforms
  * hold the pose, the clusters and the bind pose the rest), in the options' unit and up axis
  * (default metres, Y up), a plain skin-colour material. See docs/formats.md, "body.fbx".
  * Written atomically. Only reads `mesh` and `opts`.
  */
-skb_status skb_export_fbx(const struct skb_mesh *mesh,
-                          const char *path,
-                          const struct skb_export_options *opts);
+skb_status skb_mesh_write_fbx(const struct skb_mesh *mesh,
+                              const char *path,
+                              const struct skb_export_options *opts);
 
 /**
  * Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
- * the defaults): the same rigged, posed body as `skb_mesh_write_glb_with_options` (a Skeleton
+ * the defaults): the same rigged, posed body as `skb_mesh_write_glb` (a Skeleton
  * with bind and rest transforms, the pose as a static SkelAnimation), in the options' unit and
  * up axis (default metres, Y up: `metersPerUnit`, `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
  * and `opts`.
  */
-skb_status skb_export_usd(const struct skb_mesh *mesh,
-                          const char *path,
-                          const struct skb_export_options *opts);
+skb_status skb_mesh_write_usd(const struct skb_mesh *mesh,
+                              const char *path,
+                              const struct skb_export_options *opts);
+
+/* ===== The rig in memory (skb_rig) ===== */
 
 /**
  * Builds the rig of `mesh` in its current pose (the rest pose if never posed) with `opts`
@@ -1362,9 +1371,9 @@ skb_status skb_export_usd(const struct skb_mesh *mesh,
  * caller owns (release with `skb_rig_free`). Errors: degenerate bones (`SKB_ERR_DEGENERATE_BONE`).
  * Only reads `mesh` and `opts`.
  */
-skb_status skb_mesh_rig_new(const struct skb_mesh *mesh,
-                            const struct skb_export_options *opts,
-                            struct skb_rig **out);
+skb_status skb_rig_new_from_mesh(const struct skb_mesh *mesh,
+                                 const struct skb_export_options *opts,
+                                 struct skb_rig **out);
 
 /**
  * Releases a rig. NULL is a no-op.
@@ -1383,9 +1392,15 @@ skb_status skb_rig_bone_count(const struct skb_rig *rig, size_t *out);
 skb_status skb_rig_vertex_count(const struct skb_rig *rig, size_t *out);
 
 /**
+ * The byte length (UTF-8, without the terminating NUL) of bone `bone`'s name into `*out`
+ * (`bone` 0 .. `skb_rig_bone_count`−1). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+ */
+skb_status skb_rig_bone_name_length(const struct skb_rig *rig, size_t bone, size_t *out);
+
+/**
  * Copies the name of bone `bone` (0 .. `skb_rig_bone_count`−1; the GLB node's name in the chosen
- * convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least the name's length
- * + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+ * convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least
+ * `skb_rig_bone_name_length` + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
  */
 skb_status skb_rig_copy_bone_name(const struct skb_rig *rig,
                                   size_t bone,
@@ -1512,6 +1527,8 @@ skb_status skb_mesh_copy_normals(const struct skb_mesh *mesh,
                                  float *dst,
                                  size_t dst_len);
 
+/* ===== The 3-D pose: dictionaries, options, estimates and alternatives ===== */
+
 /**
  * Creates the embedded default dictionary (learned from the DeepMimic clips, see
  * assets/README.md). On success `*out` owns it. Thread-safe.
@@ -1523,7 +1540,7 @@ skb_status skb_pose_dictionary_new_default(struct skb_pose_dictionary **out);
  * `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
  * `*out` owns the dictionary. Thread-safe.
  */
-skb_status skb_pose_dictionary_load(const char *path, struct skb_pose_dictionary **out);
+skb_status skb_pose_dictionary_new_from_file(const char *path, struct skb_pose_dictionary **out);
 
 /**
  * Frees a dictionary. NULL is a no-op. Do not use it afterwards.
@@ -1533,32 +1550,32 @@ void skb_pose_dictionary_free(struct skb_pose_dictionary *dict);
 /**
  * Writes the number of basis poses K to `*out`. Thread-safe.
  */
-skb_status skb_pose_dictionary_num_bases(const struct skb_pose_dictionary *dict, uint32_t *out);
+skb_status skb_pose_dictionary_basis_count(const struct skb_pose_dictionary *dict, size_t *out);
 
 /**
- * Copies the mean pose μ (45 values, metres) into `out` (`len` ≥ 45). Thread-safe.
+ * Copies the mean pose μ (45 values, metres) into `dst` (`dst_len` ≥ 45). Thread-safe.
  */
-skb_status skb_pose_dictionary_mean(const struct skb_pose_dictionary *dict,
-                                    double *out,
-                                    size_t len);
+skb_status skb_pose_dictionary_copy_mean(const struct skb_pose_dictionary *dict,
+                                         double *dst,
+                                         size_t dst_len);
 
 /**
- * Copies basis `index` (< K; a unit 45-vector) into `out` (`len` ≥ 45) and its spread σ
+ * Copies basis `index` (< K; a unit 45-vector) into `dst` (`dst_len` ≥ 45) and its spread σ
  * (metres, used by the weight prior) into `*sigma` (may be NULL). Thread-safe.
  */
-skb_status skb_pose_dictionary_basis(const struct skb_pose_dictionary *dict,
-                                     uint32_t index,
-                                     double *out,
-                                     size_t len,
-                                     double *sigma);
+skb_status skb_pose_dictionary_copy_basis(const struct skb_pose_dictionary *dict,
+                                          uint32_t index,
+                                          double *dst,
+                                          size_t dst_len,
+                                          double *sigma);
 
 /**
  * Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
  * (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
  */
-skb_status skb_pose_dictionary_bone_lengths(const struct skb_pose_dictionary *dict,
-                                            double *out,
-                                            size_t len);
+skb_status skb_pose_dictionary_copy_bone_lengths(const struct skb_pose_dictionary *dict,
+                                                 double *dst,
+                                                 size_t dst_len);
 
 /**
  * Creates options with the defaults. On success `*out` owns them. Thread-safe.
@@ -1641,15 +1658,15 @@ skb_status skb_pose_options_set_blend(struct skb_pose_options *opts, double tau_
  * leave the dictionary's span to follow the 2-D joints, bone lengths kept (default 0.014 m,
  * 4 px on a 500-px figure; raise it for rough joints such as detections). With it on the
  * returned joints are no longer base + Σ basis · weight of the dictionary's own base pose;
- * `skb_pose_refine` still continues from them (see `skb_pose_refine`).
+ * `skb_pose3d_refine` still continues from them (see `skb_pose3d_refine`).
  */
 skb_status skb_pose_options_set_joint_noise(struct skb_pose_options *opts, double noise_m);
 
 /**
  * Sets whether the drawn proportions are estimated with the pose (default on): six per-group
- * bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_estimate_pose_figure`
+ * bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_pose3d_estimate_figure`
  * returns them) and a second solve on the 2-D joints unstylised by them; the returned joints
- * then have the figure's proportions. Turn it off for `skb_pose_refine` (the fixed-basis
+ * then have the figure's proportions. Turn it off for `skb_pose3d_refine` (the fixed-basis
  * refinement needs joints = base + Σ basis · weight on the dictionary's skeleton).
  */
 skb_status skb_pose_options_set_proportions(struct skb_pose_options *opts, bool on);
@@ -1688,20 +1705,20 @@ skb_status skb_pose_options_set_factor_prior(struct skb_pose_options *opts, bool
  * solver chooses between readings of a near-frontal figure (a limb toward or away from the
  * viewer), the depths predicted from the 2-D joints by the embedded network
  * (`assets/factor_prior.json`) add this many px² of cost per px² of depth disagreement.
- * `skb_estimate_pose` always uses them when on; the pipeline replaces them by BlazePose's own
+ * `skb_pose3d_estimate` always uses them when on; the pipeline replaces them by BlazePose's own
  * depths when it detected the joints with BlazePose. `SKB_ERR_OUT_OF_RANGE` outside [0, 10].
  */
 skb_status skb_pose_options_set_depth_prior(struct skb_pose_options *opts, double weight);
 
 /**
- * `skb_estimate_pose` that also writes the drawn proportions and the plausibility flag to
+ * `skb_pose3d_estimate` that also writes the drawn proportions and the plausibility flag to
  * `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
  */
-skb_status skb_estimate_pose_figure(const struct skb_pose_dictionary *dict,
-                                    const struct skb_joints2d *joints,
-                                    const struct skb_pose_options *opts,
-                                    struct skb_pose3d *out,
-                                    struct skb_pose_figure *figure);
+skb_status skb_pose3d_estimate_figure(const struct skb_pose_dictionary *dict,
+                                      const struct skb_joints2d *joints,
+                                      const struct skb_pose_options *opts,
+                                      struct skb_pose3d *out,
+                                      struct skb_pose_figure *figure);
 
 /**
  * Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
@@ -1713,28 +1730,28 @@ skb_status skb_estimate_pose_figure(const struct skb_pose_dictionary *dict,
  * beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
  * distinct `out`); CPU time per pose in docs/benchmarks.md ("3-D pose").
  */
-skb_status skb_estimate_pose(const struct skb_pose_dictionary *dict,
-                             const struct skb_joints2d *joints,
-                             const struct skb_pose_options *opts,
-                             struct skb_pose3d *out);
+skb_status skb_pose3d_estimate(const struct skb_pose_dictionary *dict,
+                               const struct skb_joints2d *joints,
+                               const struct skb_pose_options *opts,
+                               struct skb_pose3d *out);
 
 /**
  * The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
  * base pose is taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
- * start `skb_estimate_pose` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
+ * start `skb_pose3d_estimate` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
  * and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
  * is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
  * to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
  */
-skb_status skb_pose_refine(const struct skb_pose_dictionary *dict,
-                           const struct skb_joints2d *joints,
-                           const struct skb_pose_options *opts,
-                           const struct skb_pose3d *start,
-                           struct skb_pose3d *out);
+skb_status skb_pose3d_refine(const struct skb_pose_dictionary *dict,
+                             const struct skb_joints2d *joints,
+                             const struct skb_pose_options *opts,
+                             const struct skb_pose3d *start,
+                             struct skb_pose3d *out);
 
 /**
- * `skb_estimate_pose` into a new estimate handle `*out` (the caller owns it) that also holds the
- * ranked alternatives. `opts` may be NULL. Same errors as `skb_estimate_pose`; on error `*out`
+ * `skb_pose3d_estimate` into a new estimate handle `*out` (the caller owns it) that also holds the
+ * ranked alternatives. `opts` may be NULL. Same errors as `skb_pose3d_estimate`; on error `*out`
  * is untouched. Thread-safe.
  */
 skb_status skb_pose_estimate_new(const struct skb_pose_dictionary *dict,
@@ -1755,9 +1772,9 @@ skb_status skb_pose_estimate_pose(const struct skb_pose_estimate *est, struct sk
 
 /**
  * The number of alternatives (1..=`SKB_MAX_ALTERNATIVES`; 0 for an estimate without them) into
- * `*count`.
+ * `*out`.
  */
-skb_status skb_pose_estimate_num_alternatives(const struct skb_pose_estimate *est, uint32_t *count);
+skb_status skb_pose_estimate_alternative_count(const struct skb_pose_estimate *est, size_t *out);
 
 /**
  * Copies alternative `index`'s 15 joints (x, y, z doubles, metres, the frame of
@@ -1772,16 +1789,24 @@ skb_status skb_pose_estimate_copy_alternative_joints(const struct skb_pose_estim
                                                      double *score);
 
 /**
- * The limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`, ascending):
- * their number into `*count` (may be NULL) and, when `dst` is not NULL, the limbs into `dst`
- * (`dst_len` ≥ count; `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors:
- * `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the count.
+ * The number of limbs alternative `index` flips relative to the current pose into `*out`
+ * (0 for alternative 0; at most `SKB_NUM_LIMBS`). Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥
+ * the alternative count.
+ */
+skb_status skb_pose_estimate_alternative_flipped_count(const struct skb_pose_estimate *est,
+                                                       uint32_t index,
+                                                       size_t *out);
+
+/**
+ * Copies the limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`,
+ * ascending) into `dst` (`dst_len` ≥ `skb_pose_estimate_alternative_flipped_count`;
+ * `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors: `SKB_ERR_OUT_OF_RANGE` for
+ * `index` ≥ the alternative count.
  */
 skb_status skb_pose_estimate_copy_alternative_flipped(const struct skb_pose_estimate *est,
                                                       uint32_t index,
                                                       uint32_t *dst,
-                                                      size_t dst_len,
-                                                      size_t *count);
+                                                      size_t dst_len);
 
 /**
  * Flips the depth of `limb` (`SKB_LIMB_*`) of the estimate in place and re-solves (the image and
@@ -1791,14 +1816,18 @@ skb_status skb_pose_estimate_copy_alternative_flipped(const struct skb_pose_esti
  * the original. Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Not thread-safe on
  * one estimate.
  */
-skb_status skb_pose_flip_limb(struct skb_pose_estimate *est, uint32_t limb, uint32_t *outcome);
+skb_status skb_pose_estimate_flip_limb(struct skb_pose_estimate *est,
+                                       uint32_t limb,
+                                       uint32_t *outcome);
 
 /**
  * Makes alternative `index` the estimate's pose (0 keeps it): its limbs flipped in place, the
  * alternatives re-ranked relative to it. Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the
  * count (nothing changed). Not thread-safe on one estimate.
  */
-skb_status skb_pose_estimate_pick(struct skb_pose_estimate *est, uint32_t index);
+skb_status skb_pose_estimate_pick_alternative(struct skb_pose_estimate *est, uint32_t index);
+
+/* ===== 2-D joints files ===== */
 
 /**
  * Reads a `sketchbody-joints2d` file into `*out` (joints listed in `missing` get
@@ -1835,6 +1864,8 @@ skb_status skb_joints2d_write_json(const struct skb_joints2d *joints, const char
  * model). On success `*out` receives a new detector the caller owns; on failure it is untouched.
  * Thread-safe.
  */
+/* ===== 2-D detection ===== */
+
 skb_status skb_detector_new_from_file(const char *path, struct skb_detector **out);
 
 /**
@@ -1843,49 +1874,32 @@ skb_status skb_detector_new_from_file(const char *path, struct skb_detector **ou
 void skb_detector_free(struct skb_detector *det);
 
 /**
- * Detects the best-scoring figure in `image` with `det`. `threshold`: score threshold (NaN uses
- * the model's own); `min_cell_px`: skip pyramid levels with cells smaller than this many pixels
- * (0 searches every scale; larger is faster but misses small figures). Images whose longer side
+ * Detects the best-scoring figure in `image` with the sketch model `det` and the settings of
+ * `opts` (NULL: the defaults of `skb_detect_options_new`; its threshold, scales, figure range
+ * and levels per octave apply, the backend and strictness do not). Images whose longer side
  * exceeds 1024 px are downscaled first (results are in input pixels). Writes the 15 canonical
  * joints as (x, y) pairs in pixels (origin top-left, y down) to `joints_xy[0..30]`, their
- * confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. The other search
- * settings are the defaults of `skb_detect_options_new`. When no figure reaches the threshold
- * it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score found, below the
- * threshold; −infinity when no pyramid level was searched). Other errors (nothing written):
- * `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
- * `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
+ * confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. When no figure
+ * reaches the threshold it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score
+ * found, below the threshold; −infinity when no pyramid level was searched).
+ * `progress(user, fraction)` (may be NULL) is called on the calling thread with the fraction
+ * done (0..=1, non-decreasing) after the feature pyramid is built and after each group of
+ * pyramid levels; a non-zero return stops the search with `SKB_ERR_CANCELLED` (nothing written)
+ * and the callback is not called again. Other errors (nothing written):
+ * `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (a feature pyramid over
+ * 1 GiB, refused before any work), `SKB_ERR_NON_FINITE` (a score or joint that is not finite),
+ * `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
  */
 skb_status skb_detector_detect(const struct skb_detector *det,
                                const struct skb_image *image,
-                               double threshold,
-                               double min_cell_px,
+                               const struct skb_detect_options *opts,
+                               skb_progress_fn progress,
+                               void *user,
                                double *joints_xy,
                                size_t joints_len,
                                double *confidence,
                                size_t confidence_len,
                                double *score);
-
-/**
- * As `skb_detector_detect`, with the sketch model's settings of `opts` (NULL: the defaults of
- * `skb_detect_options_new`; its threshold, scales, figure range and levels per octave apply,
- * the backend and strictness do not) and a progress callback: `progress(user, fraction)` (may
- * be NULL) is called on the calling thread with the fraction done (0..=1, non-decreasing)
- * after the feature pyramid is built and after each group of pyramid levels; a non-zero
- * return stops the search with `SKB_ERR_CANCELLED` (nothing written) and the callback is not
- * called again. A search whose feature pyramid would exceed 1 GiB is `SKB_ERR_OUT_OF_RANGE`
- * before any work; a score or joint that is not finite is `SKB_ERR_NON_FINITE`. Other
- * statuses as `skb_detector_detect`. Thread-safe.
- */
-skb_status skb_detector_detect_with_progress(const struct skb_detector *det,
-                                             const struct skb_image *image,
-                                             const struct skb_detect_options *opts,
-                                             skb_progress_fn progress,
-                                             void *user,
-                                             double *joints_xy,
-                                             size_t joints_len,
-                                             double *confidence,
-                                             size_t confidence_len,
-                                             double *score);
 
 /**
  * Creates options with the defaults. `*out` receives a handle the caller owns.
@@ -1904,11 +1918,11 @@ void skb_detect_options_free(struct skb_detect_options *opts);
 skb_status skb_detect_options_set_backend(struct skb_detect_options *opts, uint32_t backend);
 
 /**
- * Sets strict detection (`strict` ≠ 0): "no figure" unless a backend passes its own hard
- * threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (0)
+ * Sets strict detection (`strict` true): "no figure" unless a backend passes its own hard
+ * threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (false)
  * returns the best figure whenever the calibrated presence probability is at least 0.5.
  */
-skb_status skb_detect_options_set_strict(struct skb_detect_options *opts, uint32_t strict);
+skb_status skb_detect_options_set_strict(struct skb_detect_options *opts, bool strict);
 
 /**
  * Sets the sketch model's score threshold (NaN restores the model's own), used when strict.
@@ -1959,42 +1973,44 @@ skb_status skb_detect_options_set_levels_per_octave(struct skb_detect_options *o
  * (nothing written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
  * `SKB_ERR_NULL_POINTER`, image errors. Thread-safe.
  */
-skb_status skb_detect(const struct skb_context *ctx,
-                      const struct skb_image *image,
-                      const struct skb_detect_options *opts,
-                      double *joints_xy,
-                      size_t joints_len,
-                      double *confidence,
-                      size_t confidence_len,
-                      double *score);
+skb_status skb_context_detect(const struct skb_context *ctx,
+                              const struct skb_image *image,
+                              const struct skb_detect_options *opts,
+                              double *joints_xy,
+                              size_t joints_len,
+                              double *confidence,
+                              size_t confidence_len,
+                              double *score);
 
 /**
- * As `skb_detect`, with the backend kept, the confidences, the presence probability and the
+ * As `skb_context_detect`, with the backend kept, the confidences, the presence probability and the
  * low-confidence flag in `*info` instead of a score. On `SKB_ERR_NO_FIGURE` and other errors
  * nothing is written. Thread-safe.
  */
-skb_status skb_detect_figure(const struct skb_context *ctx,
-                             const struct skb_image *image,
-                             const struct skb_detect_options *opts,
-                             double *joints_xy,
-                             size_t joints_len,
-                             double *confidence,
-                             size_t confidence_len,
-                             struct skb_figure_info *info);
+skb_status skb_context_detect_figure(const struct skb_context *ctx,
+                                     const struct skb_image *image,
+                                     const struct skb_detect_options *opts,
+                                     double *joints_xy,
+                                     size_t joints_len,
+                                     double *confidence,
+                                     size_t confidence_len,
+                                     struct skb_figure_info *info);
+
+/* ===== The figure's facing ===== */
 
 /**
- * As `skb_detect_figure` (the same arguments and statuses), with the figure's facing and the
+ * As `skb_context_detect_figure` (the same arguments and statuses), with the figure's facing and the
  * swapped labelling in `*facing` as well. On any failure nothing is written. Thread-safe.
  */
-skb_status skb_detect_facing(const struct skb_context *ctx,
-                             const struct skb_image *image,
-                             const struct skb_detect_options *opts,
-                             double *joints_xy,
-                             size_t joints_len,
-                             double *confidence,
-                             size_t confidence_len,
-                             struct skb_figure_info *info,
-                             struct skb_facing_info *facing);
+skb_status skb_context_detect_facing(const struct skb_context *ctx,
+                                     const struct skb_image *image,
+                                     const struct skb_detect_options *opts,
+                                     double *joints_xy,
+                                     size_t joints_len,
+                                     double *confidence,
+                                     size_t confidence_len,
+                                     struct skb_figure_info *info,
+                                     struct skb_facing_info *facing);
 
 /**
  * The facing of the figure behind `result`'s detected joints, with the swapped labelling, into
@@ -2009,6 +2025,8 @@ skb_status skb_result_facing(const struct skb_result *result, struct skb_facing_
  * `SKB_ERR_NULL_POINTER`. Thread-safe.
  */
 skb_status skb_joints2d_swap_sides(const struct skb_joints2d *joints, struct skb_joints2d *out);
+
+/* ===== The shape fit ===== */
 
 /**
  * Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
@@ -2049,7 +2067,7 @@ skb_status skb_fit_options_set_temperature(struct skb_fit_options *opts, double 
 /**
  * Sets the weight of the 2-D joint term, ≥ 0 (score loses weight × the mean distance in raster
  * pixels between each sample's projected rig joints and the 2-D joints; used by
- * `skb_run_pipeline`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
+ * `skb_pipeline_run`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
  * negative `SKB_ERR_OUT_OF_RANGE`.
  */
 skb_status skb_fit_options_set_joint_weight(struct skb_fit_options *opts, double weight);
@@ -2065,9 +2083,9 @@ skb_status skb_fit_options_set_height(struct skb_fit_options *opts, double metre
 /**
  * Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
  * scales and translation are refitted to its own posed joints vs the 2-D joints, so the size
- * comes from the shape. Only `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it.
+ * comes from the shape. Only `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it.
  */
-skb_status skb_fit_options_set_sample_camera(struct skb_fit_options *opts, int on);
+skb_status skb_fit_options_set_sample_camera(struct skb_fit_options *opts, bool on);
 
 /**
  * Sets the prior standard deviation of the fit's log bone-length factors (legs, arms,
@@ -2080,10 +2098,10 @@ skb_status skb_fit_options_set_proportion_sd(struct skb_fit_options *opts, doubl
  * Turns the closed-form proportion estimate on (non-zero, the default) or off (0): the bone
  * factors' prior is centred on the factors estimated from the 2-D joints' bone lengths, the
  * estimated pose and camera instead of 1 (needs 2-D joints and a proportion sd > 0: only
- * `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it). Not thread-safe on one
+ * `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it). Not thread-safe on one
  * handle, like every setter.
  */
-skb_status skb_fit_options_set_estimate_proportions(struct skb_fit_options *opts, int on);
+skb_status skb_fit_options_set_estimate_proportions(struct skb_fit_options *opts, bool on);
 
 /**
  * Sets the longest raster side of the fit, pixels, in 16..=4096.
@@ -2114,7 +2132,7 @@ skb_status skb_fit_options_set_inside_cap(struct skb_fit_options *opts, double c
 
 /**
  * Sets the PCA dimensions searched; 0 restores the default (a gendered space: all 10 of its
- * prior's dimensions; the both-sexes space: its default 5). `skb_run_pipeline` with automatic
+ * prior's dimensions; the both-sexes space: its default 5). `skb_pipeline_run` with automatic
  * gender decides the gender with two fits in 4 dimensions and then fits the chosen gender
  * with these. A value above the model's GMM dimension fails at fit time
  * (`SKB_ERR_OUT_OF_RANGE`).
@@ -2123,7 +2141,7 @@ skb_status skb_fit_options_set_dims(struct skb_fit_options *opts, uint32_t dims)
 
 /**
  * Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
- * `skb_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_run_pipeline`
+ * `skb_context_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_pipeline_run`
  * fits the gendered space the gender classifier picks, see `skb_result_gender`;
  * `skb_result_gender_value` reads it).
  */
@@ -2132,16 +2150,16 @@ skb_status skb_fit_options_set_gender(struct skb_fit_options *opts, uint32_t gen
 /**
  * Fits the body shape (SIR, paper §II-C) to an edge map for a known 3-D pose and camera.
  * `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
- * `skb_pose3d.joints` from `skb_estimate_pose`); `camera` maps them to `edges`' pixels; `edges`
+ * `skb_pose3d.joints` from `skb_pose3d_estimate`); `camera` maps them to `edges`' pixels; `edges`
  * is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
- * `skb_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
+ * `skb_image_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
  * fitted, gender a continuous weight; the mesh's gender is the nearer one and its weights are
  * the blended space's, weight 0 its gender axis). `progress` may be NULL; a non-zero return cancels
  * (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
  * caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
  * weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
  * options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
- * when one is set, else the fitted height: `skb_run_pipeline` calibrates the fitted body when its
+ * when one is set, else the fitted height: `skb_pipeline_run` calibrates the fitted body when its
  * 2-D joints are given, this call has none); `*score` (may be NULL) receives
  * the best sample's match score (higher is better). Errors: non-finite joints or camera
  * (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
@@ -2149,23 +2167,25 @@ skb_status skb_fit_options_set_gender(struct skb_fit_options *opts, uint32_t gen
  * (`SKB_ERR_OUT_OF_RANGE`). Thread-safe (the context is shared read-only); runs on the rayon
  * pool; the callback is called on the calling thread.
  */
-skb_status skb_fit_shape(const struct skb_context *ctx,
-                         const double *joints,
-                         size_t joints_len,
-                         const struct skb_camera *camera,
-                         const struct skb_image *edges,
-                         const struct skb_fit_options *opts,
-                         skb_progress_fn progress,
-                         void *user,
-                         double *score,
-                         struct skb_mesh **out);
+skb_status skb_context_fit_shape(const struct skb_context *ctx,
+                                 const double *joints,
+                                 size_t joints_len,
+                                 const struct skb_camera *camera,
+                                 const struct skb_image *edges,
+                                 const struct skb_fit_options *opts,
+                                 skb_progress_fn progress,
+                                 void *user,
+                                 double *score,
+                                 struct skb_mesh **out);
+
+/* ===== Gray images; the main job (skb_pipeline_run) and its result ===== */
 
 /**
  * Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as gray into `*out` (caller owns it).
  * Errors: `SKB_ERR_IO` (missing, unreadable), `SKB_ERR_DECODE` (not an image, truncated),
  * `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
  */
-skb_status skb_gray_image_load(const char *path, struct skb_gray_image **out);
+skb_status skb_gray_image_new_from_file(const char *path, struct skb_gray_image **out);
 
 /**
  * A borrowed 1-channel `skb_image` view of `img` into `*out`, valid while `img` lives.
@@ -2173,14 +2193,14 @@ skb_status skb_gray_image_load(const char *path, struct skb_gray_image **out);
 skb_status skb_gray_image_view(const struct skb_gray_image *img, struct skb_image *out);
 
 /**
- * Frees an image from `skb_gray_image_load`. NULL is a no-op.
+ * Frees an image from `skb_gray_image_new_from_file`. NULL is a no-op.
  */
 void skb_gray_image_free(struct skb_gray_image *img);
 
 /**
  * Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
  * edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
- * context's embedded detector finds them, as `skb_detect` with default options), the 3-D
+ * context's embedded detector finds them, as `skb_context_detect` with default options), the 3-D
  * pose and camera (with detected joints, BlazePose's relative joint depths weigh the solver's
  * choices), the shape fit (with detected joints: half the joint weight, no bone-factor
  * search, and with automatic gender the gendered space the detected-joints gender classifier
@@ -2201,7 +2221,7 @@ void skb_gray_image_free(struct skb_gray_image *img);
  * `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
  * callback is called on the calling thread.
  */
-skb_status skb_run_pipeline(const struct skb_context *ctx,
+skb_status skb_pipeline_run(const struct skb_context *ctx,
                             const struct skb_image *sketch,
                             const struct skb_joints2d *joints,
                             const struct skb_pose_dictionary *dict,
@@ -2212,13 +2232,13 @@ skb_status skb_run_pipeline(const struct skb_context *ctx,
                             struct skb_result **out);
 
 /**
- * `skb_run_pipeline` that also shows the bodies it has before the final one: `interim` (may be
+ * `skb_pipeline_run` that also shows the bodies it has before the final one: `interim` (may be
  * NULL) gets the mean shape in the estimated pose as soon as the pose is known (a few ms after
  * the pose step), then the deciding fit of the chosen gender before the final fit, so a host
- * can draw something at once. The result is `skb_run_pipeline`'s for the same inputs. Arguments,
- * ownership, errors and threading as `skb_run_pipeline`; `progress` and `interim` share `user`.
+ * can draw something at once. The result is `skb_pipeline_run`'s for the same inputs. Arguments,
+ * ownership, errors and threading as `skb_pipeline_run`; `progress` and `interim` share `user`.
  */
-skb_status skb_run_pipeline_progressive(const struct skb_context *ctx,
+skb_status skb_pipeline_run_progressive(const struct skb_context *ctx,
                                         const struct skb_image *sketch,
                                         const struct skb_joints2d *joints,
                                         const struct skb_pose_dictionary *dict,
@@ -2258,7 +2278,7 @@ skb_status skb_result_gender_value(const struct skb_result *result,
 /**
  * The detection behind the result's 2-D joints into `*info` (backend kept, calibrated
  * confidence, presence, the low-confidence flag: show the joints to the user for correction).
- * Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_run_pipeline`, not
+ * Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_pipeline_run`, not
  * detected (nothing written); `SKB_ERR_NULL_POINTER`.
  */
 skb_status skb_result_detection(const struct skb_result *result, struct skb_figure_info *info);
@@ -2278,7 +2298,9 @@ skb_status skb_result_evidence(const struct skb_result *result, bool *low, doubl
  * outline in view and for every part of the mean shape. A part below 0.5 is one the drawing
  * does not support (clothing, a shape no body has): the body there is the prior's reading.
  */
-skb_status skb_result_part_support(const struct skb_result *result, double *dst, size_t dst_len);
+skb_status skb_result_copy_part_support(const struct skb_result *result,
+                                        double *dst,
+                                        size_t dst_len);
 
 /**
  * The best match score (higher is better) of the chosen fit into `*score`; `gender` must be
@@ -2288,10 +2310,14 @@ skb_status skb_result_part_support(const struct skb_result *result, double *dst,
 skb_status skb_result_score(const struct skb_result *result, uint32_t gender, double *score);
 
 /**
- * Vertex count (13380) and quad-face count (13378) into `*vertices` and `*faces` (either may
- * be NULL).
+ * The result body's vertex count (13380) into `*out`.
  */
-skb_status skb_result_counts(const struct skb_result *result, size_t *vertices, size_t *faces);
+skb_status skb_result_vertex_count(const struct skb_result *result, size_t *out);
+
+/**
+ * The result body's quad-face count (13378) into `*out`.
+ */
+skb_status skb_result_face_count(const struct skb_result *result, size_t *out);
 
 /**
  * Copies the posed (`posed` non-zero) or rest vertices, x, y, z floats in metres, model frame,
@@ -2341,32 +2367,36 @@ skb_status skb_result_copy_skin_weights(const struct skb_result *result,
                                         size_t len);
 
 /**
- * The fitted PCA shape weights (metres): their number into `*count` (may be NULL) and, when
- * `dst` is not NULL, the weights into `dst` (`dst_len` ≥ count).
+ * The number of fitted PCA shape weights (the fit's dimensions) into `*out`.
  */
-skb_status skb_result_shape_weights(const struct skb_result *result,
-                                    double *dst,
-                                    size_t dst_len,
-                                    size_t *count);
+skb_status skb_result_shape_weight_count(const struct skb_result *result, size_t *out);
+
+/**
+ * Copies the fitted PCA shape weights (metres) into `dst` of `dst_len` doubles (at least
+ * `skb_result_shape_weight_count`).
+ */
+skb_status skb_result_copy_shape_weights(const struct skb_result *result,
+                                         double *dst,
+                                         size_t dst_len);
 
 /**
  * A new `skb_mesh` of the result (the fitted rest shape, posed as in the result) into `*out`,
  * for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
  */
-skb_status skb_result_mesh(const struct skb_result *result, struct skb_mesh **out);
+skb_status skb_mesh_new_from_result(const struct skb_result *result, struct skb_mesh **out);
 
 /**
  * The result's 3-D pose (`SKB_JOINTS_ESTIMATED`) with its ranked alternatives as a new estimate
  * handle `*out` (the caller owns it; `skb_pose_estimate_free`): list the readings with
- * `skb_pose_estimate_num_alternatives` / `skb_pose_estimate_copy_alternative_joints` /
+ * `skb_pose_estimate_alternative_count` / `skb_pose_estimate_copy_alternative_joints` /
  * `skb_pose_estimate_copy_alternative_flipped`. A copy: flipping it does not change the result
  * (use `skb_result_flip_limb` / `skb_result_pick_alternative` for that).
  */
-skb_status skb_result_pose_estimate(const struct skb_result *result,
-                                    struct skb_pose_estimate **out);
+skb_status skb_pose_estimate_new_from_result(const struct skb_result *result,
+                                             struct skb_pose_estimate **out);
 
 /**
- * Re-poses the result in place to its pose's alternative `index` (`skb_result_pose_estimate`
+ * Re-poses the result in place to its pose's alternative `index` (`skb_pose_estimate_new_from_result`
  * lists them; 0 = the current pose): IK and skinning of the fitted rest body, whose shape
  * weights, proportions and rest mesh are kept; the camera and 2-D joints are kept. A few ms.
  * `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`. Errors: `SKB_ERR_OUT_OF_RANGE` for
@@ -2389,7 +2419,7 @@ skb_status skb_result_flip_limb(struct skb_result *result, uint32_t limb, uint32
 /**
  * Re-poses the fitted body in place for moved 2-D joints `joints` (pixels of the result's
  * sketch; issue 50's live correction): the 3-D pose is re-estimated with `dict` (NULL: the
- * embedded dictionary; pass the one given to `skb_run_pipeline`) and the run's pose options,
+ * embedded dictionary; pass the one given to `skb_pipeline_run`) and the run's pose options,
  * without an image depth cue, then IK and skinning of the fitted rest body (shape weights,
  * proportions and rest mesh kept) and the camera's scales refitted to its skeleton. About
  * 5–10 ms (docs/benchmarks.md, "Re-pose"). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`,
@@ -2404,23 +2434,25 @@ skb_status skb_result_repose_joints(struct skb_result *result,
                                     uint32_t *outcome);
 
 /**
- * `skb_run_pipeline_progressive` on a turnaround: `sketch` and `joints` are the front view,
+ * `skb_pipeline_run_progressive` on a turnaround: `sketch` and `joints` are the front view,
  * `views` (`view_count` entries; NULL when 0) the same character in the same pose from the side,
  * the other side or the back. The views share one body and one pose: every view's joints enter
  * the 3-D pose (depth from a side view), every view's outline the shape fit; each view has the
  * front camera turned by its label's yaw, with its own scale and position. With `view_count` 0
- * this is `skb_run_pipeline_progressive`. Read each view with `skb_result_view` and the run's
+ * this is `skb_pipeline_run_progressive`. Read each view with `skb_result_view` and the run's
  * warnings (views that agree only roughly, a view little supported by its strokes) with
  * `skb_result_copy_view_warnings`. Arguments, ownership, threading, progress and cancel as
- * `skb_run_pipeline_progressive` (the interim bodies are the front view's); the views' images
- * and joints are only read during the call. Errors: `skb_run_pipeline`'s for any view's image
+ * `skb_pipeline_run_progressive` (the interim bodies are the front view's); the views' images
+ * and joints are only read during the call. Errors: `skb_pipeline_run`'s for any view's image
  * and joints; a label not `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`, or one given
  * twice (`SKB_ERR_OUT_OF_RANGE`); views that do not show one character in one pose (their joints
  * miss the shared pose by more than 12 % of the figure's height, match it only upside down, or a
  * side view drawn facing the other way than its label: `SKB_ERR_VIEWS_DISAGREE`, the message
  * names the view and the reason; a turnaround is never silently fitted to the front alone).
  */
-skb_status skb_run_pipeline_views(const struct skb_context *ctx,
+/* ===== Turnarounds: several views of one character ===== */
+
+skb_status skb_pipeline_run_views(const struct skb_context *ctx,
                                   const struct skb_image *sketch,
                                   const struct skb_joints2d *joints,
                                   const struct skb_view_input *views,
@@ -2434,9 +2466,9 @@ skb_status skb_run_pipeline_views(const struct skb_context *ctx,
                                   struct skb_result **out);
 
 /**
- * The number of extra views of a result into `*count` (0 for a one-view run).
+ * The number of extra views of a result into `*out` (0 for a one-view run).
  */
-skb_status skb_result_view_count(const struct skb_result *result, size_t *count);
+skb_status skb_result_view_count(const struct skb_result *result, size_t *out);
 
 /**
  * Extra view `index` (0 .. `skb_result_view_count` − 1, in the order given) into `*out`.
@@ -2447,22 +2479,29 @@ skb_status skb_result_view(const struct skb_result *result,
                            struct skb_view_info *out);
 
 /**
- * The run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing newline;
- * empty when there are none or for a one-view run): their byte length without the terminating
- * NUL into `*len` (may be NULL) and, when `dst` is not NULL, the text NUL-terminated into `dst`
- * (`dst_len` ≥ length + 1).
+ * The byte length (UTF-8, without the terminating NUL) of the run's warnings about its views
+ * into `*out`: 0 when there are none or for a one-view run. Read them with
+ * `skb_result_copy_view_warnings`.
+ */
+skb_status skb_result_view_warnings_length(const struct skb_result *result, size_t *out);
+
+/**
+ * Copies the run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing
+ * newline; empty when there are none or for a one-view run), NUL-terminated into `dst` of
+ * `dst_len` bytes (at least `skb_result_view_warnings_length` + 1).
  */
 skb_status skb_result_copy_view_warnings(const struct skb_result *result,
                                          char *dst,
-                                         size_t dst_len,
-                                         size_t *len);
+                                         size_t dst_len);
+
+/* ===== Colour images; the sketch as the body's texture ===== */
 
 /**
  * Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as 8-bit RGB into `*out` (caller
  * owns it). Errors: `SKB_ERR_IO` (missing, unreadable, not a regular file), `SKB_ERR_DECODE`
  * (not an image, truncated), `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
  */
-skb_status skb_rgb_image_load(const char *path, struct skb_rgb_image **out);
+skb_status skb_rgb_image_new_from_file(const char *path, struct skb_rgb_image **out);
 
 /**
  * A borrowed 3-channel `skb_image` view of `img` into `*out` (rows packed, `stride` = 3 ×
@@ -2471,7 +2510,7 @@ skb_status skb_rgb_image_load(const char *path, struct skb_rgb_image **out);
 skb_status skb_rgb_image_view(const struct skb_rgb_image *img, struct skb_image *out);
 
 /**
- * Frees an image from `skb_rgb_image_load`. NULL is a no-op.
+ * Frees an image from `skb_rgb_image_new_from_file`. NULL is a no-op.
  */
 void skb_rgb_image_free(struct skb_rgb_image *img);
 
@@ -2493,7 +2532,7 @@ skb_status skb_image_write_png(const struct skb_image *img, const char *path);
  * islands.
  *
  * `sketch` is the colour image the result was computed from (the same pixels; 3 channels as
- * `skb_rgb_image_load` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
+ * `skb_rgb_image_new_from_file` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
  * alpha ignored). `size` is the texture side in texels, 1..=`SKB_MAX_TEXTURE_SIZE` (the CLI's
  * default `SKB_DEFAULT_TEXTURE_SIZE`). Writes `size` rows of `size` RGB pixels (3 bytes each)
  * into `dst`, rows `dst_stride` bytes apart (at least 3 × `size`); `dst_len` is the size of
@@ -2516,7 +2555,7 @@ skb_status skb_result_project_texture(const struct skb_result *result,
  * The same projection for a mesh and a camera of the host's own: the sketch seen through
  * `cam` (model metres → sketch pixels, as `skb_result_camera` gives it) projected onto the
  * mesh in its current pose (`skb_mesh_pose`; the rest pose if never posed). For a mesh from
- * `skb_result_mesh` and the result's camera this is exactly `skb_result_project_texture`.
+ * `skb_mesh_new_from_result` and the result's camera this is exactly `skb_result_project_texture`.
  * Arguments, output and errors otherwise as `skb_result_project_texture`, plus
  * `SKB_ERR_NON_FINITE` / `SKB_ERR_OUT_OF_RANGE` for an invalid camera (non-finite, scales not
  * positive, rotation not orthonormal). Only reads `mesh`.
@@ -2530,6 +2569,8 @@ skb_status skb_mesh_project_texture(const struct skb_mesh *mesh,
                                     size_t dst_len,
                                     uint64_t *texels,
                                     uint64_t *visible);
+
+/* ===== Synthetic sketches ===== */
 
 /**
  * Creates options with the defaults. `*out` receives a handle the caller owns.
@@ -2573,20 +2614,20 @@ skb_status skb_sketch_options_set_camera(struct skb_sketch_options *opts,
  * is written on failure. Thread-safe for distinct output buffers; builds its edge tables on
  * each call (a few ms).
  */
-skb_status skb_render_sketch(const struct skb_context *ctx,
-                             uint32_t gender,
-                             const float *weights,
-                             size_t n_weights,
-                             const double *joints3d,
-                             uint64_t seed,
-                             uint32_t width,
-                             uint32_t height,
-                             const struct skb_sketch_options *opts,
-                             uint8_t *out_pixels,
-                             size_t out_stride,
-                             size_t out_len,
-                             double *out_joints2d,
-                             uint8_t *out_visible);
+skb_status skb_context_render_sketch(const struct skb_context *ctx,
+                                     uint32_t gender,
+                                     const float *weights,
+                                     size_t n_weights,
+                                     const double *joints3d,
+                                     uint64_t seed,
+                                     uint32_t width,
+                                     uint32_t height,
+                                     const struct skb_sketch_options *opts,
+                                     uint8_t *out_pixels,
+                                     size_t out_stride,
+                                     size_t out_len,
+                                     double *out_joints2d,
+                                     uint8_t *out_visible);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -77,11 +77,11 @@ struct GrayImage {
     skb_image view() const noexcept { return skb_image{pixels.data(), width, height, width, 1}; }
 };
 
-/// Canny edges (255 edge / 0), bit-exact with OpenCV's cv::Canny; see skb_canny.
+/// Canny edges (255 edge / 0), bit-exact with OpenCV's cv::Canny; see skb_image_canny.
 inline GrayImage canny(const skb_image &src, double threshold1, double threshold2, int aperture = 3,
                        bool l2_gradient = false) {
     GrayImage out{src.width, src.height, std::vector<uint8_t>(size_t(src.width) * src.height)};
-    check(skb_canny(&src, threshold1, threshold2, aperture, l2_gradient, out.pixels.data(), src.width,
+    check(skb_image_canny(&src, threshold1, threshold2, aperture, l2_gradient, out.pixels.data(), src.width,
                     out.pixels.size()));
     return out;
 }
@@ -89,14 +89,14 @@ inline GrayImage canny(const skb_image &src, double threshold1, double threshold
 /// Gaussian blur of a gray image, compatible with cv::GaussianBlur(Size(0,0), sigma).
 inline GrayImage gaussian_blur(const skb_image &src, double sigma) {
     GrayImage out{src.width, src.height, std::vector<uint8_t>(size_t(src.width) * src.height)};
-    check(skb_gaussian_blur(&src, sigma, out.pixels.data(), src.width, out.pixels.size()));
+    check(skb_image_gaussian_blur(&src, sigma, out.pixels.data(), src.width, out.pixels.size()));
     return out;
 }
 
-/// A decoded image file (PNG/JPEG) as 8-bit gray; see skb_gray_image_load.
+/// A decoded image file (PNG/JPEG) as 8-bit gray; see skb_gray_image_new_from_file.
 class LoadedImage {
 public:
-    explicit LoadedImage(const std::string &path) { check(skb_gray_image_load(path.c_str(), img_.out())); }
+    explicit LoadedImage(const std::string &path) { check(skb_gray_image_new_from_file(path.c_str(), img_.out())); }
     /// A borrowed view, valid while this object lives.
     skb_image view() const {
         skb_image v{};
@@ -109,10 +109,10 @@ private:
 };
 
 /// A decoded image file (PNG/JPEG) as 8-bit RGB, transparency over white: the sketch as
-/// `sketchbody run` reads it for the texture; see skb_rgb_image_load.
+/// `sketchbody run` reads it for the texture; see skb_rgb_image_new_from_file.
 class LoadedColourImage {
 public:
-    explicit LoadedColourImage(const std::string &path) { check(skb_rgb_image_load(path.c_str(), img_.out())); }
+    explicit LoadedColourImage(const std::string &path) { check(skb_rgb_image_new_from_file(path.c_str(), img_.out())); }
     /// A borrowed 3-channel view, valid while this object lives.
     skb_image view() const {
         skb_image v{};
@@ -163,10 +163,10 @@ public:
     FitOptions &gender(uint32_t v) { check(skb_fit_options_set_gender(o_.get(), v)); return *this; }
     /// The character's known rest height in metres (0 = unknown).
     FitOptions &height(double metres) { check(skb_fit_options_set_height(o_.get(), metres)); return *this; }
-    FitOptions &sample_camera(bool on) { check(skb_fit_options_set_sample_camera(o_.get(), on ? 1 : 0)); return *this; }
+    FitOptions &sample_camera(bool on) { check(skb_fit_options_set_sample_camera(o_.get(), on)); return *this; }
     FitOptions &proportion_sd(double v) { check(skb_fit_options_set_proportion_sd(o_.get(), v)); return *this; }
     /// Centre the bone factors' prior on their estimate from the 2-D bone lengths (default on).
-    FitOptions &estimate_proportions(bool on) { check(skb_fit_options_set_estimate_proportions(o_.get(), on ? 1 : 0)); return *this; }
+    FitOptions &estimate_proportions(bool on) { check(skb_fit_options_set_estimate_proportions(o_.get(), on)); return *this; }
     const skb_fit_options *get() const noexcept { return o_.get(); }
 
 private:
@@ -244,10 +244,13 @@ public:
     /// Bone names in the chosen convention, in the GLB's node order.
     std::vector<std::string> bone_names() const {
         std::vector<std::string> names(bone_count());
-        char buf[64];
         for (size_t b = 0; b < names.size(); ++b) {
-            check(skb_rig_copy_bone_name(r_.get(), b, buf, sizeof buf));
-            names[b] = buf;
+            size_t n = 0;
+            check(skb_rig_bone_name_length(r_.get(), b, &n));
+            std::string s(n + 1, '\0');
+            check(skb_rig_copy_bone_name(r_.get(), b, &s[0], s.size()));
+            s.resize(n);
+            names[b] = s;
         }
         return names;
     }
@@ -329,18 +332,18 @@ public:
     Rig rig(const RigOptions &options = {}) const {
         auto o = detail::export_options(options);
         skb_rig *raw = nullptr;
-        check(skb_mesh_rig_new(m_.get(), o.get(), &raw));
+        check(skb_rig_new_from_mesh(m_.get(), o.get(), &raw));
         return Rig(raw);
     }
-    /// Binary FBX 7.4 of the rigged, posed body in the options' unit and up axis; skb_export_fbx.
+    /// Binary FBX 7.4 of the rigged, posed body in the options' unit and up axis; skb_mesh_write_fbx.
     void write_fbx(const std::string &path, const RigOptions &options = {}) const {
         auto o = detail::export_options(options);
-        check(skb_export_fbx(m_.get(), path.c_str(), o.get()));
+        check(skb_mesh_write_fbx(m_.get(), path.c_str(), o.get()));
     }
-    /// UsdSkel .usda of the rigged, posed body in the options' unit and up axis; skb_export_usd.
+    /// UsdSkel .usda of the rigged, posed body in the options' unit and up axis; skb_mesh_write_usd.
     void write_usd(const std::string &path, const RigOptions &options = {}) const {
         auto o = detail::export_options(options);
-        check(skb_export_usd(m_.get(), path.c_str(), o.get()));
+        check(skb_mesh_write_usd(m_.get(), path.c_str(), o.get()));
     }
     /// The sketch seen through `cam` projected onto the mesh in its current pose, into the UV
     /// layout; skb_mesh_project_texture.
@@ -373,16 +376,16 @@ public:
     bool low_evidence() const { bool l = false; check(skb_result_evidence(r_.get(), &l, nullptr)); return l; }
     /// Per body part (head, torso, right arm, left arm, right leg, left leg), the share of the
     /// fitted outline near a stroke (0..1; NaN out of view or for the mean shape);
-    /// skb_result_part_support.
+    /// skb_result_copy_part_support.
     std::vector<double> part_support() const {
         std::vector<double> p(SKB_NUM_BODY_PARTS);
-        check(skb_result_part_support(r_.get(), p.data(), p.size()));
+        check(skb_result_copy_part_support(r_.get(), p.data(), p.size()));
         return p;
     }
     /// Best match score of the fit; g must be gender() (throws otherwise).
     double score(uint32_t g) const { double s = 0; check(skb_result_score(r_.get(), g, &s)); return s; }
-    size_t vertex_count() const { size_t v = 0; check(skb_result_counts(r_.get(), &v, nullptr)); return v; }
-    size_t face_count() const { size_t f = 0; check(skb_result_counts(r_.get(), nullptr, &f)); return f; }
+    size_t vertex_count() const { size_t v = 0; check(skb_result_vertex_count(r_.get(), &v)); return v; }
+    size_t face_count() const { size_t f = 0; check(skb_result_face_count(r_.get(), &f)); return f; }
     /// x, y, z per vertex, metres (posed or rest).
     std::vector<float> vertices(bool posed) const {
         std::vector<float> v(3 * vertex_count());
@@ -410,9 +413,9 @@ public:
     }
     std::vector<double> shape_weights() const {
         size_t n = 0;
-        check(skb_result_shape_weights(r_.get(), nullptr, 0, &n));
+        check(skb_result_shape_weight_count(r_.get(), &n));
         std::vector<double> w(n);
-        if (n > 0) check(skb_result_shape_weights(r_.get(), w.data(), w.size(), &n));
+        check(skb_result_copy_shape_weights(r_.get(), w.data(), w.size()));
         return w;
     }
     /// The texture `sketchbody run` writes as body_texture.png: `sketch` (the colour image the
@@ -427,16 +430,16 @@ public:
     /// The result's mesh (fitted rest shape, posed as in the result) for the mesh and rig getters.
     Mesh mesh() const {
         skb_mesh *raw = nullptr;
-        check(skb_result_mesh(r_.get(), &raw));
+        check(skb_mesh_new_from_result(r_.get(), &raw));
         return Mesh(raw);
     }
     /// The number of ranked depth readings of the result's pose (alternative 0 is the pose).
-    uint32_t num_alternatives() const {
+    size_t alternative_count() const {
         skb_pose_estimate *e = nullptr;
-        check(skb_result_pose_estimate(r_.get(), &e));
+        check(skb_pose_estimate_new_from_result(r_.get(), &e));
         Handle<skb_pose_estimate, skb_pose_estimate_free> h(e);
-        uint32_t n = 0;
-        check(skb_pose_estimate_num_alternatives(h.get(), &n));
+        size_t n = 0;
+        check(skb_pose_estimate_alternative_count(h.get(), &n));
         return n;
     }
     /// Re-poses the fitted body in place to depth reading `index`, its shape kept
@@ -472,9 +475,9 @@ public:
     /// What the run warns about its views, one per line (empty when none).
     std::string view_warnings() const {
         size_t n = 0;
-        check(skb_result_copy_view_warnings(r_.get(), nullptr, 0, &n));
+        check(skb_result_view_warnings_length(r_.get(), &n));
         std::string s(n + 1, '\0');
-        check(skb_result_copy_view_warnings(r_.get(), &s[0], s.size(), nullptr));
+        check(skb_result_copy_view_warnings(r_.get(), &s[0], s.size()));
         s.resize(n);
         return s;
     }
@@ -484,13 +487,13 @@ private:
     Handle<skb_result, skb_result_free> r_;
 };
 
-/// Runs the main job (skb_run_pipeline) with the embedded pose dictionary and default pose
+/// Runs the main job (skb_pipeline_run) with the embedded pose dictionary and default pose
 /// options. `joints` may be nullptr: the embedded detector finds them (SKB_ERR_NO_FIGURE if none).
 inline Result run_pipeline(const Context &ctx, const skb_image &sketch, const skb_joints2d *joints,
                            const FitOptions *fit = nullptr, Progress progress = {}) {
     skb_result *raw = nullptr;
     skb_progress_fn fn = progress ? &detail::progress_trampoline : nullptr;
-    check(skb_run_pipeline(ctx.get(), &sketch, joints, nullptr, nullptr, fit ? fit->get() : nullptr, fn,
+    check(skb_pipeline_run(ctx.get(), &sketch, joints, nullptr, nullptr, fit ? fit->get() : nullptr, fn,
                            progress ? static_cast<void *>(&progress) : nullptr, &raw));
     return Result(raw);
 }
@@ -527,12 +530,12 @@ inline void progressive_interim(void *user, uint32_t stage, const skb_mesh *mesh
 }  // namespace detail
 
 /// run_pipeline that also hands `interim` the bodies it has before the final one
-/// (skb_run_pipeline_progressive): the mean shape in the estimated pose, then the deciding fit.
+/// (skb_pipeline_run_progressive): the mean shape in the estimated pose, then the deciding fit.
 inline Result run_pipeline_progressive(const Context &ctx, const skb_image &sketch, const skb_joints2d *joints,
                                        const FitOptions *fit, Interim interim, Progress progress = {}) {
     skb_result *raw = nullptr;
     detail::ProgressiveCallbacks c{std::move(progress), std::move(interim)};
-    check(skb_run_pipeline_progressive(ctx.get(), &sketch, joints, nullptr, nullptr, fit ? fit->get() : nullptr,
+    check(skb_pipeline_run_progressive(ctx.get(), &sketch, joints, nullptr, nullptr, fit ? fit->get() : nullptr,
                                        &detail::progressive_progress, c.interim ? &detail::progressive_interim : nullptr,
                                        &c, &raw));
     return Result(raw);
@@ -547,7 +550,7 @@ struct View {
     const skb_joints2d *joints = nullptr;
 };
 
-/// run_pipeline_progressive on a turnaround (skb_run_pipeline_views): `sketch` and `joints` the
+/// run_pipeline_progressive on a turnaround (skb_pipeline_run_views): `sketch` and `joints` the
 /// front view, `views` the same character in the same pose from the side or the back. Views that
 /// do not show one character in one pose throw Error with SKB_ERR_VIEWS_DISAGREE.
 inline Result run_pipeline_views(const Context &ctx, const skb_image &sketch, const skb_joints2d *joints,
@@ -558,7 +561,7 @@ inline Result run_pipeline_views(const Context &ctx, const skb_image &sketch, co
     for (const View &v : views) in.push_back(skb_view_input{v.label, 0, &v.sketch, v.joints});
     skb_result *raw = nullptr;
     detail::ProgressiveCallbacks c{std::move(progress), std::move(interim)};
-    check(skb_run_pipeline_views(ctx.get(), &sketch, joints, in.empty() ? nullptr : in.data(), in.size(), nullptr,
+    check(skb_pipeline_run_views(ctx.get(), &sketch, joints, in.empty() ? nullptr : in.data(), in.size(), nullptr,
                                  nullptr, fit ? fit->get() : nullptr, &detail::progressive_progress,
                                  c.interim ? &detail::progressive_interim : nullptr, &c, &raw));
     return Result(raw);

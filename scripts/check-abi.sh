@@ -1,33 +1,83 @@
 #!/usr/bin/env bash
-# Compares the C ABI with the pinned manifest cpp_tests/abi_manifest.txt: the skb_* symbols the
-# shared library exports (and that nothing else is exported), the functions the header declares,
-# and the struct layouts printed by the abi_layout program. Usage:
-#   scripts/check-abi.sh LIBSKETCHBODY.so ABI_LAYOUT_PROGRAM [--bless]
-# --bless rewrites the manifest (do it only for a deliberate ABI change, and say so in the commit).
+# The C API's compatibility check (docs/c-api.md, "Compatibility policy") against the committed
+# baseline of this major version in abi/:
+#   1. the shared library exports exactly the functions the header declares, all `skb_*`;
+#   2. libabigail's abidiff between the baseline's ABI (abi/sketchbody-MAJOR.abi) and the header's
+#      ABI now (scripts/abi-probe.py: every declared function defined with the header's own
+#      signature, compiled with -g, read by abidw): a removed function, or a changed signature,
+#      struct or enum of the header fails; added functions pass and are listed;
+#   3. every `#define SKB_*` of the baseline header (abi/sketchbody-MAJOR.h) keeps its value;
+#   4. every struct layout of the baseline (abi/sketchbody-MAJOR.layout, printed by the abi_layout
+#      program: sizes and field offsets as a C compiler sees them) is unchanged.
+# Usage: scripts/check-abi.sh LIBSKETCHBODY.so ABI_LAYOUT_PROGRAM [--bless]
+#        scripts/check-abi.sh --header HEADER   (steps 2 and 3 only, for HEADER: the check's own
+#                                                test, scripts/test-abi-check.sh)
+# --bless writes the baseline of the header's major version; it refuses to overwrite one (a
+# released major's baseline never changes: an incompatible change needs a new major version).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-lib=$1 layout=$2
-manifest=cpp_tests/abi_manifest.txt
-fresh=$(mktemp)
-trap 'rm -f "$fresh"' EXIT
-{
-  nm -D --defined-only "$lib" | awk '$2 ~ /^[TDBR]$/ {print "export " $3}' | sort
-  grep -oE '\bskb_[a-z0-9_]+\(' include/sketchbody.h | tr -d '(' | sort -u | sed 's/^/declared /'
-  "$layout"
-} >"$fresh"
+if [ "$1" = "--header" ]; then
+  lib="" layout="" header=$2
+else
+  lib=$1 layout=$2 header=include/sketchbody.h
+fi
+major=$(sed -n 's/^#define SKB_VERSION_MAJOR \([0-9]*\)$/\1/p' "$header")
+base=abi/sketchbody-$major
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+fail() { echo "check-abi: $*" >&2; exit 1; }
+for tool in abidw abidiff cc nm python3; do
+  command -v "$tool" >/dev/null || fail "$tool is missing (Debian: apt-get install abigail-tools gcc binutils python3)"
+done
+
+# 1. Exports and declarations.
+grep -oE '\bskb_[a-z0-9_]+\(' "$header" | tr -d '(' | sort -u >"$work/declared"
+if [ -n "$lib" ]; then
+  nm -D --defined-only "$lib" | awk '$2 ~ /^[TDBR]$/ {print $3}' | sort >"$work/exports"
+  bad=$(grep -v '^skb_' "$work/exports" || true)
+  [ -z "$bad" ] || fail "symbols outside the skb_ prefix are exported: $bad"
+  diff -u "$work/declared" "$work/exports" >&2 ||
+    fail "the library's exports differ from the header's declarations (- declared, + exported)"
+fi
+
+# 2. The header's ABI, as a C compiler sees it.
+python3 scripts/abi-probe.py "$header" >"$work/probe.c"
+cp "$header" "$work/sketchbody.h"
+cc -std=c11 -g -O0 -shared -fPIC -I"$work" -o "$work/probe.so" "$work/probe.c"
+abidw --no-corpus-path --no-show-locs "$work/probe.so" >"$work/now.abi"
+
 if [ "${3:-}" = "--bless" ]; then
-  cp "$fresh" "$manifest"
-  echo "check-abi: $manifest rewritten ($(wc -l <"$manifest") lines)"
+  [ ! -e "$base.abi" ] || fail "$base.abi exists: a released major's baseline never changes"
+  mkdir -p abi
+  cp "$work/now.abi" "$base.abi"
+  cp "$header" "$base.h"
+  "$layout" | grep '^layout ' >"$base.layout"
+  echo "check-abi: wrote the baseline $base.{abi,h,layout} ($(wc -l <"$work/declared") functions)"
   exit 0
 fi
-if ! diff -u "$manifest" "$fresh"; then
-  echo "check-abi: the ABI differs from $manifest (lines: - pinned, + now)." >&2
-  echo "check-abi: if the change is deliberate (a new export), rerun with --bless and commit the manifest." >&2
-  exit 1
+[ -e "$base.abi" ] || fail "no baseline $base.abi for major version $major (write it once with --bless)"
+
+set +e
+abidiff --no-show-locs --no-added-syms "$base.abi" "$work/now.abi" >"$work/diff"
+status=$?
+set -e
+if [ $status -ne 0 ]; then
+  cat "$work/diff" >&2
+  fail "abidiff: the C API changed incompatibly against $base.abi (status $status; above)"
 fi
-bad=$(grep '^export ' "$fresh" | grep -v '^export skb_' || true)
-if [ -n "$bad" ]; then
-  echo "check-abi: symbols outside the skb_ prefix are exported: $bad" >&2
-  exit 1
+added=$(abidiff --no-show-locs "$base.abi" "$work/now.abi" | sed -n "s/^  \[A\] 'function .* \(skb_[a-z0-9_]*\)(.*/\1/p" | paste -sd' ' || true)
+
+# 3. Constants.
+defines() { sed -n 's/^#define \(SKB_[A-Z0-9_]*\) \(.*\)$/\1 \2/p' "$1" | sort; }
+changed=$(comm -23 <(defines "$base.h") <(defines "$header"))
+[ -z "$changed" ] || fail "constants of $base.h removed or changed: $changed"
+
+# 4. Struct layouts.
+if [ -n "$layout" ]; then
+  moved=$(comm -23 <(sort "$base.layout") <("$layout" | grep '^layout ' | sort))
+  [ -z "$moved" ] || fail "struct layouts of $base.layout changed: $moved"
 fi
-echo "check-abi: $(grep -c '^export ' "$fresh") exported symbols, $(grep -c '^declared ' "$fresh") declared, $(grep -c '^layout ' "$fresh") layout lines match $manifest"
+
+echo "check-abi: $(wc -l <"$work/declared") functions declared${lib:+ and exported}; compatible with $base" \
+  "($(grep -c '<function-decl' "$base.abi") baseline functions, $(wc -l <"$base.layout") layout lines," \
+  "$(defines "$base.h" | wc -l) constants); added since: ${added:-none}"

@@ -2,7 +2,7 @@
 # Runs every test of sketchbody on a fresh Debian 12 machine: installs the Debian packages it
 # needs when missing (blender and python3-numpy for the Blender import and add-on tests, xvfb for
 # the add-on's windowed check, python3-opencv for the BlazePose reference, assimp-utils for the
-# FBX export's second reader), a small Python venv for that reference (scripts/reference-venv.sh) and one with Pixar's usd-core
+# FBX export's second reader, abigail-tools for the C ABI check against the 1.0 baseline), a small Python venv for that reference (scripts/reference-venv.sh) and one with Pixar's usd-core
 # for the USD export (scripts/usd-venv.sh), then cargo tests, the CMake/ctest harness (OpenCV, Ceres, Embree
 # cross-checks, C and C++ API tests under sanitizers), the Python package's tests
 # (scripts/test-python.sh), the Blender add-on's, the Windows DLL's C API tests under Wine
@@ -17,7 +17,7 @@ cd "$(dirname "$0")/.."
 # shows where its time went.
 step() { printf '== [%d:%02d] %s\n' $((SECONDS / 60)) $((SECONDS % 60)) "$*"; }
 
-packages=(cmake g++ pkg-config python3 libopencv-dev libceres-dev libembree-dev blender xvfb python3-numpy python3-opencv assimp-utils
+packages=(cmake g++ pkg-config python3 libopencv-dev libceres-dev libembree-dev blender xvfb python3-numpy python3-opencv assimp-utils abigail-tools
           gcc-mingw-w64-x86-64 g++-mingw-w64-x86-64 wine wine64)
 missing=()
 for p in "${packages[@]}"; do

@@ -27,7 +27,7 @@ const _: () = assert!(SKB_NUM_JOINTS as usize == NUM_JOINTS && SKB_NUM_BONES as 
 const _: () = assert!(SKB_MAX_INFLUENCES as usize == MAX_INFLUENCES);
 
 /// The library context: holds the body model (the embedded one for [`skb_context_new`]) and the
-/// embedded 2-D detector (decoded on first use by `skb_detect`). Create with `skb_context_new`,
+/// embedded 2-D detector (decoded on first use by `skb_context_detect`). Create with `skb_context_new`,
 /// release with `skb_context_free`. Immutable after creation (the detector is initialised once,
 /// thread-safely), so one context may be used from several threads at once. Meshes keep the
 /// model alive on their own: a context may be freed before the meshes made from it.
@@ -62,8 +62,6 @@ pub struct skb_mesh {
 /// is untouched. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_new(out: *mut *mut skb_context) -> skb_status {
-    // SAFETY: the header contract of `skb_context_new` (lib.rs § Safety): `out` is NULL or valid for the documented
-    // lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
@@ -76,21 +74,17 @@ pub unsafe extern "C" fn skb_context_new(out: *mut *mut skb_context) -> skb_stat
 /// Releases a context from `skb_context_new`. NULL is a no-op. Meshes made from it stay valid.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_free(ctx: *mut skb_context) {
-    // SAFETY: the header requires `ctx` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(ctx) }
 }
 
 /// Number of principal components of `gender`'s shape space (the most weights
 /// `skb_mesh_new_from_shape` accepts) into `*out`. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_context_num_components(
+pub unsafe extern "C" fn skb_context_component_count(
     ctx: *const skb_context,
     gender: u32,
     out: *mut usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_context_num_components` (lib.rs § Safety): `ctx`, `out` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));
@@ -105,8 +99,6 @@ pub unsafe extern "C" fn skb_context_num_components(
 /// training variance) into `*out`. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_default_dim(ctx: *const skb_context, gender: u32, out: *mut usize) -> skb_status {
-    // SAFETY: the header contract of `skb_context_default_dim` (lib.rs § Safety): `ctx`, `out` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));
@@ -131,9 +123,6 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
     n: usize,
     out: *mut *mut skb_mesh,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_new_from_shape` (lib.rs § Safety): `ctx`, `weights`, `out` are NULL
-    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));
@@ -161,16 +150,12 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
 /// Releases a mesh. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_free(mesh: *mut skb_mesh) {
-    // SAFETY: the header requires `mesh` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(mesh) }
 }
 
 /// The mesh's gender (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_gender(mesh: *const skb_mesh, out: *mut u32) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_gender` (lib.rs § Safety): `mesh`, `out` are NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -183,8 +168,6 @@ pub unsafe extern "C" fn skb_mesh_gender(mesh: *const skb_mesh, out: *mut u32) -
 /// Number of vertices (13380) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_vertex_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_vertex_count` (lib.rs § Safety): `mesh`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -197,8 +180,6 @@ pub unsafe extern "C" fn skb_mesh_vertex_count(mesh: *const skb_mesh, out: *mut 
 /// Number of quad faces (13378) into `*out`; the triangle count is twice that.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_face_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_face_count` (lib.rs § Safety): `mesh`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -211,8 +192,6 @@ pub unsafe extern "C" fn skb_mesh_face_count(mesh: *const skb_mesh, out: *mut us
 /// Number of joints (always `SKB_NUM_JOINTS`) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_joint_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_joint_count` (lib.rs § Safety): `mesh`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -225,9 +204,6 @@ pub unsafe extern "C" fn skb_mesh_joint_count(mesh: *const skb_mesh, out: *mut u
 /// Number of skin-weight slots, `vertex count × SKB_MAX_INFLUENCES`, into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_skin_weight_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_skin_weight_count` (lib.rs § Safety): `mesh`, `out` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -241,8 +217,6 @@ pub unsafe extern "C" fn skb_mesh_skin_weight_count(mesh: *const skb_mesh, out: 
 /// floats (at least 3 × vertex count). On error nothing is written.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_vertices(mesh: *const skb_mesh, dst: *mut f32, dst_len: usize) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_copy_vertices` (lib.rs § Safety): `mesh`, `dst` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -259,8 +233,6 @@ pub unsafe extern "C" fn skb_mesh_copy_vertices(mesh: *const skb_mesh, dst: *mut
 /// `dst`, which holds `dst_len` integers (at least 4 × face count). On error nothing is written.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_faces(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_copy_faces` (lib.rs § Safety): `mesh`, `dst` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -278,8 +250,6 @@ pub unsafe extern "C" fn skb_mesh_copy_faces(mesh: *const skb_mesh, dst: *mut u3
 /// which holds `dst_len` integers (at least 6 × face count). On error nothing is written.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_triangles(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_copy_triangles` (lib.rs § Safety): `mesh`, `dst` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -297,8 +267,6 @@ pub unsafe extern "C" fn skb_mesh_copy_triangles(mesh: *const skb_mesh, dst: *mu
 /// holds `dst_len` doubles (at least 45). On error nothing is written.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_joints(mesh: *const skb_mesh, dst: *mut f64, dst_len: usize) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_copy_joints` (lib.rs § Safety): `mesh`, `dst` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -322,9 +290,6 @@ pub unsafe extern "C" fn skb_mesh_copy_skin_weights(
     weights: *mut f32,
     len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_copy_skin_weights` (lib.rs § Safety): `mesh`, `bones`, `weights` are
-    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
-    // each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -344,8 +309,6 @@ pub(crate) unsafe fn copy_skin_weights(
     weights: *mut f32,
     len: usize,
 ) -> skb_status {
-    // SAFETY: this function's `# Safety` contract (`bones`, `weights` NULL or valid), forwarded to the ptr.rs
-    // helpers, which check NULL and lengths.
     unsafe {
         let needed = MAX_INFLUENCES * skin.len();
         let b = try_status!(out_slice(bones, len, needed, "bones"));
@@ -361,12 +324,9 @@ pub(crate) unsafe fn copy_skin_weights(
 }
 
 /// Number of PCA shape weights the mesh was made from (as given to `skb_mesh_new_from_shape`,
-/// or found by `skb_fit_shape`) into `*out`.
+/// or found by `skb_context_fit_shape`) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_shape_weight_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_shape_weight_count` (lib.rs § Safety): `mesh`, `out` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -384,9 +344,6 @@ pub unsafe extern "C" fn skb_mesh_copy_shape_weights(
     dst: *mut f64,
     dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_copy_shape_weights` (lib.rs § Safety): `mesh`, `dst` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));

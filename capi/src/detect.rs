@@ -1,5 +1,5 @@
 //! `skb_detector`: a 2-D pose detector model loaded from a file, and detection with it;
-//! `skb_detect` / `skb_detect_figure`: single-figure detection with the embedded backends (the
+//! `skb_context_detect` / `skb_context_detect_figure`: single-figure detection with the embedded backends (the
 //! sketch model trained on synthetic concept sketches, MediaPipe's BlazePose landmark model, or
 //! both), configured by an `skb_detect_options` handle; `skb_detector_detect`: a model from a
 //! file, alone, with its raw score and threshold.
@@ -35,9 +35,6 @@ pub struct skb_detector {
 /// Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_new_from_file(path: *const c_char, out: *mut *mut skb_detector) -> skb_status {
-    // SAFETY: the header contract of `skb_detector_new_from_file` (lib.rs § Safety): `path`, `out` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let p = try_status!(try_str(path, "path"));
@@ -51,60 +48,26 @@ pub unsafe extern "C" fn skb_detector_new_from_file(path: *const c_char, out: *m
 /// Releases a detector. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_free(det: *mut skb_detector) {
-    // SAFETY: the header requires `det` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(det) }
 }
 
-/// Detects the best-scoring figure in `image` with `det`. `threshold`: score threshold (NaN uses
-/// the model's own); `min_cell_px`: skip pyramid levels with cells smaller than this many pixels
-/// (0 searches every scale; larger is faster but misses small figures). Images whose longer side
+/// Detects the best-scoring figure in `image` with the sketch model `det` and the settings of
+/// `opts` (NULL: the defaults of `skb_detect_options_new`; its threshold, scales, figure range
+/// and levels per octave apply, the backend and strictness do not). Images whose longer side
 /// exceeds 1024 px are downscaled first (results are in input pixels). Writes the 15 canonical
 /// joints as (x, y) pairs in pixels (origin top-left, y down) to `joints_xy[0..30]`, their
-/// confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. The other search
-/// settings are the defaults of `skb_detect_options_new`. When no figure reaches the threshold
-/// it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score found, below the
-/// threshold; −infinity when no pyramid level was searched). Other errors (nothing written):
-/// `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
-/// `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
+/// confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. When no figure
+/// reaches the threshold it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score
+/// found, below the threshold; −infinity when no pyramid level was searched).
+/// `progress(user, fraction)` (may be NULL) is called on the calling thread with the fraction
+/// done (0..=1, non-decreasing) after the feature pyramid is built and after each group of
+/// pyramid levels; a non-zero return stops the search with `SKB_ERR_CANCELLED` (nothing written)
+/// and the callback is not called again. Other errors (nothing written):
+/// `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (a feature pyramid over
+/// 1 GiB, refused before any work), `SKB_ERR_NON_FINITE` (a score or joint that is not finite),
+/// `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_detect(
-    det: *const skb_detector,
-    image: *const skb_image,
-    threshold: f64,
-    min_cell_px: f64,
-    joints_xy: *mut f64,
-    joints_len: usize,
-    confidence: *mut f64,
-    confidence_len: usize,
-    score: *mut f64,
-) -> skb_status {
-    // SAFETY: the header contract of `skb_detector_detect` (lib.rs § Safety): `det`, `image`, `joints_xy`,
-    // `confidence`, `score` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check
-    // NULL and lengths before each borrow.
-    unsafe {
-        ffi_boundary! {
-            let det = try_status!(try_ref(det, "det"));
-            let view = try_status!(view_of(image));
-            let (xy, cf, score) = try_status!(outputs(joints_xy, joints_len, confidence, confidence_len, score));
-            let threshold = if threshold.is_nan() { None } else { Some(threshold) };
-            let opts = DetectOptions { threshold, min_cell_px, ..Default::default() };
-            detect_into(&view, &det.model, &opts, &mut |_| true, xy, cf, score)
-        }
-    }
-}
-
-/// As `skb_detector_detect`, with the sketch model's settings of `opts` (NULL: the defaults of
-/// `skb_detect_options_new`; its threshold, scales, figure range and levels per octave apply,
-/// the backend and strictness do not) and a progress callback: `progress(user, fraction)` (may
-/// be NULL) is called on the calling thread with the fraction done (0..=1, non-decreasing)
-/// after the feature pyramid is built and after each group of pyramid levels; a non-zero
-/// return stops the search with `SKB_ERR_CANCELLED` (nothing written) and the callback is not
-/// called again. A search whose feature pyramid would exceed 1 GiB is `SKB_ERR_OUT_OF_RANGE`
-/// before any work; a score or joint that is not finite is `SKB_ERR_NON_FINITE`. Other
-/// statuses as `skb_detector_detect`. Thread-safe.
-#[no_mangle]
-pub unsafe extern "C" fn skb_detector_detect_with_progress(
     det: *const skb_detector,
     image: *const skb_image,
     opts: *const skb_detect_options,
@@ -116,9 +79,6 @@ pub unsafe extern "C" fn skb_detector_detect_with_progress(
     confidence_len: usize,
     score: *mut f64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_detector_detect_with_progress` (lib.rs § Safety): `det`, `image`,
-    // `opts`, `joints_xy`, `confidence`, `score` are NULL or valid for the documented lengths during the call,
-    // `progress` NULL or callable with `user`; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let det = try_status!(try_ref(det, "det"));
@@ -131,22 +91,22 @@ pub unsafe extern "C" fn skb_detector_detect_with_progress(
     }
 }
 
-/// Backend of `skb_detect`: both the sketch model and BlazePose, one candidate per image (the
+/// Backend of `skb_context_detect`: both the sketch model and BlazePose, one candidate per image (the
 /// default): on a drawing the sketch model recognises (its score above its own threshold), the
 /// one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
 /// higher calibrated confidence. Each joint the two backends put within 0.08 of the figure's
 /// size of each other is their mean. BlazePose, unsure of a figure framed by the ink's box, also
 /// tries the sketch model's figure box.
 pub const SKB_DETECTOR_AUTO: u32 = 0;
-/// Backend of `skb_detect`: the flexible-mixture-of-parts sketch model alone.
+/// Backend of `skb_context_detect`: the flexible-mixture-of-parts sketch model alone.
 pub const SKB_DETECTOR_FMP: u32 = 1;
-/// Backend of `skb_detect`: MediaPipe's BlazePose landmark model alone.
+/// Backend of `skb_context_detect`: MediaPipe's BlazePose landmark model alone.
 pub const SKB_DETECTOR_BLAZEPOSE: u32 = 2;
 /// A figure confidence under this is low: show the joints to the user for correction (the
 /// core's `detect::figure::LOW_CONFIDENCE`; a test keeps them equal).
 pub const SKB_LOW_CONFIDENCE: f64 = 0.75;
 
-/// What `skb_detect_figure` and `skb_result_detection` report beside the joints.
+/// What `skb_context_detect_figure` and `skb_result_detection` report beside the joints.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct skb_figure_info {
@@ -186,7 +146,7 @@ pub(crate) fn figure_info(f: &Figure) -> skb_figure_info {
     }
 }
 
-/// Options of [`skb_detect`]: backend, strictness, the sketch model's score threshold and
+/// Options of [`skb_context_detect`]: backend, strictness, the sketch model's score threshold and
 /// searched scales. Create with `skb_detect_options_new` (backend `SKB_DETECTOR_AUTO`, not
 /// strict, the model's threshold, the sketch search range: figures from 1/2 of the shorter image
 /// side to the longer side, at 7 pyramid levels per octave), release with
@@ -199,8 +159,6 @@ pub struct skb_detect_options {
 /// Creates options with the defaults. `*out` receives a handle the caller owns.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_new(out: *mut *mut skb_detect_options) -> skb_status {
-    // SAFETY: the header contract of `skb_detect_options_new` (lib.rs § Safety): `out` is NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
@@ -212,8 +170,6 @@ pub unsafe extern "C" fn skb_detect_options_new(out: *mut *mut skb_detect_option
 /// Releases options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_free(opts: *mut skb_detect_options) {
-    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(opts) }
 }
 
@@ -221,8 +177,6 @@ pub unsafe extern "C" fn skb_detect_options_free(opts: *mut skb_detect_options) 
 /// `SKB_DETECTOR_BLAZEPOSE`. Errors: `SKB_ERR_OUT_OF_RANGE` for another value.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_set_backend(opts: *mut skb_detect_options, backend: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_detect_options_set_backend` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let o = try_status!(try_mut(opts, "opts"));
@@ -237,17 +191,15 @@ pub unsafe extern "C" fn skb_detect_options_set_backend(opts: *mut skb_detect_op
     }
 }
 
-/// Sets strict detection (`strict` ≠ 0): "no figure" unless a backend passes its own hard
-/// threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (0)
+/// Sets strict detection (`strict` true): "no figure" unless a backend passes its own hard
+/// threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (false)
 /// returns the best figure whenever the calibrated presence probability is at least 0.5.
 #[no_mangle]
-pub unsafe extern "C" fn skb_detect_options_set_strict(opts: *mut skb_detect_options, strict: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_detect_options_set_strict` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+pub unsafe extern "C" fn skb_detect_options_set_strict(opts: *mut skb_detect_options, strict: bool) -> skb_status {
     unsafe {
         ffi_boundary! {
             let o = try_status!(try_mut(opts, "opts"));
-            o.inner.strict = strict != 0;
+            o.inner.strict = strict;
             skb_status::SKB_OK
         }
     }
@@ -257,8 +209,6 @@ pub unsafe extern "C" fn skb_detect_options_set_strict(opts: *mut skb_detect_opt
 /// Infinite values are `SKB_ERR_NON_FINITE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_set_threshold(opts: *mut skb_detect_options, threshold: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_detect_options_set_threshold` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let o = try_status!(try_mut(opts, "opts"));
@@ -283,8 +233,6 @@ pub unsafe extern "C" fn skb_detect_options_set_scales(
     min_cell_px: f64,
     max_cell_px: f64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_detect_options_set_scales` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let o = try_status!(try_mut(opts, "opts"));
@@ -308,9 +256,6 @@ pub unsafe extern "C" fn skb_detect_options_set_figure_range(
     min_fraction: f64,
     max_fraction: f64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_detect_options_set_figure_range` (lib.rs § Safety): `opts` is NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let o = try_status!(try_mut(opts, "opts"));
@@ -334,9 +279,6 @@ pub unsafe extern "C" fn skb_detect_options_set_levels_per_octave(
     opts: *mut skb_detect_options,
     levels: u32,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_detect_options_set_levels_per_octave` (lib.rs § Safety): `opts` is NULL
-    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let o = try_status!(try_mut(opts, "opts"));
@@ -361,7 +303,7 @@ pub unsafe extern "C" fn skb_detect_options_set_levels_per_octave(
 /// (nothing written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
 /// `SKB_ERR_NULL_POINTER`, image errors. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_detect(
+pub unsafe extern "C" fn skb_context_detect(
     ctx: *const skb_context,
     image: *const skb_image,
     opts: *const skb_detect_options,
@@ -371,9 +313,6 @@ pub unsafe extern "C" fn skb_detect(
     confidence_len: usize,
     score: *mut f64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_detect` (lib.rs § Safety): `ctx`, `image`, `opts`, `joints_xy`,
-    // `confidence`, `score` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check
-    // NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));
@@ -395,11 +334,11 @@ pub unsafe extern "C" fn skb_detect(
     }
 }
 
-/// As `skb_detect`, with the backend kept, the confidences, the presence probability and the
+/// As `skb_context_detect`, with the backend kept, the confidences, the presence probability and the
 /// low-confidence flag in `*info` instead of a score. On `SKB_ERR_NO_FIGURE` and other errors
 /// nothing is written. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_detect_figure(
+pub unsafe extern "C" fn skb_context_detect_figure(
     ctx: *const skb_context,
     image: *const skb_image,
     opts: *const skb_detect_options,
@@ -409,8 +348,6 @@ pub unsafe extern "C" fn skb_detect_figure(
     confidence_len: usize,
     info: *mut skb_figure_info,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_detect_figure` (lib.rs § Safety): `ctx`, `image`, `opts`, `joints_xy`,
-    // `confidence`, `info` are NULL or valid for the documented lengths during the call, as `detect_figure_into` asks.
     unsafe {
         ffi_boundary! {
             detect_figure_into(ctx, image, opts, joints_xy, joints_len, confidence, confidence_len, info, None)
@@ -418,7 +355,7 @@ pub unsafe extern "C" fn skb_detect_figure(
     }
 }
 
-/// The body of `skb_detect_figure` and of `skb_detect_facing` (`facing` `Some`: the figure's
+/// The body of `skb_context_detect_figure` and of `skb_context_detect_facing` (`facing` `Some`: the figure's
 /// facing into it as well, NULL refused). Nothing is written on failure.
 ///
 /// # Safety
@@ -436,8 +373,6 @@ pub(crate) unsafe fn detect_figure_into(
     info: *mut skb_figure_info,
     facing: Option<*mut super::facing::skb_facing_info>,
 ) -> skb_status {
-    // SAFETY: this function's `# Safety` contract, forwarded; the ptr.rs helpers check NULL and
-    // lengths before each borrow.
     unsafe {
         let ctx = try_status!(try_ref(ctx, "ctx"));
         let view = try_status!(view_of(image));
@@ -517,8 +452,6 @@ unsafe fn outputs<'a>(
     if joints_xy.is_null() || confidence.is_null() || score.is_null() {
         return Err(fail_with(skb_status::SKB_ERR_NULL_POINTER, "joints_xy, confidence and score must not be NULL"));
     }
-    // SAFETY: this function's `# Safety` contract (skb_detect's header docs: each pointer valid
-    // for its length), forwarded; the helpers check the lengths before borrowing.
     unsafe {
         let xy = out_slice(joints_xy, joints_len, 2 * NUM_JOINTS, "joints_xy")?;
         let cf = out_slice(confidence, confidence_len, NUM_JOINTS, "confidence")?;
@@ -575,7 +508,7 @@ mod tests {
             let img = skb_image { data: sk.pixels.as_ptr(), width: 384, height: 384, stride: 384, channels: 1 };
             let (mut xy, mut cf, mut s) = ([0f64; 30], [0f64; 15], 0f64);
             assert_eq!(
-                skb_detect(ctx, &img, null(), xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s),
+                skb_context_detect(ctx, &img, null(), xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s),
                 skb_status::SKB_OK
             );
             assert!(pck(&xy) >= 0.8, "PCK@0.2 {}: {xy:?} vs {truth:?}", pck(&xy));
@@ -592,7 +525,7 @@ mod tests {
             };
             let mut xy_f = [0f64; 30];
             assert_eq!(
-                skb_detect_figure(ctx, &img, null(), xy_f.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut info),
+                skb_context_detect_figure(ctx, &img, null(), xy_f.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut info),
                 skb_status::SKB_OK
             );
             assert_eq!(xy_f, xy);
@@ -602,7 +535,7 @@ mod tests {
             assert_eq!(SKB_LOW_CONFIDENCE, sketchbody_core::detect::figure::LOW_CONFIDENCE);
             assert!(info.presence >= 0.5 && info.presence <= 1.0, "{}", info.presence);
             assert_eq!(
-                skb_detect_figure(ctx, &img, null(), xy_f.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, null_mut()),
+                skb_context_detect_figure(ctx, &img, null(), xy_f.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, null_mut()),
                 skb_status::SKB_ERR_NULL_POINTER
             );
 
@@ -613,7 +546,7 @@ mod tests {
                 assert_eq!(o.as_ref().unwrap().inner.backend, want);
                 let mut xy_b = [0f64; 30];
                 assert_eq!(
-                    skb_detect_figure(ctx, &img, o, xy_b.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut info),
+                    skb_context_detect_figure(ctx, &img, o, xy_b.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut info),
                     skb_status::SKB_OK
                 );
                 assert_eq!(info.backend, b);
@@ -624,16 +557,16 @@ mod tests {
             // Strict with an unreachable threshold: no figure, the best raw score reported, the
             // joints untouched.
             assert_eq!(skb_detect_options_set_backend(o, SKB_DETECTOR_FMP), skb_status::SKB_OK);
-            assert_eq!(skb_detect_options_set_strict(o, 1), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_strict(o, true), skb_status::SKB_OK);
             assert_eq!(skb_detect_options_set_threshold(o, 1e6), skb_status::SKB_OK);
             let (mut xy2, mut s2) = ([-7f64; 30], 0f64);
             assert_eq!(
-                skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s2),
+                skb_context_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s2),
                 skb_status::SKB_ERR_NO_FIGURE
             );
             assert!(s2.is_finite() && s2 < 1e6, "{s2}");
             assert!(xy2.iter().all(|&v| v == -7.0));
-            assert_eq!(skb_detect_options_set_strict(o, 0), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_strict(o, false), skb_status::SKB_OK);
             assert_eq!(skb_detect_options_set_threshold(o, f64::INFINITY), skb_status::SKB_ERR_NON_FINITE);
             assert_eq!(skb_detect_options_set_threshold(o, f64::NAN), skb_status::SKB_OK);
             assert_eq!(skb_detect_options_set_scales(o, 5.0, 4.0), skb_status::SKB_ERR_OUT_OF_RANGE);
@@ -649,7 +582,7 @@ mod tests {
             // page), and its calibrated confidence says so.
             assert_eq!(skb_detect_options_set_figure_range(o, 0.05, 0.3), skb_status::SKB_OK);
             let mut s4 = 0f64;
-            let st = skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s4);
+            let st = skb_context_detect(ctx, &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s4);
             assert!(st == skb_status::SKB_ERR_NO_FIGURE || s4 < s, "{st:?}: small-figure confidence {s4} vs {s}");
             for (lo, hi) in [(0.0, 1.0), (0.5, 0.5), (0.2, f64::INFINITY), (f64::NAN, 1.0)] {
                 assert_eq!(
@@ -662,17 +595,17 @@ mod tests {
             assert_eq!(o.as_ref().unwrap().inner.sketch.search, SearchScales::All);
             let mut s3 = 0f64;
             assert_eq!(
-                skb_detect(ctx, &img, o, xy2.as_mut_ptr(), 29, cf.as_mut_ptr(), 15, &mut s3),
+                skb_context_detect(ctx, &img, o, xy2.as_mut_ptr(), 29, cf.as_mut_ptr(), 15, &mut s3),
                 skb_status::SKB_ERR_BUFFER_TOO_SMALL
             );
             assert_eq!(
-                skb_detect(null(), &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3),
+                skb_context_detect(null(), &img, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3),
                 skb_status::SKB_ERR_NULL_POINTER
             );
             assert_eq!(skb_detect_options_set_threshold(null_mut(), 0.0), skb_status::SKB_ERR_NULL_POINTER);
             let small = skb_image { data: sk.pixels.as_ptr(), width: 20, height: 20, stride: 384, channels: 1 };
             assert_eq!(
-                skb_detect(ctx, &small, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3),
+                skb_context_detect(ctx, &small, o, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s3),
                 skb_status::SKB_ERR_IMAGE_TOO_SMALL
             );
             // A blank page holds no figure: the presence probability comes back as the score.
@@ -680,7 +613,7 @@ mod tests {
             let page = skb_image { data: blank.as_ptr(), width: 256, height: 256, stride: 256, channels: 1 };
             let (mut xy3, mut s5) = ([-7f64; 30], 0f64);
             assert_eq!(
-                skb_detect(ctx, &page, null(), xy3.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s5),
+                skb_context_detect(ctx, &page, null(), xy3.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s5),
                 skb_status::SKB_ERR_NO_FIGURE
             );
             assert!((0.0..0.5).contains(&s5), "presence {s5}");
@@ -717,39 +650,44 @@ mod tests {
 
             let px: Vec<u8> = (0..64 * 64).map(|i| ((i * 13) % 256) as u8).collect();
             let img = skb_image { data: px.as_ptr(), width: 64, height: 64, stride: 64, channels: 1 };
+            let (mut low, mut high) = (null_mut(), null_mut());
+            assert_eq!(skb_detect_options_new(&mut low), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_new(&mut high), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_threshold(low, -1e6), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_threshold(high, 1e6), skb_status::SKB_OK);
+            assert_eq!(skb_detect_options_set_scales(low, -1.0, f64::INFINITY), skb_status::SKB_ERR_OUT_OF_RANGE);
+            let detect = |d: *const skb_detector, img: &skb_image, o, xy: &mut [f64], cf: &mut [f64], s: &mut f64| {
+                skb_detector_detect(
+                    d,
+                    img,
+                    o,
+                    None,
+                    null_mut(),
+                    xy.as_mut_ptr(),
+                    xy.len(),
+                    cf.as_mut_ptr(),
+                    cf.len(),
+                    s,
+                )
+            };
             let (mut xy, mut cf, mut s) = ([0f64; 30], [0f64; 15], 0f64);
-            let st = skb_detector_detect(d, &img, -1e6, 0.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s);
-            assert_eq!(st, skb_status::SKB_OK);
+            assert_eq!(detect(d, &img, low, &mut xy, &mut cf, &mut s), skb_status::SKB_OK);
             assert!(s.is_finite() && cf.iter().all(|&c| c > 0.0 && c < 1.0));
             // No figure: only the best score is written (the one found at threshold −1e6).
             let (mut xy2, mut s2) = ([-7f64; 30], 0f64);
-            assert_eq!(
-                skb_detector_detect(d, &img, 1e6, 0.0, xy2.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s2),
-                skb_status::SKB_ERR_NO_FIGURE
-            );
+            assert_eq!(detect(d, &img, high, &mut xy2, &mut cf, &mut s2), skb_status::SKB_ERR_NO_FIGURE);
             assert_eq!(s2, s);
             assert!(xy2.iter().all(|&v| v == -7.0));
+            assert_eq!(detect(d, &img, low, &mut xy[..29], &mut cf, &mut s), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
             assert_eq!(
-                skb_detector_detect(d, &img, -1e6, 0.0, xy.as_mut_ptr(), 29, cf.as_mut_ptr(), 15, &mut s),
-                skb_status::SKB_ERR_BUFFER_TOO_SMALL
-            );
-            assert_eq!(
-                skb_detector_detect(d, &img, -1e6, -1.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s),
-                skb_status::SKB_ERR_OUT_OF_RANGE
-            );
-            assert_eq!(
-                skb_detector_detect(d, &img, -1e6, 0.0, null_mut(), 30, cf.as_mut_ptr(), 15, &mut s),
+                skb_detector_detect(d, &img, low, None, null_mut(), null_mut(), 30, cf.as_mut_ptr(), 15, &mut s),
                 skb_status::SKB_ERR_NULL_POINTER
             );
             let small = skb_image { data: px.as_ptr(), width: 20, height: 20, stride: 20, channels: 1 };
-            assert_eq!(
-                skb_detector_detect(d, &small, -1e6, 0.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s),
-                skb_status::SKB_ERR_IMAGE_TOO_SMALL
-            );
-            assert_eq!(
-                skb_detector_detect(null(), &img, -1e6, 0.0, xy.as_mut_ptr(), 30, cf.as_mut_ptr(), 15, &mut s),
-                skb_status::SKB_ERR_NULL_POINTER
-            );
+            assert_eq!(detect(d, &small, low, &mut xy, &mut cf, &mut s), skb_status::SKB_ERR_IMAGE_TOO_SMALL);
+            assert_eq!(detect(null(), &img, low, &mut xy, &mut cf, &mut s), skb_status::SKB_ERR_NULL_POINTER);
+            skb_detect_options_free(low);
+            skb_detect_options_free(high);
             skb_detector_free(d);
             skb_detector_free(null_mut());
         }

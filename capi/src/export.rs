@@ -1,6 +1,6 @@
 //! `skb_export_options`: the production rig's export options (bone names, rest pose, origin,
 //! twist bones, how the pose is carried, IK targets; the FBX and USD files' unit and up axis) for
-//! `skb_mesh_write_glb_with_options`, `skb_export_fbx` and `skb_export_usd`. Opaque; set
+//! `skb_mesh_write_glb`, `skb_mesh_write_fbx` and `skb_mesh_write_usd`. Opaque; set
 //! through setters; each writer writes atomically.
 
 use std::ffi::c_char;
@@ -64,8 +64,6 @@ pub struct skb_export_options {
 /// Creates export options with the defaults into `*out` (the caller owns them).
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_new(out: *mut *mut skb_export_options) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_new` (lib.rs § Safety): `out` is NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
@@ -77,13 +75,10 @@ pub unsafe extern "C" fn skb_export_options_new(out: *mut *mut skb_export_option
 /// Frees export options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_free(opts: *mut skb_export_options) {
-    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(opts) }
 }
 
 unsafe fn set(opts: *mut skb_export_options, f: impl FnOnce(&mut RigOptions) -> Result<(), Error>) -> skb_status {
-    // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to `set_all`.
     unsafe { set_all(opts, |o| f(&mut o.rig)) }
 }
 
@@ -95,8 +90,6 @@ unsafe fn set_all(
     opts: *mut skb_export_options,
     f: impl FnOnce(&mut skb_export_options) -> Result<(), Error>,
 ) -> skb_status {
-    // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to the ptr.rs helpers, which
-    // check NULL and lengths.
     unsafe {
         let o = try_status!(try_mut(opts, "opts"));
         match f(o) {
@@ -110,8 +103,6 @@ unsafe fn set_all(
 /// anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged).
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_naming(opts: *mut skb_export_options, naming: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_set_naming` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             set(opts, |o| {
@@ -129,8 +120,6 @@ pub unsafe extern "C" fn skb_export_options_set_naming(opts: *mut skb_export_opt
 /// `SKB_ERR_OUT_OF_RANGE` (options unchanged).
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_rest_pose(opts: *mut skb_export_options, rest: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_set_rest_pose` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             set(opts, |o| {
@@ -149,8 +138,6 @@ pub unsafe extern "C" fn skb_export_options_set_rest_pose(opts: *mut skb_export_
 /// `SKB_ERR_OUT_OF_RANGE` (options unchanged).
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_options, origin: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_set_origin` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             set(opts, |o| {
@@ -168,11 +155,9 @@ pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_opt
 /// Adds the twist bones (`on` true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones
 /// after the 53, sharing the limbs' skin so that a twist spreads along the limb; docs/formats.md,
 /// "Twist bones") or not (false, the default: MakeHuman's 53 bones). Every rigged writer and
-/// `skb_mesh_rig_new` follow it.
+/// `skb_rig_new_from_mesh` follow it.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_twist_bones(opts: *mut skb_export_options, on: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_set_twist_bones` (lib.rs § Safety): `opts` is NULL or
-    // valid during the call; the ptr.rs helpers check NULL before the borrow.
     unsafe {
         ffi_boundary! {
             set(opts, |o| {
@@ -185,12 +170,10 @@ pub unsafe extern "C" fn skb_export_options_set_twist_bones(opts: *mut skb_expor
 
 /// Sets how the pose is carried: `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or
 /// `SKB_POSE_AS_BOTH` (docs/formats.md, "glTF 2.0 binary export", the pose); anything else is
-/// `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_mesh_rig_new` follow
+/// `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_rig_new_from_mesh` follow
 /// it.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_pose_as(opts: *mut skb_export_options, pose_as: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_set_pose_as` (lib.rs § Safety): `opts` is NULL or valid
-    // during the call; the ptr.rs helpers check NULL before the borrow.
     unsafe {
         ffi_boundary! {
             set(opts, |o| {
@@ -208,11 +191,9 @@ pub unsafe extern "C" fn skb_export_options_set_pose_as(opts: *mut skb_export_op
 
 /// Adds the IK target bones (`on` true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and
 /// feet under `ik_hand_root` / `ik_foot_root`, after the other bones; docs/formats.md, "IK
-/// targets") or not (false, the default). Every rigged writer and `skb_mesh_rig_new` follow it.
+/// targets") or not (false, the default). Every rigged writer and `skb_rig_new_from_mesh` follow it.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_ik_targets(opts: *mut skb_export_options, on: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_set_ik_targets` (lib.rs § Safety): `opts` is NULL or
-    // valid during the call; the ptr.rs helpers check NULL before the borrow.
     unsafe {
         ffi_boundary! {
             set(opts, |o| {
@@ -228,11 +209,9 @@ pub unsafe extern "C" fn skb_export_options_set_ik_targets(opts: *mut skb_export
 /// displacement one standard deviation of its component makes, through the body's bone-length
 /// factors and its scaling to its height; glTF morph targets, FBX blend shapes, USD
 /// BlendShapes, all at 0; docs/formats.md, "Shape keys") or not (false, the default). Every
-/// rigged writer and `skb_mesh_rig_new` follow it (`skb_rig_shape_key_count`).
+/// rigged writer and `skb_rig_new_from_mesh` follow it (`skb_rig_shape_key_count`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_shape_keys(opts: *mut skb_export_options, on: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_set_shape_keys` (lib.rs § Safety): `opts` is NULL or
-    // valid during the call; the ptr.rs helpers check NULL before the borrow.
     unsafe {
         ffi_boundary! {
             set_all(opts, |o| {
@@ -245,11 +224,9 @@ pub unsafe extern "C" fn skb_export_options_set_shape_keys(opts: *mut skb_export
 
 /// Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
 /// `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
-/// is always in metres (glTF's specification) and `skb_mesh_rig_new` in the model frame.
+/// is always in metres (glTF's specification) and `skb_rig_new_from_mesh` in the model frame.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_units(opts: *mut skb_export_options, units: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_set_units` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             set_all(opts, |o| {
@@ -267,11 +244,9 @@ pub unsafe extern "C" fn skb_export_options_set_units(opts: *mut skb_export_opti
 /// Sets the up axis of the FBX and USD files: `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model
 /// frame turned +90° about X: Z up, the body facing −Y); anything else is
 /// `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB is always Y up (glTF's specification)
-/// and `skb_mesh_rig_new` in the model frame.
+/// and `skb_rig_new_from_mesh` in the model frame.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_up_axis(opts: *mut skb_export_options, up: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_export_options_set_up_axis` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             set_all(opts, |o| {
@@ -341,44 +316,38 @@ unsafe fn write_rigged(
 /// options say; the options' shape keys as morph targets). See docs/formats.md. Written
 /// atomically. Only reads `mesh` and `opts`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_mesh_write_glb_with_options(
+pub unsafe extern "C" fn skb_mesh_write_glb(
     mesh: *const skb_mesh,
     path: *const c_char,
     opts: *const skb_export_options,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_write_glb_with_options` (lib.rs § Safety): `mesh`, `path`, `opts`
-    // are NULL or valid for the documented lengths during the call; `write_rigged` checks them.
     unsafe { write_rigged(mesh, path, opts, |p, m, s, _| write_glb(p, m, s, None)) }
 }
 
 /// Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
-/// same rigged, posed body as `skb_mesh_write_glb_with_options` (the bones' local transforms
+/// same rigged, posed body as `skb_mesh_write_glb` (the bones' local transforms
 /// hold the pose, the clusters and the bind pose the rest), in the options' unit and up axis
 /// (default metres, Y up), a plain skin-colour material. See docs/formats.md, "body.fbx".
 /// Written atomically. Only reads `mesh` and `opts`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_export_fbx(
+pub unsafe extern "C" fn skb_mesh_write_fbx(
     mesh: *const skb_mesh,
     path: *const c_char,
     opts: *const skb_export_options,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_export_fbx` (lib.rs § Safety): `mesh`, `path`, `opts` are NULL or
-    // valid for the documented lengths during the call; `write_rigged` checks them.
     unsafe { write_rigged(mesh, path, opts, |p, m, s, f| write_fbx(p, m, s, None, f)) }
 }
 
 /// Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
-/// the defaults): the same rigged, posed body as `skb_mesh_write_glb_with_options` (a Skeleton
+/// the defaults): the same rigged, posed body as `skb_mesh_write_glb` (a Skeleton
 /// with bind and rest transforms, the pose as a static SkelAnimation), in the options' unit and
 /// up axis (default metres, Y up: `metersPerUnit`, `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
 /// and `opts`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_export_usd(
+pub unsafe extern "C" fn skb_mesh_write_usd(
     mesh: *const skb_mesh,
     path: *const c_char,
     opts: *const skb_export_options,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_export_usd` (lib.rs § Safety): `mesh`, `path`, `opts` are NULL or
-    // valid for the documented lengths during the call; `write_rigged` checks them.
     unsafe { write_rigged(mesh, path, opts, |p, m, s, f| write_usda(p, m, s, false, f)) }
 }

@@ -1,5 +1,5 @@
 //! The figure's facing (front, back, left or right profile, or unknown) with its probabilities,
-//! and the labelling with left and right swapped: `skb_detect_facing` (a detection with its
+//! and the labelling with left and right swapped: `skb_context_detect_facing` (a detection with its
 //! facing), `skb_result_facing` (the facing behind a pipeline result's detected joints) and
 //! `skb_joints2d_swap_sides` (the other labelling of any joints, in one call).
 
@@ -73,11 +73,11 @@ pub(crate) fn facing_info(f: &FacingEstimate) -> skb_facing_info {
     }
 }
 
-/// As `skb_detect_figure` (the same arguments and statuses), with the figure's facing and the
+/// As `skb_context_detect_figure` (the same arguments and statuses), with the figure's facing and the
 /// swapped labelling in `*facing` as well. On any failure nothing is written. Thread-safe.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
-pub unsafe extern "C" fn skb_detect_facing(
+pub unsafe extern "C" fn skb_context_detect_facing(
     ctx: *const skb_context,
     image: *const skb_image,
     opts: *const skb_detect_options,
@@ -88,9 +88,6 @@ pub unsafe extern "C" fn skb_detect_facing(
     info: *mut skb_figure_info,
     facing: *mut skb_facing_info,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_detect_facing` (lib.rs § Safety): `ctx`, `image`, `opts`, `joints_xy`,
-    // `confidence`, `info`, `facing` are NULL or valid for the documented lengths during the call, as
-    // `detect_figure_into` asks.
     unsafe {
         ffi_boundary! {
             detect_figure_into(ctx, image, opts, joints_xy, joints_len, confidence, confidence_len, info, Some(facing))
@@ -103,8 +100,6 @@ pub unsafe extern "C" fn skb_detect_facing(
 /// written). Thread-safe on a shared result.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_facing(result: *const skb_result, facing: *mut skb_facing_info) -> skb_status {
-    // SAFETY: the header contract of `skb_result_facing` (lib.rs § Safety): `result`, `facing` are NULL or valid
-    // during the call; the ptr.rs helpers check NULL before each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -128,8 +123,6 @@ pub unsafe extern "C" fn skb_result_facing(result: *const skb_result, facing: *m
 /// `SKB_ERR_NULL_POINTER`. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_joints2d_swap_sides(joints: *const skb_joints2d, out: *mut skb_joints2d) -> skb_status {
-    // SAFETY: the header contract of `skb_joints2d_swap_sides` (lib.rs § Safety): `joints`, `out` are NULL or
-    // valid during the call and may be the same struct; the input is copied before `out` is borrowed.
     unsafe {
         ffi_boundary! {
             let j = joints_in(try_status!(try_ref(joints, "joints")));

@@ -1,5 +1,5 @@
 //! The shape fit from C: `skb_fit_options` (an opaque options handle with setters), the
-//! progress callback type `skb_progress_fn` and `skb_fit_shape`.
+//! progress callback type `skb_progress_fn` and `skb_context_fit_shape`.
 
 use std::ffi::{c_int, c_void};
 use std::sync::Arc;
@@ -44,9 +44,9 @@ pub const SKB_SKIN_DUAL_QUATERNION: u32 = 1;
 /// `skb_fit_options_set_gender`: the gender is the fit's or the classifier's (default).
 pub const SKB_GENDER_AUTO: u32 = 2;
 
-/// Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
+/// Options of `skb_context_fit_shape` and `skb_pipeline_run`'s fit. Created with the library defaults
 /// (200 samples after a first iteration of 1600 halved each iteration, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
-/// weight 1.0 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
+/// weight 1.0 (used by `skb_pipeline_run`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
 /// dimension, gender automatic, height unknown, per-sample cameras on, bone-length factors with
 /// prior sd 0.1). Every setter validates its value and leaves the options
 /// unchanged on error. Not synchronised: do not change it while another thread uses it; reading
@@ -59,8 +59,6 @@ pub struct skb_fit_options {
 /// Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_new(out: *mut *mut skb_fit_options) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_new` (lib.rs § Safety): `out` is NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
@@ -72,15 +70,11 @@ pub unsafe extern "C" fn skb_fit_options_new(out: *mut *mut skb_fit_options) -> 
 /// Frees fit options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_free(opts: *mut skb_fit_options) {
-    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(opts) }
 }
 
 /// Applies `set` to a copy, validates it and stores it only if valid.
 unsafe fn set_fit(opts: *mut skb_fit_options, set: impl FnOnce(&mut FitOptions) -> Result<(), Error>) -> skb_status {
-    // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to the ptr.rs helpers, which
-    // check NULL and lengths.
     unsafe {
         let o = try_status!(try_mut(opts, "opts"));
         let mut next = o.fit.clone();
@@ -94,8 +88,6 @@ unsafe fn set_fit(opts: *mut skb_fit_options, set: impl FnOnce(&mut FitOptions) 
 /// Sets the samples per SIR iteration, S, in 2..=100000.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_samples(opts: *mut skb_fit_options, samples: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_samples` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.samples = samples as usize; Ok(()) }) }
     }
@@ -104,8 +96,6 @@ pub unsafe extern "C" fn skb_fit_options_set_samples(opts: *mut skb_fit_options,
 /// Sets the most SIR iterations, T, in 1..=1000.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_iterations(opts: *mut skb_fit_options, iterations: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_iterations` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.max_iterations = iterations as usize; Ok(()) }) }
     }
@@ -114,9 +104,6 @@ pub unsafe extern "C" fn skb_fit_options_set_iterations(opts: *mut skb_fit_optio
 /// Sets the transition step s in standard deviations (Σ = diag(s² λ_k)), finite and > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_transition_scale(opts: *mut skb_fit_options, scale: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_transition_scale` (lib.rs § Safety): `opts` is NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.transition_scale = scale; Ok(()) }) }
     }
@@ -126,8 +113,6 @@ pub unsafe extern "C" fn skb_fit_options_set_transition_scale(opts: *mut skb_fit
 /// `SKB_SCORE_TWO_SIDED_CHAMFER`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_score(opts: *mut skb_fit_options, score: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_score` (lib.rs § Safety): `opts` is NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             set_fit(opts, |o| {
@@ -147,8 +132,6 @@ pub unsafe extern "C" fn skb_fit_options_set_score(opts: *mut skb_fit_options, s
 /// Sets the likelihood temperature of the non-paper scores (exp(score / temperature)), > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_temperature(opts: *mut skb_fit_options, temperature: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_temperature` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.temperature = temperature; Ok(()) }) }
     }
@@ -156,12 +139,10 @@ pub unsafe extern "C" fn skb_fit_options_set_temperature(opts: *mut skb_fit_opti
 
 /// Sets the weight of the 2-D joint term, ≥ 0 (score loses weight × the mean distance in raster
 /// pixels between each sample's projected rig joints and the 2-D joints; used by
-/// `skb_run_pipeline`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
+/// `skb_pipeline_run`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
 /// negative `SKB_ERR_OUT_OF_RANGE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_joint_weight(opts: *mut skb_fit_options, weight: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_joint_weight` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.joint_weight = weight; Ok(()) }) }
     }
@@ -173,8 +154,6 @@ pub unsafe extern "C" fn skb_fit_options_set_joint_weight(opts: *mut skb_fit_opt
 /// `SKB_ERR_NON_FINITE`, other values outside the range (negative included) `SKB_ERR_OUT_OF_RANGE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_height(opts: *mut skb_fit_options, metres: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_height` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.height = (metres != 0.0).then_some(metres); Ok(()) }) }
     }
@@ -182,13 +161,11 @@ pub unsafe extern "C" fn skb_fit_options_set_height(opts: *mut skb_fit_options, 
 
 /// Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
 /// scales and translation are refitted to its own posed joints vs the 2-D joints, so the size
-/// comes from the shape. Only `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it.
+/// comes from the shape. Only `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it.
 #[no_mangle]
-pub unsafe extern "C" fn skb_fit_options_set_sample_camera(opts: *mut skb_fit_options, on: c_int) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_sample_camera` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+pub unsafe extern "C" fn skb_fit_options_set_sample_camera(opts: *mut skb_fit_options, on: bool) -> skb_status {
     unsafe {
-        ffi_boundary! { set_fit(opts, |o| { o.sample_camera = on != 0; Ok(()) }) }
+        ffi_boundary! { set_fit(opts, |o| { o.sample_camera = on; Ok(()) }) }
     }
 }
 
@@ -197,8 +174,6 @@ pub unsafe extern "C" fn skb_fit_options_set_sample_camera(opts: *mut skb_fit_op
 /// `SKB_ERR_NON_FINITE`, values outside the range `SKB_ERR_OUT_OF_RANGE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_proportion_sd(opts: *mut skb_fit_options, sd: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_proportion_sd` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.proportion_sd = sd; Ok(()) }) }
     }
@@ -207,23 +182,18 @@ pub unsafe extern "C" fn skb_fit_options_set_proportion_sd(opts: *mut skb_fit_op
 /// Turns the closed-form proportion estimate on (non-zero, the default) or off (0): the bone
 /// factors' prior is centred on the factors estimated from the 2-D joints' bone lengths, the
 /// estimated pose and camera instead of 1 (needs 2-D joints and a proportion sd > 0: only
-/// `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it). Not thread-safe on one
+/// `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it). Not thread-safe on one
 /// handle, like every setter.
 #[no_mangle]
-pub unsafe extern "C" fn skb_fit_options_set_estimate_proportions(opts: *mut skb_fit_options, on: c_int) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_estimate_proportions` (lib.rs § Safety): `opts` is NULL
-    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
+pub unsafe extern "C" fn skb_fit_options_set_estimate_proportions(opts: *mut skb_fit_options, on: bool) -> skb_status {
     unsafe {
-        ffi_boundary! { set_fit(opts, |o| { o.estimate_proportions = on != 0; Ok(()) }) }
+        ffi_boundary! { set_fit(opts, |o| { o.estimate_proportions = on; Ok(()) }) }
     }
 }
 
 /// Sets the longest raster side of the fit, pixels, in 16..=4096.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_raster_side(opts: *mut skb_fit_options, side: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_raster_side` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.raster_max_side = side as usize; Ok(()) }) }
     }
@@ -232,8 +202,6 @@ pub unsafe extern "C" fn skb_fit_options_set_raster_side(opts: *mut skb_fit_opti
 /// Sets the convergence tolerance in standard deviations of the weights, finite and > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_tolerance(opts: *mut skb_fit_options, tolerance: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_tolerance` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.tolerance = tolerance; Ok(()) }) }
     }
@@ -242,8 +210,6 @@ pub unsafe extern "C" fn skb_fit_options_set_tolerance(opts: *mut skb_fit_option
 /// Sets the seed of every random step (same seed, same result on any thread count).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_seed(opts: *mut skb_fit_options, seed: u64) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_seed` (lib.rs § Safety): `opts` is NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.seed = seed; Ok(()) }) }
     }
@@ -252,8 +218,6 @@ pub unsafe extern "C" fn skb_fit_options_set_seed(opts: *mut skb_fit_options, se
 /// Sets the skinning: `SKB_SKIN_LINEAR` or `SKB_SKIN_DUAL_QUATERNION`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_skinning(opts: *mut skb_fit_options, method: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_skinning` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             set_fit(opts, |o| {
@@ -273,35 +237,29 @@ pub unsafe extern "C" fn skb_fit_options_set_skinning(opts: *mut skb_fit_options
 /// clothing do not pull the body outward; 12 or more is the plain chamfer.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_inside_cap(opts: *mut skb_fit_options, cap: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_inside_cap` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.inside_cap = cap; Ok(()) }) }
     }
 }
 
 /// Sets the PCA dimensions searched; 0 restores the default (a gendered space: all 10 of its
-/// prior's dimensions; the both-sexes space: its default 5). `skb_run_pipeline` with automatic
+/// prior's dimensions; the both-sexes space: its default 5). `skb_pipeline_run` with automatic
 /// gender decides the gender with two fits in 4 dimensions and then fits the chosen gender
 /// with these. A value above the model's GMM dimension fails at fit time
 /// (`SKB_ERR_OUT_OF_RANGE`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, dims: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_dims` (lib.rs § Safety): `opts` is NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_fit(opts, |o| { o.dims = (dims > 0).then_some(dims as usize); Ok(()) }) }
     }
 }
 
 /// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
-/// `skb_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_run_pipeline`
+/// `skb_context_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_pipeline_run`
 /// fits the gendered space the gender classifier picks, see `skb_result_gender`;
 /// `skb_result_gender_value` reads it).
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_gender(opts: *mut skb_fit_options, gender: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_options_set_gender` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let o = try_status!(try_mut(opts, "opts"));
@@ -329,16 +287,16 @@ pub(crate) fn progress_closure(progress: skb_progress_fn, user: *mut c_void) -> 
 
 /// Fits the body shape (SIR, paper §II-C) to an edge map for a known 3-D pose and camera.
 /// `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
-/// `skb_pose3d.joints` from `skb_estimate_pose`); `camera` maps them to `edges`' pixels; `edges`
+/// `skb_pose3d.joints` from `skb_pose3d_estimate`); `camera` maps them to `edges`' pixels; `edges`
 /// is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
-/// `skb_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
+/// `skb_image_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
 /// fitted, gender a continuous weight; the mesh's gender is the nearer one and its weights are
 /// the blended space's, weight 0 its gender axis). `progress` may be NULL; a non-zero return cancels
 /// (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
 /// caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
 /// weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
 /// options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
-/// when one is set, else the fitted height: `skb_run_pipeline` calibrates the fitted body when its
+/// when one is set, else the fitted height: `skb_pipeline_run` calibrates the fitted body when its
 /// 2-D joints are given, this call has none); `*score` (may be NULL) receives
 /// the best sample's match score (higher is better). Errors: non-finite joints or camera
 /// (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
@@ -346,7 +304,7 @@ pub(crate) fn progress_closure(progress: skb_progress_fn, user: *mut c_void) -> 
 /// (`SKB_ERR_OUT_OF_RANGE`). Thread-safe (the context is shared read-only); runs on the rayon
 /// pool; the callback is called on the calling thread.
 #[no_mangle]
-pub unsafe extern "C" fn skb_fit_shape(
+pub unsafe extern "C" fn skb_context_fit_shape(
     ctx: *const skb_context,
     joints: *const f64,
     joints_len: usize,
@@ -358,9 +316,6 @@ pub unsafe extern "C" fn skb_fit_shape(
     score: *mut f64,
     out: *mut *mut skb_mesh,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_fit_shape` (lib.rs § Safety): `ctx`, `joints`, `camera`, `edges`, `opts`,
-    // `progress`, `user`, `score`, `out` are NULL or valid for the documented lengths during the call; the ptr.rs
-    // helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));

@@ -32,8 +32,6 @@ const _: () = assert!(std::mem::size_of::<skb_image>() == 24 || std::mem::size_o
 /// # Safety
 /// `img` must be NULL or point to an `skb_image` whose `data` is valid for the described rows.
 pub(crate) unsafe fn view_of<'a>(img: *const skb_image) -> Result<ImageView<'a>, skb_status> {
-    // SAFETY: this function's `# Safety` contract (`img` NULL or valid), forwarded to the ptr.rs helpers, which
-    // check NULL and lengths.
     unsafe {
         let img = try_ref(img, "image")?;
         let (w, h, c, s) = (img.width as usize, img.height as usize, img.channels as usize, img.stride as usize);
@@ -51,7 +49,7 @@ pub(crate) unsafe fn view_of<'a>(img: *const skb_image) -> Result<ImageView<'a>,
 /// `dst_stride * (height - 1) + width`. Thresholds may be given in either order; `aperture` is
 /// 3, 5 or 7. On error nothing is written. Thread-safe; runs on the rayon thread pool.
 #[no_mangle]
-pub unsafe extern "C" fn skb_canny(
+pub unsafe extern "C" fn skb_image_canny(
     src: *const skb_image,
     threshold1: f64,
     threshold2: f64,
@@ -61,8 +59,6 @@ pub unsafe extern "C" fn skb_canny(
     dst_stride: usize,
     dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_canny` (lib.rs § Safety): `src`, `dst` are NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let view = try_status!(view_of(src));
@@ -79,17 +75,15 @@ pub unsafe extern "C" fn skb_canny(
 
 /// Gaussian blur of a 1-channel `src` with standard deviation `sigma` pixels (0 < sigma <= 1024),
 /// compatible with OpenCV 4.x `cv::GaussianBlur(src, dst, cv::Size(0, 0), sigma)`. Output
-/// layout as in [`skb_canny`]. On error nothing is written. Thread-safe.
+/// layout as in [`skb_image_canny`]. On error nothing is written. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_gaussian_blur(
+pub unsafe extern "C" fn skb_image_gaussian_blur(
     src: *const skb_image,
     sigma: f64,
     dst: *mut u8,
     dst_stride: usize,
     dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_gaussian_blur` (lib.rs § Safety): `src`, `dst` are NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let view = try_status!(view_of(src));

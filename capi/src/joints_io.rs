@@ -32,8 +32,6 @@ fn joints_out(j: &Joints2) -> skb_joints2d {
 /// UTF-8). `*out` is written only on success. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_joints2d_read_json(path: *const c_char, out: *mut skb_joints2d) -> skb_status {
-    // SAFETY: the header contract of `skb_joints2d_read_json` (lib.rs § Safety): `path`, `out` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let p = try_status!(path_arg(path, "path"));
@@ -57,8 +55,6 @@ pub unsafe extern "C" fn skb_joints2d_parse_json(
     len: usize,
     out: *mut skb_joints2d,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_joints2d_parse_json` (lib.rs § Safety): `json` is NULL or valid for
-    // `len` bytes and `out` NULL or valid during the call; the ptr.rs helpers check NULL and lengths first.
     unsafe {
         ffi_boundary! {
             if len as u64 > MAX_JOINTS_FILE_BYTES {
@@ -88,8 +84,6 @@ pub unsafe extern "C" fn skb_joints2d_parse_json(
 /// Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_joints2d_write_json(joints: *const skb_joints2d, path: *const c_char) -> skb_status {
-    // SAFETY: the header contract of `skb_joints2d_write_json` (lib.rs § Safety): `joints`, `path` are NULL or
-    // valid during the call; the ptr.rs helpers check NULL before each borrow.
     unsafe {
         ffi_boundary! {
             let j = try_status!(try_ref(joints, "joints"));

@@ -57,8 +57,6 @@ pub struct skb_rasterizer {
 /// [`skb_rasterizer_free`]).
 #[no_mangle]
 pub unsafe extern "C" fn skb_rasterizer_new(out: *mut *mut skb_rasterizer) -> skb_status {
-    // SAFETY: the header contract of `skb_rasterizer_new` (lib.rs § Safety): `out` is NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
@@ -70,8 +68,6 @@ pub unsafe extern "C" fn skb_rasterizer_new(out: *mut *mut skb_rasterizer) -> sk
 /// Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rasterizer_free(r: *mut skb_rasterizer) {
-    // SAFETY: the header requires `r` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(r) }
 }
 
@@ -86,7 +82,7 @@ pub unsafe extern "C" fn skb_rasterizer_free(r: *mut skb_rasterizer) {
 /// entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
 /// Arrays are only read during the call. Thread-safe with distinct rasterisers.
 #[no_mangle]
-pub unsafe extern "C" fn skb_rasterize_triangles(
+pub unsafe extern "C" fn skb_rasterizer_rasterize_triangles(
     rasterizer: *mut skb_rasterizer,
     verts: *const f32,
     nverts: usize,
@@ -99,9 +95,6 @@ pub unsafe extern "C" fn skb_rasterize_triangles(
     mask_stride: usize,
     mask_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_rasterize_triangles` (lib.rs § Safety): `rasterizer`, `verts`, `tris`,
-    // `cam`, `mask` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and
-    // lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let cam = WeakPerspective::from(try_status!(try_ref(cam, "cam")));
@@ -155,8 +148,6 @@ pub unsafe extern "C" fn skb_mesh_pose(
     joints_len: usize,
     flags: u32,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_pose` (lib.rs § Safety): `mesh`, `joints` are NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_mut(mesh, "mesh"));
@@ -186,9 +177,6 @@ pub unsafe extern "C" fn skb_mesh_copy_posed_vertices(
     dst: *mut f32,
     dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_copy_posed_vertices` (lib.rs § Safety): `mesh`, `dst` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -210,9 +198,6 @@ pub unsafe extern "C" fn skb_mesh_copy_posed_joints(
     dst: *mut f64,
     dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_copy_posed_joints` (lib.rs § Safety): `mesh`, `dst` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -227,7 +212,7 @@ pub unsafe extern "C" fn skb_mesh_copy_posed_joints(
 }
 
 /// Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
-/// [`skb_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
+/// [`skb_rasterizer_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_rasterize(
     mesh: *const skb_mesh,
@@ -239,15 +224,12 @@ pub unsafe extern "C" fn skb_mesh_rasterize(
     mask_stride: usize,
     mask_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_rasterize` (lib.rs § Safety): `mesh`, `rasterizer`, `cam`, `mask`
-    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
-    // before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
             let v = posed_vertices(m);
             let t = m.model.triangles();
-            skb_rasterize_triangles(rasterizer, v.as_ptr().cast(), v.len(), t.as_ptr().cast(), t.len(), cam, w, h, mask, mask_stride, mask_len)
+            skb_rasterizer_rasterize_triangles(rasterizer, v.as_ptr().cast(), v.len(), t.as_ptr().cast(), t.len(), cam, w, h, mask, mask_stride, mask_len)
         }
     }
 }
@@ -257,8 +239,6 @@ pub unsafe extern "C" fn skb_mesh_rasterize(
 /// Only reads `mesh`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_obj(mesh: *const skb_mesh, path: *const c_char, posed: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_write_obj` (lib.rs § Safety): `mesh`, `path` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));
@@ -271,23 +251,10 @@ pub unsafe extern "C" fn skb_mesh_write_obj(mesh: *const skb_mesh, path: *const 
     }
 }
 
-/// Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with the default export options
-/// (`skb_mesh_write_glb_with_options` with NULL options): one scene, the rest mesh skinned to
-/// MakeHuman's 53-bone rig with project names, posed by the current pose (the rest pose if never
-/// posed), origin on the floor. See docs/formats.md. Written atomically. Only reads `mesh`.
-#[no_mangle]
-pub unsafe extern "C" fn skb_mesh_write_glb(mesh: *const skb_mesh, path: *const c_char) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_write_glb` (lib.rs § Safety): `mesh`, `path` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
-    unsafe { super::export::skb_mesh_write_glb_with_options(mesh, path, std::ptr::null()) }
-}
-
 /// Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
 /// `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_preview(mesh: *const skb_mesh, path: *const c_char, size: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_write_preview` (lib.rs § Safety): `mesh`, `path` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));

@@ -1,4 +1,4 @@
-//! The main job from C: `skb_run_pipeline` (sketch + 2-D joints → fitted, posed, rigged body)
+//! The main job from C: `skb_pipeline_run` (sketch + 2-D joints → fitted, posed, rigged body)
 //! with its owned result handle `skb_result`, and `skb_gray_image` (a decoded image file) so a
 //! host needs no image library of its own.
 
@@ -39,13 +39,13 @@ pub const SKB_JOINTS_POSED: u32 = 1;
 pub const SKB_JOINTS_ESTIMATED: u32 = 2;
 
 /// A decoded image file, 8-bit gray (colour converted with OpenCV's weights). Create with
-/// `skb_gray_image_load`, view with `skb_gray_image_view`, free with `skb_gray_image_free`.
+/// `skb_gray_image_new_from_file`, view with `skb_gray_image_view`, free with `skb_gray_image_free`.
 /// Immutable: several threads may read it at once.
 pub struct skb_gray_image {
     inner: GrayImage,
 }
 
-/// The result of `skb_run_pipeline`, owned by the caller (free with `skb_result_free`). It owns
+/// The result of `skb_pipeline_run`, owned by the caller (free with `skb_result_free`). It owns
 /// all its data (nothing refers to the inputs). Several threads may read it at once; only the
 /// re-pose functions (`skb_result_pick_alternative`, `skb_result_flip_limb`,
 /// `skb_result_repose_joints`) change it, in place, and must not run while another thread uses it.
@@ -58,9 +58,10 @@ pub struct skb_result {
 /// Errors: `SKB_ERR_IO` (missing, unreadable), `SKB_ERR_DECODE` (not an image, truncated),
 /// `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_gray_image_load(path: *const c_char, out: *mut *mut skb_gray_image) -> skb_status {
-    // SAFETY: the header contract of `skb_gray_image_load` (lib.rs § Safety): `path`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+pub unsafe extern "C" fn skb_gray_image_new_from_file(
+    path: *const c_char,
+    out: *mut *mut skb_gray_image,
+) -> skb_status {
     unsafe {
         ffi_boundary! {
             let p = try_status!(path_arg(path, "path"));
@@ -74,8 +75,6 @@ pub unsafe extern "C" fn skb_gray_image_load(path: *const c_char, out: *mut *mut
 /// A borrowed 1-channel `skb_image` view of `img` into `*out`, valid while `img` lives.
 #[no_mangle]
 pub unsafe extern "C" fn skb_gray_image_view(img: *const skb_gray_image, out: *mut skb_image) -> skb_status {
-    // SAFETY: the header contract of `skb_gray_image_view` (lib.rs § Safety): `img`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let i = &try_status!(try_ref(img, "img")).inner;
@@ -86,17 +85,15 @@ pub unsafe extern "C" fn skb_gray_image_view(img: *const skb_gray_image, out: *m
     }
 }
 
-/// Frees an image from `skb_gray_image_load`. NULL is a no-op.
+/// Frees an image from `skb_gray_image_new_from_file`. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
-    // SAFETY: the header requires `img` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(img) }
 }
 
 /// Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
 /// edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
-/// context's embedded detector finds them, as `skb_detect` with default options), the 3-D
+/// context's embedded detector finds them, as `skb_context_detect` with default options), the 3-D
 /// pose and camera (with detected joints, BlazePose's relative joint depths weigh the solver's
 /// choices), the shape fit (with detected joints: half the joint weight, no bone-factor
 /// search, and with automatic gender the gendered space the detected-joints gender classifier
@@ -117,7 +114,7 @@ pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
 /// `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
 /// callback is called on the calling thread.
 #[no_mangle]
-pub unsafe extern "C" fn skb_run_pipeline(
+pub unsafe extern "C" fn skb_pipeline_run(
     ctx: *const skb_context,
     sketch: *const skb_image,
     joints: *const skb_joints2d,
@@ -128,11 +125,10 @@ pub unsafe extern "C" fn skb_run_pipeline(
     user: *mut c_void,
     out: *mut *mut skb_result,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_run_pipeline` (lib.rs § Safety), forwarded.
     unsafe { run(ctx, sketch, joints, &[], dict, pose_opts, fit_opts, progress, None, user, out) }
 }
 
-/// Interim-body callback of `skb_run_pipeline_progressive`: called on the calling thread with
+/// Interim-body callback of `skb_pipeline_run_progressive`: called on the calling thread with
 /// the caller's `user`, the stage (`SKB_INTERIM_MEAN_SHAPE`, `SKB_INTERIM_DECIDING_FIT`) and a
 /// posed mesh borrowed for the call only (read it with the mesh getters, e.g.
 /// `skb_mesh_copy_posed_vertices`; do not free or keep it).
@@ -145,13 +141,13 @@ pub const SKB_INTERIM_MEAN_SHAPE: u32 = 0;
 /// final fit (only when the gender is decided by fitting: automatic gender with given joints).
 pub const SKB_INTERIM_DECIDING_FIT: u32 = 1;
 
-/// `skb_run_pipeline` that also shows the bodies it has before the final one: `interim` (may be
+/// `skb_pipeline_run` that also shows the bodies it has before the final one: `interim` (may be
 /// NULL) gets the mean shape in the estimated pose as soon as the pose is known (a few ms after
 /// the pose step), then the deciding fit of the chosen gender before the final fit, so a host
-/// can draw something at once. The result is `skb_run_pipeline`'s for the same inputs. Arguments,
-/// ownership, errors and threading as `skb_run_pipeline`; `progress` and `interim` share `user`.
+/// can draw something at once. The result is `skb_pipeline_run`'s for the same inputs. Arguments,
+/// ownership, errors and threading as `skb_pipeline_run`; `progress` and `interim` share `user`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_run_pipeline_progressive(
+pub unsafe extern "C" fn skb_pipeline_run_progressive(
     ctx: *const skb_context,
     sketch: *const skb_image,
     joints: *const skb_joints2d,
@@ -163,7 +159,6 @@ pub unsafe extern "C" fn skb_run_pipeline_progressive(
     user: *mut c_void,
     out: *mut *mut skb_result,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_run_pipeline_progressive` (lib.rs § Safety), forwarded.
     unsafe { run(ctx, sketch, joints, &[], dict, pose_opts, fit_opts, progress, interim, user, out) }
 }
 
@@ -208,9 +203,6 @@ pub(crate) unsafe fn run(
     user: *mut c_void,
     out: *mut *mut skb_result,
 ) -> skb_status {
-    // SAFETY: forwarded contract: `ctx`, `sketch`, `joints`, `dict`, `pose_opts`, `fit_opts`, `out` and the
-    // views' pointers are NULL or valid for the documented lengths during the call; the ptr.rs helpers check
-    // NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));
@@ -273,8 +265,6 @@ pub(crate) unsafe fn run(
 /// Frees a result. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_free(result: *mut skb_result) {
-    // SAFETY: the header requires `result` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(result) }
 }
 
@@ -289,9 +279,6 @@ pub unsafe extern "C" fn skb_result_gender(
     gender: *mut u32,
     by_score: *mut bool,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_gender` (lib.rs § Safety): `result`, `gender`, `by_score` are NULL
-    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -314,9 +301,6 @@ pub unsafe extern "C" fn skb_result_gender_value(
     value: *mut f64,
     confidence: *mut f64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_gender_value` (lib.rs § Safety): `result`, `value`, `confidence`
-    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
-    // before each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -329,12 +313,10 @@ pub unsafe extern "C" fn skb_result_gender_value(
 
 /// The detection behind the result's 2-D joints into `*info` (backend kept, calibrated
 /// confidence, presence, the low-confidence flag: show the joints to the user for correction).
-/// Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_run_pipeline`, not
+/// Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_pipeline_run`, not
 /// detected (nothing written); `SKB_ERR_NULL_POINTER`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_detection(result: *const skb_result, info: *mut skb_figure_info) -> skb_status {
-    // SAFETY: the header contract of `skb_result_detection` (lib.rs § Safety): `result`, `info` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -360,9 +342,6 @@ pub unsafe extern "C" fn skb_result_evidence(
     low: *mut bool,
     edge_support: *mut f64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_evidence` (lib.rs § Safety): `result`, `low`, `edge_support` are
-    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
-    // each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -373,7 +352,7 @@ pub unsafe extern "C" fn skb_result_evidence(
     }
 }
 
-/// Number of body parts `skb_result_part_support` reports.
+/// Number of body parts `skb_result_copy_part_support` reports.
 pub const SKB_NUM_BODY_PARTS: u32 = 6;
 const _: () = assert!(SKB_NUM_BODY_PARTS as usize == sketchbody_core::fit::BodyPart::ALL.len());
 
@@ -383,14 +362,11 @@ const _: () = assert!(SKB_NUM_BODY_PARTS as usize == sketchbody_core::fit::BodyP
 /// outline in view and for every part of the mean shape. A part below 0.5 is one the drawing
 /// does not support (clothing, a shape no body has): the body there is the prior's reading.
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_part_support(
+pub unsafe extern "C" fn skb_result_copy_part_support(
     result: *const skb_result,
     dst: *mut f64,
     dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_part_support` (lib.rs § Safety): `result`, `dst` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -408,8 +384,6 @@ pub unsafe extern "C" fn skb_result_part_support(
 /// classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32, score: *mut f64) -> skb_status {
-    // SAFETY: the header contract of `skb_result_score` (lib.rs § Safety): `result`, `score` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -423,22 +397,25 @@ pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32
     }
 }
 
-/// Vertex count (13380) and quad-face count (13378) into `*vertices` and `*faces` (either may
-/// be NULL).
+/// The result body's vertex count (13380) into `*out`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_counts(
-    result: *const skb_result,
-    vertices: *mut usize,
-    faces: *mut usize,
-) -> skb_status {
-    // SAFETY: the header contract of `skb_result_counts` (lib.rs § Safety): `result`, `vertices`, `faces` are NULL
-    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
+pub unsafe extern "C" fn skb_result_vertex_count(result: *const skb_result, out: *mut usize) -> skb_status {
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
-            write_opt(vertices, r.mesh.vertices.len());
-            write_opt(faces, r.mesh.quads.len());
+            try_status!(write_out(out, r.mesh.vertices.len(), "out"));
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// The result body's quad-face count (13378) into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_face_count(result: *const skb_result, out: *mut usize) -> skb_status {
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            try_status!(write_out(out, r.mesh.quads.len(), "out"));
             skb_status::SKB_OK
         }
     }
@@ -453,9 +430,6 @@ pub unsafe extern "C" fn skb_result_copy_vertices(
     dst: *mut f32,
     dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_copy_vertices` (lib.rs § Safety): `result`, `dst` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -473,8 +447,6 @@ pub unsafe extern "C" fn skb_result_copy_vertices(
 /// triangle repeats its third index) into `dst` of `dst_len` integers (≥ 4 × face count).
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_faces(result: *const skb_result, dst: *mut u32, dst_len: usize) -> skb_status {
-    // SAFETY: the header contract of `skb_result_copy_faces` (lib.rs § Safety): `result`, `dst` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -490,8 +462,6 @@ pub unsafe extern "C" fn skb_result_copy_faces(result: *const skb_result, dst: *
 /// The 2-D joints used (pixels, with visibility) into `*out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_joints2d(result: *const skb_result, out: *mut skb_joints2d) -> skb_status {
-    // SAFETY: the header contract of `skb_result_joints2d` (lib.rs § Safety): `result`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -511,9 +481,6 @@ pub unsafe extern "C" fn skb_result_copy_joints3d(
     dst: *mut f64,
     dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_copy_joints3d` (lib.rs § Safety): `result`, `dst` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -538,8 +505,6 @@ pub unsafe extern "C" fn skb_result_copy_joints3d(
 /// joints only for a body of that height).
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_camera(result: *const skb_result, out: *mut skb_camera) -> skb_status {
-    // SAFETY: the header contract of `skb_result_camera` (lib.rs § Safety): `result`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -561,9 +526,6 @@ pub unsafe extern "C" fn skb_result_copy_skin_weights(
     weights: *mut f32,
     len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_copy_skin_weights` (lib.rs § Safety): `result`, `bones`, `weights`
-    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
-    // before each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -572,27 +534,32 @@ pub unsafe extern "C" fn skb_result_copy_skin_weights(
     }
 }
 
-/// The fitted PCA shape weights (metres): their number into `*count` (may be NULL) and, when
-/// `dst` is not NULL, the weights into `dst` (`dst_len` ≥ count).
+/// The number of fitted PCA shape weights (the fit's dimensions) into `*out`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_shape_weights(
+pub unsafe extern "C" fn skb_result_shape_weight_count(result: *const skb_result, out: *mut usize) -> skb_status {
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            try_status!(write_out(out, r.weights.len(), "out"));
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// Copies the fitted PCA shape weights (metres) into `dst` of `dst_len` doubles (at least
+/// `skb_result_shape_weight_count`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_copy_shape_weights(
     result: *const skb_result,
     dst: *mut f64,
     dst_len: usize,
-    count: *mut usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_shape_weights` (lib.rs § Safety): `result`, `dst`, `count` are
-    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
-    // each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
             let n = r.weights.len();
-            if !dst.is_null() {
-                let out = try_status!(out_slice(dst, dst_len, n, "dst"));
-                out[..n].copy_from_slice(&r.weights);
-            }
-            write_opt(count, n);
+            let out = try_status!(out_slice(dst, dst_len, n, "dst"));
+            out[..n].copy_from_slice(&r.weights);
             skb_status::SKB_OK
         }
     }
@@ -601,9 +568,7 @@ pub unsafe extern "C" fn skb_result_shape_weights(
 /// A new `skb_mesh` of the result (the fitted rest shape, posed as in the result) into `*out`,
 /// for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_mesh(result: *const skb_result, out: *mut *mut skb_mesh) -> skb_status {
-    // SAFETY: the header contract of `skb_result_mesh` (lib.rs § Safety): `result`, `out` are NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+pub unsafe extern "C" fn skb_mesh_new_from_result(result: *const skb_result, out: *mut *mut skb_mesh) -> skb_status {
     unsafe {
         ffi_boundary! {
             let res = try_status!(try_ref(result, "result"));
@@ -620,17 +585,14 @@ pub unsafe extern "C" fn skb_result_mesh(result: *const skb_result, out: *mut *m
 
 /// The result's 3-D pose (`SKB_JOINTS_ESTIMATED`) with its ranked alternatives as a new estimate
 /// handle `*out` (the caller owns it; `skb_pose_estimate_free`): list the readings with
-/// `skb_pose_estimate_num_alternatives` / `skb_pose_estimate_copy_alternative_joints` /
+/// `skb_pose_estimate_alternative_count` / `skb_pose_estimate_copy_alternative_joints` /
 /// `skb_pose_estimate_copy_alternative_flipped`. A copy: flipping it does not change the result
 /// (use `skb_result_flip_limb` / `skb_result_pick_alternative` for that).
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_pose_estimate(
+pub unsafe extern "C" fn skb_pose_estimate_new_from_result(
     result: *const skb_result,
     out: *mut *mut super::pose::skb_pose_estimate,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_pose_estimate` (lib.rs § Safety): `result`, `out` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -686,7 +648,7 @@ unsafe fn repose_c(
     }
 }
 
-/// Re-poses the result in place to its pose's alternative `index` (`skb_result_pose_estimate`
+/// Re-poses the result in place to its pose's alternative `index` (`skb_pose_estimate_new_from_result`
 /// lists them; 0 = the current pose): IK and skinning of the fitted rest body, whose shape
 /// weights, proportions and rest mesh are kept; the camera and 2-D joints are kept. A few ms.
 /// `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`. Errors: `SKB_ERR_OUT_OF_RANGE` for
@@ -698,8 +660,6 @@ pub unsafe extern "C" fn skb_result_pick_alternative(
     index: u32,
     outcome: *mut u32,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_pick_alternative` (lib.rs § Safety): `result`, `outcome` are NULL
-    // or valid during the call; the ptr.rs helpers check NULL before each borrow.
     unsafe {
         ffi_boundary! {
             repose_c(result, std::ptr::null(), ReposeRequest::Alternative(index as usize), outcome)
@@ -714,8 +674,6 @@ pub unsafe extern "C" fn skb_result_pick_alternative(
 /// not call while another thread uses it.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_flip_limb(result: *mut skb_result, limb: u32, outcome: *mut u32) -> skb_status {
-    // SAFETY: the header contract of `skb_result_flip_limb` (lib.rs § Safety): `result`, `outcome` are NULL or valid
-    // during the call; the ptr.rs helpers check NULL before each borrow.
     unsafe {
         ffi_boundary! {
             let l = try_status!(super::pose::limb_in(limb));
@@ -726,7 +684,7 @@ pub unsafe extern "C" fn skb_result_flip_limb(result: *mut skb_result, limb: u32
 
 /// Re-poses the fitted body in place for moved 2-D joints `joints` (pixels of the result's
 /// sketch; issue 50's live correction): the 3-D pose is re-estimated with `dict` (NULL: the
-/// embedded dictionary; pass the one given to `skb_run_pipeline`) and the run's pose options,
+/// embedded dictionary; pass the one given to `skb_pipeline_run`) and the run's pose options,
 /// without an image depth cue, then IK and skinning of the fitted rest body (shape weights,
 /// proportions and rest mesh kept) and the camera's scales refitted to its skeleton. About
 /// 5–10 ms (docs/benchmarks.md, "Re-pose"). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`,
@@ -741,9 +699,6 @@ pub unsafe extern "C" fn skb_result_repose_joints(
     joints: *const skb_joints2d,
     outcome: *mut u32,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_repose_joints` (lib.rs § Safety): `result`, `dict`, `joints`,
-    // `outcome` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL before
-    // each borrow.
     unsafe {
         ffi_boundary! {
             let j = joints_in(try_status!(try_ref(joints, "joints")));

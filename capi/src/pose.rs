@@ -1,6 +1,6 @@
 //! The 3-D pose step (paper §II-B): `skb_pose_dictionary`, `skb_pose_options`,
-//! `skb_estimate_pose`, the fixed-basis refinement `skb_pose_refine`, and the estimate handle
-//! `skb_pose_estimate` with its ranked depth readings and `skb_pose_flip_limb`.
+//! `skb_pose3d_estimate`, the fixed-basis refinement `skb_pose3d_refine`, and the estimate handle
+//! `skb_pose_estimate` with its ranked depth readings and `skb_pose_estimate_flip_limb`.
 
 use std::ffi::c_char;
 use std::path::Path;
@@ -91,7 +91,7 @@ pub struct skb_pose_dictionary {
     pub(crate) inner: Dictionary,
 }
 
-/// Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
+/// Options of `skb_pose3d_estimate` / `skb_pose3d_refine`. Created with defaults (κ = 0.05 relative,
 /// α = 0.8 toward the level target, sx = sy, 4 bases, 0.5 px, refinement on, prior 0.1 m,
 /// 12 exemplar starts, 64 limb candidates, blend 30 px², free-joint refinement at 0.014 m).
 /// Not synchronised: do not change it
@@ -108,8 +108,6 @@ fn out_of_range(name: &'static str, detail: String) -> skb_status {
 /// assets/README.md). On success `*out` owns it. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_new_default(out: *mut *mut skb_pose_dictionary) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_dictionary_new_default` (lib.rs § Safety): `out` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
@@ -123,12 +121,10 @@ pub unsafe extern "C" fn skb_pose_dictionary_new_default(out: *mut *mut skb_pose
 /// `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
 /// `*out` owns the dictionary. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_dictionary_load(
+pub unsafe extern "C" fn skb_pose_dictionary_new_from_file(
     path: *const c_char,
     out: *mut *mut skb_pose_dictionary,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_dictionary_load` (lib.rs § Safety): `path`, `out` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let p = try_status!(try_str(path, "path"));
@@ -142,71 +138,64 @@ pub unsafe extern "C" fn skb_pose_dictionary_load(
 /// Frees a dictionary. NULL is a no-op. Do not use it afterwards.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_free(dict: *mut skb_pose_dictionary) {
-    // SAFETY: the header requires `dict` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(dict) }
 }
 
 /// Writes the number of basis poses K to `*out`. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_dictionary_num_bases(dict: *const skb_pose_dictionary, out: *mut u32) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_dictionary_num_bases` (lib.rs § Safety): `dict`, `out` are NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
+pub unsafe extern "C" fn skb_pose_dictionary_basis_count(
+    dict: *const skb_pose_dictionary,
+    out: *mut usize,
+) -> skb_status {
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
             let out = try_status!(try_mut(out, "out"));
-            *out = d.inner.num_bases() as u32;
+            *out = d.inner.num_bases();
             skb_status::SKB_OK
         }
     }
 }
 
-/// Copies the mean pose μ (45 values, metres) into `out` (`len` ≥ 45). Thread-safe.
+/// Copies the mean pose μ (45 values, metres) into `dst` (`dst_len` ≥ 45). Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_dictionary_mean(
+pub unsafe extern "C" fn skb_pose_dictionary_copy_mean(
     dict: *const skb_pose_dictionary,
-    out: *mut f64,
-    len: usize,
+    dst: *mut f64,
+    dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_dictionary_mean` (lib.rs § Safety): `dict`, `out` are NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
-            try_status!(out_slice(out, len, POSE_DIM, "out"))[..POSE_DIM].copy_from_slice(d.inner.mean.as_slice());
+            try_status!(out_slice(dst, dst_len, POSE_DIM, "dst"))[..POSE_DIM].copy_from_slice(d.inner.mean.as_slice());
             skb_status::SKB_OK
         }
     }
 }
 
-/// Copies basis `index` (< K; a unit 45-vector) into `out` (`len` ≥ 45) and its spread σ
+/// Copies basis `index` (< K; a unit 45-vector) into `dst` (`dst_len` ≥ 45) and its spread σ
 /// (metres, used by the weight prior) into `*sigma` (may be NULL). Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_dictionary_basis(
+pub unsafe extern "C" fn skb_pose_dictionary_copy_basis(
     dict: *const skb_pose_dictionary,
     index: u32,
-    out: *mut f64,
-    len: usize,
+    dst: *mut f64,
+    dst_len: usize,
     sigma: *mut f64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_dictionary_basis` (lib.rs § Safety): `dict`, `out`, `sigma` are NULL
-    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
-            if out.is_null() {
-                return null("out");
+            if dst.is_null() {
+                return null("dst");
             }
             let k = index as usize;
             if k >= d.inner.num_bases() {
                 return out_of_range("basis index", format!("{k} is not below {}", d.inner.num_bases()));
             }
             // Short or absurd (over isize::MAX bytes) lengths are refused before anything is written.
-            let dst = try_status!(out_slice(out, len, POSE_DIM, "out"));
-            dst[..POSE_DIM].copy_from_slice(d.inner.bases.column(k).as_slice());
+            let out = try_status!(out_slice(dst, dst_len, POSE_DIM, "dst"));
+            out[..POSE_DIM].copy_from_slice(d.inner.bases.column(k).as_slice());
             write_opt(sigma, d.inner.sigma[k]);
             skb_status::SKB_OK
         }
@@ -216,18 +205,15 @@ pub unsafe extern "C" fn skb_pose_dictionary_basis(
 /// Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
 /// (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_dictionary_bone_lengths(
+pub unsafe extern "C" fn skb_pose_dictionary_copy_bone_lengths(
     dict: *const skb_pose_dictionary,
-    out: *mut f64,
-    len: usize,
+    dst: *mut f64,
+    dst_len: usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_dictionary_bone_lengths` (lib.rs § Safety): `dict`, `out` are NULL
-    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
-            try_status!(out_slice(out, len, NUM_BONES, "out"))[..NUM_BONES].copy_from_slice(&d.inner.bone_lengths);
+            try_status!(out_slice(dst, dst_len, NUM_BONES, "dst"))[..NUM_BONES].copy_from_slice(&d.inner.bone_lengths);
             skb_status::SKB_OK
         }
     }
@@ -236,8 +222,6 @@ pub unsafe extern "C" fn skb_pose_dictionary_bone_lengths(
 /// Creates options with the defaults. On success `*out` owns them. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_new(out: *mut *mut skb_pose_options) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_new` (lib.rs § Safety): `out` is NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
@@ -249,15 +233,11 @@ pub unsafe extern "C" fn skb_pose_options_new(out: *mut *mut skb_pose_options) -
 /// Frees options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_free(opts: *mut skb_pose_options) {
-    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(opts) }
 }
 
 /// Applies `set` to a copy of the options, validates the copy and stores it only if valid.
 unsafe fn set_option(opts: *mut skb_pose_options, set: impl FnOnce(&mut PoseOptions)) -> skb_status {
-    // SAFETY: this function's `# Safety` contract (`opts` NULL or valid), forwarded to the ptr.rs helpers, which
-    // check NULL and lengths.
     unsafe {
         let o = try_status!(try_mut(opts, "opts"));
         let mut next = o.inner;
@@ -272,8 +252,6 @@ unsafe fn set_option(opts: *mut skb_pose_options, set: impl FnOnce(&mut PoseOpti
 /// (0 = equality; the paper's κ = 8 CMU units² is about 0.017, see docs/formats.md).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_kappa(opts: *mut skb_pose_options, kappa: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_kappa` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.kappa = kappa) }
     }
@@ -283,8 +261,6 @@ pub unsafe extern "C" fn skb_pose_options_set_kappa(opts: *mut skb_pose_options,
 /// (`skb_pose_options_set_alpha_target`), in [0, 1]. Default 0.8.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_alpha(opts: *mut skb_pose_options, alpha: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_alpha` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.alpha = alpha) }
     }
@@ -295,8 +271,6 @@ pub unsafe extern "C" fn skb_pose_options_set_alpha(opts: *mut skb_pose_options,
 /// (the paper's eq. 4). Other values: `SKB_ERR_OUT_OF_RANGE`, options unchanged.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_alpha_target(opts: *mut skb_pose_options, target: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_alpha_target` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let t = match target {
@@ -318,8 +292,6 @@ pub unsafe extern "C" fn skb_pose_options_set_alpha_target(opts: *mut skb_pose_o
 /// (eq. 1), in the camera fit and in the refinement.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_equal_scales(opts: *mut skb_pose_options, equal: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_equal_scales` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.equal_scales = equal) }
     }
@@ -328,8 +300,6 @@ pub unsafe extern "C" fn skb_pose_options_set_equal_scales(opts: *mut skb_pose_o
 /// Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_max_bases(opts: *mut skb_pose_options, max_bases: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_max_bases` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.max_bases = max_bases as usize) }
     }
@@ -338,8 +308,6 @@ pub unsafe extern "C" fn skb_pose_options_set_max_bases(opts: *mut skb_pose_opti
 /// Sets the stopping tolerance on the reprojection RMS, pixels, in [0, 10000].
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_tolerance(opts: *mut skb_pose_options, tolerance_px: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_tolerance` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.tolerance = tolerance_px) }
     }
@@ -348,8 +316,6 @@ pub unsafe extern "C" fn skb_pose_options_set_tolerance(opts: *mut skb_pose_opti
 /// Turns the final Levenberg–Marquardt refinement on (non-zero) or off.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_refine(opts: *mut skb_pose_options, refine: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_refine` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.refine = refine) }
     }
@@ -358,8 +324,6 @@ pub unsafe extern "C" fn skb_pose_options_set_refine(opts: *mut skb_pose_options
 /// Sets the weight prior, metres in [0, 1] (0 = the paper's eq. (3) exactly; see docs).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_prior(opts: *mut skb_pose_options, prior_m: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_prior` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.prior = prior_m) }
     }
@@ -370,8 +334,6 @@ pub unsafe extern "C" fn skb_pose_options_set_prior(opts: *mut skb_pose_options,
 /// result (0 = from the mean pose, as in the paper).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_starts(opts: *mut skb_pose_options, starts: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_starts` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.starts = starts as usize) }
     }
@@ -381,9 +343,6 @@ pub unsafe extern "C" fn skb_pose_options_set_starts(opts: *mut skb_pose_options
 /// training poses).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_limb_candidates(opts: *mut skb_pose_options, count: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_limb_candidates` (lib.rs § Safety): `opts` is NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.limb_candidates = count as usize) }
     }
@@ -393,8 +352,6 @@ pub unsafe extern "C" fn skb_pose_options_set_limb_candidates(opts: *mut skb_pos
 /// [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options, tau_px2: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_blend` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.blend = tau_px2) }
     }
@@ -405,25 +362,21 @@ pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options,
 /// leave the dictionary's span to follow the 2-D joints, bone lengths kept (default 0.014 m,
 /// 4 px on a 500-px figure; raise it for rough joints such as detections). With it on the
 /// returned joints are no longer base + Σ basis · weight of the dictionary's own base pose;
-/// `skb_pose_refine` still continues from them (see `skb_pose_refine`).
+/// `skb_pose3d_refine` still continues from them (see `skb_pose3d_refine`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_joint_noise(opts: *mut skb_pose_options, noise_m: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_joint_noise` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.joint_noise = noise_m) }
     }
 }
 
 /// Sets whether the drawn proportions are estimated with the pose (default on): six per-group
-/// bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_estimate_pose_figure`
+/// bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_pose3d_estimate_figure`
 /// returns them) and a second solve on the 2-D joints unstylised by them; the returned joints
-/// then have the figure's proportions. Turn it off for `skb_pose_refine` (the fixed-basis
+/// then have the figure's proportions. Turn it off for `skb_pose3d_refine` (the fixed-basis
 /// refinement needs joints = base + Σ basis · weight on the dictionary's skeleton).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_proportions(opts: *mut skb_pose_options, on: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_proportions` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.proportions = on) }
     }
@@ -434,9 +387,6 @@ pub unsafe extern "C" fn skb_pose_options_set_proportions(opts: *mut skb_pose_op
 /// ankles under the pelvis on one ground plane. Acts only with joint noise > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_standing_prior(opts: *mut skb_pose_options, on: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_standing_prior` (lib.rs § Safety): `opts` is NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.standing_prior = on) }
     }
@@ -446,8 +396,6 @@ pub unsafe extern "C" fn skb_pose_options_set_standing_prior(opts: *mut skb_pose
 /// flipped in depth (image and bone lengths unchanged). Acts only with joint noise > 0.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_knee_limits(opts: *mut skb_pose_options, on: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_knee_limits` (lib.rs § Safety): `opts` is NULL or valid
-    // for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.knee_limits = on) }
     }
@@ -460,9 +408,6 @@ pub unsafe extern "C" fn skb_pose_options_set_knee_limits(opts: *mut skb_pose_op
 /// bent limbs too (docs/benchmarks.md, "3-D pose").
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_straight_limbs(opts: *mut skb_pose_options, on: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_straight_limbs` (lib.rs § Safety): `opts` is NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.straight_limbs = on) }
     }
@@ -473,9 +418,6 @@ pub unsafe extern "C" fn skb_pose_options_set_straight_limbs(opts: *mut skb_pose
 /// fixed spread about the dictionary's proportions. Acts only with the proportions estimated.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_factor_prior(opts: *mut skb_pose_options, on: bool) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_factor_prior` (lib.rs § Safety): `opts` is NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.factor_prior = on) }
     }
@@ -485,13 +427,10 @@ pub unsafe extern "C" fn skb_pose_options_set_factor_prior(opts: *mut skb_pose_o
 /// solver chooses between readings of a near-frontal figure (a limb toward or away from the
 /// viewer), the depths predicted from the 2-D joints by the embedded network
 /// (`assets/factor_prior.json`) add this many px² of cost per px² of depth disagreement.
-/// `skb_estimate_pose` always uses them when on; the pipeline replaces them by BlazePose's own
+/// `skb_pose3d_estimate` always uses them when on; the pipeline replaces them by BlazePose's own
 /// depths when it detected the joints with BlazePose. `SKB_ERR_OUT_OF_RANGE` outside [0, 10].
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_depth_prior(opts: *mut skb_pose_options, weight: f64) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_options_set_depth_prior` (lib.rs § Safety): `opts` is NULL or
-    // valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! { set_option(opts, |o| o.depth_prior = weight) }
     }
@@ -500,7 +439,7 @@ pub unsafe extern "C" fn skb_pose_options_set_depth_prior(opts: *mut skb_pose_op
 /// Number of proportion groups of `skb_pose_figure`.
 pub const SKB_POSE_GROUPS: u32 = 6;
 
-/// The drawn proportions and plausibility of an estimate (`skb_estimate_pose_figure`).
+/// The drawn proportions and plausibility of an estimate (`skb_pose3d_estimate_figure`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 #[allow(non_camel_case_types)]
@@ -518,19 +457,16 @@ pub struct skb_pose_figure {
 
 const _: () = assert!(SKB_POSE_GROUPS as usize == sketchbody_core::pose::figure::NUM_GROUPS);
 
-/// `skb_estimate_pose` that also writes the drawn proportions and the plausibility flag to
+/// `skb_pose3d_estimate` that also writes the drawn proportions and the plausibility flag to
 /// `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_estimate_pose_figure(
+pub unsafe extern "C" fn skb_pose3d_estimate_figure(
     dict: *const skb_pose_dictionary,
     joints: *const skb_joints2d,
     opts: *const skb_pose_options,
     out: *mut skb_pose3d,
     figure: *mut skb_pose_figure,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_estimate_pose_figure` (lib.rs § Safety): `dict`, `joints`, `opts`, `out`,
-    // `figure` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and
-    // lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
@@ -571,7 +507,7 @@ fn pose_out(e: &PoseEstimate, prior_weight: f64) -> skb_pose3d {
     out
 }
 
-/// The estimate of `skb_estimate_pose` / `skb_estimate_pose_figure` and its C form (`opts`
+/// The estimate of `skb_pose3d_estimate` / `skb_pose3d_estimate_figure` and its C form (`opts`
 /// `None` = the defaults); errors are already recorded for `skb_last_error_message`.
 fn estimate_out(
     d: &skb_pose_dictionary,
@@ -598,15 +534,12 @@ fn prior_weight(d: &Dictionary, j: &Joints2, o: &PoseOptions) -> f64 {
 /// beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
 /// distinct `out`); CPU time per pose in docs/benchmarks.md ("3-D pose").
 #[no_mangle]
-pub unsafe extern "C" fn skb_estimate_pose(
+pub unsafe extern "C" fn skb_pose3d_estimate(
     dict: *const skb_pose_dictionary,
     joints: *const skb_joints2d,
     opts: *const skb_pose_options,
     out: *mut skb_pose3d,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_estimate_pose` (lib.rs § Safety): `dict`, `joints`, `opts`, `out` are
-    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
-    // each borrow.
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
@@ -620,21 +553,18 @@ pub unsafe extern "C" fn skb_estimate_pose(
 
 /// The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
 /// base pose is taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
-/// start `skb_estimate_pose` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
+/// start `skb_pose3d_estimate` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
 /// and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
 /// is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
 /// to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_refine(
+pub unsafe extern "C" fn skb_pose3d_refine(
     dict: *const skb_pose_dictionary,
     joints: *const skb_joints2d,
     opts: *const skb_pose_options,
     start: *const skb_pose3d,
     out: *mut skb_pose3d,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_refine` (lib.rs § Safety): `dict`, `joints`, `opts`, `start`, `out`
-    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths
-    // before each borrow.
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
@@ -677,7 +607,7 @@ pub unsafe extern "C" fn skb_pose_refine(
     }
 }
 
-/// `SKB_LIMB_*`: a limb bone whose depth can be flipped, the index of `skb_pose_flip_limb` and of
+/// `SKB_LIMB_*`: a limb bone whose depth can be flipped, the index of `skb_pose_estimate_flip_limb` and of
 /// `skb_pose_estimate_copy_alternative_flipped`: right upper arm (shoulder → elbow).
 pub const SKB_LIMB_R_UPPER_ARM: u32 = 0;
 /// Right forearm (elbow → wrist).
@@ -699,7 +629,7 @@ pub const SKB_NUM_LIMBS: u32 = 8;
 /// Most alternatives of a pose estimate (the estimate itself included).
 pub const SKB_MAX_ALTERNATIVES: u32 = 8;
 
-/// `*outcome` of `skb_pose_flip_limb` and the re-pose functions: done.
+/// `*outcome` of `skb_pose_estimate_flip_limb` and the re-pose functions: done.
 pub const SKB_REPOSE_DONE: u32 = 0;
 /// The limb lies in the picture plane (its depth offset is at most 5 % of its length): no
 /// depth to flip; nothing changed.
@@ -721,8 +651,8 @@ const _: () = assert!(
 /// A 3-D pose estimate with its ranked depth readings ("alternatives": the first is the estimate
 /// itself, the others flip limbs toward or away from the camera, best first; the score is px²,
 /// lower = better, see docs/formats.md "3-D pose JSON"). Made by `skb_pose_estimate_new` or
-/// `skb_result_pose_estimate`; free with `skb_pose_estimate_free`. Reading it from several
-/// threads at once is safe; `skb_pose_flip_limb` and `skb_pose_estimate_pick` change it and must
+/// `skb_pose_estimate_new_from_result`; free with `skb_pose_estimate_free`. Reading it from several
+/// threads at once is safe; `skb_pose_estimate_flip_limb` and `skb_pose_estimate_pick_alternative` change it and must
 /// not run while another thread uses it.
 pub struct skb_pose_estimate {
     pub(crate) inner: PoseEstimate,
@@ -740,8 +670,8 @@ fn alternative_at(e: &PoseEstimate, index: u32) -> Result<&sketchbody_core::pose
         .ok_or_else(|| out_of_range("index", format!("{index} is not below the {} alternatives", e.alternatives.len())))
 }
 
-/// `skb_estimate_pose` into a new estimate handle `*out` (the caller owns it) that also holds the
-/// ranked alternatives. `opts` may be NULL. Same errors as `skb_estimate_pose`; on error `*out`
+/// `skb_pose3d_estimate` into a new estimate handle `*out` (the caller owns it) that also holds the
+/// ranked alternatives. `opts` may be NULL. Same errors as `skb_pose3d_estimate`; on error `*out`
 /// is untouched. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_new(
@@ -750,9 +680,6 @@ pub unsafe extern "C" fn skb_pose_estimate_new(
     opts: *const skb_pose_options,
     out: *mut *mut skb_pose_estimate,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_estimate_new` (lib.rs § Safety): `dict`, `joints`, `opts`, `out` are
-    // NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before
-    // each borrow.
     unsafe {
         ffi_boundary! {
             let d = try_status!(try_ref(dict, "dict"));
@@ -767,8 +694,6 @@ pub unsafe extern "C" fn skb_pose_estimate_new(
 /// Frees an estimate. NULL is a no-op. Do not use it afterwards.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_free(est: *mut skb_pose_estimate) {
-    // SAFETY: the header requires `est` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(est) }
 }
 
@@ -776,8 +701,6 @@ pub unsafe extern "C" fn skb_pose_estimate_free(est: *mut skb_pose_estimate) {
 /// reading's joints; the camera, bases and RMS are unchanged by them).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_pose(est: *const skb_pose_estimate, out: *mut skb_pose3d) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_estimate_pose` (lib.rs § Safety): `est`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let e = try_status!(try_ref(est, "est"));
@@ -788,19 +711,16 @@ pub unsafe extern "C" fn skb_pose_estimate_pose(est: *const skb_pose_estimate, o
 }
 
 /// The number of alternatives (1..=`SKB_MAX_ALTERNATIVES`; 0 for an estimate without them) into
-/// `*count`.
+/// `*out`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_estimate_num_alternatives(
+pub unsafe extern "C" fn skb_pose_estimate_alternative_count(
     est: *const skb_pose_estimate,
-    count: *mut u32,
+    out: *mut usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_estimate_num_alternatives` (lib.rs § Safety): `est`, `count` are NULL
-    // or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each
-    // borrow.
     unsafe {
         ffi_boundary! {
             let e = try_status!(try_ref(est, "est"));
-            try_status!(write_out(count, e.inner.alternatives.len() as u32, "count"));
+            try_status!(write_out(out, e.inner.alternatives.len(), "out"));
             skb_status::SKB_OK
         }
     }
@@ -818,9 +738,6 @@ pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_joints(
     dst_len: usize,
     score: *mut f64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_estimate_copy_alternative_joints` (lib.rs § Safety): `est`, `dst`,
-    // `score` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and
-    // lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let e = try_status!(try_ref(est, "est"));
@@ -835,33 +752,44 @@ pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_joints(
     }
 }
 
-/// The limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`, ascending):
-/// their number into `*count` (may be NULL) and, when `dst` is not NULL, the limbs into `dst`
-/// (`dst_len` ≥ count; `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors:
-/// `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the count.
+/// The number of limbs alternative `index` flips relative to the current pose into `*out`
+/// (0 for alternative 0; at most `SKB_NUM_LIMBS`). Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥
+/// the alternative count.
+#[no_mangle]
+pub unsafe extern "C" fn skb_pose_estimate_alternative_flipped_count(
+    est: *const skb_pose_estimate,
+    index: u32,
+    out: *mut usize,
+) -> skb_status {
+    unsafe {
+        ffi_boundary! {
+            let e = try_status!(try_ref(est, "est"));
+            let a = try_status!(alternative_at(&e.inner, index));
+            try_status!(write_out(out, a.flipped.len(), "out"));
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// Copies the limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`,
+/// ascending) into `dst` (`dst_len` ≥ `skb_pose_estimate_alternative_flipped_count`;
+/// `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors: `SKB_ERR_OUT_OF_RANGE` for
+/// `index` ≥ the alternative count.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_flipped(
     est: *const skb_pose_estimate,
     index: u32,
     dst: *mut u32,
     dst_len: usize,
-    count: *mut usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_estimate_copy_alternative_flipped` (lib.rs § Safety): `est`, `dst`,
-    // `count` are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and
-    // lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let e = try_status!(try_ref(est, "est"));
             let a = try_status!(alternative_at(&e.inner, index));
-            let n = a.flipped.len();
-            if !dst.is_null() {
-                let out = try_status!(out_slice(dst, dst_len, n, "dst"));
-                for (o, l) in out.iter_mut().zip(&a.flipped) {
-                    *o = l.index() as u32;
-                }
+            let out = try_status!(out_slice(dst, dst_len, a.flipped.len(), "dst"));
+            for (o, l) in out.iter_mut().zip(&a.flipped) {
+                *o = l.index() as u32;
             }
-            write_opt(count, n);
             skb_status::SKB_OK
         }
     }
@@ -874,9 +802,11 @@ pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_flipped(
 /// the original. Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Not thread-safe on
 /// one estimate.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_flip_limb(est: *mut skb_pose_estimate, limb: u32, outcome: *mut u32) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_flip_limb` (lib.rs § Safety): `est`, `outcome` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+pub unsafe extern "C" fn skb_pose_estimate_flip_limb(
+    est: *mut skb_pose_estimate,
+    limb: u32,
+    outcome: *mut u32,
+) -> skb_status {
     unsafe {
         ffi_boundary! {
             let e = try_status!(try_mut(est, "est"));
@@ -893,9 +823,7 @@ pub unsafe extern "C" fn skb_pose_flip_limb(est: *mut skb_pose_estimate, limb: u
 /// alternatives re-ranked relative to it. Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the
 /// count (nothing changed). Not thread-safe on one estimate.
 #[no_mangle]
-pub unsafe extern "C" fn skb_pose_estimate_pick(est: *mut skb_pose_estimate, index: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_pose_estimate_pick` (lib.rs § Safety): `est` is NULL or valid during the
-    // call; the ptr.rs helpers check NULL before the borrow.
+pub unsafe extern "C" fn skb_pose_estimate_pick_alternative(est: *mut skb_pose_estimate, index: u32) -> skb_status {
     unsafe {
         ffi_boundary! {
             let e = try_status!(try_mut(est, "est"));
@@ -949,10 +877,10 @@ mod tests {
             let j = figure();
             let mut p: skb_pose3d = std::mem::zeroed();
             let mut fig: skb_pose_figure = std::mem::zeroed();
-            assert_eq!(skb_estimate_pose_figure(d, &j, o, &mut p, &mut fig), skb_status::SKB_OK);
+            assert_eq!(skb_pose3d_estimate_figure(d, &j, o, &mut p, &mut fig), skb_status::SKB_OK);
             assert!(fig.factors.iter().all(|k| (0.5..=2.0).contains(k)) && fig.plausible == 1, "{fig:?}");
             assert_eq!(
-                skb_estimate_pose_figure(d, &j, o, &mut p, std::ptr::null_mut()),
+                skb_pose3d_estimate_figure(d, &j, o, &mut p, std::ptr::null_mut()),
                 skb_status::SKB_ERR_NULL_POINTER
             );
             // The fixed-basis refinement below continues from the dictionary's skeleton.
@@ -974,58 +902,58 @@ mod tests {
             assert_eq!(skb_pose_options_set_depth_prior(o, 0.0), skb_status::SKB_OK);
             assert_eq!((*o).inner.depth_prior, 0.0);
             // The free-joint refinement (on by default) follows the 2-D joints more closely.
-            assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
+            assert_eq!(skb_pose3d_estimate(d, &j, o, &mut p), skb_status::SKB_OK);
             let free_rms = p.rms_px;
             assert_eq!(skb_pose_options_set_joint_noise(o, 0.0), skb_status::SKB_OK);
             assert_eq!((*o).inner.joint_noise, 0.0);
             // From an exemplar start (the default): refining the result must not undo the fit,
             // which holds only if the base pose is recovered as joints − Σ basis · weight.
-            assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
+            assert_eq!(skb_pose3d_estimate(d, &j, o, &mut p), skb_status::SKB_OK);
             assert!(p.num_bases > 0);
             assert!(free_rms < p.rms_px, "free joints {free_rms} px, dictionary pose {} px", p.rms_px);
             let mut q: skb_pose3d = std::mem::zeroed();
-            assert_eq!(skb_pose_refine(d, &j, o, &p, &mut q), skb_status::SKB_OK);
+            assert_eq!(skb_pose3d_refine(d, &j, o, &p, &mut q), skb_status::SKB_OK);
             assert!(q.rms_px <= p.rms_px + 1e-9, "{} > {}", q.rms_px, p.rms_px);
             // The figure is the mean pose seen from the front: from μ (the paper) it fits.
             assert_eq!(skb_pose_options_set_starts(o, 0), skb_status::SKB_OK);
-            assert_eq!(skb_estimate_pose(d, &j, o, &mut p), skb_status::SKB_OK);
+            assert_eq!(skb_pose3d_estimate(d, &j, o, &mut p), skb_status::SKB_OK);
             assert!(p.rms_px < 1.0, "rms {}", p.rms_px);
             assert!(p.length_excess.abs() <= 0.02 + 1e-9);
             if p.num_bases > 0 {
-                assert_eq!(skb_pose_refine(d, &j, o, &p, &mut q), skb_status::SKB_OK);
+                assert_eq!(skb_pose3d_refine(d, &j, o, &p, &mut q), skb_status::SKB_OK);
                 assert!(q.rms_px <= p.rms_px + 1e-9);
             }
             let mut bad = j;
             bad.xy[3] = [f64::NAN, 0.0];
-            assert_eq!(skb_estimate_pose(d, &bad, o, &mut q), skb_status::SKB_ERR_TOO_FEW_JOINTS);
+            assert_eq!(skb_pose3d_estimate(d, &bad, o, &mut q), skb_status::SKB_ERR_TOO_FEW_JOINTS);
             let mut bad = j;
             bad.xy[3] = bad.xy[2];
-            assert_eq!(skb_estimate_pose(d, &bad, o, &mut q), skb_status::SKB_ERR_COINCIDENT_JOINTS);
+            assert_eq!(skb_pose3d_estimate(d, &bad, o, &mut q), skb_status::SKB_ERR_COINCIDENT_JOINTS);
             let mut bad = j;
             for (k, xy) in bad.xy.iter_mut().enumerate() {
                 *xy = [k as f64, 2.0 * k as f64];
             }
-            assert_eq!(skb_estimate_pose(d, &bad, o, &mut q), skb_status::SKB_ERR_DEGENERATE);
+            assert_eq!(skb_pose3d_estimate(d, &bad, o, &mut q), skb_status::SKB_ERR_DEGENERATE);
             let mut bad = j;
             bad.visible = [0; 15];
-            assert_eq!(skb_estimate_pose(d, &bad, o, &mut q), skb_status::SKB_ERR_TOO_FEW_JOINTS);
-            assert_eq!(skb_estimate_pose(std::ptr::null(), &j, o, &mut q), skb_status::SKB_ERR_NULL_POINTER);
-            assert_eq!(skb_estimate_pose(d, &j, o, std::ptr::null_mut()), skb_status::SKB_ERR_NULL_POINTER);
+            assert_eq!(skb_pose3d_estimate(d, &bad, o, &mut q), skb_status::SKB_ERR_TOO_FEW_JOINTS);
+            assert_eq!(skb_pose3d_estimate(std::ptr::null(), &j, o, &mut q), skb_status::SKB_ERR_NULL_POINTER);
+            assert_eq!(skb_pose3d_estimate(d, &j, o, std::ptr::null_mut()), skb_status::SKB_ERR_NULL_POINTER);
             let mut v = [0.0; 45];
             let mut sigma = 0.0;
-            assert_eq!(skb_pose_dictionary_basis(d, 0, v.as_mut_ptr(), 45, &mut sigma), skb_status::SKB_OK);
+            assert_eq!(skb_pose_dictionary_copy_basis(d, 0, v.as_mut_ptr(), 45, &mut sigma), skb_status::SKB_OK);
             assert!(sigma > 0.0);
             assert_eq!(
-                skb_pose_dictionary_basis(d, 0, v.as_mut_ptr(), 44, &mut sigma),
+                skb_pose_dictionary_copy_basis(d, 0, v.as_mut_ptr(), 44, &mut sigma),
                 skb_status::SKB_ERR_BUFFER_TOO_SMALL
             );
             assert_eq!(
-                skb_pose_dictionary_basis(d, 100000, v.as_mut_ptr(), 45, &mut sigma),
+                skb_pose_dictionary_copy_basis(d, 100000, v.as_mut_ptr(), 45, &mut sigma),
                 skb_status::SKB_ERR_OUT_OF_RANGE
             );
             let path = c"/nonexistent/x.skbpd";
             let mut d2 = std::ptr::null_mut();
-            assert_eq!(skb_pose_dictionary_load(path.as_ptr(), &mut d2), skb_status::SKB_ERR_IO);
+            assert_eq!(skb_pose_dictionary_new_from_file(path.as_ptr(), &mut d2), skb_status::SKB_ERR_IO);
             skb_pose_options_free(o);
             skb_pose_options_free(std::ptr::null_mut());
             skb_pose_dictionary_free(d);
@@ -1048,9 +976,9 @@ mod tests {
             assert_eq!(skb_pose_dictionary_new_default(&mut d), skb_status::SKB_OK);
             let mut e = std::ptr::null_mut();
             assert_eq!(skb_pose_estimate_new(d, &j, std::ptr::null(), &mut e), skb_status::SKB_OK);
-            let mut n = 0u32;
-            assert_eq!(skb_pose_estimate_num_alternatives(e, &mut n), skb_status::SKB_OK);
-            assert_eq!(n as usize, core.alternatives.len());
+            let mut n = 0usize;
+            assert_eq!(skb_pose_estimate_alternative_count(e, &mut n), skb_status::SKB_OK);
+            assert_eq!(n, core.alternatives.len());
             assert!(n >= 2, "{n}");
             for (i, a) in core.alternatives.iter().enumerate() {
                 let (mut x, mut score) = ([0.0f64; 45], f64::NAN);
@@ -1061,8 +989,9 @@ mod tests {
                 assert_eq!(x.to_vec(), a.joints.iter().flatten().copied().collect::<Vec<_>>());
                 assert_eq!(score, a.score);
                 let (mut limbs, mut count) = ([u32::MAX; 8], usize::MAX);
+                assert_eq!(skb_pose_estimate_alternative_flipped_count(e, i as u32, &mut count), skb_status::SKB_OK);
                 assert_eq!(
-                    skb_pose_estimate_copy_alternative_flipped(e, i as u32, limbs.as_mut_ptr(), 8, &mut count),
+                    skb_pose_estimate_copy_alternative_flipped(e, i as u32, limbs.as_mut_ptr(), 8),
                     skb_status::SKB_OK
                 );
                 assert_eq!(limbs[..count].to_vec(), a.flipped.iter().map(|l| l.index() as u32).collect::<Vec<_>>());
@@ -1071,12 +1000,12 @@ mod tests {
             let limb = core.alternatives[1].flipped[0];
             let mut outcome = u32::MAX;
             let mut p: skb_pose3d = std::mem::zeroed();
-            assert_eq!(skb_pose_flip_limb(e, limb.index() as u32, &mut outcome), skb_status::SKB_OK);
+            assert_eq!(skb_pose_estimate_flip_limb(e, limb.index() as u32, &mut outcome), skb_status::SKB_OK);
             assert_eq!(outcome, SKB_REPOSE_DONE);
             assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
             let once = flip_limb(&core, limb).0;
             assert_eq!(p.joints, once.joints);
-            assert_eq!(skb_pose_flip_limb(e, limb.index() as u32, &mut outcome), skb_status::SKB_OK);
+            assert_eq!(skb_pose_estimate_flip_limb(e, limb.index() as u32, &mut outcome), skb_status::SKB_OK);
             assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
             let back = p
                 .joints
@@ -1087,7 +1016,7 @@ mod tests {
                 .fold(0.0, f64::max);
             assert!(back < 1e-12, "{back}");
             // Picking alternative 1 takes its joints.
-            assert_eq!(skb_pose_estimate_pick(e, 1), skb_status::SKB_OK);
+            assert_eq!(skb_pose_estimate_pick_alternative(e, 1), skb_status::SKB_OK);
             assert_eq!(skb_pose_estimate_pose(e, &mut p), skb_status::SKB_OK);
             let picked = p
                 .joints

@@ -36,8 +36,8 @@ pub const SKB_NUM_IK_BONES: u32 = 7;
 const _: () = assert!(SKB_NUM_TWIST_BONES as usize == sketchbody_core::body::rig::twist::NUM_TWIST_BONES);
 const _: () = assert!(SKB_NUM_IK_BONES as usize == sketchbody_core::body::rig::ik_targets::NUM_IK_BONES);
 
-/// The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb_with_options` writes for
-/// the same mesh and options. Create with `skb_mesh_rig_new`, release with `skb_rig_free`; it does
+/// The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb` writes for
+/// the same mesh and options. Create with `skb_rig_new_from_mesh`, release with `skb_rig_free`; it does
 /// not follow later `skb_mesh_pose` calls. Read-only, so several threads may use it at once.
 pub struct skb_rig {
     scene: RigScene,
@@ -66,7 +66,7 @@ unsafe fn copy_rows<T: Copy, const N: usize>(rows: &[[T; N]], dst: *mut T, dst_l
 /// caller owns (release with `skb_rig_free`). Errors: degenerate bones (`SKB_ERR_DEGENERATE_BONE`).
 /// Only reads `mesh` and `opts`.
 #[no_mangle]
-pub unsafe extern "C" fn skb_mesh_rig_new(
+pub unsafe extern "C" fn skb_rig_new_from_mesh(
     mesh: *const skb_mesh,
     opts: *const skb_export_options,
     out: *mut *mut skb_rig,
@@ -101,7 +101,7 @@ pub unsafe extern "C" fn skb_mesh_rig_new(
 /// Releases a rig. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_free(rig: *mut skb_rig) {
-    // SAFETY: `rig` is NULL or a pointer from `skb_mesh_rig_new` not freed before.
+    // SAFETY: `rig` is NULL or a pointer from `skb_rig_new_from_mesh` not freed before.
     unsafe { free_box(rig) }
 }
 
@@ -110,9 +110,7 @@ pub unsafe extern "C" fn skb_rig_free(rig: *mut skb_rig) {
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_bone_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
-        // SAFETY: `out` is NULL or valid for a write of one size_t.
         try_status!(unsafe { write_out(out, r.scene.names.len(), "out") });
         skb_status::SKB_OK
     }
@@ -122,17 +120,36 @@ pub unsafe extern "C" fn skb_rig_bone_count(rig: *const skb_rig, out: *mut usize
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_vertex_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
-        // SAFETY: `out` is NULL or valid for a write of one size_t.
         try_status!(unsafe { write_out(out, r.scene.rest_vertices.len(), "out") });
         skb_status::SKB_OK
     }
 }
 
+/// The byte length (UTF-8, without the terminating NUL) of bone `bone`'s name into `*out`
+/// (`bone` 0 .. `skb_rig_bone_count`−1). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+#[no_mangle]
+pub unsafe extern "C" fn skb_rig_bone_name_length(rig: *const skb_rig, bone: usize, out: *mut usize) -> skb_status {
+    ffi_boundary! {
+        let r = try_status!(unsafe { try_ref(rig, "rig") });
+        let name = try_status!(bone_name(r, bone));
+        try_status!(unsafe { write_out(out, name.len(), "out") });
+        skb_status::SKB_OK
+    }
+}
+
+/// Bone `bone`'s name, or `SKB_ERR_OUT_OF_RANGE` with the message set.
+fn bone_name(r: &skb_rig, bone: usize) -> Result<&str, skb_status> {
+    r.scene
+        .names
+        .get(bone)
+        .map(String::as_str)
+        .ok_or_else(|| fail(&Error::OutOfRange { name: "bone", detail: format!("{bone} >= {}", r.scene.names.len()) }))
+}
+
 /// Copies the name of bone `bone` (0 .. `skb_rig_bone_count`−1; the GLB node's name in the chosen
-/// convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least the name's length
-/// + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+/// convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least
+/// `skb_rig_bone_name_length` + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_bone_name(
     rig: *const skb_rig,
@@ -141,12 +158,8 @@ pub unsafe extern "C" fn skb_rig_copy_bone_name(
     dst_len: usize,
 ) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
-        let Some(name) = r.scene.names.get(bone) else {
-            return fail(&Error::OutOfRange { name: "bone", detail: format!("{bone} >= {}", r.scene.names.len()) });
-        };
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` bytes.
+        let name = try_status!(bone_name(r, bone));
         try_status!(unsafe { write_c_string(dst, dst_len, name, "dst") });
         skb_status::SKB_OK
     }
@@ -158,10 +171,8 @@ pub unsafe extern "C" fn skb_rig_copy_bone_name(
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_parents(rig: *const skb_rig, dst: *mut i32, dst_len: usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
         let parents = &r.scene.armature.parents;
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` integers.
         let o = try_status!(unsafe { out_slice(dst, dst_len, parents.len(), "dst") });
         for (o, parent) in o.iter_mut().zip(parents) {
             *o = parent.map_or(-1, |p| p as i32);
@@ -184,9 +195,7 @@ pub unsafe extern "C" fn skb_rig_copy_rest_transforms(
     dst_len: usize,
 ) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
         let o = try_status!(unsafe { out_slice(dst, dst_len, 7 * r.rest_local.len(), "dst") });
         for (o, (t, q)) in o.chunks_exact_mut(7).zip(&r.rest_local) {
             o[..3].copy_from_slice(t.as_slice());
@@ -208,10 +217,8 @@ pub unsafe extern "C" fn skb_rig_copy_local_rotations(
     dst_len: usize,
 ) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
         let rows: Vec<[f64; 4]> = r.local.iter().map(|q| q.quaternion().coords.into()).collect();
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
         unsafe { copy_rows(&rows, dst, dst_len) }
     }
 }
@@ -226,9 +233,7 @@ pub unsafe extern "C" fn skb_rig_copy_root_translation(
     dst_len: usize,
 ) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
         unsafe { copy_rows(&[r.scene.pose.root_translation.into()], dst, dst_len) }
     }
 }
@@ -239,10 +244,8 @@ pub unsafe extern "C" fn skb_rig_copy_root_translation(
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_posed_heads(rig: *const skb_rig, dst: *mut f64, dst_len: usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
         let rows: Vec<[f64; 3]> = r.scene.pose.heads(&r.scene.armature).into_iter().map(Into::into).collect();
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
         unsafe { copy_rows(&rows, dst, dst_len) }
     }
 }
@@ -253,9 +256,7 @@ pub unsafe extern "C" fn skb_rig_copy_posed_heads(rig: *const skb_rig, dst: *mut
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_offset(rig: *const skb_rig, dst: *mut f64, dst_len: usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` doubles.
         unsafe { copy_rows(&[r.scene.offset.into()], dst, dst_len) }
     }
 }
@@ -267,9 +268,7 @@ pub unsafe extern "C" fn skb_rig_copy_offset(rig: *const skb_rig, dst: *mut f64,
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_rest_vertices(rig: *const skb_rig, dst: *mut f32, dst_len: usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
         unsafe { copy_rows(&r.scene.rest_vertices, dst, dst_len) }
     }
 }
@@ -279,7 +278,6 @@ pub unsafe extern "C" fn skb_rig_copy_rest_vertices(rig: *const skb_rig, dst: *m
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_shape_key_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
         // SAFETY: `out` is NULL or valid for writing one `usize`.
         try_status!(unsafe { write_out(out, r.scene.shape_keys.len(), "out") });
@@ -300,13 +298,11 @@ pub unsafe extern "C" fn skb_rig_copy_shape_key(
     dst_len: usize,
 ) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
         let keys = &r.scene.shape_keys;
         let Some(k) = keys.get(key) else {
             return fail(&Error::OutOfRange { name: "shape key", detail: format!("{key} >= {}", keys.len()) });
         };
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
         unsafe { copy_rows(&k.deltas, dst, dst_len) }
     }
 }
@@ -317,9 +313,7 @@ pub unsafe extern "C" fn skb_rig_copy_shape_key(
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_posed_vertices(rig: *const skb_rig, dst: *mut f32, dst_len: usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
         unsafe { copy_rows(&r.scene.posed_vertices, dst, dst_len) }
     }
 }
@@ -335,7 +329,6 @@ pub unsafe extern "C" fn skb_rig_copy_skin_weights(
     len: usize,
 ) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `rig` is NULL or a live rig handle, only read.
         let r = try_status!(unsafe { try_ref(rig, "rig") });
         // SAFETY: `bones` and `weights` are NULL or valid for writes of `len` elements each.
         unsafe { copy_skin_weights(&r.scene.skin, bones, weights, len) }
@@ -347,9 +340,7 @@ pub unsafe extern "C" fn skb_rig_copy_skin_weights(
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_uv_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `mesh` is NULL or a live mesh handle, only read.
         let m = try_status!(unsafe { try_ref(mesh, "mesh") });
-        // SAFETY: `out` is NULL or valid for a write of one size_t.
         try_status!(unsafe { write_out(out, m.model.uvs().len(), "out") });
         skb_status::SKB_OK
     }
@@ -360,9 +351,7 @@ pub unsafe extern "C" fn skb_mesh_uv_count(mesh: *const skb_mesh, out: *mut usiz
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_uvs(mesh: *const skb_mesh, dst: *mut f32, dst_len: usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `mesh` is NULL or a live mesh handle, only read.
         let m = try_status!(unsafe { try_ref(mesh, "mesh") });
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
         unsafe { copy_rows(m.model.uvs(), dst, dst_len) }
     }
 }
@@ -373,9 +362,7 @@ pub unsafe extern "C" fn skb_mesh_copy_uvs(mesh: *const skb_mesh, dst: *mut f32,
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_face_uvs(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `mesh` is NULL or a live mesh handle, only read.
         let m = try_status!(unsafe { try_ref(mesh, "mesh") });
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` integers.
         unsafe { copy_rows(m.model.face_uvs(), dst, dst_len) }
     }
 }
@@ -391,13 +378,11 @@ pub unsafe extern "C" fn skb_mesh_copy_normals(
     dst_len: usize,
 ) -> skb_status {
     ffi_boundary! {
-        // SAFETY: `mesh` is NULL or a live mesh handle, only read.
         let m = try_status!(unsafe { try_ref(mesh, "mesh") });
         let v = match (&m.posed, posed) {
             (Some(p), true) => &p.vertices,
             _ => &m.rest.vertices,
         };
-        // SAFETY: `dst` is NULL or valid for writes of `dst_len` floats.
         unsafe { copy_rows(&vertex_normals(v, m.model.faces()), dst, dst_len) }
     }
 }

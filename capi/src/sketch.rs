@@ -1,4 +1,4 @@
-//! `skb_render_sketch`: a synthetic concept sketch of a body for plug-in previews, with its 2-D
+//! `skb_context_render_sketch`: a synthetic concept sketch of a body for plug-in previews, with its 2-D
 //! joints; `skb_sketch_options` chooses the style and camera.
 
 use std::sync::Arc;
@@ -19,7 +19,7 @@ pub const SKB_SKETCH_STYLE_RANDOM: u32 = 0;
 /// Style: clean line art (no costume, hair, shading or clutter, white paper).
 pub const SKB_SKETCH_STYLE_CLEAN: u32 = 1;
 
-/// Options of [`skb_render_sketch`]: the style and the camera angles. Create with
+/// Options of [`skb_context_render_sketch`]: the style and the camera angles. Create with
 /// `skb_sketch_options_new` (random style, random near-frontal camera), release with
 /// `skb_sketch_options_free`. Setters need exclusive use; a configured handle may be read by
 /// several threads at once.
@@ -31,8 +31,6 @@ pub struct skb_sketch_options {
 /// Creates options with the defaults. `*out` receives a handle the caller owns.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_new(out: *mut *mut skb_sketch_options) -> skb_status {
-    // SAFETY: the header contract of `skb_sketch_options_new` (lib.rs § Safety): `out` is NULL or valid for the
-    // documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let out = try_status!(out_slot(out));
@@ -44,8 +42,6 @@ pub unsafe extern "C" fn skb_sketch_options_new(out: *mut *mut skb_sketch_option
 /// Releases options. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_free(opts: *mut skb_sketch_options) {
-    // SAFETY: the header requires `opts` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(opts) }
 }
 
@@ -53,8 +49,6 @@ pub unsafe extern "C" fn skb_sketch_options_free(opts: *mut skb_sketch_options) 
 /// `SKB_ERR_OUT_OF_RANGE`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_set_style(opts: *mut skb_sketch_options, style: u32) -> skb_status {
-    // SAFETY: the header contract of `skb_sketch_options_set_style` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let o = try_status!(try_mut(opts, "opts"));
@@ -77,8 +71,6 @@ pub unsafe extern "C" fn skb_sketch_options_set_camera(
     pitch_deg: f64,
     roll_deg: f64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_sketch_options_set_camera` (lib.rs § Safety): `opts` is NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let o = try_status!(try_mut(opts, "opts"));
@@ -106,7 +98,7 @@ pub unsafe extern "C" fn skb_sketch_options_set_camera(
 /// each call (a few ms).
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
-pub unsafe extern "C" fn skb_render_sketch(
+pub unsafe extern "C" fn skb_context_render_sketch(
     ctx: *const skb_context,
     gender: u32,
     weights: *const f32,
@@ -122,9 +114,6 @@ pub unsafe extern "C" fn skb_render_sketch(
     out_joints2d: *mut f64,
     out_visible: *mut u8,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_render_sketch` (lib.rs § Safety): `ctx`, `weights`, `joints3d`, `opts`,
-    // `out_pixels`, `out_joints2d`, `out_visible` are NULL or valid for the documented lengths during the call; the
-    // ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let ctx = try_status!(try_ref(ctx, "ctx"));
@@ -198,7 +187,7 @@ mod tests {
             let mut px = vec![7u8; stride * h as usize];
             let mut j2 = [0.0f64; 30];
             let mut vis = [9u8; 15];
-            let st = skb_render_sketch(
+            let st = skb_context_render_sketch(
                 ctx,
                 1,
                 std::ptr::null(),
@@ -221,7 +210,7 @@ mod tests {
             assert!(vis.iter().all(|&v| v <= 1) && vis.iter().filter(|&&v| v == 1).count() >= 8);
             let (pp, full) = (px.as_mut_ptr(), px.len());
             let bad = |g: u32, w: u32, len: usize| {
-                skb_render_sketch(
+                skb_context_render_sketch(
                     ctx,
                     g,
                     std::ptr::null(),
@@ -243,7 +232,7 @@ mod tests {
             assert_eq!(bad(0, 96, 10), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
             assert_eq!(bad(0, 101, full), skb_status::SKB_ERR_BAD_STRIDE);
             let nan_joints = [f64::NAN; 45];
-            let st = skb_render_sketch(
+            let st = skb_context_render_sketch(
                 ctx,
                 0,
                 std::ptr::null(),
@@ -261,7 +250,7 @@ mod tests {
             );
             assert_eq!(st, skb_status::SKB_ERR_NON_FINITE);
             let many = [0.0f32; 1000];
-            let st = skb_render_sketch(
+            let st = skb_context_render_sketch(
                 ctx,
                 0,
                 many.as_ptr(),
@@ -278,7 +267,7 @@ mod tests {
                 std::ptr::null_mut(),
             );
             assert_eq!(st, skb_status::SKB_ERR_OUT_OF_RANGE);
-            let st = skb_render_sketch(
+            let st = skb_context_render_sketch(
                 std::ptr::null(),
                 0,
                 std::ptr::null(),

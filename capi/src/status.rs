@@ -55,7 +55,7 @@ pub enum skb_status {
     SKB_ERR_NO_FIGURE = 21,
     /// The image is too small to search for a figure.
     SKB_ERR_IMAGE_TOO_SMALL = 22,
-    /// Retired, no longer returned: before the embedded detector landed, `skb_run_pipeline`
+    /// Retired, no longer returned: before the embedded detector landed, `skb_pipeline_run`
     /// without joints failed with it; now the detector finds them.
     SKB_ERR_NO_JOINTS = 23,
     /// A visible 2-D joint lies outside the image.

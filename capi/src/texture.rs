@@ -30,7 +30,7 @@ const _: () = assert!(SKB_DEFAULT_TEXTURE_SIZE as usize == sketchbody_core::expo
 
 /// A decoded image file, 8-bit RGB (gray expanded, palettes resolved, transparency composited
 /// over white, EXIF orientation applied): the sketch as `sketchbody run` reads it for the
-/// texture. Create with `skb_rgb_image_load`, view with `skb_rgb_image_view`, free with
+/// texture. Create with `skb_rgb_image_new_from_file`, view with `skb_rgb_image_view`, free with
 /// `skb_rgb_image_free`. Immutable: several threads may read it at once.
 pub struct skb_rgb_image {
     inner: RgbImage,
@@ -40,9 +40,7 @@ pub struct skb_rgb_image {
 /// owns it). Errors: `SKB_ERR_IO` (missing, unreadable, not a regular file), `SKB_ERR_DECODE`
 /// (not an image, truncated), `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
 #[no_mangle]
-pub unsafe extern "C" fn skb_rgb_image_load(path: *const c_char, out: *mut *mut skb_rgb_image) -> skb_status {
-    // SAFETY: the header contract of `skb_rgb_image_load` (lib.rs § Safety): `path`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
+pub unsafe extern "C" fn skb_rgb_image_new_from_file(path: *const c_char, out: *mut *mut skb_rgb_image) -> skb_status {
     unsafe {
         ffi_boundary! {
             let p = try_status!(path_arg(path, "path"));
@@ -57,8 +55,6 @@ pub unsafe extern "C" fn skb_rgb_image_load(path: *const c_char, out: *mut *mut 
 /// `width`), valid while `img` lives.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rgb_image_view(img: *const skb_rgb_image, out: *mut skb_image) -> skb_status {
-    // SAFETY: the header contract of `skb_rgb_image_view` (lib.rs § Safety): `img`, `out` are NULL or valid for
-    // the documented lengths during the call; the ptr.rs helpers check NULL and lengths before each borrow.
     unsafe {
         ffi_boundary! {
             let i = &try_status!(try_ref(img, "img")).inner;
@@ -70,11 +66,9 @@ pub unsafe extern "C" fn skb_rgb_image_view(img: *const skb_rgb_image, out: *mut
     }
 }
 
-/// Frees an image from `skb_rgb_image_load`. NULL is a no-op.
+/// Frees an image from `skb_rgb_image_new_from_file`. NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rgb_image_free(img: *mut skb_rgb_image) {
-    // SAFETY: the header requires `img` to be NULL or a live handle from its constructor, freed once; NULL is
-    // ignored.
     unsafe { free_box(img) }
 }
 
@@ -84,8 +78,6 @@ pub unsafe extern "C" fn skb_rgb_image_free(img: *mut skb_rgb_image) {
 /// for an unwritable path) nothing is left at `path`. Thread-safe.
 #[no_mangle]
 pub unsafe extern "C" fn skb_image_write_png(img: *const skb_image, path: *const c_char) -> skb_status {
-    // SAFETY: the header contract of `skb_image_write_png` (lib.rs § Safety): `img`, `path` are NULL or valid for
-    // the documented lengths during the call; `view_of` and the ptr.rs helpers check NULL and lengths.
     unsafe {
         ffi_boundary! {
             let view = try_status!(view_of(img));
@@ -156,7 +148,7 @@ unsafe fn project_into(
 /// islands.
 ///
 /// `sketch` is the colour image the result was computed from (the same pixels; 3 channels as
-/// `skb_rgb_image_load` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
+/// `skb_rgb_image_new_from_file` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
 /// alpha ignored). `size` is the texture side in texels, 1..=`SKB_MAX_TEXTURE_SIZE` (the CLI's
 /// default `SKB_DEFAULT_TEXTURE_SIZE`). Writes `size` rows of `size` RGB pixels (3 bytes each)
 /// into `dst`, rows `dst_stride` bytes apart (at least 3 × `size`); `dst_len` is the size of
@@ -176,9 +168,6 @@ pub unsafe extern "C" fn skb_result_project_texture(
     texels: *mut u64,
     visible: *mut u64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_project_texture` (lib.rs § Safety): `result`, `sketch`, `dst`,
-    // `texels`, `visible` are NULL or valid for the documented lengths during the call; `project_into` and the
-    // ptr.rs helpers check them.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -193,7 +182,7 @@ pub unsafe extern "C" fn skb_result_project_texture(
 /// The same projection for a mesh and a camera of the host's own: the sketch seen through
 /// `cam` (model metres → sketch pixels, as `skb_result_camera` gives it) projected onto the
 /// mesh in its current pose (`skb_mesh_pose`; the rest pose if never posed). For a mesh from
-/// `skb_result_mesh` and the result's camera this is exactly `skb_result_project_texture`.
+/// `skb_mesh_new_from_result` and the result's camera this is exactly `skb_result_project_texture`.
 /// Arguments, output and errors otherwise as `skb_result_project_texture`, plus
 /// `SKB_ERR_NON_FINITE` / `SKB_ERR_OUT_OF_RANGE` for an invalid camera (non-finite, scales not
 /// positive, rotation not orthonormal). Only reads `mesh`.
@@ -209,9 +198,6 @@ pub unsafe extern "C" fn skb_mesh_project_texture(
     texels: *mut u64,
     visible: *mut u64,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_mesh_project_texture` (lib.rs § Safety): `mesh`, `sketch`, `cam`, `dst`,
-    // `texels`, `visible` are NULL or valid for the documented lengths during the call; `project_into` and the
-    // ptr.rs helpers check them.
     unsafe {
         ffi_boundary! {
             let m = try_status!(try_ref(mesh, "mesh"));

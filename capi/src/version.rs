@@ -3,14 +3,14 @@
 use std::ffi::c_char;
 
 /// Major version of the library this header belongs to.
-pub const SKB_VERSION_MAJOR: u32 = 0;
+pub const SKB_VERSION_MAJOR: u32 = 1;
 /// Minor version of the library this header belongs to.
-pub const SKB_VERSION_MINOR: u32 = 1;
+pub const SKB_VERSION_MINOR: u32 = 0;
 /// Patch version of the library this header belongs to.
 pub const SKB_VERSION_PATCH: u32 = 0;
 /// `"MAJOR.MINOR.PATCH"` of this library. The C header derives its `SKB_VERSION_STRING` macro
 /// from the three numeric macros above (cbindgen emits no string constants).
-pub const SKB_VERSION_STRING: &str = "0.1.0";
+pub const SKB_VERSION_STRING: &str = "1.0.0";
 
 /// The version of the loaded library, `"MAJOR.MINOR.PATCH"` (compare with the header's
 /// `SKB_VERSION_STRING`). Static; never NULL; never free it. Thread-safe.

@@ -1,10 +1,11 @@
-//! Turnarounds (model sheets) from C: `skb_run_pipeline_views` fits one body to the front sketch
+//! Turnarounds (model sheets) from C: `skb_pipeline_run_views` fits one body to the front sketch
 //! and extra views of the same character in the same pose (side, other side, back), each with its
 //! own image and optional 2-D joints; the result's per-view getters.
 
 use std::ffi::{c_char, c_void};
 
 use sketchbody_core::error::Error;
+use sketchbody_core::pipeline::PipelineResult;
 use sketchbody_core::view::ViewLabel;
 
 use super::body::skb_context;
@@ -26,7 +27,7 @@ pub const SKB_VIEW_SIDE_LEFT: u32 = 2;
 /// View label: the back view (yaw 180°).
 pub const SKB_VIEW_BACK: u32 = 3;
 
-/// One extra view of a turnaround for `skb_run_pipeline_views`: its label (`SKB_VIEW_SIDE`,
+/// One extra view of a turnaround for `skb_pipeline_run_views`: its label (`SKB_VIEW_SIDE`,
 /// `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`), its sketch (1, 3 or 4 channels, dark strokes on light
 /// paper; any size: views drawn at another scale are scaled to the front by their joints) and its
 /// 2-D joints in that image's pixels (NULL: detected). The pointers are borrowed for the call only.
@@ -97,23 +98,23 @@ fn label_code(label: ViewLabel) -> u32 {
     }
 }
 
-/// `skb_run_pipeline_progressive` on a turnaround: `sketch` and `joints` are the front view,
+/// `skb_pipeline_run_progressive` on a turnaround: `sketch` and `joints` are the front view,
 /// `views` (`view_count` entries; NULL when 0) the same character in the same pose from the side,
 /// the other side or the back. The views share one body and one pose: every view's joints enter
 /// the 3-D pose (depth from a side view), every view's outline the shape fit; each view has the
 /// front camera turned by its label's yaw, with its own scale and position. With `view_count` 0
-/// this is `skb_run_pipeline_progressive`. Read each view with `skb_result_view` and the run's
+/// this is `skb_pipeline_run_progressive`. Read each view with `skb_result_view` and the run's
 /// warnings (views that agree only roughly, a view little supported by its strokes) with
 /// `skb_result_copy_view_warnings`. Arguments, ownership, threading, progress and cancel as
-/// `skb_run_pipeline_progressive` (the interim bodies are the front view's); the views' images
-/// and joints are only read during the call. Errors: `skb_run_pipeline`'s for any view's image
+/// `skb_pipeline_run_progressive` (the interim bodies are the front view's); the views' images
+/// and joints are only read during the call. Errors: `skb_pipeline_run`'s for any view's image
 /// and joints; a label not `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`, or one given
 /// twice (`SKB_ERR_OUT_OF_RANGE`); views that do not show one character in one pose (their joints
 /// miss the shared pose by more than 12 % of the figure's height, match it only upside down, or a
 /// side view drawn facing the other way than its label: `SKB_ERR_VIEWS_DISAGREE`, the message
 /// names the view and the reason; a turnaround is never silently fitted to the front alone).
 #[no_mangle]
-pub unsafe extern "C" fn skb_run_pipeline_views(
+pub unsafe extern "C" fn skb_pipeline_run_views(
     ctx: *const skb_context,
     sketch: *const skb_image,
     joints: *const skb_joints2d,
@@ -127,8 +128,6 @@ pub unsafe extern "C" fn skb_run_pipeline_views(
     user: *mut c_void,
     out: *mut *mut skb_result,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_run_pipeline_views` (lib.rs § Safety): `views` is NULL (with
-    // `view_count` 0) or valid for `view_count` entries whose pointers are NULL or valid; the rest forwarded.
     unsafe {
         ffi_boundary! {
             let views: &[skb_view_input] =
@@ -138,15 +137,13 @@ pub unsafe extern "C" fn skb_run_pipeline_views(
     }
 }
 
-/// The number of extra views of a result into `*count` (0 for a one-view run).
+/// The number of extra views of a result into `*out` (0 for a one-view run).
 #[no_mangle]
-pub unsafe extern "C" fn skb_result_view_count(result: *const skb_result, count: *mut usize) -> skb_status {
-    // SAFETY: the header contract of `skb_result_view_count` (lib.rs § Safety): `result`, `count` are NULL or
-    // valid during the call; the ptr.rs helpers check NULL before each borrow.
+pub unsafe extern "C" fn skb_result_view_count(result: *const skb_result, out: *mut usize) -> skb_status {
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
-            try_status!(write_out(count, r.views.len(), "count"));
+            try_status!(write_out(out, r.views.len(), "out"));
             skb_status::SKB_OK
         }
     }
@@ -160,8 +157,6 @@ pub unsafe extern "C" fn skb_result_view(
     index: usize,
     out: *mut skb_view_info,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_view` (lib.rs § Safety): `result`, `out` are NULL or valid
-    // during the call; the ptr.rs helpers check NULL before each borrow.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
@@ -190,28 +185,39 @@ pub unsafe extern "C" fn skb_result_view(
     }
 }
 
-/// The run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing newline;
-/// empty when there are none or for a one-view run): their byte length without the terminating
-/// NUL into `*len` (may be NULL) and, when `dst` is not NULL, the text NUL-terminated into `dst`
-/// (`dst_len` ≥ length + 1).
+/// The byte length (UTF-8, without the terminating NUL) of the run's warnings about its views
+/// into `*out`: 0 when there are none or for a one-view run. Read them with
+/// `skb_result_copy_view_warnings`.
+#[no_mangle]
+pub unsafe extern "C" fn skb_result_view_warnings_length(result: *const skb_result, out: *mut usize) -> skb_status {
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            try_status!(write_out(out, warnings_text(r).len(), "out"));
+            skb_status::SKB_OK
+        }
+    }
+}
+
+/// Copies the run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing
+/// newline; empty when there are none or for a one-view run), NUL-terminated into `dst` of
+/// `dst_len` bytes (at least `skb_result_view_warnings_length` + 1).
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_view_warnings(
     result: *const skb_result,
     dst: *mut c_char,
     dst_len: usize,
-    len: *mut usize,
 ) -> skb_status {
-    // SAFETY: the header contract of `skb_result_copy_view_warnings` (lib.rs § Safety): `result`, `dst`, `len`
-    // are NULL or valid for the documented lengths during the call; the ptr.rs helpers check NULL and lengths.
     unsafe {
         ffi_boundary! {
             let r = &try_status!(try_ref(result, "result")).inner;
-            let text = r.view_warnings.join("\n");
-            if !dst.is_null() {
-                try_status!(write_c_string(dst, dst_len, &text, "dst"));
-            }
-            write_opt(len, text.len());
+            try_status!(write_c_string(dst, dst_len, &warnings_text(r), "dst"));
             skb_status::SKB_OK
         }
     }
+}
+
+/// The view warnings as one `\n`-separated text.
+fn warnings_text(r: &PipelineResult) -> String {
+    r.view_warnings.join("\n")
 }

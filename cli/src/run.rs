@@ -545,7 +545,7 @@ fn report(
             .collect();
         let _ = writeln!(
             s,
-            "\nBodies a host could show before the final one (`skb_run_pipeline_progressive`): {}",
+            "\nBodies a host could show before the final one (`skb_pipeline_run_progressive`): {}",
             shown.join(", ")
         );
     }

@@ -416,9 +416,9 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                 let mut dst = Buf::new(u, need.min(1 << 20), 0xA5u8)?;
                 let s = if op == 5 {
                     let aperture = *u.choose(&[3i32, 5, 7, 1, 0, -3, 9, i32::MAX])?;
-                    skb_canny(src, float(u)?, float(u)?, aperture, u.arbitrary()?, dst.ptr(), stride, dst.len)
+                    skb_image_canny(src, float(u)?, float(u)?, aperture, u.arbitrary()?, dst.ptr(), stride, dst.len)
                 } else {
-                    skb_gaussian_blur(src, float(u)?, dst.ptr(), stride, dst.len)
+                    skb_image_gaussian_blur(src, float(u)?, dst.ptr(), stride, dst.len)
                 };
                 dst.untouched(check(s, "canny/blur"), "canny/blur");
             }
@@ -528,11 +528,11 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                 let mut out = std::mem::MaybeUninit::<skb_pose3d>::zeroed().assume_init();
                 let mut fig = skb_pose_figure { factors: [0.0; 6], plausible: 0, reserved: 0 };
                 let s = match u.int_in_range(0..=2u8)? {
-                    0 => skb_estimate_pose(dict, &j, o, &mut out),
-                    1 => skb_estimate_pose_figure(dict, &j, o, &mut out, &mut fig),
+                    0 => skb_pose3d_estimate(dict, &j, o, &mut out),
+                    1 => skb_pose3d_estimate_figure(dict, &j, o, &mut out, &mut fig),
                     _ => {
                         let start = out;
-                        skb_pose_refine(dict, &j, o, &start, &mut out)
+                        skb_pose3d_refine(dict, &j, o, &start, &mut out)
                     }
                 };
                 check(s, "estimate_pose");
@@ -543,13 +543,13 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
             13 => {
                 let mut v = [0f64; 64];
                 let mut sigma = 0.0;
-                let mut n = 0u32;
+                let mut n = 0usize;
                 let len = *u.choose(&[45usize, 14, 0, 44, 64])?;
                 let s = match u.int_in_range(0..=3u8)? {
-                    0 => skb_pose_dictionary_num_bases(dict, &mut n),
-                    1 => skb_pose_dictionary_mean(dict, v.as_mut_ptr(), len),
-                    2 => skb_pose_dictionary_basis(dict, enum_value(u)?, v.as_mut_ptr(), len, &mut sigma),
-                    _ => skb_pose_dictionary_bone_lengths(dict, v.as_mut_ptr(), len),
+                    0 => skb_pose_dictionary_basis_count(dict, &mut n),
+                    1 => skb_pose_dictionary_copy_mean(dict, v.as_mut_ptr(), len),
+                    2 => skb_pose_dictionary_copy_basis(dict, enum_value(u)?, v.as_mut_ptr(), len, &mut sigma),
+                    _ => skb_pose_dictionary_copy_bone_lengths(dict, v.as_mut_ptr(), len),
                 };
                 check(s, "dictionary getter");
             }
@@ -558,7 +558,7 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                     let m = pick(u, &st.meshes)?;
                     let o = pick(u, &st.export_opts)?;
                     let mut out = ptr::null_mut();
-                    if check(skb_mesh_rig_new(m, o, &mut out), "rig_new") == skb_status::SKB_OK {
+                    if check(skb_rig_new_from_mesh(m, o, &mut out), "rig_new") == skb_status::SKB_OK {
                         st.rigs.push(out);
                     }
                 }
@@ -638,7 +638,7 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                         (0..3 * nv).map(|_| float(u).map(|v| (v / 1000.0) as f32)).collect::<Result<_>>()?;
                     let nt = u.int_in_range(0..=4usize)?;
                     let tris: Vec<u32> = (0..3 * nt).map(|_| u.int_in_range(0..=7u32)).collect::<Result<_>>()?;
-                    skb_rasterize_triangles(
+                    skb_rasterizer_rasterize_triangles(
                         r,
                         verts.as_ptr(),
                         nv,
@@ -663,9 +663,9 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                 let p = path(u, ["obj", "glb", "png", "glb"][which as usize])?;
                 let s = match which {
                     0 => skb_mesh_write_obj(m, cstr_ptr(&p), u.arbitrary()?),
-                    1 => skb_mesh_write_glb(m, cstr_ptr(&p)),
+                    1 => skb_mesh_write_glb(m, cstr_ptr(&p), std::ptr::null()),
                     2 => skb_mesh_write_preview(m, cstr_ptr(&p), *u.choose(&[0u32, 16, 64, 100_000])?),
-                    _ => skb_mesh_write_glb_with_options(m, cstr_ptr(&p), pick(u, &st.export_opts)?),
+                    _ => skb_mesh_write_glb(m, cstr_ptr(&p), pick(u, &st.export_opts)?),
                 };
                 check(s, "mesh write");
             }
@@ -678,7 +678,7 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                 let mut xy = Buf::new(u, 30, -7.5f64)?;
                 let mut conf = vec![-7.5f64; 15];
                 let mut score = -7.5f64;
-                let s = skb_detect(
+                let s = skb_context_detect(
                     ctx,
                     &im,
                     pick(u, &st.detect_opts)?,
@@ -701,7 +701,7 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                 let mut pixels = Buf::new(u, (w * h) as usize, 0xA5u8)?;
                 let mut j2 = [-7.5f64; 30];
                 let mut vis = [9u8; 15];
-                let s = skb_render_sketch(
+                let s = skb_context_render_sketch(
                     ctx,
                     enum_value(u)?,
                     wts.as_ptr(),
@@ -722,13 +722,13 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
             23 => {
                 let mut n = usize::MAX;
                 let g = enum_value(u)?;
-                check(skb_context_num_components(ctx, g, &mut n), "num_components");
+                check(skb_context_component_count(ctx, g, &mut n), "num_components");
                 check(skb_context_default_dim(ctx, g, &mut n), "default_dim");
             }
             24 => {
                 let p = path(u, "png")?;
                 let mut img = ptr::null_mut();
-                if check(skb_gray_image_load(cstr_ptr(&p), &mut img), "image_load") == skb_status::SKB_OK {
+                if check(skb_gray_image_new_from_file(cstr_ptr(&p), &mut img), "image_load") == skb_status::SKB_OK {
                     let mut v = skb_image { data: ptr::null(), width: 0, height: 0, stride: 0, channels: 0 };
                     check(skb_gray_image_view(img, &mut v), "image_view");
                     skb_gray_image_free(img);
@@ -746,7 +746,7 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                     skb_detector_free(out);
                 }
                 let mut dout = ptr::null_mut();
-                if check(skb_pose_dictionary_load(cstr_ptr(&p), &mut dout), "dictionary_load") == skb_status::SKB_OK {
+                if check(skb_pose_dictionary_new_from_file(cstr_ptr(&p), &mut dout), "dictionary_load") == skb_status::SKB_OK {
                     skb_pose_dictionary_free(dout);
                 }
             }
@@ -757,7 +757,7 @@ fn step(u: &mut Unstructured, st: &mut State) -> Result<()> {
                 }
                 let m = pick(u, &st.meshes)?;
                 let p = CString::new(scratch_dir().join("f0.skbd").to_str().unwrap()).unwrap();
-                check(skb_mesh_write_glb(m, p.as_ptr()), "write for reload");
+                check(skb_mesh_write_glb(m, p.as_ptr(), std::ptr::null()), "write for reload");
             }
         }
     }

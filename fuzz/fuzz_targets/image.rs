@@ -1,5 +1,5 @@
 //! PNG/JPEG decoding through the library's loader (`decode_rgb_image`, what `load_rgb_image`,
-//! `skb_gray_image_load`, `run` and `detect` use), then the gray conversion. Any input must give
+//! `skb_gray_image_new_from_file`, `run` and `detect` use), then the gray conversion. Any input must give
 //! an image within the limits or an error; never a panic or an allocation past 64 Mpx.
 #![no_main]
 

@@ -8,14 +8,14 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "4bc227d537c029304bdae12d9117faec4b6ead9c4d83c145e8344d24b9b971e1"
+HEADER_SHA256 = "e2b11240280fde85299adad8a5a3f051c37ef8d82be75fda2d2a25beda7ebce4"
 
 # ---- constants (#define) ----
 
 # Major version of the library this header belongs to.
-SKB_VERSION_MAJOR = 0
+SKB_VERSION_MAJOR = 1
 # Minor version of the library this header belongs to.
-SKB_VERSION_MINOR = 1
+SKB_VERSION_MINOR = 0
 # Patch version of the library this header belongs to.
 SKB_VERSION_PATCH = 0
 # Largest accepted image width or height, in pixels.
@@ -85,7 +85,7 @@ SKB_ALPHA_TARGET_IDENTITY = 0
 SKB_ALPHA_TARGET_LEVEL = 1
 # Number of proportion groups of `skb_pose_figure`.
 SKB_POSE_GROUPS = 6
-# `SKB_LIMB_*`: a limb bone whose depth can be flipped, the index of `skb_pose_flip_limb` and of
+# `SKB_LIMB_*`: a limb bone whose depth can be flipped, the index of `skb_pose_estimate_flip_limb` and of
 # `skb_pose_estimate_copy_alternative_flipped`: right upper arm (shoulder → elbow).
 SKB_LIMB_R_UPPER_ARM = 0
 # Right forearm (elbow → wrist).
@@ -106,7 +106,7 @@ SKB_LIMB_L_SHIN = 7
 SKB_NUM_LIMBS = 8
 # Most alternatives of a pose estimate (the estimate itself included).
 SKB_MAX_ALTERNATIVES = 8
-# `*outcome` of `skb_pose_flip_limb` and the re-pose functions: done.
+# `*outcome` of `skb_pose_estimate_flip_limb` and the re-pose functions: done.
 SKB_REPOSE_DONE = 0
 # The limb lies in the picture plane (its depth offset is at most 5 % of its length): no
 # depth to flip; nothing changed.
@@ -119,16 +119,16 @@ SKB_REPOSE_JOINTS_COINCIDE = 3
 SKB_REPOSE_IMPLAUSIBLE = 4
 # Largest joints JSON the readers accept, in bytes (1 MiB; a joints file is about 2 kB).
 SKB_JOINTS_JSON_MAX_BYTES = 1048576
-# Backend of `skb_detect`: both the sketch model and BlazePose, one candidate per image (the
+# Backend of `skb_context_detect`: both the sketch model and BlazePose, one candidate per image (the
 # default): on a drawing the sketch model recognises (its score above its own threshold), the
 # one whose proportions the 3-D pose step finds nearer a body's; otherwise the one with the
 # higher calibrated confidence. Each joint the two backends put within 0.08 of the figure's
 # size of each other is their mean. BlazePose, unsure of a figure framed by the ink's box, also
 # tries the sketch model's figure box.
 SKB_DETECTOR_AUTO = 0
-# Backend of `skb_detect`: the flexible-mixture-of-parts sketch model alone.
+# Backend of `skb_context_detect`: the flexible-mixture-of-parts sketch model alone.
 SKB_DETECTOR_FMP = 1
-# Backend of `skb_detect`: MediaPipe's BlazePose landmark model alone.
+# Backend of `skb_context_detect`: MediaPipe's BlazePose landmark model alone.
 SKB_DETECTOR_BLAZEPOSE = 2
 # A figure confidence under this is low: show the joints to the user for correction (the
 # core's `detect::figure::LOW_CONFIDENCE`; a test keeps them equal).
@@ -171,7 +171,7 @@ SKB_INTERIM_MEAN_SHAPE = 0
 # `skb_interim_fn` stage: the gender decision's fit of the chosen gender, posed, before the
 # final fit (only when the gender is decided by fitting: automatic gender with given joints).
 SKB_INTERIM_DECIDING_FIT = 1
-# Number of body parts `skb_result_part_support` reports.
+# Number of body parts `skb_result_copy_part_support` reports.
 SKB_NUM_BODY_PARTS = 6
 # View label: the front view (yaw 0°), the pipeline's main sketch; not accepted as an extra view.
 SKB_VIEW_FRONT = 0
@@ -189,11 +189,11 @@ SKB_DEFAULT_TEXTURE_SIZE = 1024
 SKB_SKETCH_STYLE_RANDOM = 0
 # Style: clean line art (no costume, hair, shading or clutter, white paper).
 SKB_SKETCH_STYLE_CLEAN = 1
-SKB_VERSION_STRING = "0.1.0"
+SKB_VERSION_STRING = "1.0.0"
 
 CONSTANTS = {
-    "SKB_VERSION_MAJOR": 0,
-    "SKB_VERSION_MINOR": 1,
+    "SKB_VERSION_MAJOR": 1,
+    "SKB_VERSION_MINOR": 0,
     "SKB_VERSION_PATCH": 0,
     "SKB_MAX_IMAGE_SIDE": 16384,
     "SKB_GENDER_FEMALE": 0,
@@ -343,7 +343,7 @@ SKB_ERR_MESH_OUTSIDE_IMAGE = 20
 SKB_ERR_NO_FIGURE = 21
 # The image is too small to search for a figure.
 SKB_ERR_IMAGE_TOO_SMALL = 22
-# Retired, no longer returned: before the embedded detector landed, `skb_run_pipeline`
+# Retired, no longer returned: before the embedded detector landed, `skb_pipeline_run`
 # without joints failed with it; now the detector finds them.
 SKB_ERR_NO_JOINTS = 23
 # A visible 2-D joint lies outside the image.
@@ -387,7 +387,7 @@ STATUS_NAMES = {
 # ---- opaque handles (use through POINTER(...)) ----
 
 # The library context: holds the body model (the embedded one for [`skb_context_new`]) and the
-# embedded 2-D detector (decoded on first use by `skb_detect`). Create with `skb_context_new`,
+# embedded 2-D detector (decoded on first use by `skb_context_detect`). Create with `skb_context_new`,
 # release with `skb_context_free`. Immutable after creation (the detector is initialised once,
 # thread-safely), so one context may be used from several threads at once. Meshes keep the
 # model alive on their own: a context may be freed before the meshes made from it.
@@ -395,7 +395,7 @@ class skb_context(ctypes.Structure):
     pass
 
 
-# Options of [`skb_detect`]: backend, strictness, the sketch model's score threshold and
+# Options of [`skb_context_detect`]: backend, strictness, the sketch model's score threshold and
 # searched scales. Create with `skb_detect_options_new` (backend `SKB_DETECTOR_AUTO`, not
 # strict, the model's threshold, the sketch search range: figures from 1/2 of the shorter image
 # side to the longer side, at 7 pyramid levels per octave), release with
@@ -420,9 +420,9 @@ class skb_export_options(ctypes.Structure):
     pass
 
 
-# Options of `skb_fit_shape` and `skb_run_pipeline`'s fit. Created with the library defaults
+# Options of `skb_context_fit_shape` and `skb_pipeline_run`'s fit. Created with the library defaults
 # (200 samples after a first iteration of 1600 halved each iteration, ≤ 8 iterations, transition scale 0.3, chamfer score, temperature 2.0, 2-D joint
-# weight 1.0 (used by `skb_run_pipeline`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
+# weight 1.0 (used by `skb_pipeline_run`, which has the 2-D joints), raster side 256 px, tolerance 0.02, seed 1, linear blend skinning, the shape space's default
 # dimension, gender automatic, height unknown, per-sample cameras on, bone-length factors with
 # prior sd 0.1). Every setter validates its value and leaves the options
 # unchanged on error. Not synchronised: do not change it while another thread uses it; reading
@@ -432,7 +432,7 @@ class skb_fit_options(ctypes.Structure):
 
 
 # A decoded image file, 8-bit gray (colour converted with OpenCV's weights). Create with
-# `skb_gray_image_load`, view with `skb_gray_image_view`, free with `skb_gray_image_free`.
+# `skb_gray_image_new_from_file`, view with `skb_gray_image_view`, free with `skb_gray_image_free`.
 # Immutable: several threads may read it at once.
 class skb_gray_image(ctypes.Structure):
     pass
@@ -455,14 +455,14 @@ class skb_pose_dictionary(ctypes.Structure):
 # A 3-D pose estimate with its ranked depth readings ("alternatives": the first is the estimate
 # itself, the others flip limbs toward or away from the camera, best first; the score is px²,
 # lower = better, see docs/formats.md "3-D pose JSON"). Made by `skb_pose_estimate_new` or
-# `skb_result_pose_estimate`; free with `skb_pose_estimate_free`. Reading it from several
-# threads at once is safe; `skb_pose_flip_limb` and `skb_pose_estimate_pick` change it and must
+# `skb_pose_estimate_new_from_result`; free with `skb_pose_estimate_free`. Reading it from several
+# threads at once is safe; `skb_pose_estimate_flip_limb` and `skb_pose_estimate_pick_alternative` change it and must
 # not run while another thread uses it.
 class skb_pose_estimate(ctypes.Structure):
     pass
 
 
-# Options of `skb_estimate_pose` / `skb_pose_refine`. Created with defaults (κ = 0.05 relative,
+# Options of `skb_pose3d_estimate` / `skb_pose3d_refine`. Created with defaults (κ = 0.05 relative,
 # α = 0.8 toward the level target, sx = sy, 4 bases, 0.5 px, refinement on, prior 0.1 m,
 # 12 exemplar starts, 64 limb candidates, blend 30 px², free-joint refinement at 0.014 m).
 # Not synchronised: do not change it
@@ -478,7 +478,7 @@ class skb_rasterizer(ctypes.Structure):
     pass
 
 
-# The result of `skb_run_pipeline`, owned by the caller (free with `skb_result_free`). It owns
+# The result of `skb_pipeline_run`, owned by the caller (free with `skb_result_free`). It owns
 # all its data (nothing refers to the inputs). Several threads may read it at once; only the
 # re-pose functions (`skb_result_pick_alternative`, `skb_result_flip_limb`,
 # `skb_result_repose_joints`) change it, in place, and must not run while another thread uses it.
@@ -488,20 +488,20 @@ class skb_result(ctypes.Structure):
 
 # A decoded image file, 8-bit RGB (gray expanded, palettes resolved, transparency composited
 # over white, EXIF orientation applied): the sketch as `sketchbody run` reads it for the
-# texture. Create with `skb_rgb_image_load`, view with `skb_rgb_image_view`, free with
+# texture. Create with `skb_rgb_image_new_from_file`, view with `skb_rgb_image_view`, free with
 # `skb_rgb_image_free`. Immutable: several threads may read it at once.
 class skb_rgb_image(ctypes.Structure):
     pass
 
 
-# The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb_with_options` writes for
-# the same mesh and options. Create with `skb_mesh_rig_new`, release with `skb_rig_free`; it does
+# The rig of one mesh in one pose, a snapshot: what `skb_mesh_write_glb` writes for
+# the same mesh and options. Create with `skb_rig_new_from_mesh`, release with `skb_rig_free`; it does
 # not follow later `skb_mesh_pose` calls. Read-only, so several threads may use it at once.
 class skb_rig(ctypes.Structure):
     pass
 
 
-# Options of [`skb_render_sketch`]: the style and the camera angles. Create with
+# Options of [`skb_context_render_sketch`]: the style and the camera angles. Create with
 # `skb_sketch_options_new` (random style, random near-frontal camera), release with
 # `skb_sketch_options_free`. Setters need exclusive use; a configured handle may be read by
 # several threads at once.
@@ -571,7 +571,7 @@ class skb_pose3d(ctypes.Structure):
     ]
 
 
-# The drawn proportions and plausibility of an estimate (`skb_estimate_pose_figure`).
+# The drawn proportions and plausibility of an estimate (`skb_pose3d_estimate_figure`).
 class skb_pose_figure(ctypes.Structure):
     _fields_ = [
         ("factors", (ctypes.c_double * 6)),  # Bone-length factors relative to the dictionary's skeleton: head, torso, shoulders, arms,
@@ -580,7 +580,7 @@ class skb_pose_figure(ctypes.Structure):
     ]
 
 
-# What `skb_detect_figure` and `skb_result_detection` report beside the joints.
+# What `skb_context_detect_figure` and `skb_result_detection` report beside the joints.
 class skb_figure_info(ctypes.Structure):
     _fields_ = [
         ("backend", ctypes.c_uint32),  # The backend whose joints were kept: `SKB_DETECTOR_FMP` or `SKB_DETECTOR_BLAZEPOSE`.
@@ -603,7 +603,7 @@ class skb_facing_info(ctypes.Structure):
     ]
 
 
-# One extra view of a turnaround for `skb_run_pipeline_views`: its label (`SKB_VIEW_SIDE`,
+# One extra view of a turnaround for `skb_pipeline_run_views`: its label (`SKB_VIEW_SIDE`,
 # `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`), its sketch (1, 3 or 4 channels, dark strokes on light
 # paper; any size: views drawn at another scale are scaled to the front by their joints) and its
 # 2-D joints in that image's pixels (NULL: detected). The pointers are borrowed for the call only.
@@ -718,7 +718,7 @@ STRUCT_FIELDS = {
 # returns `SKB_ERR_CANCELLED` within one fit iteration, having freed everything it made.
 skb_progress_fn = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_float)
 
-# Interim-body callback of `skb_run_pipeline_progressive`: called on the calling thread with
+# Interim-body callback of `skb_pipeline_run_progressive`: called on the calling thread with
 # the caller's `user`, the stage (`SKB_INTERIM_MEAN_SHAPE`, `SKB_INTERIM_DECIDING_FIT`) and a
 # posed mesh borrowed for the call only (read it with the mesh getters, e.g.
 # `skb_mesh_copy_posed_vertices`; do not free or keep it).
@@ -730,8 +730,6 @@ skb_interim_fn = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_uint32, ctypes
 FUNCTIONS = {}
 
 
-# Static, NUL-terminated English text for a status code; "unknown status" for numbers this
-# version does not know. Never NULL; never free it. Thread-safe.
 FUNCTIONS["skb_status_str"] = (
     ctypes.c_char_p,
     [
@@ -743,9 +741,6 @@ FUNCTIONS["skb_status_str"] = (
     ),
 )
 
-# The message of the last failed sketchbody call on this thread ("" after a success).
-# The pointer stays valid until the next sketchbody call on the same thread; do not free it.
-# Never NULL.
 FUNCTIONS["skb_last_error_message"] = (
     ctypes.c_char_p,
     [
@@ -755,8 +750,6 @@ FUNCTIONS["skb_last_error_message"] = (
     ),
 )
 
-# The version of the loaded library, `"MAJOR.MINOR.PATCH"` (compare with the header's
-# `SKB_VERSION_STRING`). Static; never NULL; never free it. Thread-safe.
 FUNCTIONS["skb_version"] = (
     ctypes.c_char_p,
     [
@@ -766,14 +759,7 @@ FUNCTIONS["skb_version"] = (
     ),
 )
 
-# Canny edges of `src`, bit-exact with OpenCV 4.6
-# `cv::Canny(gray, dst, threshold1, threshold2, aperture, l2_gradient)` where `gray` is `src`
-# (1 channel) or `cv::cvtColor(src, COLOR_RGB2GRAY)` (3/4 channels). Writes `src->height` rows
-# of `src->width` bytes (255 edge, 0 not) into `dst`, rows `dst_stride` bytes apart;
-# `dst_len` is the size of `dst` in bytes and must be at least
-# `dst_stride * (height - 1) + width`. Thresholds may be given in either order; `aperture` is
-# 3, 5 or 7. On error nothing is written. Thread-safe; runs on the rayon thread pool.
-FUNCTIONS["skb_canny"] = (
+FUNCTIONS["skb_image_canny"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_image),
@@ -800,8 +786,8 @@ FUNCTIONS["skb_canny"] = (
 
 # Gaussian blur of a 1-channel `src` with standard deviation `sigma` pixels (0 < sigma <= 1024),
 # compatible with OpenCV 4.x `cv::GaussianBlur(src, dst, cv::Size(0, 0), sigma)`. Output
-# layout as in [`skb_canny`]. On error nothing is written. Thread-safe.
-FUNCTIONS["skb_gaussian_blur"] = (
+# layout as in [`skb_image_canny`]. On error nothing is written. Thread-safe.
+FUNCTIONS["skb_image_gaussian_blur"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_image),
@@ -820,9 +806,6 @@ FUNCTIONS["skb_gaussian_blur"] = (
     ),
 )
 
-# Creates a context holding the body model compiled into the library. On success `*out`
-# receives a new context the caller owns (release with `skb_context_free`); on failure `*out`
-# is untouched. Thread-safe.
 FUNCTIONS["skb_context_new"] = (
     ctypes.c_uint32,
     [
@@ -848,7 +831,7 @@ FUNCTIONS["skb_context_free"] = (
 
 # Number of principal components of `gender`'s shape space (the most weights
 # `skb_mesh_new_from_shape` accepts) into `*out`. Thread-safe.
-FUNCTIONS["skb_context_num_components"] = (
+FUNCTIONS["skb_context_component_count"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_context),
@@ -1077,7 +1060,7 @@ FUNCTIONS["skb_mesh_copy_skin_weights"] = (
 )
 
 # Number of PCA shape weights the mesh was made from (as given to `skb_mesh_new_from_shape`,
-# or found by `skb_fit_shape`) into `*out`.
+# or found by `skb_context_fit_shape`) into `*out`.
 FUNCTIONS["skb_mesh_shape_weight_count"] = (
     ctypes.c_uint32,
     [
@@ -1108,8 +1091,6 @@ FUNCTIONS["skb_mesh_copy_shape_weights"] = (
     ),
 )
 
-# Creates a rasteriser and stores it in `*out` (caller owns it; free with
-# [`skb_rasterizer_free`]).
 FUNCTIONS["skb_rasterizer_new"] = (
     ctypes.c_uint32,
     [
@@ -1143,7 +1124,7 @@ FUNCTIONS["skb_rasterizer_free"] = (
 # beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
 # entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
 # Arrays are only read during the call. Thread-safe with distinct rasterisers.
-FUNCTIONS["skb_rasterize_triangles"] = (
+FUNCTIONS["skb_rasterizer_rasterize_triangles"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_rasterizer),
@@ -1234,7 +1215,7 @@ FUNCTIONS["skb_mesh_copy_posed_joints"] = (
 )
 
 # Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
-# [`skb_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
+# [`skb_rasterizer_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
 FUNCTIONS["skb_mesh_rasterize"] = (
     ctypes.c_uint32,
     [
@@ -1275,23 +1256,6 @@ FUNCTIONS["skb_mesh_write_obj"] = (
         ("mesh", "const struct skb_mesh *"),
         ("path", "const char *"),
         ("posed", "bool"),
-    ),
-)
-
-# Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with the default export options
-# (`skb_mesh_write_glb_with_options` with NULL options): one scene, the rest mesh skinned to
-# MakeHuman's 53-bone rig with project names, posed by the current pose (the rest pose if never
-# posed), origin on the floor. See docs/formats.md. Written atomically. Only reads `mesh`.
-FUNCTIONS["skb_mesh_write_glb"] = (
-    ctypes.c_uint32,
-    [
-        ctypes.POINTER(skb_mesh),
-        ctypes.c_char_p,
-    ],
-    "skb_status",
-    (
-        ("mesh", "const struct skb_mesh *"),
-        ("path", "const char *"),
     ),
 )
 
@@ -1384,7 +1348,7 @@ FUNCTIONS["skb_export_options_set_origin"] = (
 # Adds the twist bones (`on` true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones
 # after the 53, sharing the limbs' skin so that a twist spreads along the limb; docs/formats.md,
 # "Twist bones") or not (false, the default: MakeHuman's 53 bones). Every rigged writer and
-# `skb_mesh_rig_new` follow it.
+# `skb_rig_new_from_mesh` follow it.
 FUNCTIONS["skb_export_options_set_twist_bones"] = (
     ctypes.c_uint32,
     [
@@ -1400,7 +1364,7 @@ FUNCTIONS["skb_export_options_set_twist_bones"] = (
 
 # Sets how the pose is carried: `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or
 # `SKB_POSE_AS_BOTH` (docs/formats.md, "glTF 2.0 binary export", the pose); anything else is
-# `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_mesh_rig_new` follow
+# `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_rig_new_from_mesh` follow
 # it.
 FUNCTIONS["skb_export_options_set_pose_as"] = (
     ctypes.c_uint32,
@@ -1417,7 +1381,7 @@ FUNCTIONS["skb_export_options_set_pose_as"] = (
 
 # Adds the IK target bones (`on` true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and
 # feet under `ik_hand_root` / `ik_foot_root`, after the other bones; docs/formats.md, "IK
-# targets") or not (false, the default). Every rigged writer and `skb_mesh_rig_new` follow it.
+# targets") or not (false, the default). Every rigged writer and `skb_rig_new_from_mesh` follow it.
 FUNCTIONS["skb_export_options_set_ik_targets"] = (
     ctypes.c_uint32,
     [
@@ -1436,7 +1400,7 @@ FUNCTIONS["skb_export_options_set_ik_targets"] = (
 # displacement one standard deviation of its component makes, through the body's bone-length
 # factors and its scaling to its height; glTF morph targets, FBX blend shapes, USD
 # BlendShapes, all at 0; docs/formats.md, "Shape keys") or not (false, the default). Every
-# rigged writer and `skb_mesh_rig_new` follow it (`skb_rig_shape_key_count`).
+# rigged writer and `skb_rig_new_from_mesh` follow it (`skb_rig_shape_key_count`).
 FUNCTIONS["skb_export_options_set_shape_keys"] = (
     ctypes.c_uint32,
     [
@@ -1452,7 +1416,7 @@ FUNCTIONS["skb_export_options_set_shape_keys"] = (
 
 # Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
 # `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
-# is always in metres (glTF's specification) and `skb_mesh_rig_new` in the model frame.
+# is always in metres (glTF's specification) and `skb_rig_new_from_mesh` in the model frame.
 FUNCTIONS["skb_export_options_set_units"] = (
     ctypes.c_uint32,
     [
@@ -1469,7 +1433,7 @@ FUNCTIONS["skb_export_options_set_units"] = (
 # Sets the up axis of the FBX and USD files: `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model
 # frame turned +90° about X: Z up, the body facing −Y); anything else is
 # `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB is always Y up (glTF's specification)
-# and `skb_mesh_rig_new` in the model frame.
+# and `skb_rig_new_from_mesh` in the model frame.
 FUNCTIONS["skb_export_options_set_up_axis"] = (
     ctypes.c_uint32,
     [
@@ -1489,7 +1453,7 @@ FUNCTIONS["skb_export_options_set_up_axis"] = (
 # with the root's translation, plus a one-frame clip "pose" (or the pose as the rest, as the
 # options say; the options' shape keys as morph targets). See docs/formats.md. Written
 # atomically. Only reads `mesh` and `opts`.
-FUNCTIONS["skb_mesh_write_glb_with_options"] = (
+FUNCTIONS["skb_mesh_write_glb"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_mesh),
@@ -1505,11 +1469,11 @@ FUNCTIONS["skb_mesh_write_glb_with_options"] = (
 )
 
 # Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
-# same rigged, posed body as `skb_mesh_write_glb_with_options` (the bones' local transforms
+# same rigged, posed body as `skb_mesh_write_glb` (the bones' local transforms
 # hold the pose, the clusters and the bind pose the rest), in the options' unit and up axis
 # (default metres, Y up), a plain skin-colour material. See docs/formats.md, "body.fbx".
 # Written atomically. Only reads `mesh` and `opts`.
-FUNCTIONS["skb_export_fbx"] = (
+FUNCTIONS["skb_mesh_write_fbx"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_mesh),
@@ -1525,11 +1489,11 @@ FUNCTIONS["skb_export_fbx"] = (
 )
 
 # Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
-# the defaults): the same rigged, posed body as `skb_mesh_write_glb_with_options` (a Skeleton
+# the defaults): the same rigged, posed body as `skb_mesh_write_glb` (a Skeleton
 # with bind and rest transforms, the pose as a static SkelAnimation), in the options' unit and
 # up axis (default metres, Y up: `metersPerUnit`, `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
 # and `opts`.
-FUNCTIONS["skb_export_usd"] = (
+FUNCTIONS["skb_mesh_write_usd"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_mesh),
@@ -1548,7 +1512,7 @@ FUNCTIONS["skb_export_usd"] = (
 # (NULL: the defaults: project names, A-pose rest, origin on the floor) into `*out`, which the
 # caller owns (release with `skb_rig_free`). Errors: degenerate bones (`SKB_ERR_DEGENERATE_BONE`).
 # Only reads `mesh` and `opts`.
-FUNCTIONS["skb_mesh_rig_new"] = (
+FUNCTIONS["skb_rig_new_from_mesh"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_mesh),
@@ -1604,9 +1568,26 @@ FUNCTIONS["skb_rig_vertex_count"] = (
     ),
 )
 
+# The byte length (UTF-8, without the terminating NUL) of bone `bone`'s name into `*out`
+# (`bone` 0 .. `skb_rig_bone_count`−1). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+FUNCTIONS["skb_rig_bone_name_length"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_rig),
+        ctypes.c_size_t,
+        ctypes.POINTER(ctypes.c_size_t),
+    ],
+    "skb_status",
+    (
+        ("rig", "const struct skb_rig *"),
+        ("bone", "size_t"),
+        ("out", "size_t *"),
+    ),
+)
+
 # Copies the name of bone `bone` (0 .. `skb_rig_bone_count`−1; the GLB node's name in the chosen
-# convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least the name's length
-# + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+# convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least
+# `skb_rig_bone_name_length` + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
 FUNCTIONS["skb_rig_copy_bone_name"] = (
     ctypes.c_uint32,
     [
@@ -1918,7 +1899,7 @@ FUNCTIONS["skb_pose_dictionary_new_default"] = (
 # Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody-lab learn-poses`);
 # `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
 # `*out` owns the dictionary. Thread-safe.
-FUNCTIONS["skb_pose_dictionary_load"] = (
+FUNCTIONS["skb_pose_dictionary_new_from_file"] = (
     ctypes.c_uint32,
     [
         ctypes.c_char_p,
@@ -1944,21 +1925,21 @@ FUNCTIONS["skb_pose_dictionary_free"] = (
 )
 
 # Writes the number of basis poses K to `*out`. Thread-safe.
-FUNCTIONS["skb_pose_dictionary_num_bases"] = (
+FUNCTIONS["skb_pose_dictionary_basis_count"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_dictionary),
-        ctypes.POINTER(ctypes.c_uint32),
+        ctypes.POINTER(ctypes.c_size_t),
     ],
     "skb_status",
     (
         ("dict", "const struct skb_pose_dictionary *"),
-        ("out", "uint32_t *"),
+        ("out", "size_t *"),
     ),
 )
 
-# Copies the mean pose μ (45 values, metres) into `out` (`len` ≥ 45). Thread-safe.
-FUNCTIONS["skb_pose_dictionary_mean"] = (
+# Copies the mean pose μ (45 values, metres) into `dst` (`dst_len` ≥ 45). Thread-safe.
+FUNCTIONS["skb_pose_dictionary_copy_mean"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_dictionary),
@@ -1968,14 +1949,14 @@ FUNCTIONS["skb_pose_dictionary_mean"] = (
     "skb_status",
     (
         ("dict", "const struct skb_pose_dictionary *"),
-        ("out", "double *"),
-        ("len", "size_t"),
+        ("dst", "double *"),
+        ("dst_len", "size_t"),
     ),
 )
 
-# Copies basis `index` (< K; a unit 45-vector) into `out` (`len` ≥ 45) and its spread σ
+# Copies basis `index` (< K; a unit 45-vector) into `dst` (`dst_len` ≥ 45) and its spread σ
 # (metres, used by the weight prior) into `*sigma` (may be NULL). Thread-safe.
-FUNCTIONS["skb_pose_dictionary_basis"] = (
+FUNCTIONS["skb_pose_dictionary_copy_basis"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_dictionary),
@@ -1988,15 +1969,15 @@ FUNCTIONS["skb_pose_dictionary_basis"] = (
     (
         ("dict", "const struct skb_pose_dictionary *"),
         ("index", "uint32_t"),
-        ("out", "double *"),
-        ("len", "size_t"),
+        ("dst", "double *"),
+        ("dst_len", "size_t"),
         ("sigma", "double *"),
     ),
 )
 
 # Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
 # (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
-FUNCTIONS["skb_pose_dictionary_bone_lengths"] = (
+FUNCTIONS["skb_pose_dictionary_copy_bone_lengths"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_dictionary),
@@ -2006,8 +1987,8 @@ FUNCTIONS["skb_pose_dictionary_bone_lengths"] = (
     "skb_status",
     (
         ("dict", "const struct skb_pose_dictionary *"),
-        ("out", "double *"),
-        ("len", "size_t"),
+        ("dst", "double *"),
+        ("dst_len", "size_t"),
     ),
 )
 
@@ -2203,7 +2184,7 @@ FUNCTIONS["skb_pose_options_set_blend"] = (
 # leave the dictionary's span to follow the 2-D joints, bone lengths kept (default 0.014 m,
 # 4 px on a 500-px figure; raise it for rough joints such as detections). With it on the
 # returned joints are no longer base + Σ basis · weight of the dictionary's own base pose;
-# `skb_pose_refine` still continues from them (see `skb_pose_refine`).
+# `skb_pose3d_refine` still continues from them (see `skb_pose3d_refine`).
 FUNCTIONS["skb_pose_options_set_joint_noise"] = (
     ctypes.c_uint32,
     [
@@ -2218,9 +2199,9 @@ FUNCTIONS["skb_pose_options_set_joint_noise"] = (
 )
 
 # Sets whether the drawn proportions are estimated with the pose (default on): six per-group
-# bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_estimate_pose_figure`
+# bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_pose3d_estimate_figure`
 # returns them) and a second solve on the 2-D joints unstylised by them; the returned joints
-# then have the figure's proportions. Turn it off for `skb_pose_refine` (the fixed-basis
+# then have the figure's proportions. Turn it off for `skb_pose3d_refine` (the fixed-basis
 # refinement needs joints = base + Σ basis · weight on the dictionary's skeleton).
 FUNCTIONS["skb_pose_options_set_proportions"] = (
     ctypes.c_uint32,
@@ -2304,7 +2285,7 @@ FUNCTIONS["skb_pose_options_set_factor_prior"] = (
 # solver chooses between readings of a near-frontal figure (a limb toward or away from the
 # viewer), the depths predicted from the 2-D joints by the embedded network
 # (`assets/factor_prior.json`) add this many px² of cost per px² of depth disagreement.
-# `skb_estimate_pose` always uses them when on; the pipeline replaces them by BlazePose's own
+# `skb_pose3d_estimate` always uses them when on; the pipeline replaces them by BlazePose's own
 # depths when it detected the joints with BlazePose. `SKB_ERR_OUT_OF_RANGE` outside [0, 10].
 FUNCTIONS["skb_pose_options_set_depth_prior"] = (
     ctypes.c_uint32,
@@ -2319,9 +2300,9 @@ FUNCTIONS["skb_pose_options_set_depth_prior"] = (
     ),
 )
 
-# `skb_estimate_pose` that also writes the drawn proportions and the plausibility flag to
+# `skb_pose3d_estimate` that also writes the drawn proportions and the plausibility flag to
 # `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
-FUNCTIONS["skb_estimate_pose_figure"] = (
+FUNCTIONS["skb_pose3d_estimate_figure"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_dictionary),
@@ -2348,7 +2329,7 @@ FUNCTIONS["skb_estimate_pose_figure"] = (
 # (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
 # beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
 # distinct `out`); CPU time per pose in docs/benchmarks.md ("3-D pose").
-FUNCTIONS["skb_estimate_pose"] = (
+FUNCTIONS["skb_pose3d_estimate"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_dictionary),
@@ -2367,11 +2348,11 @@ FUNCTIONS["skb_estimate_pose"] = (
 
 # The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
 # base pose is taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
-# start `skb_estimate_pose` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
+# start `skb_pose3d_estimate` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
 # and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
 # is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
 # to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
-FUNCTIONS["skb_pose_refine"] = (
+FUNCTIONS["skb_pose3d_refine"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_dictionary),
@@ -2390,8 +2371,8 @@ FUNCTIONS["skb_pose_refine"] = (
     ),
 )
 
-# `skb_estimate_pose` into a new estimate handle `*out` (the caller owns it) that also holds the
-# ranked alternatives. `opts` may be NULL. Same errors as `skb_estimate_pose`; on error `*out`
+# `skb_pose3d_estimate` into a new estimate handle `*out` (the caller owns it) that also holds the
+# ranked alternatives. `opts` may be NULL. Same errors as `skb_pose3d_estimate`; on error `*out`
 # is untouched. Thread-safe.
 FUNCTIONS["skb_pose_estimate_new"] = (
     ctypes.c_uint32,
@@ -2438,17 +2419,17 @@ FUNCTIONS["skb_pose_estimate_pose"] = (
 )
 
 # The number of alternatives (1..=`SKB_MAX_ALTERNATIVES`; 0 for an estimate without them) into
-# `*count`.
-FUNCTIONS["skb_pose_estimate_num_alternatives"] = (
+# `*out`.
+FUNCTIONS["skb_pose_estimate_alternative_count"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_estimate),
-        ctypes.POINTER(ctypes.c_uint32),
+        ctypes.POINTER(ctypes.c_size_t),
     ],
     "skb_status",
     (
         ("est", "const struct skb_pose_estimate *"),
-        ("count", "uint32_t *"),
+        ("out", "size_t *"),
     ),
 )
 
@@ -2475,10 +2456,28 @@ FUNCTIONS["skb_pose_estimate_copy_alternative_joints"] = (
     ),
 )
 
-# The limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`, ascending):
-# their number into `*count` (may be NULL) and, when `dst` is not NULL, the limbs into `dst`
-# (`dst_len` ≥ count; `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors:
-# `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the count.
+# The number of limbs alternative `index` flips relative to the current pose into `*out`
+# (0 for alternative 0; at most `SKB_NUM_LIMBS`). Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥
+# the alternative count.
+FUNCTIONS["skb_pose_estimate_alternative_flipped_count"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_pose_estimate),
+        ctypes.c_uint32,
+        ctypes.POINTER(ctypes.c_size_t),
+    ],
+    "skb_status",
+    (
+        ("est", "const struct skb_pose_estimate *"),
+        ("index", "uint32_t"),
+        ("out", "size_t *"),
+    ),
+)
+
+# Copies the limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`,
+# ascending) into `dst` (`dst_len` ≥ `skb_pose_estimate_alternative_flipped_count`;
+# `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors: `SKB_ERR_OUT_OF_RANGE` for
+# `index` ≥ the alternative count.
 FUNCTIONS["skb_pose_estimate_copy_alternative_flipped"] = (
     ctypes.c_uint32,
     [
@@ -2486,7 +2485,6 @@ FUNCTIONS["skb_pose_estimate_copy_alternative_flipped"] = (
         ctypes.c_uint32,
         ctypes.POINTER(ctypes.c_uint32),
         ctypes.c_size_t,
-        ctypes.POINTER(ctypes.c_size_t),
     ],
     "skb_status",
     (
@@ -2494,7 +2492,6 @@ FUNCTIONS["skb_pose_estimate_copy_alternative_flipped"] = (
         ("index", "uint32_t"),
         ("dst", "uint32_t *"),
         ("dst_len", "size_t"),
-        ("count", "size_t *"),
     ),
 )
 
@@ -2504,7 +2501,7 @@ FUNCTIONS["skb_pose_estimate_copy_alternative_flipped"] = (
 # for a limb lying in the picture plane (nothing changed). Flipping the same limb twice returns
 # the original. Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Not thread-safe on
 # one estimate.
-FUNCTIONS["skb_pose_flip_limb"] = (
+FUNCTIONS["skb_pose_estimate_flip_limb"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_estimate),
@@ -2522,7 +2519,7 @@ FUNCTIONS["skb_pose_flip_limb"] = (
 # Makes alternative `index` the estimate's pose (0 keeps it): its limbs flipped in place, the
 # alternatives re-ranked relative to it. Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the
 # count (nothing changed). Not thread-safe on one estimate.
-FUNCTIONS["skb_pose_estimate_pick"] = (
+FUNCTIONS["skb_pose_estimate_pick_alternative"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_pose_estimate),
@@ -2592,11 +2589,6 @@ FUNCTIONS["skb_joints2d_write_json"] = (
     ),
 )
 
-# Loads a detector model from `path` (NUL-terminated UTF-8): the binary `.skbd` format
-# (`docs/formats.md`, "Detector model") or the PARSE model JSON. Errors: `SKB_ERR_IO` (cannot
-# read), `SKB_ERR_CORRUPT_DATA` (bad magic, version, checksum, truncated or inconsistent
-# model). On success `*out` receives a new detector the caller owns; on failure it is untouched.
-# Thread-safe.
 FUNCTIONS["skb_detector_new_from_file"] = (
     ctypes.c_uint32,
     [
@@ -2622,54 +2614,22 @@ FUNCTIONS["skb_detector_free"] = (
     ),
 )
 
-# Detects the best-scoring figure in `image` with `det`. `threshold`: score threshold (NaN uses
-# the model's own); `min_cell_px`: skip pyramid levels with cells smaller than this many pixels
-# (0 searches every scale; larger is faster but misses small figures). Images whose longer side
+# Detects the best-scoring figure in `image` with the sketch model `det` and the settings of
+# `opts` (NULL: the defaults of `skb_detect_options_new`; its threshold, scales, figure range
+# and levels per octave apply, the backend and strictness do not). Images whose longer side
 # exceeds 1024 px are downscaled first (results are in input pixels). Writes the 15 canonical
 # joints as (x, y) pairs in pixels (origin top-left, y down) to `joints_xy[0..30]`, their
-# confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. The other search
-# settings are the defaults of `skb_detect_options_new`. When no figure reaches the threshold
-# it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score found, below the
-# threshold; −infinity when no pyramid level was searched). Other errors (nothing written):
-# `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (negative or infinite
-# `min_cell_px`), `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
+# confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. When no figure
+# reaches the threshold it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score
+# found, below the threshold; −infinity when no pyramid level was searched).
+# `progress(user, fraction)` (may be NULL) is called on the calling thread with the fraction
+# done (0..=1, non-decreasing) after the feature pyramid is built and after each group of
+# pyramid levels; a non-zero return stops the search with `SKB_ERR_CANCELLED` (nothing written)
+# and the callback is not called again. Other errors (nothing written):
+# `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (a feature pyramid over
+# 1 GiB, refused before any work), `SKB_ERR_NON_FINITE` (a score or joint that is not finite),
+# `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
 FUNCTIONS["skb_detector_detect"] = (
-    ctypes.c_uint32,
-    [
-        ctypes.POINTER(skb_detector),
-        ctypes.POINTER(skb_image),
-        ctypes.c_double,
-        ctypes.c_double,
-        ctypes.POINTER(ctypes.c_double),
-        ctypes.c_size_t,
-        ctypes.POINTER(ctypes.c_double),
-        ctypes.c_size_t,
-        ctypes.POINTER(ctypes.c_double),
-    ],
-    "skb_status",
-    (
-        ("det", "const struct skb_detector *"),
-        ("image", "const struct skb_image *"),
-        ("threshold", "double"),
-        ("min_cell_px", "double"),
-        ("joints_xy", "double *"),
-        ("joints_len", "size_t"),
-        ("confidence", "double *"),
-        ("confidence_len", "size_t"),
-        ("score", "double *"),
-    ),
-)
-
-# As `skb_detector_detect`, with the sketch model's settings of `opts` (NULL: the defaults of
-# `skb_detect_options_new`; its threshold, scales, figure range and levels per octave apply,
-# the backend and strictness do not) and a progress callback: `progress(user, fraction)` (may
-# be NULL) is called on the calling thread with the fraction done (0..=1, non-decreasing)
-# after the feature pyramid is built and after each group of pyramid levels; a non-zero
-# return stops the search with `SKB_ERR_CANCELLED` (nothing written) and the callback is not
-# called again. A search whose feature pyramid would exceed 1 GiB is `SKB_ERR_OUT_OF_RANGE`
-# before any work; a score or joint that is not finite is `SKB_ERR_NON_FINITE`. Other
-# statuses as `skb_detector_detect`. Thread-safe.
-FUNCTIONS["skb_detector_detect_with_progress"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_detector),
@@ -2737,19 +2697,19 @@ FUNCTIONS["skb_detect_options_set_backend"] = (
     ),
 )
 
-# Sets strict detection (`strict` ≠ 0): "no figure" unless a backend passes its own hard
-# threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (0)
+# Sets strict detection (`strict` true): "no figure" unless a backend passes its own hard
+# threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (false)
 # returns the best figure whenever the calibrated presence probability is at least 0.5.
 FUNCTIONS["skb_detect_options_set_strict"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_detect_options),
-        ctypes.c_uint32,
+        ctypes.c_bool,
     ],
     "skb_status",
     (
         ("opts", "struct skb_detect_options *"),
-        ("strict", "uint32_t"),
+        ("strict", "bool"),
     ),
 )
 
@@ -2835,7 +2795,7 @@ FUNCTIONS["skb_detect_options_set_levels_per_octave"] = (
 # `*score` (the presence probability, or the best raw score when strict). Other errors
 # (nothing written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
 # `SKB_ERR_NULL_POINTER`, image errors. Thread-safe.
-FUNCTIONS["skb_detect"] = (
+FUNCTIONS["skb_context_detect"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_context),
@@ -2860,10 +2820,10 @@ FUNCTIONS["skb_detect"] = (
     ),
 )
 
-# As `skb_detect`, with the backend kept, the confidences, the presence probability and the
+# As `skb_context_detect`, with the backend kept, the confidences, the presence probability and the
 # low-confidence flag in `*info` instead of a score. On `SKB_ERR_NO_FIGURE` and other errors
 # nothing is written. Thread-safe.
-FUNCTIONS["skb_detect_figure"] = (
+FUNCTIONS["skb_context_detect_figure"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_context),
@@ -2888,9 +2848,9 @@ FUNCTIONS["skb_detect_figure"] = (
     ),
 )
 
-# As `skb_detect_figure` (the same arguments and statuses), with the figure's facing and the
+# As `skb_context_detect_figure` (the same arguments and statuses), with the figure's facing and the
 # swapped labelling in `*facing` as well. On any failure nothing is written. Thread-safe.
-FUNCTIONS["skb_detect_facing"] = (
+FUNCTIONS["skb_context_detect_facing"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_context),
@@ -3046,7 +3006,7 @@ FUNCTIONS["skb_fit_options_set_temperature"] = (
 
 # Sets the weight of the 2-D joint term, ≥ 0 (score loses weight × the mean distance in raster
 # pixels between each sample's projected rig joints and the 2-D joints; used by
-# `skb_run_pipeline`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
+# `skb_pipeline_run`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
 # negative `SKB_ERR_OUT_OF_RANGE`.
 FUNCTIONS["skb_fit_options_set_joint_weight"] = (
     ctypes.c_uint32,
@@ -3080,17 +3040,17 @@ FUNCTIONS["skb_fit_options_set_height"] = (
 
 # Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
 # scales and translation are refitted to its own posed joints vs the 2-D joints, so the size
-# comes from the shape. Only `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it.
+# comes from the shape. Only `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it.
 FUNCTIONS["skb_fit_options_set_sample_camera"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_fit_options),
-        ctypes.c_int,
+        ctypes.c_bool,
     ],
     "skb_status",
     (
         ("opts", "struct skb_fit_options *"),
-        ("on", "int"),
+        ("on", "bool"),
     ),
 )
 
@@ -3113,18 +3073,18 @@ FUNCTIONS["skb_fit_options_set_proportion_sd"] = (
 # Turns the closed-form proportion estimate on (non-zero, the default) or off (0): the bone
 # factors' prior is centred on the factors estimated from the 2-D joints' bone lengths, the
 # estimated pose and camera instead of 1 (needs 2-D joints and a proportion sd > 0: only
-# `skb_run_pipeline` has 2-D joints; `skb_fit_shape` ignores it). Not thread-safe on one
+# `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it). Not thread-safe on one
 # handle, like every setter.
 FUNCTIONS["skb_fit_options_set_estimate_proportions"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_fit_options),
-        ctypes.c_int,
+        ctypes.c_bool,
     ],
     "skb_status",
     (
         ("opts", "struct skb_fit_options *"),
-        ("on", "int"),
+        ("on", "bool"),
     ),
 )
 
@@ -3201,7 +3161,7 @@ FUNCTIONS["skb_fit_options_set_inside_cap"] = (
 )
 
 # Sets the PCA dimensions searched; 0 restores the default (a gendered space: all 10 of its
-# prior's dimensions; the both-sexes space: its default 5). `skb_run_pipeline` with automatic
+# prior's dimensions; the both-sexes space: its default 5). `skb_pipeline_run` with automatic
 # gender decides the gender with two fits in 4 dimensions and then fits the chosen gender
 # with these. A value above the model's GMM dimension fails at fit time
 # (`SKB_ERR_OUT_OF_RANGE`).
@@ -3219,7 +3179,7 @@ FUNCTIONS["skb_fit_options_set_dims"] = (
 )
 
 # Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
-# `skb_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_run_pipeline`
+# `skb_context_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_pipeline_run`
 # fits the gendered space the gender classifier picks, see `skb_result_gender`;
 # `skb_result_gender_value` reads it).
 FUNCTIONS["skb_fit_options_set_gender"] = (
@@ -3237,23 +3197,23 @@ FUNCTIONS["skb_fit_options_set_gender"] = (
 
 # Fits the body shape (SIR, paper §II-C) to an edge map for a known 3-D pose and camera.
 # `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
-# `skb_pose3d.joints` from `skb_estimate_pose`); `camera` maps them to `edges`' pixels; `edges`
+# `skb_pose3d.joints` from `skb_pose3d_estimate`); `camera` maps them to `edges`' pixels; `edges`
 # is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
-# `skb_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
+# `skb_image_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
 # fitted, gender a continuous weight; the mesh's gender is the nearer one and its weights are
 # the blended space's, weight 0 its gender axis). `progress` may be NULL; a non-zero return cancels
 # (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
 # caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
 # weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
 # options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
-# when one is set, else the fitted height: `skb_run_pipeline` calibrates the fitted body when its
+# when one is set, else the fitted height: `skb_pipeline_run` calibrates the fitted body when its
 # 2-D joints are given, this call has none); `*score` (may be NULL) receives
 # the best sample's match score (higher is better). Errors: non-finite joints or camera
 # (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
 # without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with
 # (`SKB_ERR_OUT_OF_RANGE`). Thread-safe (the context is shared read-only); runs on the rayon
 # pool; the callback is called on the calling thread.
-FUNCTIONS["skb_fit_shape"] = (
+FUNCTIONS["skb_context_fit_shape"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_context),
@@ -3285,7 +3245,7 @@ FUNCTIONS["skb_fit_shape"] = (
 # Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as gray into `*out` (caller owns it).
 # Errors: `SKB_ERR_IO` (missing, unreadable), `SKB_ERR_DECODE` (not an image, truncated),
 # `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
-FUNCTIONS["skb_gray_image_load"] = (
+FUNCTIONS["skb_gray_image_new_from_file"] = (
     ctypes.c_uint32,
     [
         ctypes.c_char_p,
@@ -3312,7 +3272,7 @@ FUNCTIONS["skb_gray_image_view"] = (
     ),
 )
 
-# Frees an image from `skb_gray_image_load`. NULL is a no-op.
+# Frees an image from `skb_gray_image_new_from_file`. NULL is a no-op.
 FUNCTIONS["skb_gray_image_free"] = (
     None,
     [
@@ -3326,7 +3286,7 @@ FUNCTIONS["skb_gray_image_free"] = (
 
 # Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
 # edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
-# context's embedded detector finds them, as `skb_detect` with default options), the 3-D
+# context's embedded detector finds them, as `skb_context_detect` with default options), the 3-D
 # pose and camera (with detected joints, BlazePose's relative joint depths weigh the solver's
 # choices), the shape fit (with detected joints: half the joint weight, no bone-factor
 # search, and with automatic gender the gendered space the detected-joints gender classifier
@@ -3346,7 +3306,7 @@ FUNCTIONS["skb_gray_image_free"] = (
 # NaN), the pose solver's (`SKB_ERR_TOO_FEW_JOINTS`, `SKB_ERR_COINCIDENT_JOINTS`,
 # `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
 # callback is called on the calling thread.
-FUNCTIONS["skb_run_pipeline"] = (
+FUNCTIONS["skb_pipeline_run"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_context),
@@ -3373,12 +3333,12 @@ FUNCTIONS["skb_run_pipeline"] = (
     ),
 )
 
-# `skb_run_pipeline` that also shows the bodies it has before the final one: `interim` (may be
+# `skb_pipeline_run` that also shows the bodies it has before the final one: `interim` (may be
 # NULL) gets the mean shape in the estimated pose as soon as the pose is known (a few ms after
 # the pose step), then the deciding fit of the chosen gender before the final fit, so a host
-# can draw something at once. The result is `skb_run_pipeline`'s for the same inputs. Arguments,
-# ownership, errors and threading as `skb_run_pipeline`; `progress` and `interim` share `user`.
-FUNCTIONS["skb_run_pipeline_progressive"] = (
+# can draw something at once. The result is `skb_pipeline_run`'s for the same inputs. Arguments,
+# ownership, errors and threading as `skb_pipeline_run`; `progress` and `interim` share `user`.
+FUNCTIONS["skb_pipeline_run_progressive"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_context),
@@ -3462,7 +3422,7 @@ FUNCTIONS["skb_result_gender_value"] = (
 
 # The detection behind the result's 2-D joints into `*info` (backend kept, calibrated
 # confidence, presence, the low-confidence flag: show the joints to the user for correction).
-# Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_run_pipeline`, not
+# Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_pipeline_run`, not
 # detected (nothing written); `SKB_ERR_NULL_POINTER`.
 FUNCTIONS["skb_result_detection"] = (
     ctypes.c_uint32,
@@ -3501,7 +3461,7 @@ FUNCTIONS["skb_result_evidence"] = (
 # right arm, left arm, right leg, left leg (the figure's own sides); NaN for a part with no
 # outline in view and for every part of the mean shape. A part below 0.5 is one the drawing
 # does not support (clothing, a shape no body has): the body there is the prior's reading.
-FUNCTIONS["skb_result_part_support"] = (
+FUNCTIONS["skb_result_copy_part_support"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_result),
@@ -3534,20 +3494,31 @@ FUNCTIONS["skb_result_score"] = (
     ),
 )
 
-# Vertex count (13380) and quad-face count (13378) into `*vertices` and `*faces` (either may
-# be NULL).
-FUNCTIONS["skb_result_counts"] = (
+# The result body's vertex count (13380) into `*out`.
+FUNCTIONS["skb_result_vertex_count"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_result),
-        ctypes.POINTER(ctypes.c_size_t),
         ctypes.POINTER(ctypes.c_size_t),
     ],
     "skb_status",
     (
         ("result", "const struct skb_result *"),
-        ("vertices", "size_t *"),
-        ("faces", "size_t *"),
+        ("out", "size_t *"),
+    ),
+)
+
+# The result body's quad-face count (13378) into `*out`.
+FUNCTIONS["skb_result_face_count"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.POINTER(ctypes.c_size_t),
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("out", "size_t *"),
     ),
 )
 
@@ -3657,28 +3628,40 @@ FUNCTIONS["skb_result_copy_skin_weights"] = (
     ),
 )
 
-# The fitted PCA shape weights (metres): their number into `*count` (may be NULL) and, when
-# `dst` is not NULL, the weights into `dst` (`dst_len` ≥ count).
-FUNCTIONS["skb_result_shape_weights"] = (
+# The number of fitted PCA shape weights (the fit's dimensions) into `*out`.
+FUNCTIONS["skb_result_shape_weight_count"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.POINTER(ctypes.c_size_t),
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("out", "size_t *"),
+    ),
+)
+
+# Copies the fitted PCA shape weights (metres) into `dst` of `dst_len` doubles (at least
+# `skb_result_shape_weight_count`).
+FUNCTIONS["skb_result_copy_shape_weights"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_result),
         ctypes.POINTER(ctypes.c_double),
         ctypes.c_size_t,
-        ctypes.POINTER(ctypes.c_size_t),
     ],
     "skb_status",
     (
         ("result", "const struct skb_result *"),
         ("dst", "double *"),
         ("dst_len", "size_t"),
-        ("count", "size_t *"),
     ),
 )
 
 # A new `skb_mesh` of the result (the fitted rest shape, posed as in the result) into `*out`,
 # for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
-FUNCTIONS["skb_result_mesh"] = (
+FUNCTIONS["skb_mesh_new_from_result"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_result),
@@ -3693,10 +3676,10 @@ FUNCTIONS["skb_result_mesh"] = (
 
 # The result's 3-D pose (`SKB_JOINTS_ESTIMATED`) with its ranked alternatives as a new estimate
 # handle `*out` (the caller owns it; `skb_pose_estimate_free`): list the readings with
-# `skb_pose_estimate_num_alternatives` / `skb_pose_estimate_copy_alternative_joints` /
+# `skb_pose_estimate_alternative_count` / `skb_pose_estimate_copy_alternative_joints` /
 # `skb_pose_estimate_copy_alternative_flipped`. A copy: flipping it does not change the result
 # (use `skb_result_flip_limb` / `skb_result_pick_alternative` for that).
-FUNCTIONS["skb_result_pose_estimate"] = (
+FUNCTIONS["skb_pose_estimate_new_from_result"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_result),
@@ -3709,7 +3692,7 @@ FUNCTIONS["skb_result_pose_estimate"] = (
     ),
 )
 
-# Re-poses the result in place to its pose's alternative `index` (`skb_result_pose_estimate`
+# Re-poses the result in place to its pose's alternative `index` (`skb_pose_estimate_new_from_result`
 # lists them; 0 = the current pose): IK and skinning of the fitted rest body, whose shape
 # weights, proportions and rest mesh are kept; the camera and 2-D joints are kept. A few ms.
 # `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`. Errors: `SKB_ERR_OUT_OF_RANGE` for
@@ -3752,7 +3735,7 @@ FUNCTIONS["skb_result_flip_limb"] = (
 
 # Re-poses the fitted body in place for moved 2-D joints `joints` (pixels of the result's
 # sketch; issue 50's live correction): the 3-D pose is re-estimated with `dict` (NULL: the
-# embedded dictionary; pass the one given to `skb_run_pipeline`) and the run's pose options,
+# embedded dictionary; pass the one given to `skb_pipeline_run`) and the run's pose options,
 # without an image depth cue, then IK and skinning of the fitted rest body (shape weights,
 # proportions and rest mesh kept) and the camera's scales refitted to its skeleton. About
 # 5–10 ms (docs/benchmarks.md, "Re-pose"). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`,
@@ -3777,22 +3760,7 @@ FUNCTIONS["skb_result_repose_joints"] = (
     ),
 )
 
-# `skb_run_pipeline_progressive` on a turnaround: `sketch` and `joints` are the front view,
-# `views` (`view_count` entries; NULL when 0) the same character in the same pose from the side,
-# the other side or the back. The views share one body and one pose: every view's joints enter
-# the 3-D pose (depth from a side view), every view's outline the shape fit; each view has the
-# front camera turned by its label's yaw, with its own scale and position. With `view_count` 0
-# this is `skb_run_pipeline_progressive`. Read each view with `skb_result_view` and the run's
-# warnings (views that agree only roughly, a view little supported by its strokes) with
-# `skb_result_copy_view_warnings`. Arguments, ownership, threading, progress and cancel as
-# `skb_run_pipeline_progressive` (the interim bodies are the front view's); the views' images
-# and joints are only read during the call. Errors: `skb_run_pipeline`'s for any view's image
-# and joints; a label not `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`, or one given
-# twice (`SKB_ERR_OUT_OF_RANGE`); views that do not show one character in one pose (their joints
-# miss the shared pose by more than 12 % of the figure's height, match it only upside down, or a
-# side view drawn facing the other way than its label: `SKB_ERR_VIEWS_DISAGREE`, the message
-# names the view and the reason; a turnaround is never silently fitted to the front alone).
-FUNCTIONS["skb_run_pipeline_views"] = (
+FUNCTIONS["skb_pipeline_run_views"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_context),
@@ -3825,7 +3793,7 @@ FUNCTIONS["skb_run_pipeline_views"] = (
     ),
 )
 
-# The number of extra views of a result into `*count` (0 for a one-view run).
+# The number of extra views of a result into `*out` (0 for a one-view run).
 FUNCTIONS["skb_result_view_count"] = (
     ctypes.c_uint32,
     [
@@ -3835,7 +3803,7 @@ FUNCTIONS["skb_result_view_count"] = (
     "skb_status",
     (
         ("result", "const struct skb_result *"),
-        ("count", "size_t *"),
+        ("out", "size_t *"),
     ),
 )
 
@@ -3856,31 +3824,44 @@ FUNCTIONS["skb_result_view"] = (
     ),
 )
 
-# The run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing newline;
-# empty when there are none or for a one-view run): their byte length without the terminating
-# NUL into `*len` (may be NULL) and, when `dst` is not NULL, the text NUL-terminated into `dst`
-# (`dst_len` ≥ length + 1).
+# The byte length (UTF-8, without the terminating NUL) of the run's warnings about its views
+# into `*out`: 0 when there are none or for a one-view run. Read them with
+# `skb_result_copy_view_warnings`.
+FUNCTIONS["skb_result_view_warnings_length"] = (
+    ctypes.c_uint32,
+    [
+        ctypes.POINTER(skb_result),
+        ctypes.POINTER(ctypes.c_size_t),
+    ],
+    "skb_status",
+    (
+        ("result", "const struct skb_result *"),
+        ("out", "size_t *"),
+    ),
+)
+
+# Copies the run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing
+# newline; empty when there are none or for a one-view run), NUL-terminated into `dst` of
+# `dst_len` bytes (at least `skb_result_view_warnings_length` + 1).
 FUNCTIONS["skb_result_copy_view_warnings"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_result),
         ctypes.POINTER(ctypes.c_char),
         ctypes.c_size_t,
-        ctypes.POINTER(ctypes.c_size_t),
     ],
     "skb_status",
     (
         ("result", "const struct skb_result *"),
         ("dst", "char *"),
         ("dst_len", "size_t"),
-        ("len", "size_t *"),
     ),
 )
 
 # Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as 8-bit RGB into `*out` (caller
 # owns it). Errors: `SKB_ERR_IO` (missing, unreadable, not a regular file), `SKB_ERR_DECODE`
 # (not an image, truncated), `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
-FUNCTIONS["skb_rgb_image_load"] = (
+FUNCTIONS["skb_rgb_image_new_from_file"] = (
     ctypes.c_uint32,
     [
         ctypes.c_char_p,
@@ -3908,7 +3889,7 @@ FUNCTIONS["skb_rgb_image_view"] = (
     ),
 )
 
-# Frees an image from `skb_rgb_image_load`. NULL is a no-op.
+# Frees an image from `skb_rgb_image_new_from_file`. NULL is a no-op.
 FUNCTIONS["skb_rgb_image_free"] = (
     None,
     [
@@ -3946,7 +3927,7 @@ FUNCTIONS["skb_image_write_png"] = (
 # islands.
 #
 # `sketch` is the colour image the result was computed from (the same pixels; 3 channels as
-# `skb_rgb_image_load` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
+# `skb_rgb_image_new_from_file` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
 # alpha ignored). `size` is the texture side in texels, 1..=`SKB_MAX_TEXTURE_SIZE` (the CLI's
 # default `SKB_DEFAULT_TEXTURE_SIZE`). Writes `size` rows of `size` RGB pixels (3 bytes each)
 # into `dst`, rows `dst_stride` bytes apart (at least 3 × `size`); `dst_len` is the size of
@@ -3983,7 +3964,7 @@ FUNCTIONS["skb_result_project_texture"] = (
 # The same projection for a mesh and a camera of the host's own: the sketch seen through
 # `cam` (model metres → sketch pixels, as `skb_result_camera` gives it) projected onto the
 # mesh in its current pose (`skb_mesh_pose`; the rest pose if never posed). For a mesh from
-# `skb_result_mesh` and the result's camera this is exactly `skb_result_project_texture`.
+# `skb_mesh_new_from_result` and the result's camera this is exactly `skb_result_project_texture`.
 # Arguments, output and errors otherwise as `skb_result_project_texture`, plus
 # `SKB_ERR_NON_FINITE` / `SKB_ERR_OUT_OF_RANGE` for an invalid camera (non-finite, scales not
 # positive, rotation not orthonormal). Only reads `mesh`.
@@ -4087,7 +4068,7 @@ FUNCTIONS["skb_sketch_options_set_camera"] = (
 # bones (`SKB_ERR_DEGENERATE_BONE`), sizes outside 1..=4096, short stride or buffer. Nothing
 # is written on failure. Thread-safe for distinct output buffers; builds its edge tables on
 # each call (a few ms).
-FUNCTIONS["skb_render_sketch"] = (
+FUNCTIONS["skb_context_render_sketch"] = (
     ctypes.c_uint32,
     [
         ctypes.POINTER(skb_context),

@@ -6,7 +6,7 @@ Library lookup order (the first that exists wins; see python/README.md):
 2. the library bundled in the package (sketchbody/lib/libsketchbody.so, copied by
    `pip install ./python` when it finds the built library);
 3. the repository's target/release/libsketchbody.so (when running from a checkout);
-4. the system loader (`libsketchbody.so.0`, `libsketchbody.so`: LD_LIBRARY_PATH, ldconfig).
+4. the system loader (`libsketchbody.so.1`, `libsketchbody.so`: LD_LIBRARY_PATH, ldconfig).
 """
 
 import ctypes
@@ -17,12 +17,12 @@ from . import _bindings as B
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _NAMES = ("libsketchbody.so",)
-_SYSTEM_NAMES = ("libsketchbody.so.0", "libsketchbody.so")
+_SYSTEM_NAMES = ("libsketchbody.so.1", "libsketchbody.so")
 
 INSTALL_HINT = (
     "build the library and install the package: `cargo build --release -p sketchbody-capi` "
     "then `pip install ./python` in the sketchbody checkout; or point SKETCHBODY_LIBRARY at "
-    "libsketchbody.so (e.g. /opt/sketchbody/lib/libsketchbody.so.0 after `cmake --install`)"
+    "libsketchbody.so (e.g. /opt/sketchbody/lib/libsketchbody.so.1 after `cmake --install`)"
 )
 
 

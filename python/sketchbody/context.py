@@ -43,7 +43,7 @@ class Context(Handle):
     def num_components(self, gender):
         """Principal components of `gender`'s shape space (the most weights a shape takes)."""
         n = ctypes.c_size_t()
-        call("skb_context_num_components", self._p, gender_code(gender, False), ctypes.byref(n))
+        call("skb_context_component_count", self._p, gender_code(gender, False), ctypes.byref(n))
         return n.value
 
     def default_dim(self, gender):

@@ -34,10 +34,6 @@ class DetectOptions(OptionsBase):
     figure_range: Optional[Tuple[float, float]] = None
     levels_per_octave: Optional[int] = None
 
-    def __post_init__(self):
-        if isinstance(self.strict, bool):  # the C setter takes 0 / 1
-            self.strict = int(self.strict)
-
     _c_prefix = "skb_detect_options"
     _enums = {"backend": {"auto": B.SKB_DETECTOR_AUTO, "fmp": B.SKB_DETECTOR_FMP,
                           "blazepose": B.SKB_DETECTOR_BLAZEPOSE}}
@@ -137,11 +133,11 @@ def detect(image, options=None, context=None):
         xy = np.empty((15, 2), dtype=np.float64)
         conf = np.empty(15, dtype=np.float64)
         info, facing = B.skb_figure_info(), B.skb_facing_info()
-        st = lib.skb_detect_facing(ctx._p, ctypes.byref(view), h, A.ptr(xy), xy.size, A.ptr(conf), conf.size,
+        st = lib.skb_context_detect_facing(ctx._p, ctypes.byref(view), h, A.ptr(xy), xy.size, A.ptr(conf), conf.size,
                                    ctypes.byref(info), ctypes.byref(facing))
         del keep
         if st != B.SKB_OK:
-            raise error(st, "skb_detect_facing")
+            raise error(st, "skb_context_detect_facing")
         return Detection(Joints2D(xy), conf, info.confidence, _BACKEND_NAMES.get(info.backend, "?"),
                          info.presence, bool(info.low_confidence), Facing.from_struct(facing))
 
@@ -155,9 +151,10 @@ class Detector(Handle):
     def __init__(self, path):
         super().__init__(new_handle("skb_detector_new_from_file", B.skb_detector, A.path_arg(path)))
 
-    def detect(self, image, threshold=None, min_cell_px=0.0):
-        """As detect(), with this model; `threshold` None: the model's own; `min_cell_px`:
-        skip pyramid levels with smaller cells (0 searches every scale)."""
+    def detect(self, image, options=None):
+        """As detect(), with this model and the sketch-model settings of `options`
+        (DetectOptions: threshold, scales, figure_range, levels_per_octave; None: the
+        defaults)."""
         view, keep = as_image(image)
-        t = float("nan") if threshold is None else A.real(threshold, "threshold")
-        return _detect("skb_detector_detect", (self._p,), view, keep, (t, A.real(min_cell_px, "min_cell_px")))
+        with options_handle(options, DetectOptions) as h:
+            return _detect("skb_detector_detect", (self._p,), view, keep, (h, None, None))

@@ -27,7 +27,7 @@ def load_image(path):
     with OpenCV's weights). Errors: SketchbodyError SKB_ERR_IO (missing, unreadable),
     SKB_ERR_DECODE (not an image), SKB_ERR_IMAGE_TOO_LARGE."""
     p = A.path_arg(path)
-    with _GrayImage(new_handle("skb_gray_image_load", B.skb_gray_image, p)) as img:
+    with _GrayImage(new_handle("skb_gray_image_new_from_file", B.skb_gray_image, p)) as img:
         view = B.skb_image()
         call("skb_gray_image_view", img._p, ctypes.byref(view))
         h, w, stride = view.height, view.width, view.stride
@@ -41,7 +41,7 @@ def load_rgb_image(path):
     transparency composited over white, EXIF orientation applied): the sketch as `sketchbody run`
     reads it for the texture. Errors as load_image."""
     p = A.path_arg(path)
-    with _RgbImage(new_handle("skb_rgb_image_load", B.skb_rgb_image, p)) as img:
+    with _RgbImage(new_handle("skb_rgb_image_new_from_file", B.skb_rgb_image, p)) as img:
         view = B.skb_image()
         call("skb_rgb_image_view", img._p, ctypes.byref(view))
         h, w = view.height, view.width
@@ -71,7 +71,7 @@ def canny(image, low=50.0, high=150.0, aperture=3, l2_gradient=False):
     given in either order; `aperture` is 3, 5 or 7."""
     view, keep = as_image(image)
     out = np.empty((view.height, view.width), dtype=np.uint8)
-    call("skb_canny", ctypes.byref(view), A.real(low, "low"), A.real(high, "high"),
+    call("skb_image_canny", ctypes.byref(view), A.real(low, "low"), A.real(high, "high"),
          A.index(aperture, "aperture", 0, 2**31 - 1), bool(l2_gradient), A.ptr(out), view.width, out.size)
     del keep
     return out
@@ -84,7 +84,7 @@ def gaussian_blur(image, sigma):
     if view.channels != 1:
         raise ValueError("gaussian_blur takes a gray (H, W) image")
     out = np.empty((view.height, view.width), dtype=np.uint8)
-    call("skb_gaussian_blur", ctypes.byref(view), A.real(sigma, "sigma"), A.ptr(out), view.width, out.size)
+    call("skb_image_gaussian_blur", ctypes.byref(view), A.real(sigma, "sigma"), A.ptr(out), view.width, out.size)
     del keep
     return out
 
@@ -114,7 +114,7 @@ def render_sketch(gender, width=512, height=512, weights=None, joints3d=None, se
         img = np.empty((height, width), dtype=np.uint8)
         xy = np.empty((15, 2), dtype=np.float64)
         vis = np.empty(15, dtype=np.uint8)
-        call("skb_render_sketch", ctx._p, g, A.ptr(w) if w.size else None, w.size,
+        call("skb_context_render_sketch", ctx._p, g, A.ptr(w) if w.size else None, w.size,
              None if j is None else A.ptr(j), A.index(seed, "seed", 0, 2**64 - 1), width, height, opts,
              A.ptr(img), width, img.size, A.ptr(xy), A.ptr(vis))
     finally:

@@ -230,19 +230,19 @@ class Mesh(Handle):
         """Binary glTF 2.0: the rest mesh skinned to the 53-bone rig, posed by bone rotations
         (ExportOptions or None for the defaults), written atomically."""
         with options_handle(options, ExportOptions) as h, self._lock:
-            call("skb_mesh_write_glb_with_options", self._p, A.path_arg(path), h)
+            call("skb_mesh_write_glb", self._p, A.path_arg(path), h)
 
     def write_fbx(self, path, options=None):
         """Binary FBX 7.4 of the same rigged, posed body as write_glb, in the options' units and
         up axis (default metres, Y up), a plain skin colour; written atomically."""
         with options_handle(options, ExportOptions) as h, self._lock:
-            call("skb_export_fbx", self._p, A.path_arg(path), h)
+            call("skb_mesh_write_fbx", self._p, A.path_arg(path), h)
 
     def write_usd(self, path, options=None):
         """UsdSkel text layer (.usda) of the same rigged, posed body as write_glb, in the
         options' units and up axis (metersPerUnit, upAxis); written atomically."""
         with options_handle(options, ExportOptions) as h, self._lock:
-            call("skb_export_usd", self._p, A.path_arg(path), h)
+            call("skb_mesh_write_usd", self._p, A.path_arg(path), h)
 
     def texture(self, sketch, camera, size=1024):
         """The sketch projected through `camera` (a Camera: model metres -> sketch pixels) onto
@@ -270,7 +270,7 @@ class Mesh(Handle):
     def rig(self, options=None):
         """The Rig of the mesh in its current pose with ExportOptions `options`."""
         with options_handle(options, ExportOptions) as h, self._lock:
-            r = new_handle("skb_mesh_rig_new", B.skb_rig, self._p, h)
+            r = new_handle("skb_rig_new_from_mesh", B.skb_rig, self._p, h)
         with _RigHandle(r) as rh:
             return rh.snapshot()
 

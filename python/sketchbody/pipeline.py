@@ -117,18 +117,18 @@ class Result(Handle):
 
     _free_fn = "skb_result_free"
 
-    def _counts(self):
-        nv, nf = ctypes.c_size_t(), ctypes.c_size_t()
-        call("skb_result_counts", self._p, ctypes.byref(nv), ctypes.byref(nf))
-        return nv.value, nf.value
+    def _count(self, fn):
+        n = ctypes.c_size_t()
+        call(fn, self._p, ctypes.byref(n))
+        return n.value
 
     @property
     def vertex_count(self):
-        return self._counts()[0]
+        return self._count("skb_result_vertex_count")
 
     @property
     def face_count(self):
-        return self._counts()[1]
+        return self._count("skb_result_face_count")
 
     @property
     def gender(self):
@@ -200,7 +200,7 @@ class Result(Handle):
         stroke, or None for a part out of view (every part of the mean shape). A part below 0.5
         is not supported by the drawing: the body there is the prior's reading."""
         out = np.full(len(self.BODY_PARTS), np.nan)
-        call("skb_result_part_support", self._p, A.ptr(out), out.size)
+        call("skb_result_copy_part_support", self._p, A.ptr(out), out.size)
         return {name: (None if np.isnan(v) else float(v)) for name, v in zip(self.BODY_PARTS, out)}
 
     def vertices(self, posed=True):
@@ -238,10 +238,8 @@ class Result(Handle):
     def view_warnings(self):
         """What the run warns about its views (list of str: views that agree only roughly, a view
         little supported by its strokes); empty for one view."""
-        n = ctypes.c_size_t()
-        call("skb_result_copy_view_warnings", self._p, None, 0, ctypes.byref(n))
-        buf = ctypes.create_string_buffer(n.value + 1)
-        call("skb_result_copy_view_warnings", self._p, buf, len(buf), None)
+        buf = ctypes.create_string_buffer(self._count("skb_result_view_warnings_length") + 1)
+        call("skb_result_copy_view_warnings", self._p, buf, len(buf))
         text = buf.value.decode("utf-8")
         return text.split("\n") if text else []
 
@@ -271,10 +269,8 @@ class Result(Handle):
 
     def shape_weights(self):
         """The fitted PCA shape weights (metres)."""
-        n = ctypes.c_size_t()
-        call("skb_result_shape_weights", self._p, None, 0, ctypes.byref(n))
-        out = np.empty(n.value, dtype=np.float64)
-        call("skb_result_shape_weights", self._p, A.ptr(out), out.size, None)
+        out = np.empty(self._count("skb_result_shape_weight_count"), dtype=np.float64)
+        call("skb_result_copy_shape_weights", self._p, A.ptr(out), out.size)
         return out
 
     def texture(self, sketch, size=1024):
@@ -295,12 +291,12 @@ class Result(Handle):
     def mesh(self):
         """A new Mesh of the result (fitted rest shape, posed as in the result) for UVs,
         normals, triangles, the rig and export (write_glb, write_obj, write_preview)."""
-        return Mesh(new_handle("skb_result_mesh", B.skb_mesh, self._p))
+        return Mesh(new_handle("skb_mesh_new_from_result", B.skb_mesh, self._p))
 
     def pose_estimate(self):
         """A copy of the result's 3-D pose with its ranked depth readings (PoseEstimate;
         `.alternatives`). Flipping the copy does not change the result: use flip_limb()."""
-        return PoseEstimate(new_handle("skb_result_pose_estimate", B.skb_pose_estimate, self._p))
+        return PoseEstimate(new_handle("skb_pose_estimate_new_from_result", B.skb_pose_estimate, self._p))
 
     @property
     def alternatives(self):
@@ -394,7 +390,7 @@ def run_pipeline(sketch, joints=None, fit_options=None, pose_options=None, dicti
     out = ctypes.POINTER(B.skb_result)()
     with options_handle(fit_options, FitOptions) as fh, options_handle(pose_options, PoseOptions) as ph:
         try:
-            call("skb_run_pipeline_views", ctx._p, ctypes.byref(view), None if j is None else ctypes.byref(j),
+            call("skb_pipeline_run_views", ctx._p, ctypes.byref(view), None if j is None else ctypes.byref(j),
                  view_arr, view_count, None if d is None else d._p, ph, fh, prog.fn, shown.fn, None,
                  ctypes.byref(out))
         finally:
@@ -418,7 +414,7 @@ def fit_shape(joints3d, camera, edges, options=None, progress=None, cancel=None,
     out = ctypes.POINTER(B.skb_mesh)()
     with options_handle(options, FitOptions) as fh:
         try:
-            call("skb_fit_shape", ctx._p, A.ptr(j), j.size, ctypes.byref(cam), ctypes.byref(view), fh, prog.fn,
+            call("skb_context_fit_shape", ctx._p, A.ptr(j), j.size, ctypes.byref(cam), ctypes.byref(view), fh, prog.fn,
                  None, ctypes.byref(score), ctypes.byref(out))
         finally:
             prog.reraise()

@@ -217,32 +217,32 @@ class PoseDictionary(Handle):
         if path is None:
             super().__init__(new_handle("skb_pose_dictionary_new_default", B.skb_pose_dictionary))
         else:
-            super().__init__(new_handle("skb_pose_dictionary_load", B.skb_pose_dictionary, A.path_arg(path)))
+            super().__init__(new_handle("skb_pose_dictionary_new_from_file", B.skb_pose_dictionary, A.path_arg(path)))
 
     @property
     def num_bases(self):
-        n = ctypes.c_uint32()
-        call("skb_pose_dictionary_num_bases", self._p, ctypes.byref(n))
+        n = ctypes.c_size_t()
+        call("skb_pose_dictionary_basis_count", self._p, ctypes.byref(n))
         return n.value
 
     def mean(self):
         """The mean pose, (15, 3) metres."""
         out = np.empty((15, 3), dtype=np.float64)
-        call("skb_pose_dictionary_mean", self._p, A.ptr(out), out.size)
+        call("skb_pose_dictionary_copy_mean", self._p, A.ptr(out), out.size)
         return out
 
     def basis(self, index):
         """(basis (15, 3) unit vector, its spread sigma in metres)."""
         out = np.empty((15, 3), dtype=np.float64)
         sigma = ctypes.c_double()
-        call("skb_pose_dictionary_basis", self._p, A.index(index, "index", 0, 2**32 - 1), A.ptr(out), out.size,
+        call("skb_pose_dictionary_copy_basis", self._p, A.index(index, "index", 0, 2**32 - 1), A.ptr(out), out.size,
              ctypes.byref(sigma))
         return out, sigma.value
 
     def bone_lengths(self):
         """The 14 average bone lengths, metres."""
         out = np.empty(14, dtype=np.float64)
-        call("skb_pose_dictionary_bone_lengths", self._p, A.ptr(out), out.size)
+        call("skb_pose_dictionary_copy_bone_lengths", self._p, A.ptr(out), out.size)
         return out
 
 
@@ -270,12 +270,12 @@ def estimate_pose(joints, options=None, dictionary=None):
     d = _dict_arg(dictionary)
     out, fig = B.skb_pose3d(), B.skb_pose_figure()
     with options_handle(options, PoseOptions) as h:
-        call("skb_estimate_pose_figure", d._p, ctypes.byref(j), h, ctypes.byref(out), ctypes.byref(fig))
+        call("skb_pose3d_estimate_figure", d._p, ctypes.byref(j), h, ctypes.byref(out), ctypes.byref(fig))
     return Pose3D.from_struct(out, fig)
 
 
 def refine_pose(joints, start, options=None, dictionary=None):
-    """The fixed-basis refinement alone (skb_pose_refine) from `start` (a Pose3D returned by
+    """The fixed-basis refinement alone (skb_pose3d_refine) from `start` (a Pose3D returned by
     estimate_pose, made with PoseOptions(proportions=False))."""
     if not isinstance(start, Pose3D) or start.raw is None:
         raise TypeError("start must be a Pose3D returned by estimate_pose")
@@ -283,7 +283,7 @@ def refine_pose(joints, start, options=None, dictionary=None):
     d = _dict_arg(dictionary)
     out = B.skb_pose3d()
     with options_handle(options, PoseOptions) as h:
-        call("skb_pose_refine", d._p, ctypes.byref(j), h, ctypes.byref(start.raw), ctypes.byref(out))
+        call("skb_pose3d_refine", d._p, ctypes.byref(j), h, ctypes.byref(start.raw), ctypes.byref(out))
     return Pose3D.from_struct(out)
 
 
@@ -336,16 +336,17 @@ class PoseEstimate(Handle):
     @property
     def alternatives(self):
         """The ranked alternatives (list of Alternative, at most 8)."""
-        n = ctypes.c_uint32()
-        call("skb_pose_estimate_num_alternatives", self._p, ctypes.byref(n))
+        n = ctypes.c_size_t()
+        call("skb_pose_estimate_alternative_count", self._p, ctypes.byref(n))
         out = []
         for i in range(n.value):
             j = np.empty((15, 3), dtype=np.float64)
             score = ctypes.c_double()
             call("skb_pose_estimate_copy_alternative_joints", self._p, i, A.ptr(j), j.size, ctypes.byref(score))
-            limbs = (ctypes.c_uint32 * len(LIMB_NAMES))()
             count = ctypes.c_size_t()
-            call("skb_pose_estimate_copy_alternative_flipped", self._p, i, limbs, len(LIMB_NAMES), ctypes.byref(count))
+            call("skb_pose_estimate_alternative_flipped_count", self._p, i, ctypes.byref(count))
+            limbs = (ctypes.c_uint32 * max(count.value, 1))()
+            call("skb_pose_estimate_copy_alternative_flipped", self._p, i, limbs, len(limbs))
             out.append(Alternative(j, score.value, tuple(LIMB_NAMES[limbs[k]] for k in range(count.value))))
         return out
 
@@ -353,12 +354,12 @@ class PoseEstimate(Handle):
         """Flips one limb's depth (a LIMB_NAMES name or index) in place; returns "done" or
         "no_depth" (the limb lies in the picture plane; nothing changed)."""
         o = ctypes.c_uint32()
-        call("skb_pose_flip_limb", self._p, limb_index(limb), ctypes.byref(o))
+        call("skb_pose_estimate_flip_limb", self._p, limb_index(limb), ctypes.byref(o))
         return REPOSE_OUTCOMES[o.value]
 
     def pick(self, index):
         """Makes alternative `index` the pose (in place)."""
-        call("skb_pose_estimate_pick", self._p, A.index(index, "index", 0, 2**32 - 1))
+        call("skb_pose_estimate_pick_alternative", self._p, A.index(index, "index", 0, 2**32 - 1))
 
 
 def estimate_pose_alternatives(joints, options=None, dictionary=None):

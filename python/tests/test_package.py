@@ -395,7 +395,7 @@ class PipelineTest(unittest.TestCase):
         self.assertLess(pose.rms_px, 20)
         self.assertEqual(set(pose.proportions), set(skb.PROPORTION_GROUPS))
         est = self.r.joints3d("estimated")
-        # The pipeline's pose step is skb_estimate_pose with the same defaults.
+        # The pipeline's pose step is skb_pose3d_estimate with the same defaults.
         np.testing.assert_allclose(pose.joints - pose.joints[8], est - est[8], atol=0.05)
 
 
@@ -842,11 +842,11 @@ class TextureTest(unittest.TestCase):
 
 class RawBindingsTest(unittest.TestCase):
     def test_raw_call_through_lib(self):
-        st = skb.lib.skb_canny(None, 1.0, 2.0, 3, False, None, 0, 0)
+        st = skb.lib.skb_image_canny(None, 1.0, 2.0, 3, False, None, 0, 0)
         self.assertEqual(st, skb.Status.SKB_ERR_NULL_POINTER)
         self.assertIn(b"NULL", skb.lib.skb_last_error_message())
         n = ctypes.c_size_t()
-        self.assertEqual(skb.lib.skb_context_num_components(None, 0, ctypes.byref(n)), 1)
+        self.assertEqual(skb.lib.skb_context_component_count(None, 0, ctypes.byref(n)), 1)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 //! The shape stage in one place: fit the shape space the caller asks for (a gender's, or without
 //! one the both-sexes space with gender as a continuous weight, [`crate::body::BlendedSpace`]),
 //! apply its bone-length factors, scale it to the height, pose it by IK and skin it. [`super::run_pipeline`]
-//! and the C API's `skb_fit_shape` both call [`fit_body`].
+//! and the C API's `skb_context_fit_shape` both call [`fit_body`].
 
 use std::time::Instant;
 

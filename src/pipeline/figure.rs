@@ -58,7 +58,7 @@ pub fn decide(
 
 /// The best figure of `image` ([`figure::detect_figure`]) refereed by [`proportion_choice`] with
 /// `dict` (`None`: the embedded dictionary): the product's detection, used by `detect`, `run`,
-/// `skb_detect_figure` and the pipeline. Errors as [`figure::detect_figure`].
+/// `skb_context_detect_figure` and the pipeline. Errors as [`figure::detect_figure`].
 pub fn detect_figure(
     image: &ImageView<'_>,
     model: &Model,

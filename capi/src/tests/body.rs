@@ -32,7 +32,7 @@ fn mesh_from_shape_reports_counts_and_copies_data() {
     let (mut k, mut d) = (0usize, 0usize);
     // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
-        assert_eq!(skb_context_num_components(ctx.0, SKB_GENDER_MALE, &mut k), skb_status::SKB_OK);
+        assert_eq!(skb_context_component_count(ctx.0, SKB_GENDER_MALE, &mut k), skb_status::SKB_OK);
         assert_eq!(skb_context_default_dim(ctx.0, SKB_GENDER_MALE, &mut d), skb_status::SKB_OK);
     }
     assert!(k >= 10 && (1..=k).contains(&d), "components {k}, default dim {d}");

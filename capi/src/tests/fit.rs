@@ -1,4 +1,4 @@
-//! `skb_fit_options`, `skb_fit_shape` and `skb_run_pipeline` / `skb_result_*` through the C API
+//! `skb_fit_options`, `skb_context_fit_shape` and `skb_pipeline_run` / `skb_result_*` through the C API
 //! as a C host would: results, cancellation through the progress callback, and the specific
 //! status of each bad input.
 
@@ -35,7 +35,7 @@ impl Inputs {
             assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
             let mut img = ptr::null_mut();
             let path = CString::new(SKETCH).unwrap();
-            assert_eq!(skb_gray_image_load(path.as_ptr(), &mut img), skb_status::SKB_OK, "{}", last_error());
+            assert_eq!(skb_gray_image_new_from_file(path.as_ptr(), &mut img), skb_status::SKB_OK, "{}", last_error());
             let mut view: skb_image = std::mem::zeroed();
             assert_eq!(skb_gray_image_view(img, &mut view), skb_status::SKB_OK);
             let mut opts = ptr::null_mut();
@@ -103,7 +103,7 @@ fn options_setters_validate() {
         assert_eq!(skb_fit_options_set_skinning(i.opts, 2), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_gender(i.opts, 3), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_fit_options_set_samples(ptr::null_mut(), 10), skb_status::SKB_ERR_NULL_POINTER);
-        assert_eq!(skb_fit_options_set_estimate_proportions(ptr::null_mut(), 1), skb_status::SKB_ERR_NULL_POINTER);
+        assert_eq!(skb_fit_options_set_estimate_proportions(ptr::null_mut(), true), skb_status::SKB_ERR_NULL_POINTER);
         for ok in [
             skb_fit_options_set_score(i.opts, SKB_SCORE_PAPER),
             skb_fit_options_set_score(i.opts, SKB_SCORE_TWO_SIDED_CHAMFER),
@@ -119,12 +119,12 @@ fn options_setters_validate() {
             skb_fit_options_set_gender(i.opts, SKB_GENDER_AUTO),
             skb_fit_options_set_height(i.opts, 1.8),
             skb_fit_options_set_height(i.opts, 0.0),
-            skb_fit_options_set_sample_camera(i.opts, 1),
-            skb_fit_options_set_sample_camera(i.opts, 0),
+            skb_fit_options_set_sample_camera(i.opts, true),
+            skb_fit_options_set_sample_camera(i.opts, false),
             skb_fit_options_set_proportion_sd(i.opts, 0.0),
             skb_fit_options_set_proportion_sd(i.opts, 0.1),
-            skb_fit_options_set_estimate_proportions(i.opts, 0),
-            skb_fit_options_set_estimate_proportions(i.opts, 1),
+            skb_fit_options_set_estimate_proportions(i.opts, false),
+            skb_fit_options_set_estimate_proportions(i.opts, true),
         ] {
             assert_eq!(ok, skb_status::SKB_OK);
         }
@@ -139,7 +139,7 @@ fn pipeline_result_accessors() {
     let mut r = ptr::null_mut();
     // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
-        let st = skb_run_pipeline(
+        let st = skb_pipeline_run(
             i.ctx,
             &i.view,
             &j,
@@ -153,7 +153,8 @@ fn pipeline_result_accessors() {
         assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
         assert!(calls.windows(2).all(|w| w[0] <= w[1]) && *calls.last().unwrap() == 1.0, "{calls:?}");
         let (mut nv, mut nf) = (0usize, 0usize);
-        assert_eq!(skb_result_counts(r, &mut nv, &mut nf), skb_status::SKB_OK);
+        assert_eq!(skb_result_vertex_count(r, &mut nv), skb_status::SKB_OK);
+        assert_eq!(skb_result_face_count(r, &mut nf), skb_status::SKB_OK);
         assert_eq!((nv, nf), (13380, 13378));
         let mut v = vec![0.0f32; 3 * nv];
         assert_eq!(
@@ -200,20 +201,21 @@ fn pipeline_result_accessors() {
         // Per part: shares in 0..=1 (NaN only for a part out of view); the torso is always in
         // view, and the parts' shares bracket the whole outline's.
         let mut parts = [f64::NAN; SKB_NUM_BODY_PARTS as usize];
-        assert_eq!(skb_result_part_support(r, parts.as_mut_ptr(), parts.len()), skb_status::SKB_OK);
+        assert_eq!(skb_result_copy_part_support(r, parts.as_mut_ptr(), parts.len()), skb_status::SKB_OK);
         assert!(parts.iter().all(|p| p.is_nan() || (0.0..=1.0).contains(p)), "{parts:?}");
         assert!(parts[1].is_finite(), "{parts:?}");
         let seen: Vec<f64> = parts.iter().copied().filter(|p| p.is_finite()).collect();
         assert!(seen.iter().copied().fold(1.0, f64::min) <= support + 1e-9, "{parts:?} {support}");
         assert!(seen.iter().copied().fold(0.0, f64::max) >= support - 1e-9, "{parts:?} {support}");
         let mut n = 0usize;
-        assert_eq!(skb_result_shape_weights(r, ptr::null_mut(), 0, &mut n), skb_status::SKB_OK);
+        assert_eq!(skb_result_shape_weight_count(r, &mut n), skb_status::SKB_OK);
         let mut w = vec![0.0; n];
         assert!(n > 0);
-        assert_eq!(skb_result_shape_weights(r, w.as_mut_ptr(), n, &mut n), skb_status::SKB_OK);
+        assert_eq!(skb_result_copy_shape_weights(r, w.as_mut_ptr(), n - 1), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
+        assert_eq!(skb_result_copy_shape_weights(r, w.as_mut_ptr(), n), skb_status::SKB_OK);
         // The result as an skb_mesh: same posed vertices, exportable.
         let mut mesh = ptr::null_mut();
-        assert_eq!(skb_result_mesh(r, &mut mesh), skb_status::SKB_OK);
+        assert_eq!(skb_mesh_new_from_result(r, &mut mesh), skb_status::SKB_OK);
         let mut mv = vec![0.0f32; 3 * nv];
         assert_eq!(skb_mesh_copy_posed_vertices(mesh, mv.as_mut_ptr(), mv.len()), skb_status::SKB_OK);
         assert_eq!(mv, v);
@@ -236,7 +238,7 @@ fn pipeline_errors_and_cancel() {
     unsafe {
         let mut r = ptr::null_mut();
         let go = |img: &skb_image, jp: *const skb_joints2d, r: &mut *mut skb_result| {
-            skb_run_pipeline(i.ctx, img, jp, ptr::null(), ptr::null(), i.opts, None, ptr::null_mut(), r)
+            skb_pipeline_run(i.ctx, img, jp, ptr::null(), ptr::null(), i.opts, None, ptr::null_mut(), r)
         };
         let mut page = vec![255u8; 200 * 200];
         for k in 20..180 {
@@ -260,7 +262,7 @@ fn pipeline_errors_and_cancel() {
         assert_eq!(skb_fit_options_set_iterations(i.opts, 100), skb_status::SKB_OK);
         assert_eq!(skb_fit_options_set_samples(i.opts, 200), skb_status::SKB_OK);
         let mut calls = 0usize;
-        let st = skb_run_pipeline(
+        let st = skb_pipeline_run(
             i.ctx,
             &i.view,
             &j,
@@ -276,7 +278,7 @@ fn pipeline_errors_and_cancel() {
         assert!(r.is_null());
         let path = CString::new("/nonexistent/sketch.png").unwrap();
         let mut img = ptr::null_mut();
-        assert_eq!(skb_gray_image_load(path.as_ptr(), &mut img), skb_status::SKB_ERR_IO);
+        assert_eq!(skb_gray_image_new_from_file(path.as_ptr(), &mut img), skb_status::SKB_ERR_IO);
     }
 }
 
@@ -289,18 +291,31 @@ fn fit_shape_from_c() {
         let mut dict = ptr::null_mut();
         assert_eq!(skb_pose_dictionary_new_default(&mut dict), skb_status::SKB_OK);
         let mut pose: skb_pose3d = std::mem::zeroed();
-        assert_eq!(skb_estimate_pose(dict, &joints(), ptr::null(), &mut pose), skb_status::SKB_OK);
+        assert_eq!(skb_pose3d_estimate(dict, &joints(), ptr::null(), &mut pose), skb_status::SKB_OK);
         skb_pose_dictionary_free(dict);
         let (w, h) = (i.view.width as usize, i.view.height as usize);
         let mut edges = vec![0u8; w * h];
-        assert_eq!(skb_canny(&i.view, 50.0, 150.0, 3, false, edges.as_mut_ptr(), w, edges.len()), skb_status::SKB_OK);
+        assert_eq!(
+            skb_image_canny(&i.view, 50.0, 150.0, 3, false, edges.as_mut_ptr(), w, edges.len()),
+            skb_status::SKB_OK
+        );
         let ev = skb_image { data: edges.as_ptr(), width: w as u32, height: h as u32, stride: w as u32, channels: 1 };
         let cam = skb_camera { sx: pose.sx, sy: pose.sy, r: pose.r, t: pose.t };
         let flat: Vec<f64> = pose.joints.iter().flatten().copied().collect();
         assert_eq!(skb_fit_options_set_gender(i.opts, SKB_GENDER_MALE), skb_status::SKB_OK);
         let (mut mesh, mut score) = (ptr::null_mut(), 0.0);
-        let st =
-            skb_fit_shape(i.ctx, flat.as_ptr(), 45, &cam, &ev, i.opts, None, ptr::null_mut(), &mut score, &mut mesh);
+        let st = skb_context_fit_shape(
+            i.ctx,
+            flat.as_ptr(),
+            45,
+            &cam,
+            &ev,
+            i.opts,
+            None,
+            ptr::null_mut(),
+            &mut score,
+            &mut mesh,
+        );
         assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
         assert!(score.is_finite() && score < 0.0);
         let mut g = 9;
@@ -318,16 +333,38 @@ fn fit_shape_from_c() {
         let mut nan = flat.clone();
         nan[0] = f64::NAN;
         assert_eq!(
-            skb_fit_shape(i.ctx, nan.as_ptr(), 45, &cam, &ev, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2),
+            skb_context_fit_shape(
+                i.ctx,
+                nan.as_ptr(),
+                45,
+                &cam,
+                &ev,
+                i.opts,
+                None,
+                ptr::null_mut(),
+                ptr::null_mut(),
+                &mut m2
+            ),
             skb_status::SKB_ERR_NON_FINITE
         );
         assert_eq!(
-            skb_fit_shape(i.ctx, flat.as_ptr(), 44, &cam, &ev, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2),
+            skb_context_fit_shape(
+                i.ctx,
+                flat.as_ptr(),
+                44,
+                &cam,
+                &ev,
+                i.opts,
+                None,
+                ptr::null_mut(),
+                ptr::null_mut(),
+                &mut m2
+            ),
             skb_status::SKB_ERR_OUT_OF_RANGE
         );
         let bad_cam = skb_camera { sx: -1.0, ..cam };
         assert_eq!(
-            skb_fit_shape(
+            skb_context_fit_shape(
                 i.ctx,
                 flat.as_ptr(),
                 45,
@@ -344,7 +381,18 @@ fn fit_shape_from_c() {
         let zero = vec![0u8; w * h];
         let zv = skb_image { data: zero.as_ptr(), ..ev };
         assert_eq!(
-            skb_fit_shape(i.ctx, flat.as_ptr(), 45, &cam, &zv, i.opts, None, ptr::null_mut(), ptr::null_mut(), &mut m2),
+            skb_context_fit_shape(
+                i.ctx,
+                flat.as_ptr(),
+                45,
+                &cam,
+                &zv,
+                i.opts,
+                None,
+                ptr::null_mut(),
+                ptr::null_mut(),
+                &mut m2
+            ),
             skb_status::SKB_ERR_BLANK_IMAGE
         );
         let mut calls = 0usize;
@@ -355,7 +403,7 @@ fn fit_shape_from_c() {
             1
         }
         assert_eq!(
-            skb_fit_shape(
+            skb_context_fit_shape(
                 i.ctx,
                 flat.as_ptr(),
                 45,
@@ -394,7 +442,7 @@ unsafe extern "C" fn record_interim(user: *mut c_void, stage: u32, mesh: *const 
 }
 
 /// The progressive run shows the posed mean shape, then the chosen gender's 4-dimension
-/// deciding fit, as borrowed meshes, and ends with skb_run_pipeline's result.
+/// deciding fit, as borrowed meshes, and ends with skb_pipeline_run's result.
 #[test]
 fn progressive_run_shows_interim_bodies_and_ends_as_the_plain_run() {
     let i = Inputs::new();
@@ -404,9 +452,9 @@ fn progressive_run_shows_interim_bodies_and_ends_as_the_plain_run() {
     // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
         let st =
-            skb_run_pipeline(i.ctx, &i.view, &j, ptr::null(), ptr::null(), i.opts, None, ptr::null_mut(), &mut plain);
+            skb_pipeline_run(i.ctx, &i.view, &j, ptr::null(), ptr::null(), i.opts, None, ptr::null_mut(), &mut plain);
         assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
-        let st = skb_run_pipeline_progressive(
+        let st = skb_pipeline_run_progressive(
             i.ctx,
             &i.view,
             &j,
@@ -421,7 +469,8 @@ fn progressive_run_shows_interim_bodies_and_ends_as_the_plain_run() {
         assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
         let vertices = |r: *mut skb_result| {
             let (mut nv, mut nf) = (0usize, 0usize);
-            assert_eq!(skb_result_counts(r, &mut nv, &mut nf), skb_status::SKB_OK);
+            assert_eq!(skb_result_vertex_count(r, &mut nv), skb_status::SKB_OK);
+            assert_eq!(skb_result_face_count(r, &mut nf), skb_status::SKB_OK);
             let mut v = vec![0.0f32; 3 * nv];
             assert_eq!(skb_result_copy_vertices(r, true, v.as_mut_ptr(), v.len()), skb_status::SKB_OK);
             v

@@ -1,7 +1,73 @@
 //! The committed C header must equal a fresh cbindgen generation (cbindgen pinned in
-//! Cargo.toml). Run with `SKB_BLESS_HEADER=1` (scripts/gen-header.sh) to rewrite it.
+//! Cargo.toml) with a banner before each topic's functions. Run with `SKB_BLESS_HEADER=1`
+//! (scripts/gen-header.sh) to rewrite it.
 
 use std::path::Path;
+
+/// The header's sections: each C-API module (capi/src/NAME.rs) and the banner put before its
+/// first function, in the order lib.rs declares the modules (cbindgen keeps it).
+const SECTIONS: &[(&str, &str)] = &[
+    ("status", "Status codes and their text"),
+    ("error", "Error messages"),
+    ("version", "Version"),
+    ("image", "Image functions: Canny, Gaussian blur"),
+    ("body", "The body model (skb_context) and meshes (skb_mesh)"),
+    ("mesh_ops", "Posing, rasterising and writing meshes"),
+    ("export", "Export options; FBX and USD"),
+    ("rig", "The rig in memory (skb_rig)"),
+    ("pose", "The 3-D pose: dictionaries, options, estimates and alternatives"),
+    ("joints_io", "2-D joints files"),
+    ("detect", "2-D detection"),
+    ("facing", "The figure's facing"),
+    ("fit", "The shape fit"),
+    ("pipeline", "Gray images; the main job (skb_pipeline_run) and its result"),
+    ("views", "Turnarounds: several views of one character"),
+    ("texture", "Colour images; the sketch as the body's texture"),
+    ("sketch", "Synthetic sketches"),
+];
+
+/// `header` with a banner comment before the first function of every section.
+fn with_sections(header: &str, crate_dir: &Path) -> String {
+    let mut out = header.to_string();
+    for (module, title) in SECTIONS {
+        let src = std::fs::read_to_string(crate_dir.join(format!("src/{module}.rs")))
+            .unwrap_or_else(|e| panic!("capi/src/{module}.rs: {e}"));
+        let first = src
+            .lines()
+            .find_map(|l| l.split_once("extern \"C\" fn ").filter(|(head, _)| head.starts_with("pub ")))
+            .and_then(|(_, rest)| rest.split('(').next())
+            .unwrap_or_else(|| panic!("capi/src/{module}.rs exports no function"));
+        let proto = out
+            .lines()
+            .scan(0usize, |at, l| {
+                let start = *at;
+                *at += l.len() + 1;
+                Some((start, l))
+            })
+            .find(|(_, l)| {
+                !l.starts_with(' ')
+                    && l.find(&format!("{first}(")).is_some_and(|i| i > 0 && matches!(l.as_bytes()[i - 1], b' ' | b'*'))
+            })
+            .map(|(start, _)| start)
+            .unwrap_or_else(|| panic!("{first} is not declared in the generated header"));
+        let doc = out[..proto].rfind("/**").filter(|&d| !out[d..proto].contains(';')).unwrap_or(proto);
+        out.insert_str(doc, &format!("/* ===== {title} ===== */\n\n"));
+    }
+    out
+}
+
+#[test]
+fn every_module_has_a_header_section() {
+    let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let lib = std::fs::read_to_string(crate_dir.join("src/lib.rs")).expect("read capi/src/lib.rs");
+    let modules: Vec<&str> = lib
+        .lines()
+        .filter_map(|l| l.strip_prefix("mod ")?.strip_suffix(';'))
+        .filter(|m| !matches!(*m, "panic" | "ptr" | "tests"))
+        .collect();
+    let sections: Vec<&str> = SECTIONS.iter().map(|(m, _)| *m).collect();
+    assert_eq!(modules, sections, "capi/src/lib.rs's modules and the header's sections (tests/header.rs)");
+}
 
 #[test]
 fn committed_header_matches_fresh_generation() {
@@ -13,8 +79,9 @@ fn committed_header_matches_fresh_generation() {
         .with_config(config)
         .generate()
         .expect("cbindgen generates the header");
-    let mut fresh = Vec::new();
-    bindings.write(&mut fresh);
+    let mut generated = Vec::new();
+    bindings.write(&mut generated);
+    let fresh = with_sections(&String::from_utf8(generated).expect("cbindgen writes UTF-8"), crate_dir).into_bytes();
     let path = root.join("include/sketchbody.h");
     if std::env::var_os("SKB_BLESS_HEADER").is_some() {
         std::fs::write(&path, &fresh).expect("write include/sketchbody.h");

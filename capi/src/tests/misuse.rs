@@ -245,6 +245,34 @@ impl Table {
         }
     }
 
+    /// An indexed getter `f(handle, index, out)`: NULL handle, the largest index, NULL out, and a
+    /// control with index `valid`.
+    fn indexed_getter<H, I: Copy, O>(
+        &mut self,
+        export: &'static str,
+        hp: &'static str,
+        ip: &'static str,
+        f: unsafe extern "C" fn(*const H, I, *mut O) -> skb_status,
+        h: *const H,
+        valid: I,
+        max: I,
+    ) {
+        let cases: [(*const H, I, bool, &'static str, Kind, skb_status); 4] = [
+            (ptr::null(), valid, true, hp, Kind::Null, SKB_ERR_NULL_POINTER),
+            (h, max, true, ip, Kind::Max, SKB_ERR_OUT_OF_RANGE),
+            (h, valid, false, "out", Kind::Null, SKB_ERR_NULL_POINTER),
+            (h, valid, true, "out", Kind::Other, SKB_OK),
+        ];
+        for (hh, index, with_out, param, kind, want) in cases {
+            let mut c = Canary::of::<O>(1);
+            let out = if with_out { c.ptr() } else { ptr::null_mut() };
+            // SAFETY: `h` is a live handle or NULL; `c` holds one `O`.
+            let s = unsafe { f(hh, index, out) };
+            let untouched_ok = if want == SKB_OK { !c.intact() } else { c.intact() };
+            self.check(export, param, kind, want, s, untouched_ok);
+        }
+    }
+
     /// A floating-point setter: NULL handle, NaN, ±Inf (`SKB_ERR_NON_FINITE`), a valid control.
     fn set_f64<H>(
         &mut self,
@@ -355,7 +383,7 @@ impl Fx {
             assert_eq!(skb_mesh_vertex_count(fx.mesh, &mut fx.nv), SKB_OK);
             assert_eq!(skb_mesh_face_count(fx.mesh, &mut fx.nf), SKB_OK);
             assert_eq!(skb_mesh_shape_weight_count(fx.mesh, &mut fx.nk), SKB_OK);
-            assert_eq!(skb_mesh_rig_new(fx.mesh, ptr::null(), &mut fx.rig), SKB_OK);
+            assert_eq!(skb_rig_new_from_mesh(fx.mesh, ptr::null(), &mut fx.rig), SKB_OK);
             assert_eq!(skb_rasterizer_new(&mut fx.raster), SKB_OK);
             assert_eq!(skb_pose_dictionary_new_default(&mut fx.dict), SKB_OK);
             assert_eq!(skb_pose_options_new(&mut fx.pose_opts), SKB_OK);
@@ -366,7 +394,7 @@ impl Fx {
             let p = CString::new(det_path.to_str().unwrap()).unwrap();
             assert_eq!(skb_detector_new_from_file(p.as_ptr(), &mut fx.detector), SKB_OK, "{}", last_error());
             let p = CString::new(SKETCH).unwrap();
-            assert_eq!(skb_gray_image_load(p.as_ptr(), &mut fx.gray), SKB_OK);
+            assert_eq!(skb_gray_image_new_from_file(p.as_ptr(), &mut fx.gray), SKB_OK);
             assert_eq!(skb_gray_image_view(fx.gray, &mut fx.sketch), SKB_OK);
             // A quick pipeline run for the result getters.
             let mut quick = ptr::null_mut();
@@ -374,7 +402,7 @@ impl Fx {
             assert_eq!(skb_fit_options_set_samples(quick, 16), SKB_OK);
             assert_eq!(skb_fit_options_set_iterations(quick, 1), SKB_OK);
             assert_eq!(skb_fit_options_set_raster_side(quick, 64), SKB_OK);
-            let s = skb_run_pipeline(
+            let s = skb_pipeline_run(
                 fx.ctx,
                 &fx.sketch,
                 &fx.joints,
@@ -453,16 +481,16 @@ fn text_and_lifecycle_rows(t: &mut Table) {
     t.free("skb_sketch_options_free", "opts", skb_sketch_options_free);
 }
 
-/// `skb_canny` and `skb_gaussian_blur` on a valid 8 x 6 gray image.
+/// `skb_image_canny` and `skb_image_gaussian_blur` on a valid 8 x 6 gray image.
 fn image_rows(t: &mut Table) {
     let px = [100u8; 48];
     let im = skb_image { data: px.as_ptr(), width: 8, height: 6, stride: 8, channels: 1 };
     let canny = |src: *const skb_image, t1: f64, t2: f64, ap: i32, dst: *mut u8, stride: usize, len: usize| {
         // SAFETY: `src` is NULL or `im` (valid for its geometry); `dst` is NULL or a canary of
         // at least 48 bytes or refused lengths.
-        unsafe { skb_canny(src, t1, t2, ap, false, dst, stride, len) }
+        unsafe { skb_image_canny(src, t1, t2, ap, false, dst, stride, len) }
     };
-    let e = "skb_canny";
+    let e = "skb_image_canny";
     let mut c = Canary::bytes(48);
     t.check(e, "src", Kind::Null, SKB_ERR_NULL_POINTER, canny(ptr::null(), 50.0, 150.0, 3, c.ptr(), 8, 48), c.intact());
     let null_data = skb_image { data: ptr::null(), ..im };
@@ -524,10 +552,10 @@ fn image_rows(t: &mut Table) {
     }
     t.check(e, "dst", Kind::Other, SKB_OK, canny(&im, 50.0, 150.0, 3, c.ptr(), 8, 48), true);
 
-    let e = "skb_gaussian_blur";
+    let e = "skb_image_gaussian_blur";
     let blur = |src: *const skb_image, sigma: f64, dst: *mut u8, stride: usize, len: usize| {
         // SAFETY: as for Canny above.
-        unsafe { skb_gaussian_blur(src, sigma, dst, stride, len) }
+        unsafe { skb_image_gaussian_blur(src, sigma, dst, stride, len) }
     };
     let mut c = Canary::bytes(48);
     t.check(e, "src", Kind::Null, SKB_ERR_NULL_POINTER, blur(ptr::null(), 1.0, c.ptr(), 8, 48), c.intact());
@@ -546,7 +574,7 @@ fn body_rows(t: &mut Table, fx: &Fx) {
     let ctx = fx.ctx as *const skb_context;
     let mesh = fx.mesh as *const skb_mesh;
     for (e, f) in [
-        ("skb_context_num_components", skb_context_num_components as unsafe extern "C" fn(_, _, _) -> _),
+        ("skb_context_component_count", skb_context_component_count as unsafe extern "C" fn(_, _, _) -> _),
         ("skb_context_default_dim", skb_context_default_dim),
     ] {
         let mut c = Canary::of::<usize>(1);
@@ -696,7 +724,7 @@ fn raster_rows(t: &mut Table, fx: &Fx) {
     let verts = [0.0f32, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0, 0.2, 0.0];
     let tris = [0u32, 1, 2];
     let cam = camera();
-    let e = "skb_rasterize_triangles";
+    let e = "skb_rasterizer_rasterize_triangles";
     let r = fx.raster;
     #[allow(clippy::type_complexity)]
     let call = |r: *mut skb_rasterizer,
@@ -711,7 +739,7 @@ fn raster_rows(t: &mut Table, fx: &Fx) {
                 st: usize,
                 len: usize| {
         // SAFETY: every pointer is NULL or a live local of the size passed (refused sizes aside).
-        unsafe { skb_rasterize_triangles(r, v, nv, tr, nt, c, w, h, m, st, len) }
+        unsafe { skb_rasterizer_rasterize_triangles(r, v, nv, tr, nt, c, w, h, m, st, len) }
     };
     let mut m = Canary::bytes(64 * 64);
     let (vp, tp, mp) = (verts.as_ptr(), tris.as_ptr(), m.ptr());
@@ -973,18 +1001,13 @@ fn write_rows(t: &mut Table, fx: &Fx) {
         // SAFETY: `m` is the live mesh or NULL, `p` NULL or a NUL-terminated string.
         ("skb_mesh_write_obj", Box::new(|m, p| unsafe { skb_mesh_write_obj(m, p, true) })),
         // SAFETY: as above.
-        ("skb_mesh_write_glb", Box::new(|m, p| unsafe { skb_mesh_write_glb(m, p) })),
-        // SAFETY: as above.
         ("skb_mesh_write_preview", Box::new(|m, p| unsafe { skb_mesh_write_preview(m, p, 64) })),
         // SAFETY: as above; the export options are live.
-        (
-            "skb_mesh_write_glb_with_options",
-            Box::new(|m, p| unsafe { skb_mesh_write_glb_with_options(m, p, fx.export_opts) }),
-        ),
+        ("skb_mesh_write_glb", Box::new(|m, p| unsafe { skb_mesh_write_glb(m, p, fx.export_opts) })),
         // SAFETY: as above; the export options are live.
-        ("skb_export_fbx", Box::new(|m, p| unsafe { skb_export_fbx(m, p, fx.export_opts) })),
+        ("skb_mesh_write_fbx", Box::new(|m, p| unsafe { skb_mesh_write_fbx(m, p, fx.export_opts) })),
         // SAFETY: as above; the export options are live.
-        ("skb_export_usd", Box::new(|m, p| unsafe { skb_export_usd(m, p, fx.export_opts) })),
+        ("skb_mesh_write_usd", Box::new(|m, p| unsafe { skb_mesh_write_usd(m, p, fx.export_opts) })),
     ];
     for (e, w) in &writers {
         t.check(e, "mesh", Kind::Null, SKB_ERR_NULL_POINTER, w(ptr::null(), good.as_ptr()), true);
@@ -1008,10 +1031,24 @@ fn write_rows(t: &mut Table, fx: &Fx) {
             skb_mesh_write_preview(mesh, good.as_ptr(), u32::MAX),
             true,
         );
-        let e = "skb_mesh_write_glb_with_options";
-        t.check(e, "opts", Kind::Null, SKB_OK, skb_mesh_write_glb_with_options(mesh, good.as_ptr(), ptr::null()), true);
-        t.check("skb_export_fbx", "opts", Kind::Null, SKB_OK, skb_export_fbx(mesh, good.as_ptr(), ptr::null()), true);
-        t.check("skb_export_usd", "opts", Kind::Null, SKB_OK, skb_export_usd(mesh, good.as_ptr(), ptr::null()), true);
+        let e = "skb_mesh_write_glb";
+        t.check(e, "opts", Kind::Null, SKB_OK, skb_mesh_write_glb(mesh, good.as_ptr(), ptr::null()), true);
+        t.check(
+            "skb_mesh_write_fbx",
+            "opts",
+            Kind::Null,
+            SKB_OK,
+            skb_mesh_write_fbx(mesh, good.as_ptr(), ptr::null()),
+            true,
+        );
+        t.check(
+            "skb_mesh_write_usd",
+            "opts",
+            Kind::Null,
+            SKB_OK,
+            skb_mesh_write_usd(mesh, good.as_ptr(), ptr::null()),
+            true,
+        );
     }
     let o = fx.export_opts;
     t.set_int(
@@ -1087,12 +1124,12 @@ fn write_rows(t: &mut Table, fx: &Fx) {
 /// colour decoder and the PNG writer.
 fn texture_rows(t: &mut Table, fx: &Fx) {
     let json = CString::new(JOINTS).unwrap();
-    t.loader("skb_rgb_image_load", skb_rgb_image_load, &json, SKB_ERR_DECODE);
+    t.loader("skb_rgb_image_new_from_file", skb_rgb_image_new_from_file, &json, SKB_ERR_DECODE);
     t.free("skb_rgb_image_free", "img", skb_rgb_image_free);
     let mut rgb = ptr::null_mut();
     let p = CString::new(SKETCH).unwrap();
     // SAFETY: a NUL-terminated path and a live out-pointer.
-    assert_eq!(unsafe { skb_rgb_image_load(p.as_ptr(), &mut rgb) }, SKB_OK);
+    assert_eq!(unsafe { skb_rgb_image_new_from_file(p.as_ptr(), &mut rgb) }, SKB_OK);
     t.getter("skb_rgb_image_view", "img", "out", skb_rgb_image_view, rgb as *const skb_rgb_image);
 
     let e = "skb_image_write_png";
@@ -1238,7 +1275,7 @@ fn texture_rows(t: &mut Table, fx: &Fx) {
 }
 
 fn rig_rows(t: &mut Table, fx: &Fx) {
-    let e = "skb_mesh_rig_new";
+    let e = "skb_rig_new_from_mesh";
     let mut c = Canary::of::<*mut skb_rig>(1);
     // SAFETY: live mesh and options or NULL; `c` holds one pointer.
     unsafe {
@@ -1247,7 +1284,7 @@ fn rig_rows(t: &mut Table, fx: &Fx) {
             "mesh",
             Kind::Null,
             SKB_ERR_NULL_POINTER,
-            skb_mesh_rig_new(ptr::null(), fx.export_opts, c.ptr()),
+            skb_rig_new_from_mesh(ptr::null(), fx.export_opts, c.ptr()),
             c.intact(),
         );
         t.check(
@@ -1255,10 +1292,10 @@ fn rig_rows(t: &mut Table, fx: &Fx) {
             "out",
             Kind::Null,
             SKB_ERR_NULL_POINTER,
-            skb_mesh_rig_new(fx.mesh, fx.export_opts, ptr::null_mut()),
+            skb_rig_new_from_mesh(fx.mesh, fx.export_opts, ptr::null_mut()),
             true,
         );
-        t.check(e, "opts", Kind::Null, SKB_OK, skb_mesh_rig_new(fx.mesh, ptr::null(), c.ptr()), true);
+        t.check(e, "opts", Kind::Null, SKB_OK, skb_rig_new_from_mesh(fx.mesh, ptr::null(), c.ptr()), true);
         skb_rig_free(*c.ptr::<*mut skb_rig>());
     }
     let rig = fx.rig as *const skb_rig;
@@ -1275,13 +1312,14 @@ fn rig_rows(t: &mut Table, fx: &Fx) {
     t.copy("skb_rig_copy_posed_vertices", "rig", "dst", "dst_len", skb_rig_copy_posed_vertices, rig, 3 * nv);
     two_buffer_rows(t, "skb_rig_copy_skin_weights", "rig", skb_rig_copy_skin_weights, rig, 4 * nv);
     t.indexed_copy("skb_rig_copy_bone_name", "rig", "bone", skb_rig_copy_bone_name, rig, 0, usize::MAX, 64, 1);
+    t.indexed_getter("skb_rig_bone_name_length", "rig", "bone", skb_rig_bone_name_length, rig, 0, usize::MAX);
     t.getter("skb_rig_shape_key_count", "rig", "out", skb_rig_shape_key_count, rig);
     // A rig with shape keys for the key's copy.
     let mut keyed: *mut skb_rig = ptr::null_mut();
     // SAFETY: live mesh and options; `keyed` receives a rig freed below.
     unsafe {
         assert_eq!(skb_export_options_set_shape_keys(fx.export_opts, true), SKB_OK);
-        assert_eq!(skb_mesh_rig_new(fx.mesh, fx.export_opts, &mut keyed), SKB_OK);
+        assert_eq!(skb_rig_new_from_mesh(fx.mesh, fx.export_opts, &mut keyed), SKB_OK);
         assert_eq!(skb_export_options_set_shape_keys(fx.export_opts, false), SKB_OK);
     }
     let k = keyed as *const skb_rig;
@@ -1293,11 +1331,19 @@ fn rig_rows(t: &mut Table, fx: &Fx) {
 fn dictionary_rows(t: &mut Table, fx: &Fx) {
     let d = fx.dict as *const skb_pose_dictionary;
     let det = CString::new(fx.dir.join("tiny.skbd").to_str().unwrap()).unwrap();
-    t.loader("skb_pose_dictionary_load", skb_pose_dictionary_load, &det, SKB_ERR_CORRUPT_DATA);
-    t.getter("skb_pose_dictionary_num_bases", "dict", "out", skb_pose_dictionary_num_bases, d);
-    t.copy("skb_pose_dictionary_mean", "dict", "out", "len", skb_pose_dictionary_mean, d, 45);
-    t.copy("skb_pose_dictionary_bone_lengths", "dict", "out", "len", skb_pose_dictionary_bone_lengths, d, 14);
-    let e = "skb_pose_dictionary_basis";
+    t.loader("skb_pose_dictionary_new_from_file", skb_pose_dictionary_new_from_file, &det, SKB_ERR_CORRUPT_DATA);
+    t.getter("skb_pose_dictionary_basis_count", "dict", "out", skb_pose_dictionary_basis_count, d);
+    t.copy("skb_pose_dictionary_copy_mean", "dict", "dst", "dst_len", skb_pose_dictionary_copy_mean, d, 45);
+    t.copy(
+        "skb_pose_dictionary_copy_bone_lengths",
+        "dict",
+        "dst",
+        "dst_len",
+        skb_pose_dictionary_copy_bone_lengths,
+        d,
+        14,
+    );
+    let e = "skb_pose_dictionary_copy_basis";
     let mut c = Canary::of::<f64>(46);
     // SAFETY: live dictionary or NULL; `c` holds 46 doubles (the basis then sigma).
     unsafe {
@@ -1307,7 +1353,7 @@ fn dictionary_rows(t: &mut Table, fx: &Fx) {
             "dict",
             Kind::Null,
             SKB_ERR_NULL_POINTER,
-            skb_pose_dictionary_basis(ptr::null(), 0, out, 45, sigma),
+            skb_pose_dictionary_copy_basis(ptr::null(), 0, out, 45, sigma),
             c.intact(),
         );
         t.check(
@@ -1315,34 +1361,34 @@ fn dictionary_rows(t: &mut Table, fx: &Fx) {
             "index",
             Kind::Max,
             SKB_ERR_OUT_OF_RANGE,
-            skb_pose_dictionary_basis(d, u32::MAX, out, 45, sigma),
+            skb_pose_dictionary_copy_basis(d, u32::MAX, out, 45, sigma),
             c.intact(),
         );
         t.check(
             e,
-            "out",
+            "dst",
             Kind::Null,
             SKB_ERR_NULL_POINTER,
-            skb_pose_dictionary_basis(d, 0, ptr::null_mut(), 45, sigma),
+            skb_pose_dictionary_copy_basis(d, 0, ptr::null_mut(), 45, sigma),
             c.intact(),
         );
         t.check(
             e,
-            "len",
+            "dst_len",
             Kind::Max,
             SKB_ERR_OUT_OF_RANGE,
-            skb_pose_dictionary_basis(d, 0, out, usize::MAX, sigma),
+            skb_pose_dictionary_copy_basis(d, 0, out, usize::MAX, sigma),
             c.intact(),
         );
         t.check(
             e,
-            "len",
+            "dst_len",
             Kind::Other,
             SKB_ERR_BUFFER_TOO_SMALL,
-            skb_pose_dictionary_basis(d, 0, out, 44, sigma),
+            skb_pose_dictionary_copy_basis(d, 0, out, 44, sigma),
             c.intact(),
         );
-        t.check(e, "sigma", Kind::Null, SKB_OK, skb_pose_dictionary_basis(d, 0, out, 45, ptr::null_mut()), true);
+        t.check(e, "sigma", Kind::Null, SKB_OK, skb_pose_dictionary_copy_basis(d, 0, out, 45, ptr::null_mut()), true);
     }
 }
 
@@ -1407,7 +1453,7 @@ fn estimate_rows(t: &mut Table, fx: &Fx) {
     // SAFETY: skb_pose3d is plain numbers; all-zero is a valid value.
     let mut start: skb_pose3d = unsafe { std::mem::zeroed() };
     // SAFETY: live handles; `start` is a local.
-    assert_eq!(unsafe { skb_estimate_pose(d, &j, o, &mut start) }, SKB_OK, "{}", last_error());
+    assert_eq!(unsafe { skb_pose3d_estimate(d, &j, o, &mut start) }, SKB_OK, "{}", last_error());
     let mut bad_joints: Vec<(&'static str, Kind, skb_joints2d, skb_status)> = Vec::new();
     // Documented: a joint that is not finite counts as missing ("fewer than 15 finite joints").
     for (v, k) in NON_FINITE {
@@ -1436,14 +1482,14 @@ fn estimate_rows(t: &mut Table, fx: &Fx) {
     let fig_ptr = fig.ptr::<skb_pose_figure>();
     let estimators: Vec<(&'static str, Estimator)> = vec![
         // SAFETY: pointers are live locals, live handles or NULL.
-        ("skb_estimate_pose", Box::new(|d, j, o, out| unsafe { skb_estimate_pose(d, j, o, out) })),
+        ("skb_pose3d_estimate", Box::new(|d, j, o, out| unsafe { skb_pose3d_estimate(d, j, o, out) })),
         // SAFETY: as above; `fig_ptr` is a canary holding one skb_pose_figure.
         (
-            "skb_estimate_pose_figure",
-            Box::new(move |d, j, o, out| unsafe { skb_estimate_pose_figure(d, j, o, out, fig_ptr) }),
+            "skb_pose3d_estimate_figure",
+            Box::new(move |d, j, o, out| unsafe { skb_pose3d_estimate_figure(d, j, o, out, fig_ptr) }),
         ),
         // SAFETY: as above; `start` is a live local.
-        ("skb_pose_refine", Box::new(|d, j, o, out| unsafe { skb_pose_refine(d, j, o, &start, out) })),
+        ("skb_pose3d_refine", Box::new(|d, j, o, out| unsafe { skb_pose3d_refine(d, j, o, &start, out) })),
     ];
     for (e, f) in &estimators {
         let mut c = Canary::of::<skb_pose3d>(1);
@@ -1457,34 +1503,41 @@ fn estimate_rows(t: &mut Table, fx: &Fx) {
     // SAFETY: live handles; NULL where tested; locals otherwise.
     unsafe {
         let mut c = Canary::of::<skb_pose3d>(1);
-        let e = "skb_estimate_pose_figure";
+        let e = "skb_pose3d_estimate_figure";
         t.check(
             e,
             "figure",
             Kind::Null,
             SKB_ERR_NULL_POINTER,
-            skb_estimate_pose_figure(d, &j, o, c.ptr(), ptr::null_mut()),
+            skb_pose3d_estimate_figure(d, &j, o, c.ptr(), ptr::null_mut()),
             c.intact(),
         );
-        let e = "skb_pose_refine";
+        let e = "skb_pose3d_refine";
         t.check(
             e,
             "start",
             Kind::Null,
             SKB_ERR_NULL_POINTER,
-            skb_pose_refine(d, &j, o, ptr::null(), c.ptr()),
+            skb_pose3d_refine(d, &j, o, ptr::null(), c.ptr()),
             c.intact(),
         );
         for (v, k) in NON_FINITE {
             let mut s = start;
             s.sx = v;
-            t.check(e, "start", k, SKB_ERR_NON_FINITE, skb_pose_refine(d, &j, o, &s, c.ptr()), c.intact());
+            t.check(e, "start", k, SKB_ERR_NON_FINITE, skb_pose3d_refine(d, &j, o, &s, c.ptr()), c.intact());
         }
-        t.check(e, "opts", Kind::Null, SKB_OK, skb_pose_refine(d, &j, ptr::null(), &start, c.ptr()), true);
-        let e = "skb_estimate_pose";
-        t.check(e, "opts", Kind::Null, SKB_OK, skb_estimate_pose(d, &j, ptr::null(), c.ptr()), true);
-        let e = "skb_estimate_pose_figure";
-        t.check(e, "opts", Kind::Null, SKB_OK, skb_estimate_pose_figure(d, &j, ptr::null(), c.ptr(), fig.ptr()), true);
+        t.check(e, "opts", Kind::Null, SKB_OK, skb_pose3d_refine(d, &j, ptr::null(), &start, c.ptr()), true);
+        let e = "skb_pose3d_estimate";
+        t.check(e, "opts", Kind::Null, SKB_OK, skb_pose3d_estimate(d, &j, ptr::null(), c.ptr()), true);
+        let e = "skb_pose3d_estimate_figure";
+        t.check(
+            e,
+            "opts",
+            Kind::Null,
+            SKB_OK,
+            skb_pose3d_estimate_figure(d, &j, ptr::null(), c.ptr(), fig.ptr()),
+            true,
+        );
     }
 }
 
@@ -1496,47 +1549,6 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
     let im = fx.sketch;
     let det = fx.detector as *const skb_detector;
     let e = "skb_detector_detect";
-    #[allow(clippy::type_complexity)]
-    let call = |d: *const skb_detector,
-                i: *const skb_image,
-                th: f64,
-                cell: f64,
-                xy: *mut f64,
-                xl: usize,
-                cf: *mut f64,
-                cl: usize,
-                sc: *mut f64| {
-        // SAFETY: live handles or NULL; buffers are canaries of the lengths passed (refused ones aside).
-        unsafe { skb_detector_detect(d, i, th, cell, xy, xl, cf, cl, sc) }
-    };
-    let (mut xy, mut cf, mut sc) = (Canary::of::<f64>(30), Canary::of::<f64>(15), Canary::of::<f64>(1));
-    let (xp, cp, sp) = (xy.ptr(), cf.ptr(), sc.ptr());
-    let mut rows: Vec<(&'static str, Kind, skb_status, skb_status)> = vec![
-        ("det", Kind::Null, SKB_ERR_NULL_POINTER, call(ptr::null(), &im, 0.0, 0.0, xp, 30, cp, 15, sp)),
-        ("image", Kind::Null, SKB_ERR_NULL_POINTER, call(det, ptr::null(), 0.0, 0.0, xp, 30, cp, 15, sp)),
-        ("joints_xy", Kind::Null, SKB_ERR_NULL_POINTER, call(det, &im, 0.0, 0.0, ptr::null_mut(), 30, cp, 15, sp)),
-        ("confidence", Kind::Null, SKB_ERR_NULL_POINTER, call(det, &im, 0.0, 0.0, xp, 30, ptr::null_mut(), 15, sp)),
-        ("score", Kind::Null, SKB_ERR_NULL_POINTER, call(det, &im, 0.0, 0.0, xp, 30, cp, 15, ptr::null_mut())),
-        ("joints_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, call(det, &im, 0.0, 0.0, xp, usize::MAX, cp, 15, sp)),
-        ("joints_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, call(det, &im, 0.0, 0.0, xp, 29, cp, 15, sp)),
-        ("confidence_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, call(det, &im, 0.0, 0.0, xp, 30, cp, usize::MAX, sp)),
-        ("confidence_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, call(det, &im, 0.0, 0.0, xp, 30, cp, 14, sp)),
-        ("image", Kind::Other, SKB_ERR_IMAGE_TOO_SMALL, call(det, &small_im, 0.0, 0.0, xp, 30, cp, 15, sp)),
-        ("min_cell_px", Kind::NaN, SKB_ERR_OUT_OF_RANGE, call(det, &im, 0.0, f64::NAN, xp, 30, cp, 15, sp)),
-        ("min_cell_px", Kind::PosInf, SKB_ERR_OUT_OF_RANGE, call(det, &im, 0.0, f64::INFINITY, xp, 30, cp, 15, sp)),
-        ("min_cell_px", Kind::NegInf, SKB_ERR_OUT_OF_RANGE, call(det, &im, 0.0, f64::NEG_INFINITY, xp, 30, cp, 15, sp)),
-        ("threshold", Kind::PosInf, SKB_ERR_NON_FINITE, call(det, &im, f64::INFINITY, 0.0, xp, 30, cp, 15, sp)),
-        ("threshold", Kind::NegInf, SKB_ERR_NON_FINITE, call(det, &im, f64::NEG_INFINITY, 0.0, xp, 30, cp, 15, sp)),
-    ];
-    for (param, kind, want, got) in rows.drain(..) {
-        t.check(e, param, kind, want, got, xy.intact() && cf.intact() && sc.intact());
-    }
-    // NaN threshold: the model's own (documented), so the call runs.
-    let got = call(det, &im, f64::NAN, 0.0, xp, 30, cp, 15, sp);
-    let ran = got == SKB_OK || got == SKB_ERR_NO_FIGURE;
-    t.check(e, "threshold", Kind::NaN, SKB_OK, if ran { SKB_OK } else { got }, true);
-
-    let e = "skb_detector_detect_with_progress";
     let o = fx.detect_opts as *const skb_detect_options;
     #[allow(clippy::type_complexity)]
     let call = |d: *const skb_detector,
@@ -1548,7 +1560,7 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
                 cl: usize,
                 sc: *mut f64| {
         // SAFETY: live handles or NULL; buffers are canaries of the lengths passed (refused ones aside).
-        unsafe { skb_detector_detect_with_progress(d, i, o, None, ptr::null_mut(), xy, xl, cf, cl, sc) }
+        unsafe { skb_detector_detect(d, i, o, None, ptr::null_mut(), xy, xl, cf, cl, sc) }
     };
     let (mut xy, mut cf, mut sc) = (Canary::of::<f64>(30), Canary::of::<f64>(15), Canary::of::<f64>(1));
     let (xp, cp, sp) = (xy.ptr(), cf.ptr(), sc.ptr());
@@ -1574,7 +1586,7 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
 
     let ctx = fx.ctx as *const skb_context;
     let o = fx.detect_opts as *const skb_detect_options;
-    let e = "skb_detect";
+    let e = "skb_context_detect";
     #[allow(clippy::type_complexity)]
     let call = |c: *const skb_context,
                 i: *const skb_image,
@@ -1585,7 +1597,7 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
                 cl: usize,
                 sc: *mut f64| {
         // SAFETY: as above.
-        unsafe { skb_detect(c, i, o, xy, xl, cf, cl, sc) }
+        unsafe { skb_context_detect(c, i, o, xy, xl, cf, cl, sc) }
     };
     let (mut xy, mut cf, mut sc) = (Canary::of::<f64>(30), Canary::of::<f64>(15), Canary::of::<f64>(1));
     let (xp, cp, sp) = (xy.ptr(), cf.ptr(), sc.ptr());
@@ -1606,7 +1618,7 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
         t.check(e, param, kind, want, got, xy.intact() && cf.intact() && sc.intact());
     }
     let o = fx.detect_opts as *const skb_detect_options;
-    let e = "skb_detect_figure";
+    let e = "skb_context_detect_figure";
     #[allow(clippy::type_complexity)]
     let call = |c: *const skb_context,
                 i: *const skb_image,
@@ -1617,7 +1629,7 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
                 cl: usize,
                 info: *mut skb_figure_info| {
         // SAFETY: as above.
-        unsafe { skb_detect_figure(c, i, o, xy, xl, cf, cl, info) }
+        unsafe { skb_context_detect_figure(c, i, o, xy, xl, cf, cl, info) }
     };
     let (mut xy, mut cf, mut inf) = (Canary::of::<f64>(30), Canary::of::<f64>(15), Canary::of::<skb_figure_info>(1));
     let (xp, cp, ip) = (xy.ptr(), cf.ptr(), inf.ptr());
@@ -1659,7 +1671,7 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
         t.check(e, "result", Kind::Other, SKB_ERR_OUT_OF_RANGE, skb_result_facing(r, fp), fac.intact());
     }
     let o = fx.detect_opts as *const skb_detect_options;
-    let e = "skb_detect_facing";
+    let e = "skb_context_detect_facing";
     #[allow(clippy::type_complexity)]
     let call = |c: *const skb_context,
                 i: *const skb_image,
@@ -1671,7 +1683,7 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
                 info: *mut skb_figure_info,
                 facing: *mut skb_facing_info| {
         // SAFETY: as above.
-        unsafe { skb_detect_facing(c, i, o, xy, xl, cf, cl, info, facing) }
+        unsafe { skb_context_detect_facing(c, i, o, xy, xl, cf, cl, info, facing) }
     };
     let (mut xy, mut cf, mut inf, mut fac) = (
         Canary::of::<f64>(30),
@@ -1716,7 +1728,7 @@ fn detect_rows(t: &mut Table, fx: &Fx) {
         SKB_DETECTOR_AUTO,
     );
     // Documented: any non-zero value is strict.
-    t.set_int("skb_detect_options_set_strict", "strict", skb_detect_options_set_strict, o, u32::MAX, SKB_OK, 0);
+    t.set_bool("skb_detect_options_set_strict", skb_detect_options_set_strict, o);
     let o = fx.detect_opts;
     let e = "skb_detect_options_set_threshold";
     // SAFETY: live options or NULL.
@@ -1816,17 +1828,9 @@ fn fit_option_rows(t: &mut Table, fx: &Fx) {
     t.set_f64("skb_fit_options_set_temperature", "temperature", skb_fit_options_set_temperature, o, 2.0);
     t.set_f64("skb_fit_options_set_joint_weight", "weight", skb_fit_options_set_joint_weight, o, 1.0);
     t.set_f64("skb_fit_options_set_height", "metres", skb_fit_options_set_height, o, 1.8);
-    t.set_int("skb_fit_options_set_sample_camera", "on", skb_fit_options_set_sample_camera, o, i32::MAX, SKB_OK, 1);
+    t.set_bool("skb_fit_options_set_sample_camera", skb_fit_options_set_sample_camera, o);
     t.set_f64("skb_fit_options_set_proportion_sd", "sd", skb_fit_options_set_proportion_sd, o, 0.1);
-    t.set_int(
-        "skb_fit_options_set_estimate_proportions",
-        "on",
-        skb_fit_options_set_estimate_proportions,
-        o,
-        i32::MAX,
-        SKB_OK,
-        1,
-    );
+    t.set_bool("skb_fit_options_set_estimate_proportions", skb_fit_options_set_estimate_proportions, o);
     t.set_int(
         "skb_fit_options_set_raster_side",
         "side",
@@ -1905,7 +1909,7 @@ fn fit_option_rows(t: &mut Table, fx: &Fx) {
     }
 }
 
-/// `skb_fit_shape` and `skb_run_pipeline`: every row fails before the fit starts.
+/// `skb_context_fit_shape` and `skb_pipeline_run`: every row fails before the fit starts.
 fn long_call_rows(t: &mut Table, fx: &Fx) {
     let ctx = fx.ctx as *const skb_context;
     let mut j3 = [0f64; 45];
@@ -1913,14 +1917,14 @@ fn long_call_rows(t: &mut Table, fx: &Fx) {
     let mut est: skb_pose3d = unsafe { std::mem::zeroed() };
     // SAFETY: live handles and locals.
     unsafe {
-        assert_eq!(skb_estimate_pose(fx.dict, &fx.joints, ptr::null(), &mut est), SKB_OK);
+        assert_eq!(skb_pose3d_estimate(fx.dict, &fx.joints, ptr::null(), &mut est), SKB_OK);
         j3.iter_mut().zip(est.joints.iter().flatten()).for_each(|(d, s)| *d = *s);
     }
     let cam = skb_camera { sx: est.sx, sy: est.sy, r: est.r, t: est.t };
     let blank = [0u8; 64 * 64];
     let blank_im = skb_image { data: blank.as_ptr(), width: 64, height: 64, stride: 64, channels: 1 };
     let edges = fx.sketch;
-    let e = "skb_fit_shape";
+    let e = "skb_context_fit_shape";
     let mut out = Canary::of::<*mut skb_mesh>(1);
     let mut score = Canary::of::<f64>(1);
     let (op, sp) = (out.ptr(), score.ptr());
@@ -1933,7 +1937,7 @@ fn long_call_rows(t: &mut Table, fx: &Fx) {
                o: *const skb_fit_options,
                out: *mut *mut skb_mesh| {
         // SAFETY: live handles or NULL; `j` holds 45 doubles (larger lengths are refused).
-        unsafe { skb_fit_shape(c, j, jl, cm, ed, o, None, ptr::null_mut(), sp, out) }
+        unsafe { skb_context_fit_shape(c, j, jl, cm, ed, o, None, ptr::null_mut(), sp, out) }
     };
     let o = fx.fit_opts as *const skb_fit_options;
     let mut rows: Vec<(&'static str, Kind, skb_status, skb_status)> = vec![
@@ -1966,14 +1970,15 @@ fn long_call_rows(t: &mut Table, fx: &Fx) {
     }
     // `score` may be NULL: a blank edge map still fails first, and the NULL is not what fails.
     // SAFETY: live handles; `out` a canary.
-    let s =
-        unsafe { skb_fit_shape(ctx, j3.as_ptr(), 45, &cam, &blank_im, o, None, ptr::null_mut(), ptr::null_mut(), op) };
+    let s = unsafe {
+        skb_context_fit_shape(ctx, j3.as_ptr(), 45, &cam, &blank_im, o, None, ptr::null_mut(), ptr::null_mut(), op)
+    };
     t.check(e, "score", Kind::Null, SKB_ERR_BLANK_IMAGE, s, out.intact());
 
     for (e, entry) in [
-        ("skb_run_pipeline", Entry::Plain),
-        ("skb_run_pipeline_progressive", Entry::Progressive),
-        ("skb_run_pipeline_views", Entry::Views),
+        ("skb_pipeline_run", Entry::Plain),
+        ("skb_pipeline_run_progressive", Entry::Progressive),
+        ("skb_pipeline_run_views", Entry::Views),
     ] {
         pipeline_rows(t, fx, ctx, &blank_im, e, entry);
     }
@@ -1983,17 +1988,17 @@ fn long_call_rows(t: &mut Table, fx: &Fx) {
 /// Which entry point of the main job [`pipeline_rows`] calls.
 #[derive(Clone, Copy)]
 enum Entry {
-    /// `skb_run_pipeline`.
+    /// `skb_pipeline_run`.
     Plain,
-    /// `skb_run_pipeline_progressive` with an interim callback.
+    /// `skb_pipeline_run_progressive` with an interim callback.
     Progressive,
-    /// `skb_run_pipeline_views` with no views.
+    /// `skb_pipeline_run_views` with no views.
     Views,
 }
 
-/// `skb_run_pipeline_views`' own parameters: the views array and count, and a view's fields.
+/// `skb_pipeline_run_views`' own parameters: the views array and count, and a view's fields.
 fn view_input_rows(t: &mut Table, fx: &Fx, ctx: *const skb_context) {
-    let e = "skb_run_pipeline_views";
+    let e = "skb_pipeline_run_views";
     let mut out = Canary::of::<*mut skb_result>(1);
     let op = out.ptr();
     let (sk, j) = (fx.sketch, fx.joints);
@@ -2001,7 +2006,7 @@ fn view_input_rows(t: &mut Table, fx: &Fx, ctx: *const skb_context) {
         // SAFETY: live handles and locals; `views` NULL or holding `n` entries (larger counts are
         // refused before use).
         unsafe {
-            skb_run_pipeline_views(
+            skb_pipeline_run_views(
                 ctx,
                 &sk,
                 &j,
@@ -2049,13 +2054,13 @@ fn pipeline_rows(t: &mut Table, fx: &Fx, ctx: *const skb_context, blank_im: &skb
         // SAFETY: live handles, locals or NULL; the interim callback only counts.
         unsafe {
             match entry {
-                Entry::Plain => skb_run_pipeline(c, s, j, d, po, fo, None, ptr::null_mut(), out),
+                Entry::Plain => skb_pipeline_run(c, s, j, d, po, fo, None, ptr::null_mut(), out),
                 Entry::Progressive => {
-                    skb_run_pipeline_progressive(c, s, j, d, po, fo, None, Some(no_interim), ptr::null_mut(), out)
+                    skb_pipeline_run_progressive(c, s, j, d, po, fo, None, Some(no_interim), ptr::null_mut(), out)
                 }
                 Entry::Views => {
                     let none = ptr::null();
-                    skb_run_pipeline_views(c, s, j, none, 0, d, po, fo, None, Some(no_interim), ptr::null_mut(), out)
+                    skb_pipeline_run_views(c, s, j, none, 0, d, po, fo, None, Some(no_interim), ptr::null_mut(), out)
                 }
             }
         }
@@ -2102,8 +2107,9 @@ fn result_rows(t: &mut Table, fx: &Fx) {
     let mut nk = 0usize;
     // SAFETY: live result; locals.
     unsafe {
-        assert_eq!(skb_result_counts(r, &mut nv, &mut nf), SKB_OK);
-        assert_eq!(skb_result_shape_weights(r, ptr::null_mut(), 0, &mut nk), SKB_OK);
+        assert_eq!(skb_result_vertex_count(r, &mut nv), SKB_OK);
+        assert_eq!(skb_result_face_count(r, &mut nf), SKB_OK);
+        assert_eq!(skb_result_shape_weight_count(r, &mut nk), SKB_OK);
     }
     // Two-output getters: NULL result, NULL first output, NULL second output (optional).
     macro_rules! pair {
@@ -2123,21 +2129,12 @@ fn result_rows(t: &mut Table, fx: &Fx) {
     pair!("skb_result_gender", skb_result_gender, "gender": u32, "by_score": bool, true);
     pair!("skb_result_gender_value", skb_result_gender_value, "value": f64, "confidence": f64, true);
     pair!("skb_result_evidence", skb_result_evidence, "low": bool, "edge_support": f64, true);
-    // Both outputs of the counts may be NULL.
+    t.getter("skb_result_vertex_count", "result", "out", skb_result_vertex_count, r);
+    t.getter("skb_result_face_count", "result", "out", skb_result_face_count, r);
+    t.getter("skb_result_shape_weight_count", "result", "out", skb_result_shape_weight_count, r);
+    t.copy("skb_result_copy_shape_weights", "result", "dst", "dst_len", skb_result_copy_shape_weights, r, nk);
     // SAFETY: live result or NULL; locals.
     unsafe {
-        let e = "skb_result_counts";
-        let (mut a, mut b) = (Canary::of::<usize>(1), Canary::of::<usize>(1));
-        t.check(
-            e,
-            "result",
-            Kind::Null,
-            SKB_ERR_NULL_POINTER,
-            skb_result_counts(ptr::null(), a.ptr(), b.ptr()),
-            a.intact() && b.intact(),
-        );
-        t.check(e, "vertices", Kind::Null, SKB_OK, skb_result_counts(r, ptr::null_mut(), b.ptr()), true);
-        t.check(e, "faces", Kind::Null, SKB_OK, skb_result_counts(r, a.ptr(), ptr::null_mut()), true);
         let e = "skb_result_score";
         let mut g = 0u32;
         skb_result_gender(r, &mut g, ptr::null_mut());
@@ -2162,10 +2159,11 @@ fn result_rows(t: &mut Table, fx: &Fx) {
         t.check(e, "dst_len", Kind::Other, SKB_OK, f(r, c.ptr(), 3 * nv), true);
     }
     t.copy("skb_result_copy_faces", "result", "dst", "dst_len", skb_result_copy_faces, r, 4 * nf);
-    t.copy("skb_result_part_support", "result", "dst", "dst_len", skb_result_part_support, r, 6);
+    t.copy("skb_result_copy_part_support", "result", "dst", "dst_len", skb_result_copy_part_support, r, 6);
     two_buffer_rows(t, "skb_result_copy_skin_weights", "result", skb_result_copy_skin_weights, r, 4 * nv);
     t.getter("skb_result_joints2d", "result", "out", skb_result_joints2d, r);
-    t.getter("skb_result_view_count", "result", "count", skb_result_view_count, r);
+    t.getter("skb_result_view_count", "result", "out", skb_result_view_count, r);
+    t.getter("skb_result_view_warnings_length", "result", "out", skb_result_view_warnings_length, r);
     // SAFETY: live result or NULL; canaries of the sizes passed (the result has no views and no
     // view warnings: the text is the empty string, one byte with its NUL).
     unsafe {
@@ -2175,71 +2173,37 @@ fn result_rows(t: &mut Table, fx: &Fx) {
         t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_view(r, 0, ptr::null_mut()), true);
         t.check(e, "index", Kind::Max, SKB_ERR_OUT_OF_RANGE, skb_result_view(r, usize::MAX, c.ptr()), c.intact());
         t.check(e, "index", Kind::Other, SKB_ERR_OUT_OF_RANGE, skb_result_view(r, 0, c.ptr()), c.intact());
-        let e = "skb_result_copy_view_warnings";
-        let f = |res: *const skb_result, dst: *mut std::ffi::c_char, len: usize, n: *mut usize| {
-            skb_result_copy_view_warnings(res, dst, len, n)
-        };
-        let mut b = Canary::of::<std::ffi::c_char>(1);
-        let mut n = Canary::of::<usize>(1);
-        let s = f(ptr::null(), b.ptr(), 1, n.ptr());
-        t.check(e, "result", Kind::Null, SKB_ERR_NULL_POINTER, s, b.intact() && n.intact());
-        t.check(e, "dst", Kind::Null, SKB_OK, f(r, ptr::null_mut(), 0, n.ptr()), true);
-        t.check(e, "len", Kind::Null, SKB_OK, f(r, b.ptr(), 1, ptr::null_mut()), true);
-        let mut b = Canary::of::<std::ffi::c_char>(1);
-        t.check(e, "dst_len", Kind::Max, SKB_ERR_OUT_OF_RANGE, f(r, b.ptr(), usize::MAX, ptr::null_mut()), b.intact());
-        t.check(e, "dst_len", Kind::Other, SKB_ERR_BUFFER_TOO_SMALL, f(r, b.ptr(), 0, ptr::null_mut()), b.intact());
     }
+    // The result has no views: its warnings are the empty text, one byte with its NUL.
+    t.copy("skb_result_copy_view_warnings", "result", "dst", "dst_len", skb_result_copy_view_warnings, r, 1);
     t.getter("skb_result_camera", "result", "out", skb_result_camera, r);
     t.indexed_copy("skb_result_copy_joints3d", "result", "which", skb_result_copy_joints3d, r, 2, u32::MAX, 45, 44);
     // SAFETY: live result or NULL; canaries of the sizes passed.
     unsafe {
-        let e = "skb_result_shape_weights";
-        let mut c = Canary::of::<f64>(nk);
-        let mut n = Canary::of::<usize>(1);
+        let e = "skb_mesh_new_from_result";
+        let mut m = Canary::of::<*mut skb_mesh>(1);
         t.check(
             e,
             "result",
             Kind::Null,
             SKB_ERR_NULL_POINTER,
-            skb_result_shape_weights(ptr::null(), c.ptr(), nk, n.ptr()),
-            c.intact() && n.intact(),
+            skb_mesh_new_from_result(ptr::null(), m.ptr()),
+            m.intact(),
         );
-        t.check(e, "dst", Kind::Null, SKB_OK, skb_result_shape_weights(r, ptr::null_mut(), 0, n.ptr()), true);
-        let mut n = Canary::of::<usize>(1);
-        t.check(
-            e,
-            "dst_len",
-            Kind::Max,
-            SKB_ERR_OUT_OF_RANGE,
-            skb_result_shape_weights(r, c.ptr(), usize::MAX, n.ptr()),
-            c.intact() && n.intact(),
-        );
-        t.check(
-            e,
-            "dst_len",
-            Kind::Other,
-            SKB_ERR_BUFFER_TOO_SMALL,
-            skb_result_shape_weights(r, c.ptr(), nk - 1, n.ptr()),
-            c.intact() && n.intact(),
-        );
-        t.check(e, "count", Kind::Null, SKB_OK, skb_result_shape_weights(r, c.ptr(), nk, ptr::null_mut()), true);
-        let e = "skb_result_mesh";
-        let mut m = Canary::of::<*mut skb_mesh>(1);
-        t.check(e, "result", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_mesh(ptr::null(), m.ptr()), m.intact());
-        t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_mesh(r, ptr::null_mut()), true);
-        t.check(e, "out", Kind::Other, SKB_OK, skb_result_mesh(r, m.ptr()), true);
+        t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, skb_mesh_new_from_result(r, ptr::null_mut()), true);
+        t.check(e, "out", Kind::Other, SKB_OK, skb_mesh_new_from_result(r, m.ptr()), true);
         skb_mesh_free(*m.ptr::<*mut skb_mesh>());
     }
 }
 
 fn gray_image_rows(t: &mut Table, fx: &Fx) {
     let json = CString::new(JOINTS).unwrap();
-    t.loader("skb_gray_image_load", skb_gray_image_load, &json, SKB_ERR_DECODE);
+    t.loader("skb_gray_image_new_from_file", skb_gray_image_new_from_file, &json, SKB_ERR_DECODE);
     t.getter("skb_gray_image_view", "img", "out", skb_gray_image_view, fx.gray as *const skb_gray_image);
 }
 
 fn render_rows(t: &mut Table, fx: &Fx) {
-    let e = "skb_render_sketch";
+    let e = "skb_context_render_sketch";
     let ctx = fx.ctx as *const skb_context;
     let o = fx.sketch_opts as *const skb_sketch_options;
     let w = [0.01f32];
@@ -2261,7 +2225,7 @@ fn render_rows(t: &mut Table, fx: &Fx) {
                 jo: *mut f64,
                 vo: *mut u8| {
         // SAFETY: live handles, NULL or canaries of the sizes passed (refused sizes aside).
-        unsafe { skb_render_sketch(c, g, wt, n, j, seed, w, h, o, p, st, len, jo, vo) }
+        unsafe { skb_context_render_sketch(c, g, wt, n, j, seed, w, h, o, p, st, len, jo, vo) }
     };
     let rows: Vec<(&'static str, Kind, skb_status, skb_status)> = vec![
         (
@@ -2367,8 +2331,9 @@ fn render_rows(t: &mut Table, fx: &Fx) {
     t.check(e, "out_visible", Kind::Null, SKB_OK, s, true);
     t.check(e, "joints3d", Kind::Null, SKB_OK, s, true);
     // SAFETY: NULL options are the random style and camera.
-    let s =
-        unsafe { skb_render_sketch(ctx, 1, w.as_ptr(), 1, ptr::null(), 1, 48, 40, ptr::null(), pp, 48, 1920, jp, vp) };
+    let s = unsafe {
+        skb_context_render_sketch(ctx, 1, w.as_ptr(), 1, ptr::null(), 1, 48, 40, ptr::null(), pp, 48, 1920, jp, vp)
+    };
     t.check(e, "opts", Kind::Null, SKB_OK, s, true);
 }
 
@@ -2530,9 +2495,18 @@ fn alternatives_rows(t: &mut Table, fx: &Fx) {
         t.free("skb_pose_estimate_free", "est", skb_pose_estimate_free);
         let ec = est as *const skb_pose_estimate;
         t.getter("skb_pose_estimate_pose", "est", "out", skb_pose_estimate_pose, ec);
-        t.getter("skb_pose_estimate_num_alternatives", "est", "count", skb_pose_estimate_num_alternatives, ec);
-        let mut n = 0u32;
-        assert_eq!(skb_pose_estimate_num_alternatives(ec, &mut n), SKB_OK);
+        t.getter("skb_pose_estimate_alternative_count", "est", "out", skb_pose_estimate_alternative_count, ec);
+        t.indexed_getter(
+            "skb_pose_estimate_alternative_flipped_count",
+            "est",
+            "index",
+            skb_pose_estimate_alternative_flipped_count,
+            ec,
+            1,
+            u32::MAX,
+        );
+        let mut n = 0usize;
+        assert_eq!(skb_pose_estimate_alternative_count(ec, &mut n), SKB_OK);
         assert!(n >= 2, "the example's estimate has alternatives: {n}");
 
         let e = "skb_pose_estimate_copy_alternative_joints";
@@ -2562,7 +2536,7 @@ fn alternatives_rows(t: &mut Table, fx: &Fx) {
             "index",
             Kind::Other,
             SKB_ERR_OUT_OF_RANGE,
-            f(ec, n, c.ptr(), 45, s.ptr()),
+            f(ec, n as u32, c.ptr(), 45, s.ptr()),
             c.intact() && s.intact(),
         );
         t.check(e, "dst", Kind::Null, SKB_ERR_NULL_POINTER, f(ec, 0, ptr::null_mut(), 45, s.ptr()), s.intact());
@@ -2585,88 +2559,87 @@ fn alternatives_rows(t: &mut Table, fx: &Fx) {
         t.check(e, "score", Kind::Null, SKB_OK, f(ec, 1, c.ptr(), 45, ptr::null_mut()), true);
         t.check(e, "score", Kind::Other, SKB_OK, f(ec, 1, c.ptr(), 45, s.ptr()), true);
 
-        let e = "skb_pose_estimate_copy_alternative_flipped";
-        let f = |h: *const skb_pose_estimate, i: u32, dst: *mut u32, len: usize, count: *mut usize| {
-            skb_pose_estimate_copy_alternative_flipped(h, i, dst, len, count)
-        };
-        let mut c = Canary::of::<u32>(8);
-        let mut k = Canary::of::<usize>(1);
-        t.check(
-            e,
+        t.indexed_copy(
+            "skb_pose_estimate_copy_alternative_flipped",
             "est",
-            Kind::Null,
-            SKB_ERR_NULL_POINTER,
-            f(ptr::null(), 1, c.ptr(), 8, k.ptr()),
-            c.intact() && k.intact(),
-        );
-        t.check(
-            e,
             "index",
-            Kind::Max,
-            SKB_ERR_OUT_OF_RANGE,
-            f(ec, u32::MAX, c.ptr(), 8, k.ptr()),
-            c.intact() && k.intact(),
+            skb_pose_estimate_copy_alternative_flipped,
+            ec,
+            1,
+            u32::MAX,
+            8,
+            0,
         );
-        t.check(
-            e,
-            "dst_len",
-            Kind::Max,
-            SKB_ERR_OUT_OF_RANGE,
-            f(ec, 1, c.ptr(), usize::MAX, k.ptr()),
-            c.intact() && k.intact(),
-        );
-        t.check(
-            e,
-            "dst_len",
-            Kind::Other,
-            SKB_ERR_BUFFER_TOO_SMALL,
-            f(ec, 1, c.ptr(), 0, k.ptr()),
-            c.intact() && k.intact(),
-        );
-        t.check(e, "dst", Kind::Null, SKB_OK, f(ec, 1, ptr::null_mut(), 0, k.ptr()), true);
-        t.check(e, "count", Kind::Null, SKB_OK, f(ec, 1, c.ptr(), 8, ptr::null_mut()), true);
 
-        let e = "skb_pose_flip_limb";
+        let e = "skb_pose_estimate_flip_limb";
         let mut oc = Canary::of::<u32>(1);
         t.check(
             e,
             "est",
             Kind::Null,
             SKB_ERR_NULL_POINTER,
-            skb_pose_flip_limb(ptr::null_mut(), 0, oc.ptr()),
+            skb_pose_estimate_flip_limb(ptr::null_mut(), 0, oc.ptr()),
             oc.intact(),
         );
-        t.check(e, "limb", Kind::Max, SKB_ERR_OUT_OF_RANGE, skb_pose_flip_limb(est, u32::MAX, oc.ptr()), oc.intact());
+        t.check(
+            e,
+            "limb",
+            Kind::Max,
+            SKB_ERR_OUT_OF_RANGE,
+            skb_pose_estimate_flip_limb(est, u32::MAX, oc.ptr()),
+            oc.intact(),
+        );
         t.check(
             e,
             "limb",
             Kind::Other,
             SKB_ERR_OUT_OF_RANGE,
-            skb_pose_flip_limb(est, SKB_NUM_LIMBS, oc.ptr()),
+            skb_pose_estimate_flip_limb(est, SKB_NUM_LIMBS, oc.ptr()),
             oc.intact(),
         );
-        t.check(e, "outcome", Kind::Null, SKB_OK, skb_pose_flip_limb(est, SKB_LIMB_L_THIGH, ptr::null_mut()), true);
-        t.check(e, "outcome", Kind::Other, SKB_OK, skb_pose_flip_limb(est, SKB_LIMB_L_THIGH, oc.ptr()), true);
+        t.check(
+            e,
+            "outcome",
+            Kind::Null,
+            SKB_OK,
+            skb_pose_estimate_flip_limb(est, SKB_LIMB_L_THIGH, ptr::null_mut()),
+            true,
+        );
+        t.check(e, "outcome", Kind::Other, SKB_OK, skb_pose_estimate_flip_limb(est, SKB_LIMB_L_THIGH, oc.ptr()), true);
 
-        let e = "skb_pose_estimate_pick";
-        t.check(e, "est", Kind::Null, SKB_ERR_NULL_POINTER, skb_pose_estimate_pick(ptr::null_mut(), 0), true);
-        t.check(e, "index", Kind::Max, SKB_ERR_OUT_OF_RANGE, skb_pose_estimate_pick(est, u32::MAX), true);
-        t.check(e, "index", Kind::Other, SKB_OK, skb_pose_estimate_pick(est, 0), true);
+        let e = "skb_pose_estimate_pick_alternative";
+        t.check(
+            e,
+            "est",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_pose_estimate_pick_alternative(ptr::null_mut(), 0),
+            true,
+        );
+        t.check(e, "index", Kind::Max, SKB_ERR_OUT_OF_RANGE, skb_pose_estimate_pick_alternative(est, u32::MAX), true);
+        t.check(e, "index", Kind::Other, SKB_OK, skb_pose_estimate_pick_alternative(est, 0), true);
         skb_pose_estimate_free(est);
 
         let r = fx.result;
-        let e = "skb_result_pose_estimate";
+        let e = "skb_pose_estimate_new_from_result";
         let mut c = Canary::of::<*mut skb_pose_estimate>(1);
         t.check(
             e,
             "result",
             Kind::Null,
             SKB_ERR_NULL_POINTER,
-            skb_result_pose_estimate(ptr::null(), c.ptr()),
+            skb_pose_estimate_new_from_result(ptr::null(), c.ptr()),
             c.intact(),
         );
-        t.check(e, "out", Kind::Null, SKB_ERR_NULL_POINTER, skb_result_pose_estimate(r, ptr::null_mut()), true);
-        t.check(e, "out", Kind::Other, SKB_OK, skb_result_pose_estimate(r, c.ptr()), true);
+        t.check(
+            e,
+            "out",
+            Kind::Null,
+            SKB_ERR_NULL_POINTER,
+            skb_pose_estimate_new_from_result(r, ptr::null_mut()),
+            true,
+        );
+        t.check(e, "out", Kind::Other, SKB_OK, skb_pose_estimate_new_from_result(r, c.ptr()), true);
         skb_pose_estimate_free(*c.ptr::<*mut skb_pose_estimate>());
 
         let e = "skb_result_pick_alternative";

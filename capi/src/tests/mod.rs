@@ -5,6 +5,7 @@ mod body;
 mod fit;
 mod header;
 mod misuse;
+mod naming;
 mod pose;
 mod reliability;
 mod rig;

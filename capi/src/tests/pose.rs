@@ -81,7 +81,7 @@ fn mesh_poses_rasterises_and_exports() {
         );
         let mut r = ptr::null_mut();
         assert_eq!(skb_rasterizer_new(&mut r), skb_status::SKB_OK);
-        let st = skb_rasterize_triangles(
+        let st = skb_rasterizer_rasterize_triangles(
             r,
             verts.as_ptr(),
             nv,
@@ -108,11 +108,11 @@ fn mesh_poses_rasterises_and_exports() {
     let p = |n: &str| CString::new(dir.join(n).to_str().unwrap()).unwrap();
     // SAFETY: the pointers are live locals or handles made above and not freed yet; lengths are theirs.
     unsafe {
-        assert_eq!(skb_mesh_write_glb(mesh, p("a.glb").as_ptr()), skb_status::SKB_OK, "{}", last_error());
+        assert_eq!(skb_mesh_write_glb(mesh, p("a.glb").as_ptr(), ptr::null()), skb_status::SKB_OK, "{}", last_error());
         assert_eq!(skb_mesh_write_obj(mesh, p("a.obj").as_ptr(), true), skb_status::SKB_OK, "{}", last_error());
         assert_eq!(skb_mesh_write_preview(mesh, p("a.png").as_ptr(), 64), skb_status::SKB_OK, "{}", last_error());
         assert_eq!(skb_mesh_write_obj(mesh, p("missing/a.obj").as_ptr(), false), skb_status::SKB_ERR_IO);
-        assert_eq!(skb_mesh_write_glb(mesh, ptr::null()), skb_status::SKB_ERR_NULL_POINTER);
+        assert_eq!(skb_mesh_write_glb(mesh, ptr::null(), ptr::null()), skb_status::SKB_ERR_NULL_POINTER);
         // Export options: Mixamo names, T-pose, pelvis origin; out-of-range values are specific
         // errors that leave the options as they were.
         let mut o: *mut skb_export_options = ptr::null_mut();
@@ -124,7 +124,7 @@ fn mesh_poses_rasterises_and_exports() {
         assert_eq!(skb_export_options_set_rest_pose(o, 2), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_export_options_set_origin(o, 9), skb_status::SKB_ERR_OUT_OF_RANGE);
         assert_eq!(skb_export_options_set_naming(ptr::null_mut(), 0), skb_status::SKB_ERR_NULL_POINTER);
-        let st = skb_mesh_write_glb_with_options(mesh, p("m.glb").as_ptr(), o);
+        let st = skb_mesh_write_glb(mesh, p("m.glb").as_ptr(), o);
         assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
         skb_export_options_free(o);
         skb_export_options_free(ptr::null_mut());
@@ -180,7 +180,7 @@ fn mesh_poses_rasterises_and_exports() {
             skb_status::SKB_ERR_OUT_OF_RANGE
         );
         assert_eq!(
-            skb_rasterize_triangles(
+            skb_rasterizer_rasterize_triangles(
                 ptr::null_mut(),
                 verts.as_ptr(),
                 nv,

@@ -29,14 +29,14 @@ fn wrapping_strides_are_refused_with_nothing_written() {
     let mut dst = [0xA5u8; 64];
     // SAFETY: test code; each pointer is NULL or a live local of the documented size.
     unsafe {
-        let s = skb_canny(&im, 50.0, 150.0, 3, false, dst.as_mut_ptr(), stride, dst.len());
+        let s = skb_image_canny(&im, 50.0, 150.0, 3, false, dst.as_mut_ptr(), stride, dst.len());
         assert_eq!(s, skb_status::SKB_ERR_OUT_OF_RANGE, "{}", last_error());
         assert!(last_error().contains("stride"), "{}", last_error());
-        let s = skb_gaussian_blur(&im, 1.0, dst.as_mut_ptr(), stride, dst.len());
+        let s = skb_image_gaussian_blur(&im, 1.0, dst.as_mut_ptr(), stride, dst.len());
         assert_eq!(s, skb_status::SKB_ERR_OUT_OF_RANGE, "{}", last_error());
         let mut ctx = ptr::null_mut();
         assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
-        let s = skb_render_sketch(
+        let s = skb_context_render_sketch(
             ctx,
             SKB_GENDER_MALE,
             ptr::null(),
@@ -65,7 +65,7 @@ fn image_loader_refuses_special_files() {
         let path = CString::new(p).unwrap();
         let mut out = ptr::null_mut();
         // SAFETY: test code; each pointer is NULL or a live local of the documented size.
-        assert_eq!(unsafe { skb_gray_image_load(path.as_ptr(), &mut out) }, skb_status::SKB_ERR_IO, "{p}");
+        assert_eq!(unsafe { skb_gray_image_new_from_file(path.as_ptr(), &mut out) }, skb_status::SKB_ERR_IO, "{p}");
         assert!(out.is_null());
         assert!(last_error().contains("not a regular file"), "{}", last_error());
     }
@@ -115,7 +115,7 @@ fn glb_writer_refuses_a_symlink() {
         let mut mesh = ptr::null_mut();
         assert_eq!(skb_mesh_new_from_shape(ctx, SKB_GENDER_FEMALE, ptr::null(), 0, &mut mesh), skb_status::SKB_OK);
         let p = CString::new(link.to_str().unwrap()).unwrap();
-        assert_eq!(skb_mesh_write_glb(mesh, p.as_ptr()), skb_status::SKB_ERR_IO, "{}", last_error());
+        assert_eq!(skb_mesh_write_glb(mesh, p.as_ptr(), ptr::null()), skb_status::SKB_ERR_IO, "{}", last_error());
         assert!(last_error().contains("not a regular file"), "{}", last_error());
         skb_mesh_free(mesh);
         skb_context_free(ctx);
@@ -209,7 +209,7 @@ fn detector_models_are_bounded_and_detection_cancellable() {
         let run = |cancel_at: usize| {
             let mut pr = DetectProgress { calls: 0, cancel_at, after_cancel: 0 };
             let (mut xy, mut cf, mut score) = ([7.0; 30], [7.0; 15], 7.0);
-            let s = skb_detector_detect_with_progress(
+            let s = skb_detector_detect(
                 det,
                 &im,
                 opts,

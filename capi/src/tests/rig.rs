@@ -1,5 +1,5 @@
 //! The rig options of issue 49 through the C API: twist bones, IK targets, the pose as the rest
-//! and shape keys, as `skb_mesh_rig_new` reports them.
+//! and shape keys, as `skb_rig_new_from_mesh` reports them.
 
 use std::ffi::CStr;
 use std::ptr;
@@ -47,7 +47,7 @@ fn twist_bones_ik_targets_and_shape_keys_reach_the_rig() {
     let (mut bones, mut keys) = (0usize, 0usize);
     // SAFETY: live handles and locals.
     unsafe {
-        assert_eq!(skb_mesh_rig_new(mesh, opts, &mut rig), skb_status::SKB_OK, "{}", last_error());
+        assert_eq!(skb_rig_new_from_mesh(mesh, opts, &mut rig), skb_status::SKB_OK, "{}", last_error());
         assert_eq!(skb_rig_bone_count(rig, &mut bones), skb_status::SKB_OK);
         assert_eq!(skb_rig_shape_key_count(rig, &mut keys), skb_status::SKB_OK);
     }

@@ -63,7 +63,7 @@ fn run_once(
     let mut out = sentinel;
     // SAFETY: live handles and locals; `p` outlives the call.
     let s = unsafe {
-        skb_run_pipeline(
+        skb_pipeline_run(
             ctx,
             sketch,
             joints,
@@ -115,7 +115,7 @@ fn cancelling_at_every_progress_point_keeps_memory_flat() {
         assert_eq!(skb_context_new(&mut ctx), skb_status::SKB_OK);
         let mut img = ptr::null_mut();
         let path = CString::new(SKETCH).unwrap();
-        assert_eq!(skb_gray_image_load(path.as_ptr(), &mut img), skb_status::SKB_OK);
+        assert_eq!(skb_gray_image_new_from_file(path.as_ptr(), &mut img), skb_status::SKB_OK);
         let mut sketch: skb_image = std::mem::zeroed();
         assert_eq!(skb_gray_image_view(img, &mut sketch), skb_status::SKB_OK);
         let mut fit = ptr::null_mut();
@@ -174,7 +174,7 @@ fn same_path_from_eight_threads_gives_one_whole_file() {
         let mut mesh = ptr::null_mut();
         assert_eq!(skb_mesh_new_from_shape(ctx, SKB_GENDER_MALE, ptr::null(), 0, &mut mesh), skb_status::SKB_OK);
         let r = CString::new(reference.to_str().unwrap()).unwrap();
-        assert_eq!(skb_mesh_write_glb(mesh, r.as_ptr()), skb_status::SKB_OK);
+        assert_eq!(skb_mesh_write_glb(mesh, r.as_ptr(), ptr::null()), skb_status::SKB_OK);
         let mesh_addr = mesh as usize;
         let p = CString::new(shared.to_str().unwrap()).unwrap();
         std::thread::scope(|s| {
@@ -183,7 +183,7 @@ fn same_path_from_eight_threads_gives_one_whole_file() {
                 s.spawn(move || {
                     for _ in 0..3 {
                         // SAFETY: the mesh is only read by the writer, which several threads may do.
-                        let st = skb_mesh_write_glb(mesh_addr as *const skb_mesh, p.as_ptr());
+                        let st = skb_mesh_write_glb(mesh_addr as *const skb_mesh, p.as_ptr(), ptr::null());
                         assert_eq!(st, skb_status::SKB_OK, "{}", last_error());
                     }
                 });

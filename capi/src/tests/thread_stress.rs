@@ -46,7 +46,7 @@ fn work(s: Shared, k: usize, image: &[u8]) -> (Vec<u32>, Vec<u32>, Vec<u8>) {
         let im = skb_image { data: image.as_ptr(), width: 128, height: 96, stride: 128, channels: 1 };
         let mut edges = vec![0u8; 128 * 96];
         let s_canny =
-            skb_canny(&im, 40.0, 120.0, 3 + 2 * (k % 3) as i32, k % 2 == 1, edges.as_mut_ptr(), 128, edges.len());
+            skb_image_canny(&im, 40.0, 120.0, 3 + 2 * (k % 3) as i32, k % 2 == 1, edges.as_mut_ptr(), 128, edges.len());
         assert_eq!(s_canny, skb_status::SKB_OK, "{}", last_error());
         (posed.iter().map(|x| x.to_bits()).collect(), shared.iter().map(|x| x.to_bits()).collect(), edges)
     }

@@ -1,4 +1,4 @@
-//! `skb_run_pipeline_views` and the result's view getters as a C host calls them, on a
+//! `skb_pipeline_run_views` and the result's view getters as a C host calls them, on a
 //! turnaround the synthetic renderer draws (the same body and pose from the front and the side):
 //! the C result equals the core's turnaround run, each view reads back with its label, joints and
 //! turned camera, and each bad input has its own status.
@@ -65,13 +65,13 @@ impl Setup {
         }
     }
 
-    /// `skb_run_pipeline_views` on `front` with `views`; the status and the result (NULL on error).
+    /// `skb_pipeline_run_views` on `front` with `views`; the status and the result (NULL on error).
     fn run(&self, front: &skb_image, joints: &skb_joints2d, views: &[skb_view_input]) -> (skb_status, *mut skb_result) {
         let mut out = ptr::null_mut();
         let views_ptr = if views.is_empty() { ptr::null() } else { views.as_ptr() };
         // SAFETY: every pointer is a live local or handle; `views` holds `views.len()` entries.
         let st = unsafe {
-            skb_run_pipeline_views(
+            skb_pipeline_run_views(
                 self.ctx,
                 front,
                 joints,
@@ -104,7 +104,8 @@ fn vertices(r: *const skb_result) -> Vec<f32> {
     // SAFETY: `r` is a live result; the buffer holds the vertex count's 3 floats each.
     unsafe {
         let (mut nv, mut nf) = (0usize, 0usize);
-        assert_eq!(skb_result_counts(r, &mut nv, &mut nf), skb_status::SKB_OK);
+        assert_eq!(skb_result_vertex_count(r, &mut nv), skb_status::SKB_OK);
+        assert_eq!(skb_result_face_count(r, &mut nf), skb_status::SKB_OK);
         let mut v = vec![0.0f32; 3 * nv];
         assert_eq!(skb_result_copy_vertices(r, true, v.as_mut_ptr(), v.len()), skb_status::SKB_OK);
         v
@@ -162,18 +163,12 @@ fn a_turnaround_through_the_c_api_is_the_core_run_with_each_view_read_back() {
 
         // Warnings: the length first, then the text; a short buffer is refused.
         let mut len = 99usize;
-        assert_eq!(skb_result_copy_view_warnings(two, ptr::null_mut(), 0, &mut len), skb_status::SKB_OK);
+        assert_eq!(skb_result_view_warnings_length(two, &mut len), skb_status::SKB_OK);
         assert_eq!(len, core.view_warnings.join("\n").len());
         let mut buf = vec![1 as c_char; len + 1];
-        assert_eq!(
-            skb_result_copy_view_warnings(two, buf.as_mut_ptr(), buf.len(), ptr::null_mut()),
-            skb_status::SKB_OK
-        );
+        assert_eq!(skb_result_copy_view_warnings(two, buf.as_mut_ptr(), buf.len()), skb_status::SKB_OK);
         assert_eq!(CStr::from_ptr(buf.as_ptr()).to_str().unwrap(), core.view_warnings.join("\n"));
-        assert_eq!(
-            skb_result_copy_view_warnings(two, buf.as_mut_ptr(), len, ptr::null_mut()),
-            skb_status::SKB_ERR_BUFFER_TOO_SMALL
-        );
+        assert_eq!(skb_result_copy_view_warnings(two, buf.as_mut_ptr(), len), skb_status::SKB_ERR_BUFFER_TOO_SMALL);
         skb_result_free(two);
     }
 
@@ -232,7 +227,7 @@ fn bad_views_each_have_their_own_status_and_leave_no_result() {
     let mut out = ptr::null_mut();
     // SAFETY: NULL views with a count and a view with a NULL sketch: the library checks both.
     unsafe {
-        let st = skb_run_pipeline_views(
+        let st = skb_pipeline_run_views(
             s.ctx,
             &fi,
             &fj,

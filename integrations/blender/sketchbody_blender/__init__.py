@@ -9,7 +9,7 @@ Blender objects. See integrations/blender/README.md.
 bl_info = {
     "name": "Sketchbody",
     "author": "sketchbody authors",
-    "version": (0, 1, 0),
+    "version": (1, 0, 0),
     "blender": (3, 4, 0),
     "location": "View3D > Sidebar > Sketchbody",
     "description": "Concept sketch to a rigged, posed 3-D body (53-bone rig); correct the 2-D joints on the sketch",
