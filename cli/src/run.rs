@@ -13,7 +13,9 @@
 //! `body.mtl` + `body_texture.png` (the texture, unless `--no-texture`), `joints2d.json`
 //! (sketchbody-joints2d), `pose3d.json` (sketchbody-pose3d: 3-D joints and camera),
 //! `overlay.png`, `preview.png` (sketch, body through the camera, blend, front, side),
-//! `report.md`; with views also `overlay_LABEL.png` and `joints2d_LABEL.json` per view.
+//! `report.md`; with views also `overlay_LABEL.png`, `preview_LABEL.png` (that view's sketch,
+//! the body through its camera, the blend, the body's front and side) and `joints2d_LABEL.json`
+//! per view.
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -550,8 +552,11 @@ fn report(
         );
     }
     let tex = if a.no_texture { "" } else { " body.mtl, body_texture.png," };
-    let per_view: String =
-        r.views.iter().map(|v| format!(" overlay_{0}.png, joints2d_{0}.json,", v.label.name())).collect();
+    let per_view: String = r
+        .views
+        .iter()
+        .map(|v| format!(" overlay_{0}.png, preview_{0}.png, joints2d_{0}.json,", v.label.name()))
+        .collect();
     let _ = writeln!(
         s,
         "\n## Files\n\n{}, body.obj, body_rest.obj,{tex} joints2d.json, pose3d.json, overlay.png,{per_view} preview.png, report.md",
@@ -622,7 +627,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         .collect();
     // Fail on output sizes that cannot be drawn, and on an unwritable output folder, before
     // the work.
-    compare_layout(sketch_rgb.width(), sketch_rgb.height(), a.preview_size)?;
+    for rgb in std::iter::once(sketch_rgb).chain(inputs.views.iter().map(|v| &v.rgb)) {
+        compare_layout(rgb.width(), rgb.height(), a.preview_size)?;
+    }
     check_texture_size(a.texture_size)?;
     let staging = StagingDir::new(&a.out).map_err(|e| CliError(format!("cannot write the output folder: {e}")))?;
     let model = BodyModel::embedded()?;
@@ -687,6 +694,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         let name = vr.label.name();
         let over = overlay(&v.gray, &vr.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &vr.camera)?;
         save_png(&over.view(), &staging.path(&format!("overlay_{name}.png")))?;
+        let panel = compare_preview(&v.rgb, &r.posed_vertices, &tris, None, &vr.camera, a.preview_size)?;
+        save_png(&panel.view(), &staging.path(&format!("preview_{name}.png")))?;
         write_joints2d_with(&staging.path(&format!("joints2d_{name}.json")), &vr.joints2d, None)?;
     }
     save_png(&views.view(), &staging.path("preview.png"))?;

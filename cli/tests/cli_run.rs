@@ -330,3 +330,71 @@ fn every_promised_size_runs_to_the_end() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Writes a turnaround of one body and pose (the synthetic renderer, front yaw 0°, side yaw 90°)
+/// with each view's true joints into `dir`: (front.png, front.json, side.png, side.json).
+fn turnaround(dir: &Path) -> [PathBuf; 4] {
+    use sketchbody::body::{BodyModel, Gender};
+    use sketchbody::export::joints2d::write_joints2d;
+    use sketchbody::render::sketch::{CameraAngles, SketchRenderer, SketchRequest};
+    use sketchbody::skeleton::{Joints2, NUM_JOINTS};
+    let renderer = SketchRenderer::new(std::sync::Arc::new(BodyModel::embedded().unwrap()), None).unwrap();
+    let files = ["front.png", "front.json", "side.png", "side.json"].map(|f| dir.join(f));
+    for (k, yaw_deg) in [0.0, 90.0].into_iter().enumerate() {
+        let req = SketchRequest {
+            gender: Some(Gender::Female),
+            camera: Some(CameraAngles { yaw_deg, pitch_deg: 0.0, roll_deg: 0.0 }),
+            ..SketchRequest::random(11, 256)
+        };
+        let s = renderer.render(&req).unwrap();
+        let img = GrayImage::from_vec(s.truth.width, s.truth.height, s.pixels.clone()).unwrap();
+        save_png(&img.view(), &files[2 * k]).unwrap();
+        let j = Joints2 { xy: std::array::from_fn(|i| s.truth.joints2d[i]), visible: [true; NUM_JOINTS] };
+        write_joints2d(&files[2 * k + 1], &j).unwrap();
+    }
+    files
+}
+
+#[test]
+fn a_turnaround_writes_each_views_overlay_preview_and_joints() {
+    let dir = scratch("views");
+    let [front, front_j, side, side_j] = turnaround(&dir);
+    let out_dir = dir.join("out");
+    let side_arg = format!("side={}", side.display());
+    let side_joints_arg = format!("side={}", side_j.display());
+    let args = [
+        front.to_str().unwrap(),
+        "--joints",
+        front_j.to_str().unwrap(),
+        "--view",
+        &side_arg,
+        "--view-joints",
+        &side_joints_arg,
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--gender",
+        "f",
+    ];
+    let out = run(&args.iter().chain(&FAST).copied().collect::<Vec<_>>());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let files = names(&out_dir);
+    for f in ["overlay_side.png", "preview_side.png", "joints2d_side.json", "preview.png"] {
+        assert!(files.contains(&f.to_string()), "{f} missing from {files:?}");
+    }
+    // The side view's panel row has that view's sketch at the preview's height, like the front's.
+    let front_preview = image::open(out_dir.join("preview.png")).unwrap();
+    let side_preview = image::open(out_dir.join("preview_side.png")).unwrap();
+    assert_eq!(side_preview.height(), front_preview.height());
+    assert_eq!(side_preview.height(), 128);
+    // Its second panel (the sketches are square: panels 128 px wide) is the body seen through the
+    // side view's camera: drawn (not one colour), and not the front view's picture of it.
+    let body_panel = |p: &image::DynamicImage| -> Vec<[u8; 3]> {
+        let rgb = p.to_rgb8();
+        (0..128).flat_map(|y| (128..256).map(move |x| (x, y))).map(|(x, y)| rgb.get_pixel(x, y).0).collect()
+    };
+    let (side_body, front_body) = (body_panel(&side_preview), body_panel(&front_preview));
+    assert!(side_body.iter().any(|p| *p != side_body[0]), "the side view's body panel is empty");
+    assert_ne!(side_body, front_body, "the side view's body panel is the front's");
+    let report = std::fs::read_to_string(out_dir.join("report.md")).unwrap();
+    assert!(report.contains("preview_side.png"), "{report}");
+}
