@@ -57,9 +57,11 @@ pub struct skb_mesh {
     pub(crate) posed: Option<Box<Posed>>,
 }
 
-/// Creates a context holding the body model compiled into the library. On success `*out`
-/// receives a new context the caller owns (release with `skb_context_free`); on failure `*out`
-/// is untouched. Thread-safe.
+/// Creates a context holding the body model compiled into the library. Thread-safe.
+/// @param out receives a new context the caller owns (release with `skb_context_free`);
+///            untouched on failure; not NULL.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL `out`; the error of loading the embedded
+///         model should it fail.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_new(out: *mut *mut skb_context) -> skb_status {
     unsafe {
@@ -71,14 +73,19 @@ pub unsafe extern "C" fn skb_context_new(out: *mut *mut skb_context) -> skb_stat
     }
 }
 
-/// Releases a context from `skb_context_new`. NULL is a no-op. Meshes made from it stay valid.
+/// Releases a context from `skb_context_new`. Meshes made from it stay valid.
+/// @param ctx the context to release; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_free(ctx: *mut skb_context) {
     unsafe { free_box(ctx) }
 }
 
-/// Number of principal components of `gender`'s shape space (the most weights
-/// `skb_mesh_new_from_shape` accepts) into `*out`. Thread-safe.
+/// Number of principal components of a gender's shape space (the most weights
+/// `skb_mesh_new_from_shape` accepts). Thread-safe.
+/// @param ctx the context, only read.
+/// @param gender `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for an unknown gender; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_component_count(
     ctx: *const skb_context,
@@ -95,8 +102,12 @@ pub unsafe extern "C" fn skb_context_component_count(
     }
 }
 
-/// The default fitting dimension of `gender`'s shape space (components holding 96% of the
-/// training variance) into `*out`. Thread-safe.
+/// The default fitting dimension of a gender's shape space (components holding 96% of the
+/// training variance). Thread-safe.
+/// @param ctx the context, only read.
+/// @param gender `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`.
+/// @param out receives the dimension; not NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for an unknown gender; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_default_dim(ctx: *const skb_context, gender: u32, out: *mut usize) -> skb_status {
     unsafe {
@@ -109,12 +120,16 @@ pub unsafe extern "C" fn skb_context_default_dim(ctx: *const skb_context, gender
     }
 }
 
-/// Builds the rest-pose mesh of `gender` (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) with PCA
-/// weights `weights[0..n]` (metres along unit basis vectors; missing trailing weights are 0, so
-/// `n = 0` gives the mean shape and `weights` may then be NULL). Errors: unknown gender
-/// (`SKB_ERR_OUT_OF_RANGE`), `n` above the component count (`SKB_ERR_OUT_OF_RANGE`), a NaN or
-/// infinite weight (`SKB_ERR_NON_FINITE`). On success `*out` receives a new mesh the caller owns
-/// (release with `skb_mesh_free`); on failure `*out` is untouched. Thread-safe.
+/// Builds the rest-pose mesh of a gender with given PCA shape weights. Thread-safe.
+/// @param ctx the context, only read.
+/// @param gender `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`.
+/// @param weights `weights[0..n]`, metres along unit basis vectors; missing trailing weights are
+///                0; may be NULL when `n` is 0.
+/// @param n the number of weights, at most `skb_context_component_count` (0: the mean shape).
+/// @param out receives a new mesh the caller owns (release with `skb_mesh_free`); untouched on
+///            failure; not NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for an unknown gender or `n` above the component count;
+///         SKB_ERR_NON_FINITE for a NaN or infinite weight; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_new_from_shape(
     ctx: *const skb_context,
@@ -147,13 +162,17 @@ pub unsafe extern "C" fn skb_mesh_new_from_shape(
     }
 }
 
-/// Releases a mesh. NULL is a no-op.
+/// Releases a mesh.
+/// @param mesh the mesh to release; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_free(mesh: *mut skb_mesh) {
     unsafe { free_box(mesh) }
 }
 
-/// The mesh's gender (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) into `*out`.
+/// The mesh's gender.
+/// @param mesh the mesh, only read.
+/// @param out receives `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_gender(mesh: *const skb_mesh, out: *mut u32) -> skb_status {
     unsafe {
@@ -165,7 +184,10 @@ pub unsafe extern "C" fn skb_mesh_gender(mesh: *const skb_mesh, out: *mut u32) -
     }
 }
 
-/// Number of vertices (13380) into `*out`.
+/// Number of vertices (13380).
+/// @param mesh the mesh, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_vertex_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
     unsafe {
@@ -177,7 +199,10 @@ pub unsafe extern "C" fn skb_mesh_vertex_count(mesh: *const skb_mesh, out: *mut 
     }
 }
 
-/// Number of quad faces (13378) into `*out`; the triangle count is twice that.
+/// Number of quad faces (13378); the triangle count is twice that.
+/// @param mesh the mesh, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_face_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
     unsafe {
@@ -189,7 +214,10 @@ pub unsafe extern "C" fn skb_mesh_face_count(mesh: *const skb_mesh, out: *mut us
     }
 }
 
-/// Number of joints (always `SKB_NUM_JOINTS`) into `*out`.
+/// Number of joints (always `SKB_NUM_JOINTS`).
+/// @param mesh the mesh, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_joint_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
     unsafe {
@@ -201,7 +229,10 @@ pub unsafe extern "C" fn skb_mesh_joint_count(mesh: *const skb_mesh, out: *mut u
     }
 }
 
-/// Number of skin-weight slots, `vertex count × SKB_MAX_INFLUENCES`, into `*out`.
+/// Number of skin-weight slots, `vertex count × SKB_MAX_INFLUENCES`.
+/// @param mesh the mesh, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_skin_weight_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
     unsafe {
@@ -213,8 +244,11 @@ pub unsafe extern "C" fn skb_mesh_skin_weight_count(mesh: *const skb_mesh, out: 
     }
 }
 
-/// Copies the rest-pose vertices as x, y, z floats (metres) into `dst`, which holds `dst_len`
-/// floats (at least 3 × vertex count). On error nothing is written.
+/// Copies the rest-pose vertices. On error nothing is written.
+/// @param mesh the mesh, only read.
+/// @param dst receives x, y, z floats per vertex, metres.
+/// @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_vertices(mesh: *const skb_mesh, dst: *mut f32, dst_len: usize) -> skb_status {
     unsafe {
@@ -229,8 +263,11 @@ pub unsafe extern "C" fn skb_mesh_copy_vertices(mesh: *const skb_mesh, dst: *mut
     }
 }
 
-/// Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside) into
-/// `dst`, which holds `dst_len` integers (at least 4 × face count). On error nothing is written.
+/// Copies the quad faces. On error nothing is written.
+/// @param mesh the mesh, only read.
+/// @param dst receives 4 vertex indices per face, counter-clockwise seen from outside.
+/// @param dst_len the element count of `dst` in integers, at least 4 × face count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_faces(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
     unsafe {
@@ -246,8 +283,12 @@ pub unsafe extern "C" fn skb_mesh_copy_faces(mesh: *const skb_mesh, dst: *mut u3
     }
 }
 
-/// Copies the faces split into triangles ((a,b,c), (a,c,d) per quad; 3 indices each) into `dst`,
-/// which holds `dst_len` integers (at least 6 × face count). On error nothing is written.
+/// Copies the faces split into triangles: (a,b,c), (a,c,d) per quad. On error nothing is
+/// written.
+/// @param mesh the mesh, only read.
+/// @param dst receives 3 vertex indices per triangle.
+/// @param dst_len the element count of `dst` in integers, at least 6 × face count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_triangles(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
     unsafe {
@@ -263,8 +304,11 @@ pub unsafe extern "C" fn skb_mesh_copy_triangles(mesh: *const skb_mesh, dst: *mu
     }
 }
 
-/// Copies the 15 rest-pose joints (canonical order, x, y, z doubles, metres) into `dst`, which
-/// holds `dst_len` doubles (at least 45). On error nothing is written.
+/// Copies the 15 rest-pose joints. On error nothing is written.
+/// @param mesh the mesh, only read.
+/// @param dst receives x, y, z doubles per joint, canonical order, metres.
+/// @param dst_len the element count of `dst` in doubles, at least 45.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_joints(mesh: *const skb_mesh, dst: *mut f64, dst_len: usize) -> skb_status {
     unsafe {
@@ -279,10 +323,13 @@ pub unsafe extern "C" fn skb_mesh_copy_joints(mesh: *const skb_mesh, dst: *mut f
     }
 }
 
-/// Copies the skin weights: for vertex v, slots `4v .. 4v+3` of `bones` (bone indices 0..13,
-/// docs/design.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
-/// Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count). On error
-/// nothing is written.
+/// Copies the skin weights: for vertex v, slots `4v .. 4v+3` of both buffers (unused slots
+/// have bone 0, weight 0). On error nothing is written.
+/// @param mesh the mesh, only read.
+/// @param bones receives bone indices 0..13, docs/design.md's bone order.
+/// @param weights receives the weights, summing to 1 per vertex.
+/// @param len the element count of each buffer, at least `SKB_MAX_INFLUENCES` × vertex count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for short buffers; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_skin_weights(
     mesh: *const skb_mesh,
@@ -324,7 +371,10 @@ pub(crate) unsafe fn copy_skin_weights(
 }
 
 /// Number of PCA shape weights the mesh was made from (as given to `skb_mesh_new_from_shape`,
-/// or found by `skb_context_fit_shape`) into `*out`.
+/// or found by `skb_context_fit_shape`).
+/// @param mesh the mesh, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_shape_weight_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
     unsafe {
@@ -336,8 +386,11 @@ pub unsafe extern "C" fn skb_mesh_shape_weight_count(mesh: *const skb_mesh, out:
     }
 }
 
-/// Copies the mesh's PCA shape weights (metres; `skb_mesh_shape_weight_count` of them) into
-/// `dst`, which holds `dst_len` doubles. On error nothing is written.
+/// Copies the mesh's PCA shape weights. On error nothing is written.
+/// @param mesh the mesh, only read.
+/// @param dst receives `skb_mesh_shape_weight_count` doubles, metres.
+/// @param dst_len the element count of `dst` in doubles, at least the shape weight count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_shape_weights(
     mesh: *const skb_mesh,

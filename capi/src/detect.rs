@@ -28,11 +28,13 @@ pub struct skb_detector {
     model: Model,
 }
 
-/// Loads a detector model from `path` (NUL-terminated UTF-8): the binary `.skbd` format
-/// (`docs/formats.md`, "Detector model") or the PARSE model JSON. Errors: `SKB_ERR_IO` (cannot
-/// read), `SKB_ERR_CORRUPT_DATA` (bad magic, version, checksum, truncated or inconsistent
-/// model). On success `*out` receives a new detector the caller owns; on failure it is untouched.
-/// Thread-safe.
+/// Loads a detector model from a file: the binary `.skbd` format (`docs/formats.md`, "Detector
+/// model") or the PARSE model JSON. Thread-safe.
+/// @param path the file path, NUL-terminated UTF-8.
+/// @param out receives a new detector the caller owns (release with `skb_detector_free`);
+///            untouched on failure; not NULL.
+/// @return SKB_OK; SKB_ERR_IO (cannot read); SKB_ERR_CORRUPT_DATA (bad magic, version,
+///         checksum, truncated or inconsistent model); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_new_from_file(path: *const c_char, out: *mut *mut skb_detector) -> skb_status {
     unsafe {
@@ -45,27 +47,37 @@ pub unsafe extern "C" fn skb_detector_new_from_file(path: *const c_char, out: *m
     }
 }
 
-/// Releases a detector. NULL is a no-op.
+/// Releases a detector.
+/// @param det the detector to release; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_free(det: *mut skb_detector) {
     unsafe { free_box(det) }
 }
 
-/// Detects the best-scoring figure in `image` with the sketch model `det` and the settings of
-/// `opts` (NULL: the defaults of `skb_detect_options_new`; its threshold, scales, figure range
-/// and levels per octave apply, the backend and strictness do not). Images whose longer side
-/// exceeds 1024 px are downscaled first (results are in input pixels). Writes the 15 canonical
-/// joints as (x, y) pairs in pixels (origin top-left, y down) to `joints_xy[0..30]`, their
-/// confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. When no figure
-/// reaches the threshold it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score
-/// found, below the threshold; −infinity when no pyramid level was searched).
-/// `progress(user, fraction)` (may be NULL) is called on the calling thread with the fraction
-/// done (0..=1, non-decreasing) after the feature pyramid is built and after each group of
-/// pyramid levels; a non-zero return stops the search with `SKB_ERR_CANCELLED` (nothing written)
-/// and the callback is not called again. Other errors (nothing written):
-/// `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (a feature pyramid over
-/// 1 GiB, refused before any work), `SKB_ERR_NON_FINITE` (a score or joint that is not finite),
-/// `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
+/// Detects the best-scoring figure in `image` with the sketch model `det` alone. Images whose
+/// longer side exceeds 1024 px are downscaled first (results are in input pixels). Thread-safe.
+/// @param det the detector, only read.
+/// @param image the sketch.
+/// @param opts detection options, or NULL for the defaults of `skb_detect_options_new`; its
+///             threshold, scales, figure range and levels per octave apply, the backend and
+///             strictness do not.
+/// @param progress `progress(user, fraction)`, or NULL: called on the calling thread with the
+///                 fraction done (0..=1, non-decreasing) after the feature pyramid is built and
+///                 after each group of pyramid levels; a non-zero return stops the search and
+///                 the callback is not called again.
+/// @param user passed to `progress` unchanged.
+/// @param joints_xy receives the 15 canonical joints as (x, y) pairs in pixels (origin top-left,
+///                  y down) in `joints_xy[0..30]`; not NULL.
+/// @param joints_len the element count of `joints_xy`, at least 30.
+/// @param confidence receives the joints' confidences in (0, 1) in `confidence[0..15]`; not NULL.
+/// @param confidence_len the element count of `confidence`, at least 15.
+/// @param score receives the score; on SKB_ERR_NO_FIGURE the best score found, below the
+///              threshold (−infinity when no pyramid level was searched); not NULL.
+/// @return SKB_OK; SKB_ERR_NO_FIGURE when no figure reaches the threshold (only `*score`
+///         written); other errors write nothing: SKB_ERR_CANCELLED (the callback stopped it),
+///         SKB_ERR_IMAGE_TOO_SMALL (a side < 32 px), SKB_ERR_OUT_OF_RANGE (a feature pyramid
+///         over 1 GiB, refused before any work), SKB_ERR_NON_FINITE (a score or joint that is
+///         not finite), SKB_ERR_BUFFER_TOO_SMALL, image and argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detector_detect(
     det: *const skb_detector,
@@ -156,7 +168,10 @@ pub struct skb_detect_options {
     inner: FigureOptions,
 }
 
-/// Creates options with the defaults. `*out` receives a handle the caller owns.
+/// Creates detection options with the defaults.
+/// @param out receives a new options handle the caller owns (release with
+///            `skb_detect_options_free`); not NULL.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL `out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_new(out: *mut *mut skb_detect_options) -> skb_status {
     unsafe {
@@ -167,14 +182,17 @@ pub unsafe extern "C" fn skb_detect_options_new(out: *mut *mut skb_detect_option
     }
 }
 
-/// Releases options. NULL is a no-op.
+/// Releases detection options.
+/// @param opts the options to release; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_free(opts: *mut skb_detect_options) {
     unsafe { free_box(opts) }
 }
 
-/// Sets the backend: `SKB_DETECTOR_AUTO` (default), `SKB_DETECTOR_FMP` or
-/// `SKB_DETECTOR_BLAZEPOSE`. Errors: `SKB_ERR_OUT_OF_RANGE` for another value.
+/// Sets the detection backend.
+/// @param opts the options, changed.
+/// @param backend `SKB_DETECTOR_AUTO` (default), `SKB_DETECTOR_FMP` or `SKB_DETECTOR_BLAZEPOSE`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value; SKB_ERR_NULL_POINTER for NULL `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_set_backend(opts: *mut skb_detect_options, backend: u32) -> skb_status {
     unsafe {
@@ -191,9 +209,12 @@ pub unsafe extern "C" fn skb_detect_options_set_backend(opts: *mut skb_detect_op
     }
 }
 
-/// Sets strict detection (`strict` true): "no figure" unless a backend passes its own hard
-/// threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (false)
-/// returns the best figure whenever the calibrated presence probability is at least 0.5.
+/// Sets strict detection: "no figure" unless a backend passes its own hard threshold (the
+/// sketch model's score threshold, BlazePose's pose flag 0.5).
+/// @param opts the options, changed.
+/// @param strict true for strict; the default (false) returns the best figure whenever the
+///               calibrated presence probability is at least 0.5.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for NULL `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_set_strict(opts: *mut skb_detect_options, strict: bool) -> skb_status {
     unsafe {
@@ -205,8 +226,11 @@ pub unsafe extern "C" fn skb_detect_options_set_strict(opts: *mut skb_detect_opt
     }
 }
 
-/// Sets the sketch model's score threshold (NaN restores the model's own), used when strict.
-/// Infinite values are `SKB_ERR_NON_FINITE`.
+/// Sets the sketch model's score threshold, used when strict.
+/// @param opts the options, changed.
+/// @param threshold the score threshold; NaN restores the model's own.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for an infinite value; SKB_ERR_NULL_POINTER for NULL
+///         `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_set_threshold(opts: *mut skb_detect_options, threshold: f64) -> skb_status {
     unsafe {
@@ -222,11 +246,15 @@ pub unsafe extern "C" fn skb_detect_options_set_threshold(opts: *mut skb_detect_
 }
 
 /// Sets the searched scales as the pyramid cell size in pixels of the (possibly downscaled)
-/// image: levels with cells smaller than `min_cell_px` (which find small figures) or larger
-/// than `max_cell_px` (large figures) are skipped. A figure is found at cells of about its
-/// standing height / 40. Setting scales replaces the default sketch search range (so 0 and
-/// +infinity search every scale). Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 ≤ min < max (max may
-/// be +infinity; NaN is rejected).
+/// image; a figure is found at cells of about its standing height / 40. Setting scales replaces
+/// the default sketch search range (so 0 and +infinity search every scale).
+/// @param opts the options, changed.
+/// @param min_cell_px levels with cells smaller than this (which find small figures) are
+///                    skipped; 0 ≤ `min_cell_px`, finite.
+/// @param max_cell_px levels with cells larger than this (large figures) are skipped;
+///                    greater than `min_cell_px`, may be +infinity.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE unless 0 ≤ min < max (NaN is rejected);
+///         SKB_ERR_NULL_POINTER for NULL `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_set_scales(
     opts: *mut skb_detect_options,
@@ -247,9 +275,13 @@ pub unsafe extern "C" fn skb_detect_options_set_scales(
     }
 }
 
-/// Sets the searched figure sizes as fractions of the image: figures from `min_fraction` × the
-/// shorter side to `max_fraction` × the longer side tall (the default range is 0.5..1). Replaces any cell range set by `skb_detect_options_set_scales`.
-/// Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 < min < max, both finite (NaN is rejected).
+/// Sets the searched figure sizes as fractions of the image (the default range is 0.5..1).
+/// Replaces any cell range set by `skb_detect_options_set_scales`.
+/// @param opts the options, changed.
+/// @param min_fraction the smallest figure height, as a fraction of the shorter image side.
+/// @param max_fraction the largest figure height, as a fraction of the longer image side.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE unless 0 < min < max, both finite (NaN is rejected);
+///         SKB_ERR_NULL_POINTER for NULL `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_set_figure_range(
     opts: *mut skb_detect_options,
@@ -270,10 +302,13 @@ pub unsafe extern "C" fn skb_detect_options_set_figure_range(
     }
 }
 
-/// Sets the pyramid levels per octave: 1..=100, or 0 for the model's own (10 for the embedded
-/// detector and the PARSE family). The default is 7 (0.7 of the work of 10, the same accuracy
-/// on held-out sketches); 5 scores exactly every other level of 10, about half the work,
-/// coarser in scale. Errors: `SKB_ERR_OUT_OF_RANGE` above 100.
+/// Sets the pyramid levels per octave. The default is 7 (0.7 of the work of 10, the same
+/// accuracy on held-out sketches); 5 scores exactly every other level of 10, about half the
+/// work, coarser in scale.
+/// @param opts the options, changed.
+/// @param levels 1..=100, or 0 for the model's own (10 for the embedded detector and the PARSE
+///               family).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE above 100; SKB_ERR_NULL_POINTER for NULL `opts`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_detect_options_set_levels_per_octave(
     opts: *mut skb_detect_options,
@@ -291,17 +326,25 @@ pub unsafe extern "C" fn skb_detect_options_set_levels_per_octave(
     }
 }
 
-/// Detects the best figure in `image` (1, 3 or 4 channels; colour helps BlazePose on painted
-/// drawings) with the embedded backends of `ctx` and `opts` (NULL: defaults, `SKB_DETECTOR_AUTO`).
-/// Writes the 15 canonical joints as (x, y) pairs in pixels (origin top-left, y down) to
-/// `joints_xy[0..30]`, their calibrated confidences in [0, 1] (each the estimated probability
-/// that the joint is within 0.2 × the figure's size of the truth) to `confidence[0..15]` and the
-/// figure's confidence (their mean) to `*score`. Large images are normalised first (results are
-/// in input pixels). When the image holds no figure (blank pages, text, clutter; or, when
-/// strict, no backend passes its threshold) it returns `SKB_ERR_NO_FIGURE` and writes only
-/// `*score` (the presence probability, or the best raw score when strict). Other errors
-/// (nothing written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
-/// `SKB_ERR_NULL_POINTER`, image errors. Thread-safe.
+/// Detects the best figure in `image` with the embedded backends of `ctx`. Large images are
+/// normalised first (results are in input pixels). Thread-safe.
+/// @param ctx the context, only read.
+/// @param image the sketch: 1, 3 or 4 channels (colour helps BlazePose on painted drawings).
+/// @param opts detection options, or NULL for the defaults (`SKB_DETECTOR_AUTO`).
+/// @param joints_xy receives the 15 canonical joints as (x, y) pairs in pixels (origin top-left,
+///                  y down) in `joints_xy[0..30]`; not NULL.
+/// @param joints_len the element count of `joints_xy`, at least 30.
+/// @param confidence receives the joints' calibrated confidences in [0, 1] (each the estimated
+///                   probability that the joint is within 0.2 × the figure's size of the
+///                   truth) in `confidence[0..15]`; not NULL.
+/// @param confidence_len the element count of `confidence`, at least 15.
+/// @param score receives the figure's confidence (the confidences' mean); on
+///              SKB_ERR_NO_FIGURE the presence probability, or the best raw score when strict;
+///              not NULL.
+/// @return SKB_OK; SKB_ERR_NO_FIGURE when the image holds no figure (blank pages, text,
+///         clutter; or, when strict, no backend passes its threshold), only `*score` written;
+///         other errors write nothing: SKB_ERR_IMAGE_TOO_SMALL (a side < 32 px),
+///         SKB_ERR_BUFFER_TOO_SMALL, SKB_ERR_NULL_POINTER, image errors.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_detect(
     ctx: *const skb_context,
@@ -334,9 +377,18 @@ pub unsafe extern "C" fn skb_context_detect(
     }
 }
 
-/// As `skb_context_detect`, with the backend kept, the confidences, the presence probability and the
-/// low-confidence flag in `*info` instead of a score. On `SKB_ERR_NO_FIGURE` and other errors
-/// nothing is written. Thread-safe.
+/// As `skb_context_detect`, with the backend kept, the confidences, the presence probability
+/// and the low-confidence flag in `*info` instead of a score. Thread-safe.
+/// @param ctx the context, only read.
+/// @param image the sketch, as in `skb_context_detect`.
+/// @param opts detection options, or NULL for the defaults.
+/// @param joints_xy receives the 15 joints as (x, y) pixel pairs in `joints_xy[0..30]`; not NULL.
+/// @param joints_len the element count of `joints_xy`, at least 30.
+/// @param confidence receives the 15 joint confidences in `confidence[0..15]`; not NULL.
+/// @param confidence_len the element count of `confidence`, at least 15.
+/// @param info receives the figure info; not NULL.
+/// @return SKB_OK; the errors of `skb_context_detect`, but on SKB_ERR_NO_FIGURE, as on every
+///         error, nothing is written.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_detect_figure(
     ctx: *const skb_context,

@@ -32,9 +32,9 @@ pub(crate) fn fail_with(status: skb_status, message: &str) -> skb_status {
     status
 }
 
-/// The message of the last failed sketchbody call on this thread ("" after a success).
-/// The pointer stays valid until the next sketchbody call on the same thread; do not free it.
-/// Never NULL.
+/// The message of the last failed sketchbody call on this thread.
+/// @return a NUL-terminated string owned by the library ("" after a success), valid until the
+///         next sketchbody call on the same thread; never NULL; do not free it.
 #[no_mangle]
 pub extern "C" fn skb_last_error_message() -> *const c_char {
     LAST_ERROR.with(|e| e.borrow().as_ptr())

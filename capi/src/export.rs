@@ -61,7 +61,10 @@ pub struct skb_export_options {
     pub(crate) frame: ExportFrame,
 }
 
-/// Creates export options with the defaults into `*out` (the caller owns them).
+/// Creates export options with the defaults.
+/// @param out receives a new options handle the caller owns (release with
+///            `skb_export_options_free`); not NULL.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL `out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_new(out: *mut *mut skb_export_options) -> skb_status {
     unsafe {
@@ -72,7 +75,8 @@ pub unsafe extern "C" fn skb_export_options_new(out: *mut *mut skb_export_option
     }
 }
 
-/// Frees export options. NULL is a no-op.
+/// Frees export options.
+/// @param opts the options to free; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_free(opts: *mut skb_export_options) {
     unsafe { free_box(opts) }
@@ -99,8 +103,11 @@ unsafe fn set_all(
     }
 }
 
-/// Sets the bone names: `SKB_NAMING_PROJECT`, `SKB_NAMING_MIXAMO` or `SKB_NAMING_UNREAL`;
-/// anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+/// Sets the bone names.
+/// @param opts the options, changed.
+/// @param naming `SKB_NAMING_PROJECT` (the default), `SKB_NAMING_MIXAMO` or `SKB_NAMING_UNREAL`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_naming(opts: *mut skb_export_options, naming: u32) -> skb_status {
     unsafe {
@@ -116,8 +123,11 @@ pub unsafe extern "C" fn skb_export_options_set_naming(opts: *mut skb_export_opt
     }
 }
 
-/// Sets the rest pose: `SKB_REST_A_POSE` or `SKB_REST_T_POSE`; anything else is
-/// `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+/// Sets the rest pose.
+/// @param opts the options, changed.
+/// @param rest `SKB_REST_A_POSE` (the default) or `SKB_REST_T_POSE`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_rest_pose(opts: *mut skb_export_options, rest: u32) -> skb_status {
     unsafe {
@@ -134,8 +144,11 @@ pub unsafe extern "C" fn skb_export_options_set_rest_pose(opts: *mut skb_export_
     }
 }
 
-/// Sets the origin: `SKB_ORIGIN_FLOOR` or `SKB_ORIGIN_PELVIS`; anything else is
-/// `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+/// Sets the origin.
+/// @param opts the options, changed.
+/// @param origin `SKB_ORIGIN_FLOOR` (the default) or `SKB_ORIGIN_PELVIS`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_options, origin: u32) -> skb_status {
     unsafe {
@@ -152,10 +165,13 @@ pub unsafe extern "C" fn skb_export_options_set_origin(opts: *mut skb_export_opt
     }
 }
 
-/// Adds the twist bones (`on` true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones
-/// after the 53, sharing the limbs' skin so that a twist spreads along the limb; docs/formats.md,
-/// "Twist bones") or not (false, the default: MakeHuman's 53 bones). Every rigged writer and
+/// Adds the twist bones or not (docs/formats.md, "Twist bones"). Every rigged writer and
 /// `skb_rig_new_from_mesh` follow it.
+/// @param opts the options, changed.
+/// @param on true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones after the 53,
+///           sharing the limbs' skin so that a twist spreads along the limb; false (the
+///           default): MakeHuman's 53 bones.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_twist_bones(opts: *mut skb_export_options, on: bool) -> skb_status {
     unsafe {
@@ -168,10 +184,12 @@ pub unsafe extern "C" fn skb_export_options_set_twist_bones(opts: *mut skb_expor
     }
 }
 
-/// Sets how the pose is carried: `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or
-/// `SKB_POSE_AS_BOTH` (docs/formats.md, "glTF 2.0 binary export", the pose); anything else is
-/// `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_rig_new_from_mesh` follow
-/// it.
+/// Sets how the pose is carried (docs/formats.md, "glTF 2.0 binary export", the pose). Every
+/// rigged writer and `skb_rig_new_from_mesh` follow it.
+/// @param opts the options, changed.
+/// @param pose_as `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or `SKB_POSE_AS_BOTH`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_pose_as(opts: *mut skb_export_options, pose_as: u32) -> skb_status {
     unsafe {
@@ -189,9 +207,12 @@ pub unsafe extern "C" fn skb_export_options_set_pose_as(opts: *mut skb_export_op
     }
 }
 
-/// Adds the IK target bones (`on` true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and
-/// feet under `ik_hand_root` / `ik_foot_root`, after the other bones; docs/formats.md, "IK
-/// targets") or not (false, the default). Every rigged writer and `skb_rig_new_from_mesh` follow it.
+/// Adds the IK target bones or not (docs/formats.md, "IK targets"). Every rigged writer and
+/// `skb_rig_new_from_mesh` follow it.
+/// @param opts the options, changed.
+/// @param on true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and feet under
+///           `ik_hand_root` / `ik_foot_root`, after the other bones; false: none (the default).
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_ik_targets(opts: *mut skb_export_options, on: bool) -> skb_status {
     unsafe {
@@ -204,12 +225,15 @@ pub unsafe extern "C" fn skb_export_options_set_ik_targets(opts: *mut skb_export
     }
 }
 
-/// Adds the mesh's shape dimensions as shape keys (`on` true: one key `shape_01`, `shape_02`, …
-/// per PCA weight of the mesh, or the space's default count for the mean shape, each the
-/// displacement one standard deviation of its component makes, through the body's bone-length
-/// factors and its scaling to its height; glTF morph targets, FBX blend shapes, USD
-/// BlendShapes, all at 0; docs/formats.md, "Shape keys") or not (false, the default). Every
-/// rigged writer and `skb_rig_new_from_mesh` follow it (`skb_rig_shape_key_count`).
+/// Adds the mesh's shape dimensions as shape keys or not (glTF morph targets, FBX blend shapes,
+/// USD BlendShapes, all at 0; docs/formats.md, "Shape keys"). Every rigged writer and
+/// `skb_rig_new_from_mesh` follow it (`skb_rig_shape_key_count`).
+/// @param opts the options, changed.
+/// @param on true: one key `shape_01`, `shape_02`, … per PCA weight of the mesh, or the
+///           space's default count for the mean shape, each the displacement one standard
+///           deviation of its component makes, through the body's bone-length factors and its
+///           scaling to its height; false: none (the default).
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_shape_keys(opts: *mut skb_export_options, on: bool) -> skb_status {
     unsafe {
@@ -222,9 +246,12 @@ pub unsafe extern "C" fn skb_export_options_set_shape_keys(opts: *mut skb_export
     }
 }
 
-/// Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
-/// `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
-/// is always in metres (glTF's specification) and `skb_rig_new_from_mesh` in the model frame.
+/// Sets the unit of the FBX and USD files. The GLB is always in metres (glTF's specification)
+/// and `skb_rig_new_from_mesh` in the model frame.
+/// @param opts the options, changed.
+/// @param units `SKB_UNITS_METRES` (the default) or `SKB_UNITS_CENTIMETRES`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_units(opts: *mut skb_export_options, units: u32) -> skb_status {
     unsafe {
@@ -241,10 +268,13 @@ pub unsafe extern "C" fn skb_export_options_set_units(opts: *mut skb_export_opti
     }
 }
 
-/// Sets the up axis of the FBX and USD files: `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model
-/// frame turned +90° about X: Z up, the body facing −Y); anything else is
-/// `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB is always Y up (glTF's specification)
+/// Sets the up axis of the FBX and USD files. The GLB is always Y up (glTF's specification)
 /// and `skb_rig_new_from_mesh` in the model frame.
+/// @param opts the options, changed.
+/// @param up `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model frame turned +90° about X: Z
+///           up, the body facing −Y).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_export_options_set_up_axis(opts: *mut skb_export_options, up: u32) -> skb_status {
     unsafe {
@@ -309,12 +339,16 @@ unsafe fn write_rigged(
     }
 }
 
-/// Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
-/// scene, the rest mesh skinned to MakeHuman's 53-bone rig (plus the twist bones and IK targets
-/// the options add), posed by the current pose (the rest pose if never posed) as bone rotations
-/// with the root's translation, plus a one-frame clip "pose" (or the pose as the rest, as the
-/// options say; the options' shape keys as morph targets). See docs/formats.md. Written
-/// atomically. Only reads `mesh` and `opts`.
+/// Writes the mesh as binary glTF 2.0: one scene, the rest mesh skinned to MakeHuman's 53-bone
+/// rig (plus the twist bones and IK targets the options add), posed by the current pose (the
+/// rest pose if never posed) as bone rotations with the root's translation, plus a one-frame
+/// clip "pose" (or the pose as the rest, as the options say; the options' shape keys as morph
+/// targets). See docs/formats.md. Written atomically.
+/// @param mesh the mesh, only read.
+/// @param path the output file path, NUL-terminated UTF-8.
+/// @param opts export options, only read, or NULL for the defaults.
+/// @return SKB_OK; SKB_ERR_IO when the file cannot be written (none is left behind); argument
+///         errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_glb(
     mesh: *const skb_mesh,
@@ -324,11 +358,15 @@ pub unsafe extern "C" fn skb_mesh_write_glb(
     unsafe { write_rigged(mesh, path, opts, |p, m, s, _| write_glb(p, m, s, None)) }
 }
 
-/// Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
-/// same rigged, posed body as `skb_mesh_write_glb` (the bones' local transforms
-/// hold the pose, the clusters and the bind pose the rest), in the options' unit and up axis
-/// (default metres, Y up), a plain skin-colour material. See docs/formats.md, "body.fbx".
-/// Written atomically. Only reads `mesh` and `opts`.
+/// Writes the mesh as binary FBX 7.4: the same rigged, posed body as `skb_mesh_write_glb` (the
+/// bones' local transforms hold the pose, the clusters and the bind pose the rest), in the
+/// options' unit and up axis (default metres, Y up), a plain skin-colour material. See
+/// docs/formats.md, "body.fbx". Written atomically.
+/// @param mesh the mesh, only read.
+/// @param path the output file path, NUL-terminated UTF-8.
+/// @param opts export options, only read, or NULL for the defaults.
+/// @return SKB_OK; SKB_ERR_IO when the file cannot be written (none is left behind); argument
+///         errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_fbx(
     mesh: *const skb_mesh,
@@ -338,11 +376,16 @@ pub unsafe extern "C" fn skb_mesh_write_fbx(
     unsafe { write_rigged(mesh, path, opts, |p, m, s, f| write_fbx(p, m, s, None, f)) }
 }
 
-/// Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
-/// the defaults): the same rigged, posed body as `skb_mesh_write_glb` (a Skeleton
-/// with bind and rest transforms, the pose as a static SkelAnimation), in the options' unit and
-/// up axis (default metres, Y up: `metersPerUnit`, `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
-/// and `opts`.
+/// Writes the mesh as a USD text layer (UsdSkel, `.usda`): the same rigged, posed body as
+/// `skb_mesh_write_glb` (a Skeleton with bind and rest transforms, the pose as a static
+/// SkelAnimation), in the options' unit and up axis (default metres, Y up: `metersPerUnit`,
+/// `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written
+/// atomically.
+/// @param mesh the mesh, only read.
+/// @param path the output file path, NUL-terminated UTF-8.
+/// @param opts export options, only read, or NULL for the defaults.
+/// @return SKB_OK; SKB_ERR_IO when the file cannot be written (none is left behind); argument
+///         errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_usd(
     mesh: *const skb_mesh,

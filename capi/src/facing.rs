@@ -73,8 +73,18 @@ pub(crate) fn facing_info(f: &FacingEstimate) -> skb_facing_info {
     }
 }
 
-/// As `skb_context_detect_figure` (the same arguments and statuses), with the figure's facing and the
-/// swapped labelling in `*facing` as well. On any failure nothing is written. Thread-safe.
+/// As `skb_context_detect_figure` (the same arguments and statuses), with the figure's facing
+/// and the swapped labelling as well. On any failure nothing is written. Thread-safe.
+/// @param ctx the context, only read.
+/// @param image the sketch, as in `skb_context_detect_figure`.
+/// @param opts detection options, or NULL for the defaults.
+/// @param joints_xy receives the 15 joints as (x, y) pixel pairs in `joints_xy[0..30]`; not NULL.
+/// @param joints_len the element count of `joints_xy`, at least 30.
+/// @param confidence receives the 15 joint confidences in `confidence[0..15]`; not NULL.
+/// @param confidence_len the element count of `confidence`, at least 15.
+/// @param info receives the figure info, as in `skb_context_detect_figure`.
+/// @param facing receives the facing and the swapped labelling; not NULL.
+/// @return the statuses of `skb_context_detect_figure`.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
 pub unsafe extern "C" fn skb_context_detect_facing(
@@ -95,9 +105,12 @@ pub unsafe extern "C" fn skb_context_detect_facing(
     }
 }
 
-/// The facing of the figure behind `result`'s detected joints, with the swapped labelling, into
-/// `*facing`. `SKB_ERR_OUT_OF_RANGE` when the result's joints were given, not detected (nothing
-/// written). Thread-safe on a shared result.
+/// The facing of the figure behind `result`'s detected joints, with the swapped labelling.
+/// Thread-safe on a shared result.
+/// @param result the pipeline result, only read.
+/// @param facing receives the facing info; not NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE when the result's joints were given, not detected
+///         (nothing written); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_facing(result: *const skb_result, facing: *mut skb_facing_info) -> skb_status {
     unsafe {
@@ -118,9 +131,11 @@ pub unsafe extern "C" fn skb_result_facing(result: *const skb_result, facing: *m
     }
 }
 
-/// `*joints` with left and right swapped (each joint takes its mirror's position and
-/// visibility; head, neck and pelvis stay) into `*out`, which may be `joints` itself. Errors:
-/// `SKB_ERR_NULL_POINTER`. Thread-safe.
+/// `*joints` with left and right swapped: each joint takes its mirror's position and
+/// visibility; head, neck and pelvis stay. Thread-safe.
+/// @param joints the joints, only read.
+/// @param out receives the swapped joints; may be `joints` itself; not NULL.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL argument.
 #[no_mangle]
 pub unsafe extern "C" fn skb_joints2d_swap_sides(joints: *const skb_joints2d, out: *mut skb_joints2d) -> skb_status {
     unsafe {

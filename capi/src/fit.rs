@@ -56,7 +56,10 @@ pub struct skb_fit_options {
     pub(crate) gender: Option<Gender>,
 }
 
-/// Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
+/// Creates fit options with the defaults. Thread-safe.
+/// @param out receives a new options handle the caller owns (release with
+///            `skb_fit_options_free`); not NULL.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL `out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_new(out: *mut *mut skb_fit_options) -> skb_status {
     unsafe {
@@ -67,7 +70,8 @@ pub unsafe extern "C" fn skb_fit_options_new(out: *mut *mut skb_fit_options) -> 
     }
 }
 
-/// Frees fit options. NULL is a no-op.
+/// Frees fit options.
+/// @param opts the options to free; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_free(opts: *mut skb_fit_options) {
     unsafe { free_box(opts) }
@@ -85,7 +89,11 @@ unsafe fn set_fit(opts: *mut skb_fit_options, set: impl FnOnce(&mut FitOptions) 
     }
 }
 
-/// Sets the samples per SIR iteration, S, in 2..=100000.
+/// Sets the samples per SIR iteration, S.
+/// @param opts the options, changed.
+/// @param samples the sample count, in 2..=100000.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_samples(opts: *mut skb_fit_options, samples: u32) -> skb_status {
     unsafe {
@@ -93,7 +101,11 @@ pub unsafe extern "C" fn skb_fit_options_set_samples(opts: *mut skb_fit_options,
     }
 }
 
-/// Sets the most SIR iterations, T, in 1..=1000.
+/// Sets the most SIR iterations, T.
+/// @param opts the options, changed.
+/// @param iterations the iteration limit, in 1..=1000.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_iterations(opts: *mut skb_fit_options, iterations: u32) -> skb_status {
     unsafe {
@@ -101,7 +113,11 @@ pub unsafe extern "C" fn skb_fit_options_set_iterations(opts: *mut skb_fit_optio
     }
 }
 
-/// Sets the transition step s in standard deviations (Σ = diag(s² λ_k)), finite and > 0.
+/// Sets the transition step s in standard deviations (Σ = diag(s² λ_k)).
+/// @param opts the options, changed.
+/// @param scale the step, finite and > 0.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_transition_scale(opts: *mut skb_fit_options, scale: f64) -> skb_status {
     unsafe {
@@ -109,8 +125,12 @@ pub unsafe extern "C" fn skb_fit_options_set_transition_scale(opts: *mut skb_fit
     }
 }
 
-/// Sets the match score: `SKB_SCORE_PAPER`, `SKB_SCORE_FILLED_IOU`, `SKB_SCORE_CHAMFER` or
-/// `SKB_SCORE_TWO_SIDED_CHAMFER`.
+/// Sets the match score.
+/// @param opts the options, changed.
+/// @param score `SKB_SCORE_PAPER`, `SKB_SCORE_FILLED_IOU`, `SKB_SCORE_CHAMFER` (the default) or
+///              `SKB_SCORE_TWO_SIDED_CHAMFER`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_score(opts: *mut skb_fit_options, score: u32) -> skb_status {
     unsafe {
@@ -129,7 +149,11 @@ pub unsafe extern "C" fn skb_fit_options_set_score(opts: *mut skb_fit_options, s
     }
 }
 
-/// Sets the likelihood temperature of the non-paper scores (exp(score / temperature)), > 0.
+/// Sets the likelihood temperature of the non-paper scores (exp(score / temperature)).
+/// @param opts the options, changed.
+/// @param temperature the temperature, finite and > 0.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_temperature(opts: *mut skb_fit_options, temperature: f64) -> skb_status {
     unsafe {
@@ -137,10 +161,13 @@ pub unsafe extern "C" fn skb_fit_options_set_temperature(opts: *mut skb_fit_opti
     }
 }
 
-/// Sets the weight of the 2-D joint term, ≥ 0 (score loses weight × the mean distance in raster
-/// pixels between each sample's projected rig joints and the 2-D joints; used by
-/// `skb_pipeline_run`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
-/// negative `SKB_ERR_OUT_OF_RANGE`.
+/// Sets the weight of the 2-D joint term: the score loses weight × the mean distance in raster
+/// pixels between each sample's projected rig joints and the 2-D joints (used by
+/// `skb_pipeline_run`, which has the 2-D joints).
+/// @param opts the options, changed.
+/// @param weight the weight, ≥ 0; 0 turns the term off.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN (or infinity); SKB_ERR_OUT_OF_RANGE for a negative
+///         weight (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_joint_weight(opts: *mut skb_fit_options, weight: f64) -> skb_status {
     unsafe {
@@ -148,10 +175,13 @@ pub unsafe extern "C" fn skb_fit_options_set_joint_weight(opts: *mut skb_fit_opt
     }
 }
 
-/// Sets the character's known rest height in metres (character sheets carry one), in
-/// 0.1..=10; 0 means unknown (the default). With a height the fitted rest mesh is scaled about
-/// its pelvis to it (and, without per-sample cameras, every fit sample too). NaN is
-/// `SKB_ERR_NON_FINITE`, other values outside the range (negative included) `SKB_ERR_OUT_OF_RANGE`.
+/// Sets the character's known rest height (character sheets carry one). With a height the
+/// fitted rest mesh is scaled about its pelvis to it (and, without per-sample cameras, every fit
+/// sample too).
+/// @param opts the options, changed.
+/// @param metres the height in metres, in 0.1..=10; 0 means unknown (the default).
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN; SKB_ERR_OUT_OF_RANGE for other values outside the
+///         range, negative included (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_height(opts: *mut skb_fit_options, metres: f64) -> skb_status {
     unsafe {
@@ -159,9 +189,12 @@ pub unsafe extern "C" fn skb_fit_options_set_height(opts: *mut skb_fit_options, 
     }
 }
 
-/// Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
-/// scales and translation are refitted to its own posed joints vs the 2-D joints, so the size
-/// comes from the shape. Only `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it.
+/// Turns per-sample cameras on or off: each fit sample's camera scales and translation are
+/// refitted to its own posed joints vs the 2-D joints, so the size comes from the shape. Only
+/// `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it.
+/// @param opts the options, changed.
+/// @param on true: on (the default); false: off.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_sample_camera(opts: *mut skb_fit_options, on: bool) -> skb_status {
     unsafe {
@@ -170,8 +203,11 @@ pub unsafe extern "C" fn skb_fit_options_set_sample_camera(opts: *mut skb_fit_op
 }
 
 /// Sets the prior standard deviation of the fit's log bone-length factors (legs, arms,
-/// shoulders, head, torso), in 0..=0.5; 0 searches PCA weights only (default 0.1). NaN is
-/// `SKB_ERR_NON_FINITE`, values outside the range `SKB_ERR_OUT_OF_RANGE`.
+/// shoulders, head, torso).
+/// @param opts the options, changed.
+/// @param sd the standard deviation, in 0..=0.5; 0 searches PCA weights only (default 0.1).
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_proportion_sd(opts: *mut skb_fit_options, sd: f64) -> skb_status {
     unsafe {
@@ -179,11 +215,13 @@ pub unsafe extern "C" fn skb_fit_options_set_proportion_sd(opts: *mut skb_fit_op
     }
 }
 
-/// Turns the closed-form proportion estimate on (non-zero, the default) or off (0): the bone
-/// factors' prior is centred on the factors estimated from the 2-D joints' bone lengths, the
-/// estimated pose and camera instead of 1 (needs 2-D joints and a proportion sd > 0: only
-/// `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it). Not thread-safe on one
-/// handle, like every setter.
+/// Turns the closed-form proportion estimate on or off: the bone factors' prior is centred on
+/// the factors estimated from the 2-D joints' bone lengths, the estimated pose and camera
+/// instead of 1 (needs 2-D joints and a proportion sd > 0: only `skb_pipeline_run` has 2-D
+/// joints; `skb_context_fit_shape` ignores it). Not thread-safe on one handle, like every setter.
+/// @param opts the options, changed.
+/// @param on true: on (the default); false: off.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_estimate_proportions(opts: *mut skb_fit_options, on: bool) -> skb_status {
     unsafe {
@@ -191,7 +229,11 @@ pub unsafe extern "C" fn skb_fit_options_set_estimate_proportions(opts: *mut skb
     }
 }
 
-/// Sets the longest raster side of the fit, pixels, in 16..=4096.
+/// Sets the longest raster side of the fit.
+/// @param opts the options, changed.
+/// @param side the side in pixels, in 16..=4096.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_raster_side(opts: *mut skb_fit_options, side: u32) -> skb_status {
     unsafe {
@@ -199,7 +241,11 @@ pub unsafe extern "C" fn skb_fit_options_set_raster_side(opts: *mut skb_fit_opti
     }
 }
 
-/// Sets the convergence tolerance in standard deviations of the weights, finite and > 0.
+/// Sets the convergence tolerance.
+/// @param opts the options, changed.
+/// @param tolerance the tolerance in standard deviations of the weights, finite and > 0.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_tolerance(opts: *mut skb_fit_options, tolerance: f64) -> skb_status {
     unsafe {
@@ -208,6 +254,9 @@ pub unsafe extern "C" fn skb_fit_options_set_tolerance(opts: *mut skb_fit_option
 }
 
 /// Sets the seed of every random step (same seed, same result on any thread count).
+/// @param opts the options, changed.
+/// @param seed the seed (default 1).
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_seed(opts: *mut skb_fit_options, seed: u64) -> skb_status {
     unsafe {
@@ -215,7 +264,11 @@ pub unsafe extern "C" fn skb_fit_options_set_seed(opts: *mut skb_fit_options, se
     }
 }
 
-/// Sets the skinning: `SKB_SKIN_LINEAR` or `SKB_SKIN_DUAL_QUATERNION`.
+/// Sets the skinning.
+/// @param opts the options, changed.
+/// @param method `SKB_SKIN_LINEAR` (the default) or `SKB_SKIN_DUAL_QUATERNION`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_skinning(opts: *mut skb_fit_options, method: u32) -> skb_status {
     unsafe {
@@ -232,9 +285,13 @@ pub unsafe extern "C" fn skb_fit_options_set_skinning(opts: *mut skb_fit_options
     }
 }
 
-/// Sets the clothing-robust chamfer's cap, raster pixels, finite and > 0 (default 4): silhouette
-/// boundary pixels inside the sketch's outer outline cost at most this, so strokes that may be
-/// clothing do not pull the body outward; 12 or more is the plain chamfer.
+/// Sets the clothing-robust chamfer's cap: silhouette boundary pixels inside the sketch's outer
+/// outline cost at most this, so strokes that may be clothing do not pull the body outward.
+/// @param opts the options, changed.
+/// @param cap the cap in raster pixels, finite and > 0 (default 4); 12 or more is the plain
+///            chamfer.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_inside_cap(opts: *mut skb_fit_options, cap: f64) -> skb_status {
     unsafe {
@@ -242,11 +299,13 @@ pub unsafe extern "C" fn skb_fit_options_set_inside_cap(opts: *mut skb_fit_optio
     }
 }
 
-/// Sets the PCA dimensions searched; 0 restores the default (a gendered space: all 10 of its
-/// prior's dimensions; the both-sexes space: its default 5). `skb_pipeline_run` with automatic
-/// gender decides the gender with two fits in 4 dimensions and then fits the chosen gender
-/// with these. A value above the model's GMM dimension fails at fit time
-/// (`SKB_ERR_OUT_OF_RANGE`).
+/// Sets the PCA dimensions searched. `skb_pipeline_run` with automatic gender decides the gender
+/// with two fits in 4 dimensions and then fits the chosen gender with these.
+/// @param opts the options, changed.
+/// @param dims the dimension count; 0 restores the default (a gendered space: all 10 of its
+///             prior's dimensions; the both-sexes space: its default 5).
+/// @return SKB_OK; argument errors as docs/c-api.md. A value above the model's GMM dimension fails
+///         at fit time (SKB_ERR_OUT_OF_RANGE), not here.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, dims: u32) -> skb_status {
     unsafe {
@@ -254,10 +313,14 @@ pub unsafe extern "C" fn skb_fit_options_set_dims(opts: *mut skb_fit_options, di
     }
 }
 
-/// Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
-/// `skb_context_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_pipeline_run`
-/// fits the gendered space the gender classifier picks, see `skb_result_gender`;
-/// `skb_result_gender_value` reads it).
+/// Sets the gender of the fit.
+/// @param opts the options, changed.
+/// @param gender `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
+///               `skb_context_fit_shape` fits the both-sexes space, gender a continuous weight;
+///               `skb_pipeline_run` fits the gendered space the gender classifier picks, see
+///               `skb_result_gender`; `skb_result_gender_value` reads it).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_fit_options_set_gender(opts: *mut skb_fit_options, gender: u32) -> skb_status {
     unsafe {
@@ -286,23 +349,31 @@ pub(crate) fn progress_closure(progress: skb_progress_fn, user: *mut c_void) -> 
 }
 
 /// Fits the body shape (SIR, paper §II-C) to an edge map for a known 3-D pose and camera.
-/// `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
-/// `skb_pose3d.joints` from `skb_pose3d_estimate`); `camera` maps them to `edges`' pixels; `edges`
-/// is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
-/// `skb_image_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
-/// fitted, gender a continuous weight; the mesh's gender is the nearer one and its weights are
-/// the blended space's, weight 0 its gender axis). `progress` may be NULL; a non-zero return cancels
-/// (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
-/// caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
-/// weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
-/// options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
-/// when one is set, else the fitted height: `skb_pipeline_run` calibrates the fitted body when its
-/// 2-D joints are given, this call has none); `*score` (may be NULL) receives
-/// the best sample's match score (higher is better). Errors: non-finite joints or camera
-/// (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
-/// without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with
-/// (`SKB_ERR_OUT_OF_RANGE`). Thread-safe (the context is shared read-only); runs on the rayon
-/// pool; the callback is called on the calling thread.
+/// Thread-safe (the context is shared read-only); runs on the rayon pool; the callback is
+/// called on the calling thread.
+/// @param ctx the context, only read.
+/// @param joints 15 × (x, y, z) doubles, metres, model frame (as `skb_pose3d.joints` from
+///               `skb_pose3d_estimate`).
+/// @param joints_len the element count of `joints`: 45.
+/// @param camera maps the joints to `edges`' pixels.
+/// @param edges the sketch's edge map: 1, 3 or 4 channels; any non-zero pixel is an edge (e.g.
+///              from `skb_image_canny`).
+/// @param opts fit options, only read, or NULL for the defaults (gender automatic: the
+///             both-sexes space is fitted, gender a continuous weight; the mesh's gender is the
+///             nearer one and its weights are the blended space's, weight 0 its gender axis).
+/// @param progress the progress callback, or NULL; a non-zero return cancels.
+/// @param user passed to `progress` unchanged.
+/// @param score receives the best sample's match score (higher is better); may be NULL.
+/// @param out receives a new mesh the caller owns (`skb_mesh_free`): the fitted rest shape (its
+///            gender from `skb_mesh_gender`, its weights from `skb_mesh_copy_shape_weights`)
+///            already posed to `joints` (no retargeting, the options' skinning; read with
+///            `skb_mesh_copy_posed_vertices`; scaled to the options' height when one is set,
+///            else the fitted height: `skb_pipeline_run` calibrates the fitted body when its
+///            2-D joints are given, this call has none); not NULL.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for non-finite joints or camera; SKB_ERR_OUT_OF_RANGE for
+///         a `joints_len` other than 45, an invalid camera or options, or a pose no sample can
+///         be projected with; SKB_ERR_BLANK_IMAGE for an edge map without edges;
+///         SKB_ERR_CANCELLED (nothing allocated remains); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_context_fit_shape(
     ctx: *const skb_context,

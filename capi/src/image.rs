@@ -43,11 +43,18 @@ pub(crate) unsafe fn view_of<'a>(img: *const skb_image) -> Result<ImageView<'a>,
 
 /// Canny edges of `src`, bit-exact with OpenCV 4.6
 /// `cv::Canny(gray, dst, threshold1, threshold2, aperture, l2_gradient)` where `gray` is `src`
-/// (1 channel) or `cv::cvtColor(src, COLOR_RGB2GRAY)` (3/4 channels). Writes `src->height` rows
-/// of `src->width` bytes (255 edge, 0 not) into `dst`, rows `dst_stride` bytes apart;
-/// `dst_len` is the size of `dst` in bytes and must be at least
-/// `dst_stride * (height - 1) + width`. Thresholds may be given in either order; `aperture` is
-/// 3, 5 or 7. On error nothing is written. Thread-safe; runs on the rayon thread pool.
+/// (1 channel) or `cv::cvtColor(src, COLOR_RGB2GRAY)` (3/4 channels). On error nothing is
+/// written. Thread-safe; runs on the rayon thread pool.
+/// @param src the image (1, 3 or 4 channels), only read.
+/// @param threshold1 one hysteresis threshold (the two may be given in either order).
+/// @param threshold2 the other hysteresis threshold.
+/// @param aperture the Sobel aperture: 3, 5 or 7.
+/// @param l2_gradient true for the L2 gradient magnitude, false for L1 (as OpenCV's flag).
+/// @param dst receives `src->height` rows of `src->width` bytes (255 edge, 0 not).
+/// @param dst_stride bytes between the starts of consecutive rows of `dst`.
+/// @param dst_len the size of `dst` in bytes; at least `dst_stride * (height - 1) + width`.
+/// @return SKB_OK; SKB_ERR_INVALID_APERTURE for an aperture other than 3, 5 or 7;
+///         SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_image_canny(
     src: *const skb_image,
@@ -73,9 +80,15 @@ pub unsafe extern "C" fn skb_image_canny(
     }
 }
 
-/// Gaussian blur of a 1-channel `src` with standard deviation `sigma` pixels (0 < sigma <= 1024),
-/// compatible with OpenCV 4.x `cv::GaussianBlur(src, dst, cv::Size(0, 0), sigma)`. Output
-/// layout as in [`skb_image_canny`]. On error nothing is written. Thread-safe.
+/// Gaussian blur of a 1-channel `src`, compatible with OpenCV 4.x
+/// `cv::GaussianBlur(src, dst, cv::Size(0, 0), sigma)`. On error nothing is written. Thread-safe.
+/// @param src the 1-channel image, only read.
+/// @param sigma the standard deviation in pixels, 0 < sigma <= 1024.
+/// @param dst receives `src->height` rows of `src->width` bytes, as in [`skb_image_canny`].
+/// @param dst_stride bytes between the starts of consecutive rows of `dst`.
+/// @param dst_len the size of `dst` in bytes; at least `dst_stride * (height - 1) + width`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `sigma` outside its range;
+///         SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_image_gaussian_blur(
     src: *const skb_image,

@@ -23,13 +23,16 @@ fn joints_out(j: &Joints2) -> skb_joints2d {
     skb_joints2d { xy: j.xy, visible: j.visible.map(u8::from), reserved: 0 }
 }
 
-/// Reads a `sketchbody-joints2d` file into `*out` (joints listed in `missing` get
-/// `visible = 0`). `path` is NUL-terminated UTF-8 and must name a regular file of at most
-/// `SKB_JOINTS_JSON_MAX_BYTES` (a FIFO, a device or a folder is refused without blocking). A
-/// leading UTF-8 byte-order mark is accepted. Statuses: `SKB_ERR_IO` (missing, unreadable, not a
-/// regular file, too large), `SKB_ERR_CORRUPT_DATA` (not JSON, a key given twice, another format
-/// or version, a missing, unknown or malformed joint), `SKB_ERR_INVALID_ARGUMENT` (`path` not
-/// UTF-8). `*out` is written only on success. Thread-safe.
+/// Reads a `sketchbody-joints2d` file (joints listed in `missing` get `visible = 0`). A leading
+/// UTF-8 byte-order mark is accepted. Thread-safe.
+/// @param path NUL-terminated UTF-8; must name a regular file of at most
+///             `SKB_JOINTS_JSON_MAX_BYTES` (a FIFO, a device or a folder is refused without
+///             blocking).
+/// @param out receives the joints, written only on success; not NULL.
+/// @return SKB_OK; SKB_ERR_IO (missing, unreadable, not a regular file, too large);
+///         SKB_ERR_CORRUPT_DATA (not JSON, a key given twice, another format or version, a
+///         missing, unknown or malformed joint); SKB_ERR_INVALID_ARGUMENT (`path` not UTF-8);
+///         argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_joints2d_read_json(path: *const c_char, out: *mut skb_joints2d) -> skb_status {
     unsafe {
@@ -45,10 +48,13 @@ pub unsafe extern "C" fn skb_joints2d_read_json(path: *const c_char, out: *mut s
     }
 }
 
-/// Parses the `len` bytes at `json` (UTF-8, not NUL-terminated; at most
-/// `SKB_JOINTS_JSON_MAX_BYTES`) as a `sketchbody-joints2d` document into `*out`, with the rules
-/// of `skb_joints2d_read_json`. Statuses: `SKB_ERR_CORRUPT_DATA` (as above, or not UTF-8),
-/// `SKB_ERR_OUT_OF_RANGE` (`len` over the limit). `*out` is written only on success. Thread-safe.
+/// Parses a `sketchbody-joints2d` document held in memory, with the rules of
+/// `skb_joints2d_read_json`. Thread-safe.
+/// @param json the document's bytes, UTF-8, not NUL-terminated.
+/// @param len the byte count of `json`, at most `SKB_JOINTS_JSON_MAX_BYTES`.
+/// @param out receives the joints, written only on success; not NULL.
+/// @return SKB_OK; SKB_ERR_CORRUPT_DATA (as for `skb_joints2d_read_json`, or not UTF-8);
+///         SKB_ERR_OUT_OF_RANGE (`len` over the limit); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_joints2d_parse_json(
     json: *const c_char,
@@ -77,11 +83,14 @@ pub unsafe extern "C" fn skb_joints2d_parse_json(
     }
 }
 
-/// Writes `*joints` as a `sketchbody-joints2d` file at `path` (NUL-terminated UTF-8; joints with
-/// `visible == 0` listed in `missing`), atomically: a temporary file renamed over `path`, which
-/// is replaced only when it is a regular file. Statuses: `SKB_ERR_NON_FINITE` (a coordinate is
-/// NaN or infinite; nothing written), `SKB_ERR_IO`, `SKB_ERR_INVALID_ARGUMENT` (`path` not UTF-8).
-/// Thread-safe.
+/// Writes joints as a `sketchbody-joints2d` file (joints with `visible == 0` listed in
+/// `missing`), atomically: a temporary file renamed over `path`, which is replaced only when it
+/// is a regular file. Thread-safe.
+/// @param joints the joints, only read.
+/// @param path the output file path, NUL-terminated UTF-8.
+/// @return SKB_OK; SKB_ERR_NON_FINITE (a coordinate is NaN or infinite; nothing written);
+///         SKB_ERR_IO; SKB_ERR_INVALID_ARGUMENT (`path` not UTF-8); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_joints2d_write_json(joints: *const skb_joints2d, path: *const c_char) -> skb_status {
     unsafe {

@@ -53,8 +53,10 @@ pub struct skb_rasterizer {
     inner: Rasterizer,
 }
 
-/// Creates a rasteriser and stores it in `*out` (caller owns it; free with
-/// [`skb_rasterizer_free`]).
+/// Creates a rasteriser.
+/// @param out receives a new rasteriser the caller owns (free with [`skb_rasterizer_free`]);
+///            not NULL.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL `out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rasterizer_new(out: *mut *mut skb_rasterizer) -> skb_status {
     unsafe {
@@ -65,22 +67,32 @@ pub unsafe extern "C" fn skb_rasterizer_new(out: *mut *mut skb_rasterizer) -> sk
     }
 }
 
-/// Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
+/// Releases a rasteriser made by [`skb_rasterizer_new`].
+/// @param r the rasteriser to release; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rasterizer_free(r: *mut skb_rasterizer) {
     unsafe { free_box(r) }
 }
 
-/// Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
-/// points as x, y, z floats (metres, model frame), `tris` holds `ntris` triangles as three
-/// 0-based vertex indices. Pixel (i, j) is set to 255 when its centre (i + 0.5, j + 0.5) lies
-/// inside a projected triangle (top-left fill rule, both windings), else 0. Writes `h` rows of
-/// `w` bytes into `mask`, rows `mask_stride` bytes apart; `mask_len` must be at least
-/// `mask_stride * (h - 1) + w`. Sizes 1..=4096 a side. Errors: NULL pointers, bad sizes or
-/// strides, an invalid camera, index out of range, non-finite vertices, vertices projecting
-/// beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
-/// entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
-/// Arrays are only read during the call. Thread-safe with distinct rasterisers.
+/// Rasterises the silhouette of a triangle mesh given as raw arrays. On error nothing is
+/// written. Arrays are only read during the call. Thread-safe with distinct rasterisers.
+/// @param rasterizer the rasteriser whose buffers are reused (changed), or NULL (a temporary one
+///                   is used).
+/// @param verts `nverts` points as x, y, z floats (metres, model frame).
+/// @param nverts the number of points in `verts` (3 floats each).
+/// @param tris `ntris` triangles as three 0-based vertex indices.
+/// @param ntris the number of triangles in `tris` (3 indices each).
+/// @param cam the camera, only read.
+/// @param w the mask width in pixels, 1..=4096.
+/// @param h the mask height in pixels, 1..=4096.
+/// @param mask receives `h` rows of `w` bytes: 255 where a pixel's centre (i + 0.5, j + 0.5)
+///             lies inside a projected triangle (top-left fill rule, both windings), else 0.
+/// @param mask_stride bytes between the starts of consecutive rows of `mask`.
+/// @param mask_len the size of `mask` in bytes, at least `mask_stride * (h - 1) + w`.
+/// @return SKB_OK; SKB_ERR_MESH_OUTSIDE_IMAGE when the projected mesh misses the image
+///         entirely; SKB_ERR_BAD_STRIDE, SKB_ERR_BUFFER_TOO_SMALL, SKB_ERR_NON_FINITE
+///         (non-finite vertices); errors for bad sizes, an invalid camera, an index out of
+///         range or vertices projecting beyond ±32768 px; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rasterizer_rasterize_triangles(
     rasterizer: *mut skb_rasterizer,
@@ -134,13 +146,16 @@ fn posed_vertices(m: &skb_mesh) -> &[[f32; 3]] {
     m.posed.as_ref().map_or(&m.rest.vertices, |p| &p.vertices)
 }
 
-/// Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,
-/// metres, model frame; `joints_len` must be 45) by inverse kinematics and skinning. `flags` is
-/// 0 or a combination of `SKB_POSE_RETARGET` and `SKB_POSE_DUAL_QUATERNION`. The pose replaces
-/// any earlier one (the rest shape is kept; posing to the rest joints gives the rest pose).
-/// Errors: non-finite joints (`SKB_ERR_NON_FINITE`), coincident joints
-/// (`SKB_ERR_DEGENERATE_BONE`), unknown flags or a wrong length (`SKB_ERR_OUT_OF_RANGE`); on
-/// error the mesh is unchanged. Needs exclusive use of `mesh`; skinning runs on the rayon pool.
+/// Poses a mesh to 15 target joints by inverse kinematics and skinning. The pose replaces any
+/// earlier one (the rest shape is kept; posing to the rest joints gives the rest pose). Needs
+/// exclusive use of `mesh`; skinning runs on the rayon pool.
+/// @param mesh the mesh, changed (unchanged on error).
+/// @param joints x, y, z doubles per joint in canonical order, metres, model frame.
+/// @param joints_len the element count of `joints`: 45.
+/// @param flags 0 or a combination of `SKB_POSE_RETARGET` and `SKB_POSE_DUAL_QUATERNION`.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for non-finite joints; SKB_ERR_DEGENERATE_BONE for coincident
+///         joints; SKB_ERR_OUT_OF_RANGE for unknown flags or a wrong length; argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_pose(
     mesh: *mut skb_mesh,
@@ -168,9 +183,12 @@ pub unsafe extern "C" fn skb_mesh_pose(
     }
 }
 
-/// Copies the posed vertices (the rest vertices before any `skb_mesh_pose`) as x, y, z floats
-/// (metres) into `dst` of `dst_len` floats (at least 3 × vertex count). On error nothing is
-/// written. Only reads `mesh`.
+/// Copies the posed vertices (the rest vertices before any `skb_mesh_pose`). On error nothing
+/// is written.
+/// @param mesh the mesh, only read.
+/// @param dst receives x, y, z floats per vertex, metres.
+/// @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_posed_vertices(
     mesh: *const skb_mesh,
@@ -190,8 +208,11 @@ pub unsafe extern "C" fn skb_mesh_copy_posed_vertices(
     }
 }
 
-/// Copies the posed joints (15 × x, y, z doubles, metres; the rest joints before any
-/// `skb_mesh_pose`) into `dst` of `dst_len` doubles (at least 45). Only reads `mesh`.
+/// Copies the posed joints (the rest joints before any `skb_mesh_pose`).
+/// @param mesh the mesh, only read.
+/// @param dst receives 15 × x, y, z doubles, metres.
+/// @param dst_len the element count of `dst` in doubles, at least 45.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_posed_joints(
     mesh: *const skb_mesh,
@@ -211,8 +232,18 @@ pub unsafe extern "C" fn skb_mesh_copy_posed_joints(
     }
 }
 
-/// Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
-/// [`skb_rasterizer_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
+/// Rasterises the silhouette of the posed mesh (rules, sizes and errors as in
+/// [`skb_rasterizer_rasterize_triangles`]).
+/// @param mesh the mesh, only read.
+/// @param rasterizer the rasteriser whose buffers are reused (changed), or NULL.
+/// @param cam the camera, only read.
+/// @param w the mask width in pixels, 1..=4096.
+/// @param h the mask height in pixels, 1..=4096.
+/// @param mask receives `h` rows of `w` bytes: 255 where a pixel's centre (i + 0.5, j + 0.5)
+///             lies inside a projected triangle (top-left fill rule, both windings), else 0.
+/// @param mask_stride bytes between the starts of consecutive rows of `mask`.
+/// @param mask_len the size of `mask` in bytes, at least `mask_stride * (h - 1) + w`.
+/// @return the statuses of [`skb_rasterizer_rasterize_triangles`].
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_rasterize(
     mesh: *const skb_mesh,
@@ -234,9 +265,12 @@ pub unsafe extern "C" fn skb_mesh_rasterize(
     }
 }
 
-/// Writes the mesh as Wavefront OBJ to `path` (UTF-8): the posed vertices when `posed`, else the
-/// rest pose; normals, MakeHuman UVs, quads. Written atomically: on error no file is left.
-/// Only reads `mesh`.
+/// Writes the mesh as Wavefront OBJ: normals, MakeHuman UVs, quads. Written atomically: on
+/// error no file is left.
+/// @param mesh the mesh, only read.
+/// @param path the output file path, NUL-terminated UTF-8.
+/// @param posed true: the posed vertices; false: the rest pose.
+/// @return SKB_OK; SKB_ERR_IO when the file cannot be written; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_obj(mesh: *const skb_mesh, path: *const c_char, posed: bool) -> skb_status {
     unsafe {
@@ -251,8 +285,13 @@ pub unsafe extern "C" fn skb_mesh_write_obj(mesh: *const skb_mesh, path: *const 
     }
 }
 
-/// Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
-/// `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
+/// Writes a preview PNG of the posed mesh: front and right-side views side by side. Written
+/// atomically.
+/// @param mesh the mesh, only read.
+/// @param path the output file path, NUL-terminated UTF-8.
+/// @param size the side of each view in pixels, 1..=4096 (each view is `size`×`size`).
+/// @return SKB_OK; SKB_ERR_EMPTY_IMAGE for a `size` of 0; SKB_ERR_IO when the file cannot be
+///         written; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_preview(mesh: *const skb_mesh, path: *const c_char, size: u32) -> skb_status {
     unsafe {

@@ -54,9 +54,11 @@ pub struct skb_result {
     pub(crate) inner: PipelineResult,
 }
 
-/// Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as gray into `*out` (caller owns it).
-/// Errors: `SKB_ERR_IO` (missing, unreadable), `SKB_ERR_DECODE` (not an image, truncated),
-/// `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
+/// Loads a PNG or JPEG file as gray (colour converted with OpenCV's weights). Thread-safe.
+/// @param path the file path, NUL-terminated UTF-8.
+/// @param out receives a new image the caller owns (free with `skb_gray_image_free`); not NULL.
+/// @return SKB_OK; SKB_ERR_IO (missing, unreadable); SKB_ERR_DECODE (not an image, truncated);
+///         SKB_ERR_IMAGE_TOO_LARGE; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_gray_image_new_from_file(
     path: *const c_char,
@@ -72,7 +74,10 @@ pub unsafe extern "C" fn skb_gray_image_new_from_file(
     }
 }
 
-/// A borrowed 1-channel `skb_image` view of `img` into `*out`, valid while `img` lives.
+/// A borrowed 1-channel `skb_image` view of a decoded image.
+/// @param img the image, only read.
+/// @param out receives the view (stride = width), valid while `img` lives; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_gray_image_view(img: *const skb_gray_image, out: *mut skb_image) -> skb_status {
     unsafe {
@@ -85,34 +90,40 @@ pub unsafe extern "C" fn skb_gray_image_view(img: *const skb_gray_image, out: *m
     }
 }
 
-/// Frees an image from `skb_gray_image_new_from_file`. NULL is a no-op.
+/// Frees an image from `skb_gray_image_new_from_file`.
+/// @param img the image to free; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_gray_image_free(img: *mut skb_gray_image) {
     unsafe { free_box(img) }
 }
 
-/// Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
-/// edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
-/// context's embedded detector finds them, as `skb_context_detect` with default options), the 3-D
+/// Runs the main job on a sketch: Canny edges (50/150, aperture 3), the 2-D joints, the 3-D
 /// pose and camera (with detected joints, BlazePose's relative joint depths weigh the solver's
-/// choices), the shape fit (with detected joints: half the joint weight, no bone-factor
-/// search, and with automatic gender the gendered space the detected-joints gender classifier
-/// picks), and the fitted shape posed to the estimate. Without a height in `fit_opts` and with
-/// `joints` given, the fitted body is calibrated: a gendered fit's shape weights are mapped and
-/// its height calibrated (docs/benchmarks.md, "Shape calibration", "Height calibration");
-/// detected joints keep the fitted body.
-/// `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
-/// fit options' gender defaults to automatic: chosen by the gender classifier, see
-/// `skb_result_gender`) are
-/// only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
-/// cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
-/// `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
-/// untouched. Errors: `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BLANK_IMAGE`,
-/// `SKB_ERR_NO_FIGURE` (NULL joints and the detector finds no figure),
-/// `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
-/// NaN), the pose solver's (`SKB_ERR_TOO_FEW_JOINTS`, `SKB_ERR_COINCIDENT_JOINTS`,
-/// `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
-/// callback is called on the calling thread.
+/// choices), the shape fit (with detected joints: half the joint weight, no bone-factor search,
+/// and with automatic gender the gendered space the detected-joints gender classifier picks),
+/// and the fitted shape posed to the estimate. Without a height in `fit_opts` and with `joints`
+/// given, the fitted body is calibrated: a gendered fit's shape weights are mapped and its
+/// height calibrated (docs/benchmarks.md, "Shape calibration", "Height calibration"); detected
+/// joints keep the fitted body. Thread-safe; runs on the rayon pool; the callback is called on
+/// the calling thread.
+/// @param ctx the context, only read.
+/// @param sketch the sketch: 1, 3 or 4 channels, dark strokes on light paper.
+/// @param joints the 2-D joints with their visibility, only read; NULL: the context's embedded
+///               detector finds them, as `skb_context_detect` with default options.
+/// @param dict the pose dictionary, only read; NULL: the embedded dictionary.
+/// @param pose_opts pose options, only read; NULL: the defaults.
+/// @param fit_opts fit options, only read; NULL: the defaults (the gender defaults to
+///                 automatic: chosen by the gender classifier, see `skb_result_gender`).
+/// @param progress gets the fraction of the whole run, or NULL; a non-zero return cancels
+///                 within one fit iteration, freeing everything.
+/// @param user passed to `progress` unchanged.
+/// @param out receives a new result the caller owns (`skb_result_free`); untouched on error;
+///            not NULL.
+/// @return SKB_OK; SKB_ERR_IMAGE_TOO_SMALL (a side < 32 px); SKB_ERR_BLANK_IMAGE;
+///         SKB_ERR_NO_FIGURE (NULL joints and the detector finds no figure);
+///         SKB_ERR_JOINT_OUTSIDE_IMAGE; SKB_ERR_NON_FINITE (a visible joint NaN); the pose
+///         solver's SKB_ERR_TOO_FEW_JOINTS, SKB_ERR_COINCIDENT_JOINTS, SKB_ERR_DEGENERATE;
+///         SKB_ERR_CANCELLED; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pipeline_run(
     ctx: *const skb_context,
@@ -141,11 +152,22 @@ pub const SKB_INTERIM_MEAN_SHAPE: u32 = 0;
 /// final fit (only when the gender is decided by fitting: automatic gender with given joints).
 pub const SKB_INTERIM_DECIDING_FIT: u32 = 1;
 
-/// `skb_pipeline_run` that also shows the bodies it has before the final one: `interim` (may be
-/// NULL) gets the mean shape in the estimated pose as soon as the pose is known (a few ms after
-/// the pose step), then the deciding fit of the chosen gender before the final fit, so a host
-/// can draw something at once. The result is `skb_pipeline_run`'s for the same inputs. Arguments,
-/// ownership, errors and threading as `skb_pipeline_run`; `progress` and `interim` share `user`.
+/// `skb_pipeline_run` that also shows the bodies it has before the final one, so a host can
+/// draw something at once. The result is `skb_pipeline_run`'s for the same inputs. Arguments,
+/// ownership, errors and threading as `skb_pipeline_run`.
+/// @param ctx as in `skb_pipeline_run`.
+/// @param sketch as in `skb_pipeline_run`.
+/// @param joints as in `skb_pipeline_run` (NULL: detected).
+/// @param dict as in `skb_pipeline_run` (NULL: the embedded dictionary).
+/// @param pose_opts as in `skb_pipeline_run` (NULL: the defaults).
+/// @param fit_opts as in `skb_pipeline_run` (NULL: the defaults).
+/// @param progress as in `skb_pipeline_run` (may be NULL).
+/// @param interim may be NULL; gets the mean shape in the estimated pose as soon as the pose is
+///                known (a few ms after the pose step), then the deciding fit of the chosen
+///                gender before the final fit.
+/// @param user passed unchanged to both `progress` and `interim`.
+/// @param out as in `skb_pipeline_run`.
+/// @return the statuses of `skb_pipeline_run`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pipeline_run_progressive(
     ctx: *const skb_context,
@@ -262,17 +284,20 @@ pub(crate) unsafe fn run(
     }
 }
 
-/// Frees a result. NULL is a no-op.
+/// Frees a result.
+/// @param result the result to free; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_free(result: *mut skb_result) {
     unsafe { free_box(result) }
 }
 
-/// The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
-/// or with automatic gender the classifier's choice between the two gendered fits (given
-/// joints) or the detected-joints classifier's choice of the one gendered space fitted
-/// (detected joints);
-/// whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
+/// The result's gender: the given one, or with automatic gender the classifier's choice
+/// between the two gendered fits (given joints) or the detected-joints classifier's choice of
+/// the one gendered space fitted (detected joints).
+/// @param result the result, only read.
+/// @param gender receives `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`; not NULL.
+/// @param by_score receives whether the gender was fitted (true) or given (false); may be NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_gender(
     result: *const skb_result,
@@ -289,12 +314,16 @@ pub unsafe extern "C" fn skb_result_gender(
     }
 }
 
-/// The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
-/// when a gendered space was fitted, as by default) and into `*confidence` (may be NULL) the
-/// probability that `skb_result_gender` is right (0.5..=1; 1 when the gender was given): with
-/// given joints, the gender classifier's (the sketch's joint and outline widths and the score
-/// margin of the two gendered fits); with detected joints, the detected-joints classifier's
-/// (the same widths).
+/// The fitted gender value and the confidence in `skb_result_gender`.
+/// @param result the result, only read.
+/// @param value receives 0 = the female mean shape … 1 = the male mean (0 or 1 when a gendered
+///              space was fitted, as by default); not NULL.
+/// @param confidence receives the probability that `skb_result_gender` is right (0.5..=1; 1 when
+///                   the gender was given): with given joints, the gender classifier's (the
+///                   sketch's joint and outline widths and the score margin of the two gendered
+///                   fits); with detected joints, the detected-joints classifier's (the same
+///                   widths); may be NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_gender_value(
     result: *const skb_result,
@@ -311,10 +340,12 @@ pub unsafe extern "C" fn skb_result_gender_value(
     }
 }
 
-/// The detection behind the result's 2-D joints into `*info` (backend kept, calibrated
-/// confidence, presence, the low-confidence flag: show the joints to the user for correction).
-/// Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_pipeline_run`, not
-/// detected (nothing written); `SKB_ERR_NULL_POINTER`.
+/// The detection behind the result's 2-D joints.
+/// @param result the result, only read.
+/// @param info receives the backend kept, calibrated confidence, presence and the
+///             low-confidence flag (show the joints to the user for correction); not NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE when the joints were given to `skb_pipeline_run`, not
+///         detected (nothing written); SKB_ERR_NULL_POINTER.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_detection(result: *const skb_result, info: *mut skb_figure_info) -> skb_status {
     unsafe {
@@ -332,10 +363,13 @@ pub unsafe extern "C" fn skb_result_detection(result: *const skb_result, info: *
     }
 }
 
-/// Whether the fit is low-evidence (1: the sketch's strokes support less than half of the
-/// fitted outline, e.g. a figure under a cloak to the ground: the body is mostly the prior's)
-/// into `*low`, and that fraction (0..=1; NaN for the mean shape) into `*edge_support` (may be
-/// NULL).
+/// Whether the fit is low-evidence, and the fraction of the fitted outline the strokes support.
+/// @param result the result, only read.
+/// @param low receives true when the sketch's strokes support less than half of the fitted
+///            outline (e.g. a figure under a cloak to the ground: the body is mostly the
+///            prior's); not NULL.
+/// @param edge_support receives that fraction (0..=1; NaN for the mean shape); may be NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_evidence(
     result: *const skb_result,
@@ -356,11 +390,15 @@ pub unsafe extern "C" fn skb_result_evidence(
 pub const SKB_NUM_BODY_PARTS: u32 = 6;
 const _: () = assert!(SKB_NUM_BODY_PARTS as usize == sketchbody_core::fit::BodyPart::ALL.len());
 
-/// Per body part, the share (0..=1) of the fitted silhouette's outline within 2 raster pixels
-/// of a stroke, into `dst[0..6]` (`dst_len` ≥ `SKB_NUM_BODY_PARTS`) in the order head, torso,
-/// right arm, left arm, right leg, left leg (the figure's own sides); NaN for a part with no
-/// outline in view and for every part of the mean shape. A part below 0.5 is one the drawing
-/// does not support (clothing, a shape no body has): the body there is the prior's reading.
+/// Per body part, the share of the fitted silhouette's outline within 2 raster pixels of a
+/// stroke. A part below 0.5 is one the drawing does not support (clothing, a shape no body
+/// has): the body there is the prior's reading.
+/// @param result the result, only read.
+/// @param dst receives `dst[0..6]`, each in 0..=1, in the order head, torso, right arm, left
+///            arm, right leg, left leg (the figure's own sides); NaN for a part with no outline
+///            in view and for every part of the mean shape.
+/// @param dst_len the element count of `dst`, at least `SKB_NUM_BODY_PARTS`.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_part_support(
     result: *const skb_result,
@@ -379,9 +417,12 @@ pub unsafe extern "C" fn skb_result_copy_part_support(
     }
 }
 
-/// The best match score (higher is better) of the chosen fit into `*score`; `gender` must be
-/// the result's gender (`skb_result_gender`: the given gender's space or the gendered fit the
-/// classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
+/// The best match score (higher is better) of the chosen fit.
+/// @param result the result, only read.
+/// @param gender the result's gender (`skb_result_gender`: the given gender's space or the
+///               gendered fit the classifier chose).
+/// @param score receives the score; not NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for the other gender; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32, score: *mut f64) -> skb_status {
     unsafe {
@@ -397,7 +438,10 @@ pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32
     }
 }
 
-/// The result body's vertex count (13380) into `*out`.
+/// The result body's vertex count (13380).
+/// @param result the result, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_vertex_count(result: *const skb_result, out: *mut usize) -> skb_status {
     unsafe {
@@ -409,7 +453,10 @@ pub unsafe extern "C" fn skb_result_vertex_count(result: *const skb_result, out:
     }
 }
 
-/// The result body's quad-face count (13378) into `*out`.
+/// The result body's quad-face count (13378).
+/// @param result the result, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_face_count(result: *const skb_result, out: *mut usize) -> skb_status {
     unsafe {
@@ -421,8 +468,12 @@ pub unsafe extern "C" fn skb_result_face_count(result: *const skb_result, out: *
     }
 }
 
-/// Copies the posed (`posed` non-zero) or rest vertices, x, y, z floats in metres, model frame,
-/// into `dst` of `dst_len` floats (≥ 3 × vertex count). On error nothing is written.
+/// Copies the posed or rest vertices. On error nothing is written.
+/// @param result the result, only read.
+/// @param posed true: the posed vertices; false: the rest vertices.
+/// @param dst receives x, y, z floats per vertex, metres, model frame.
+/// @param dst_len the element count of `dst` in floats, ≥ 3 × vertex count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_vertices(
     result: *const skb_result,
@@ -443,8 +494,12 @@ pub unsafe extern "C" fn skb_result_copy_vertices(
     }
 }
 
-/// Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside; a
-/// triangle repeats its third index) into `dst` of `dst_len` integers (≥ 4 × face count).
+/// Copies the quad faces.
+/// @param result the result, only read.
+/// @param dst receives 4 vertex indices per face, counter-clockwise seen from outside (a
+///            triangle repeats its third index).
+/// @param dst_len the element count of `dst` in integers, ≥ 4 × face count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_faces(result: *const skb_result, dst: *mut u32, dst_len: usize) -> skb_status {
     unsafe {
@@ -459,7 +514,10 @@ pub unsafe extern "C" fn skb_result_copy_faces(result: *const skb_result, dst: *
     }
 }
 
-/// The 2-D joints used (pixels, with visibility) into `*out`.
+/// The 2-D joints used (pixels, with visibility).
+/// @param result the result, only read.
+/// @param out receives the joints; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_joints2d(result: *const skb_result, out: *mut skb_joints2d) -> skb_status {
     unsafe {
@@ -472,8 +530,13 @@ pub unsafe extern "C" fn skb_result_joints2d(result: *const skb_result, out: *mu
     }
 }
 
-/// Copies 15 3-D joints (x, y, z doubles, metres, model frame) into `dst` (`dst_len` ≥ 45):
-/// `which` is `SKB_JOINTS_REST`, `SKB_JOINTS_POSED` or `SKB_JOINTS_ESTIMATED`.
+/// Copies 15 3-D joints.
+/// @param result the result, only read.
+/// @param which `SKB_JOINTS_REST`, `SKB_JOINTS_POSED` or `SKB_JOINTS_ESTIMATED`.
+/// @param dst receives x, y, z doubles per joint, metres, model frame.
+/// @param dst_len the element count of `dst` in doubles, ≥ 45.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another `which`; SKB_ERR_BUFFER_TOO_SMALL for a
+///         short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_joints3d(
     result: *const skb_result,
@@ -499,10 +562,13 @@ pub unsafe extern "C" fn skb_result_copy_joints3d(
     }
 }
 
-/// The result's weak-perspective camera (model metres → sketch pixels) into `*out`: the posed
-/// body's, fitted to its skeleton, so it projects `SKB_JOINTS_POSED` and the posed vertices onto
-/// the sketch (`SKB_JOINTS_ESTIMATED` are at the pose step's 1.75 m scale and land on the drawn
+/// The result's weak-perspective camera (model metres → sketch pixels): the posed body's,
+/// fitted to its skeleton, so it projects `SKB_JOINTS_POSED` and the posed vertices onto the
+/// sketch (`SKB_JOINTS_ESTIMATED` are at the pose step's 1.75 m scale and land on the drawn
 /// joints only for a body of that height).
+/// @param result the result, only read.
+/// @param out receives the camera; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_camera(result: *const skb_result, out: *mut skb_camera) -> skb_status {
     unsafe {
@@ -517,8 +583,12 @@ pub unsafe extern "C" fn skb_result_camera(result: *const skb_result, out: *mut 
 }
 
 /// Copies the skin weights as `skb_mesh_copy_skin_weights` does: for vertex v, slots
-/// `4v .. 4v+3` of `bones` (bone indices 0..13) and `weights` (summing to 1); both hold `len`
-/// elements (≥ 4 × vertex count).
+/// `4v .. 4v+3` of both buffers.
+/// @param result the result, only read.
+/// @param bones receives bone indices 0..13.
+/// @param weights receives the weights, summing to 1 per vertex.
+/// @param len the element count of each buffer, ≥ 4 × vertex count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for short buffers; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_skin_weights(
     result: *const skb_result,
@@ -534,7 +604,10 @@ pub unsafe extern "C" fn skb_result_copy_skin_weights(
     }
 }
 
-/// The number of fitted PCA shape weights (the fit's dimensions) into `*out`.
+/// The number of fitted PCA shape weights (the fit's dimensions).
+/// @param result the result, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_shape_weight_count(result: *const skb_result, out: *mut usize) -> skb_status {
     unsafe {
@@ -546,8 +619,11 @@ pub unsafe extern "C" fn skb_result_shape_weight_count(result: *const skb_result
     }
 }
 
-/// Copies the fitted PCA shape weights (metres) into `dst` of `dst_len` doubles (at least
-/// `skb_result_shape_weight_count`).
+/// Copies the fitted PCA shape weights.
+/// @param result the result, only read.
+/// @param dst receives the weights, metres.
+/// @param dst_len the element count of `dst` in doubles, at least `skb_result_shape_weight_count`.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_shape_weights(
     result: *const skb_result,
@@ -565,8 +641,11 @@ pub unsafe extern "C" fn skb_result_copy_shape_weights(
     }
 }
 
-/// A new `skb_mesh` of the result (the fitted rest shape, posed as in the result) into `*out`,
-/// for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
+/// A new `skb_mesh` of the result (the fitted rest shape, posed as in the result), for the mesh
+/// functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...).
+/// @param result the result, only read.
+/// @param out receives a new mesh the caller owns (`skb_mesh_free`); not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_new_from_result(result: *const skb_result, out: *mut *mut skb_mesh) -> skb_status {
     unsafe {
@@ -583,11 +662,14 @@ pub unsafe extern "C" fn skb_mesh_new_from_result(result: *const skb_result, out
     }
 }
 
-/// The result's 3-D pose (`SKB_JOINTS_ESTIMATED`) with its ranked alternatives as a new estimate
-/// handle `*out` (the caller owns it; `skb_pose_estimate_free`): list the readings with
-/// `skb_pose_estimate_alternative_count` / `skb_pose_estimate_copy_alternative_joints` /
-/// `skb_pose_estimate_copy_alternative_flipped`. A copy: flipping it does not change the result
-/// (use `skb_result_flip_limb` / `skb_result_pick_alternative` for that).
+/// The result's 3-D pose (`SKB_JOINTS_ESTIMATED`) with its ranked alternatives as a new
+/// estimate handle: list the readings with `skb_pose_estimate_alternative_count` /
+/// `skb_pose_estimate_copy_alternative_joints` / `skb_pose_estimate_copy_alternative_flipped`.
+/// A copy: flipping it does not change the result (use `skb_result_flip_limb` /
+/// `skb_result_pick_alternative` for that).
+/// @param result the result, only read.
+/// @param out receives a new estimate the caller owns (`skb_pose_estimate_free`); not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_new_from_result(
     result: *const skb_result,
@@ -648,12 +730,15 @@ unsafe fn repose_c(
     }
 }
 
-/// Re-poses the result in place to its pose's alternative `index` (`skb_pose_estimate_new_from_result`
-/// lists them; 0 = the current pose): IK and skinning of the fitted rest body, whose shape
-/// weights, proportions and rest mesh are kept; the camera and 2-D joints are kept. A few ms.
-/// `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`. Errors: `SKB_ERR_OUT_OF_RANGE` for
-/// `index` ≥ the count (nothing changed). Changes `result`: do not call while another thread
-/// uses it.
+/// Re-poses the result in place to one of its pose's alternatives: IK and skinning of the
+/// fitted rest body, whose shape weights, proportions and rest mesh are kept; the camera and
+/// 2-D joints are kept. A few ms. Do not call while another thread uses `result`.
+/// @param result the result, changed.
+/// @param index the alternative (`skb_pose_estimate_new_from_result` lists them; 0 = the
+///              current pose).
+/// @param outcome receives `SKB_REPOSE_DONE`; may be NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the count (nothing changed); argument errors
+///         as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_pick_alternative(
     result: *mut skb_result,
@@ -667,11 +752,14 @@ pub unsafe extern "C" fn skb_result_pick_alternative(
     }
 }
 
-/// Flips the depth of `limb` (`SKB_LIMB_*`) of the result's pose and re-poses the fitted body in
-/// place (as `skb_result_pick_alternative`). `*outcome` (may be NULL) receives
-/// `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH` for a limb lying in the picture plane (nothing
-/// changed). Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Changes `result`: do
-/// not call while another thread uses it.
+/// Flips the depth of a limb of the result's pose and re-poses the fitted body in place (as
+/// `skb_result_pick_alternative`). Do not call while another thread uses `result`.
+/// @param result the result, changed.
+/// @param limb `SKB_LIMB_*`.
+/// @param outcome receives `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH` for a limb lying in the
+///                picture plane (nothing changed); may be NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `limb` ≥ `SKB_NUM_LIMBS`; argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_flip_limb(result: *mut skb_result, limb: u32, outcome: *mut u32) -> skb_status {
     unsafe {
@@ -682,16 +770,21 @@ pub unsafe extern "C" fn skb_result_flip_limb(result: *mut skb_result, limb: u32
     }
 }
 
-/// Re-poses the fitted body in place for moved 2-D joints `joints` (pixels of the result's
-/// sketch; issue 50's live correction): the 3-D pose is re-estimated with `dict` (NULL: the
-/// embedded dictionary; pass the one given to `skb_pipeline_run`) and the run's pose options,
-/// without an image depth cue, then IK and skinning of the fitted rest body (shape weights,
-/// proportions and rest mesh kept) and the camera's scales refitted to its skeleton. About
-/// 5–10 ms (docs/benchmarks.md, "Re-pose"). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`,
-/// or, with nothing changed: `SKB_REPOSE_JOINT_OUTSIDE_IMAGE` (a visible joint outside the
-/// sketch or not finite), `SKB_REPOSE_JOINTS_COINCIDE` (two visible joints on each other),
-/// `SKB_REPOSE_IMPLAUSIBLE` (no plausible body explains them). With the result's own given joints the mesh is the run's. Changes `result`:
-/// do not call while another thread uses it.
+/// Re-poses the fitted body in place for moved 2-D joints (issue 50's live correction): the
+/// 3-D pose is re-estimated with the run's pose options, without an image depth cue, then IK
+/// and skinning of the fitted rest body (shape weights, proportions and rest mesh kept) and the
+/// camera's scales refitted to its skeleton. About 5–10 ms (docs/benchmarks.md, "Re-pose").
+/// With the result's own given joints the mesh is the run's. Do not call while another thread
+/// uses `result`.
+/// @param result the result, changed.
+/// @param dict the pose dictionary, only read; NULL: the embedded dictionary (pass the one
+///             given to `skb_pipeline_run`).
+/// @param joints the moved joints, pixels of the result's sketch, only read.
+/// @param outcome receives `SKB_REPOSE_DONE`, or, with nothing changed:
+///                `SKB_REPOSE_JOINT_OUTSIDE_IMAGE` (a visible joint outside the sketch or not
+///                finite), `SKB_REPOSE_JOINTS_COINCIDE` (two visible joints on each other),
+///                `SKB_REPOSE_IMPLAUSIBLE` (no plausible body explains them); may be NULL.
+/// @return SKB_OK (whatever the outcome); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_repose_joints(
     result: *mut skb_result,

@@ -105,7 +105,9 @@ fn out_of_range(name: &'static str, detail: String) -> skb_status {
 }
 
 /// Creates the embedded default dictionary (learned from the DeepMimic clips, see
-/// assets/README.md). On success `*out` owns it. Thread-safe.
+/// assets/README.md). Thread-safe.
+/// @param out receives a new dictionary the caller owns (`skb_pose_dictionary_free`); not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_new_default(out: *mut *mut skb_pose_dictionary) -> skb_status {
     unsafe {
@@ -117,9 +119,12 @@ pub unsafe extern "C" fn skb_pose_dictionary_new_default(out: *mut *mut skb_pose
     }
 }
 
-/// Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody-lab learn-poses`);
-/// `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
-/// `*out` owns the dictionary. Thread-safe.
+/// Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody-lab learn-poses`).
+/// Magic, version, sizes and checksum are checked. Thread-safe.
+/// @param path the file path, NUL-terminated UTF-8.
+/// @param out receives a new dictionary the caller owns (`skb_pose_dictionary_free`); not NULL.
+/// @return SKB_OK; SKB_ERR_IO when the file cannot be read; SKB_ERR_CORRUPT_DATA when a check
+///         fails; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_new_from_file(
     path: *const c_char,
@@ -135,13 +140,17 @@ pub unsafe extern "C" fn skb_pose_dictionary_new_from_file(
     }
 }
 
-/// Frees a dictionary. NULL is a no-op. Do not use it afterwards.
+/// Frees a dictionary. Do not use it afterwards.
+/// @param dict the dictionary to free; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_free(dict: *mut skb_pose_dictionary) {
     unsafe { free_box(dict) }
 }
 
-/// Writes the number of basis poses K to `*out`. Thread-safe.
+/// The number of basis poses K. Thread-safe.
+/// @param dict the dictionary, only read.
+/// @param out receives K; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_basis_count(
     dict: *const skb_pose_dictionary,
@@ -157,7 +166,11 @@ pub unsafe extern "C" fn skb_pose_dictionary_basis_count(
     }
 }
 
-/// Copies the mean pose μ (45 values, metres) into `dst` (`dst_len` ≥ 45). Thread-safe.
+/// Copies the mean pose μ. Thread-safe.
+/// @param dict the dictionary, only read.
+/// @param dst receives 45 values (x, y, z per joint), metres.
+/// @param dst_len the element count of `dst`, ≥ 45.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_copy_mean(
     dict: *const skb_pose_dictionary,
@@ -173,8 +186,14 @@ pub unsafe extern "C" fn skb_pose_dictionary_copy_mean(
     }
 }
 
-/// Copies basis `index` (< K; a unit 45-vector) into `dst` (`dst_len` ≥ 45) and its spread σ
-/// (metres, used by the weight prior) into `*sigma` (may be NULL). Thread-safe.
+/// Copies one basis pose (a unit 45-vector) and its spread. Thread-safe.
+/// @param dict the dictionary, only read.
+/// @param index the basis, < K.
+/// @param dst receives the basis's 45 values.
+/// @param dst_len the element count of `dst`, ≥ 45.
+/// @param sigma receives the basis's spread σ (metres, used by the weight prior); may be NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ K; SKB_ERR_BUFFER_TOO_SMALL for a short
+///         `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_copy_basis(
     dict: *const skb_pose_dictionary,
@@ -202,8 +221,12 @@ pub unsafe extern "C" fn skb_pose_dictionary_copy_basis(
     }
 }
 
-/// Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
-/// (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
+/// Copies the 14 average bone lengths l_ij. Their squares sum to the Σ l² of the length
+/// constraint. Thread-safe.
+/// @param dict the dictionary, only read.
+/// @param dst receives the lengths, metres, bone order of docs/c-api.md.
+/// @param dst_len the element count of `dst`, ≥ 14.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_dictionary_copy_bone_lengths(
     dict: *const skb_pose_dictionary,
@@ -219,7 +242,9 @@ pub unsafe extern "C" fn skb_pose_dictionary_copy_bone_lengths(
     }
 }
 
-/// Creates options with the defaults. On success `*out` owns them. Thread-safe.
+/// Creates pose options with the defaults. Thread-safe.
+/// @param out receives a new options handle the caller owns (`skb_pose_options_free`); not NULL.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL `out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_new(out: *mut *mut skb_pose_options) -> skb_status {
     unsafe {
@@ -230,7 +255,8 @@ pub unsafe extern "C" fn skb_pose_options_new(out: *mut *mut skb_pose_options) -
     }
 }
 
-/// Frees options. NULL is a no-op.
+/// Frees pose options.
+/// @param opts the options to free; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_free(opts: *mut skb_pose_options) {
     unsafe { free_box(opts) }
@@ -248,8 +274,12 @@ unsafe fn set_option(opts: *mut skb_pose_options, set: impl FnOnce(&mut PoseOpti
     }
 }
 
-/// Sets κ, the relative limb-length tolerance: |Σ‖X_i − X_j‖² − Σ l²| ≤ κ Σ l², in [0, 10]
-/// (0 = equality; the paper's κ = 8 CMU units² is about 0.017, see docs/formats.md).
+/// Sets κ, the relative limb-length tolerance: |Σ‖X_i − X_j‖² − Σ l²| ≤ κ Σ l² (the paper's
+/// κ = 8 CMU units² is about 0.017, see docs/formats.md).
+/// @param opts the options, changed.
+/// @param kappa κ, in [0, 10] (0 = equality; default 0.05).
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_kappa(opts: *mut skb_pose_options, kappa: f64) -> skb_status {
     unsafe {
@@ -258,7 +288,11 @@ pub unsafe extern "C" fn skb_pose_options_set_kappa(opts: *mut skb_pose_options,
 }
 
 /// Sets α of eq. (4), the pull of the camera rotation toward its target
-/// (`skb_pose_options_set_alpha_target`), in [0, 1]. Default 0.8.
+/// (`skb_pose_options_set_alpha_target`).
+/// @param opts the options, changed.
+/// @param alpha α, in [0, 1]. Default 0.8.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_alpha(opts: *mut skb_pose_options, alpha: f64) -> skb_status {
     unsafe {
@@ -266,9 +300,12 @@ pub unsafe extern "C" fn skb_pose_options_set_alpha(opts: *mut skb_pose_options,
     }
 }
 
-/// Sets what α pulls the camera rotation toward: `SKB_ALPHA_TARGET_LEVEL` (default: the
-/// fitted rotation with its pitch removed, yaw and roll kept) or `SKB_ALPHA_TARGET_IDENTITY`
-/// (the paper's eq. 4). Other values: `SKB_ERR_OUT_OF_RANGE`, options unchanged.
+/// Sets what α pulls the camera rotation toward.
+/// @param opts the options, changed.
+/// @param target `SKB_ALPHA_TARGET_LEVEL` (default: the fitted rotation with its pitch removed,
+///               yaw and roll kept) or `SKB_ALPHA_TARGET_IDENTITY` (the paper's eq. 4).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_alpha_target(opts: *mut skb_pose_options, target: u32) -> skb_status {
     unsafe {
@@ -288,8 +325,10 @@ pub unsafe extern "C" fn skb_pose_options_set_alpha_target(opts: *mut skb_pose_o
     }
 }
 
-/// Non-zero: one scale for both image axes (sx = sy, default); 0: independent sx and sy
-/// (eq. 1), in the camera fit and in the refinement.
+/// Sets whether the camera fit and the refinement use one scale for both image axes.
+/// @param opts the options, changed.
+/// @param equal true: sx = sy (default); false: independent sx and sy (eq. 1).
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_equal_scales(opts: *mut skb_pose_options, equal: bool) -> skb_status {
     unsafe {
@@ -297,7 +336,11 @@ pub unsafe extern "C" fn skb_pose_options_set_equal_scales(opts: *mut skb_pose_o
     }
 }
 
-/// Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).
+/// Sets the most bases the pursuit may choose.
+/// @param opts the options, changed.
+/// @param max_bases 0..=32 (0 = mean pose with a fitted camera; default 4).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_max_bases(opts: *mut skb_pose_options, max_bases: u32) -> skb_status {
     unsafe {
@@ -305,7 +348,11 @@ pub unsafe extern "C" fn skb_pose_options_set_max_bases(opts: *mut skb_pose_opti
     }
 }
 
-/// Sets the stopping tolerance on the reprojection RMS, pixels, in [0, 10000].
+/// Sets the stopping tolerance on the reprojection RMS.
+/// @param opts the options, changed.
+/// @param tolerance_px pixels, in [0, 10000] (default 0.5).
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_tolerance(opts: *mut skb_pose_options, tolerance_px: f64) -> skb_status {
     unsafe {
@@ -313,7 +360,10 @@ pub unsafe extern "C" fn skb_pose_options_set_tolerance(opts: *mut skb_pose_opti
     }
 }
 
-/// Turns the final Levenberg–Marquardt refinement on (non-zero) or off.
+/// Turns the final Levenberg–Marquardt refinement on or off.
+/// @param opts the options, changed.
+/// @param refine true: on (default); false: off.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_refine(opts: *mut skb_pose_options, refine: bool) -> skb_status {
     unsafe {
@@ -321,7 +371,11 @@ pub unsafe extern "C" fn skb_pose_options_set_refine(opts: *mut skb_pose_options
     }
 }
 
-/// Sets the weight prior, metres in [0, 1] (0 = the paper's eq. (3) exactly; see docs).
+/// Sets the weight prior (see docs).
+/// @param opts the options, changed.
+/// @param prior_m metres, in [0, 1] (0 = the paper's eq. (3) exactly; default 0.1).
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_prior(opts: *mut skb_pose_options, prior_m: f64) -> skb_status {
     unsafe {
@@ -329,9 +383,12 @@ pub unsafe extern "C" fn skb_pose_options_set_prior(opts: *mut skb_pose_options,
     }
 }
 
-/// Sets the number of nearest-neighbour starts, 0..=32: the pursuit runs from each of this
-/// many training poses of the dictionary that best explain the 2-D joints and keeps the best
-/// result (0 = from the mean pose, as in the paper).
+/// Sets the number of nearest-neighbour starts: the pursuit runs from each of this many
+/// training poses of the dictionary that best explain the 2-D joints and keeps the best result.
+/// @param opts the options, changed.
+/// @param starts 0..=32 (0 = from the mean pose, as in the paper; default 12).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_starts(opts: *mut skb_pose_options, starts: u32) -> skb_status {
     unsafe {
@@ -339,8 +396,11 @@ pub unsafe extern "C" fn skb_pose_options_set_starts(opts: *mut skb_pose_options
     }
 }
 
-/// Sets the limb candidates for recomposing nearest-neighbour starts, 0..=4096 (0 = whole
-/// training poses).
+/// Sets the limb candidates for recomposing nearest-neighbour starts.
+/// @param opts the options, changed.
+/// @param count 0..=4096 (0 = whole training poses; default 64).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_limb_candidates(opts: *mut skb_pose_options, count: u32) -> skb_status {
     unsafe {
@@ -348,8 +408,13 @@ pub unsafe extern "C" fn skb_pose_options_set_limb_candidates(opts: *mut skb_pos
     }
 }
 
-/// Sets the blend temperature of the exemplar starts' hypotheses, px² per visible joint in
-/// [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
+/// Sets the blend temperature of the exemplar starts' hypotheses (see docs/benchmarks.md
+/// "3-D pose").
+/// @param opts the options, changed.
+/// @param tau_px2 px² per visible joint, in [0, 1e6] (0 = return the single best hypothesis;
+///                default 30).
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options, tau_px2: f64) -> skb_status {
     unsafe {
@@ -357,12 +422,16 @@ pub unsafe extern "C" fn skb_pose_options_set_blend(opts: *mut skb_pose_options,
     }
 }
 
-/// Sets the free-joint refinement's expected 2-D joint error, metres at the figure's scale (a
-/// 1.75 m person) in [0, 1]; 0 turns it off. After the dictionary fit every joint may then
-/// leave the dictionary's span to follow the 2-D joints, bone lengths kept (default 0.014 m,
-/// 4 px on a 500-px figure; raise it for rough joints such as detections). With it on the
-/// returned joints are no longer base + Σ basis · weight of the dictionary's own base pose;
-/// `skb_pose3d_refine` still continues from them (see `skb_pose3d_refine`).
+/// Sets the free-joint refinement's expected 2-D joint error. After the dictionary fit every
+/// joint may then leave the dictionary's span to follow the 2-D joints, bone lengths kept. With
+/// it on the returned joints are no longer base + Σ basis · weight of the dictionary's own base
+/// pose; `skb_pose3d_refine` still continues from them (see `skb_pose3d_refine`).
+/// @param opts the options, changed.
+/// @param noise_m metres at the figure's scale (a 1.75 m person), in [0, 1]; 0 turns it off
+///                (default 0.014 m, 4 px on a 500-px figure; raise it for rough joints such
+///                as detections).
+/// @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+///         outside the range (options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_joint_noise(opts: *mut skb_pose_options, noise_m: f64) -> skb_status {
     unsafe {
@@ -370,11 +439,14 @@ pub unsafe extern "C" fn skb_pose_options_set_joint_noise(opts: *mut skb_pose_op
     }
 }
 
-/// Sets whether the drawn proportions are estimated with the pose (default on): six per-group
-/// bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_pose3d_estimate_figure`
-/// returns them) and a second solve on the 2-D joints unstylised by them; the returned joints
-/// then have the figure's proportions. Turn it off for `skb_pose3d_refine` (the fixed-basis
-/// refinement needs joints = base + Σ basis · weight on the dictionary's skeleton).
+/// Sets whether the drawn proportions are estimated with the pose: six per-group bone-length
+/// factors (head, torso, shoulders, arms, hips, legs; `skb_pose3d_estimate_figure` returns them)
+/// and a second solve on the 2-D joints unstylised by them; the returned joints then have the
+/// figure's proportions.
+/// @param opts the options, changed.
+/// @param on true: on (default); false: off (for `skb_pose3d_refine`: the fixed-basis refinement
+///           needs joints = base + Σ basis · weight on the dictionary's skeleton).
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_proportions(opts: *mut skb_pose_options, on: bool) -> skb_status {
     unsafe {
@@ -382,9 +454,12 @@ pub unsafe extern "C" fn skb_pose_options_set_proportions(opts: *mut skb_pose_op
     }
 }
 
-/// Sets the standing prior of the free-joint refinement (default on): for a figure whose 2-D
-/// joints show it standing on both feet, an upright torso, the head over the neck and both
-/// ankles under the pelvis on one ground plane. Acts only with joint noise > 0.
+/// Sets the standing prior of the free-joint refinement: for a figure whose 2-D joints show it
+/// standing on both feet, an upright torso, the head over the neck and both ankles under the
+/// pelvis on one ground plane. Acts only with joint noise > 0.
+/// @param opts the options, changed.
+/// @param on true: on (default); false: off.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_standing_prior(opts: *mut skb_pose_options, on: bool) -> skb_status {
     unsafe {
@@ -392,8 +467,11 @@ pub unsafe extern "C" fn skb_pose_options_set_standing_prior(opts: *mut skb_pose
     }
 }
 
-/// Sets the knee limits of the free-joint refinement (default on): knees bent backwards are
-/// flipped in depth (image and bone lengths unchanged). Acts only with joint noise > 0.
+/// Sets the knee limits of the free-joint refinement: knees bent backwards are flipped in depth
+/// (image and bone lengths unchanged). Acts only with joint noise > 0.
+/// @param opts the options, changed.
+/// @param on true: on (default); false: off.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_knee_limits(opts: *mut skb_pose_options, on: bool) -> skb_status {
     unsafe {
@@ -401,11 +479,14 @@ pub unsafe extern "C" fn skb_pose_options_set_knee_limits(opts: *mut skb_pose_op
     }
 }
 
-/// Sets the straight limbs (default off): the last step straightens every arm and leg drawn
-/// straight that the solve bent by at most 60° in depth (the middle joint moves onto the segment
-/// between the limb's ends; the ends and the image are kept, the two bones get shorter). For
-/// figures drawn standing or posing with straight limbs; on unseen motion it straightens truly
-/// bent limbs too (docs/benchmarks.md, "3-D pose").
+/// Sets the straight limbs: the last step straightens every arm and leg drawn straight that the
+/// solve bent by at most 60° in depth (the middle joint moves onto the segment between the
+/// limb's ends; the ends and the image are kept, the two bones get shorter). For figures drawn
+/// standing or posing with straight limbs; on unseen motion it straightens truly bent limbs too
+/// (docs/benchmarks.md, "3-D pose").
+/// @param opts the options, changed.
+/// @param on true: on; false: off (default).
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_straight_limbs(opts: *mut skb_pose_options, on: bool) -> skb_status {
     unsafe {
@@ -413,9 +494,12 @@ pub unsafe extern "C" fn skb_pose_options_set_straight_limbs(opts: *mut skb_pose
     }
 }
 
-/// Sets the learned factor prior (default on): the prior on the drawn proportions is predicted
-/// from the 2-D joints by the embedded regression (`assets/factor_prior.json`) instead of a
-/// fixed spread about the dictionary's proportions. Acts only with the proportions estimated.
+/// Sets the learned factor prior: the prior on the drawn proportions is predicted from the 2-D
+/// joints by the embedded regression (`assets/factor_prior.json`) instead of a fixed spread
+/// about the dictionary's proportions. Acts only with the proportions estimated.
+/// @param opts the options, changed.
+/// @param on true: on (default); false: off.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_factor_prior(opts: *mut skb_pose_options, on: bool) -> skb_status {
     unsafe {
@@ -423,12 +507,15 @@ pub unsafe extern "C" fn skb_pose_options_set_factor_prior(opts: *mut skb_pose_o
     }
 }
 
-/// Sets the weight of the learned joints' depths (default 0.05; 0 = off; at most 10): where the
-/// solver chooses between readings of a near-frontal figure (a limb toward or away from the
-/// viewer), the depths predicted from the 2-D joints by the embedded network
-/// (`assets/factor_prior.json`) add this many px² of cost per px² of depth disagreement.
-/// `skb_pose3d_estimate` always uses them when on; the pipeline replaces them by BlazePose's own
-/// depths when it detected the joints with BlazePose. `SKB_ERR_OUT_OF_RANGE` outside [0, 10].
+/// Sets the weight of the learned joints' depths: where the solver chooses between readings of
+/// a near-frontal figure (a limb toward or away from the viewer), the depths predicted from the
+/// 2-D joints by the embedded network (`assets/factor_prior.json`) add this many px² of cost per
+/// px² of depth disagreement. `skb_pose3d_estimate` always uses them when on; the pipeline
+/// replaces them by BlazePose's own depths when it detected the joints with BlazePose.
+/// @param opts the options, changed.
+/// @param weight in [0, 10] (default 0.05; 0 = off).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside [0, 10] (SKB_ERR_NON_FINITE for NaN or
+///         infinity; options unchanged); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_options_set_depth_prior(opts: *mut skb_pose_options, weight: f64) -> skb_status {
     unsafe {
@@ -457,8 +544,15 @@ pub struct skb_pose_figure {
 
 const _: () = assert!(SKB_POSE_GROUPS as usize == sketchbody_core::pose::figure::NUM_GROUPS);
 
-/// `skb_pose3d_estimate` that also writes the drawn proportions and the plausibility flag to
-/// `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
+/// `skb_pose3d_estimate` that also writes the drawn proportions and the plausibility flag.
+/// Thread-safe.
+/// @param dict the dictionary, only read.
+/// @param joints the 2-D joints, only read.
+/// @param opts pose options, only read, or NULL for the defaults.
+/// @param out receives the pose and camera; not written on error.
+/// @param figure receives the drawn proportions and the plausibility flag; not NULL; not
+///               written on error.
+/// @return the statuses of `skb_pose3d_estimate`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose3d_estimate_figure(
     dict: *const skb_pose_dictionary,
@@ -525,14 +619,19 @@ fn prior_weight(d: &Dictionary, j: &Joints2, o: &PoseOptions) -> f64 {
     sketchbody_core::pose::problem::Problem::new(d, j, o.prior).map(|p| p.prior_w).unwrap_or(0.0)
 }
 
-/// Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
-/// refinement if enabled; by default from 12 exemplar starts whose results are blended, see
-/// `skb_pose_options_set_starts`, and last the free-joint refinement, see
-/// `skb_pose_options_set_joint_noise`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
-/// joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
-/// (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
-/// beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
-/// distinct `out`); CPU time per pose in docs/benchmarks.md ("3-D pose").
+/// Estimates the 3-D pose and camera from 2-D joints: matching pursuit of eq. 3, then the joint
+/// refinement if enabled; by default from 12 exemplar starts whose results are blended (see
+/// `skb_pose_options_set_starts`), and last the free-joint refinement (see
+/// `skb_pose_options_set_joint_noise`). Thread-safe (with distinct `out`); CPU time per pose
+/// in docs/benchmarks.md ("3-D pose").
+/// @param dict the dictionary, only read.
+/// @param joints the 2-D joints, only read.
+/// @param opts pose options, only read, or NULL for the defaults.
+/// @param out receives the pose and camera; not written on error.
+/// @return SKB_OK; SKB_ERR_TOO_FEW_JOINTS (fewer than 15 finite joints or fewer than 8
+///         visible); SKB_ERR_COINCIDENT_JOINTS (a bone whose ends coincide);
+///         SKB_ERR_DEGENERATE (collinear or tiny figures); SKB_ERR_OUT_OF_RANGE (coordinates
+///         beyond ±1e6 px); argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose3d_estimate(
     dict: *const skb_pose_dictionary,
@@ -551,12 +650,20 @@ pub unsafe extern "C" fn skb_pose3d_estimate(
     }
 }
 
-/// The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
-/// base pose is taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
-/// start `skb_pose3d_estimate` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
-/// and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
-/// is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
-/// to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
+/// The fixed-basis refinement alone: runs the joint Levenberg–Marquardt refinement of rotation,
+/// sx, sy, t and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside
+/// the bound is first moved onto it). Use it to re-polish a pose after editing its camera or
+/// weights, or to compare with another solver. Thread-safe.
+/// @param dict the dictionary, only read.
+/// @param joints the 2-D joints, only read.
+/// @param opts pose options, only read, or NULL for the defaults.
+/// @param start the starting pose, only read: its bases, weights and camera; its base pose is
+///              taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
+///              start `skb_pose3d_estimate` used, so pass the joints it returned.
+/// @param out receives the refined pose; may equal `start`.
+/// @return SKB_OK; the errors of `skb_pose3d_estimate`; SKB_ERR_OUT_OF_RANGE for a start with
+///         0 or more than 32 bases or a basis index ≥ K; SKB_ERR_NON_FINITE for a non-finite
+///         weight or base-pose value; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose3d_refine(
     dict: *const skb_pose_dictionary,
@@ -670,9 +777,14 @@ fn alternative_at(e: &PoseEstimate, index: u32) -> Result<&sketchbody_core::pose
         .ok_or_else(|| out_of_range("index", format!("{index} is not below the {} alternatives", e.alternatives.len())))
 }
 
-/// `skb_pose3d_estimate` into a new estimate handle `*out` (the caller owns it) that also holds the
-/// ranked alternatives. `opts` may be NULL. Same errors as `skb_pose3d_estimate`; on error `*out`
-/// is untouched. Thread-safe.
+/// `skb_pose3d_estimate` into a new estimate handle that also holds the ranked alternatives.
+/// Thread-safe.
+/// @param dict the dictionary, only read.
+/// @param joints the 2-D joints, only read.
+/// @param opts pose options, only read, or NULL for the defaults.
+/// @param out receives a new estimate the caller owns (`skb_pose_estimate_free`); untouched on
+///            error; not NULL.
+/// @return the statuses of `skb_pose3d_estimate`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_new(
     dict: *const skb_pose_dictionary,
@@ -691,14 +803,18 @@ pub unsafe extern "C" fn skb_pose_estimate_new(
     }
 }
 
-/// Frees an estimate. NULL is a no-op. Do not use it afterwards.
+/// Frees an estimate. Do not use it afterwards.
+/// @param est the estimate to free; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_free(est: *mut skb_pose_estimate) {
     unsafe { free_box(est) }
 }
 
-/// The estimate's current pose and camera into `*out` (after flips and picks, the chosen
-/// reading's joints; the camera, bases and RMS are unchanged by them).
+/// The estimate's current pose and camera: after flips and picks, the chosen reading's joints
+/// (the camera, bases and RMS are unchanged by them).
+/// @param est the estimate, only read.
+/// @param out receives the pose; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_pose(est: *const skb_pose_estimate, out: *mut skb_pose3d) -> skb_status {
     unsafe {
@@ -710,8 +826,10 @@ pub unsafe extern "C" fn skb_pose_estimate_pose(est: *const skb_pose_estimate, o
     }
 }
 
-/// The number of alternatives (1..=`SKB_MAX_ALTERNATIVES`; 0 for an estimate without them) into
-/// `*out`.
+/// The number of alternatives.
+/// @param est the estimate, only read.
+/// @param out receives 1..=`SKB_MAX_ALTERNATIVES`, or 0 for an estimate without them; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_alternative_count(
     est: *const skb_pose_estimate,
@@ -726,10 +844,14 @@ pub unsafe extern "C" fn skb_pose_estimate_alternative_count(
     }
 }
 
-/// Copies alternative `index`'s 15 joints (x, y, z doubles, metres, the frame of
-/// `skb_pose3d.joints`) into `dst` (`dst_len` ≥ 45) and its score (px², lower = better) into
-/// `*score` (may be NULL). Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the count; on error
-/// nothing is written.
+/// Copies one alternative's 15 joints and its score. On error nothing is written.
+/// @param est the estimate, only read.
+/// @param index the alternative, below `skb_pose_estimate_alternative_count`.
+/// @param dst receives x, y, z doubles per joint, metres, the frame of `skb_pose3d.joints`.
+/// @param dst_len the element count of `dst`, ≥ 45.
+/// @param score receives the score (px², lower = better); may be NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the count; SKB_ERR_BUFFER_TOO_SMALL for a
+///         short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_joints(
     est: *const skb_pose_estimate,
@@ -752,9 +874,12 @@ pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_joints(
     }
 }
 
-/// The number of limbs alternative `index` flips relative to the current pose into `*out`
-/// (0 for alternative 0; at most `SKB_NUM_LIMBS`). Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥
-/// the alternative count.
+/// The number of limbs an alternative flips relative to the current pose.
+/// @param est the estimate, only read.
+/// @param index the alternative, below the alternative count.
+/// @param out receives the count (0 for alternative 0; at most `SKB_NUM_LIMBS`); not NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the alternative count; argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_alternative_flipped_count(
     est: *const skb_pose_estimate,
@@ -771,10 +896,15 @@ pub unsafe extern "C" fn skb_pose_estimate_alternative_flipped_count(
     }
 }
 
-/// Copies the limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`,
-/// ascending) into `dst` (`dst_len` ≥ `skb_pose_estimate_alternative_flipped_count`;
-/// `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors: `SKB_ERR_OUT_OF_RANGE` for
-/// `index` ≥ the alternative count.
+/// Copies the limbs an alternative flips relative to the current pose. Alternative 0 flips
+/// none.
+/// @param est the estimate, only read.
+/// @param index the alternative, below the alternative count.
+/// @param dst receives `SKB_LIMB_*` values, ascending.
+/// @param dst_len the element count of `dst`, ≥ `skb_pose_estimate_alternative_flipped_count`
+///                (`SKB_NUM_LIMBS` always suffices).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the alternative count;
+///         SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_flipped(
     est: *const skb_pose_estimate,
@@ -795,12 +925,16 @@ pub unsafe extern "C" fn skb_pose_estimate_copy_alternative_flipped(
     }
 }
 
-/// Flips the depth of `limb` (`SKB_LIMB_*`) of the estimate in place and re-solves (the image and
-/// every bone length are kept; the alternatives are re-ranked relative to the new pose; a few
-/// microseconds). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH`
-/// for a limb lying in the picture plane (nothing changed). Flipping the same limb twice returns
-/// the original. Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Not thread-safe on
-/// one estimate.
+/// Flips the depth of a limb of the estimate in place and re-solves (the image and every bone
+/// length are kept; the alternatives are re-ranked relative to the new pose; a few
+/// microseconds). Flipping the same limb twice returns the original. Not thread-safe on one
+/// estimate.
+/// @param est the estimate, changed.
+/// @param limb `SKB_LIMB_*`.
+/// @param outcome receives `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH` for a limb lying in the
+///                picture plane (nothing changed); may be NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `limb` ≥ `SKB_NUM_LIMBS`; argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_flip_limb(
     est: *mut skb_pose_estimate,
@@ -819,9 +953,12 @@ pub unsafe extern "C" fn skb_pose_estimate_flip_limb(
     }
 }
 
-/// Makes alternative `index` the estimate's pose (0 keeps it): its limbs flipped in place, the
-/// alternatives re-ranked relative to it. Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the
-/// count (nothing changed). Not thread-safe on one estimate.
+/// Makes an alternative the estimate's pose: its limbs flipped in place, the alternatives
+/// re-ranked relative to it. Not thread-safe on one estimate.
+/// @param est the estimate, changed.
+/// @param index the alternative (0 keeps the current pose).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the count (nothing changed); argument errors
+///         as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_pose_estimate_pick_alternative(est: *mut skb_pose_estimate, index: u32) -> skb_status {
     unsafe {

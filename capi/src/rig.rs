@@ -61,10 +61,12 @@ unsafe fn copy_rows<T: Copy, const N: usize>(rows: &[[T; N]], dst: *mut T, dst_l
     skb_status::SKB_OK
 }
 
-/// Builds the rig of `mesh` in its current pose (the rest pose if never posed) with `opts`
-/// (NULL: the defaults: project names, A-pose rest, origin on the floor) into `*out`, which the
-/// caller owns (release with `skb_rig_free`). Errors: degenerate bones (`SKB_ERR_DEGENERATE_BONE`).
-/// Only reads `mesh` and `opts`.
+/// Builds the rig of a mesh in its current pose (the rest pose if never posed).
+/// @param mesh the mesh, only read.
+/// @param opts export options, only read; NULL: the defaults (project names, A-pose rest,
+///             origin on the floor).
+/// @param out receives a new rig the caller owns (release with `skb_rig_free`); not NULL.
+/// @return SKB_OK; SKB_ERR_DEGENERATE_BONE for degenerate bones; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_new_from_mesh(
     mesh: *const skb_mesh,
@@ -98,15 +100,19 @@ pub unsafe extern "C" fn skb_rig_new_from_mesh(
     }
 }
 
-/// Releases a rig. NULL is a no-op.
+/// Releases a rig.
+/// @param rig the rig to release; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_free(rig: *mut skb_rig) {
     // SAFETY: `rig` is NULL or a pointer from `skb_rig_new_from_mesh` not freed before.
     unsafe { free_box(rig) }
 }
 
-/// Number of bones (`SKB_NUM_RIG_BONES`, plus `SKB_NUM_TWIST_BONES` with twist bones and
-/// `SKB_NUM_IK_BONES` with IK targets) into `*out`.
+/// Number of bones: `SKB_NUM_RIG_BONES`, plus `SKB_NUM_TWIST_BONES` with twist bones and
+/// `SKB_NUM_IK_BONES` with IK targets.
+/// @param rig the rig, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_bone_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
     ffi_boundary! {
@@ -116,7 +122,10 @@ pub unsafe extern "C" fn skb_rig_bone_count(rig: *const skb_rig, out: *mut usize
     }
 }
 
-/// Number of vertices of the rig's mesh (the mesh's, 13380) into `*out`.
+/// Number of vertices of the rig's mesh (the mesh's, 13380).
+/// @param rig the rig, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_vertex_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
     ffi_boundary! {
@@ -126,8 +135,11 @@ pub unsafe extern "C" fn skb_rig_vertex_count(rig: *const skb_rig, out: *mut usi
     }
 }
 
-/// The byte length (UTF-8, without the terminating NUL) of bone `bone`'s name into `*out`
-/// (`bone` 0 .. `skb_rig_bone_count`−1). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+/// The byte length of a bone's name (UTF-8, without the terminating NUL).
+/// @param rig the rig, only read.
+/// @param bone the bone, 0 .. `skb_rig_bone_count`−1.
+/// @param out receives the length; not NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `bone` out of range; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_bone_name_length(rig: *const skb_rig, bone: usize, out: *mut usize) -> skb_status {
     ffi_boundary! {
@@ -147,9 +159,14 @@ fn bone_name(r: &skb_rig, bone: usize) -> Result<&str, skb_status> {
         .ok_or_else(|| fail(&Error::OutOfRange { name: "bone", detail: format!("{bone} >= {}", r.scene.names.len()) }))
 }
 
-/// Copies the name of bone `bone` (0 .. `skb_rig_bone_count`−1; the GLB node's name in the chosen
-/// convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least
-/// `skb_rig_bone_name_length` + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+/// Copies a bone's name: the GLB node's name in the chosen convention.
+/// @param rig the rig, only read.
+/// @param bone the bone, 0 .. `skb_rig_bone_count`−1.
+/// @param dst receives the name as NUL-terminated UTF-8.
+/// @param dst_len the size of `dst` in bytes, at least `skb_rig_bone_name_length` + 1 (64 bytes
+///                hold every name).
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `bone` out of range; SKB_ERR_BUFFER_TOO_SMALL for a
+///         short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_bone_name(
     rig: *const skb_rig,
@@ -165,9 +182,12 @@ pub unsafe extern "C" fn skb_rig_copy_bone_name(
     }
 }
 
-/// Copies each bone's parent index (−1 for the root, bone 0) into `dst` of `dst_len` integers
-/// (at least `skb_rig_bone_count`). Parents come before their children; the order is the GLB's
+/// Copies each bone's parent index. Parents come before their children; the order is the GLB's
 /// node and joint order.
+/// @param rig the rig, only read.
+/// @param dst receives one parent index per bone (−1 for the root, bone 0).
+/// @param dst_len the element count of `dst` in integers, at least `skb_rig_bone_count`.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_parents(rig: *const skb_rig, dst: *mut i32, dst_len: usize) -> skb_status {
     ffi_boundary! {
@@ -181,13 +201,16 @@ pub unsafe extern "C" fn skb_rig_copy_parents(rig: *const skb_rig, dst: *mut i32
     }
 }
 
-/// Copies each bone's rest transform relative to its parent, `SKB_RIG_TRANSFORM_LEN` doubles per
-/// bone: translation x, y, z (metres, in the parent bone's frame; the root's in the model frame,
-/// +Y up) then the rotation as a unit quaternion x, y, z, w (parent bone frame → this bone's
-/// frame; bone frames have Y along the bone, X the bend axis MakeHuman's roll gives). The rest
-/// is the rig's (A- or T-pose, placed at the chosen origin): the GLB's bind pose. Composing
-/// `parent · T(t) · R(q)` from the root gives each bone's rest frame and head. `dst` holds
-/// `dst_len` doubles (at least 7 × `skb_rig_bone_count`).
+/// Copies each bone's rest transform relative to its parent. The rest is the rig's (A- or
+/// T-pose, placed at the chosen origin): the GLB's bind pose. Composing `parent · T(t) · R(q)`
+/// from the root gives each bone's rest frame and head.
+/// @param rig the rig, only read.
+/// @param dst receives `SKB_RIG_TRANSFORM_LEN` doubles per bone: translation x, y, z (metres, in
+///            the parent bone's frame; the root's in the model frame, +Y up) then the rotation as a
+///            unit quaternion x, y, z, w (parent bone frame → this bone's frame; bone frames have Y
+///            along the bone, X the bend axis MakeHuman's roll gives).
+/// @param dst_len the element count of `dst` in doubles, at least 7 × `skb_rig_bone_count`.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_rest_transforms(
     rig: *const skb_rig,
@@ -205,11 +228,15 @@ pub unsafe extern "C" fn skb_rig_copy_rest_transforms(
     }
 }
 
-/// Copies the posed rotation of each bone relative to its parent (4 doubles per bone: unit
-/// quaternion x, y, z, w; the root's relative to the model frame): the GLB nodes' `rotation`,
+/// Copies the posed rotation of each bone relative to its parent: the GLB nodes' `rotation`,
 /// what a DCC shows as the pose bones' rotations. With the rest translations of
-/// `skb_rig_copy_rest_transforms` (the root's plus `skb_rig_copy_root_translation`) they give the
-/// posed skeleton. `dst` holds `dst_len` doubles (at least 4 × `skb_rig_bone_count`).
+/// `skb_rig_copy_rest_transforms` (the root's plus `skb_rig_copy_root_translation`) they give
+/// the posed skeleton.
+/// @param rig the rig, only read.
+/// @param dst receives 4 doubles per bone: unit quaternion x, y, z, w (the root's relative to the
+///            model frame).
+/// @param dst_len the element count of `dst` in doubles, at least 4 × `skb_rig_bone_count`.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_local_rotations(
     rig: *const skb_rig,
@@ -223,9 +250,12 @@ pub unsafe extern "C" fn skb_rig_copy_local_rotations(
     }
 }
 
-/// Copies the root's translation in the pose (x, y, z doubles, metres, model frame; non-zero only
-/// with the origin on the floor, where it keeps the posed body's lowest point at y = 0) into
-/// `dst` of `dst_len` doubles (at least 3).
+/// Copies the root's translation in the pose: non-zero only with the origin on the floor, where
+/// it keeps the posed body's lowest point at y = 0.
+/// @param rig the rig, only read.
+/// @param dst receives x, y, z doubles, metres, model frame.
+/// @param dst_len the element count of `dst` in doubles, at least 3.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_root_translation(
     rig: *const skb_rig,
@@ -238,9 +268,12 @@ pub unsafe extern "C" fn skb_rig_copy_root_translation(
     }
 }
 
-/// Copies the posed bone heads (x, y, z doubles per bone, metres, the export's frame) as the
-/// library computes them (the rig's forward kinematics, what a glTF viewer shows) into `dst` of
-/// `dst_len` doubles (at least 3 × `skb_rig_bone_count`).
+/// Copies the posed bone heads as the library computes them (the rig's forward kinematics, what
+/// a glTF viewer shows).
+/// @param rig the rig, only read.
+/// @param dst receives x, y, z doubles per bone, metres, the export's frame.
+/// @param dst_len the element count of `dst` in doubles, at least 3 × `skb_rig_bone_count`.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_posed_heads(rig: *const skb_rig, dst: *mut f64, dst_len: usize) -> skb_status {
     ffi_boundary! {
@@ -250,9 +283,12 @@ pub unsafe extern "C" fn skb_rig_copy_posed_heads(rig: *const skb_rig, dst: *mut
     }
 }
 
-/// Copies the translation from the mesh's model frame to the export's frame (x, y, z doubles,
-/// metres: the rig's rest = the mesh's rest + this, before any T-pose) into `dst` of `dst_len`
-/// doubles (at least 3).
+/// Copies the translation from the mesh's model frame to the export's frame: the rig's rest =
+/// the mesh's rest + this, before any T-pose.
+/// @param rig the rig, only read.
+/// @param dst receives x, y, z doubles, metres.
+/// @param dst_len the element count of `dst` in doubles, at least 3.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_offset(rig: *const skb_rig, dst: *mut f64, dst_len: usize) -> skb_status {
     ffi_boundary! {
@@ -261,10 +297,13 @@ pub unsafe extern "C" fn skb_rig_copy_offset(rig: *const skb_rig, dst: *mut f64,
     }
 }
 
-/// Copies the rig's rest vertices (the bind pose: the mesh's rest placed at the chosen origin,
-/// skinned into the T-pose when asked; x, y, z floats, metres) into `dst` of `dst_len` floats (at
-/// least 3 × vertex count). Faces are the mesh's (`skb_mesh_copy_faces`,
+/// Copies the rig's rest vertices: the bind pose, the mesh's rest placed at the chosen origin,
+/// skinned into the T-pose when asked. Faces are the mesh's (`skb_mesh_copy_faces`,
 /// `skb_mesh_copy_triangles`).
+/// @param rig the rig, only read.
+/// @param dst receives x, y, z floats per vertex, metres.
+/// @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_rest_vertices(rig: *const skb_rig, dst: *mut f32, dst_len: usize) -> skb_status {
     ffi_boundary! {
@@ -273,8 +312,11 @@ pub unsafe extern "C" fn skb_rig_copy_rest_vertices(rig: *const skb_rig, dst: *m
     }
 }
 
-/// Number of shape keys (0 unless the options asked for them, `skb_export_options_set_shape_keys`)
-/// into `*out`.
+/// Number of shape keys (0 unless the options asked for them,
+/// `skb_export_options_set_shape_keys`).
+/// @param rig the rig, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_shape_key_count(rig: *const skb_rig, out: *mut usize) -> skb_status {
     ffi_boundary! {
@@ -285,11 +327,16 @@ pub unsafe extern "C" fn skb_rig_shape_key_count(rig: *const skb_rig, out: *mut 
     }
 }
 
-/// Copies shape key `key`'s displacement of each rest vertex (`skb_rig_copy_rest_vertices`'
-/// order and frame; x, y, z floats, metres; the key at value 1 adds them, the base is the fitted
-/// body) into `dst` of `dst_len` floats (at least 3 × vertex count). Key `k` is named
-/// `shape_NN` with NN = k + 1 in two digits (the GLB's `extras.targetNames`, the FBX and USD
-/// shapes' names). Errors: `key` ≥ `skb_rig_shape_key_count` (`SKB_ERR_OUT_OF_RANGE`).
+/// Copies a shape key's displacement of each rest vertex (the key at value 1 adds them, the base
+/// is the fitted body). Key `k` is named `shape_NN` with NN = k + 1 in two digits (the GLB's
+/// `extras.targetNames`, the FBX and USD shapes' names).
+/// @param rig the rig, only read.
+/// @param key the shape key, below `skb_rig_shape_key_count`.
+/// @param dst receives x, y, z floats per vertex, metres, `skb_rig_copy_rest_vertices`' order
+///            and frame.
+/// @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `key` ≥ `skb_rig_shape_key_count`;
+///         SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_shape_key(
     rig: *const skb_rig,
@@ -307,9 +354,12 @@ pub unsafe extern "C" fn skb_rig_copy_shape_key(
     }
 }
 
-/// Copies the rig's posed vertices (the rig's own linear blend skinning of the rest vertices,
-/// as a glTF viewer shows the GLB; x, y, z floats, metres) into `dst` of `dst_len` floats (at
-/// least 3 × vertex count).
+/// Copies the rig's posed vertices: the rig's own linear blend skinning of the rest vertices,
+/// as a glTF viewer shows the GLB.
+/// @param rig the rig, only read.
+/// @param dst receives x, y, z floats per vertex, metres.
+/// @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_posed_vertices(rig: *const skb_rig, dst: *mut f32, dst_len: usize) -> skb_status {
     ffi_boundary! {
@@ -318,9 +368,13 @@ pub unsafe extern "C" fn skb_rig_copy_posed_vertices(rig: *const skb_rig, dst: *
     }
 }
 
-/// Copies the skin weights to the rig's bones: for vertex v, slots `4v .. 4v+3` of `bones`
-/// (indices into the rig's bone order) and `weights` (summing to 1; unused slots bone 0, weight
-/// 0). Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count).
+/// Copies the skin weights to the rig's bones: for vertex v, slots `4v .. 4v+3` of both buffers
+/// (unused slots bone 0, weight 0).
+/// @param rig the rig, only read.
+/// @param bones receives indices into the rig's bone order.
+/// @param weights receives the weights, summing to 1 per vertex.
+/// @param len the element count of each buffer, at least `SKB_MAX_INFLUENCES` × vertex count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for short buffers; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rig_copy_skin_weights(
     rig: *const skb_rig,
@@ -336,7 +390,10 @@ pub unsafe extern "C" fn skb_rig_copy_skin_weights(
 }
 
 /// Number of UV coordinates of the mesh (texture corners shared by faces; more than the
-/// vertices, because seams split them) into `*out`.
+/// vertices, because seams split them).
+/// @param mesh the mesh, only read.
+/// @param out receives the count; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_uv_count(mesh: *const skb_mesh, out: *mut usize) -> skb_status {
     ffi_boundary! {
@@ -346,8 +403,11 @@ pub unsafe extern "C" fn skb_mesh_uv_count(mesh: *const skb_mesh, out: *mut usiz
     }
 }
 
-/// Copies the UV coordinates (u, v floats each, v up as in OBJ and MakeHuman; glTF's v is
-/// 1 − v) into `dst` of `dst_len` floats (at least 2 × `skb_mesh_uv_count`).
+/// Copies the UV coordinates.
+/// @param mesh the mesh, only read.
+/// @param dst receives u, v floats each, v up as in OBJ and MakeHuman (glTF's v is 1 − v).
+/// @param dst_len the element count of `dst` in floats, at least 2 × `skb_mesh_uv_count`.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_uvs(mesh: *const skb_mesh, dst: *mut f32, dst_len: usize) -> skb_status {
     ffi_boundary! {
@@ -356,9 +416,12 @@ pub unsafe extern "C" fn skb_mesh_copy_uvs(mesh: *const skb_mesh, dst: *mut f32,
     }
 }
 
-/// Copies, for each quad face, the UV index (into `skb_mesh_copy_uvs`) of each of its 4 corners,
-/// in the corner order of `skb_mesh_copy_faces`, into `dst` of `dst_len` integers (at least
-/// 4 × face count).
+/// Copies, for each quad face, the UV index of each of its 4 corners.
+/// @param mesh the mesh, only read.
+/// @param dst receives UV indices (into `skb_mesh_copy_uvs`), 4 per face, in the corner order of
+///            `skb_mesh_copy_faces`.
+/// @param dst_len the element count of `dst` in integers, at least 4 × face count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_face_uvs(mesh: *const skb_mesh, dst: *mut u32, dst_len: usize) -> skb_status {
     ffi_boundary! {
@@ -367,9 +430,13 @@ pub unsafe extern "C" fn skb_mesh_copy_face_uvs(mesh: *const skb_mesh, dst: *mut
     }
 }
 
-/// Copies unit vertex normals (x, y, z floats; area-weighted face normals, outward, as the GLB
-/// writes) of the rest vertices, or of the posed ones (`posed`: the current `skb_mesh_pose`,
-/// the rest before any), into `dst` of `dst_len` floats (at least 3 × vertex count).
+/// Copies unit vertex normals: area-weighted face normals, outward, as the GLB writes.
+/// @param mesh the mesh, only read.
+/// @param posed true: of the posed vertices (the current `skb_mesh_pose`, the rest before any);
+///              false: of the rest vertices.
+/// @param dst receives x, y, z floats per vertex.
+/// @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_copy_normals(
     mesh: *const skb_mesh,

@@ -28,7 +28,10 @@ pub struct skb_sketch_options {
     camera: Option<CameraAngles>,
 }
 
-/// Creates options with the defaults. `*out` receives a handle the caller owns.
+/// Creates sketch options with the defaults (random style, random near-frontal camera).
+/// @param out receives a new options handle the caller owns (release with
+///            `skb_sketch_options_free`); not NULL.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL `out`.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_new(out: *mut *mut skb_sketch_options) -> skb_status {
     unsafe {
@@ -39,14 +42,17 @@ pub unsafe extern "C" fn skb_sketch_options_new(out: *mut *mut skb_sketch_option
     }
 }
 
-/// Releases options. NULL is a no-op.
+/// Releases sketch options.
+/// @param opts the options to release; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_free(opts: *mut skb_sketch_options) {
     unsafe { free_box(opts) }
 }
 
-/// Sets the style: `SKB_SKETCH_STYLE_RANDOM` or `SKB_SKETCH_STYLE_CLEAN`; anything else is
-/// `SKB_ERR_OUT_OF_RANGE`.
+/// Sets the sketch style.
+/// @param opts the options, changed.
+/// @param style `SKB_SKETCH_STYLE_RANDOM` (the default) or `SKB_SKETCH_STYLE_CLEAN`.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_set_style(opts: *mut skb_sketch_options, style: u32) -> skb_status {
     unsafe {
@@ -61,9 +67,14 @@ pub unsafe extern "C" fn skb_sketch_options_set_style(opts: *mut skb_sketch_opti
     }
 }
 
-/// Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; yaw within ±180°
-/// (±180° a back view, −90° a left profile), pitch and roll within ±90°) instead of random
+/// Fixes the camera angles (rotation `Rz(roll) Rx(pitch) Ry(yaw)`) instead of random
 /// near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+/// @param opts the options, changed.
+/// @param yaw_deg degrees within ±180° (±180° a back view, −90° a left profile).
+/// @param pitch_deg degrees within ±90°.
+/// @param roll_deg degrees within ±90°.
+/// @return SKB_OK; SKB_ERR_NON_FINITE for a non-finite angle; SKB_ERR_OUT_OF_RANGE for an angle
+///         beyond its limit; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_sketch_options_set_camera(
     opts: *mut skb_sketch_options,
@@ -82,20 +93,29 @@ pub unsafe extern "C" fn skb_sketch_options_set_camera(
     }
 }
 
-/// Renders a `width`×`height` gray sketch (0 ink … 255 paper) of a body of `gender`
-/// (`SKB_GENDER_*`) with `n_weights` PCA shape `weights` (`n_weights` 0: a random shape from the
-/// model's prior), posed onto `joints3d` (15 × x y z metres, +Y up, canonical order; only the
-/// bone directions are used) or, when `joints3d` is NULL, a random procedural pose. Every
-/// random choice comes from `seed`. `opts` may be NULL (random style and camera).
-///
-/// Writes the image to `out_pixels` (`out_stride` ≥ `width` bytes a row, `out_len` bytes in
-/// all) and, when not NULL, the 15 projected joints to `out_joints2d` (15 × x y pixels) and
-/// their visibility (1 visible, 0 hidden by another body part) to `out_visible` (15 bytes).
-/// Errors: NULL context or pixels, an unknown gender or too many weights
-/// (`SKB_ERR_OUT_OF_RANGE`), non-finite weights or joints (`SKB_ERR_NON_FINITE`), zero-length
-/// bones (`SKB_ERR_DEGENERATE_BONE`), sizes outside 1..=4096, short stride or buffer. Nothing
-/// is written on failure. Thread-safe for distinct output buffers; builds its edge tables on
-/// each call (a few ms).
+/// Renders a gray sketch (0 ink … 255 paper) of a body. Every random choice comes from `seed`.
+/// Nothing is written on failure. Thread-safe for distinct output buffers; builds its edge
+/// tables on each call (a few ms).
+/// @param ctx the context, only read.
+/// @param gender `SKB_GENDER_*`.
+/// @param weights `n_weights` PCA shape weights.
+/// @param n_weights the number of weights; 0: a random shape from the model's prior.
+/// @param joints3d 15 × x y z metres, +Y up, canonical order (only the bone directions are
+///                 used); NULL: a random procedural pose.
+/// @param seed the seed of every random choice.
+/// @param width the image width in pixels, 1..=4096.
+/// @param height the image height in pixels, 1..=4096.
+/// @param opts sketch options, only read, or NULL (random style and camera).
+/// @param out_pixels receives the image; not NULL.
+/// @param out_stride bytes between the starts of consecutive rows, ≥ `width`.
+/// @param out_len the size of `out_pixels` in bytes.
+/// @param out_joints2d receives the 15 projected joints (15 × x y pixels); may be NULL.
+/// @param out_visible receives their visibility (15 bytes: 1 visible, 0 hidden by another body
+///                    part); may be NULL.
+/// @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL context or pixels; SKB_ERR_OUT_OF_RANGE for
+///         an unknown gender or too many weights; SKB_ERR_NON_FINITE for non-finite weights or
+///         joints; SKB_ERR_DEGENERATE_BONE for zero-length bones; errors for sizes outside
+///         1..=4096, a short stride or buffer; argument errors as docs/c-api.md.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
 pub unsafe extern "C" fn skb_context_render_sketch(

@@ -98,8 +98,10 @@ impl From<&Error> for skb_status {
     }
 }
 
-/// Static, NUL-terminated English text for a status code; "unknown status" for numbers this
-/// version does not know. Never NULL; never free it. Thread-safe.
+/// English text for a status code. Thread-safe.
+/// @param status a `skb_status` value (any `uint32_t` is accepted).
+/// @return a static, NUL-terminated string, valid for the life of the process ("unknown status"
+///         for numbers this version does not know); never NULL; never free it.
 #[no_mangle]
 pub extern "C" fn skb_status_str(status: u32) -> *const c_char {
     let s: &'static [u8] = match status {

@@ -36,9 +36,11 @@ pub struct skb_rgb_image {
     inner: RgbImage,
 }
 
-/// Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as 8-bit RGB into `*out` (caller
-/// owns it). Errors: `SKB_ERR_IO` (missing, unreadable, not a regular file), `SKB_ERR_DECODE`
-/// (not an image, truncated), `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
+/// Loads a PNG or JPEG file as 8-bit RGB. Thread-safe.
+/// @param path the file path, NUL-terminated UTF-8.
+/// @param out receives a new image the caller owns (free with `skb_rgb_image_free`); not NULL.
+/// @return SKB_OK; SKB_ERR_IO (missing, unreadable, not a regular file); SKB_ERR_DECODE (not an
+///         image, truncated); SKB_ERR_IMAGE_TOO_LARGE; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rgb_image_new_from_file(path: *const c_char, out: *mut *mut skb_rgb_image) -> skb_status {
     unsafe {
@@ -51,8 +53,11 @@ pub unsafe extern "C" fn skb_rgb_image_new_from_file(path: *const c_char, out: *
     }
 }
 
-/// A borrowed 3-channel `skb_image` view of `img` into `*out` (rows packed, `stride` = 3 ×
-/// `width`), valid while `img` lives.
+/// A borrowed 3-channel `skb_image` view of a decoded image.
+/// @param img the image, only read.
+/// @param out receives the view (rows packed, `stride` = 3 × `width`), valid while `img` lives;
+///            not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rgb_image_view(img: *const skb_rgb_image, out: *mut skb_image) -> skb_status {
     unsafe {
@@ -66,16 +71,20 @@ pub unsafe extern "C" fn skb_rgb_image_view(img: *const skb_rgb_image, out: *mut
     }
 }
 
-/// Frees an image from `skb_rgb_image_new_from_file`. NULL is a no-op.
+/// Frees an image from `skb_rgb_image_new_from_file`.
+/// @param img the image to free; NULL is a no-op.
 #[no_mangle]
 pub unsafe extern "C" fn skb_rgb_image_free(img: *mut skb_rgb_image) {
     unsafe { free_box(img) }
 }
 
-/// Writes `img` (1 channel: gray, 3: RGB, 4: RGBA; any stride) as an 8-bit PNG to `path`
-/// (NUL-terminated UTF-8) with the library's encoder, the one `sketchbody run` writes
-/// `body_texture.png` with (same pixels, same bytes). Written atomically: on error (`SKB_ERR_IO`
-/// for an unwritable path) nothing is left at `path`. Thread-safe.
+/// Writes an image as an 8-bit PNG with the library's encoder, the one `sketchbody run` writes
+/// `body_texture.png` with (same pixels, same bytes). Written atomically: on error nothing is
+/// left at `path`. Thread-safe.
+/// @param img the image, only read: 1 channel gray, 3 RGB, 4 RGBA; any stride.
+/// @param path the output file path, NUL-terminated UTF-8.
+/// @return SKB_OK; SKB_ERR_IO for an unwritable path; image and argument errors as
+///         docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_image_write_png(img: *const skb_image, path: *const c_char) -> skb_status {
     unsafe {
@@ -147,16 +156,20 @@ unsafe fn project_into(
 /// light grey (190, 190, 190); seen texels grow 2 texels into the unused space around UV
 /// islands.
 ///
-/// `sketch` is the colour image the result was computed from (the same pixels; 3 channels as
-/// `skb_rgb_image_new_from_file` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
-/// alpha ignored). `size` is the texture side in texels, 1..=`SKB_MAX_TEXTURE_SIZE` (the CLI's
-/// default `SKB_DEFAULT_TEXTURE_SIZE`). Writes `size` rows of `size` RGB pixels (3 bytes each)
-/// into `dst`, rows `dst_stride` bytes apart (at least 3 × `size`); `dst_len` is the size of
-/// `dst` in bytes and must be at least `dst_stride * (size - 1) + 3 * size`. `texels` and
-/// `visible` (each may be NULL) receive the number of texels inside the UV layout and of those
-/// the sketch coloured. Errors: `SKB_ERR_OUT_OF_RANGE` (size), `SKB_ERR_BAD_STRIDE`,
-/// `SKB_ERR_BUFFER_TOO_SMALL`, the image errors, `SKB_ERR_NULL_POINTER`; nothing is written on
-/// error. Thread-safe (the result is only read).
+/// Nothing is written on error. Thread-safe (the result is only read).
+/// @param result the result, only read.
+/// @param sketch the colour image the result was computed from (the same pixels; 3 channels as
+///               `skb_rgb_image_new_from_file` gives them reproduce the CLI exactly; 1 channel
+///               is taken as gray, 4 with alpha ignored).
+/// @param size the texture side in texels, 1..=`SKB_MAX_TEXTURE_SIZE` (the CLI's default
+///             `SKB_DEFAULT_TEXTURE_SIZE`).
+/// @param dst receives `size` rows of `size` RGB pixels (3 bytes each).
+/// @param dst_stride bytes between the starts of consecutive rows of `dst`, at least 3 × `size`.
+/// @param dst_len the size of `dst` in bytes, at least `dst_stride * (size - 1) + 3 * size`.
+/// @param texels receives the number of texels inside the UV layout; may be NULL.
+/// @param visible receives the number of those the sketch coloured; may be NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE (size, or a result mesh without a UV layout);
+///         SKB_ERR_BAD_STRIDE; SKB_ERR_BUFFER_TOO_SMALL; the image errors; SKB_ERR_NULL_POINTER.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_project_texture(
     result: *const skb_result,
@@ -179,13 +192,22 @@ pub unsafe extern "C" fn skb_result_project_texture(
     }
 }
 
-/// The same projection for a mesh and a camera of the host's own: the sketch seen through
-/// `cam` (model metres → sketch pixels, as `skb_result_camera` gives it) projected onto the
-/// mesh in its current pose (`skb_mesh_pose`; the rest pose if never posed). For a mesh from
-/// `skb_mesh_new_from_result` and the result's camera this is exactly `skb_result_project_texture`.
-/// Arguments, output and errors otherwise as `skb_result_project_texture`, plus
-/// `SKB_ERR_NON_FINITE` / `SKB_ERR_OUT_OF_RANGE` for an invalid camera (non-finite, scales not
-/// positive, rotation not orthonormal). Only reads `mesh`.
+/// The same projection as `skb_result_project_texture` for a mesh and a camera of the host's
+/// own: the sketch seen through `cam` projected onto the mesh in its current pose
+/// (`skb_mesh_pose`; the rest pose if never posed). For a mesh from `skb_mesh_new_from_result`
+/// and the result's camera this is exactly `skb_result_project_texture`.
+/// @param mesh the mesh, only read.
+/// @param sketch as in `skb_result_project_texture`.
+/// @param cam model metres → sketch pixels, as `skb_result_camera` gives it.
+/// @param size as in `skb_result_project_texture`.
+/// @param dst as in `skb_result_project_texture`.
+/// @param dst_stride as in `skb_result_project_texture`.
+/// @param dst_len as in `skb_result_project_texture`.
+/// @param texels as in `skb_result_project_texture` (may be NULL).
+/// @param visible as in `skb_result_project_texture` (may be NULL).
+/// @return the statuses of `skb_result_project_texture`, plus SKB_ERR_NON_FINITE /
+///         SKB_ERR_OUT_OF_RANGE for an invalid camera (non-finite, scales not positive, rotation
+///         not orthonormal).
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_project_texture(
     mesh: *const skb_mesh,

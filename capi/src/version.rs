@@ -12,8 +12,10 @@ pub const SKB_VERSION_PATCH: u32 = 0;
 /// from the three numeric macros above (cbindgen emits no string constants).
 pub const SKB_VERSION_STRING: &str = "1.0.0";
 
-/// The version of the loaded library, `"MAJOR.MINOR.PATCH"` (compare with the header's
-/// `SKB_VERSION_STRING`). Static; never NULL; never free it. Thread-safe.
+/// The version of the loaded library (compare with the header's `SKB_VERSION_STRING`).
+/// Thread-safe.
+/// @return a static, NUL-terminated `"MAJOR.MINOR.PATCH"` string, valid for the life of the
+///         process; never NULL; never free it.
 #[no_mangle]
 pub extern "C" fn skb_version() -> *const c_char {
     concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr().cast()

@@ -98,21 +98,34 @@ fn label_code(label: ViewLabel) -> u32 {
     }
 }
 
-/// `skb_pipeline_run_progressive` on a turnaround: `sketch` and `joints` are the front view,
-/// `views` (`view_count` entries; NULL when 0) the same character in the same pose from the side,
-/// the other side or the back. The views share one body and one pose: every view's joints enter
-/// the 3-D pose (depth from a side view), every view's outline the shape fit; each view has the
-/// front camera turned by its label's yaw, with its own scale and position. With `view_count` 0
-/// this is `skb_pipeline_run_progressive`. Read each view with `skb_result_view` and the run's
-/// warnings (views that agree only roughly, a view little supported by its strokes) with
-/// `skb_result_copy_view_warnings`. Arguments, ownership, threading, progress and cancel as
-/// `skb_pipeline_run_progressive` (the interim bodies are the front view's); the views' images
-/// and joints are only read during the call. Errors: `skb_pipeline_run`'s for any view's image
-/// and joints; a label not `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or `SKB_VIEW_BACK`, or one given
-/// twice (`SKB_ERR_OUT_OF_RANGE`); views that do not show one character in one pose (their joints
-/// miss the shared pose by more than 12 % of the figure's height, match it only upside down, or a
-/// side view drawn facing the other way than its label: `SKB_ERR_VIEWS_DISAGREE`, the message
-/// names the view and the reason; a turnaround is never silently fitted to the front alone).
+/// `skb_pipeline_run_progressive` on a turnaround. The views share one body and one pose: every
+/// view's joints enter the 3-D pose (depth from a side view), every view's outline the shape
+/// fit; each view has the front camera turned by its label's yaw, with its own scale and
+/// position. Read each view with `skb_result_view` and the run's warnings (views that agree only
+/// roughly, a view little supported by its strokes) with `skb_result_copy_view_warnings`.
+/// Ownership, threading, progress and cancel as `skb_pipeline_run_progressive`.
+/// @param ctx as in `skb_pipeline_run`.
+/// @param sketch the front view, as in `skb_pipeline_run`.
+/// @param joints the front view's joints, as in `skb_pipeline_run` (NULL: detected).
+/// @param views `view_count` extra views, the same character in the same pose from the side,
+///              the other side or the back; their images and joints are only read during the
+///              call; NULL when `view_count` is 0.
+/// @param view_count the number of extra views; 0 makes this `skb_pipeline_run_progressive`.
+/// @param dict as in `skb_pipeline_run` (NULL: the embedded dictionary).
+/// @param pose_opts as in `skb_pipeline_run` (NULL: the defaults).
+/// @param fit_opts as in `skb_pipeline_run` (NULL: the defaults).
+/// @param progress as in `skb_pipeline_run` (may be NULL).
+/// @param interim as in `skb_pipeline_run_progressive` (the interim bodies are the front
+///                view's; may be NULL).
+/// @param user passed unchanged to `progress` and `interim`.
+/// @param out as in `skb_pipeline_run`.
+/// @return SKB_OK; `skb_pipeline_run`'s errors for any view's image and joints;
+///         SKB_ERR_OUT_OF_RANGE for a label not `SKB_VIEW_SIDE`, `SKB_VIEW_SIDE_LEFT` or
+///         `SKB_VIEW_BACK`, or one given twice; SKB_ERR_VIEWS_DISAGREE for views that do not
+///         show one character in one pose (their joints miss the shared pose by more than 12 %
+///         of the figure's height, match it only upside down, or a side view drawn facing the
+///         other way than its label; the message names the view and the reason; a turnaround
+///         is never silently fitted to the front alone).
 #[no_mangle]
 pub unsafe extern "C" fn skb_pipeline_run_views(
     ctx: *const skb_context,
@@ -137,7 +150,10 @@ pub unsafe extern "C" fn skb_pipeline_run_views(
     }
 }
 
-/// The number of extra views of a result into `*out` (0 for a one-view run).
+/// The number of extra views of a result.
+/// @param result the result, only read.
+/// @param out receives the count (0 for a one-view run); not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_view_count(result: *const skb_result, out: *mut usize) -> skb_status {
     unsafe {
@@ -149,8 +165,11 @@ pub unsafe extern "C" fn skb_result_view_count(result: *const skb_result, out: *
     }
 }
 
-/// Extra view `index` (0 .. `skb_result_view_count` − 1, in the order given) into `*out`.
-/// Errors: `index` out of range (`SKB_ERR_OUT_OF_RANGE`).
+/// What the run made of one extra view.
+/// @param result the result, only read.
+/// @param index the view, 0 .. `skb_result_view_count` − 1, in the order given.
+/// @param out receives the view's info; not NULL.
+/// @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` out of range; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_view(
     result: *const skb_result,
@@ -185,9 +204,11 @@ pub unsafe extern "C" fn skb_result_view(
     }
 }
 
-/// The byte length (UTF-8, without the terminating NUL) of the run's warnings about its views
-/// into `*out`: 0 when there are none or for a one-view run. Read them with
-/// `skb_result_copy_view_warnings`.
+/// The byte length (UTF-8, without the terminating NUL) of the run's warnings about its views.
+/// Read them with `skb_result_copy_view_warnings`.
+/// @param result the result, only read.
+/// @param out receives the length: 0 when there are none or for a one-view run; not NULL.
+/// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_view_warnings_length(result: *const skb_result, out: *mut usize) -> skb_status {
     unsafe {
@@ -199,9 +220,12 @@ pub unsafe extern "C" fn skb_result_view_warnings_length(result: *const skb_resu
     }
 }
 
-/// Copies the run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing
-/// newline; empty when there are none or for a one-view run), NUL-terminated into `dst` of
-/// `dst_len` bytes (at least `skb_result_view_warnings_length` + 1).
+/// Copies the run's warnings about its views, one per line.
+/// @param result the result, only read.
+/// @param dst receives the warnings as NUL-terminated UTF-8, `\n`-separated, no trailing
+///            newline; empty when there are none or for a one-view run.
+/// @param dst_len the size of `dst` in bytes, at least `skb_result_view_warnings_length` + 1.
+/// @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_copy_view_warnings(
     result: *const skb_result,

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "e2b11240280fde85299adad8a5a3f051c37ef8d82be75fda2d2a25beda7ebce4"
+HEADER_SHA256 = "a32e09d31d4addbfb28cdf2191ea6a0d9b926b89483425efe2af774cfa5996b5"
 
 # ---- constants (#define) ----
 
@@ -784,9 +784,15 @@ FUNCTIONS["skb_image_canny"] = (
     ),
 )
 
-# Gaussian blur of a 1-channel `src` with standard deviation `sigma` pixels (0 < sigma <= 1024),
-# compatible with OpenCV 4.x `cv::GaussianBlur(src, dst, cv::Size(0, 0), sigma)`. Output
-# layout as in [`skb_image_canny`]. On error nothing is written. Thread-safe.
+# Gaussian blur of a 1-channel `src`, compatible with OpenCV 4.x
+# `cv::GaussianBlur(src, dst, cv::Size(0, 0), sigma)`. On error nothing is written. Thread-safe.
+# @param src the 1-channel image, only read.
+# @param sigma the standard deviation in pixels, 0 < sigma <= 1024.
+# @param dst receives `src->height` rows of `src->width` bytes, as in [`skb_image_canny`].
+# @param dst_stride bytes between the starts of consecutive rows of `dst`.
+# @param dst_len the size of `dst` in bytes; at least `dst_stride * (height - 1) + width`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `sigma` outside its range;
+#         SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_image_gaussian_blur"] = (
     ctypes.c_uint32,
     [
@@ -817,7 +823,8 @@ FUNCTIONS["skb_context_new"] = (
     ),
 )
 
-# Releases a context from `skb_context_new`. NULL is a no-op. Meshes made from it stay valid.
+# Releases a context from `skb_context_new`. Meshes made from it stay valid.
+# @param ctx the context to release; NULL is a no-op.
 FUNCTIONS["skb_context_free"] = (
     None,
     [
@@ -829,8 +836,12 @@ FUNCTIONS["skb_context_free"] = (
     ),
 )
 
-# Number of principal components of `gender`'s shape space (the most weights
-# `skb_mesh_new_from_shape` accepts) into `*out`. Thread-safe.
+# Number of principal components of a gender's shape space (the most weights
+# `skb_mesh_new_from_shape` accepts). Thread-safe.
+# @param ctx the context, only read.
+# @param gender `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`.
+# @param out receives the count; not NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for an unknown gender; argument errors as docs/c-api.md.
 FUNCTIONS["skb_context_component_count"] = (
     ctypes.c_uint32,
     [
@@ -846,8 +857,12 @@ FUNCTIONS["skb_context_component_count"] = (
     ),
 )
 
-# The default fitting dimension of `gender`'s shape space (components holding 96% of the
-# training variance) into `*out`. Thread-safe.
+# The default fitting dimension of a gender's shape space (components holding 96% of the
+# training variance). Thread-safe.
+# @param ctx the context, only read.
+# @param gender `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`.
+# @param out receives the dimension; not NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for an unknown gender; argument errors as docs/c-api.md.
 FUNCTIONS["skb_context_default_dim"] = (
     ctypes.c_uint32,
     [
@@ -863,12 +878,16 @@ FUNCTIONS["skb_context_default_dim"] = (
     ),
 )
 
-# Builds the rest-pose mesh of `gender` (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) with PCA
-# weights `weights[0..n]` (metres along unit basis vectors; missing trailing weights are 0, so
-# `n = 0` gives the mean shape and `weights` may then be NULL). Errors: unknown gender
-# (`SKB_ERR_OUT_OF_RANGE`), `n` above the component count (`SKB_ERR_OUT_OF_RANGE`), a NaN or
-# infinite weight (`SKB_ERR_NON_FINITE`). On success `*out` receives a new mesh the caller owns
-# (release with `skb_mesh_free`); on failure `*out` is untouched. Thread-safe.
+# Builds the rest-pose mesh of a gender with given PCA shape weights. Thread-safe.
+# @param ctx the context, only read.
+# @param gender `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`.
+# @param weights `weights[0..n]`, metres along unit basis vectors; missing trailing weights are
+#                0; may be NULL when `n` is 0.
+# @param n the number of weights, at most `skb_context_component_count` (0: the mean shape).
+# @param out receives a new mesh the caller owns (release with `skb_mesh_free`); untouched on
+#            failure; not NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for an unknown gender or `n` above the component count;
+#         SKB_ERR_NON_FINITE for a NaN or infinite weight; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_new_from_shape"] = (
     ctypes.c_uint32,
     [
@@ -888,7 +907,8 @@ FUNCTIONS["skb_mesh_new_from_shape"] = (
     ),
 )
 
-# Releases a mesh. NULL is a no-op.
+# Releases a mesh.
+# @param mesh the mesh to release; NULL is a no-op.
 FUNCTIONS["skb_mesh_free"] = (
     None,
     [
@@ -900,7 +920,10 @@ FUNCTIONS["skb_mesh_free"] = (
     ),
 )
 
-# The mesh's gender (`SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`) into `*out`.
+# The mesh's gender.
+# @param mesh the mesh, only read.
+# @param out receives `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_gender"] = (
     ctypes.c_uint32,
     [
@@ -914,7 +937,10 @@ FUNCTIONS["skb_mesh_gender"] = (
     ),
 )
 
-# Number of vertices (13380) into `*out`.
+# Number of vertices (13380).
+# @param mesh the mesh, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_vertex_count"] = (
     ctypes.c_uint32,
     [
@@ -928,7 +954,10 @@ FUNCTIONS["skb_mesh_vertex_count"] = (
     ),
 )
 
-# Number of quad faces (13378) into `*out`; the triangle count is twice that.
+# Number of quad faces (13378); the triangle count is twice that.
+# @param mesh the mesh, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_face_count"] = (
     ctypes.c_uint32,
     [
@@ -942,7 +971,10 @@ FUNCTIONS["skb_mesh_face_count"] = (
     ),
 )
 
-# Number of joints (always `SKB_NUM_JOINTS`) into `*out`.
+# Number of joints (always `SKB_NUM_JOINTS`).
+# @param mesh the mesh, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_joint_count"] = (
     ctypes.c_uint32,
     [
@@ -956,7 +988,10 @@ FUNCTIONS["skb_mesh_joint_count"] = (
     ),
 )
 
-# Number of skin-weight slots, `vertex count × SKB_MAX_INFLUENCES`, into `*out`.
+# Number of skin-weight slots, `vertex count × SKB_MAX_INFLUENCES`.
+# @param mesh the mesh, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_skin_weight_count"] = (
     ctypes.c_uint32,
     [
@@ -970,8 +1005,11 @@ FUNCTIONS["skb_mesh_skin_weight_count"] = (
     ),
 )
 
-# Copies the rest-pose vertices as x, y, z floats (metres) into `dst`, which holds `dst_len`
-# floats (at least 3 × vertex count). On error nothing is written.
+# Copies the rest-pose vertices. On error nothing is written.
+# @param mesh the mesh, only read.
+# @param dst receives x, y, z floats per vertex, metres.
+# @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_vertices"] = (
     ctypes.c_uint32,
     [
@@ -987,8 +1025,11 @@ FUNCTIONS["skb_mesh_copy_vertices"] = (
     ),
 )
 
-# Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside) into
-# `dst`, which holds `dst_len` integers (at least 4 × face count). On error nothing is written.
+# Copies the quad faces. On error nothing is written.
+# @param mesh the mesh, only read.
+# @param dst receives 4 vertex indices per face, counter-clockwise seen from outside.
+# @param dst_len the element count of `dst` in integers, at least 4 × face count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_faces"] = (
     ctypes.c_uint32,
     [
@@ -1004,8 +1045,12 @@ FUNCTIONS["skb_mesh_copy_faces"] = (
     ),
 )
 
-# Copies the faces split into triangles ((a,b,c), (a,c,d) per quad; 3 indices each) into `dst`,
-# which holds `dst_len` integers (at least 6 × face count). On error nothing is written.
+# Copies the faces split into triangles: (a,b,c), (a,c,d) per quad. On error nothing is
+# written.
+# @param mesh the mesh, only read.
+# @param dst receives 3 vertex indices per triangle.
+# @param dst_len the element count of `dst` in integers, at least 6 × face count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_triangles"] = (
     ctypes.c_uint32,
     [
@@ -1021,8 +1066,11 @@ FUNCTIONS["skb_mesh_copy_triangles"] = (
     ),
 )
 
-# Copies the 15 rest-pose joints (canonical order, x, y, z doubles, metres) into `dst`, which
-# holds `dst_len` doubles (at least 45). On error nothing is written.
+# Copies the 15 rest-pose joints. On error nothing is written.
+# @param mesh the mesh, only read.
+# @param dst receives x, y, z doubles per joint, canonical order, metres.
+# @param dst_len the element count of `dst` in doubles, at least 45.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_joints"] = (
     ctypes.c_uint32,
     [
@@ -1038,10 +1086,13 @@ FUNCTIONS["skb_mesh_copy_joints"] = (
     ),
 )
 
-# Copies the skin weights: for vertex v, slots `4v .. 4v+3` of `bones` (bone indices 0..13,
-# docs/design.md's bone order) and `weights` (summing to 1; unused slots have bone 0, weight 0).
-# Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count). On error
-# nothing is written.
+# Copies the skin weights: for vertex v, slots `4v .. 4v+3` of both buffers (unused slots
+# have bone 0, weight 0). On error nothing is written.
+# @param mesh the mesh, only read.
+# @param bones receives bone indices 0..13, docs/design.md's bone order.
+# @param weights receives the weights, summing to 1 per vertex.
+# @param len the element count of each buffer, at least `SKB_MAX_INFLUENCES` × vertex count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for short buffers; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_skin_weights"] = (
     ctypes.c_uint32,
     [
@@ -1060,7 +1111,10 @@ FUNCTIONS["skb_mesh_copy_skin_weights"] = (
 )
 
 # Number of PCA shape weights the mesh was made from (as given to `skb_mesh_new_from_shape`,
-# or found by `skb_context_fit_shape`) into `*out`.
+# or found by `skb_context_fit_shape`).
+# @param mesh the mesh, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_shape_weight_count"] = (
     ctypes.c_uint32,
     [
@@ -1074,8 +1128,11 @@ FUNCTIONS["skb_mesh_shape_weight_count"] = (
     ),
 )
 
-# Copies the mesh's PCA shape weights (metres; `skb_mesh_shape_weight_count` of them) into
-# `dst`, which holds `dst_len` doubles. On error nothing is written.
+# Copies the mesh's PCA shape weights. On error nothing is written.
+# @param mesh the mesh, only read.
+# @param dst receives `skb_mesh_shape_weight_count` doubles, metres.
+# @param dst_len the element count of `dst` in doubles, at least the shape weight count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_shape_weights"] = (
     ctypes.c_uint32,
     [
@@ -1102,7 +1159,8 @@ FUNCTIONS["skb_rasterizer_new"] = (
     ),
 )
 
-# Releases a rasteriser made by [`skb_rasterizer_new`]; NULL is a no-op.
+# Releases a rasteriser made by [`skb_rasterizer_new`].
+# @param r the rasteriser to release; NULL is a no-op.
 FUNCTIONS["skb_rasterizer_free"] = (
     None,
     [
@@ -1114,16 +1172,25 @@ FUNCTIONS["skb_rasterizer_free"] = (
     ),
 )
 
-# Rasterises the silhouette of a triangle mesh given as raw arrays: `verts` holds `nverts`
-# points as x, y, z floats (metres, model frame), `tris` holds `ntris` triangles as three
-# 0-based vertex indices. Pixel (i, j) is set to 255 when its centre (i + 0.5, j + 0.5) lies
-# inside a projected triangle (top-left fill rule, both windings), else 0. Writes `h` rows of
-# `w` bytes into `mask`, rows `mask_stride` bytes apart; `mask_len` must be at least
-# `mask_stride * (h - 1) + w`. Sizes 1..=4096 a side. Errors: NULL pointers, bad sizes or
-# strides, an invalid camera, index out of range, non-finite vertices, vertices projecting
-# beyond ±32768 px, and `SKB_ERR_MESH_OUTSIDE_IMAGE` when the projected mesh misses the image
-# entirely. On error nothing is written. `rasterizer` may be NULL (a temporary one is used).
-# Arrays are only read during the call. Thread-safe with distinct rasterisers.
+# Rasterises the silhouette of a triangle mesh given as raw arrays. On error nothing is
+# written. Arrays are only read during the call. Thread-safe with distinct rasterisers.
+# @param rasterizer the rasteriser whose buffers are reused (changed), or NULL (a temporary one
+#                   is used).
+# @param verts `nverts` points as x, y, z floats (metres, model frame).
+# @param nverts the number of points in `verts` (3 floats each).
+# @param tris `ntris` triangles as three 0-based vertex indices.
+# @param ntris the number of triangles in `tris` (3 indices each).
+# @param cam the camera, only read.
+# @param w the mask width in pixels, 1..=4096.
+# @param h the mask height in pixels, 1..=4096.
+# @param mask receives `h` rows of `w` bytes: 255 where a pixel's centre (i + 0.5, j + 0.5)
+#             lies inside a projected triangle (top-left fill rule, both windings), else 0.
+# @param mask_stride bytes between the starts of consecutive rows of `mask`.
+# @param mask_len the size of `mask` in bytes, at least `mask_stride * (h - 1) + w`.
+# @return SKB_OK; SKB_ERR_MESH_OUTSIDE_IMAGE when the projected mesh misses the image
+#         entirely; SKB_ERR_BAD_STRIDE, SKB_ERR_BUFFER_TOO_SMALL, SKB_ERR_NON_FINITE
+#         (non-finite vertices); errors for bad sizes, an invalid camera, an index out of
+#         range or vertices projecting beyond ±32768 px; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rasterizer_rasterize_triangles"] = (
     ctypes.c_uint32,
     [
@@ -1155,13 +1222,16 @@ FUNCTIONS["skb_rasterizer_rasterize_triangles"] = (
     ),
 )
 
-# Poses `mesh` to the 15 target joints `joints` (x, y, z doubles per joint in canonical order,
-# metres, model frame; `joints_len` must be 45) by inverse kinematics and skinning. `flags` is
-# 0 or a combination of `SKB_POSE_RETARGET` and `SKB_POSE_DUAL_QUATERNION`. The pose replaces
-# any earlier one (the rest shape is kept; posing to the rest joints gives the rest pose).
-# Errors: non-finite joints (`SKB_ERR_NON_FINITE`), coincident joints
-# (`SKB_ERR_DEGENERATE_BONE`), unknown flags or a wrong length (`SKB_ERR_OUT_OF_RANGE`); on
-# error the mesh is unchanged. Needs exclusive use of `mesh`; skinning runs on the rayon pool.
+# Poses a mesh to 15 target joints by inverse kinematics and skinning. The pose replaces any
+# earlier one (the rest shape is kept; posing to the rest joints gives the rest pose). Needs
+# exclusive use of `mesh`; skinning runs on the rayon pool.
+# @param mesh the mesh, changed (unchanged on error).
+# @param joints x, y, z doubles per joint in canonical order, metres, model frame.
+# @param joints_len the element count of `joints`: 45.
+# @param flags 0 or a combination of `SKB_POSE_RETARGET` and `SKB_POSE_DUAL_QUATERNION`.
+# @return SKB_OK; SKB_ERR_NON_FINITE for non-finite joints; SKB_ERR_DEGENERATE_BONE for coincident
+#         joints; SKB_ERR_OUT_OF_RANGE for unknown flags or a wrong length; argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_mesh_pose"] = (
     ctypes.c_uint32,
     [
@@ -1179,9 +1249,12 @@ FUNCTIONS["skb_mesh_pose"] = (
     ),
 )
 
-# Copies the posed vertices (the rest vertices before any `skb_mesh_pose`) as x, y, z floats
-# (metres) into `dst` of `dst_len` floats (at least 3 × vertex count). On error nothing is
-# written. Only reads `mesh`.
+# Copies the posed vertices (the rest vertices before any `skb_mesh_pose`). On error nothing
+# is written.
+# @param mesh the mesh, only read.
+# @param dst receives x, y, z floats per vertex, metres.
+# @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_posed_vertices"] = (
     ctypes.c_uint32,
     [
@@ -1197,8 +1270,11 @@ FUNCTIONS["skb_mesh_copy_posed_vertices"] = (
     ),
 )
 
-# Copies the posed joints (15 × x, y, z doubles, metres; the rest joints before any
-# `skb_mesh_pose`) into `dst` of `dst_len` doubles (at least 45). Only reads `mesh`.
+# Copies the posed joints (the rest joints before any `skb_mesh_pose`).
+# @param mesh the mesh, only read.
+# @param dst receives 15 × x, y, z doubles, metres.
+# @param dst_len the element count of `dst` in doubles, at least 45.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_posed_joints"] = (
     ctypes.c_uint32,
     [
@@ -1214,8 +1290,18 @@ FUNCTIONS["skb_mesh_copy_posed_joints"] = (
     ),
 )
 
-# Rasterises the silhouette of the posed `mesh` (rules, sizes and errors as in
-# [`skb_rasterizer_rasterize_triangles`]). `rasterizer` may be NULL. Only reads `mesh`.
+# Rasterises the silhouette of the posed mesh (rules, sizes and errors as in
+# [`skb_rasterizer_rasterize_triangles`]).
+# @param mesh the mesh, only read.
+# @param rasterizer the rasteriser whose buffers are reused (changed), or NULL.
+# @param cam the camera, only read.
+# @param w the mask width in pixels, 1..=4096.
+# @param h the mask height in pixels, 1..=4096.
+# @param mask receives `h` rows of `w` bytes: 255 where a pixel's centre (i + 0.5, j + 0.5)
+#             lies inside a projected triangle (top-left fill rule, both windings), else 0.
+# @param mask_stride bytes between the starts of consecutive rows of `mask`.
+# @param mask_len the size of `mask` in bytes, at least `mask_stride * (h - 1) + w`.
+# @return the statuses of [`skb_rasterizer_rasterize_triangles`].
 FUNCTIONS["skb_mesh_rasterize"] = (
     ctypes.c_uint32,
     [
@@ -1241,9 +1327,12 @@ FUNCTIONS["skb_mesh_rasterize"] = (
     ),
 )
 
-# Writes the mesh as Wavefront OBJ to `path` (UTF-8): the posed vertices when `posed`, else the
-# rest pose; normals, MakeHuman UVs, quads. Written atomically: on error no file is left.
-# Only reads `mesh`.
+# Writes the mesh as Wavefront OBJ: normals, MakeHuman UVs, quads. Written atomically: on
+# error no file is left.
+# @param mesh the mesh, only read.
+# @param path the output file path, NUL-terminated UTF-8.
+# @param posed true: the posed vertices; false: the rest pose.
+# @return SKB_OK; SKB_ERR_IO when the file cannot be written; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_write_obj"] = (
     ctypes.c_uint32,
     [
@@ -1259,8 +1348,13 @@ FUNCTIONS["skb_mesh_write_obj"] = (
     ),
 )
 
-# Writes a preview PNG of the posed mesh to `path` (UTF-8): front and right-side views,
-# `size`×`size` pixels each (1..=4096), side by side. Written atomically. Only reads `mesh`.
+# Writes a preview PNG of the posed mesh: front and right-side views side by side. Written
+# atomically.
+# @param mesh the mesh, only read.
+# @param path the output file path, NUL-terminated UTF-8.
+# @param size the side of each view in pixels, 1..=4096 (each view is `size`×`size`).
+# @return SKB_OK; SKB_ERR_EMPTY_IMAGE for a `size` of 0; SKB_ERR_IO when the file cannot be
+#         written; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_write_preview"] = (
     ctypes.c_uint32,
     [
@@ -1276,7 +1370,6 @@ FUNCTIONS["skb_mesh_write_preview"] = (
     ),
 )
 
-# Creates export options with the defaults into `*out` (the caller owns them).
 FUNCTIONS["skb_export_options_new"] = (
     ctypes.c_uint32,
     [
@@ -1288,7 +1381,8 @@ FUNCTIONS["skb_export_options_new"] = (
     ),
 )
 
-# Frees export options. NULL is a no-op.
+# Frees export options.
+# @param opts the options to free; NULL is a no-op.
 FUNCTIONS["skb_export_options_free"] = (
     None,
     [
@@ -1300,8 +1394,11 @@ FUNCTIONS["skb_export_options_free"] = (
     ),
 )
 
-# Sets the bone names: `SKB_NAMING_PROJECT`, `SKB_NAMING_MIXAMO` or `SKB_NAMING_UNREAL`;
-# anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+# Sets the bone names.
+# @param opts the options, changed.
+# @param naming `SKB_NAMING_PROJECT` (the default), `SKB_NAMING_MIXAMO` or `SKB_NAMING_UNREAL`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_export_options_set_naming"] = (
     ctypes.c_uint32,
     [
@@ -1315,8 +1412,11 @@ FUNCTIONS["skb_export_options_set_naming"] = (
     ),
 )
 
-# Sets the rest pose: `SKB_REST_A_POSE` or `SKB_REST_T_POSE`; anything else is
-# `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+# Sets the rest pose.
+# @param opts the options, changed.
+# @param rest `SKB_REST_A_POSE` (the default) or `SKB_REST_T_POSE`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_export_options_set_rest_pose"] = (
     ctypes.c_uint32,
     [
@@ -1330,8 +1430,11 @@ FUNCTIONS["skb_export_options_set_rest_pose"] = (
     ),
 )
 
-# Sets the origin: `SKB_ORIGIN_FLOOR` or `SKB_ORIGIN_PELVIS`; anything else is
-# `SKB_ERR_OUT_OF_RANGE` (options unchanged).
+# Sets the origin.
+# @param opts the options, changed.
+# @param origin `SKB_ORIGIN_FLOOR` (the default) or `SKB_ORIGIN_PELVIS`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_export_options_set_origin"] = (
     ctypes.c_uint32,
     [
@@ -1345,10 +1448,13 @@ FUNCTIONS["skb_export_options_set_origin"] = (
     ),
 )
 
-# Adds the twist bones (`on` true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones
-# after the 53, sharing the limbs' skin so that a twist spreads along the limb; docs/formats.md,
-# "Twist bones") or not (false, the default: MakeHuman's 53 bones). Every rigged writer and
+# Adds the twist bones or not (docs/formats.md, "Twist bones"). Every rigged writer and
 # `skb_rig_new_from_mesh` follow it.
+# @param opts the options, changed.
+# @param on true: upper arms, forearms and thighs, `SKB_NUM_TWIST_BONES` bones after the 53,
+#           sharing the limbs' skin so that a twist spreads along the limb; false (the
+#           default): MakeHuman's 53 bones.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_export_options_set_twist_bones"] = (
     ctypes.c_uint32,
     [
@@ -1362,10 +1468,12 @@ FUNCTIONS["skb_export_options_set_twist_bones"] = (
     ),
 )
 
-# Sets how the pose is carried: `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or
-# `SKB_POSE_AS_BOTH` (docs/formats.md, "glTF 2.0 binary export", the pose); anything else is
-# `SKB_ERR_OUT_OF_RANGE` (options unchanged). Every rigged writer and `skb_rig_new_from_mesh` follow
-# it.
+# Sets how the pose is carried (docs/formats.md, "glTF 2.0 binary export", the pose). Every
+# rigged writer and `skb_rig_new_from_mesh` follow it.
+# @param opts the options, changed.
+# @param pose_as `SKB_POSE_AS_ACTION` (the default), `SKB_POSE_AS_REST` or `SKB_POSE_AS_BOTH`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_export_options_set_pose_as"] = (
     ctypes.c_uint32,
     [
@@ -1379,9 +1487,12 @@ FUNCTIONS["skb_export_options_set_pose_as"] = (
     ),
 )
 
-# Adds the IK target bones (`on` true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and
-# feet under `ik_hand_root` / `ik_foot_root`, after the other bones; docs/formats.md, "IK
-# targets") or not (false, the default). Every rigged writer and `skb_rig_new_from_mesh` follow it.
+# Adds the IK target bones or not (docs/formats.md, "IK targets"). Every rigged writer and
+# `skb_rig_new_from_mesh` follow it.
+# @param opts the options, changed.
+# @param on true: `SKB_NUM_IK_BONES` non-deforming bones at the hands and feet under
+#           `ik_hand_root` / `ik_foot_root`, after the other bones; false: none (the default).
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_export_options_set_ik_targets"] = (
     ctypes.c_uint32,
     [
@@ -1395,12 +1506,15 @@ FUNCTIONS["skb_export_options_set_ik_targets"] = (
     ),
 )
 
-# Adds the mesh's shape dimensions as shape keys (`on` true: one key `shape_01`, `shape_02`, …
-# per PCA weight of the mesh, or the space's default count for the mean shape, each the
-# displacement one standard deviation of its component makes, through the body's bone-length
-# factors and its scaling to its height; glTF morph targets, FBX blend shapes, USD
-# BlendShapes, all at 0; docs/formats.md, "Shape keys") or not (false, the default). Every
-# rigged writer and `skb_rig_new_from_mesh` follow it (`skb_rig_shape_key_count`).
+# Adds the mesh's shape dimensions as shape keys or not (glTF morph targets, FBX blend shapes,
+# USD BlendShapes, all at 0; docs/formats.md, "Shape keys"). Every rigged writer and
+# `skb_rig_new_from_mesh` follow it (`skb_rig_shape_key_count`).
+# @param opts the options, changed.
+# @param on true: one key `shape_01`, `shape_02`, … per PCA weight of the mesh, or the
+#           space's default count for the mean shape, each the displacement one standard
+#           deviation of its component makes, through the body's bone-length factors and its
+#           scaling to its height; false: none (the default).
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_export_options_set_shape_keys"] = (
     ctypes.c_uint32,
     [
@@ -1414,9 +1528,12 @@ FUNCTIONS["skb_export_options_set_shape_keys"] = (
     ),
 )
 
-# Sets the unit of the FBX and USD files: `SKB_UNITS_METRES` (the default) or
-# `SKB_UNITS_CENTIMETRES`; anything else is `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB
-# is always in metres (glTF's specification) and `skb_rig_new_from_mesh` in the model frame.
+# Sets the unit of the FBX and USD files. The GLB is always in metres (glTF's specification)
+# and `skb_rig_new_from_mesh` in the model frame.
+# @param opts the options, changed.
+# @param units `SKB_UNITS_METRES` (the default) or `SKB_UNITS_CENTIMETRES`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_export_options_set_units"] = (
     ctypes.c_uint32,
     [
@@ -1430,10 +1547,13 @@ FUNCTIONS["skb_export_options_set_units"] = (
     ),
 )
 
-# Sets the up axis of the FBX and USD files: `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model
-# frame turned +90° about X: Z up, the body facing −Y); anything else is
-# `SKB_ERR_OUT_OF_RANGE` (options unchanged). The GLB is always Y up (glTF's specification)
+# Sets the up axis of the FBX and USD files. The GLB is always Y up (glTF's specification)
 # and `skb_rig_new_from_mesh` in the model frame.
+# @param opts the options, changed.
+# @param up `SKB_UP_Y` (the default) or `SKB_UP_Z` (the model frame turned +90° about X: Z
+#           up, the body facing −Y).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_export_options_set_up_axis"] = (
     ctypes.c_uint32,
     [
@@ -1447,12 +1567,16 @@ FUNCTIONS["skb_export_options_set_up_axis"] = (
     ),
 )
 
-# Writes the mesh as binary glTF 2.0 to `path` (UTF-8) with `opts` (NULL: the defaults): one
-# scene, the rest mesh skinned to MakeHuman's 53-bone rig (plus the twist bones and IK targets
-# the options add), posed by the current pose (the rest pose if never posed) as bone rotations
-# with the root's translation, plus a one-frame clip "pose" (or the pose as the rest, as the
-# options say; the options' shape keys as morph targets). See docs/formats.md. Written
-# atomically. Only reads `mesh` and `opts`.
+# Writes the mesh as binary glTF 2.0: one scene, the rest mesh skinned to MakeHuman's 53-bone
+# rig (plus the twist bones and IK targets the options add), posed by the current pose (the
+# rest pose if never posed) as bone rotations with the root's translation, plus a one-frame
+# clip "pose" (or the pose as the rest, as the options say; the options' shape keys as morph
+# targets). See docs/formats.md. Written atomically.
+# @param mesh the mesh, only read.
+# @param path the output file path, NUL-terminated UTF-8.
+# @param opts export options, only read, or NULL for the defaults.
+# @return SKB_OK; SKB_ERR_IO when the file cannot be written (none is left behind); argument
+#         errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_write_glb"] = (
     ctypes.c_uint32,
     [
@@ -1468,11 +1592,15 @@ FUNCTIONS["skb_mesh_write_glb"] = (
     ),
 )
 
-# Writes the mesh as binary FBX 7.4 to `path` (UTF-8) with `opts` (NULL: the defaults): the
-# same rigged, posed body as `skb_mesh_write_glb` (the bones' local transforms
-# hold the pose, the clusters and the bind pose the rest), in the options' unit and up axis
-# (default metres, Y up), a plain skin-colour material. See docs/formats.md, "body.fbx".
-# Written atomically. Only reads `mesh` and `opts`.
+# Writes the mesh as binary FBX 7.4: the same rigged, posed body as `skb_mesh_write_glb` (the
+# bones' local transforms hold the pose, the clusters and the bind pose the rest), in the
+# options' unit and up axis (default metres, Y up), a plain skin-colour material. See
+# docs/formats.md, "body.fbx". Written atomically.
+# @param mesh the mesh, only read.
+# @param path the output file path, NUL-terminated UTF-8.
+# @param opts export options, only read, or NULL for the defaults.
+# @return SKB_OK; SKB_ERR_IO when the file cannot be written (none is left behind); argument
+#         errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_write_fbx"] = (
     ctypes.c_uint32,
     [
@@ -1488,11 +1616,16 @@ FUNCTIONS["skb_mesh_write_fbx"] = (
     ),
 )
 
-# Writes the mesh as a USD text layer (UsdSkel, `.usda`) to `path` (UTF-8) with `opts` (NULL:
-# the defaults): the same rigged, posed body as `skb_mesh_write_glb` (a Skeleton
-# with bind and rest transforms, the pose as a static SkelAnimation), in the options' unit and
-# up axis (default metres, Y up: `metersPerUnit`, `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written atomically. Only reads `mesh`
-# and `opts`.
+# Writes the mesh as a USD text layer (UsdSkel, `.usda`): the same rigged, posed body as
+# `skb_mesh_write_glb` (a Skeleton with bind and rest transforms, the pose as a static
+# SkelAnimation), in the options' unit and up axis (default metres, Y up: `metersPerUnit`,
+# `upAxis`), a plain skin-colour material. See docs/formats.md, "body.usda". Written
+# atomically.
+# @param mesh the mesh, only read.
+# @param path the output file path, NUL-terminated UTF-8.
+# @param opts export options, only read, or NULL for the defaults.
+# @return SKB_OK; SKB_ERR_IO when the file cannot be written (none is left behind); argument
+#         errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_write_usd"] = (
     ctypes.c_uint32,
     [
@@ -1508,10 +1641,6 @@ FUNCTIONS["skb_mesh_write_usd"] = (
     ),
 )
 
-# Builds the rig of `mesh` in its current pose (the rest pose if never posed) with `opts`
-# (NULL: the defaults: project names, A-pose rest, origin on the floor) into `*out`, which the
-# caller owns (release with `skb_rig_free`). Errors: degenerate bones (`SKB_ERR_DEGENERATE_BONE`).
-# Only reads `mesh` and `opts`.
 FUNCTIONS["skb_rig_new_from_mesh"] = (
     ctypes.c_uint32,
     [
@@ -1527,7 +1656,8 @@ FUNCTIONS["skb_rig_new_from_mesh"] = (
     ),
 )
 
-# Releases a rig. NULL is a no-op.
+# Releases a rig.
+# @param rig the rig to release; NULL is a no-op.
 FUNCTIONS["skb_rig_free"] = (
     None,
     [
@@ -1539,8 +1669,11 @@ FUNCTIONS["skb_rig_free"] = (
     ),
 )
 
-# Number of bones (`SKB_NUM_RIG_BONES`, plus `SKB_NUM_TWIST_BONES` with twist bones and
-# `SKB_NUM_IK_BONES` with IK targets) into `*out`.
+# Number of bones: `SKB_NUM_RIG_BONES`, plus `SKB_NUM_TWIST_BONES` with twist bones and
+# `SKB_NUM_IK_BONES` with IK targets.
+# @param rig the rig, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_bone_count"] = (
     ctypes.c_uint32,
     [
@@ -1554,7 +1687,10 @@ FUNCTIONS["skb_rig_bone_count"] = (
     ),
 )
 
-# Number of vertices of the rig's mesh (the mesh's, 13380) into `*out`.
+# Number of vertices of the rig's mesh (the mesh's, 13380).
+# @param rig the rig, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_vertex_count"] = (
     ctypes.c_uint32,
     [
@@ -1568,8 +1704,11 @@ FUNCTIONS["skb_rig_vertex_count"] = (
     ),
 )
 
-# The byte length (UTF-8, without the terminating NUL) of bone `bone`'s name into `*out`
-# (`bone` 0 .. `skb_rig_bone_count`−1). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+# The byte length of a bone's name (UTF-8, without the terminating NUL).
+# @param rig the rig, only read.
+# @param bone the bone, 0 .. `skb_rig_bone_count`−1.
+# @param out receives the length; not NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `bone` out of range; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_bone_name_length"] = (
     ctypes.c_uint32,
     [
@@ -1585,9 +1724,14 @@ FUNCTIONS["skb_rig_bone_name_length"] = (
     ),
 )
 
-# Copies the name of bone `bone` (0 .. `skb_rig_bone_count`−1; the GLB node's name in the chosen
-# convention) as NUL-terminated UTF-8 into `dst` of `dst_len` bytes (at least
-# `skb_rig_bone_name_length` + 1; 64 bytes hold every name). Errors: `bone` out of range (`SKB_ERR_OUT_OF_RANGE`).
+# Copies a bone's name: the GLB node's name in the chosen convention.
+# @param rig the rig, only read.
+# @param bone the bone, 0 .. `skb_rig_bone_count`−1.
+# @param dst receives the name as NUL-terminated UTF-8.
+# @param dst_len the size of `dst` in bytes, at least `skb_rig_bone_name_length` + 1 (64 bytes
+#                hold every name).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `bone` out of range; SKB_ERR_BUFFER_TOO_SMALL for a
+#         short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_bone_name"] = (
     ctypes.c_uint32,
     [
@@ -1605,9 +1749,12 @@ FUNCTIONS["skb_rig_copy_bone_name"] = (
     ),
 )
 
-# Copies each bone's parent index (−1 for the root, bone 0) into `dst` of `dst_len` integers
-# (at least `skb_rig_bone_count`). Parents come before their children; the order is the GLB's
+# Copies each bone's parent index. Parents come before their children; the order is the GLB's
 # node and joint order.
+# @param rig the rig, only read.
+# @param dst receives one parent index per bone (−1 for the root, bone 0).
+# @param dst_len the element count of `dst` in integers, at least `skb_rig_bone_count`.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_parents"] = (
     ctypes.c_uint32,
     [
@@ -1623,13 +1770,16 @@ FUNCTIONS["skb_rig_copy_parents"] = (
     ),
 )
 
-# Copies each bone's rest transform relative to its parent, `SKB_RIG_TRANSFORM_LEN` doubles per
-# bone: translation x, y, z (metres, in the parent bone's frame; the root's in the model frame,
-# +Y up) then the rotation as a unit quaternion x, y, z, w (parent bone frame → this bone's
-# frame; bone frames have Y along the bone, X the bend axis MakeHuman's roll gives). The rest
-# is the rig's (A- or T-pose, placed at the chosen origin): the GLB's bind pose. Composing
-# `parent · T(t) · R(q)` from the root gives each bone's rest frame and head. `dst` holds
-# `dst_len` doubles (at least 7 × `skb_rig_bone_count`).
+# Copies each bone's rest transform relative to its parent. The rest is the rig's (A- or
+# T-pose, placed at the chosen origin): the GLB's bind pose. Composing `parent · T(t) · R(q)`
+# from the root gives each bone's rest frame and head.
+# @param rig the rig, only read.
+# @param dst receives `SKB_RIG_TRANSFORM_LEN` doubles per bone: translation x, y, z (metres, in
+#            the parent bone's frame; the root's in the model frame, +Y up) then the rotation as a
+#            unit quaternion x, y, z, w (parent bone frame → this bone's frame; bone frames have Y
+#            along the bone, X the bend axis MakeHuman's roll gives).
+# @param dst_len the element count of `dst` in doubles, at least 7 × `skb_rig_bone_count`.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_rest_transforms"] = (
     ctypes.c_uint32,
     [
@@ -1645,11 +1795,15 @@ FUNCTIONS["skb_rig_copy_rest_transforms"] = (
     ),
 )
 
-# Copies the posed rotation of each bone relative to its parent (4 doubles per bone: unit
-# quaternion x, y, z, w; the root's relative to the model frame): the GLB nodes' `rotation`,
+# Copies the posed rotation of each bone relative to its parent: the GLB nodes' `rotation`,
 # what a DCC shows as the pose bones' rotations. With the rest translations of
-# `skb_rig_copy_rest_transforms` (the root's plus `skb_rig_copy_root_translation`) they give the
-# posed skeleton. `dst` holds `dst_len` doubles (at least 4 × `skb_rig_bone_count`).
+# `skb_rig_copy_rest_transforms` (the root's plus `skb_rig_copy_root_translation`) they give
+# the posed skeleton.
+# @param rig the rig, only read.
+# @param dst receives 4 doubles per bone: unit quaternion x, y, z, w (the root's relative to the
+#            model frame).
+# @param dst_len the element count of `dst` in doubles, at least 4 × `skb_rig_bone_count`.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_local_rotations"] = (
     ctypes.c_uint32,
     [
@@ -1665,9 +1819,12 @@ FUNCTIONS["skb_rig_copy_local_rotations"] = (
     ),
 )
 
-# Copies the root's translation in the pose (x, y, z doubles, metres, model frame; non-zero only
-# with the origin on the floor, where it keeps the posed body's lowest point at y = 0) into
-# `dst` of `dst_len` doubles (at least 3).
+# Copies the root's translation in the pose: non-zero only with the origin on the floor, where
+# it keeps the posed body's lowest point at y = 0.
+# @param rig the rig, only read.
+# @param dst receives x, y, z doubles, metres, model frame.
+# @param dst_len the element count of `dst` in doubles, at least 3.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_root_translation"] = (
     ctypes.c_uint32,
     [
@@ -1683,9 +1840,12 @@ FUNCTIONS["skb_rig_copy_root_translation"] = (
     ),
 )
 
-# Copies the posed bone heads (x, y, z doubles per bone, metres, the export's frame) as the
-# library computes them (the rig's forward kinematics, what a glTF viewer shows) into `dst` of
-# `dst_len` doubles (at least 3 × `skb_rig_bone_count`).
+# Copies the posed bone heads as the library computes them (the rig's forward kinematics, what
+# a glTF viewer shows).
+# @param rig the rig, only read.
+# @param dst receives x, y, z doubles per bone, metres, the export's frame.
+# @param dst_len the element count of `dst` in doubles, at least 3 × `skb_rig_bone_count`.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_posed_heads"] = (
     ctypes.c_uint32,
     [
@@ -1701,9 +1861,12 @@ FUNCTIONS["skb_rig_copy_posed_heads"] = (
     ),
 )
 
-# Copies the translation from the mesh's model frame to the export's frame (x, y, z doubles,
-# metres: the rig's rest = the mesh's rest + this, before any T-pose) into `dst` of `dst_len`
-# doubles (at least 3).
+# Copies the translation from the mesh's model frame to the export's frame: the rig's rest =
+# the mesh's rest + this, before any T-pose.
+# @param rig the rig, only read.
+# @param dst receives x, y, z doubles, metres.
+# @param dst_len the element count of `dst` in doubles, at least 3.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_offset"] = (
     ctypes.c_uint32,
     [
@@ -1719,10 +1882,13 @@ FUNCTIONS["skb_rig_copy_offset"] = (
     ),
 )
 
-# Copies the rig's rest vertices (the bind pose: the mesh's rest placed at the chosen origin,
-# skinned into the T-pose when asked; x, y, z floats, metres) into `dst` of `dst_len` floats (at
-# least 3 × vertex count). Faces are the mesh's (`skb_mesh_copy_faces`,
+# Copies the rig's rest vertices: the bind pose, the mesh's rest placed at the chosen origin,
+# skinned into the T-pose when asked. Faces are the mesh's (`skb_mesh_copy_faces`,
 # `skb_mesh_copy_triangles`).
+# @param rig the rig, only read.
+# @param dst receives x, y, z floats per vertex, metres.
+# @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_rest_vertices"] = (
     ctypes.c_uint32,
     [
@@ -1738,8 +1904,11 @@ FUNCTIONS["skb_rig_copy_rest_vertices"] = (
     ),
 )
 
-# Number of shape keys (0 unless the options asked for them, `skb_export_options_set_shape_keys`)
-# into `*out`.
+# Number of shape keys (0 unless the options asked for them,
+# `skb_export_options_set_shape_keys`).
+# @param rig the rig, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_shape_key_count"] = (
     ctypes.c_uint32,
     [
@@ -1753,11 +1922,16 @@ FUNCTIONS["skb_rig_shape_key_count"] = (
     ),
 )
 
-# Copies shape key `key`'s displacement of each rest vertex (`skb_rig_copy_rest_vertices`'
-# order and frame; x, y, z floats, metres; the key at value 1 adds them, the base is the fitted
-# body) into `dst` of `dst_len` floats (at least 3 × vertex count). Key `k` is named
-# `shape_NN` with NN = k + 1 in two digits (the GLB's `extras.targetNames`, the FBX and USD
-# shapes' names). Errors: `key` ≥ `skb_rig_shape_key_count` (`SKB_ERR_OUT_OF_RANGE`).
+# Copies a shape key's displacement of each rest vertex (the key at value 1 adds them, the base
+# is the fitted body). Key `k` is named `shape_NN` with NN = k + 1 in two digits (the GLB's
+# `extras.targetNames`, the FBX and USD shapes' names).
+# @param rig the rig, only read.
+# @param key the shape key, below `skb_rig_shape_key_count`.
+# @param dst receives x, y, z floats per vertex, metres, `skb_rig_copy_rest_vertices`' order
+#            and frame.
+# @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `key` ≥ `skb_rig_shape_key_count`;
+#         SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_shape_key"] = (
     ctypes.c_uint32,
     [
@@ -1775,9 +1949,12 @@ FUNCTIONS["skb_rig_copy_shape_key"] = (
     ),
 )
 
-# Copies the rig's posed vertices (the rig's own linear blend skinning of the rest vertices,
-# as a glTF viewer shows the GLB; x, y, z floats, metres) into `dst` of `dst_len` floats (at
-# least 3 × vertex count).
+# Copies the rig's posed vertices: the rig's own linear blend skinning of the rest vertices,
+# as a glTF viewer shows the GLB.
+# @param rig the rig, only read.
+# @param dst receives x, y, z floats per vertex, metres.
+# @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_posed_vertices"] = (
     ctypes.c_uint32,
     [
@@ -1793,9 +1970,13 @@ FUNCTIONS["skb_rig_copy_posed_vertices"] = (
     ),
 )
 
-# Copies the skin weights to the rig's bones: for vertex v, slots `4v .. 4v+3` of `bones`
-# (indices into the rig's bone order) and `weights` (summing to 1; unused slots bone 0, weight
-# 0). Both buffers hold `len` elements (at least `SKB_MAX_INFLUENCES` × vertex count).
+# Copies the skin weights to the rig's bones: for vertex v, slots `4v .. 4v+3` of both buffers
+# (unused slots bone 0, weight 0).
+# @param rig the rig, only read.
+# @param bones receives indices into the rig's bone order.
+# @param weights receives the weights, summing to 1 per vertex.
+# @param len the element count of each buffer, at least `SKB_MAX_INFLUENCES` × vertex count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for short buffers; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rig_copy_skin_weights"] = (
     ctypes.c_uint32,
     [
@@ -1814,7 +1995,10 @@ FUNCTIONS["skb_rig_copy_skin_weights"] = (
 )
 
 # Number of UV coordinates of the mesh (texture corners shared by faces; more than the
-# vertices, because seams split them) into `*out`.
+# vertices, because seams split them).
+# @param mesh the mesh, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_uv_count"] = (
     ctypes.c_uint32,
     [
@@ -1828,8 +2012,11 @@ FUNCTIONS["skb_mesh_uv_count"] = (
     ),
 )
 
-# Copies the UV coordinates (u, v floats each, v up as in OBJ and MakeHuman; glTF's v is
-# 1 − v) into `dst` of `dst_len` floats (at least 2 × `skb_mesh_uv_count`).
+# Copies the UV coordinates.
+# @param mesh the mesh, only read.
+# @param dst receives u, v floats each, v up as in OBJ and MakeHuman (glTF's v is 1 − v).
+# @param dst_len the element count of `dst` in floats, at least 2 × `skb_mesh_uv_count`.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_uvs"] = (
     ctypes.c_uint32,
     [
@@ -1845,9 +2032,12 @@ FUNCTIONS["skb_mesh_copy_uvs"] = (
     ),
 )
 
-# Copies, for each quad face, the UV index (into `skb_mesh_copy_uvs`) of each of its 4 corners,
-# in the corner order of `skb_mesh_copy_faces`, into `dst` of `dst_len` integers (at least
-# 4 × face count).
+# Copies, for each quad face, the UV index of each of its 4 corners.
+# @param mesh the mesh, only read.
+# @param dst receives UV indices (into `skb_mesh_copy_uvs`), 4 per face, in the corner order of
+#            `skb_mesh_copy_faces`.
+# @param dst_len the element count of `dst` in integers, at least 4 × face count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_face_uvs"] = (
     ctypes.c_uint32,
     [
@@ -1863,9 +2053,13 @@ FUNCTIONS["skb_mesh_copy_face_uvs"] = (
     ),
 )
 
-# Copies unit vertex normals (x, y, z floats; area-weighted face normals, outward, as the GLB
-# writes) of the rest vertices, or of the posed ones (`posed`: the current `skb_mesh_pose`,
-# the rest before any), into `dst` of `dst_len` floats (at least 3 × vertex count).
+# Copies unit vertex normals: area-weighted face normals, outward, as the GLB writes.
+# @param mesh the mesh, only read.
+# @param posed true: of the posed vertices (the current `skb_mesh_pose`, the rest before any);
+#              false: of the rest vertices.
+# @param dst receives x, y, z floats per vertex.
+# @param dst_len the element count of `dst` in floats, at least 3 × vertex count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_copy_normals"] = (
     ctypes.c_uint32,
     [
@@ -1883,8 +2077,6 @@ FUNCTIONS["skb_mesh_copy_normals"] = (
     ),
 )
 
-# Creates the embedded default dictionary (learned from the DeepMimic clips, see
-# assets/README.md). On success `*out` owns it. Thread-safe.
 FUNCTIONS["skb_pose_dictionary_new_default"] = (
     ctypes.c_uint32,
     [
@@ -1896,9 +2088,12 @@ FUNCTIONS["skb_pose_dictionary_new_default"] = (
     ),
 )
 
-# Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody-lab learn-poses`);
-# `path` is NUL-terminated UTF-8. Magic, version, sizes and checksum are checked. On success
-# `*out` owns the dictionary. Thread-safe.
+# Loads a dictionary file (`.skbpd`, docs/formats.md; made by `sketchbody-lab learn-poses`).
+# Magic, version, sizes and checksum are checked. Thread-safe.
+# @param path the file path, NUL-terminated UTF-8.
+# @param out receives a new dictionary the caller owns (`skb_pose_dictionary_free`); not NULL.
+# @return SKB_OK; SKB_ERR_IO when the file cannot be read; SKB_ERR_CORRUPT_DATA when a check
+#         fails; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_dictionary_new_from_file"] = (
     ctypes.c_uint32,
     [
@@ -1912,7 +2107,8 @@ FUNCTIONS["skb_pose_dictionary_new_from_file"] = (
     ),
 )
 
-# Frees a dictionary. NULL is a no-op. Do not use it afterwards.
+# Frees a dictionary. Do not use it afterwards.
+# @param dict the dictionary to free; NULL is a no-op.
 FUNCTIONS["skb_pose_dictionary_free"] = (
     None,
     [
@@ -1924,7 +2120,10 @@ FUNCTIONS["skb_pose_dictionary_free"] = (
     ),
 )
 
-# Writes the number of basis poses K to `*out`. Thread-safe.
+# The number of basis poses K. Thread-safe.
+# @param dict the dictionary, only read.
+# @param out receives K; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_dictionary_basis_count"] = (
     ctypes.c_uint32,
     [
@@ -1938,7 +2137,11 @@ FUNCTIONS["skb_pose_dictionary_basis_count"] = (
     ),
 )
 
-# Copies the mean pose μ (45 values, metres) into `dst` (`dst_len` ≥ 45). Thread-safe.
+# Copies the mean pose μ. Thread-safe.
+# @param dict the dictionary, only read.
+# @param dst receives 45 values (x, y, z per joint), metres.
+# @param dst_len the element count of `dst`, ≥ 45.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_dictionary_copy_mean"] = (
     ctypes.c_uint32,
     [
@@ -1954,8 +2157,14 @@ FUNCTIONS["skb_pose_dictionary_copy_mean"] = (
     ),
 )
 
-# Copies basis `index` (< K; a unit 45-vector) into `dst` (`dst_len` ≥ 45) and its spread σ
-# (metres, used by the weight prior) into `*sigma` (may be NULL). Thread-safe.
+# Copies one basis pose (a unit 45-vector) and its spread. Thread-safe.
+# @param dict the dictionary, only read.
+# @param index the basis, < K.
+# @param dst receives the basis's 45 values.
+# @param dst_len the element count of `dst`, ≥ 45.
+# @param sigma receives the basis's spread σ (metres, used by the weight prior); may be NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ K; SKB_ERR_BUFFER_TOO_SMALL for a short
+#         `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_dictionary_copy_basis"] = (
     ctypes.c_uint32,
     [
@@ -1975,8 +2184,12 @@ FUNCTIONS["skb_pose_dictionary_copy_basis"] = (
     ),
 )
 
-# Copies the 14 average bone lengths l_ij (metres, bone order of docs/c-api.md) into `out`
-# (`len` ≥ 14). Their squares sum to the Σ l² of the length constraint. Thread-safe.
+# Copies the 14 average bone lengths l_ij. Their squares sum to the Σ l² of the length
+# constraint. Thread-safe.
+# @param dict the dictionary, only read.
+# @param dst receives the lengths, metres, bone order of docs/c-api.md.
+# @param dst_len the element count of `dst`, ≥ 14.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_dictionary_copy_bone_lengths"] = (
     ctypes.c_uint32,
     [
@@ -1992,7 +2205,9 @@ FUNCTIONS["skb_pose_dictionary_copy_bone_lengths"] = (
     ),
 )
 
-# Creates options with the defaults. On success `*out` owns them. Thread-safe.
+# Creates pose options with the defaults. Thread-safe.
+# @param out receives a new options handle the caller owns (`skb_pose_options_free`); not NULL.
+# @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL `out`.
 FUNCTIONS["skb_pose_options_new"] = (
     ctypes.c_uint32,
     [
@@ -2004,7 +2219,8 @@ FUNCTIONS["skb_pose_options_new"] = (
     ),
 )
 
-# Frees options. NULL is a no-op.
+# Frees pose options.
+# @param opts the options to free; NULL is a no-op.
 FUNCTIONS["skb_pose_options_free"] = (
     None,
     [
@@ -2016,8 +2232,12 @@ FUNCTIONS["skb_pose_options_free"] = (
     ),
 )
 
-# Sets κ, the relative limb-length tolerance: |Σ‖X_i − X_j‖² − Σ l²| ≤ κ Σ l², in [0, 10]
-# (0 = equality; the paper's κ = 8 CMU units² is about 0.017, see docs/formats.md).
+# Sets κ, the relative limb-length tolerance: |Σ‖X_i − X_j‖² − Σ l²| ≤ κ Σ l² (the paper's
+# κ = 8 CMU units² is about 0.017, see docs/formats.md).
+# @param opts the options, changed.
+# @param kappa κ, in [0, 10] (0 = equality; default 0.05).
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_kappa"] = (
     ctypes.c_uint32,
     [
@@ -2032,7 +2252,11 @@ FUNCTIONS["skb_pose_options_set_kappa"] = (
 )
 
 # Sets α of eq. (4), the pull of the camera rotation toward its target
-# (`skb_pose_options_set_alpha_target`), in [0, 1]. Default 0.8.
+# (`skb_pose_options_set_alpha_target`).
+# @param opts the options, changed.
+# @param alpha α, in [0, 1]. Default 0.8.
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_alpha"] = (
     ctypes.c_uint32,
     [
@@ -2046,9 +2270,12 @@ FUNCTIONS["skb_pose_options_set_alpha"] = (
     ),
 )
 
-# Sets what α pulls the camera rotation toward: `SKB_ALPHA_TARGET_LEVEL` (default: the
-# fitted rotation with its pitch removed, yaw and roll kept) or `SKB_ALPHA_TARGET_IDENTITY`
-# (the paper's eq. 4). Other values: `SKB_ERR_OUT_OF_RANGE`, options unchanged.
+# Sets what α pulls the camera rotation toward.
+# @param opts the options, changed.
+# @param target `SKB_ALPHA_TARGET_LEVEL` (default: the fitted rotation with its pitch removed,
+#               yaw and roll kept) or `SKB_ALPHA_TARGET_IDENTITY` (the paper's eq. 4).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_alpha_target"] = (
     ctypes.c_uint32,
     [
@@ -2062,8 +2289,10 @@ FUNCTIONS["skb_pose_options_set_alpha_target"] = (
     ),
 )
 
-# Non-zero: one scale for both image axes (sx = sy, default); 0: independent sx and sy
-# (eq. 1), in the camera fit and in the refinement.
+# Sets whether the camera fit and the refinement use one scale for both image axes.
+# @param opts the options, changed.
+# @param equal true: sx = sy (default); false: independent sx and sy (eq. 1).
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_equal_scales"] = (
     ctypes.c_uint32,
     [
@@ -2077,7 +2306,11 @@ FUNCTIONS["skb_pose_options_set_equal_scales"] = (
     ),
 )
 
-# Sets the most bases the pursuit may choose, 0..=32 (0 = mean pose with a fitted camera).
+# Sets the most bases the pursuit may choose.
+# @param opts the options, changed.
+# @param max_bases 0..=32 (0 = mean pose with a fitted camera; default 4).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_max_bases"] = (
     ctypes.c_uint32,
     [
@@ -2091,7 +2324,11 @@ FUNCTIONS["skb_pose_options_set_max_bases"] = (
     ),
 )
 
-# Sets the stopping tolerance on the reprojection RMS, pixels, in [0, 10000].
+# Sets the stopping tolerance on the reprojection RMS.
+# @param opts the options, changed.
+# @param tolerance_px pixels, in [0, 10000] (default 0.5).
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_tolerance"] = (
     ctypes.c_uint32,
     [
@@ -2105,7 +2342,10 @@ FUNCTIONS["skb_pose_options_set_tolerance"] = (
     ),
 )
 
-# Turns the final Levenberg–Marquardt refinement on (non-zero) or off.
+# Turns the final Levenberg–Marquardt refinement on or off.
+# @param opts the options, changed.
+# @param refine true: on (default); false: off.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_refine"] = (
     ctypes.c_uint32,
     [
@@ -2119,7 +2359,11 @@ FUNCTIONS["skb_pose_options_set_refine"] = (
     ),
 )
 
-# Sets the weight prior, metres in [0, 1] (0 = the paper's eq. (3) exactly; see docs).
+# Sets the weight prior (see docs).
+# @param opts the options, changed.
+# @param prior_m metres, in [0, 1] (0 = the paper's eq. (3) exactly; default 0.1).
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_prior"] = (
     ctypes.c_uint32,
     [
@@ -2133,9 +2377,12 @@ FUNCTIONS["skb_pose_options_set_prior"] = (
     ),
 )
 
-# Sets the number of nearest-neighbour starts, 0..=32: the pursuit runs from each of this
-# many training poses of the dictionary that best explain the 2-D joints and keeps the best
-# result (0 = from the mean pose, as in the paper).
+# Sets the number of nearest-neighbour starts: the pursuit runs from each of this many
+# training poses of the dictionary that best explain the 2-D joints and keeps the best result.
+# @param opts the options, changed.
+# @param starts 0..=32 (0 = from the mean pose, as in the paper; default 12).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_starts"] = (
     ctypes.c_uint32,
     [
@@ -2149,8 +2396,11 @@ FUNCTIONS["skb_pose_options_set_starts"] = (
     ),
 )
 
-# Sets the limb candidates for recomposing nearest-neighbour starts, 0..=4096 (0 = whole
-# training poses).
+# Sets the limb candidates for recomposing nearest-neighbour starts.
+# @param opts the options, changed.
+# @param count 0..=4096 (0 = whole training poses; default 64).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_limb_candidates"] = (
     ctypes.c_uint32,
     [
@@ -2164,8 +2414,13 @@ FUNCTIONS["skb_pose_options_set_limb_candidates"] = (
     ),
 )
 
-# Sets the blend temperature of the exemplar starts' hypotheses, px² per visible joint in
-# [0, 1e6] (0 = return the single best hypothesis; see docs/benchmarks.md "3-D pose").
+# Sets the blend temperature of the exemplar starts' hypotheses (see docs/benchmarks.md
+# "3-D pose").
+# @param opts the options, changed.
+# @param tau_px2 px² per visible joint, in [0, 1e6] (0 = return the single best hypothesis;
+#                default 30).
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_blend"] = (
     ctypes.c_uint32,
     [
@@ -2179,12 +2434,16 @@ FUNCTIONS["skb_pose_options_set_blend"] = (
     ),
 )
 
-# Sets the free-joint refinement's expected 2-D joint error, metres at the figure's scale (a
-# 1.75 m person) in [0, 1]; 0 turns it off. After the dictionary fit every joint may then
-# leave the dictionary's span to follow the 2-D joints, bone lengths kept (default 0.014 m,
-# 4 px on a 500-px figure; raise it for rough joints such as detections). With it on the
-# returned joints are no longer base + Σ basis · weight of the dictionary's own base pose;
-# `skb_pose3d_refine` still continues from them (see `skb_pose3d_refine`).
+# Sets the free-joint refinement's expected 2-D joint error. After the dictionary fit every
+# joint may then leave the dictionary's span to follow the 2-D joints, bone lengths kept. With
+# it on the returned joints are no longer base + Σ basis · weight of the dictionary's own base
+# pose; `skb_pose3d_refine` still continues from them (see `skb_pose3d_refine`).
+# @param opts the options, changed.
+# @param noise_m metres at the figure's scale (a 1.75 m person), in [0, 1]; 0 turns it off
+#                (default 0.014 m, 4 px on a 500-px figure; raise it for rough joints such
+#                as detections).
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_joint_noise"] = (
     ctypes.c_uint32,
     [
@@ -2198,11 +2457,14 @@ FUNCTIONS["skb_pose_options_set_joint_noise"] = (
     ),
 )
 
-# Sets whether the drawn proportions are estimated with the pose (default on): six per-group
-# bone-length factors (head, torso, shoulders, arms, hips, legs; `skb_pose3d_estimate_figure`
-# returns them) and a second solve on the 2-D joints unstylised by them; the returned joints
-# then have the figure's proportions. Turn it off for `skb_pose3d_refine` (the fixed-basis
-# refinement needs joints = base + Σ basis · weight on the dictionary's skeleton).
+# Sets whether the drawn proportions are estimated with the pose: six per-group bone-length
+# factors (head, torso, shoulders, arms, hips, legs; `skb_pose3d_estimate_figure` returns them)
+# and a second solve on the 2-D joints unstylised by them; the returned joints then have the
+# figure's proportions.
+# @param opts the options, changed.
+# @param on true: on (default); false: off (for `skb_pose3d_refine`: the fixed-basis refinement
+#           needs joints = base + Σ basis · weight on the dictionary's skeleton).
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_proportions"] = (
     ctypes.c_uint32,
     [
@@ -2216,9 +2478,12 @@ FUNCTIONS["skb_pose_options_set_proportions"] = (
     ),
 )
 
-# Sets the standing prior of the free-joint refinement (default on): for a figure whose 2-D
-# joints show it standing on both feet, an upright torso, the head over the neck and both
-# ankles under the pelvis on one ground plane. Acts only with joint noise > 0.
+# Sets the standing prior of the free-joint refinement: for a figure whose 2-D joints show it
+# standing on both feet, an upright torso, the head over the neck and both ankles under the
+# pelvis on one ground plane. Acts only with joint noise > 0.
+# @param opts the options, changed.
+# @param on true: on (default); false: off.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_standing_prior"] = (
     ctypes.c_uint32,
     [
@@ -2232,8 +2497,11 @@ FUNCTIONS["skb_pose_options_set_standing_prior"] = (
     ),
 )
 
-# Sets the knee limits of the free-joint refinement (default on): knees bent backwards are
-# flipped in depth (image and bone lengths unchanged). Acts only with joint noise > 0.
+# Sets the knee limits of the free-joint refinement: knees bent backwards are flipped in depth
+# (image and bone lengths unchanged). Acts only with joint noise > 0.
+# @param opts the options, changed.
+# @param on true: on (default); false: off.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_knee_limits"] = (
     ctypes.c_uint32,
     [
@@ -2247,11 +2515,14 @@ FUNCTIONS["skb_pose_options_set_knee_limits"] = (
     ),
 )
 
-# Sets the straight limbs (default off): the last step straightens every arm and leg drawn
-# straight that the solve bent by at most 60° in depth (the middle joint moves onto the segment
-# between the limb's ends; the ends and the image are kept, the two bones get shorter). For
-# figures drawn standing or posing with straight limbs; on unseen motion it straightens truly
-# bent limbs too (docs/benchmarks.md, "3-D pose").
+# Sets the straight limbs: the last step straightens every arm and leg drawn straight that the
+# solve bent by at most 60° in depth (the middle joint moves onto the segment between the
+# limb's ends; the ends and the image are kept, the two bones get shorter). For figures drawn
+# standing or posing with straight limbs; on unseen motion it straightens truly bent limbs too
+# (docs/benchmarks.md, "3-D pose").
+# @param opts the options, changed.
+# @param on true: on; false: off (default).
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_straight_limbs"] = (
     ctypes.c_uint32,
     [
@@ -2265,9 +2536,12 @@ FUNCTIONS["skb_pose_options_set_straight_limbs"] = (
     ),
 )
 
-# Sets the learned factor prior (default on): the prior on the drawn proportions is predicted
-# from the 2-D joints by the embedded regression (`assets/factor_prior.json`) instead of a
-# fixed spread about the dictionary's proportions. Acts only with the proportions estimated.
+# Sets the learned factor prior: the prior on the drawn proportions is predicted from the 2-D
+# joints by the embedded regression (`assets/factor_prior.json`) instead of a fixed spread
+# about the dictionary's proportions. Acts only with the proportions estimated.
+# @param opts the options, changed.
+# @param on true: on (default); false: off.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_factor_prior"] = (
     ctypes.c_uint32,
     [
@@ -2281,12 +2555,15 @@ FUNCTIONS["skb_pose_options_set_factor_prior"] = (
     ),
 )
 
-# Sets the weight of the learned joints' depths (default 0.05; 0 = off; at most 10): where the
-# solver chooses between readings of a near-frontal figure (a limb toward or away from the
-# viewer), the depths predicted from the 2-D joints by the embedded network
-# (`assets/factor_prior.json`) add this many px² of cost per px² of depth disagreement.
-# `skb_pose3d_estimate` always uses them when on; the pipeline replaces them by BlazePose's own
-# depths when it detected the joints with BlazePose. `SKB_ERR_OUT_OF_RANGE` outside [0, 10].
+# Sets the weight of the learned joints' depths: where the solver chooses between readings of
+# a near-frontal figure (a limb toward or away from the viewer), the depths predicted from the
+# 2-D joints by the embedded network (`assets/factor_prior.json`) add this many px² of cost per
+# px² of depth disagreement. `skb_pose3d_estimate` always uses them when on; the pipeline
+# replaces them by BlazePose's own depths when it detected the joints with BlazePose.
+# @param opts the options, changed.
+# @param weight in [0, 10] (default 0.05; 0 = off).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside [0, 10] (SKB_ERR_NON_FINITE for NaN or
+#         infinity; options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_options_set_depth_prior"] = (
     ctypes.c_uint32,
     [
@@ -2300,8 +2577,15 @@ FUNCTIONS["skb_pose_options_set_depth_prior"] = (
     ),
 )
 
-# `skb_pose3d_estimate` that also writes the drawn proportions and the plausibility flag to
-# `figure` (non-NULL). Same errors; on error neither output is written. Thread-safe.
+# `skb_pose3d_estimate` that also writes the drawn proportions and the plausibility flag.
+# Thread-safe.
+# @param dict the dictionary, only read.
+# @param joints the 2-D joints, only read.
+# @param opts pose options, only read, or NULL for the defaults.
+# @param out receives the pose and camera; not written on error.
+# @param figure receives the drawn proportions and the plausibility flag; not NULL; not
+#               written on error.
+# @return the statuses of `skb_pose3d_estimate`.
 FUNCTIONS["skb_pose3d_estimate_figure"] = (
     ctypes.c_uint32,
     [
@@ -2321,14 +2605,19 @@ FUNCTIONS["skb_pose3d_estimate_figure"] = (
     ),
 )
 
-# Estimates the 3-D pose and camera from 2-D joints (matching pursuit of eq. 3, then the joint
-# refinement if enabled; by default from 12 exemplar starts whose results are blended, see
-# `skb_pose_options_set_starts`, and last the free-joint refinement, see
-# `skb_pose_options_set_joint_noise`). `opts` may be NULL for the defaults. Errors: fewer than 15 finite
-# joints or fewer than 8 visible (`SKB_ERR_TOO_FEW_JOINTS`), a bone whose ends coincide
-# (`SKB_ERR_COINCIDENT_JOINTS`), collinear or tiny figures (`SKB_ERR_DEGENERATE`), coordinates
-# beyond ±1e6 px (`SKB_ERR_OUT_OF_RANGE`). On error `*out` is not written. Thread-safe (with
-# distinct `out`); CPU time per pose in docs/benchmarks.md ("3-D pose").
+# Estimates the 3-D pose and camera from 2-D joints: matching pursuit of eq. 3, then the joint
+# refinement if enabled; by default from 12 exemplar starts whose results are blended (see
+# `skb_pose_options_set_starts`), and last the free-joint refinement (see
+# `skb_pose_options_set_joint_noise`). Thread-safe (with distinct `out`); CPU time per pose
+# in docs/benchmarks.md ("3-D pose").
+# @param dict the dictionary, only read.
+# @param joints the 2-D joints, only read.
+# @param opts pose options, only read, or NULL for the defaults.
+# @param out receives the pose and camera; not written on error.
+# @return SKB_OK; SKB_ERR_TOO_FEW_JOINTS (fewer than 15 finite joints or fewer than 8
+#         visible); SKB_ERR_COINCIDENT_JOINTS (a bone whose ends coincide);
+#         SKB_ERR_DEGENERATE (collinear or tiny figures); SKB_ERR_OUT_OF_RANGE (coordinates
+#         beyond ±1e6 px); argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose3d_estimate"] = (
     ctypes.c_uint32,
     [
@@ -2346,12 +2635,20 @@ FUNCTIONS["skb_pose3d_estimate"] = (
     ),
 )
 
-# The fixed-basis refinement alone: starting from `start` (its bases, weights and camera; its
-# base pose is taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
-# start `skb_pose3d_estimate` used, so pass the joints it returned), runs the joint Levenberg–Marquardt refinement of rotation, sx, sy, t
-# and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside the bound
-# is first moved onto it). Use it to re-polish a pose after editing its camera or weights, or
-# to compare with another solver. `opts` may be NULL. `out` may equal `start`. Thread-safe.
+# The fixed-basis refinement alone: runs the joint Levenberg–Marquardt refinement of rotation,
+# sx, sy, t and the weights on `joints`, keeping |length excess| ≤ κ exactly (a start outside
+# the bound is first moved onto it). Use it to re-polish a pose after editing its camera or
+# weights, or to compare with another solver. Thread-safe.
+# @param dict the dictionary, only read.
+# @param joints the 2-D joints, only read.
+# @param opts pose options, only read, or NULL for the defaults.
+# @param start the starting pose, only read: its bases, weights and camera; its base pose is
+#              taken as `joints − Σ_k basis_k · weights_k`, i.e. the mean pose or the exemplar
+#              start `skb_pose3d_estimate` used, so pass the joints it returned.
+# @param out receives the refined pose; may equal `start`.
+# @return SKB_OK; the errors of `skb_pose3d_estimate`; SKB_ERR_OUT_OF_RANGE for a start with
+#         0 or more than 32 bases or a basis index ≥ K; SKB_ERR_NON_FINITE for a non-finite
+#         weight or base-pose value; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose3d_refine"] = (
     ctypes.c_uint32,
     [
@@ -2371,9 +2668,14 @@ FUNCTIONS["skb_pose3d_refine"] = (
     ),
 )
 
-# `skb_pose3d_estimate` into a new estimate handle `*out` (the caller owns it) that also holds the
-# ranked alternatives. `opts` may be NULL. Same errors as `skb_pose3d_estimate`; on error `*out`
-# is untouched. Thread-safe.
+# `skb_pose3d_estimate` into a new estimate handle that also holds the ranked alternatives.
+# Thread-safe.
+# @param dict the dictionary, only read.
+# @param joints the 2-D joints, only read.
+# @param opts pose options, only read, or NULL for the defaults.
+# @param out receives a new estimate the caller owns (`skb_pose_estimate_free`); untouched on
+#            error; not NULL.
+# @return the statuses of `skb_pose3d_estimate`.
 FUNCTIONS["skb_pose_estimate_new"] = (
     ctypes.c_uint32,
     [
@@ -2391,7 +2693,8 @@ FUNCTIONS["skb_pose_estimate_new"] = (
     ),
 )
 
-# Frees an estimate. NULL is a no-op. Do not use it afterwards.
+# Frees an estimate. Do not use it afterwards.
+# @param est the estimate to free; NULL is a no-op.
 FUNCTIONS["skb_pose_estimate_free"] = (
     None,
     [
@@ -2403,8 +2706,11 @@ FUNCTIONS["skb_pose_estimate_free"] = (
     ),
 )
 
-# The estimate's current pose and camera into `*out` (after flips and picks, the chosen
-# reading's joints; the camera, bases and RMS are unchanged by them).
+# The estimate's current pose and camera: after flips and picks, the chosen reading's joints
+# (the camera, bases and RMS are unchanged by them).
+# @param est the estimate, only read.
+# @param out receives the pose; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_estimate_pose"] = (
     ctypes.c_uint32,
     [
@@ -2418,8 +2724,10 @@ FUNCTIONS["skb_pose_estimate_pose"] = (
     ),
 )
 
-# The number of alternatives (1..=`SKB_MAX_ALTERNATIVES`; 0 for an estimate without them) into
-# `*out`.
+# The number of alternatives.
+# @param est the estimate, only read.
+# @param out receives 1..=`SKB_MAX_ALTERNATIVES`, or 0 for an estimate without them; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_estimate_alternative_count"] = (
     ctypes.c_uint32,
     [
@@ -2433,10 +2741,14 @@ FUNCTIONS["skb_pose_estimate_alternative_count"] = (
     ),
 )
 
-# Copies alternative `index`'s 15 joints (x, y, z doubles, metres, the frame of
-# `skb_pose3d.joints`) into `dst` (`dst_len` ≥ 45) and its score (px², lower = better) into
-# `*score` (may be NULL). Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the count; on error
-# nothing is written.
+# Copies one alternative's 15 joints and its score. On error nothing is written.
+# @param est the estimate, only read.
+# @param index the alternative, below `skb_pose_estimate_alternative_count`.
+# @param dst receives x, y, z doubles per joint, metres, the frame of `skb_pose3d.joints`.
+# @param dst_len the element count of `dst`, ≥ 45.
+# @param score receives the score (px², lower = better); may be NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the count; SKB_ERR_BUFFER_TOO_SMALL for a
+#         short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_estimate_copy_alternative_joints"] = (
     ctypes.c_uint32,
     [
@@ -2456,9 +2768,12 @@ FUNCTIONS["skb_pose_estimate_copy_alternative_joints"] = (
     ),
 )
 
-# The number of limbs alternative `index` flips relative to the current pose into `*out`
-# (0 for alternative 0; at most `SKB_NUM_LIMBS`). Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥
-# the alternative count.
+# The number of limbs an alternative flips relative to the current pose.
+# @param est the estimate, only read.
+# @param index the alternative, below the alternative count.
+# @param out receives the count (0 for alternative 0; at most `SKB_NUM_LIMBS`); not NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the alternative count; argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_pose_estimate_alternative_flipped_count"] = (
     ctypes.c_uint32,
     [
@@ -2474,10 +2789,15 @@ FUNCTIONS["skb_pose_estimate_alternative_flipped_count"] = (
     ),
 )
 
-# Copies the limbs alternative `index` flips relative to the current pose (`SKB_LIMB_*`,
-# ascending) into `dst` (`dst_len` ≥ `skb_pose_estimate_alternative_flipped_count`;
-# `SKB_NUM_LIMBS` always suffices). Alternative 0 flips none. Errors: `SKB_ERR_OUT_OF_RANGE` for
-# `index` ≥ the alternative count.
+# Copies the limbs an alternative flips relative to the current pose. Alternative 0 flips
+# none.
+# @param est the estimate, only read.
+# @param index the alternative, below the alternative count.
+# @param dst receives `SKB_LIMB_*` values, ascending.
+# @param dst_len the element count of `dst`, ≥ `skb_pose_estimate_alternative_flipped_count`
+#                (`SKB_NUM_LIMBS` always suffices).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the alternative count;
+#         SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_estimate_copy_alternative_flipped"] = (
     ctypes.c_uint32,
     [
@@ -2495,12 +2815,16 @@ FUNCTIONS["skb_pose_estimate_copy_alternative_flipped"] = (
     ),
 )
 
-# Flips the depth of `limb` (`SKB_LIMB_*`) of the estimate in place and re-solves (the image and
-# every bone length are kept; the alternatives are re-ranked relative to the new pose; a few
-# microseconds). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH`
-# for a limb lying in the picture plane (nothing changed). Flipping the same limb twice returns
-# the original. Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Not thread-safe on
-# one estimate.
+# Flips the depth of a limb of the estimate in place and re-solves (the image and every bone
+# length are kept; the alternatives are re-ranked relative to the new pose; a few
+# microseconds). Flipping the same limb twice returns the original. Not thread-safe on one
+# estimate.
+# @param est the estimate, changed.
+# @param limb `SKB_LIMB_*`.
+# @param outcome receives `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH` for a limb lying in the
+#                picture plane (nothing changed); may be NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `limb` ≥ `SKB_NUM_LIMBS`; argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_pose_estimate_flip_limb"] = (
     ctypes.c_uint32,
     [
@@ -2516,9 +2840,12 @@ FUNCTIONS["skb_pose_estimate_flip_limb"] = (
     ),
 )
 
-# Makes alternative `index` the estimate's pose (0 keeps it): its limbs flipped in place, the
-# alternatives re-ranked relative to it. Errors: `SKB_ERR_OUT_OF_RANGE` for `index` ≥ the
-# count (nothing changed). Not thread-safe on one estimate.
+# Makes an alternative the estimate's pose: its limbs flipped in place, the alternatives
+# re-ranked relative to it. Not thread-safe on one estimate.
+# @param est the estimate, changed.
+# @param index the alternative (0 keeps the current pose).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the count (nothing changed); argument errors
+#         as docs/c-api.md.
 FUNCTIONS["skb_pose_estimate_pick_alternative"] = (
     ctypes.c_uint32,
     [
@@ -2532,13 +2859,6 @@ FUNCTIONS["skb_pose_estimate_pick_alternative"] = (
     ),
 )
 
-# Reads a `sketchbody-joints2d` file into `*out` (joints listed in `missing` get
-# `visible = 0`). `path` is NUL-terminated UTF-8 and must name a regular file of at most
-# `SKB_JOINTS_JSON_MAX_BYTES` (a FIFO, a device or a folder is refused without blocking). A
-# leading UTF-8 byte-order mark is accepted. Statuses: `SKB_ERR_IO` (missing, unreadable, not a
-# regular file, too large), `SKB_ERR_CORRUPT_DATA` (not JSON, a key given twice, another format
-# or version, a missing, unknown or malformed joint), `SKB_ERR_INVALID_ARGUMENT` (`path` not
-# UTF-8). `*out` is written only on success. Thread-safe.
 FUNCTIONS["skb_joints2d_read_json"] = (
     ctypes.c_uint32,
     [
@@ -2552,10 +2872,13 @@ FUNCTIONS["skb_joints2d_read_json"] = (
     ),
 )
 
-# Parses the `len` bytes at `json` (UTF-8, not NUL-terminated; at most
-# `SKB_JOINTS_JSON_MAX_BYTES`) as a `sketchbody-joints2d` document into `*out`, with the rules
-# of `skb_joints2d_read_json`. Statuses: `SKB_ERR_CORRUPT_DATA` (as above, or not UTF-8),
-# `SKB_ERR_OUT_OF_RANGE` (`len` over the limit). `*out` is written only on success. Thread-safe.
+# Parses a `sketchbody-joints2d` document held in memory, with the rules of
+# `skb_joints2d_read_json`. Thread-safe.
+# @param json the document's bytes, UTF-8, not NUL-terminated.
+# @param len the byte count of `json`, at most `SKB_JOINTS_JSON_MAX_BYTES`.
+# @param out receives the joints, written only on success; not NULL.
+# @return SKB_OK; SKB_ERR_CORRUPT_DATA (as for `skb_joints2d_read_json`, or not UTF-8);
+#         SKB_ERR_OUT_OF_RANGE (`len` over the limit); argument errors as docs/c-api.md.
 FUNCTIONS["skb_joints2d_parse_json"] = (
     ctypes.c_uint32,
     [
@@ -2571,11 +2894,14 @@ FUNCTIONS["skb_joints2d_parse_json"] = (
     ),
 )
 
-# Writes `*joints` as a `sketchbody-joints2d` file at `path` (NUL-terminated UTF-8; joints with
-# `visible == 0` listed in `missing`), atomically: a temporary file renamed over `path`, which
-# is replaced only when it is a regular file. Statuses: `SKB_ERR_NON_FINITE` (a coordinate is
-# NaN or infinite; nothing written), `SKB_ERR_IO`, `SKB_ERR_INVALID_ARGUMENT` (`path` not UTF-8).
-# Thread-safe.
+# Writes joints as a `sketchbody-joints2d` file (joints with `visible == 0` listed in
+# `missing`), atomically: a temporary file renamed over `path`, which is replaced only when it
+# is a regular file. Thread-safe.
+# @param joints the joints, only read.
+# @param path the output file path, NUL-terminated UTF-8.
+# @return SKB_OK; SKB_ERR_NON_FINITE (a coordinate is NaN or infinite; nothing written);
+#         SKB_ERR_IO; SKB_ERR_INVALID_ARGUMENT (`path` not UTF-8); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_joints2d_write_json"] = (
     ctypes.c_uint32,
     [
@@ -2602,7 +2928,8 @@ FUNCTIONS["skb_detector_new_from_file"] = (
     ),
 )
 
-# Releases a detector. NULL is a no-op.
+# Releases a detector.
+# @param det the detector to release; NULL is a no-op.
 FUNCTIONS["skb_detector_free"] = (
     None,
     [
@@ -2614,21 +2941,30 @@ FUNCTIONS["skb_detector_free"] = (
     ),
 )
 
-# Detects the best-scoring figure in `image` with the sketch model `det` and the settings of
-# `opts` (NULL: the defaults of `skb_detect_options_new`; its threshold, scales, figure range
-# and levels per octave apply, the backend and strictness do not). Images whose longer side
-# exceeds 1024 px are downscaled first (results are in input pixels). Writes the 15 canonical
-# joints as (x, y) pairs in pixels (origin top-left, y down) to `joints_xy[0..30]`, their
-# confidences in (0, 1) to `confidence[0..15]` and the score to `*score`. When no figure
-# reaches the threshold it returns `SKB_ERR_NO_FIGURE` and writes only `*score` (the best score
-# found, below the threshold; −infinity when no pyramid level was searched).
-# `progress(user, fraction)` (may be NULL) is called on the calling thread with the fraction
-# done (0..=1, non-decreasing) after the feature pyramid is built and after each group of
-# pyramid levels; a non-zero return stops the search with `SKB_ERR_CANCELLED` (nothing written)
-# and the callback is not called again. Other errors (nothing written):
-# `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_OUT_OF_RANGE` (a feature pyramid over
-# 1 GiB, refused before any work), `SKB_ERR_NON_FINITE` (a score or joint that is not finite),
-# `SKB_ERR_BUFFER_TOO_SMALL`, image errors. Thread-safe.
+# Detects the best-scoring figure in `image` with the sketch model `det` alone. Images whose
+# longer side exceeds 1024 px are downscaled first (results are in input pixels). Thread-safe.
+# @param det the detector, only read.
+# @param image the sketch.
+# @param opts detection options, or NULL for the defaults of `skb_detect_options_new`; its
+#             threshold, scales, figure range and levels per octave apply, the backend and
+#             strictness do not.
+# @param progress `progress(user, fraction)`, or NULL: called on the calling thread with the
+#                 fraction done (0..=1, non-decreasing) after the feature pyramid is built and
+#                 after each group of pyramid levels; a non-zero return stops the search and
+#                 the callback is not called again.
+# @param user passed to `progress` unchanged.
+# @param joints_xy receives the 15 canonical joints as (x, y) pairs in pixels (origin top-left,
+#                  y down) in `joints_xy[0..30]`; not NULL.
+# @param joints_len the element count of `joints_xy`, at least 30.
+# @param confidence receives the joints' confidences in (0, 1) in `confidence[0..15]`; not NULL.
+# @param confidence_len the element count of `confidence`, at least 15.
+# @param score receives the score; on SKB_ERR_NO_FIGURE the best score found, below the
+#              threshold (−infinity when no pyramid level was searched); not NULL.
+# @return SKB_OK; SKB_ERR_NO_FIGURE when no figure reaches the threshold (only `*score`
+#         written); other errors write nothing: SKB_ERR_CANCELLED (the callback stopped it),
+#         SKB_ERR_IMAGE_TOO_SMALL (a side < 32 px), SKB_ERR_OUT_OF_RANGE (a feature pyramid
+#         over 1 GiB, refused before any work), SKB_ERR_NON_FINITE (a score or joint that is
+#         not finite), SKB_ERR_BUFFER_TOO_SMALL, image and argument errors as docs/c-api.md.
 FUNCTIONS["skb_detector_detect"] = (
     ctypes.c_uint32,
     [
@@ -2658,7 +2994,10 @@ FUNCTIONS["skb_detector_detect"] = (
     ),
 )
 
-# Creates options with the defaults. `*out` receives a handle the caller owns.
+# Creates detection options with the defaults.
+# @param out receives a new options handle the caller owns (release with
+#            `skb_detect_options_free`); not NULL.
+# @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL `out`.
 FUNCTIONS["skb_detect_options_new"] = (
     ctypes.c_uint32,
     [
@@ -2670,7 +3009,8 @@ FUNCTIONS["skb_detect_options_new"] = (
     ),
 )
 
-# Releases options. NULL is a no-op.
+# Releases detection options.
+# @param opts the options to release; NULL is a no-op.
 FUNCTIONS["skb_detect_options_free"] = (
     None,
     [
@@ -2682,8 +3022,10 @@ FUNCTIONS["skb_detect_options_free"] = (
     ),
 )
 
-# Sets the backend: `SKB_DETECTOR_AUTO` (default), `SKB_DETECTOR_FMP` or
-# `SKB_DETECTOR_BLAZEPOSE`. Errors: `SKB_ERR_OUT_OF_RANGE` for another value.
+# Sets the detection backend.
+# @param opts the options, changed.
+# @param backend `SKB_DETECTOR_AUTO` (default), `SKB_DETECTOR_FMP` or `SKB_DETECTOR_BLAZEPOSE`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value; SKB_ERR_NULL_POINTER for NULL `opts`.
 FUNCTIONS["skb_detect_options_set_backend"] = (
     ctypes.c_uint32,
     [
@@ -2697,9 +3039,12 @@ FUNCTIONS["skb_detect_options_set_backend"] = (
     ),
 )
 
-# Sets strict detection (`strict` true): "no figure" unless a backend passes its own hard
-# threshold (the sketch model's score threshold, BlazePose's pose flag 0.5). The default (false)
-# returns the best figure whenever the calibrated presence probability is at least 0.5.
+# Sets strict detection: "no figure" unless a backend passes its own hard threshold (the
+# sketch model's score threshold, BlazePose's pose flag 0.5).
+# @param opts the options, changed.
+# @param strict true for strict; the default (false) returns the best figure whenever the
+#               calibrated presence probability is at least 0.5.
+# @return SKB_OK; SKB_ERR_NULL_POINTER for NULL `opts`.
 FUNCTIONS["skb_detect_options_set_strict"] = (
     ctypes.c_uint32,
     [
@@ -2713,8 +3058,11 @@ FUNCTIONS["skb_detect_options_set_strict"] = (
     ),
 )
 
-# Sets the sketch model's score threshold (NaN restores the model's own), used when strict.
-# Infinite values are `SKB_ERR_NON_FINITE`.
+# Sets the sketch model's score threshold, used when strict.
+# @param opts the options, changed.
+# @param threshold the score threshold; NaN restores the model's own.
+# @return SKB_OK; SKB_ERR_NON_FINITE for an infinite value; SKB_ERR_NULL_POINTER for NULL
+#         `opts`.
 FUNCTIONS["skb_detect_options_set_threshold"] = (
     ctypes.c_uint32,
     [
@@ -2729,11 +3077,15 @@ FUNCTIONS["skb_detect_options_set_threshold"] = (
 )
 
 # Sets the searched scales as the pyramid cell size in pixels of the (possibly downscaled)
-# image: levels with cells smaller than `min_cell_px` (which find small figures) or larger
-# than `max_cell_px` (large figures) are skipped. A figure is found at cells of about its
-# standing height / 40. Setting scales replaces the default sketch search range (so 0 and
-# +infinity search every scale). Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 ≤ min < max (max may
-# be +infinity; NaN is rejected).
+# image; a figure is found at cells of about its standing height / 40. Setting scales replaces
+# the default sketch search range (so 0 and +infinity search every scale).
+# @param opts the options, changed.
+# @param min_cell_px levels with cells smaller than this (which find small figures) are
+#                    skipped; 0 ≤ `min_cell_px`, finite.
+# @param max_cell_px levels with cells larger than this (large figures) are skipped;
+#                    greater than `min_cell_px`, may be +infinity.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE unless 0 ≤ min < max (NaN is rejected);
+#         SKB_ERR_NULL_POINTER for NULL `opts`.
 FUNCTIONS["skb_detect_options_set_scales"] = (
     ctypes.c_uint32,
     [
@@ -2749,9 +3101,13 @@ FUNCTIONS["skb_detect_options_set_scales"] = (
     ),
 )
 
-# Sets the searched figure sizes as fractions of the image: figures from `min_fraction` × the
-# shorter side to `max_fraction` × the longer side tall (the default range is 0.5..1). Replaces any cell range set by `skb_detect_options_set_scales`.
-# Errors: `SKB_ERR_OUT_OF_RANGE` unless 0 < min < max, both finite (NaN is rejected).
+# Sets the searched figure sizes as fractions of the image (the default range is 0.5..1).
+# Replaces any cell range set by `skb_detect_options_set_scales`.
+# @param opts the options, changed.
+# @param min_fraction the smallest figure height, as a fraction of the shorter image side.
+# @param max_fraction the largest figure height, as a fraction of the longer image side.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE unless 0 < min < max, both finite (NaN is rejected);
+#         SKB_ERR_NULL_POINTER for NULL `opts`.
 FUNCTIONS["skb_detect_options_set_figure_range"] = (
     ctypes.c_uint32,
     [
@@ -2767,10 +3123,13 @@ FUNCTIONS["skb_detect_options_set_figure_range"] = (
     ),
 )
 
-# Sets the pyramid levels per octave: 1..=100, or 0 for the model's own (10 for the embedded
-# detector and the PARSE family). The default is 7 (0.7 of the work of 10, the same accuracy
-# on held-out sketches); 5 scores exactly every other level of 10, about half the work,
-# coarser in scale. Errors: `SKB_ERR_OUT_OF_RANGE` above 100.
+# Sets the pyramid levels per octave. The default is 7 (0.7 of the work of 10, the same
+# accuracy on held-out sketches); 5 scores exactly every other level of 10, about half the
+# work, coarser in scale.
+# @param opts the options, changed.
+# @param levels 1..=100, or 0 for the model's own (10 for the embedded detector and the PARSE
+#               family).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE above 100; SKB_ERR_NULL_POINTER for NULL `opts`.
 FUNCTIONS["skb_detect_options_set_levels_per_octave"] = (
     ctypes.c_uint32,
     [
@@ -2784,17 +3143,25 @@ FUNCTIONS["skb_detect_options_set_levels_per_octave"] = (
     ),
 )
 
-# Detects the best figure in `image` (1, 3 or 4 channels; colour helps BlazePose on painted
-# drawings) with the embedded backends of `ctx` and `opts` (NULL: defaults, `SKB_DETECTOR_AUTO`).
-# Writes the 15 canonical joints as (x, y) pairs in pixels (origin top-left, y down) to
-# `joints_xy[0..30]`, their calibrated confidences in [0, 1] (each the estimated probability
-# that the joint is within 0.2 × the figure's size of the truth) to `confidence[0..15]` and the
-# figure's confidence (their mean) to `*score`. Large images are normalised first (results are
-# in input pixels). When the image holds no figure (blank pages, text, clutter; or, when
-# strict, no backend passes its threshold) it returns `SKB_ERR_NO_FIGURE` and writes only
-# `*score` (the presence probability, or the best raw score when strict). Other errors
-# (nothing written): `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BUFFER_TOO_SMALL`,
-# `SKB_ERR_NULL_POINTER`, image errors. Thread-safe.
+# Detects the best figure in `image` with the embedded backends of `ctx`. Large images are
+# normalised first (results are in input pixels). Thread-safe.
+# @param ctx the context, only read.
+# @param image the sketch: 1, 3 or 4 channels (colour helps BlazePose on painted drawings).
+# @param opts detection options, or NULL for the defaults (`SKB_DETECTOR_AUTO`).
+# @param joints_xy receives the 15 canonical joints as (x, y) pairs in pixels (origin top-left,
+#                  y down) in `joints_xy[0..30]`; not NULL.
+# @param joints_len the element count of `joints_xy`, at least 30.
+# @param confidence receives the joints' calibrated confidences in [0, 1] (each the estimated
+#                   probability that the joint is within 0.2 × the figure's size of the
+#                   truth) in `confidence[0..15]`; not NULL.
+# @param confidence_len the element count of `confidence`, at least 15.
+# @param score receives the figure's confidence (the confidences' mean); on
+#              SKB_ERR_NO_FIGURE the presence probability, or the best raw score when strict;
+#              not NULL.
+# @return SKB_OK; SKB_ERR_NO_FIGURE when the image holds no figure (blank pages, text,
+#         clutter; or, when strict, no backend passes its threshold), only `*score` written;
+#         other errors write nothing: SKB_ERR_IMAGE_TOO_SMALL (a side < 32 px),
+#         SKB_ERR_BUFFER_TOO_SMALL, SKB_ERR_NULL_POINTER, image errors.
 FUNCTIONS["skb_context_detect"] = (
     ctypes.c_uint32,
     [
@@ -2820,9 +3187,18 @@ FUNCTIONS["skb_context_detect"] = (
     ),
 )
 
-# As `skb_context_detect`, with the backend kept, the confidences, the presence probability and the
-# low-confidence flag in `*info` instead of a score. On `SKB_ERR_NO_FIGURE` and other errors
-# nothing is written. Thread-safe.
+# As `skb_context_detect`, with the backend kept, the confidences, the presence probability
+# and the low-confidence flag in `*info` instead of a score. Thread-safe.
+# @param ctx the context, only read.
+# @param image the sketch, as in `skb_context_detect`.
+# @param opts detection options, or NULL for the defaults.
+# @param joints_xy receives the 15 joints as (x, y) pixel pairs in `joints_xy[0..30]`; not NULL.
+# @param joints_len the element count of `joints_xy`, at least 30.
+# @param confidence receives the 15 joint confidences in `confidence[0..15]`; not NULL.
+# @param confidence_len the element count of `confidence`, at least 15.
+# @param info receives the figure info; not NULL.
+# @return SKB_OK; the errors of `skb_context_detect`, but on SKB_ERR_NO_FIGURE, as on every
+#         error, nothing is written.
 FUNCTIONS["skb_context_detect_figure"] = (
     ctypes.c_uint32,
     [
@@ -2848,8 +3224,6 @@ FUNCTIONS["skb_context_detect_figure"] = (
     ),
 )
 
-# As `skb_context_detect_figure` (the same arguments and statuses), with the figure's facing and the
-# swapped labelling in `*facing` as well. On any failure nothing is written. Thread-safe.
 FUNCTIONS["skb_context_detect_facing"] = (
     ctypes.c_uint32,
     [
@@ -2877,9 +3251,12 @@ FUNCTIONS["skb_context_detect_facing"] = (
     ),
 )
 
-# The facing of the figure behind `result`'s detected joints, with the swapped labelling, into
-# `*facing`. `SKB_ERR_OUT_OF_RANGE` when the result's joints were given, not detected (nothing
-# written). Thread-safe on a shared result.
+# The facing of the figure behind `result`'s detected joints, with the swapped labelling.
+# Thread-safe on a shared result.
+# @param result the pipeline result, only read.
+# @param facing receives the facing info; not NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE when the result's joints were given, not detected
+#         (nothing written); argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_facing"] = (
     ctypes.c_uint32,
     [
@@ -2893,9 +3270,11 @@ FUNCTIONS["skb_result_facing"] = (
     ),
 )
 
-# `*joints` with left and right swapped (each joint takes its mirror's position and
-# visibility; head, neck and pelvis stay) into `*out`, which may be `joints` itself. Errors:
-# `SKB_ERR_NULL_POINTER`. Thread-safe.
+# `*joints` with left and right swapped: each joint takes its mirror's position and
+# visibility; head, neck and pelvis stay. Thread-safe.
+# @param joints the joints, only read.
+# @param out receives the swapped joints; may be `joints` itself; not NULL.
+# @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL argument.
 FUNCTIONS["skb_joints2d_swap_sides"] = (
     ctypes.c_uint32,
     [
@@ -2909,7 +3288,6 @@ FUNCTIONS["skb_joints2d_swap_sides"] = (
     ),
 )
 
-# Creates fit options with the defaults into `*out` (the caller owns them). Thread-safe.
 FUNCTIONS["skb_fit_options_new"] = (
     ctypes.c_uint32,
     [
@@ -2921,7 +3299,8 @@ FUNCTIONS["skb_fit_options_new"] = (
     ),
 )
 
-# Frees fit options. NULL is a no-op.
+# Frees fit options.
+# @param opts the options to free; NULL is a no-op.
 FUNCTIONS["skb_fit_options_free"] = (
     None,
     [
@@ -2933,7 +3312,11 @@ FUNCTIONS["skb_fit_options_free"] = (
     ),
 )
 
-# Sets the samples per SIR iteration, S, in 2..=100000.
+# Sets the samples per SIR iteration, S.
+# @param opts the options, changed.
+# @param samples the sample count, in 2..=100000.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_samples"] = (
     ctypes.c_uint32,
     [
@@ -2947,7 +3330,11 @@ FUNCTIONS["skb_fit_options_set_samples"] = (
     ),
 )
 
-# Sets the most SIR iterations, T, in 1..=1000.
+# Sets the most SIR iterations, T.
+# @param opts the options, changed.
+# @param iterations the iteration limit, in 1..=1000.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_iterations"] = (
     ctypes.c_uint32,
     [
@@ -2961,7 +3348,11 @@ FUNCTIONS["skb_fit_options_set_iterations"] = (
     ),
 )
 
-# Sets the transition step s in standard deviations (Σ = diag(s² λ_k)), finite and > 0.
+# Sets the transition step s in standard deviations (Σ = diag(s² λ_k)).
+# @param opts the options, changed.
+# @param scale the step, finite and > 0.
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_transition_scale"] = (
     ctypes.c_uint32,
     [
@@ -2975,8 +3366,12 @@ FUNCTIONS["skb_fit_options_set_transition_scale"] = (
     ),
 )
 
-# Sets the match score: `SKB_SCORE_PAPER`, `SKB_SCORE_FILLED_IOU`, `SKB_SCORE_CHAMFER` or
-# `SKB_SCORE_TWO_SIDED_CHAMFER`.
+# Sets the match score.
+# @param opts the options, changed.
+# @param score `SKB_SCORE_PAPER`, `SKB_SCORE_FILLED_IOU`, `SKB_SCORE_CHAMFER` (the default) or
+#              `SKB_SCORE_TWO_SIDED_CHAMFER`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_score"] = (
     ctypes.c_uint32,
     [
@@ -2990,7 +3385,11 @@ FUNCTIONS["skb_fit_options_set_score"] = (
     ),
 )
 
-# Sets the likelihood temperature of the non-paper scores (exp(score / temperature)), > 0.
+# Sets the likelihood temperature of the non-paper scores (exp(score / temperature)).
+# @param opts the options, changed.
+# @param temperature the temperature, finite and > 0.
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_temperature"] = (
     ctypes.c_uint32,
     [
@@ -3004,10 +3403,13 @@ FUNCTIONS["skb_fit_options_set_temperature"] = (
     ),
 )
 
-# Sets the weight of the 2-D joint term, ≥ 0 (score loses weight × the mean distance in raster
-# pixels between each sample's projected rig joints and the 2-D joints; used by
-# `skb_pipeline_run`, which has the 2-D joints; 0 turns it off). NaN is `SKB_ERR_NON_FINITE`,
-# negative `SKB_ERR_OUT_OF_RANGE`.
+# Sets the weight of the 2-D joint term: the score loses weight × the mean distance in raster
+# pixels between each sample's projected rig joints and the 2-D joints (used by
+# `skb_pipeline_run`, which has the 2-D joints).
+# @param opts the options, changed.
+# @param weight the weight, ≥ 0; 0 turns the term off.
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN (or infinity); SKB_ERR_OUT_OF_RANGE for a negative
+#         weight (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_joint_weight"] = (
     ctypes.c_uint32,
     [
@@ -3021,10 +3423,13 @@ FUNCTIONS["skb_fit_options_set_joint_weight"] = (
     ),
 )
 
-# Sets the character's known rest height in metres (character sheets carry one), in
-# 0.1..=10; 0 means unknown (the default). With a height the fitted rest mesh is scaled about
-# its pelvis to it (and, without per-sample cameras, every fit sample too). NaN is
-# `SKB_ERR_NON_FINITE`, other values outside the range (negative included) `SKB_ERR_OUT_OF_RANGE`.
+# Sets the character's known rest height (character sheets carry one). With a height the
+# fitted rest mesh is scaled about its pelvis to it (and, without per-sample cameras, every fit
+# sample too).
+# @param opts the options, changed.
+# @param metres the height in metres, in 0.1..=10; 0 means unknown (the default).
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN; SKB_ERR_OUT_OF_RANGE for other values outside the
+#         range, negative included (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_height"] = (
     ctypes.c_uint32,
     [
@@ -3038,9 +3443,12 @@ FUNCTIONS["skb_fit_options_set_height"] = (
     ),
 )
 
-# Turns per-sample cameras on (non-zero, the default) or off (0): each fit sample's camera
-# scales and translation are refitted to its own posed joints vs the 2-D joints, so the size
-# comes from the shape. Only `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it.
+# Turns per-sample cameras on or off: each fit sample's camera scales and translation are
+# refitted to its own posed joints vs the 2-D joints, so the size comes from the shape. Only
+# `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it.
+# @param opts the options, changed.
+# @param on true: on (the default); false: off.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_sample_camera"] = (
     ctypes.c_uint32,
     [
@@ -3055,8 +3463,11 @@ FUNCTIONS["skb_fit_options_set_sample_camera"] = (
 )
 
 # Sets the prior standard deviation of the fit's log bone-length factors (legs, arms,
-# shoulders, head, torso), in 0..=0.5; 0 searches PCA weights only (default 0.1). NaN is
-# `SKB_ERR_NON_FINITE`, values outside the range `SKB_ERR_OUT_OF_RANGE`.
+# shoulders, head, torso).
+# @param opts the options, changed.
+# @param sd the standard deviation, in 0..=0.5; 0 searches PCA weights only (default 0.1).
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_proportion_sd"] = (
     ctypes.c_uint32,
     [
@@ -3070,11 +3481,13 @@ FUNCTIONS["skb_fit_options_set_proportion_sd"] = (
     ),
 )
 
-# Turns the closed-form proportion estimate on (non-zero, the default) or off (0): the bone
-# factors' prior is centred on the factors estimated from the 2-D joints' bone lengths, the
-# estimated pose and camera instead of 1 (needs 2-D joints and a proportion sd > 0: only
-# `skb_pipeline_run` has 2-D joints; `skb_context_fit_shape` ignores it). Not thread-safe on one
-# handle, like every setter.
+# Turns the closed-form proportion estimate on or off: the bone factors' prior is centred on
+# the factors estimated from the 2-D joints' bone lengths, the estimated pose and camera
+# instead of 1 (needs 2-D joints and a proportion sd > 0: only `skb_pipeline_run` has 2-D
+# joints; `skb_context_fit_shape` ignores it). Not thread-safe on one handle, like every setter.
+# @param opts the options, changed.
+# @param on true: on (the default); false: off.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_estimate_proportions"] = (
     ctypes.c_uint32,
     [
@@ -3088,7 +3501,11 @@ FUNCTIONS["skb_fit_options_set_estimate_proportions"] = (
     ),
 )
 
-# Sets the longest raster side of the fit, pixels, in 16..=4096.
+# Sets the longest raster side of the fit.
+# @param opts the options, changed.
+# @param side the side in pixels, in 16..=4096.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE outside the range (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_raster_side"] = (
     ctypes.c_uint32,
     [
@@ -3102,7 +3519,11 @@ FUNCTIONS["skb_fit_options_set_raster_side"] = (
     ),
 )
 
-# Sets the convergence tolerance in standard deviations of the weights, finite and > 0.
+# Sets the convergence tolerance.
+# @param opts the options, changed.
+# @param tolerance the tolerance in standard deviations of the weights, finite and > 0.
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_tolerance"] = (
     ctypes.c_uint32,
     [
@@ -3117,6 +3538,9 @@ FUNCTIONS["skb_fit_options_set_tolerance"] = (
 )
 
 # Sets the seed of every random step (same seed, same result on any thread count).
+# @param opts the options, changed.
+# @param seed the seed (default 1).
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_seed"] = (
     ctypes.c_uint32,
     [
@@ -3130,7 +3554,11 @@ FUNCTIONS["skb_fit_options_set_seed"] = (
     ),
 )
 
-# Sets the skinning: `SKB_SKIN_LINEAR` or `SKB_SKIN_DUAL_QUATERNION`.
+# Sets the skinning.
+# @param opts the options, changed.
+# @param method `SKB_SKIN_LINEAR` (the default) or `SKB_SKIN_DUAL_QUATERNION`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_skinning"] = (
     ctypes.c_uint32,
     [
@@ -3144,9 +3572,13 @@ FUNCTIONS["skb_fit_options_set_skinning"] = (
     ),
 )
 
-# Sets the clothing-robust chamfer's cap, raster pixels, finite and > 0 (default 4): silhouette
-# boundary pixels inside the sketch's outer outline cost at most this, so strokes that may be
-# clothing do not pull the body outward; 12 or more is the plain chamfer.
+# Sets the clothing-robust chamfer's cap: silhouette boundary pixels inside the sketch's outer
+# outline cost at most this, so strokes that may be clothing do not pull the body outward.
+# @param opts the options, changed.
+# @param cap the cap in raster pixels, finite and > 0 (default 4); 12 or more is the plain
+#            chamfer.
+# @return SKB_OK; SKB_ERR_NON_FINITE for NaN or infinity, SKB_ERR_OUT_OF_RANGE for other values
+#         outside the range (options unchanged); argument errors as docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_inside_cap"] = (
     ctypes.c_uint32,
     [
@@ -3160,11 +3592,13 @@ FUNCTIONS["skb_fit_options_set_inside_cap"] = (
     ),
 )
 
-# Sets the PCA dimensions searched; 0 restores the default (a gendered space: all 10 of its
-# prior's dimensions; the both-sexes space: its default 5). `skb_pipeline_run` with automatic
-# gender decides the gender with two fits in 4 dimensions and then fits the chosen gender
-# with these. A value above the model's GMM dimension fails at fit time
-# (`SKB_ERR_OUT_OF_RANGE`).
+# Sets the PCA dimensions searched. `skb_pipeline_run` with automatic gender decides the gender
+# with two fits in 4 dimensions and then fits the chosen gender with these.
+# @param opts the options, changed.
+# @param dims the dimension count; 0 restores the default (a gendered space: all 10 of its
+#             prior's dimensions; the both-sexes space: its default 5).
+# @return SKB_OK; argument errors as docs/c-api.md. A value above the model's GMM dimension fails
+#         at fit time (SKB_ERR_OUT_OF_RANGE), not here.
 FUNCTIONS["skb_fit_options_set_dims"] = (
     ctypes.c_uint32,
     [
@@ -3178,10 +3612,14 @@ FUNCTIONS["skb_fit_options_set_dims"] = (
     ),
 )
 
-# Sets the gender: `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
-# `skb_context_fit_shape` fits the both-sexes space, gender a continuous weight; `skb_pipeline_run`
-# fits the gendered space the gender classifier picks, see `skb_result_gender`;
-# `skb_result_gender_value` reads it).
+# Sets the gender of the fit.
+# @param opts the options, changed.
+# @param gender `SKB_GENDER_FEMALE`, `SKB_GENDER_MALE` or `SKB_GENDER_AUTO` (the default:
+#               `skb_context_fit_shape` fits the both-sexes space, gender a continuous weight;
+#               `skb_pipeline_run` fits the gendered space the gender classifier picks, see
+#               `skb_result_gender`; `skb_result_gender_value` reads it).
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value (options unchanged); argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_fit_options_set_gender"] = (
     ctypes.c_uint32,
     [
@@ -3196,23 +3634,31 @@ FUNCTIONS["skb_fit_options_set_gender"] = (
 )
 
 # Fits the body shape (SIR, paper §II-C) to an edge map for a known 3-D pose and camera.
-# `joints` is 15 × (x, y, z) doubles (`joints_len` = 45), metres, model frame (as
-# `skb_pose3d.joints` from `skb_pose3d_estimate`); `camera` maps them to `edges`' pixels; `edges`
-# is the sketch's edge map (1, 3 or 4 channels; any non-zero pixel is an edge; e.g. from
-# `skb_image_canny`); `opts` may be NULL for the defaults (gender automatic: the both-sexes space is
-# fitted, gender a continuous weight; the mesh's gender is the nearer one and its weights are
-# the blended space's, weight 0 its gender axis). `progress` may be NULL; a non-zero return cancels
-# (`SKB_ERR_CANCELLED`, nothing allocated remains). On success `*out` receives a new mesh the
-# caller owns (`skb_mesh_free`): the fitted rest shape (its gender from `skb_mesh_gender`, its
-# weights from `skb_mesh_copy_shape_weights`) already posed to `joints` (no retargeting, the
-# options' skinning; read with `skb_mesh_copy_posed_vertices`; scaled to the options' height
-# when one is set, else the fitted height: `skb_pipeline_run` calibrates the fitted body when its
-# 2-D joints are given, this call has none); `*score` (may be NULL) receives
-# the best sample's match score (higher is better). Errors: non-finite joints or camera
-# (`SKB_ERR_NON_FINITE`), invalid camera or options (`SKB_ERR_OUT_OF_RANGE`), an edge map
-# without edges (`SKB_ERR_BLANK_IMAGE`), a pose no sample can be projected with
-# (`SKB_ERR_OUT_OF_RANGE`). Thread-safe (the context is shared read-only); runs on the rayon
-# pool; the callback is called on the calling thread.
+# Thread-safe (the context is shared read-only); runs on the rayon pool; the callback is
+# called on the calling thread.
+# @param ctx the context, only read.
+# @param joints 15 × (x, y, z) doubles, metres, model frame (as `skb_pose3d.joints` from
+#               `skb_pose3d_estimate`).
+# @param joints_len the element count of `joints`: 45.
+# @param camera maps the joints to `edges`' pixels.
+# @param edges the sketch's edge map: 1, 3 or 4 channels; any non-zero pixel is an edge (e.g.
+#              from `skb_image_canny`).
+# @param opts fit options, only read, or NULL for the defaults (gender automatic: the
+#             both-sexes space is fitted, gender a continuous weight; the mesh's gender is the
+#             nearer one and its weights are the blended space's, weight 0 its gender axis).
+# @param progress the progress callback, or NULL; a non-zero return cancels.
+# @param user passed to `progress` unchanged.
+# @param score receives the best sample's match score (higher is better); may be NULL.
+# @param out receives a new mesh the caller owns (`skb_mesh_free`): the fitted rest shape (its
+#            gender from `skb_mesh_gender`, its weights from `skb_mesh_copy_shape_weights`)
+#            already posed to `joints` (no retargeting, the options' skinning; read with
+#            `skb_mesh_copy_posed_vertices`; scaled to the options' height when one is set,
+#            else the fitted height: `skb_pipeline_run` calibrates the fitted body when its
+#            2-D joints are given, this call has none); not NULL.
+# @return SKB_OK; SKB_ERR_NON_FINITE for non-finite joints or camera; SKB_ERR_OUT_OF_RANGE for
+#         a `joints_len` other than 45, an invalid camera or options, or a pose no sample can
+#         be projected with; SKB_ERR_BLANK_IMAGE for an edge map without edges;
+#         SKB_ERR_CANCELLED (nothing allocated remains); argument errors as docs/c-api.md.
 FUNCTIONS["skb_context_fit_shape"] = (
     ctypes.c_uint32,
     [
@@ -3242,9 +3688,6 @@ FUNCTIONS["skb_context_fit_shape"] = (
     ),
 )
 
-# Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as gray into `*out` (caller owns it).
-# Errors: `SKB_ERR_IO` (missing, unreadable), `SKB_ERR_DECODE` (not an image, truncated),
-# `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
 FUNCTIONS["skb_gray_image_new_from_file"] = (
     ctypes.c_uint32,
     [
@@ -3258,7 +3701,10 @@ FUNCTIONS["skb_gray_image_new_from_file"] = (
     ),
 )
 
-# A borrowed 1-channel `skb_image` view of `img` into `*out`, valid while `img` lives.
+# A borrowed 1-channel `skb_image` view of a decoded image.
+# @param img the image, only read.
+# @param out receives the view (stride = width), valid while `img` lives; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_gray_image_view"] = (
     ctypes.c_uint32,
     [
@@ -3272,7 +3718,8 @@ FUNCTIONS["skb_gray_image_view"] = (
     ),
 )
 
-# Frees an image from `skb_gray_image_new_from_file`. NULL is a no-op.
+# Frees an image from `skb_gray_image_new_from_file`.
+# @param img the image to free; NULL is a no-op.
 FUNCTIONS["skb_gray_image_free"] = (
     None,
     [
@@ -3284,28 +3731,33 @@ FUNCTIONS["skb_gray_image_free"] = (
     ),
 )
 
-# Runs the main job on `sketch` (1, 3 or 4 channels; dark strokes on light paper): Canny
-# edges (50/150, aperture 3), the 2-D joints `joints` (with their visibility; NULL: the
-# context's embedded detector finds them, as `skb_context_detect` with default options), the 3-D
+# Runs the main job on a sketch: Canny edges (50/150, aperture 3), the 2-D joints, the 3-D
 # pose and camera (with detected joints, BlazePose's relative joint depths weigh the solver's
-# choices), the shape fit (with detected joints: half the joint weight, no bone-factor
-# search, and with automatic gender the gendered space the detected-joints gender classifier
-# picks), and the fitted shape posed to the estimate. Without a height in `fit_opts` and with
-# `joints` given, the fitted body is calibrated: a gendered fit's shape weights are mapped and
-# its height calibrated (docs/benchmarks.md, "Shape calibration", "Height calibration");
-# detected joints keep the fitted body.
-# `dict` (NULL: the embedded dictionary), `pose_opts` and `fit_opts` (NULL: defaults; the
-# fit options' gender defaults to automatic: chosen by the gender classifier, see
-# `skb_result_gender`) are
-# only read. `progress` (may be NULL) gets the fraction of the whole run; a non-zero return
-# cancels with `SKB_ERR_CANCELLED` within one fit iteration, freeing everything. On success
-# `*out` receives a new result the caller owns (`skb_result_free`); on error `*out` is
-# untouched. Errors: `SKB_ERR_IMAGE_TOO_SMALL` (a side < 32 px), `SKB_ERR_BLANK_IMAGE`,
-# `SKB_ERR_NO_FIGURE` (NULL joints and the detector finds no figure),
-# `SKB_ERR_JOINT_OUTSIDE_IMAGE`, `SKB_ERR_NON_FINITE` (a visible joint
-# NaN), the pose solver's (`SKB_ERR_TOO_FEW_JOINTS`, `SKB_ERR_COINCIDENT_JOINTS`,
-# `SKB_ERR_DEGENERATE`) and `SKB_ERR_CANCELLED`. Thread-safe; runs on the rayon pool; the
-# callback is called on the calling thread.
+# choices), the shape fit (with detected joints: half the joint weight, no bone-factor search,
+# and with automatic gender the gendered space the detected-joints gender classifier picks),
+# and the fitted shape posed to the estimate. Without a height in `fit_opts` and with `joints`
+# given, the fitted body is calibrated: a gendered fit's shape weights are mapped and its
+# height calibrated (docs/benchmarks.md, "Shape calibration", "Height calibration"); detected
+# joints keep the fitted body. Thread-safe; runs on the rayon pool; the callback is called on
+# the calling thread.
+# @param ctx the context, only read.
+# @param sketch the sketch: 1, 3 or 4 channels, dark strokes on light paper.
+# @param joints the 2-D joints with their visibility, only read; NULL: the context's embedded
+#               detector finds them, as `skb_context_detect` with default options.
+# @param dict the pose dictionary, only read; NULL: the embedded dictionary.
+# @param pose_opts pose options, only read; NULL: the defaults.
+# @param fit_opts fit options, only read; NULL: the defaults (the gender defaults to
+#                 automatic: chosen by the gender classifier, see `skb_result_gender`).
+# @param progress gets the fraction of the whole run, or NULL; a non-zero return cancels
+#                 within one fit iteration, freeing everything.
+# @param user passed to `progress` unchanged.
+# @param out receives a new result the caller owns (`skb_result_free`); untouched on error;
+#            not NULL.
+# @return SKB_OK; SKB_ERR_IMAGE_TOO_SMALL (a side < 32 px); SKB_ERR_BLANK_IMAGE;
+#         SKB_ERR_NO_FIGURE (NULL joints and the detector finds no figure);
+#         SKB_ERR_JOINT_OUTSIDE_IMAGE; SKB_ERR_NON_FINITE (a visible joint NaN); the pose
+#         solver's SKB_ERR_TOO_FEW_JOINTS, SKB_ERR_COINCIDENT_JOINTS, SKB_ERR_DEGENERATE;
+#         SKB_ERR_CANCELLED; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pipeline_run"] = (
     ctypes.c_uint32,
     [
@@ -3333,11 +3785,22 @@ FUNCTIONS["skb_pipeline_run"] = (
     ),
 )
 
-# `skb_pipeline_run` that also shows the bodies it has before the final one: `interim` (may be
-# NULL) gets the mean shape in the estimated pose as soon as the pose is known (a few ms after
-# the pose step), then the deciding fit of the chosen gender before the final fit, so a host
-# can draw something at once. The result is `skb_pipeline_run`'s for the same inputs. Arguments,
-# ownership, errors and threading as `skb_pipeline_run`; `progress` and `interim` share `user`.
+# `skb_pipeline_run` that also shows the bodies it has before the final one, so a host can
+# draw something at once. The result is `skb_pipeline_run`'s for the same inputs. Arguments,
+# ownership, errors and threading as `skb_pipeline_run`.
+# @param ctx as in `skb_pipeline_run`.
+# @param sketch as in `skb_pipeline_run`.
+# @param joints as in `skb_pipeline_run` (NULL: detected).
+# @param dict as in `skb_pipeline_run` (NULL: the embedded dictionary).
+# @param pose_opts as in `skb_pipeline_run` (NULL: the defaults).
+# @param fit_opts as in `skb_pipeline_run` (NULL: the defaults).
+# @param progress as in `skb_pipeline_run` (may be NULL).
+# @param interim may be NULL; gets the mean shape in the estimated pose as soon as the pose is
+#                known (a few ms after the pose step), then the deciding fit of the chosen
+#                gender before the final fit.
+# @param user passed unchanged to both `progress` and `interim`.
+# @param out as in `skb_pipeline_run`.
+# @return the statuses of `skb_pipeline_run`.
 FUNCTIONS["skb_pipeline_run_progressive"] = (
     ctypes.c_uint32,
     [
@@ -3367,7 +3830,8 @@ FUNCTIONS["skb_pipeline_run_progressive"] = (
     ),
 )
 
-# Frees a result. NULL is a no-op.
+# Frees a result.
+# @param result the result to free; NULL is a no-op.
 FUNCTIONS["skb_result_free"] = (
     None,
     [
@@ -3379,11 +3843,13 @@ FUNCTIONS["skb_result_free"] = (
     ),
 )
 
-# The result's gender (`SKB_GENDER_FEMALE` / `SKB_GENDER_MALE`) into `*gender`: the given one,
-# or with automatic gender the classifier's choice between the two gendered fits (given
-# joints) or the detected-joints classifier's choice of the one gendered space fitted
-# (detected joints);
-# whether it was fitted (1) or given (0) into `*by_score` (may be NULL).
+# The result's gender: the given one, or with automatic gender the classifier's choice
+# between the two gendered fits (given joints) or the detected-joints classifier's choice of
+# the one gendered space fitted (detected joints).
+# @param result the result, only read.
+# @param gender receives `SKB_GENDER_FEMALE` or `SKB_GENDER_MALE`; not NULL.
+# @param by_score receives whether the gender was fitted (true) or given (false); may be NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_gender"] = (
     ctypes.c_uint32,
     [
@@ -3399,12 +3865,16 @@ FUNCTIONS["skb_result_gender"] = (
     ),
 )
 
-# The fitted gender value into `*value` (0 = the female mean shape … 1 = the male mean; 0 or 1
-# when a gendered space was fitted, as by default) and into `*confidence` (may be NULL) the
-# probability that `skb_result_gender` is right (0.5..=1; 1 when the gender was given): with
-# given joints, the gender classifier's (the sketch's joint and outline widths and the score
-# margin of the two gendered fits); with detected joints, the detected-joints classifier's
-# (the same widths).
+# The fitted gender value and the confidence in `skb_result_gender`.
+# @param result the result, only read.
+# @param value receives 0 = the female mean shape … 1 = the male mean (0 or 1 when a gendered
+#              space was fitted, as by default); not NULL.
+# @param confidence receives the probability that `skb_result_gender` is right (0.5..=1; 1 when
+#                   the gender was given): with given joints, the gender classifier's (the
+#                   sketch's joint and outline widths and the score margin of the two gendered
+#                   fits); with detected joints, the detected-joints classifier's (the same
+#                   widths); may be NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_gender_value"] = (
     ctypes.c_uint32,
     [
@@ -3420,10 +3890,12 @@ FUNCTIONS["skb_result_gender_value"] = (
     ),
 )
 
-# The detection behind the result's 2-D joints into `*info` (backend kept, calibrated
-# confidence, presence, the low-confidence flag: show the joints to the user for correction).
-# Errors: `SKB_ERR_OUT_OF_RANGE` when the joints were given to `skb_pipeline_run`, not
-# detected (nothing written); `SKB_ERR_NULL_POINTER`.
+# The detection behind the result's 2-D joints.
+# @param result the result, only read.
+# @param info receives the backend kept, calibrated confidence, presence and the
+#             low-confidence flag (show the joints to the user for correction); not NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE when the joints were given to `skb_pipeline_run`, not
+#         detected (nothing written); SKB_ERR_NULL_POINTER.
 FUNCTIONS["skb_result_detection"] = (
     ctypes.c_uint32,
     [
@@ -3437,10 +3909,13 @@ FUNCTIONS["skb_result_detection"] = (
     ),
 )
 
-# Whether the fit is low-evidence (1: the sketch's strokes support less than half of the
-# fitted outline, e.g. a figure under a cloak to the ground: the body is mostly the prior's)
-# into `*low`, and that fraction (0..=1; NaN for the mean shape) into `*edge_support` (may be
-# NULL).
+# Whether the fit is low-evidence, and the fraction of the fitted outline the strokes support.
+# @param result the result, only read.
+# @param low receives true when the sketch's strokes support less than half of the fitted
+#            outline (e.g. a figure under a cloak to the ground: the body is mostly the
+#            prior's); not NULL.
+# @param edge_support receives that fraction (0..=1; NaN for the mean shape); may be NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_evidence"] = (
     ctypes.c_uint32,
     [
@@ -3456,11 +3931,15 @@ FUNCTIONS["skb_result_evidence"] = (
     ),
 )
 
-# Per body part, the share (0..=1) of the fitted silhouette's outline within 2 raster pixels
-# of a stroke, into `dst[0..6]` (`dst_len` ≥ `SKB_NUM_BODY_PARTS`) in the order head, torso,
-# right arm, left arm, right leg, left leg (the figure's own sides); NaN for a part with no
-# outline in view and for every part of the mean shape. A part below 0.5 is one the drawing
-# does not support (clothing, a shape no body has): the body there is the prior's reading.
+# Per body part, the share of the fitted silhouette's outline within 2 raster pixels of a
+# stroke. A part below 0.5 is one the drawing does not support (clothing, a shape no body
+# has): the body there is the prior's reading.
+# @param result the result, only read.
+# @param dst receives `dst[0..6]`, each in 0..=1, in the order head, torso, right arm, left
+#            arm, right leg, left leg (the figure's own sides); NaN for a part with no outline
+#            in view and for every part of the mean shape.
+# @param dst_len the element count of `dst`, at least `SKB_NUM_BODY_PARTS`.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_copy_part_support"] = (
     ctypes.c_uint32,
     [
@@ -3476,9 +3955,12 @@ FUNCTIONS["skb_result_copy_part_support"] = (
     ),
 )
 
-# The best match score (higher is better) of the chosen fit into `*score`; `gender` must be
-# the result's gender (`skb_result_gender`: the given gender's space or the gendered fit the
-# classifier chose). Errors: `SKB_ERR_OUT_OF_RANGE` for the other gender.
+# The best match score (higher is better) of the chosen fit.
+# @param result the result, only read.
+# @param gender the result's gender (`skb_result_gender`: the given gender's space or the
+#               gendered fit the classifier chose).
+# @param score receives the score; not NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for the other gender; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_score"] = (
     ctypes.c_uint32,
     [
@@ -3494,7 +3976,10 @@ FUNCTIONS["skb_result_score"] = (
     ),
 )
 
-# The result body's vertex count (13380) into `*out`.
+# The result body's vertex count (13380).
+# @param result the result, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_vertex_count"] = (
     ctypes.c_uint32,
     [
@@ -3508,7 +3993,10 @@ FUNCTIONS["skb_result_vertex_count"] = (
     ),
 )
 
-# The result body's quad-face count (13378) into `*out`.
+# The result body's quad-face count (13378).
+# @param result the result, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_face_count"] = (
     ctypes.c_uint32,
     [
@@ -3522,8 +4010,12 @@ FUNCTIONS["skb_result_face_count"] = (
     ),
 )
 
-# Copies the posed (`posed` non-zero) or rest vertices, x, y, z floats in metres, model frame,
-# into `dst` of `dst_len` floats (≥ 3 × vertex count). On error nothing is written.
+# Copies the posed or rest vertices. On error nothing is written.
+# @param result the result, only read.
+# @param posed true: the posed vertices; false: the rest vertices.
+# @param dst receives x, y, z floats per vertex, metres, model frame.
+# @param dst_len the element count of `dst` in floats, ≥ 3 × vertex count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_copy_vertices"] = (
     ctypes.c_uint32,
     [
@@ -3541,8 +4033,12 @@ FUNCTIONS["skb_result_copy_vertices"] = (
     ),
 )
 
-# Copies the quad faces (4 vertex indices each, counter-clockwise seen from outside; a
-# triangle repeats its third index) into `dst` of `dst_len` integers (≥ 4 × face count).
+# Copies the quad faces.
+# @param result the result, only read.
+# @param dst receives 4 vertex indices per face, counter-clockwise seen from outside (a
+#            triangle repeats its third index).
+# @param dst_len the element count of `dst` in integers, ≥ 4 × face count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_copy_faces"] = (
     ctypes.c_uint32,
     [
@@ -3558,7 +4054,10 @@ FUNCTIONS["skb_result_copy_faces"] = (
     ),
 )
 
-# The 2-D joints used (pixels, with visibility) into `*out`.
+# The 2-D joints used (pixels, with visibility).
+# @param result the result, only read.
+# @param out receives the joints; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_joints2d"] = (
     ctypes.c_uint32,
     [
@@ -3572,8 +4071,13 @@ FUNCTIONS["skb_result_joints2d"] = (
     ),
 )
 
-# Copies 15 3-D joints (x, y, z doubles, metres, model frame) into `dst` (`dst_len` ≥ 45):
-# `which` is `SKB_JOINTS_REST`, `SKB_JOINTS_POSED` or `SKB_JOINTS_ESTIMATED`.
+# Copies 15 3-D joints.
+# @param result the result, only read.
+# @param which `SKB_JOINTS_REST`, `SKB_JOINTS_POSED` or `SKB_JOINTS_ESTIMATED`.
+# @param dst receives x, y, z doubles per joint, metres, model frame.
+# @param dst_len the element count of `dst` in doubles, ≥ 45.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another `which`; SKB_ERR_BUFFER_TOO_SMALL for a
+#         short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_copy_joints3d"] = (
     ctypes.c_uint32,
     [
@@ -3591,10 +4095,13 @@ FUNCTIONS["skb_result_copy_joints3d"] = (
     ),
 )
 
-# The result's weak-perspective camera (model metres → sketch pixels) into `*out`: the posed
-# body's, fitted to its skeleton, so it projects `SKB_JOINTS_POSED` and the posed vertices onto
-# the sketch (`SKB_JOINTS_ESTIMATED` are at the pose step's 1.75 m scale and land on the drawn
+# The result's weak-perspective camera (model metres → sketch pixels): the posed body's,
+# fitted to its skeleton, so it projects `SKB_JOINTS_POSED` and the posed vertices onto the
+# sketch (`SKB_JOINTS_ESTIMATED` are at the pose step's 1.75 m scale and land on the drawn
 # joints only for a body of that height).
+# @param result the result, only read.
+# @param out receives the camera; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_camera"] = (
     ctypes.c_uint32,
     [
@@ -3609,8 +4116,12 @@ FUNCTIONS["skb_result_camera"] = (
 )
 
 # Copies the skin weights as `skb_mesh_copy_skin_weights` does: for vertex v, slots
-# `4v .. 4v+3` of `bones` (bone indices 0..13) and `weights` (summing to 1); both hold `len`
-# elements (≥ 4 × vertex count).
+# `4v .. 4v+3` of both buffers.
+# @param result the result, only read.
+# @param bones receives bone indices 0..13.
+# @param weights receives the weights, summing to 1 per vertex.
+# @param len the element count of each buffer, ≥ 4 × vertex count.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for short buffers; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_copy_skin_weights"] = (
     ctypes.c_uint32,
     [
@@ -3628,7 +4139,10 @@ FUNCTIONS["skb_result_copy_skin_weights"] = (
     ),
 )
 
-# The number of fitted PCA shape weights (the fit's dimensions) into `*out`.
+# The number of fitted PCA shape weights (the fit's dimensions).
+# @param result the result, only read.
+# @param out receives the count; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_shape_weight_count"] = (
     ctypes.c_uint32,
     [
@@ -3642,8 +4156,11 @@ FUNCTIONS["skb_result_shape_weight_count"] = (
     ),
 )
 
-# Copies the fitted PCA shape weights (metres) into `dst` of `dst_len` doubles (at least
-# `skb_result_shape_weight_count`).
+# Copies the fitted PCA shape weights.
+# @param result the result, only read.
+# @param dst receives the weights, metres.
+# @param dst_len the element count of `dst` in doubles, at least `skb_result_shape_weight_count`.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_copy_shape_weights"] = (
     ctypes.c_uint32,
     [
@@ -3659,8 +4176,11 @@ FUNCTIONS["skb_result_copy_shape_weights"] = (
     ),
 )
 
-# A new `skb_mesh` of the result (the fitted rest shape, posed as in the result) into `*out`,
-# for the mesh functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...). The caller owns it.
+# A new `skb_mesh` of the result (the fitted rest shape, posed as in the result), for the mesh
+# functions (`skb_mesh_write_glb`, `skb_mesh_write_obj`, ...).
+# @param result the result, only read.
+# @param out receives a new mesh the caller owns (`skb_mesh_free`); not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_new_from_result"] = (
     ctypes.c_uint32,
     [
@@ -3674,11 +4194,14 @@ FUNCTIONS["skb_mesh_new_from_result"] = (
     ),
 )
 
-# The result's 3-D pose (`SKB_JOINTS_ESTIMATED`) with its ranked alternatives as a new estimate
-# handle `*out` (the caller owns it; `skb_pose_estimate_free`): list the readings with
-# `skb_pose_estimate_alternative_count` / `skb_pose_estimate_copy_alternative_joints` /
-# `skb_pose_estimate_copy_alternative_flipped`. A copy: flipping it does not change the result
-# (use `skb_result_flip_limb` / `skb_result_pick_alternative` for that).
+# The result's 3-D pose (`SKB_JOINTS_ESTIMATED`) with its ranked alternatives as a new
+# estimate handle: list the readings with `skb_pose_estimate_alternative_count` /
+# `skb_pose_estimate_copy_alternative_joints` / `skb_pose_estimate_copy_alternative_flipped`.
+# A copy: flipping it does not change the result (use `skb_result_flip_limb` /
+# `skb_result_pick_alternative` for that).
+# @param result the result, only read.
+# @param out receives a new estimate the caller owns (`skb_pose_estimate_free`); not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_pose_estimate_new_from_result"] = (
     ctypes.c_uint32,
     [
@@ -3692,12 +4215,15 @@ FUNCTIONS["skb_pose_estimate_new_from_result"] = (
     ),
 )
 
-# Re-poses the result in place to its pose's alternative `index` (`skb_pose_estimate_new_from_result`
-# lists them; 0 = the current pose): IK and skinning of the fitted rest body, whose shape
-# weights, proportions and rest mesh are kept; the camera and 2-D joints are kept. A few ms.
-# `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`. Errors: `SKB_ERR_OUT_OF_RANGE` for
-# `index` ≥ the count (nothing changed). Changes `result`: do not call while another thread
-# uses it.
+# Re-poses the result in place to one of its pose's alternatives: IK and skinning of the
+# fitted rest body, whose shape weights, proportions and rest mesh are kept; the camera and
+# 2-D joints are kept. A few ms. Do not call while another thread uses `result`.
+# @param result the result, changed.
+# @param index the alternative (`skb_pose_estimate_new_from_result` lists them; 0 = the
+#              current pose).
+# @param outcome receives `SKB_REPOSE_DONE`; may be NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` ≥ the count (nothing changed); argument errors
+#         as docs/c-api.md.
 FUNCTIONS["skb_result_pick_alternative"] = (
     ctypes.c_uint32,
     [
@@ -3713,11 +4239,14 @@ FUNCTIONS["skb_result_pick_alternative"] = (
     ),
 )
 
-# Flips the depth of `limb` (`SKB_LIMB_*`) of the result's pose and re-poses the fitted body in
-# place (as `skb_result_pick_alternative`). `*outcome` (may be NULL) receives
-# `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH` for a limb lying in the picture plane (nothing
-# changed). Errors: `SKB_ERR_OUT_OF_RANGE` for `limb` ≥ `SKB_NUM_LIMBS`. Changes `result`: do
-# not call while another thread uses it.
+# Flips the depth of a limb of the result's pose and re-poses the fitted body in place (as
+# `skb_result_pick_alternative`). Do not call while another thread uses `result`.
+# @param result the result, changed.
+# @param limb `SKB_LIMB_*`.
+# @param outcome receives `SKB_REPOSE_DONE`, or `SKB_REPOSE_NO_DEPTH` for a limb lying in the
+#                picture plane (nothing changed); may be NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `limb` ≥ `SKB_NUM_LIMBS`; argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_result_flip_limb"] = (
     ctypes.c_uint32,
     [
@@ -3733,16 +4262,21 @@ FUNCTIONS["skb_result_flip_limb"] = (
     ),
 )
 
-# Re-poses the fitted body in place for moved 2-D joints `joints` (pixels of the result's
-# sketch; issue 50's live correction): the 3-D pose is re-estimated with `dict` (NULL: the
-# embedded dictionary; pass the one given to `skb_pipeline_run`) and the run's pose options,
-# without an image depth cue, then IK and skinning of the fitted rest body (shape weights,
-# proportions and rest mesh kept) and the camera's scales refitted to its skeleton. About
-# 5–10 ms (docs/benchmarks.md, "Re-pose"). `*outcome` (may be NULL) receives `SKB_REPOSE_DONE`,
-# or, with nothing changed: `SKB_REPOSE_JOINT_OUTSIDE_IMAGE` (a visible joint outside the
-# sketch or not finite), `SKB_REPOSE_JOINTS_COINCIDE` (two visible joints on each other),
-# `SKB_REPOSE_IMPLAUSIBLE` (no plausible body explains them). With the result's own given joints the mesh is the run's. Changes `result`:
-# do not call while another thread uses it.
+# Re-poses the fitted body in place for moved 2-D joints (issue 50's live correction): the
+# 3-D pose is re-estimated with the run's pose options, without an image depth cue, then IK
+# and skinning of the fitted rest body (shape weights, proportions and rest mesh kept) and the
+# camera's scales refitted to its skeleton. About 5–10 ms (docs/benchmarks.md, "Re-pose").
+# With the result's own given joints the mesh is the run's. Do not call while another thread
+# uses `result`.
+# @param result the result, changed.
+# @param dict the pose dictionary, only read; NULL: the embedded dictionary (pass the one
+#             given to `skb_pipeline_run`).
+# @param joints the moved joints, pixels of the result's sketch, only read.
+# @param outcome receives `SKB_REPOSE_DONE`, or, with nothing changed:
+#                `SKB_REPOSE_JOINT_OUTSIDE_IMAGE` (a visible joint outside the sketch or not
+#                finite), `SKB_REPOSE_JOINTS_COINCIDE` (two visible joints on each other),
+#                `SKB_REPOSE_IMPLAUSIBLE` (no plausible body explains them); may be NULL.
+# @return SKB_OK (whatever the outcome); argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_repose_joints"] = (
     ctypes.c_uint32,
     [
@@ -3793,7 +4327,10 @@ FUNCTIONS["skb_pipeline_run_views"] = (
     ),
 )
 
-# The number of extra views of a result into `*out` (0 for a one-view run).
+# The number of extra views of a result.
+# @param result the result, only read.
+# @param out receives the count (0 for a one-view run); not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_view_count"] = (
     ctypes.c_uint32,
     [
@@ -3807,8 +4344,11 @@ FUNCTIONS["skb_result_view_count"] = (
     ),
 )
 
-# Extra view `index` (0 .. `skb_result_view_count` − 1, in the order given) into `*out`.
-# Errors: `index` out of range (`SKB_ERR_OUT_OF_RANGE`).
+# What the run made of one extra view.
+# @param result the result, only read.
+# @param index the view, 0 .. `skb_result_view_count` − 1, in the order given.
+# @param out receives the view's info; not NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for `index` out of range; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_view"] = (
     ctypes.c_uint32,
     [
@@ -3824,9 +4364,11 @@ FUNCTIONS["skb_result_view"] = (
     ),
 )
 
-# The byte length (UTF-8, without the terminating NUL) of the run's warnings about its views
-# into `*out`: 0 when there are none or for a one-view run. Read them with
-# `skb_result_copy_view_warnings`.
+# The byte length (UTF-8, without the terminating NUL) of the run's warnings about its views.
+# Read them with `skb_result_copy_view_warnings`.
+# @param result the result, only read.
+# @param out receives the length: 0 when there are none or for a one-view run; not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_view_warnings_length"] = (
     ctypes.c_uint32,
     [
@@ -3840,9 +4382,12 @@ FUNCTIONS["skb_result_view_warnings_length"] = (
     ),
 )
 
-# Copies the run's warnings about its views, one per line (UTF-8, `\n`-separated, no trailing
-# newline; empty when there are none or for a one-view run), NUL-terminated into `dst` of
-# `dst_len` bytes (at least `skb_result_view_warnings_length` + 1).
+# Copies the run's warnings about its views, one per line.
+# @param result the result, only read.
+# @param dst receives the warnings as NUL-terminated UTF-8, `\n`-separated, no trailing
+#            newline; empty when there are none or for a one-view run.
+# @param dst_len the size of `dst` in bytes, at least `skb_result_view_warnings_length` + 1.
+# @return SKB_OK; SKB_ERR_BUFFER_TOO_SMALL for a short `dst`; argument errors as docs/c-api.md.
 FUNCTIONS["skb_result_copy_view_warnings"] = (
     ctypes.c_uint32,
     [
@@ -3858,9 +4403,6 @@ FUNCTIONS["skb_result_copy_view_warnings"] = (
     ),
 )
 
-# Loads a PNG or JPEG file (`path`: NUL-terminated UTF-8) as 8-bit RGB into `*out` (caller
-# owns it). Errors: `SKB_ERR_IO` (missing, unreadable, not a regular file), `SKB_ERR_DECODE`
-# (not an image, truncated), `SKB_ERR_IMAGE_TOO_LARGE`. Thread-safe.
 FUNCTIONS["skb_rgb_image_new_from_file"] = (
     ctypes.c_uint32,
     [
@@ -3874,8 +4416,11 @@ FUNCTIONS["skb_rgb_image_new_from_file"] = (
     ),
 )
 
-# A borrowed 3-channel `skb_image` view of `img` into `*out` (rows packed, `stride` = 3 ×
-# `width`), valid while `img` lives.
+# A borrowed 3-channel `skb_image` view of a decoded image.
+# @param img the image, only read.
+# @param out receives the view (rows packed, `stride` = 3 × `width`), valid while `img` lives;
+#            not NULL.
+# @return SKB_OK; argument errors as docs/c-api.md.
 FUNCTIONS["skb_rgb_image_view"] = (
     ctypes.c_uint32,
     [
@@ -3889,7 +4434,8 @@ FUNCTIONS["skb_rgb_image_view"] = (
     ),
 )
 
-# Frees an image from `skb_rgb_image_new_from_file`. NULL is a no-op.
+# Frees an image from `skb_rgb_image_new_from_file`.
+# @param img the image to free; NULL is a no-op.
 FUNCTIONS["skb_rgb_image_free"] = (
     None,
     [
@@ -3901,10 +4447,13 @@ FUNCTIONS["skb_rgb_image_free"] = (
     ),
 )
 
-# Writes `img` (1 channel: gray, 3: RGB, 4: RGBA; any stride) as an 8-bit PNG to `path`
-# (NUL-terminated UTF-8) with the library's encoder, the one `sketchbody run` writes
-# `body_texture.png` with (same pixels, same bytes). Written atomically: on error (`SKB_ERR_IO`
-# for an unwritable path) nothing is left at `path`. Thread-safe.
+# Writes an image as an 8-bit PNG with the library's encoder, the one `sketchbody run` writes
+# `body_texture.png` with (same pixels, same bytes). Written atomically: on error nothing is
+# left at `path`. Thread-safe.
+# @param img the image, only read: 1 channel gray, 3 RGB, 4 RGBA; any stride.
+# @param path the output file path, NUL-terminated UTF-8.
+# @return SKB_OK; SKB_ERR_IO for an unwritable path; image and argument errors as
+#         docs/c-api.md.
 FUNCTIONS["skb_image_write_png"] = (
     ctypes.c_uint32,
     [
@@ -3926,16 +4475,20 @@ FUNCTIONS["skb_image_write_png"] = (
 # light grey (190, 190, 190); seen texels grow 2 texels into the unused space around UV
 # islands.
 #
-# `sketch` is the colour image the result was computed from (the same pixels; 3 channels as
-# `skb_rgb_image_new_from_file` gives them reproduce the CLI exactly; 1 channel is taken as gray, 4 with
-# alpha ignored). `size` is the texture side in texels, 1..=`SKB_MAX_TEXTURE_SIZE` (the CLI's
-# default `SKB_DEFAULT_TEXTURE_SIZE`). Writes `size` rows of `size` RGB pixels (3 bytes each)
-# into `dst`, rows `dst_stride` bytes apart (at least 3 × `size`); `dst_len` is the size of
-# `dst` in bytes and must be at least `dst_stride * (size - 1) + 3 * size`. `texels` and
-# `visible` (each may be NULL) receive the number of texels inside the UV layout and of those
-# the sketch coloured. Errors: `SKB_ERR_OUT_OF_RANGE` (size), `SKB_ERR_BAD_STRIDE`,
-# `SKB_ERR_BUFFER_TOO_SMALL`, the image errors, `SKB_ERR_NULL_POINTER`; nothing is written on
-# error. Thread-safe (the result is only read).
+# Nothing is written on error. Thread-safe (the result is only read).
+# @param result the result, only read.
+# @param sketch the colour image the result was computed from (the same pixels; 3 channels as
+#               `skb_rgb_image_new_from_file` gives them reproduce the CLI exactly; 1 channel
+#               is taken as gray, 4 with alpha ignored).
+# @param size the texture side in texels, 1..=`SKB_MAX_TEXTURE_SIZE` (the CLI's default
+#             `SKB_DEFAULT_TEXTURE_SIZE`).
+# @param dst receives `size` rows of `size` RGB pixels (3 bytes each).
+# @param dst_stride bytes between the starts of consecutive rows of `dst`, at least 3 × `size`.
+# @param dst_len the size of `dst` in bytes, at least `dst_stride * (size - 1) + 3 * size`.
+# @param texels receives the number of texels inside the UV layout; may be NULL.
+# @param visible receives the number of those the sketch coloured; may be NULL.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE (size, or a result mesh without a UV layout);
+#         SKB_ERR_BAD_STRIDE; SKB_ERR_BUFFER_TOO_SMALL; the image errors; SKB_ERR_NULL_POINTER.
 FUNCTIONS["skb_result_project_texture"] = (
     ctypes.c_uint32,
     [
@@ -3961,13 +4514,22 @@ FUNCTIONS["skb_result_project_texture"] = (
     ),
 )
 
-# The same projection for a mesh and a camera of the host's own: the sketch seen through
-# `cam` (model metres → sketch pixels, as `skb_result_camera` gives it) projected onto the
-# mesh in its current pose (`skb_mesh_pose`; the rest pose if never posed). For a mesh from
-# `skb_mesh_new_from_result` and the result's camera this is exactly `skb_result_project_texture`.
-# Arguments, output and errors otherwise as `skb_result_project_texture`, plus
-# `SKB_ERR_NON_FINITE` / `SKB_ERR_OUT_OF_RANGE` for an invalid camera (non-finite, scales not
-# positive, rotation not orthonormal). Only reads `mesh`.
+# The same projection as `skb_result_project_texture` for a mesh and a camera of the host's
+# own: the sketch seen through `cam` projected onto the mesh in its current pose
+# (`skb_mesh_pose`; the rest pose if never posed). For a mesh from `skb_mesh_new_from_result`
+# and the result's camera this is exactly `skb_result_project_texture`.
+# @param mesh the mesh, only read.
+# @param sketch as in `skb_result_project_texture`.
+# @param cam model metres → sketch pixels, as `skb_result_camera` gives it.
+# @param size as in `skb_result_project_texture`.
+# @param dst as in `skb_result_project_texture`.
+# @param dst_stride as in `skb_result_project_texture`.
+# @param dst_len as in `skb_result_project_texture`.
+# @param texels as in `skb_result_project_texture` (may be NULL).
+# @param visible as in `skb_result_project_texture` (may be NULL).
+# @return the statuses of `skb_result_project_texture`, plus SKB_ERR_NON_FINITE /
+#         SKB_ERR_OUT_OF_RANGE for an invalid camera (non-finite, scales not positive, rotation
+#         not orthonormal).
 FUNCTIONS["skb_mesh_project_texture"] = (
     ctypes.c_uint32,
     [
@@ -3995,7 +4557,6 @@ FUNCTIONS["skb_mesh_project_texture"] = (
     ),
 )
 
-# Creates options with the defaults. `*out` receives a handle the caller owns.
 FUNCTIONS["skb_sketch_options_new"] = (
     ctypes.c_uint32,
     [
@@ -4007,7 +4568,8 @@ FUNCTIONS["skb_sketch_options_new"] = (
     ),
 )
 
-# Releases options. NULL is a no-op.
+# Releases sketch options.
+# @param opts the options to release; NULL is a no-op.
 FUNCTIONS["skb_sketch_options_free"] = (
     None,
     [
@@ -4019,8 +4581,10 @@ FUNCTIONS["skb_sketch_options_free"] = (
     ),
 )
 
-# Sets the style: `SKB_SKETCH_STYLE_RANDOM` or `SKB_SKETCH_STYLE_CLEAN`; anything else is
-# `SKB_ERR_OUT_OF_RANGE`.
+# Sets the sketch style.
+# @param opts the options, changed.
+# @param style `SKB_SKETCH_STYLE_RANDOM` (the default) or `SKB_SKETCH_STYLE_CLEAN`.
+# @return SKB_OK; SKB_ERR_OUT_OF_RANGE for another value; argument errors as docs/c-api.md.
 FUNCTIONS["skb_sketch_options_set_style"] = (
     ctypes.c_uint32,
     [
@@ -4034,9 +4598,14 @@ FUNCTIONS["skb_sketch_options_set_style"] = (
     ),
 )
 
-# Fixes the camera angles in degrees (rotation `Rz(roll) Rx(pitch) Ry(yaw)`; yaw within ±180°
-# (±180° a back view, −90° a left profile), pitch and roll within ±90°) instead of random
+# Fixes the camera angles (rotation `Rz(roll) Rx(pitch) Ry(yaw)`) instead of random
 # near-frontal ones (yaw ±30°, pitch ±10°, roll ±5°).
+# @param opts the options, changed.
+# @param yaw_deg degrees within ±180° (±180° a back view, −90° a left profile).
+# @param pitch_deg degrees within ±90°.
+# @param roll_deg degrees within ±90°.
+# @return SKB_OK; SKB_ERR_NON_FINITE for a non-finite angle; SKB_ERR_OUT_OF_RANGE for an angle
+#         beyond its limit; argument errors as docs/c-api.md.
 FUNCTIONS["skb_sketch_options_set_camera"] = (
     ctypes.c_uint32,
     [
@@ -4054,20 +4623,29 @@ FUNCTIONS["skb_sketch_options_set_camera"] = (
     ),
 )
 
-# Renders a `width`×`height` gray sketch (0 ink … 255 paper) of a body of `gender`
-# (`SKB_GENDER_*`) with `n_weights` PCA shape `weights` (`n_weights` 0: a random shape from the
-# model's prior), posed onto `joints3d` (15 × x y z metres, +Y up, canonical order; only the
-# bone directions are used) or, when `joints3d` is NULL, a random procedural pose. Every
-# random choice comes from `seed`. `opts` may be NULL (random style and camera).
-#
-# Writes the image to `out_pixels` (`out_stride` ≥ `width` bytes a row, `out_len` bytes in
-# all) and, when not NULL, the 15 projected joints to `out_joints2d` (15 × x y pixels) and
-# their visibility (1 visible, 0 hidden by another body part) to `out_visible` (15 bytes).
-# Errors: NULL context or pixels, an unknown gender or too many weights
-# (`SKB_ERR_OUT_OF_RANGE`), non-finite weights or joints (`SKB_ERR_NON_FINITE`), zero-length
-# bones (`SKB_ERR_DEGENERATE_BONE`), sizes outside 1..=4096, short stride or buffer. Nothing
-# is written on failure. Thread-safe for distinct output buffers; builds its edge tables on
-# each call (a few ms).
+# Renders a gray sketch (0 ink … 255 paper) of a body. Every random choice comes from `seed`.
+# Nothing is written on failure. Thread-safe for distinct output buffers; builds its edge
+# tables on each call (a few ms).
+# @param ctx the context, only read.
+# @param gender `SKB_GENDER_*`.
+# @param weights `n_weights` PCA shape weights.
+# @param n_weights the number of weights; 0: a random shape from the model's prior.
+# @param joints3d 15 × x y z metres, +Y up, canonical order (only the bone directions are
+#                 used); NULL: a random procedural pose.
+# @param seed the seed of every random choice.
+# @param width the image width in pixels, 1..=4096.
+# @param height the image height in pixels, 1..=4096.
+# @param opts sketch options, only read, or NULL (random style and camera).
+# @param out_pixels receives the image; not NULL.
+# @param out_stride bytes between the starts of consecutive rows, ≥ `width`.
+# @param out_len the size of `out_pixels` in bytes.
+# @param out_joints2d receives the 15 projected joints (15 × x y pixels); may be NULL.
+# @param out_visible receives their visibility (15 bytes: 1 visible, 0 hidden by another body
+#                    part); may be NULL.
+# @return SKB_OK; SKB_ERR_NULL_POINTER for a NULL context or pixels; SKB_ERR_OUT_OF_RANGE for
+#         an unknown gender or too many weights; SKB_ERR_NON_FINITE for non-finite weights or
+#         joints; SKB_ERR_DEGENERATE_BONE for zero-length bones; errors for sizes outside
+#         1..=4096, a short stride or buffer; argument errors as docs/c-api.md.
 FUNCTIONS["skb_context_render_sketch"] = (
     ctypes.c_uint32,
     [
