@@ -1354,8 +1354,8 @@ skb_status skb_mesh_write_obj(const struct skb_mesh *mesh, const char *path, boo
  * @param mesh the mesh, only read.
  * @param path the output file path, NUL-terminated UTF-8.
  * @param size the side of each view in pixels, 1..=4096 (each view is `size`×`size`).
- * @return SKB_OK; SKB_ERR_EMPTY_IMAGE for a `size` of 0; SKB_ERR_IO when the file cannot be
- *         written; argument errors as docs/c-api.md.
+ * @return SKB_OK; SKB_ERR_EMPTY_IMAGE for a `size` of 0, SKB_ERR_OUT_OF_RANGE above 4096;
+ *         SKB_ERR_IO when the file cannot be written; argument errors as docs/c-api.md.
  */
 skb_status skb_mesh_write_preview(const struct skb_mesh *mesh, const char *path, uint32_t size);
 

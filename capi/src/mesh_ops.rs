@@ -290,8 +290,8 @@ pub unsafe extern "C" fn skb_mesh_write_obj(mesh: *const skb_mesh, path: *const 
 /// @param mesh the mesh, only read.
 /// @param path the output file path, NUL-terminated UTF-8.
 /// @param size the side of each view in pixels, 1..=4096 (each view is `size`×`size`).
-/// @return SKB_OK; SKB_ERR_EMPTY_IMAGE for a `size` of 0; SKB_ERR_IO when the file cannot be
-///         written; argument errors as docs/c-api.md.
+/// @return SKB_OK; SKB_ERR_EMPTY_IMAGE for a `size` of 0, SKB_ERR_OUT_OF_RANGE above 4096;
+///         SKB_ERR_IO when the file cannot be written; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_mesh_write_preview(mesh: *const skb_mesh, path: *const c_char, size: u32) -> skb_status {
     unsafe {

@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "a32e09d31d4addbfb28cdf2191ea6a0d9b926b89483425efe2af774cfa5996b5"
+HEADER_SHA256 = "422942de9baef7713945efe8d8153b8f66c8788386202e673af28bb03d209d10"
 
 # ---- constants (#define) ----
 
@@ -1353,8 +1353,8 @@ FUNCTIONS["skb_mesh_write_obj"] = (
 # @param mesh the mesh, only read.
 # @param path the output file path, NUL-terminated UTF-8.
 # @param size the side of each view in pixels, 1..=4096 (each view is `size`×`size`).
-# @return SKB_OK; SKB_ERR_EMPTY_IMAGE for a `size` of 0; SKB_ERR_IO when the file cannot be
-#         written; argument errors as docs/c-api.md.
+# @return SKB_OK; SKB_ERR_EMPTY_IMAGE for a `size` of 0, SKB_ERR_OUT_OF_RANGE above 4096;
+#         SKB_ERR_IO when the file cannot be written; argument errors as docs/c-api.md.
 FUNCTIONS["skb_mesh_write_preview"] = (
     ctypes.c_uint32,
     [
