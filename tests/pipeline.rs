@@ -144,9 +144,25 @@ fn default_automatic_gender_chooses_between_both_gendered_fits() {
     let chosen = r42.chosen_fit().unwrap();
     assert!(std::ptr::eq(chosen, &r42.fits[2 + r42.gender.index()]));
     assert_eq!(r42.weights, chosen.fit.as_ref().unwrap().weights);
-    let none = PipelineOptions { gender_decision_seeds: 0, ..one };
+    let none = PipelineOptions { gender_decision_seeds: 0, ..one.clone() };
     let e = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &none, &mut |_| true).unwrap_err();
     assert!(matches!(e, Error::OutOfRange { name: "gender decision seeds", .. }), "{e:?}");
+
+    // Cheaper deciding fits (their own samples per iteration) leave the chosen gender's fit as
+    // it was: 12 × 3 evaluations each, then the fit's own schedule (8 × 24, 96, 48).
+    let evaluations = |g: &sketchbody::pipeline::GenderFit| g.fit.as_ref().unwrap().evaluations;
+    let full = PipelineOptions { fit: FitOptions { tolerance: 1e-12, ..one.fit.clone() }, ..one };
+    let rf = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &full, &mut |_| true).unwrap();
+    let cheap = PipelineOptions { gender_decision_samples: Some(12), ..full.clone() };
+    let rc = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &cheap, &mut |_| true).unwrap();
+    assert_eq!(rf.fits.iter().map(evaluations).collect::<Vec<_>>(), [72, 72, 192 + 96 + 48]);
+    assert_eq!(rc.fits.iter().map(evaluations).collect::<Vec<_>>(), [36, 36, 192 + 96 + 48]);
+    assert_ne!(rc.fits[0].score, rf.fits[0].score, "the deciding fits are other fits");
+    assert_eq!(rc.gender, rf.gender);
+    assert_eq!((&rc.weights, rc.fits[2].score), (&rf.weights, rf.fits[2].score), "the same final fit");
+    let bad = PipelineOptions { gender_decision_samples: Some(1), ..full };
+    let e = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad, &mut |_| true).unwrap_err();
+    assert!(matches!(e, Error::OutOfRange { name: "samples", .. }), "{e:?}");
 }
 
 #[test]

@@ -126,6 +126,9 @@ pub struct FitArgs {
     /// averaged with --classify-gender.
     #[arg(long, default_value_t = PipelineOptions::default().gender_decision_seeds as u32, value_parser = clap::value_parser!(u32).range(1..=16))]
     pub gender_decision_seeds: u32,
+    /// Samples per iteration of each deciding fit with --classify-gender (default: --samples).
+    #[arg(long, value_parser = crate::ranges::count(2..=100_000))]
+    pub gender_decision_samples: Option<usize>,
     /// When the height is unknown (no --height) and the joints are given, calibrate the fitted
     /// body: map a gendered fit's shape weights, then scale it to the calibrated height (the fit
     /// alone draws the body toward the prior's mean; `--calibrate-fit false` keeps the fit's
@@ -190,6 +193,7 @@ impl FitArgs {
             classify_gender: self.classify_gender,
             gender_decision_dims: self.gender_decision_dims.map(|d| d as usize),
             gender_decision_seeds: self.gender_decision_seeds as usize,
+            gender_decision_samples: self.gender_decision_samples,
             calibrate_fit: self.calibrate_fit,
             ..PipelineOptions::default()
         }

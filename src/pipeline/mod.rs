@@ -115,6 +115,10 @@ pub struct PipelineOptions {
     /// between seeds). Each further pair adds two fits to `run`'s time. Default 1 (the choice:
     /// docs/benchmarks-history.md, "Two deciding seeds"). In 1..=16.
     pub gender_decision_seeds: usize,
+    /// Samples per iteration of each deciding fit under [`PipelineOptions::classify_gender`]
+    /// (`None`: the fit's [`FitOptions::samples`]). Only the score margin is read from them, so
+    /// they may be cheaper than the fit of the chosen gender. In 2..=100000.
+    pub gender_decision_samples: Option<usize>,
     /// When the character's height is unknown (`fit.height` is `None`) and the 2-D joints are
     /// given, calibrate the fitted body with [`FitCalibration::SHIPPED`]: map a gendered fit's
     /// shape weights, then scale the rest body to the calibrated height. The fit alone draws
@@ -139,6 +143,7 @@ impl Default for PipelineOptions {
             classify_gender: true,
             gender_decision_dims: None,
             gender_decision_seeds: 1,
+            gender_decision_samples: None,
             calibrate_fit: true,
         }
     }
@@ -182,8 +187,9 @@ pub struct PipelineResult {
     /// [`PipelineOptions::classify_gender`] both gendered ones (female first) per deciding seed
     /// ([`PipelineOptions::gender_decision_seeds`]), followed by the
     /// chosen gender's refit when [`PipelineOptions::gender_decision_dims`] differs from the
-    /// fit's dimensions or the fit's [`FitOptions::initial_factor`] is not 1 (the deciding fits
-    /// use a flat population). The result's fit is [`PipelineResult::chosen_fit`].
+    /// fit's dimensions, the fit's [`FitOptions::initial_factor`] is not 1 (the deciding fits
+    /// use a flat population) or [`PipelineOptions::gender_decision_samples`] differs from the
+    /// fit's samples. The result's fit is [`PipelineResult::chosen_fit`].
     pub fits: Vec<GenderFit>,
     /// The space of the result (the chosen fit's).
     pub space: ShapeChoice,
@@ -445,7 +451,11 @@ pub fn run_pipeline_views(
         let mut cb = |f: f32| (p.callback)((0.06 + 0.9 * f).clamp(0.0, 1.0));
         let sketch = SketchInputs { pose: &pose, edges: &edges, joints2d: &joints2d, views: &body_views };
         let log_odds = classifier.log_odds(&evidence.features);
-        let decision = Decision { dims: options.gender_decision_dims, seeds: options.gender_decision_seeds };
+        let decision = Decision {
+            dims: options.gender_decision_dims,
+            seeds: options.gender_decision_seeds,
+            samples: options.gender_decision_samples,
+        };
         let (body, male) = classify_and_fit(model, &sketch, &fit, &choice, decision, log_odds, &mut cb, interim)?;
         (body, Some(male.max(1.0 - male)))
     } else {
@@ -550,6 +560,8 @@ struct SketchInputs<'a> {
 struct Decision {
     dims: Option<usize>,
     seeds: usize,
+    /// [`PipelineOptions::gender_decision_samples`].
+    samples: Option<usize>,
 }
 
 /// [`PipelineOptions::classify_gender`]: both gendered fits in the decision's dimensions
@@ -579,8 +591,11 @@ fn classify_and_fit(
     }
     let space = |g: Gender| model.shape_space(ShapeChoice::Gendered(g));
     let decision_dims = |g: Gender| -> Result<usize> { Ok(decision.dims.unwrap_or(space(g)?.default_dim())) };
+    let decision_samples = decision.samples.unwrap_or(fit.samples);
     let refit = |g: Gender| -> Result<bool> {
-        Ok(fit.initial_factor != 1 || decision_dims(g)? != fit.dims.unwrap_or(space(g)?.gmm().dims()))
+        Ok(fit.initial_factor != 1
+            || decision_samples != fit.samples
+            || decision_dims(g)? != fit.dims.unwrap_or(space(g)?.gmm().dims()))
     };
     let deciding_fits = 2 * decision.seeds;
     let steps = deciding_fits as f32 + if refit(Gender::Female)? || refit(Gender::Male)? { 1.0 } else { 0.0 };
@@ -594,7 +609,13 @@ fn classify_and_fit(
     for k in 0..decision.seeds {
         for (i, g) in Gender::ALL.into_iter().enumerate() {
             let seed = fit.seed.wrapping_add(k as u64);
-            let deciding = FitOptions { dims: Some(decision_dims(g)?), initial_factor: 1, seed, ..fit.clone() };
+            let deciding = FitOptions {
+                dims: Some(decision_dims(g)?),
+                initial_factor: 1,
+                samples: decision_samples,
+                seed,
+                ..fit.clone()
+            };
             bodies.push(fit_one(g, &deciding, (2 * k + i) as f32)?);
         }
     }
