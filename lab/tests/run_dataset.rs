@@ -127,7 +127,7 @@ fn shape_floor_agrees_with_eval(ds: &Path, eval_table: &str) {
     let bad = skb(&["shape-floor", s(ds), "--dims", "17"]);
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("17 > 16"));
     // What a front view could tell (issue 47): the truth's heights and widths, or only the
-    // offsets across its front contour, with the prior. On bodies the model drew itself, both
+    // offsets across its front contour (and a side view's), with the prior. On bodies the model drew itself, both
     // recover most of the body; fewer constraints never fit the truth better than all of them;
     // every coordinate without noise is the plain projection.
     let run = |axes: &str, noise: &str| -> String {
@@ -139,7 +139,7 @@ fn shape_floor_agrees_with_eval(ds: &Path, eval_table: &str) {
     let plain = run("xyz", "0");
     assert_eq!(at_height(&plain, "| truth projected, 16 dims |"), at_height(&floor, "| truth projected, 16 dims |"));
     let mean_at_height = at_height(&floor, "| mean shape |");
-    for axes in ["xy", "outline"] {
+    for axes in ["xy", "outline", "outline+side"] {
         let t = run(axes, "50");
         let sixteen = at_height(&t, "| truth projected, 16 dims |");
         assert!(sixteen < 0.6 * mean_at_height, "{axes}: {t}");

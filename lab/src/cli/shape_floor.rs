@@ -7,7 +7,8 @@
 //!
 //! `--axes xy` (or `x`) fits only those coordinates of the rest mesh, and `--axes outline` only
 //! the offsets across the true rest mesh's front-view contour: what a front view could at best
-//! tell (issue 47, "where the limit is"): heights and widths, not depths. With less than every
+//! tell (issue 47, "where the limit is"): heights and widths, not depths; `--axes
+//! outline+side` adds a side view's contour (a turnaround, issue 48). With less than every
 //! coordinate the least squares may leave a component's depth free, so `--noise-mm S` makes it
 //! the posterior mean under the space's prior (each weight's variance) with an error of S mm per
 //! fitted value; 0 (the default) is plain least squares.
@@ -31,7 +32,8 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "4,10")]
     dims: Vec<usize>,
     /// Coordinates of the rest mesh the projection fits: `xyz` (all), `xy` (every vertex's
-    /// height and width), `x` (widths only), `outline` (the front-view contour's offsets).
+    /// height and width), `x` (widths only), `outline` (the front-view contour's offsets),
+    /// `outline+side` (the front and side views' contours).
     #[arg(long, default_value = "xyz")]
     axes: String,
     /// Error per fitted coordinate (mm) of the posterior-mean projection; 0 = least squares.
@@ -52,10 +54,25 @@ enum Axes {
     /// within [`OUTLINE_MAX_NZ`] of the picture plane), the offset along the contour's 2-D normal
     /// only, as a silhouette tells it (occlusion ignored).
     Outline,
+    /// The front outline and a side view's (seen along x: the contour where the normal is
+    /// within [`OUTLINE_MAX_NZ`] of the y-z plane, offsets along its y-z direction), as a
+    /// turnaround's front and side drawings tell it (issue 48).
+    OutlineSide,
 }
 
-/// Largest |n_z| of a unit vertex normal counted as on the front-view contour.
+/// Largest |n · view direction| of a unit vertex normal counted as on a view's contour.
 const OUTLINE_MAX_NZ: f64 = 0.2;
+
+/// The contour rows of the view along axis `view` (0 = x, 2 = z): each vertex whose unit normal
+/// `n` has |n[view]| ≤ [`OUTLINE_MAX_NZ`], with the direction of `n` with that component removed.
+fn contour_rows(normals: &[[f32; 3]], view: usize) -> impl Iterator<Item = (usize, [f64; 3])> + '_ {
+    normals.iter().enumerate().filter(move |(_, n)| (n[view] as f64).abs() <= OUTLINE_MAX_NZ).map(move |(i, n)| {
+        let mut d = n.map(|c| c as f64);
+        d[view] = 0.0;
+        let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        (i, d.map(|c| c / l))
+    })
+}
 
 /// The constraints a projection fits: (vertex, unit direction) pairs, each asking the model's
 /// vertex to match the truth's along the direction.
@@ -70,16 +87,11 @@ fn constraints(axes: Axes, rest: &[[f32; 3]], faces: &[[u32; 4]]) -> Vec<(usize,
         Axes::Xyz => per_vertex(&[0, 1, 2]),
         Axes::Xy => per_vertex(&[0, 1]),
         Axes::X => per_vertex(&[0]),
-        Axes::Outline => vertex_normals(rest, faces)
-            .iter()
-            .enumerate()
-            .filter(|(_, n)| (n[2] as f64).abs() <= OUTLINE_MAX_NZ)
-            .map(|(i, n)| {
-                let (x, y) = (n[0] as f64, n[1] as f64);
-                let l = (x * x + y * y).sqrt();
-                (i, [x / l, y / l, 0.0])
-            })
-            .collect(),
+        Axes::Outline => contour_rows(&vertex_normals(rest, faces), 2).collect(),
+        Axes::OutlineSide => {
+            let normals = vertex_normals(rest, faces);
+            contour_rows(&normals, 2).chain(contour_rows(&normals, 0)).collect()
+        }
     }
 }
 
@@ -147,7 +159,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         "xy" => Axes::Xy,
         "x" => Axes::X,
         "outline" => Axes::Outline,
-        other => return Err(CliError(format!("--axes {other}: expected xyz, xy, x or outline"))),
+        "outline+side" => Axes::OutlineSide,
+        other => return Err(CliError(format!("--axes {other}: expected xyz, xy, x, outline or outline+side"))),
     };
     if !(a.noise_mm.is_finite() && a.noise_mm >= 0.0) {
         return Err(CliError(format!("--noise-mm {}: expected a finite value ≥ 0", a.noise_mm)));
