@@ -106,6 +106,24 @@ fn results_are_scored_by_eval_and_deterministic() {
     assert_eq!((cells[3], cells[5]), ("3", "3"), "{aed_row}");
     assert!(cells[2].parse::<f64>().unwrap() > 0.0 && cells[4].parse::<f64>().unwrap() > 0.0, "{aed_row}");
     shape_floor_agrees_with_eval(&ds, &table);
+    // `--score-line N`: N + 1 scores from the mean shape (t = 0) to the truth's projection
+    // (t = 1), and the fit's own weights' score; the truth drawn by the model's own renderer,
+    // with its pose, camera and height, scores above the mean shape.
+    let line = dir.join("line");
+    let extra = ["--oracle-pose", "--true-height", "--score-line", "2"];
+    ok(&skb(&[&["run-dataset", s(&ds), "--out", s(&line)][..], &fast, &extra].concat()));
+    let mut rising = 0;
+    for stem in ["000000", "000001", "000002"] {
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(line.join(format!("{stem}.json"))).unwrap()).unwrap();
+        let l = r["score_line"].as_array().unwrap_or_else(|| panic!("{stem}: {r}"));
+        let t: Vec<f64> = l.iter().map(|p| p["t"].as_f64().unwrap()).collect();
+        assert_eq!(t, [0.0, 0.5, 1.0], "{stem}");
+        let sc: Vec<f64> = l.iter().map(|p| p["score"].as_f64().unwrap()).collect();
+        assert!(r["score_line_fit"].as_f64().is_some(), "{stem}: {r}");
+        rising += (sc[2] > sc[0]) as usize;
+    }
+    assert!(rising >= 2, "the truth above the mean on {rising} of 3");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
