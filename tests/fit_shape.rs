@@ -5,7 +5,7 @@
 use nalgebra::Matrix3;
 use sketchbody::body::{BodyModel, Gender, ShapeChoice};
 use sketchbody::camera::WeakPerspective;
-use sketchbody::fit::{fit_shape, FitOptions, FitProblem, MatchScore};
+use sketchbody::fit::{fit_shape, score_shapes, FitOptions, FitProblem, MatchScore};
 use sketchbody::image::{canny, CannyParams, GrayImage};
 use sketchbody::raster::Rasterizer;
 use sketchbody::skeleton::{Joints2, NUM_JOINTS};
@@ -327,4 +327,23 @@ fn the_population_starts_wide_and_halves_down_to_the_samples() {
     for bad in [0, 65] {
         assert!(matches!(run(bad), Err(Error::OutOfRange { name: "initial factor", .. })), "{bad}");
     }
+}
+
+/// `score_shapes` scores shapes as the fit scores its samples: the body the outline was drawn
+/// from above the mean shape, the same shape the same score twice; a shape of another length or
+/// with a non-finite weight is an error.
+#[test]
+fn score_shapes_ranks_the_drawn_body_above_the_mean() {
+    let c = case();
+    let space = c.model.space(Gender::Male);
+    let dims = space.default_dim();
+    let truth = space.project(&c.truth.vertices, dims).unwrap();
+    let (p, o) = (male_problem(&c), options());
+    let s = score_shapes(&p, &o, dims, &[vec![0.0; dims], truth.clone(), truth.clone()]).unwrap();
+    assert!(s[1] > s[0], "the drawn body {} against the mean {}", s[1], s[0]);
+    assert_eq!(s[1], s[2]);
+    assert!(matches!(score_shapes(&p, &o, dims, &[vec![0.0; dims + 1]]), Err(Error::OutOfRange { .. })));
+    let mut nan = truth;
+    nan[0] = f64::NAN;
+    assert!(matches!(score_shapes(&p, &o, dims, &[nan]), Err(Error::NonFinite { .. })));
 }

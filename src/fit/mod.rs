@@ -19,7 +19,7 @@ pub use height_calibration::{HeightCalibration, HeightEvidence, HEIGHT_EVIDENCE_
 pub use parts::{BodyPart, PartSupport};
 pub use score::{distance_transform, MatchScore, SketchEvidence, CHAMFER_CAP};
 pub use sir::{
-    fit_shape, FitOptions, FitProblem, FitResult, FitView, IterationStats, EDGE_SUPPORT_RADIUS, LOW_EVIDENCE_SUPPORT,
-    PRIOR_RANGE_SD,
+    fit_shape, score_shapes, FitOptions, FitProblem, FitResult, FitView, IterationStats, EDGE_SUPPORT_RADIUS,
+    LOW_EVIDENCE_SUPPORT, PRIOR_RANGE_SD,
 };
 pub use transition::Transition;

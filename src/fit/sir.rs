@@ -409,7 +409,35 @@ struct Scratch {
     joints_px: [[f64; 2]; NUM_JOINTS],
 }
 
-impl Evaluator<'_> {
+impl<'a> Evaluator<'a> {
+    /// The evaluator of `problem` under `options`, searching the first `dims` dimensions of its
+    /// shape space. Errors: the model's, a view's camera, the sketch evidence's.
+    fn new(problem: &'a FitProblem<'a>, options: &'a FitOptions, dims: usize) -> Result<Evaluator<'a>> {
+        let space = problem.model.shape_space(problem.gender)?;
+        let proxy = problem.model.fit_proxy()?;
+        let proxy_space = proxy.shape_space(problem.model, problem.gender)?;
+        let mut views = Vec::with_capacity(problem.views.len());
+        for v in problem.views {
+            v.camera.validate()?;
+            views.push(ViewEvidence::new(problem.pose, v.camera, v.edges, v.joints2d, options)?);
+        }
+        Ok(Evaluator {
+            problem,
+            options,
+            proxy,
+            space,
+            proxy_space,
+            front: ViewEvidence::new(problem.pose, problem.camera, problem.edges, problem.joints2d, options)?,
+            views,
+            height_correction: {
+                let mut proxy_mean = Vec::new();
+                proxy_space.synthesize_into(space, &[], &mut proxy_mean)?;
+                y_extent(space.mean()) / y_extent(&proxy_mean)
+            },
+            dims,
+        })
+    }
+
     /// Score of one shape (higher is better); a shape that cannot be posed or lands outside the
     /// image scores −∞.
     fn score(&self, y: &[f64], s: &mut Scratch) -> Result<f64> {
@@ -543,6 +571,45 @@ impl Evaluator<'_> {
     }
 }
 
+/// The fit's score (higher is better; −∞ for a shape that cannot be posed or lands outside the
+/// image) of each of `shapes` under `problem` and `options`, as [`fit_shape`] scores its samples:
+/// each shape is its first `dims` PCA weights, optionally followed by the natural logs of its
+/// five bone-length factors. A diagnostic (e.g. the score along the line from the mean shape to
+/// a known body). Errors: `options`' and the camera's checks, a shape with another length
+/// (`OutOfRange`), a non-finite weight.
+pub fn score_shapes(
+    problem: &FitProblem<'_>,
+    options: &FitOptions,
+    dims: usize,
+    shapes: &[Vec<f64>],
+) -> Result<Vec<f64>> {
+    options.validate()?;
+    problem.camera.validate()?;
+    crate::body::ik::check_joints("pose", problem.pose)?;
+    let evaluator = Evaluator::new(problem, options, dims)?;
+    evaluator.space.check_weights(&vec![0.0; dims])?;
+    let mut scratch = Scratch::default();
+    shapes
+        .iter()
+        .map(|y| {
+            if y.len() != dims && y.len() != dims + super::proportions::NUM_FACTORS {
+                return Err(Error::OutOfRange {
+                    name: "scored shape",
+                    detail: format!(
+                        "{} values, expected {dims} or {}",
+                        y.len(),
+                        dims + super::proportions::NUM_FACTORS
+                    ),
+                });
+            }
+            for &v in y {
+                ensure_finite("scored shape", v)?;
+            }
+            evaluator.score(y, &mut scratch)
+        })
+        .collect()
+}
+
 /// Fits the shape (see the module documentation). `progress(fraction)` is called after every
 /// iteration from the calling thread; returning `false` cancels with [`Error::Cancelled`].
 pub fn fit_shape(
@@ -554,8 +621,6 @@ pub fn fit_shape(
     problem.camera.validate()?;
     crate::body::ik::check_joints("pose", problem.pose)?;
     let space = problem.model.shape_space(problem.gender)?;
-    let proxy = problem.model.fit_proxy()?;
-    let proxy_space = proxy.shape_space(problem.model, problem.gender)?;
     let reweighted = match (problem.gender, options.male_prior) {
         (ShapeChoice::Blended, Some(p)) => Some(problem.model.blended()?.prior_with_male_mass(p)?),
         _ => None,
@@ -577,26 +642,7 @@ pub fn fit_shape(
     let sigma: Vec<f64> = space.variances()[..dims].iter().map(|l| options.transition_scale.powi(2) * l).collect();
     let transition = Transition::new(&prior, &sigma)?;
 
-    let mut views = Vec::with_capacity(problem.views.len());
-    for v in problem.views {
-        v.camera.validate()?;
-        views.push(ViewEvidence::new(problem.pose, v.camera, v.edges, v.joints2d, options)?);
-    }
-    let evaluator = Evaluator {
-        problem,
-        options,
-        proxy,
-        space,
-        proxy_space,
-        front: ViewEvidence::new(problem.pose, problem.camera, problem.edges, problem.joints2d, options)?,
-        views,
-        height_correction: {
-            let mut proxy_mean = Vec::new();
-            proxy_space.synthesize_into(space, &[], &mut proxy_mean)?;
-            y_extent(space.mean()) / y_extent(&proxy_mean)
-        },
-        dims,
-    };
+    let evaluator = Evaluator::new(problem, options, dims)?;
     let estimate = match (options.estimate_proportions && options.proportion_sd > 0.0, problem.joints2d) {
         (true, Some(j2)) => match estimate_proportions(
             space.mean_joints(),

@@ -83,6 +83,12 @@ pub struct Args {
     /// (comma-separated: side, side_left, back); a sample without one of them fails.
     #[arg(long, value_delimiter = ',', value_parser = parse_view_label)]
     views: Vec<ViewLabel>,
+    /// Diagnostic (issue 47): also score, as the fit scores its samples, N + 1 shapes along the
+    /// line from the fitted gender's mean shape (0) to the true rest mesh's projection onto the
+    /// fitted dimensions (1), and the fit's own weights; written as `score_line` and
+    /// `score_line_fit` (bone-length factors left at 1 for all of them).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100))]
+    score_line: Option<u32>,
 }
 
 fn parse_view_label(s: &str) -> Result<ViewLabel, String> {
@@ -129,6 +135,8 @@ struct Shared<'a> {
     oracle_pose: bool,
     /// `--views`.
     views: Vec<ViewLabel>,
+    /// `--score-line`.
+    score_line: Option<u32>,
 }
 
 /// The ground truth's 3-D pose and camera as a pose estimate (for `--oracle-pose`).
@@ -152,6 +160,45 @@ fn truth_pose(t: &GroundTruth, stem: &str) -> Result<PoseEstimate, CliError> {
         alternatives: Vec::new(),
         depth_costs: None,
     })
+}
+
+/// `--score-line`: the fit's score of `n + 1` shapes from the fitted gender's mean shape to the
+/// truth's projection onto the fitted dimensions, under the result's pose, camera, edges and
+/// joints, and the score of the fit's own weights. Errors: a blended fit (no single gender's
+/// space), the mesh file's, the fit's.
+fn score_line(
+    model: &sketchbody::body::BodyModel,
+    dataset: &Path,
+    stem: &str,
+    r: &sketchbody::pipeline::PipelineResult,
+    fit: &sketchbody::fit::FitOptions,
+    n: u32,
+) -> Result<(Vec<(f64, f64)>, f64), CliError> {
+    let sketchbody::body::ShapeChoice::Gendered(gender) = r.space else {
+        return Err(CliError(format!("sample {stem}: --score-line needs a gendered fit")));
+    };
+    let mp = dataset.join(format!("{stem}.mesh"));
+    let bytes = std::fs::read(&mp).map_err(|e| CliError(format!("{}: {e}", mp.display())))?;
+    let rest = sketchbody::render::sketch::truth::parse_mesh(&bytes, &mp.display().to_string())?.0;
+    let space = model.space(gender);
+    let dims = fit.dims.unwrap_or(space.gmm().dims());
+    let truth = space.project(&rest, dims)?;
+    let problem = sketchbody::fit::FitProblem {
+        model,
+        gender: r.space,
+        pose: &r.pose.joints,
+        camera: &r.pose.camera,
+        edges: &r.edges,
+        joints2d: Some(&r.joints2d),
+        views: &[],
+    };
+    let ts: Vec<f64> = (0..=n).map(|k| k as f64 / n as f64).collect();
+    let mut shapes: Vec<Vec<f64>> = ts.iter().map(|t| truth.iter().map(|w| t * w).collect()).collect();
+    let fitted = r.chosen_fit().and_then(|g| g.fit.as_ref()).map(|f| f.weights.clone());
+    shapes.push(fitted.unwrap_or_else(|| vec![0.0; dims]));
+    let scores = sketchbody::fit::score_shapes(&problem, fit, dims, &shapes)
+        .map_err(|e| CliError(format!("sample {stem}: score line: {e}")))?;
+    Ok((ts.into_iter().zip(scores.iter().copied()).collect(), scores[scores.len() - 1]))
 }
 
 /// Runs one sample and writes its three files. Returns the pipeline's seconds.
@@ -209,6 +256,10 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
     .map_err(|e| CliError(format!("sample {stem}: {e}")))?;
     let rm = r.pose.camera.r;
     let finite = |x: f64| json!(if x.is_finite() { Some(x) } else { None });
+    let line = match s.score_line {
+        Some(n) => Some(score_line(s.model, dataset, stem, &r, &opts.fit, n)?),
+        None => None,
+    };
     // One score per fitted space: the deciding fit's when the chosen gender was refitted.
     let mut scores = serde_json::Map::new();
     for g in &r.fits {
@@ -246,6 +297,8 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
             "facing": v.facing.map(|f| json!({"as_labelled_deg": f.as_labelled_deg, "other_side_deg": f.other_side_deg})),
         })).collect::<Vec<_>>(),
         "view_warnings": r.view_warnings,
+        "score_line": line.as_ref().map(|(l, _)| l.iter().map(|&(t, v)| json!({"t": t, "score": finite(v)})).collect::<Vec<_>>()),
+        "score_line_fit": line.as_ref().map(|(_, f)| finite(*f)),
         "seconds": r.timings.total,
     });
     write_atomic(&out.join(format!("{stem}.json")), doc.to_string().as_bytes())?;
@@ -299,6 +352,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         true_height: a.true_height,
         oracle_pose: a.oracle_pose,
         views: a.views.clone(),
+        score_line: a.score_line,
     };
     let todo: Vec<&String> = stems.iter().filter(|s| !a.out.join(format!("{s}_posed.obj")).is_file()).collect();
     let pool = rayon::ThreadPoolBuilder::new()
