@@ -78,6 +78,18 @@ pub struct Args {
     /// depths'; 0 = off.
     #[arg(long, default_value_t = PoseOptions::default().learned_depth_sd, value_parser = crate::ranges::real(0.0, 1.0, false))]
     learned_depth_sd: f64,
+    /// Relative spread of each bone's length in the free-joint step (log-normal about the
+    /// estimate's, left and right pulled equal); 0 = the estimate's lengths kept.
+    #[arg(long, default_value_t = PoseOptions::default().bone_length_sd, value_parser = crate::ranges::real(0.0, 1.0, false))]
+    bone_length_sd: f64,
+    /// Spread (m) of the free-joint step's pull of the knees', ankles', elbows' and wrists'
+    /// depths toward the solve's; 0 = that of the other joints (0.02 m).
+    #[arg(long, default_value_t = PoseOptions::default().limb_depth_sd, value_parser = crate::ranges::real(0.0, 1.0, false))]
+    limb_depth_sd: f64,
+    /// Weight of the learned bend prior of the knees and elbows (assets/factor_prior.json) in
+    /// the free-joint step; 0 = off.
+    #[arg(long, default_value_t = PoseOptions::default().bend_prior, value_parser = crate::ranges::real(0.0, sketchbody::pose::options::MAX_BEND_PRIOR, false))]
+    bend_prior: f64,
     /// Straighten the arms and legs drawn straight that the solve bent by at most 60° in depth
     /// (the drawn proportions absorb the bend): for figures drawn standing or posing with
     /// straight limbs. Off by default (on unseen motion it straightens truly bent limbs too).
@@ -111,6 +123,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         factor_prior: !a.no_factor_prior,
         depth_prior: a.depth_prior,
         learned_depth_sd: a.learned_depth_sd,
+        bone_length_sd: a.bone_length_sd,
+        limb_depth_sd: a.limb_depth_sd,
+        bend_prior: a.bend_prior,
         straight_limbs: a.straight_limbs,
     };
     let est = estimate_pose(&dict, &joints, &opts)?;

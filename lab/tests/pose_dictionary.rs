@@ -102,11 +102,12 @@ fn frontal_example_sketch_gets_a_level_camera_and_stands_straight() {
 
 #[test]
 fn straight_limbs_straighten_the_example_without_moving_its_image() {
-    // The example stands with straight arms and legs; the default solve bends its knees ~38° in
-    // depth (its drawn shins are shorter than the dictionary's). With straight limbs (issue 46)
-    // every knee and elbow is within 10° of straight, the ankles, wrists and torso stay where
-    // they were, the reprojection barely moves, and the estimate is still base + Σ B w with the
-    // factors applied.
+    // The example stands with straight arms and legs; with the free-joint step's bone lengths
+    // kept and no bend prior (the default before issue 46's uncertain lengths) the solve bends
+    // its knees ~38° in depth (its drawn thighs and shins are equal, the dictionary's are not).
+    // With straight limbs (issue 46) every knee and elbow is within 10° of straight, the
+    // ankles, wrists and torso stay where they were, the reprojection barely moves, and the
+    // estimate is still base + Σ B w with the factors applied.
     use sketchbody::pose::straighten::{bend_deg, LIMBS};
     use sketchbody::skeleton::Joints3;
     let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(
@@ -117,9 +118,10 @@ fn straight_limbs_straighten_the_example_without_moving_its_image() {
     let dict = dict_io::embedded().unwrap();
     let bends =
         |x: &Joints3| LIMBS.map(|(a, b, c)| bend_deg(&Vector3::from(x[a]), &Vector3::from(x[b]), &Vector3::from(x[c])));
-    let plain = estimate_pose(&dict, &joints, &PoseOptions::default()).unwrap();
+    let kept = PoseOptions { bone_length_sd: 0.0, limb_depth_sd: 0.0, bend_prior: 0.0, ..PoseOptions::default() };
+    let plain = estimate_pose(&dict, &joints, &kept).unwrap();
     assert!(bends(&plain.joints)[2] > 20.0 && bends(&plain.joints)[3] > 20.0, "knees {:?}", bends(&plain.joints));
-    let opts = PoseOptions { straight_limbs: true, ..PoseOptions::default() };
+    let opts = PoseOptions { straight_limbs: true, ..kept };
     let est = estimate_pose(&dict, &joints, &opts).unwrap();
     for (i, b) in bends(&est.joints).iter().enumerate() {
         assert!(*b <= 10.0, "limb {i} bent {b:.1} deg");
@@ -139,4 +141,31 @@ fn straight_limbs_straighten_the_example_without_moving_its_image() {
             assert!((rebuilt[j][a] - est.joints[j][a]).abs() < 1e-9, "joint {j} axis {a}");
         }
     }
+}
+
+#[test]
+fn the_default_explains_the_examples_short_legs_by_length_not_by_bent_knees() {
+    // Issue 46: with each bone's length uncertain and the learned bend prior (the default), the
+    // example's knees come out near straight (10.5° / 10.9° on 2026-12-07) instead of bent ~38°
+    // in depth, the image as well fitted and the standing figure still upright.
+    use sketchbody::pose::straighten::{bend_deg, LIMBS};
+    let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../assets/examples/sketch_joints.json"
+    )))
+    .unwrap();
+    let dict = dict_io::embedded().unwrap();
+    let est = estimate_pose(&dict, &joints, &PoseOptions::default()).unwrap();
+    let kept = PoseOptions { bone_length_sd: 0.0, limb_depth_sd: 0.0, bend_prior: 0.0, ..PoseOptions::default() };
+    let old = estimate_pose(&dict, &joints, &kept).unwrap();
+    let knees = |x: &sketchbody::skeleton::Joints3| {
+        [2, 3].map(|i| {
+            let (a, b, c) = LIMBS[i];
+            bend_deg(&Vector3::from(x[a]), &Vector3::from(x[b]), &Vector3::from(x[c]))
+        })
+    };
+    assert!(knees(&old.joints).iter().all(|b| *b > 30.0), "lengths kept: knees {:?}", knees(&old.joints));
+    assert!(knees(&est.joints).iter().all(|b| *b < 13.0), "default: knees {:?}", knees(&est.joints));
+    assert!(est.rms <= old.rms + 0.5, "rms {:.2} -> {:.2} px", old.rms, est.rms);
+    assert!(sketchbody_lab::pose::metrics::torso_lean_deg(&est.joints) <= 3.0);
 }

@@ -56,7 +56,7 @@ pub fn pose3d_json(est: &PoseEstimate, dict: &Dictionary, opts: &PoseOptions) ->
         "proportions": factors,
         "plausible": est.plausible,
         "alternatives": alternatives,
-        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "alpha_target": opts.alpha_target.name(), "equal_scales": opts.equal_scales, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior, "starts": opts.starts, "limb_candidates": opts.limb_candidates, "blend": opts.blend, "joint_noise": opts.joint_noise, "proportions": opts.proportions, "depth_prior": opts.depth_prior, "learned_depth_sd": opts.learned_depth_sd, "straight_limbs": opts.straight_limbs},
+        "options": {"kappa": opts.kappa, "alpha": opts.alpha, "alpha_target": opts.alpha_target.name(), "equal_scales": opts.equal_scales, "max_bases": opts.max_bases, "tolerance": opts.tolerance, "refine": opts.refine, "prior": opts.prior, "starts": opts.starts, "limb_candidates": opts.limb_candidates, "blend": opts.blend, "joint_noise": opts.joint_noise, "proportions": opts.proportions, "depth_prior": opts.depth_prior, "learned_depth_sd": opts.learned_depth_sd, "bone_length_sd": opts.bone_length_sd, "limb_depth_sd": opts.limb_depth_sd, "bend_prior": opts.bend_prior, "straight_limbs": opts.straight_limbs},
     })
 }
 

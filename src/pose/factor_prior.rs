@@ -15,12 +15,15 @@
 //! any scale estimate (the pose step: the first solve's camera scale, the convention of
 //! [`super::figure::estimate_factors`]). A second network of the same shape predicts each
 //! joint's depth toward the camera relative to the pelvis, over `s₂` (metres at the figure's
-//! 2-D scale). How the networks are trained and measured: docs/benchmarks.md, "3-D pose".
+//! 2-D scale). The file also holds the learned bend prior of the knees and elbows
+//! ([`super::bend_prior`], [`FactorPrior::bend`]), counted on the same training motion. How the
+//! networks are trained and measured: docs/benchmarks.md, "3-D pose".
 
 use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 
+use super::bend_prior::BendPrior;
 use super::depth_hint::DepthHint;
 use super::figure::{BONE_GROUP, NUM_GROUPS};
 use super::mlp::Mlp;
@@ -64,6 +67,10 @@ pub struct FactorPrior {
     pub depth_network: Mlp,
     /// Predictive spread of each group's log factor (RMS residual on samples not fitted), > 0.
     pub sd: Vec<f64>,
+    /// The learned bend prior of the knees and elbows ([`super::bend_prior`]), from the same
+    /// training motion; `None` in files written before it (the free-joint step then has none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bend: Option<BendPrior>,
 }
 
 /// A prediction of [`FactorPrior::predict`].
@@ -139,6 +146,9 @@ impl FactorPrior {
         let positive = p.lengths.iter().chain(&p.scale).chain(&p.sd).all(|v| v.is_finite() && *v > 0.0);
         if !finite || !positive {
             return Err(Error::CorruptData("factor prior: non-finite values or non-positive spreads".into()));
+        }
+        if let Some(b) = &p.bend {
+            b.validate()?;
         }
         Ok(p)
     }
@@ -242,6 +252,21 @@ mod tests {
         let text = p.to_json();
         assert!(matches!(FactorPrior::from_json(&text[..text.len() / 2]), Err(Error::CorruptData(_))));
         assert_eq!(&FactorPrior::from_json(&text).unwrap(), p);
+        // The bend prior: present in the embedded file, checked when present, optional.
+        assert!(p.bend.is_some());
+        let mut bad = p.clone();
+        if let Some(b) = bad.bend.as_mut() {
+            b.knee.pop();
+        }
+        assert!(matches!(FactorPrior::from_json(&bad.to_json()), Err(Error::CorruptData(m)) if m.contains("bend")));
+        let mut bad = p.clone();
+        if let Some(b) = bad.bend.as_mut() {
+            b.elbow[3] = -1.0;
+        }
+        assert!(matches!(FactorPrior::from_json(&bad.to_json()), Err(Error::CorruptData(m)) if m.contains("bend")));
+        let without = FactorPrior { bend: None, ..p.clone() };
+        assert!(!without.to_json().contains("\"bend\""));
+        assert_eq!(FactorPrior::from_json(&without.to_json()).unwrap(), without);
     }
 
     /// Every array and network of the wrong size is refused ("wrong size"), each on its own;

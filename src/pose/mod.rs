@@ -3,6 +3,7 @@
 //!
 //! - [`motion`]: motion tables (canonical-joint CSV), pose normalisation, mirroring.
 //! - [`alternatives`]: the ranked depth readings of an estimate and the flip of one limb's depth.
+//! - [`bend_prior`]: the learned prior on the bends of the knees and elbows.
 //! - [`blend`]: posterior-mean blend of the exemplar starts' hypotheses.
 //! - [`depth_hint`]: relative joint depths from an image cue, weighing the solver's choices.
 //! - [`dictionary`]: the basis-pose dictionary (eq. 2) and its learning (per-action PCA).
@@ -18,13 +19,15 @@
 //! - [`camera_fit`]: the camera step (SVD of M, eq. 4 blend, projection onto SO(3)).
 //! - [`pursuit`]: the matching pursuit driver ([`estimate_pose`]).
 //! - [`refine`]: the joint Levenberg–Marquardt refinement with the constraint kept exactly.
-//! - [`joint_fit`]: the free-joint refinement (joints leave the dictionary's span, bone lengths kept).
+//! - [`joint_fit`]: the free-joint refinement (joints leave the dictionary's span; bone lengths
+//!   under a prior, knee and elbow bends under the learned one).
 //! - [`straighten`]: limbs drawn straight kept straight in depth (the last step).
 //!
 //! Units: 3-D joints are metres of a 1.75 m person (every pose is normalised to that stature,
 //! see [`motion::normalize_pose`]); 2-D joints are image pixels (origin top-left, y down).
 
 pub mod alternatives;
+pub mod bend_prior;
 pub mod blend;
 pub mod camera_fit;
 pub mod depth_hint;

@@ -139,6 +139,20 @@ pub struct PoseOptions {
     /// [0, 1]; 0 = off. Applies where the learned depths do ([`PoseOptions::depth_prior`] > 0,
     /// not for a figure the standing prior takes as standing), with or without an image cue.
     pub learned_depth_sd: f64,
+    /// Relative spread of each bone's length in the free-joint step ([`super::joint_fit`]), in
+    /// [0, 1]: the lengths are unknowns, log-normal about the estimate's, the left and right
+    /// limbs' pulled equal; 0 = the estimate's lengths kept exactly. Needs `joint_noise` > 0.
+    pub bone_length_sd: f64,
+    /// Spread, metres, of the free-joint step's pull of the knees', ankles', elbows' and
+    /// wrists' depths (camera frame) toward the estimate's, in [0, 1] (the other joints':
+    /// [`super::joint_fit::SIGMA_3D`]); 0 = that of the other joints. Not for a figure the
+    /// standing prior takes as standing (every depth is then freer).
+    pub limb_depth_sd: f64,
+    /// Weight of the learned bend prior of the knees and elbows in the free-joint step
+    /// ([`super::bend_prior`], from `assets/factor_prior.json`), in [0, [`MAX_BEND_PRIOR`]]:
+    /// 1 = its learned costs (−2 ln p); 0 = off. The default 0.5 was chosen on the validation
+    /// clips (docs/benchmarks-history.md, "Uncertain bone lengths and a learned bend prior").
+    pub bend_prior: f64,
     /// Straight limbs ([`super::straighten`]): the last step straightens the arms and legs
     /// drawn straight that are bent at most [`super::straighten::MAX_BEND_DEG`] in depth (the
     /// drawn proportions of the two bones absorb what the bend did). Off by default: it trades
@@ -149,6 +163,9 @@ pub struct PoseOptions {
 /// Largest [`PoseOptions::depth_prior`].
 pub const MAX_DEPTH_PRIOR: f64 = 10.0;
 
+/// Largest [`PoseOptions::bend_prior`].
+pub const MAX_BEND_PRIOR: f64 = 10.0;
+
 impl Default for PoseOptions {
     /// The library default (docs/benchmarks.md, "3-D pose"): κ = 0.05, α = 0.8 (the paper's)
     /// toward the level target (the pitch pulled to 0; the paper's identity target pulls the
@@ -156,7 +173,8 @@ impl Default for PoseOptions {
     /// 12 exemplar starts recomposed from 64 limb candidates, blended at τ = 30 px² per joint,
     /// then the free-joint refinement at 0.014 m (4 px on a 500-px figure), with the proportions
     /// estimated under the learned factor prior and the learned depths weighted 0.05 (and pulling
-    /// the free-joint step's bone depths at 0.05 m).
+    /// the free-joint step's bone depths at 0.05 m); in the free-joint step each bone's length
+    /// uncertain at 5 %, the limb joints' depths at 0.08 m and the learned bend prior at weight 0.5.
     fn default() -> Self {
         PoseOptions {
             kappa: 0.05,
@@ -177,6 +195,9 @@ impl Default for PoseOptions {
             factor_prior: true,
             depth_prior: 0.05,
             learned_depth_sd: 0.05,
+            bone_length_sd: 0.05,
+            limb_depth_sd: 0.08,
+            bend_prior: 0.5,
             straight_limbs: false,
         }
     }
@@ -193,6 +214,9 @@ impl PoseOptions {
         ensure_finite("joint_noise", self.joint_noise)?;
         ensure_finite("depth_prior", self.depth_prior)?;
         ensure_finite("learned_depth_sd", self.learned_depth_sd)?;
+        ensure_finite("bone_length_sd", self.bone_length_sd)?;
+        ensure_finite("limb_depth_sd", self.limb_depth_sd)?;
+        ensure_finite("bend_prior", self.bend_prior)?;
         let range = |name: &'static str, detail: String| Err(Error::OutOfRange { name, detail });
         if !(0.0..=MAX_KAPPA).contains(&self.kappa) {
             return range("kappa", format!("{} is not in [0, {MAX_KAPPA}]", self.kappa));
@@ -227,6 +251,15 @@ impl PoseOptions {
         if !(0.0..=1.0).contains(&self.learned_depth_sd) {
             return range("learned_depth_sd", format!("{} m is not in [0, 1]", self.learned_depth_sd));
         }
+        if !(0.0..=1.0).contains(&self.bone_length_sd) {
+            return range("bone_length_sd", format!("{} is not in [0, 1]", self.bone_length_sd));
+        }
+        if !(0.0..=1.0).contains(&self.limb_depth_sd) {
+            return range("limb_depth_sd", format!("{} m is not in [0, 1]", self.limb_depth_sd));
+        }
+        if !(0.0..=MAX_BEND_PRIOR).contains(&self.bend_prior) {
+            return range("bend_prior", format!("{} is not in [0, {MAX_BEND_PRIOR}]", self.bend_prior));
+        }
         Ok(())
     }
 }
@@ -256,6 +289,12 @@ mod tests {
             PoseOptions { depth_prior: 11.0, ..Default::default() },
             PoseOptions { learned_depth_sd: -0.01, ..Default::default() },
             PoseOptions { learned_depth_sd: f64::NAN, ..Default::default() },
+            PoseOptions { bone_length_sd: -0.01, ..Default::default() },
+            PoseOptions { bone_length_sd: f64::NAN, ..Default::default() },
+            PoseOptions { limb_depth_sd: 1.5, ..Default::default() },
+            PoseOptions { limb_depth_sd: f64::INFINITY, ..Default::default() },
+            PoseOptions { bend_prior: -1.0, ..Default::default() },
+            PoseOptions { bend_prior: 11.0, ..Default::default() },
         ];
         for o in bad {
             assert!(o.validate().is_err(), "{o:?}");

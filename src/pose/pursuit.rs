@@ -15,6 +15,7 @@
 use nalgebra::{DVector, Vector3};
 
 use super::alternatives::{Alternative, DepthCosts};
+use super::bend_prior::BendPrior;
 use super::camera_fit::{fit_camera, CameraPrior};
 use super::depth_hint::{hint_cost, DepthHint};
 use super::dictionary::Dictionary;
@@ -138,7 +139,11 @@ pub fn estimate_pose_hinted(
     opts: &PoseOptions,
     hint: Option<&DepthHint>,
 ) -> Result<PoseEstimate> {
-    let prior = if opts.factor_prior || opts.depth_prior > 0.0 { Some(FactorPrior::embedded()?) } else { None };
+    let prior = if opts.factor_prior || opts.depth_prior > 0.0 || opts.bend_prior > 0.0 {
+        Some(FactorPrior::embedded()?)
+    } else {
+        None
+    };
     estimate_pose_with_factor_prior(dict, joints, opts, hint, prior)
 }
 
@@ -165,10 +170,15 @@ pub fn estimate_pose_with_factor_prior(
     let standing = opts.standing_prior
         && opts.joint_noise > 0.0
         && super::plausibility::standing_in_image(&joints.xy, &joints.visible);
-    let hints =
-        Hints { given: hint, prior: prior.filter(|_| opts.depth_prior > 0.0 && !standing), weight: opts.depth_prior };
+    let hints = Hints {
+        given: hint,
+        prior: prior.filter(|_| opts.depth_prior > 0.0 && !standing),
+        weight: opts.depth_prior,
+        bend: prior.and_then(|p| p.bend.as_ref()).filter(|_| opts.bend_prior > 0.0),
+    };
     let factor_prior = prior.filter(|_| opts.factor_prior);
-    let first = estimate_fixed(dict, joints, opts, hints.of(joints).as_ref(), hints.learned(joints).as_ref())?;
+    let first =
+        estimate_fixed(dict, joints, opts, hints.of(joints).as_ref(), hints.learned(joints).as_ref(), hints.bend)?;
     let est = if opts.proportions { with_proportions(dict, joints, opts, first, &hints, factor_prior) } else { first };
     let est = with_straight_limbs(dict, joints, opts, est);
     let est = with_alternatives(dict, joints, opts, hints.of(joints).as_ref(), est);
@@ -220,11 +230,12 @@ fn finite_estimate(e: PoseEstimate) -> Result<PoseEstimate> {
 }
 
 /// Where a solve's depth hint comes from: the caller's image cue, else the learned depths of
-/// the 2-D joints that solve sees.
+/// the 2-D joints that solve sees; and the learned bend prior of the free-joint step.
 struct Hints<'a> {
     given: Option<&'a DepthHint>,
     prior: Option<&'a FactorPrior>,
     weight: f64,
+    bend: Option<&'a BendPrior>,
 }
 
 impl Hints<'_> {
@@ -296,7 +307,9 @@ fn second_solve(
         return None;
     }
     let plain = f.unstylise_2d(joints);
-    let second = estimate_fixed(dict, &plain, opts, hints.of(&plain).as_ref(), hints.learned(&plain).as_ref()).ok()?;
+    let second =
+        estimate_fixed(dict, &plain, opts, hints.of(&plain).as_ref(), hints.learned(&plain).as_ref(), hints.bend)
+            .ok()?;
     let x = f.apply(&second.joints);
     let xs: [Vector3<f64>; NUM_JOINTS] = std::array::from_fn(|j| Vector3::from(x[j]));
     let prob = Problem::new(dict, joints, 0.0).ok()?;
@@ -340,18 +353,20 @@ fn flag_plausibility(joints: &Joints2, est: PoseEstimate) -> PoseEstimate {
 }
 
 /// [`estimate_pose`] with the dictionary's proportions (no factors, no plausibility flag);
-/// `hint` weighs the solver's choices, `learned` (the learned depths) pulls the free-joint step.
+/// `hint` weighs the solver's choices, `learned` (the learned depths) pulls the free-joint step,
+/// `bend` is its learned bend prior.
 fn estimate_fixed(
     dict: &Dictionary,
     joints: &Joints2,
     opts: &PoseOptions,
     hint: Option<&DepthHint>,
     learned: Option<&DepthHint>,
+    bend: Option<&BendPrior>,
 ) -> Result<PoseEstimate> {
     let prob = Problem::new(dict, joints, opts.prior)?;
     if opts.starts == 0 || dict.exemplars.ncols() == 0 {
         let cam = fit_camera(&prob.pose(&[], &[]), &prob.uv, &prob.vis, &CameraPrior::of(opts))?;
-        return Ok(with_joint_fit(&prob, opts, pursue(&prob, opts, cam, None)?, learned));
+        return Ok(with_joint_fit(&prob, opts, pursue(&prob, opts, cam, None)?, learned, bend));
     }
     let ranking =
         super::exemplar::affine_ranking(&prob, super::exemplar::shortlist_len(opts.starts).max(opts.limb_candidates));
@@ -391,12 +406,20 @@ fn estimate_fixed(
         (None, Some(e)) => return Err(e),
         (None, None) => return Err(crate::error::Error::Degenerate("no exemplar start admitted a camera".into())),
     };
-    Ok(with_joint_fit(&prob, opts, est, learned))
+    Ok(with_joint_fit(&prob, opts, est, learned, bend))
 }
 
 /// The free-joint refinement of `est` when [`PoseOptions::joint_noise`] > 0, pulled toward the
-/// learned depths `learned` at [`PoseOptions::learned_depth_sd`].
-fn with_joint_fit(prob: &Problem, opts: &PoseOptions, est: PoseEstimate, learned: Option<&DepthHint>) -> PoseEstimate {
+/// learned depths `learned` at [`PoseOptions::learned_depth_sd`], its bone lengths uncertain at
+/// [`PoseOptions::bone_length_sd`] and its bends under the learned bend prior `bend` at
+/// [`PoseOptions::bend_prior`].
+fn with_joint_fit(
+    prob: &Problem,
+    opts: &PoseOptions,
+    est: PoseEstimate,
+    learned: Option<&DepthHint>,
+    bend: Option<&BendPrior>,
+) -> PoseEstimate {
     if opts.joint_noise > 0.0 {
         let depths = learned.filter(|h| opts.learned_depth_sd > 0.0 && h.known.iter().all(|k| *k)).map(|h| h.depth);
         let priors = super::joint_fit::Priors {
@@ -404,6 +427,10 @@ fn with_joint_fit(prob: &Problem, opts: &PoseOptions, est: PoseEstimate, learned
             knee_limits: opts.knee_limits,
             depths,
             depth_sd: opts.learned_depth_sd,
+            length_sd: opts.bone_length_sd,
+            limb_depth_sd: opts.limb_depth_sd,
+            bend,
+            bend_weight: opts.bend_prior,
         };
         super::joint_fit::fit_joints(prob, &est, opts.joint_noise, &priors)
     } else {
@@ -677,6 +704,9 @@ pub(crate) mod tests {
             factor_prior: false,
             depth_prior: 0.0,
             learned_depth_sd: 0.0,
+            bone_length_sd: 0.0,
+            limb_depth_sd: 0.0,
+            bend_prior: 0.0,
             straight_limbs: false,
         }
     }

@@ -97,6 +97,17 @@ pub struct Args {
     /// (default: the library's; 0 = off).
     #[arg(long)]
     learned_depth_sd: Option<f64>,
+    /// Relative spread of each bone's length in the free-joint step in configuration (d)
+    /// (default: the library's; 0 = lengths kept).
+    #[arg(long)]
+    bone_length_sd: Option<f64>,
+    /// Spread (m) of the free-joint step's pull of the limb joints' depths in configuration (d)
+    /// (default: the library's; 0 = that of the other joints).
+    #[arg(long)]
+    limb_depth_sd: Option<f64>,
+    /// Weight of the learned bend prior in configuration (d) (default: the library's; 0 = off).
+    #[arg(long)]
+    bend_prior: Option<f64>,
     /// Straight limbs on (`on`) or off (`off`) in configuration (d) (default: the library's).
     #[arg(long)]
     straight_limbs: Option<String>,
@@ -264,6 +275,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         factor_prior: def.factor_prior && !a.no_factor_prior,
         depth_prior: a.depth_prior.unwrap_or(def.depth_prior),
         learned_depth_sd: a.learned_depth_sd.unwrap_or(def.learned_depth_sd),
+        bone_length_sd: a.bone_length_sd.unwrap_or(def.bone_length_sd),
+        limb_depth_sd: a.limb_depth_sd.unwrap_or(def.limb_depth_sd),
+        bend_prior: a.bend_prior.unwrap_or(def.bend_prior),
         straight_limbs: match a.straight_limbs.as_deref() {
             None => def.straight_limbs,
             Some("on") => true,
@@ -316,6 +330,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
         factor_prior: false,
         depth_prior: 0.0,
         learned_depth_sd: 0.0,
+        bone_length_sd: 0.0,
+        limb_depth_sd: 0.0,
+        bend_prior: 0.0,
         straight_limbs: false,
     };
     let configs = [

@@ -19,6 +19,7 @@ use super::learn::{clip_matches, motion_files, retarget_frames};
 use super::metrics::LIMB_BONES;
 use crate::pose::mlp_train::{self as mlp, MlpParams};
 use sketchbody::error::{Error, Result};
+use sketchbody::pose::bend_prior::BendPrior;
 use sketchbody::pose::factor_prior::{group_lengths, inputs, standardise, FactorPrior, FORMAT, NUM_INPUTS, VERSION};
 use sketchbody::pose::figure::{BodyFactors, BONE_GROUP, NUM_GROUPS};
 use sketchbody::pose::mlp::Mlp;
@@ -240,7 +241,7 @@ pub fn train(
          spread_share={}\nleft-out RMS of ln factor by group (head, torso, shoulders, arms, hips, legs): {} \
          (constant: {}); left-out joint depths: RMS {depth_rms:.4} (m at the figure's 2-D scale), the depth order \
          of limbs (upper arms, forearms, thighs, shins) pointing more than {ORDER_MIN_DEPTH} m toward or away from the viewer right on {order_right} of \
-         {order_total}",
+         {order_total}; bend prior of the knees and elbows counted on the {} training frames",
         p.seed,
         p.samples,
         p.hidden,
@@ -249,7 +250,8 @@ pub fn train(
         p.max_noise_px,
         p.spread_share,
         fmt(&sd),
-        fmt(&base)
+        fmt(&base),
+        frames.len()
     );
     let prior = FactorPrior {
         format: FORMAT.into(),
@@ -261,6 +263,7 @@ pub fn train(
         network,
         depth_network,
         sd,
+        bend: Some(BendPrior::learn(frames)),
     };
     // Round-trip through the checks of the file format.
     FactorPrior::from_json(&prior.to_json())
