@@ -163,6 +163,15 @@ pub fn estimate_pose_with_factor_prior(
     if let Some(h) = hint {
         h.validate()?;
     }
+    // An image cue's depths decide the limbs' depths and bends: the free-joint step then holds
+    // the limb joints as the others and has no bend prior (as it has no learned depths).
+    let cued;
+    let opts = if hint.is_some_and(|h| h.weight > 0.0) {
+        cued = PoseOptions { limb_depth_sd: 0.0, bend_prior: 0.0, ..opts.clone() };
+        &cued
+    } else {
+        opts
+    };
     // A figure the image shows standing takes the standing prior's depths instead of the
     // learned ones, which read the bundled example's short drawn legs as a lean with the feet
     // behind (docs/benchmarks-history.md, "Held-out real motion, drawn proportions,
