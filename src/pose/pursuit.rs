@@ -167,7 +167,7 @@ pub fn estimate_pose_with_factor_prior(
     // the limb joints as the others and has no bend prior (as it has no learned depths).
     let cued;
     let opts = if hint.is_some_and(|h| h.weight > 0.0) {
-        cued = PoseOptions { limb_depth_sd: 0.0, bend_prior: 0.0, ..opts.clone() };
+        cued = PoseOptions { limb_depth_sd: 0.0, bend_prior: 0.0, ..*opts };
         &cued
     } else {
         opts
