@@ -442,8 +442,11 @@ class PoseTest(unittest.TestCase):
                 out.append(float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))))
             return out
 
-        bent = bends(skb.estimate_pose(j).joints)
-        self.assertGreater(min(bent[2:]), 20.0, bent)
+        # By default the knees come out near straight (issue 46's uncertain bone lengths: 10.5° /
+        # 10.9°, not the 37.6° of a solve that keeps the lengths); straight_limbs makes every limb
+        # straight to within 10°.
+        default = bends(skb.estimate_pose(j).joints)
+        self.assertLess(max(default[2:]), 15.0, default)
         straight = bends(skb.estimate_pose(j, skb.PoseOptions(straight_limbs=True)).joints)
         self.assertLessEqual(max(straight), 10.0, straight)
 
