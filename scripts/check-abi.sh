@@ -6,7 +6,7 @@
 #      ABI now (scripts/abi-probe.py: every declared function defined with the header's own
 #      signature, compiled with -g, read by abidw): a removed function, or a changed signature,
 #      struct or enum of the header fails; added functions pass and are listed;
-#   3. every `#define SKB_*` of the baseline header (abi/sketchbody-MAJOR.h) keeps its value;
+#   3. every `#define SKB_*` of the baseline (abi/sketchbody-MAJOR.defines) keeps its value;
 #   4. every struct layout of the baseline (abi/sketchbody-MAJOR.layout, printed by the abi_layout
 #      program: sizes and field offsets as a C compiler sees them) is unchanged.
 # Usage: scripts/check-abi.sh LIBSKETCHBODY.so ABI_LAYOUT_PROGRAM [--bless]
@@ -26,6 +26,8 @@ base=abi/sketchbody-$major
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 fail() { echo "check-abi: $*" >&2; exit 1; }
+# defines HEADER: its `#define SKB_* VALUE` lines as "NAME VALUE", sorted.
+defines() { sed -n 's/^#define \(SKB_[A-Z0-9_]*\) \(.*\)$/\1 \2/p' "$1" | sort; }
 for tool in abidw abidiff cc nm python3; do
   command -v "$tool" >/dev/null || fail "$tool is missing (Debian: apt-get install abigail-tools gcc binutils python3)"
 done
@@ -50,9 +52,9 @@ if [ "${3:-}" = "--bless" ]; then
   [ ! -e "$base.abi" ] || fail "$base.abi exists: a released major's baseline never changes"
   mkdir -p abi
   cp "$work/now.abi" "$base.abi"
-  cp "$header" "$base.h"
+  defines "$header" >"$base.defines"
   "$layout" | grep '^layout ' >"$base.layout"
-  echo "check-abi: wrote the baseline $base.{abi,h,layout} ($(wc -l <"$work/declared") functions)"
+  echo "check-abi: wrote the baseline $base.{abi,defines,layout} ($(wc -l <"$work/declared") functions)"
   exit 0
 fi
 [ -e "$base.abi" ] || fail "no baseline $base.abi for major version $major (write it once with --bless)"
@@ -68,9 +70,8 @@ fi
 added=$(abidiff --no-show-locs "$base.abi" "$work/now.abi" | sed -n "s/^  \[A\] 'function .* \(skb_[a-z0-9_]*\)(.*/\1/p" | paste -sd' ' || true)
 
 # 3. Constants.
-defines() { sed -n 's/^#define \(SKB_[A-Z0-9_]*\) \(.*\)$/\1 \2/p' "$1" | sort; }
-changed=$(comm -23 <(defines "$base.h") <(defines "$header"))
-[ -z "$changed" ] || fail "constants of $base.h removed or changed: $changed"
+changed=$(comm -23 "$base.defines" <(defines "$header"))
+[ -z "$changed" ] || fail "constants of $base.defines removed or changed: $changed"
 
 # 4. Struct layouts.
 if [ -n "$layout" ]; then
@@ -80,4 +81,4 @@ fi
 
 echo "check-abi: $(wc -l <"$work/declared") functions declared${lib:+ and exported}; compatible with $base" \
   "($(grep -c '<function-decl' "$base.abi") baseline functions, $(wc -l <"$base.layout") layout lines," \
-  "$(defines "$base.h" | wc -l) constants); added since: ${added:-none}"
+  "$(wc -l <"$base.defines") constants); added since: ${added:-none}"

@@ -438,19 +438,31 @@ pub unsafe extern "C" fn skb_result_score(result: *const skb_result, gender: u32
     }
 }
 
+/// Writes `count(result)` to `*out`: the body of the result's count and length getters.
+///
+/// # Safety
+/// As those getters: `result` NULL or a live result, `out` NULL or valid for one write.
+pub(crate) unsafe fn write_result_count(
+    result: *const skb_result,
+    out: *mut usize,
+    count: impl FnOnce(&PipelineResult) -> usize,
+) -> skb_status {
+    unsafe {
+        ffi_boundary! {
+            let r = &try_status!(try_ref(result, "result")).inner;
+            try_status!(write_out(out, count(r), "out"));
+            skb_status::SKB_OK
+        }
+    }
+}
+
 /// The result body's vertex count (13380).
 /// @param result the result, only read.
 /// @param out receives the count; not NULL.
 /// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_vertex_count(result: *const skb_result, out: *mut usize) -> skb_status {
-    unsafe {
-        ffi_boundary! {
-            let r = &try_status!(try_ref(result, "result")).inner;
-            try_status!(write_out(out, r.mesh.vertices.len(), "out"));
-            skb_status::SKB_OK
-        }
-    }
+    unsafe { write_result_count(result, out, |r| r.mesh.vertices.len()) }
 }
 
 /// The result body's quad-face count (13378).
@@ -459,13 +471,7 @@ pub unsafe extern "C" fn skb_result_vertex_count(result: *const skb_result, out:
 /// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_face_count(result: *const skb_result, out: *mut usize) -> skb_status {
-    unsafe {
-        ffi_boundary! {
-            let r = &try_status!(try_ref(result, "result")).inner;
-            try_status!(write_out(out, r.mesh.quads.len(), "out"));
-            skb_status::SKB_OK
-        }
-    }
+    unsafe { write_result_count(result, out, |r| r.mesh.quads.len()) }
 }
 
 /// Copies the posed or rest vertices. On error nothing is written.
@@ -610,13 +616,7 @@ pub unsafe extern "C" fn skb_result_copy_skin_weights(
 /// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_shape_weight_count(result: *const skb_result, out: *mut usize) -> skb_status {
-    unsafe {
-        ffi_boundary! {
-            let r = &try_status!(try_ref(result, "result")).inner;
-            try_status!(write_out(out, r.weights.len(), "out"));
-            skb_status::SKB_OK
-        }
-    }
+    unsafe { write_result_count(result, out, |r| r.weights.len()) }
 }
 
 /// Copies the fitted PCA shape weights.

@@ -13,7 +13,7 @@ use super::error::fail;
 use super::fit::{skb_fit_options, skb_progress_fn};
 use super::image::skb_image;
 use super::mesh_ops::skb_camera;
-use super::pipeline::{run, skb_interim_fn, skb_result};
+use super::pipeline::{run, skb_interim_fn, skb_result, write_result_count};
 use super::pose::{skb_joints2d, skb_pose_dictionary, skb_pose_options};
 use super::ptr::*;
 use super::status::skb_status;
@@ -156,13 +156,7 @@ pub unsafe extern "C" fn skb_pipeline_run_views(
 /// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_view_count(result: *const skb_result, out: *mut usize) -> skb_status {
-    unsafe {
-        ffi_boundary! {
-            let r = &try_status!(try_ref(result, "result")).inner;
-            try_status!(write_out(out, r.views.len(), "out"));
-            skb_status::SKB_OK
-        }
-    }
+    unsafe { write_result_count(result, out, |r| r.views.len()) }
 }
 
 /// What the run made of one extra view.
@@ -211,13 +205,7 @@ pub unsafe extern "C" fn skb_result_view(
 /// @return SKB_OK; argument errors as docs/c-api.md.
 #[no_mangle]
 pub unsafe extern "C" fn skb_result_view_warnings_length(result: *const skb_result, out: *mut usize) -> skb_status {
-    unsafe {
-        ffi_boundary! {
-            let r = &try_status!(try_ref(result, "result")).inner;
-            try_status!(write_out(out, warnings_text(r).len(), "out"));
-            skb_status::SKB_OK
-        }
-    }
+    unsafe { write_result_count(result, out, |r| warnings_text(r).len()) }
 }
 
 /// Copies the run's warnings about its views, one per line.

@@ -67,6 +67,26 @@ fn solver_recovers_a_training_pose_and_drops_invisible_joints() {
     assert!(est2.rms < 3.0, "reprojection RMS with a hidden wrist {} px", est2.rms);
 }
 
+/// The bundled example's 2-D joints.
+fn example_joints() -> Joints2 {
+    sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../assets/examples/sketch_joints.json"
+    )))
+    .unwrap()
+}
+
+/// The free-joint step as it was before issue 46: the bone lengths kept, no bend prior.
+fn lengths_kept() -> PoseOptions {
+    PoseOptions { bone_length_sd: 0.0, limb_depth_sd: 0.0, bend_prior: 0.0, ..PoseOptions::default() }
+}
+
+/// Bend, degrees, of each limb of `straighten::LIMBS` (arms, then knees).
+fn bends(x: &sketchbody::skeleton::Joints3) -> [f64; 4] {
+    use sketchbody::pose::straighten::{bend_deg, LIMBS};
+    LIMBS.map(|(a, b, c)| bend_deg(&Vector3::from(x[a]), &Vector3::from(x[b]), &Vector3::from(x[c])))
+}
+
 /// Pitch of a camera rotation r = Rz(roll)·Rx(pitch)·Ry(yaw), degrees.
 fn pitch_deg(r: &nalgebra::Matrix3<f64>) -> f64 {
     r[(2, 1)].clamp(-1.0, 1.0).asin().to_degrees()
@@ -78,11 +98,7 @@ fn frontal_example_sketch_gets_a_level_camera_and_stands_straight() {
     // (the body would lean back in the side preview). With the free-joint step's uncertain bone
     // lengths (issue 46) the camera takes up part of the drawn legs' shortness as a pitch of
     // about 13° (0.3° with the lengths kept) while the body stays upright (the lean below).
-    let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../assets/examples/sketch_joints.json"
-    )))
-    .unwrap();
+    let joints = example_joints();
     let dict = dict_io::embedded().unwrap();
     let est = estimate_pose(&dict, &joints, &PoseOptions::default()).unwrap();
     assert!(pitch_deg(&est.camera.r).abs() < 15.0, "default pitch {:.1} deg", pitch_deg(&est.camera.r));
@@ -110,17 +126,10 @@ fn straight_limbs_straighten_the_example_without_moving_its_image() {
     // With straight limbs (issue 46) every knee and elbow is within 10° of straight, the
     // ankles, wrists and torso stay where they were, the reprojection barely moves, and the
     // estimate is still base + Σ B w with the factors applied.
-    use sketchbody::pose::straighten::{bend_deg, LIMBS};
-    use sketchbody::skeleton::Joints3;
-    let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../assets/examples/sketch_joints.json"
-    )))
-    .unwrap();
+    use sketchbody::pose::straighten::LIMBS;
+    let joints = example_joints();
     let dict = dict_io::embedded().unwrap();
-    let bends =
-        |x: &Joints3| LIMBS.map(|(a, b, c)| bend_deg(&Vector3::from(x[a]), &Vector3::from(x[b]), &Vector3::from(x[c])));
-    let kept = PoseOptions { bone_length_sd: 0.0, limb_depth_sd: 0.0, bend_prior: 0.0, ..PoseOptions::default() };
+    let kept = lengths_kept();
     let plain = estimate_pose(&dict, &joints, &kept).unwrap();
     assert!(bends(&plain.joints)[2] > 20.0 && bends(&plain.joints)[3] > 20.0, "knees {:?}", bends(&plain.joints));
     let opts = PoseOptions { straight_limbs: true, ..kept };
@@ -150,21 +159,14 @@ fn the_default_explains_the_examples_short_legs_by_length_not_by_bent_knees() {
     // Issue 46: with each bone's length uncertain and the learned bend prior (the default), the
     // example's knees come out near straight (10.5° / 10.9° on 2026-12-07) instead of bent ~38°
     // in depth, the image as well fitted and the standing figure still upright.
-    use sketchbody::pose::straighten::{bend_deg, LIMBS};
-    let joints = sketchbody::export::joints2d::load_joints2d(std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../assets/examples/sketch_joints.json"
-    )))
-    .unwrap();
+    let joints = example_joints();
     let dict = dict_io::embedded().unwrap();
     let est = estimate_pose(&dict, &joints, &PoseOptions::default()).unwrap();
-    let kept = PoseOptions { bone_length_sd: 0.0, limb_depth_sd: 0.0, bend_prior: 0.0, ..PoseOptions::default() };
+    let kept = lengths_kept();
     let old = estimate_pose(&dict, &joints, &kept).unwrap();
     let knees = |x: &sketchbody::skeleton::Joints3| {
-        [2, 3].map(|i| {
-            let (a, b, c) = LIMBS[i];
-            bend_deg(&Vector3::from(x[a]), &Vector3::from(x[b]), &Vector3::from(x[c]))
-        })
+        let b = bends(x);
+        [b[2], b[3]]
     };
     assert!(knees(&old.joints).iter().all(|b| *b > 30.0), "lengths kept: knees {:?}", knees(&old.joints));
     assert!(knees(&est.joints).iter().all(|b| *b < 13.0), "default: knees {:?}", knees(&est.joints));
