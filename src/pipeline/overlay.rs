@@ -202,14 +202,20 @@ mod tests {
     use crate::body::procedural::{capsule_humanoid, rest_joints};
     use nalgebra::Matrix3;
 
-    #[test]
-    fn a_large_sketch_is_drawn_shrunk_with_its_joints_in_place() {
+    /// A capsule humanoid and its joints projected by `cam`, all visible.
+    fn projected_humanoid(cam: &WeakPerspective) -> (crate::body::rig::mesh::RiggedMesh, Joints2) {
         let m = capsule_humanoid(&rest_joints(), 10, 8);
-        let cam = WeakPerspective { sx: 1200.0, sy: 1200.0, r: Matrix3::identity(), t: [2200.0, 1300.0] };
         let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
         for k in 0..NUM_JOINTS {
             j.xy[k] = cam.project(&nalgebra::Vector3::from(m.joints[k]));
         }
+        (m, j)
+    }
+
+    #[test]
+    fn a_large_sketch_is_drawn_shrunk_with_its_joints_in_place() {
+        let cam = WeakPerspective { sx: 1200.0, sy: 1200.0, r: Matrix3::identity(), t: [2200.0, 1300.0] };
+        let (m, j) = projected_humanoid(&cam);
         let sketch = GrayImage::filled(4400, 2600, 255).unwrap();
         let img = overlay(&sketch, &j, &m.joints, &m.vertices, &m.triangles(), &cam).unwrap();
         // n = 3: 1467 × 867 and a 434 px panel.
@@ -223,12 +229,8 @@ mod tests {
 
     #[test]
     fn outline_bones_and_joints_are_drawn() {
-        let m = capsule_humanoid(&rest_joints(), 10, 8);
         let cam = WeakPerspective { sx: 120.0, sy: 120.0, r: Matrix3::identity(), t: [128.0, 128.0] };
-        let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
-        for k in 0..NUM_JOINTS {
-            j.xy[k] = cam.project(&nalgebra::Vector3::from(m.joints[k]));
-        }
+        let (m, mut j) = projected_humanoid(&cam);
         j.visible[joint::L_WRIST] = false;
         let sketch = GrayImage::filled(256, 256, 255).unwrap();
         let img = overlay(&sketch, &j, &m.joints, &m.vertices, &m.triangles(), &cam).unwrap();
