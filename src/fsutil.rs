@@ -87,6 +87,12 @@ fn unique_tag(prefix: &str) -> String {
 /// or a folder the call fails with [`Error::Io`] (kind `InvalidInput`) and nothing is written.
 /// On failure the temporary file is removed and `path` is untouched.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_parts(path, &[bytes])
+}
+
+/// [`write_atomic`] of the concatenation of `parts`, written one after the other (no joined copy
+/// in memory).
+pub fn write_atomic_parts(path: &Path, parts: &[&[u8]]) -> Result<()> {
     let io_err = |source| Error::Io { path: path.to_path_buf(), source };
     replace::check_replaceable(path)?;
     let tmp = replace::sibling(path, ".tmp")?;
@@ -94,7 +100,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let result = (|| {
         let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(&tmp)?;
         created = true;
-        f.write_all(bytes)?;
+        for part in parts {
+            f.write_all(part)?;
+        }
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();

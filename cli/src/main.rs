@@ -6,7 +6,7 @@
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use sketchbody_cli::{body, default_sigpipe, detect, edges, exit_code, pose, run};
+use sketchbody_cli::{body, default_sigpipe, detect, edges, exit_code, one_malloc_arena, pose, run};
 
 #[derive(Parser)]
 #[command(name = "sketchbody", version, about = "Concept sketch of a human character to a rigged 3-D base mesh")]
@@ -31,6 +31,7 @@ enum Command {
 
 fn main() -> ExitCode {
     default_sigpipe();
+    one_malloc_arena();
     let result = match Cli::parse().command {
         Command::Run(a) => run::run(*a),
         Command::Detect(a) => detect::run(a),

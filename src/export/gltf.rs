@@ -21,7 +21,7 @@ use crate::body::rig::RigScene;
 use crate::body::rig::{vertex_normals, RiggedMesh};
 use crate::error::{Error, Result};
 use crate::export::rigged::{bind_transform, check_scene, pose_locals, posed_locals};
-use crate::fsutil::write_atomic;
+use crate::fsutil::write_atomic_parts;
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -73,6 +73,10 @@ fn vec_json(v: &Vector3<f64>) -> Value {
 /// `mesh` and, when given, `texture_png` (PNG bytes) as the base-colour texture. Errors: the
 /// mesh is invalid or its vertex count differs from the scene's; the file would exceed 4 GiB.
 pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>) -> Result<Vec<u8>> {
+    Ok(build_glb(mesh, scene, texture_png)?.parts().concat())
+}
+
+fn build_glb(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>) -> Result<Glb> {
     check_scene(mesh, scene)?;
     let vertices = &scene.rest_vertices;
     // Split vertices where a vertex has several UVs (glTF attributes are per vertex).
@@ -284,25 +288,46 @@ pub fn glb_bytes(mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>
     while !data.len().is_multiple_of(4) {
         data.push(0);
     }
-    let total = 12 + 8 + text.len() + 8 + data.len();
-    let total32 = u32::try_from(total)
-        .map_err(|_| Error::OutOfRange { name: "glb size", detail: format!("{total} bytes exceeds 4 GiB") })?;
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&total32.to_le_bytes());
-    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&text);
-    out.extend_from_slice(&(data.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&data);
-    Ok(out)
+    Glb::new(text, data)
 }
 
-/// Writes [`glb_bytes`] to `path` atomically.
+/// A .glb file's two chunks (JSON and binary, each padded to 4 bytes) and the headers that go
+/// before each.
+struct Glb {
+    text: Vec<u8>,
+    data: Vec<u8>,
+    header: [u8; 20],
+    bin_header: [u8; 8],
+}
+
+impl Glb {
+    /// Errors: the file would exceed 4 GiB.
+    fn new(text: Vec<u8>, data: Vec<u8>) -> Result<Glb> {
+        let total = 12 + 8 + text.len() + 8 + data.len();
+        let total32 = u32::try_from(total)
+            .map_err(|_| Error::OutOfRange { name: "glb size", detail: format!("{total} bytes exceeds 4 GiB") })?;
+        let mut header = [0u8; 20];
+        header[..4].copy_from_slice(b"glTF");
+        header[4..8].copy_from_slice(&2u32.to_le_bytes());
+        header[8..12].copy_from_slice(&total32.to_le_bytes());
+        header[12..16].copy_from_slice(&(text.len() as u32).to_le_bytes());
+        header[16..].copy_from_slice(b"JSON");
+        let mut bin_header = [0u8; 8];
+        bin_header[..4].copy_from_slice(&(data.len() as u32).to_le_bytes());
+        bin_header[4..].copy_from_slice(b"BIN\0");
+        Ok(Glb { text, data, header, bin_header })
+    }
+
+    /// The file's bytes in order, as four slices.
+    fn parts(&self) -> [&[u8]; 4] {
+        [&self.header, &self.text, &self.bin_header, &self.data]
+    }
+}
+
+/// Writes [`glb_bytes`] to `path` atomically (its chunks one after the other, without the
+/// joined copy).
 pub fn write_glb(path: &Path, mesh: &RiggedMesh, scene: &RigScene, texture_png: Option<&[u8]>) -> Result<()> {
-    write_atomic(path, &glb_bytes(mesh, scene, texture_png)?)
+    write_atomic_parts(path, &build_glb(mesh, scene, texture_png)?.parts())
 }
 
 #[cfg(test)]

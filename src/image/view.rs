@@ -153,11 +153,52 @@ impl GrayImage {
     pub fn view(&self) -> ImageView<'_> {
         ImageView { data: &self.data, width: self.width, height: self.height, channels: 1, stride: self.width }
     }
+    /// This image shrunk by the whole factor `n` (≥ 1): ⌈width / n⌉ × ⌈height / n⌉ pixels, each
+    /// the rounded mean of its n × n block (clipped at the right and bottom edges). `n` = 1 gives
+    /// a copy.
+    pub fn box_shrunk(&self, n: usize) -> GrayImage {
+        let n = n.max(1);
+        let (w, h) = (self.width.div_ceil(n), self.height.div_ceil(n));
+        let mut sums = vec![0u32; w];
+        let mut data = Vec::with_capacity(w * h);
+        for by in 0..h {
+            sums.fill(0);
+            let rows = (by * n)..((by + 1) * n).min(self.height);
+            let row_count = rows.len();
+            for y in rows {
+                let row = &self.data[y * self.width..(y + 1) * self.width];
+                for (x, &v) in row.iter().enumerate() {
+                    sums[x / n] += u32::from(v);
+                }
+            }
+            for (bx, &sum) in sums.iter().enumerate() {
+                let cols = ((bx + 1) * n).min(self.width) - bx * n;
+                let count = (cols * row_count) as u32;
+                data.push(((sum + count / 2) / count) as u8);
+            }
+        }
+        GrayImage { width: w, height: h, data }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn box_shrunk_averages_whole_blocks_and_clips_the_edges() {
+        // 5 × 3: columns 0-1 of rows 0-1 are 0, 10, 20, 30 (mean 15); the last column and row
+        // make partial blocks.
+        let img =
+            GrayImage::from_vec(5, 3, vec![0, 10, 100, 100, 7, 20, 30, 100, 101, 9, 1, 3, 255, 255, 200]).unwrap();
+        let s = img.box_shrunk(2);
+        assert_eq!((s.width(), s.height()), (3, 2));
+        assert_eq!(s.as_bytes(), &[15, 100, 8, 2, 255, 200]);
+        assert_eq!(img.box_shrunk(1).as_bytes(), img.as_bytes());
+        assert_eq!(img.box_shrunk(0).as_bytes(), img.as_bytes());
+        let one = img.box_shrunk(8);
+        assert_eq!((one.width(), one.height(), one.as_bytes()[0]), (1, 1, 79));
+    }
 
     /// Finding 1: lengths derived from caller strides never wrap.
     #[test]

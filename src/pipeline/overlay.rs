@@ -23,6 +23,12 @@ const PANEL: [u8; 3] = [248, 248, 244];
 const SEPARATOR: [u8; 3] = [90, 90, 90];
 const VIEWER: [u8; 3] = [120, 120, 120];
 
+/// Longest side, px, of the sketch part of [`overlay`]'s picture: a larger sketch is drawn
+/// shrunk by the smallest whole factor that brings it within (the picture is for looking at; at
+/// the sketch's own size a 4096² sketch's overlay would be 6144 × 4096 px and take most of a
+/// run's writing time).
+pub const MAX_OVERLAY_SIDE: usize = 2048;
+
 /// Width of the side-view panel for a `w` × `h` sketch: half the height, less where the picture
 /// would pass [`MAX_IMAGE_SIDE`] (0 for a sketch already that wide: no panel).
 pub fn side_panel_width(w: usize, h: usize) -> usize {
@@ -67,9 +73,33 @@ fn line(img: &mut RgbImage, a: [f64; 2], b: [f64; 2], half_width: f64, c: [u8; 3
 /// sketch: `vertices`/`tris` is the posed mesh (metres, model frame) projected with `camera`
 /// (image pixels); `joints` are the 2-D joints; `pose` the 3-D joints (metres, model frame) the
 /// side panel draws. Images with a side above the rasteriser's 4096 px get the outline from a
-/// scaled raster. Errors: an invalid camera or mesh (as [`Rasterizer::rasterize`]); a mesh
-/// wholly outside the image draws no outline and is not an error.
+/// scaled raster. A sketch with a side above [`MAX_OVERLAY_SIDE`] is drawn shrunk by a whole
+/// factor n (joints and camera divided by n). Errors: an invalid camera or mesh (as
+/// [`Rasterizer::rasterize`]); a mesh wholly outside the image draws no outline and is not an
+/// error.
 pub fn overlay(
+    sketch: &GrayImage,
+    joints: &Joints2,
+    pose: &Joints3,
+    vertices: &[[f32; 3]],
+    tris: &[[u32; 3]],
+    camera: &WeakPerspective,
+) -> Result<RgbImage> {
+    let n = sketch.width().max(sketch.height()).div_ceil(MAX_OVERLAY_SIDE);
+    if n <= 1 {
+        return draw(sketch, joints, pose, vertices, tris, camera);
+    }
+    let k = 1.0 / n as f64;
+    let mut small_joints = *joints;
+    for p in &mut small_joints.xy {
+        *p = [p[0] * k, p[1] * k];
+    }
+    let small_camera =
+        WeakPerspective { sx: camera.sx * k, sy: camera.sy * k, r: camera.r, t: [camera.t[0] * k, camera.t[1] * k] };
+    draw(&sketch.box_shrunk(n), &small_joints, pose, vertices, tris, &small_camera)
+}
+
+fn draw(
     sketch: &GrayImage,
     joints: &Joints2,
     pose: &Joints3,
@@ -172,14 +202,35 @@ mod tests {
     use crate::body::procedural::{capsule_humanoid, rest_joints};
     use nalgebra::Matrix3;
 
-    #[test]
-    fn outline_bones_and_joints_are_drawn() {
+    /// A capsule humanoid and its joints projected by `cam`, all visible.
+    fn projected_humanoid(cam: &WeakPerspective) -> (crate::body::rig::mesh::RiggedMesh, Joints2) {
         let m = capsule_humanoid(&rest_joints(), 10, 8);
-        let cam = WeakPerspective { sx: 120.0, sy: 120.0, r: Matrix3::identity(), t: [128.0, 128.0] };
         let mut j = Joints2 { xy: [[0.0; 2]; NUM_JOINTS], visible: [true; NUM_JOINTS] };
         for k in 0..NUM_JOINTS {
             j.xy[k] = cam.project(&nalgebra::Vector3::from(m.joints[k]));
         }
+        (m, j)
+    }
+
+    #[test]
+    fn a_large_sketch_is_drawn_shrunk_with_its_joints_in_place() {
+        let cam = WeakPerspective { sx: 1200.0, sy: 1200.0, r: Matrix3::identity(), t: [2200.0, 1300.0] };
+        let (m, j) = projected_humanoid(&cam);
+        let sketch = GrayImage::filled(4400, 2600, 255).unwrap();
+        let img = overlay(&sketch, &j, &m.joints, &m.vertices, &m.triangles(), &cam).unwrap();
+        // n = 3: 1467 × 867 and a 434 px panel.
+        assert_eq!((img.width(), img.height()), (1467 + 434, 867));
+        let [hx, hy] = j.xy[joint::HEAD];
+        let o = (((hy / 3.0) as usize) * img.width() + (hx / 3.0) as usize) * 3;
+        assert_eq!(&img.as_bytes()[o..o + 3], CENTRE);
+        let outline = img.as_bytes().chunks(3).filter(|p| *p == OUTLINE).count();
+        assert!(outline > 200, "outline {outline}");
+    }
+
+    #[test]
+    fn outline_bones_and_joints_are_drawn() {
+        let cam = WeakPerspective { sx: 120.0, sy: 120.0, r: Matrix3::identity(), t: [128.0, 128.0] };
+        let (m, mut j) = projected_humanoid(&cam);
         j.visible[joint::L_WRIST] = false;
         let sketch = GrayImage::filled(256, 256, 255).unwrap();
         let img = overlay(&sketch, &j, &m.joints, &m.vertices, &m.triangles(), &cam).unwrap();
