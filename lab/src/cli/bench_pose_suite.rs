@@ -30,7 +30,9 @@ use sketchbody::skeleton::{Joints2, Joints3, NUM_JOINTS};
 use sketchbody_lab::pose::learn::{
     body_model_skeletons, clip_matches, default_held_out, held_out_of, motion_files, retarget_frames,
 };
-use sketchbody_lab::pose::metrics::{limb_direction_errors, pa_mpjpe, torso_lean_error_deg, HingeScores};
+use sketchbody_lab::pose::metrics::{
+    hinge_bends_deg, hinge_depth_angles_deg, limb_direction_errors, pa_mpjpe, torso_lean_error_deg, HingeScores,
+};
 
 use crate::bench_pose::thread_cpu_s;
 use sketchbody_cli::CliError;
@@ -290,10 +292,13 @@ pub fn run(dict: &Dictionary, opts: &PoseOptions, suite: &Suite) -> Result<(), C
             let mut f = std::io::BufWriter::new(std::fs::File::create(p).map_err(dump_err)?);
             writeln!(
                 f,
-                "set,props,view,sigma,case,standing_2d,{},{},{}",
+                "set,props,view,sigma,case,standing_2d,{},{},{},{},{},{}",
                 (0..8).map(|i| format!("limb{i}")).collect::<Vec<_>>().join(","),
                 GROUP_NAMES.map(|g| format!("est_{g}")).join(","),
-                GROUP_NAMES.map(|g| format!("true_{g}")).join(",")
+                GROUP_NAMES.map(|g| format!("true_{g}")).join(","),
+                (0..4).map(|i| format!("est_bend{i}")).collect::<Vec<_>>().join(","),
+                (0..4).map(|i| format!("true_bend{i}")).collect::<Vec<_>>().join(","),
+                (0..4).map(|i| format!("true_depth_deg{i}")).collect::<Vec<_>>().join(",")
             )
             .map_err(dump_err)?;
             Some(f)
@@ -380,12 +385,15 @@ pub(crate) fn score_sets(
                             let vis = [true; NUM_JOINTS];
                             writeln!(
                                 out,
-                                "{},{props},{view},{sigma},{case},{},{},{},{}",
+                                "{},{props},{view},{sigma},{case},{},{},{},{},{},{},{}",
                                 set.name,
                                 u8::from(standing_in_image(&j2.xy, &vis)),
                                 errs.iter().map(|e| format!("{e:.2}")).collect::<Vec<_>>().join(","),
                                 est.factors.k.map(|k| format!("{k:.3}")).join(","),
-                                truth.k.map(|k| format!("{k:.3}")).join(",")
+                                truth.k.map(|k| format!("{k:.3}")).join(","),
+                                hinge_bends_deg(&est.joints).map(|b| format!("{b:.1}")).join(","),
+                                hinge_bends_deg(&gt).map(|b| format!("{b:.1}")).join(","),
+                                hinge_depth_angles_deg(&gt, &cam.r).map(|b| format!("{b:.1}")).join(",")
                             )
                             .map_err(dump_err)?;
                         }

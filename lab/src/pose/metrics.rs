@@ -90,6 +90,21 @@ pub fn hinge_bends_deg(x: &Joints3) -> [f64; 4] {
     HINGES.map(|(p, h, c)| angle_deg(&(v(&x[h]) - v(&x[p])), &(v(&x[c]) - v(&x[h]))))
 }
 
+/// For each of [`HINGES`], the angle of its chord (first joint to last) out of the image plane
+/// of the camera with model-to-camera rotation `r`, degrees (0 = in the plane, 90 = pointing
+/// along the viewing direction, signed: > 0 toward +z of the camera frame).
+pub fn hinge_depth_angles_deg(x: &Joints3, r: &Matrix3<f64>) -> [f64; 4] {
+    HINGES.map(|(p, _, c)| {
+        let d = r * (v(&x[c]) - v(&x[p]));
+        let n = d.norm();
+        if n > 0.0 {
+            (d.z / n).clamp(-1.0, 1.0).asin().to_degrees()
+        } else {
+            0.0
+        }
+    })
+}
+
 /// Sums of hinge-bend errors over many poses ([`HingeScores::add`]); the means are the
 /// benchmark's figures.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
