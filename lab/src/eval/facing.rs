@@ -141,8 +141,9 @@ pub struct Misread {
     pub features: [f64; NUM_FEATURES],
 }
 
-/// The samples with a yaw and evidence of a figure whose decided facing under `model` is not
-/// the true one.
+/// The samples with a yaw and evidence of a figure whose facing under `model`, as the detector
+/// acts on it ([`sketchbody::detect::figure::facing_acted_on`]: no back view on a photo-like
+/// image), is not the true one.
 pub fn misread(samples: &[Sample], model: &FacingModel) -> Vec<Misread> {
     let mut out = Vec::new();
     for (index, s) in samples.iter().enumerate() {
@@ -152,7 +153,7 @@ pub fn misread(samples: &[Sample], model: &FacingModel) -> Vec<Misread> {
         }
         let features = evidence_facing_features(&s.evidence);
         let probabilities = model.probabilities(&features);
-        let decided = sketchbody::detect::facing::decided(&probabilities);
+        let decided = sketchbody::detect::figure::facing_acted_on(&s.evidence, &probabilities);
         if decided != Facing::of_yaw(yaw_deg) {
             out.push(Misread { index, yaw_deg, decided, probabilities, features });
         }
