@@ -2,10 +2,10 @@
 //! the image holds, and the left/right labelling that follows from it. The evidence
 //! ([`facing_features`]): how far apart each backend put the two sides (small for a profile),
 //! BlazePose's face landmarks (their visibility, the nose beside the ears) and its depth of the
-//! shoulders, and the ink inside the head and the direction of its strokes (hair drawn over a
-//! head seen from behind, or a face). Which side a backend labelled left is not evidence: both
-//! label a faceless outline either way. A
-//! multinomial logistic model ([`FacingModel`], fitted by `sketchbody-lab fit-facing` on rendered
+//! shoulders, and the ink inside the head, the direction of its strokes and how many of them
+//! lines across and along the head cross ([`head_ink`]: hair drawn over a head seen from behind,
+//! or a face). Which side a backend labelled left is not evidence: both label a faceless outline
+//! either way. A multinomial logistic model ([`FacingModel`], fitted by `sketchbody-lab fit-facing` on rendered
 //! sketches of every yaw, embedded from `assets/facing_model.json`) turns them into the four
 //! probabilities; under [`DECIDE`] the facing is [`Facing::Unknown`], except a back view that
 //! the front hardly competes with ([`decided`]).
