@@ -312,8 +312,9 @@
 #define SKB_FACING_RIGHT 3
 
 /**
- * Facing: undecided (no facing reaches probability 0.6); the joints carry the front's
- * labelling unless a profile is likelier than front and back together.
+ * Facing: undecided (no facing reaches probability 0.6, a back view 0.5 with the front ruled
+ * out; or a back view in a photo-like image); the joints carry the front's labelling unless a
+ * profile is likelier than front and back together.
  */
 #define SKB_FACING_UNKNOWN 4
 

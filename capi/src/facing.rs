@@ -22,8 +22,9 @@ pub const SKB_FACING_BACK: u32 = 1;
 pub const SKB_FACING_LEFT: u32 = 2;
 /// Facing: a right profile (the character's right side toward the viewer).
 pub const SKB_FACING_RIGHT: u32 = 3;
-/// Facing: undecided (no facing reaches probability 0.6); the joints carry the front's
-/// labelling unless a profile is likelier than front and back together.
+/// Facing: undecided (no facing reaches probability 0.6, a back view 0.5 with the front ruled
+/// out; or a back view in a photo-like image); the joints carry the front's labelling unless a
+/// profile is likelier than front and back together.
 pub const SKB_FACING_UNKNOWN: u32 = 4;
 
 /// The facing of a detected figure. Plain data, 304 bytes; its layout is part of the ABI.

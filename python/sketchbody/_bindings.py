@@ -8,7 +8,7 @@ use these only for what it does not wrap. The comments are the header's document
 
 import ctypes
 
-HEADER_SHA256 = "422942de9baef7713945efe8d8153b8f66c8788386202e673af28bb03d209d10"
+HEADER_SHA256 = "5c17f8996e42f3aa8a5802c63ec43275f1f315648c7a9dde62c893b25daba967"
 
 # ---- constants (#define) ----
 
@@ -141,8 +141,9 @@ SKB_FACING_BACK = 1
 SKB_FACING_LEFT = 2
 # Facing: a right profile (the character's right side toward the viewer).
 SKB_FACING_RIGHT = 3
-# Facing: undecided (no facing reaches probability 0.6); the joints carry the front's
-# labelling unless a profile is likelier than front and back together.
+# Facing: undecided (no facing reaches probability 0.6, a back view 0.5 with the front ruled
+# out; or a back view in a photo-like image); the joints carry the front's labelling unless a
+# profile is likelier than front and back together.
 SKB_FACING_UNKNOWN = 4
 # `skb_fit_options_set_score`: the paper's eq. 7 (IoU of the silhouette with the edge map).
 SKB_SCORE_PAPER = 0

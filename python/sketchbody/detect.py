@@ -66,7 +66,8 @@ _FACING_NAMES = {B.SKB_FACING_FRONT: "front", B.SKB_FACING_BACK: "back", B.SKB_F
 class Facing:
     """Which way the detected figure faces: `facing` "front", "back", "left" (a left profile:
     the character's left side toward the viewer), "right" or "unknown" (no facing reaches
-    probability 0.6); `probabilities` {facing: p} over the four (summing to 1); `swapped` (the
+    probability 0.6, a back view 0.5 with the front ruled out; or a back view in a photo-like
+    image); `probabilities` {facing: p} over the four (summing to 1); `swapped` (the
     joints are the detector's with left and right swapped: a labelling that implied a back view
     without evidence of one, or the reverse); `alternative` (Joints2D: the joints with left and
     right swapped) and `alternative_score` (the probability that it is the right labelling)."""

@@ -2,12 +2,13 @@
 //! the image holds, and the left/right labelling that follows from it. The evidence
 //! ([`facing_features`]): how far apart each backend put the two sides (small for a profile),
 //! BlazePose's face landmarks (their visibility, the nose beside the ears) and its depth of the
-//! shoulders, and the ink inside the head and the direction of its strokes (hair drawn over a
-//! head seen from behind, or a face). Which side a backend labelled left is not evidence: both
-//! label a faceless outline either way. A
-//! multinomial logistic model ([`FacingModel`], fitted by `sketchbody-lab fit-facing` on rendered
+//! shoulders, and the ink inside the head, the direction of its strokes and how many of them
+//! lines across and along the head cross ([`head_ink`]: hair drawn over a head seen from behind,
+//! or a face). Which side a backend labelled left is not evidence: both label a faceless outline
+//! either way. A multinomial logistic model ([`FacingModel`], fitted by `sketchbody-lab fit-facing` on rendered
 //! sketches of every yaw, embedded from `assets/facing_model.json`) turns them into the four
-//! probabilities; under [`DECIDE`] the facing is [`Facing::Unknown`].
+//! probabilities; under [`DECIDE`] the facing is [`Facing::Unknown`], except a back view that
+//! the front hardly competes with ([`decided`]).
 //!
 //! The labelling rule ([`target_handedness`]): a figure read as seen from behind gets the back
 //! view's labelling, every other figure whose front or back dominates its profiles the front's:
@@ -32,6 +33,13 @@ pub const FACING_MODEL_FORMAT: &str = "sketchbody-facing-model";
 /// is [`Facing::Unknown`] (the probabilities are still reported).
 pub const DECIDE: f64 = 0.6;
 
+/// The smallest probability of a likeliest back view decided under [`DECIDE`] ([`decided`]).
+pub const BACK_DECIDE: f64 = 0.5;
+
+/// The smallest share of the front's and back's probability a back view under [`DECIDE`] must
+/// hold to be decided ([`decided`]).
+pub const BACK_OVER_FRONT: f64 = 0.9;
+
 /// The smallest |handedness| ([`handedness`]) at which a labelling is swapped to the target's
 /// side: under it the shoulders and hips overlap in the image (a profile) and the sign says
 /// nothing.
@@ -52,7 +60,7 @@ pub enum Facing {
     Left,
     /// A right profile: the character's right side toward the viewer.
     Right,
-    /// The evidence does not decide (no facing reaches [`DECIDE`]).
+    /// The evidence does not decide (no facing reaches [`DECIDE`], [`decided`]).
     Unknown,
 }
 
@@ -133,7 +141,7 @@ pub struct FacingModel {
 }
 
 /// The features of [`facing_features`], in order.
-pub const FEATURES: [&str; 12] = [
+pub const FEATURES: [&str; 14] = [
     "bias",
     "sketch_present",
     "sketch_spread",
@@ -146,6 +154,8 @@ pub const FEATURES: [&str; 12] = [
     "shoulder_depth",
     "head_ink",
     "head_strokes_along",
+    "head_runs_across",
+    "head_runs_along",
 ];
 
 /// Number of [`FEATURES`].
@@ -288,8 +298,8 @@ pub fn facing_features(input: &FacingInput<'_>) -> [f64; NUM_FEATURES] {
             x[9] = if dz.is_finite() { dz.clamp(-2.0, 2.0) } else { 0.0 };
         }
     }
-    let head = input.head_ink.unwrap_or(HeadInk { ink: 0.0, along: 0.5 });
-    (x[10], x[11]) = (head.ink, head.along);
+    let head = input.head_ink.unwrap_or(HeadInk::EMPTY);
+    (x[10], x[11], x[12], x[13]) = (head.ink, head.along, head.runs_across, head.runs_along);
     x
 }
 
@@ -303,6 +313,53 @@ pub struct HeadInk {
     /// running along the axis, as hair seen from behind, give values near 1, the horizontal
     /// strokes of eyes, brows and mouth low ones; 0.5 without gradient. In [0, 1].
     pub along: f64,
+    /// Strokes crossed per line across the head's axis ([`RUN_LINES`] lines): many for strands
+    /// of hair, few for a face.
+    pub runs_across: f64,
+    /// Strokes crossed per line along the head's axis: eyes, brows and mouth cross these.
+    pub runs_along: f64,
+}
+
+impl HeadInk {
+    /// No ink: an empty head.
+    pub const EMPTY: HeadInk = HeadInk { ink: 0.0, along: 0.5, runs_across: 0.0, runs_along: 0.0 };
+}
+
+/// Lines of each direction [`head_runs`] scans, evenly spaced over the middle of the head.
+pub const RUN_LINES: usize = 7;
+
+/// The dark runs (gray under 128, entered from a light pixel) met on [`RUN_LINES`] lines
+/// running in `dir` (unit) through the disk at `c` of radius `r`, spaced across `dir` over
+/// ±0.75 `r`, sampled every pixel: their mean per line.
+fn head_runs(image: &ImageView<'_>, c: [f64; 2], r: f64, dir: [f64; 2]) -> f64 {
+    let normal = [-dir[1], dir[0]];
+    let mut runs = 0usize;
+    for k in 0..RUN_LINES {
+        let off = r * 0.75 * (2.0 * k as f64 / (RUN_LINES - 1) as f64 - 1.0);
+        let half = (r * r - off * off).max(0.0).sqrt();
+        let steps = (2.0 * half).floor() as usize;
+        let mut dark_before = true;
+        for i in 0..=steps {
+            let t = -half + i as f64;
+            let (x, y) = (c[0] + off * normal[0] + t * dir[0], c[1] + off * normal[1] + t * dir[1]);
+            let dark = match pixel_at(image, x, y) {
+                Some(g) => g < 128,
+                None => true,
+            };
+            runs += usize::from(dark && !dark_before);
+            dark_before = dark;
+        }
+    }
+    runs as f64 / RUN_LINES as f64
+}
+
+/// The gray value at image point (`x`, `y`) (the pixel holding it), `None` outside the image.
+fn pixel_at(image: &ImageView<'_>, x: f64, y: f64) -> Option<u8> {
+    if !(x >= 0.0 && y >= 0.0) {
+        return None;
+    }
+    let (xi, yi) = (x as usize, y as usize);
+    (xi < image.width() && yi < image.height()).then(|| gray_at(image, xi, yi))
 }
 
 /// The ink of `image` inside the disk at the head joint of `j` whose radius is 0.3 × the
@@ -337,7 +394,13 @@ pub fn head_ink(image: &ImageView<'_>, j: &Joints2) -> Option<HeadInk> {
         }
     }
     let total = across + along_axis;
-    (all > 0).then(|| HeadInk { ink: ink as f64 / all as f64, along: if total > 0.0 { across / total } else { 0.5 } })
+    let normal = [-axis[1], axis[0]];
+    (all > 0).then(|| HeadInk {
+        ink: ink as f64 / all as f64,
+        along: if total > 0.0 { across / total } else { 0.5 },
+        runs_across: head_runs(image, h, r, normal),
+        runs_along: head_runs(image, h, r, axis),
+    })
 }
 
 /// The gray value of pixel (`x`, `y`) of a 1, 3 or 4 channel image.
@@ -365,10 +428,16 @@ pub fn target_handedness(facing: Facing, p: &[f64; 4]) -> f64 {
     }
 }
 
-/// The facing of probabilities `p`: the likeliest when it reaches [`DECIDE`], else `Unknown`.
+/// The facing of probabilities `p`: the likeliest when it reaches [`DECIDE`], else `Unknown`;
+/// a likeliest back view is also decided from [`BACK_DECIDE`] when it holds [`BACK_OVER_FRONT`]
+/// of the front's and back's probability. Such a figure is split between a back view and a
+/// profile (a back turned 20° reads as either); undecided, it would get the front's labelling
+/// ([`target_handedness`]: its front and back outweigh its profiles), the one reading its
+/// probabilities rule out.
 pub fn decided(p: &[f64; 4]) -> Facing {
     let k = (0..4).max_by(|&a, &b| p[a].total_cmp(&p[b])).unwrap_or(0);
-    if p[k] >= DECIDE {
+    let back = k == 1 && p[1] >= BACK_DECIDE && p[1] >= BACK_OVER_FRONT * (p[0] + p[1]);
+    if p[k] >= DECIDE || back {
         FACINGS[k]
     } else {
         Facing::Unknown
@@ -399,7 +468,7 @@ pub fn estimate(joints: &Joints2, p: [f64; 4], swapped: bool) -> FacingEstimate 
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A figure 400 px tall facing the viewer: its right side on the image's left.
@@ -464,6 +533,13 @@ mod tests {
         assert!(Facing::from_name("up").is_err());
         assert_eq!(decided(&[0.55, 0.45, 0.0, 0.0]), Facing::Unknown);
         assert_eq!(decided(&[0.1, 0.7, 0.1, 0.1]), Facing::Back);
+        // A back view split with a profile, the front ruled out: decided; not when the front
+        // competes, or under a half.
+        assert_eq!(decided(&[0.02, 0.55, 0.42, 0.01]), Facing::Back);
+        assert_eq!(decided(&[0.35, 0.57, 0.05, 0.03]), Facing::Unknown);
+        assert_eq!(decided(&[0.01, 0.45, 0.44, 0.1]), Facing::Unknown);
+        assert_eq!(decided(&[0.02, 0.42, 0.55, 0.01]), Facing::Unknown);
+        assert_eq!(decided(&[f64::NAN; 4]), Facing::Unknown);
         // Undecided between front and back: the front's labelling.
         let even = [0.45, 0.45, 0.05, 0.05];
         assert_eq!(target_handedness(decided(&even), &even), 1.0);
@@ -498,11 +574,11 @@ mod tests {
         // Either labelling gives the same features: only the spread of the sides is read.
         assert!(x[2] > 0.4 && x[2] == x[4]);
         assert_eq!(x[11], 0.5);
-        let head = HeadInk { ink: 0.3, along: 0.8 };
+        let head = HeadInk { ink: 0.3, along: 0.8, runs_across: 4.0, runs_along: 1.5 };
         let none =
             facing_features(&FacingInput { sketch: None, blazepose: None, landmarks: None, head_ink: Some(head) });
         assert_eq!(none[1..10], [0.0; 9]);
-        assert_eq!((none[10], none[11]), (0.3, 0.8));
+        assert_eq!(none[10..], [0.3, 0.8, 4.0, 1.5]);
         // The head's inside: an empty circle outline is no ink, a filled head all ink.
         let (w, h) = (400usize, 460usize);
         let mut px = vec![255u8; w * h];
@@ -516,9 +592,12 @@ mod tests {
             }
         }
         let v = ImageView::gray(&px, w, h).unwrap();
-        assert_eq!(head_ink(&v, &f), Some(HeadInk { ink: 0.0, along: 0.5 }));
+        assert_eq!(head_ink(&v, &f), Some(HeadInk { ink: 0.0, ..HeadInk::EMPTY }));
         let filled: Vec<u8> = px.iter().map(|_| 0).collect();
-        assert_eq!(head_ink(&ImageView::gray(&filled, w, h).unwrap(), &f), Some(HeadInk { ink: 1.0, along: 0.5 }));
+        assert_eq!(
+            head_ink(&ImageView::gray(&filled, w, h).unwrap(), &f),
+            Some(HeadInk { ink: 1.0, ..HeadInk::EMPTY })
+        );
         // Strokes along the head's axis (hair seen from behind) and across it (a mouth, brows).
         let stripes = |vertical: bool| -> Vec<u8> {
             (0..w * h).map(|i| if (if vertical { i % w } else { i / w }) % 6 == 0 { 0 } else { 255 }).collect()
@@ -528,6 +607,11 @@ mod tests {
         let across = head_ink(&ImageView::gray(&h_px, w, h).unwrap(), &f).unwrap();
         assert!(along.along > 0.99 && across.along < 0.01, "{along:?} {across:?}");
         assert!((along.ink - 1.0 / 6.0).abs() < 0.05);
+        // Strands along the axis are crossed by the lines across it (the head's 30 px width
+        // holds 5 of them, its shorter chords 3 or 4), not by the lines along it; a mouth and
+        // brows the other way round.
+        assert!(along.runs_across >= 3.0 && along.runs_along < 0.5, "{along:?}");
+        assert!(across.runs_along >= 3.0 && across.runs_across < 0.5, "{across:?}");
         let mut tiny = f;
         tiny.xy[joint::NECK] = [c[0], c[1] + 3.0];
         assert_eq!(head_ink(&v, &tiny), None);

@@ -16,6 +16,7 @@ use super::calibration::{clamp_score, joint_features, log_odds, predict, presenc
 use super::facing::{self, FacingEstimate, FacingInput, FacingModel};
 use super::landmark::roi::Roi;
 use super::landmark::{detect_blazepose, retry_from, BlazePoseDetection, BlazePoseOptions, LandmarkNet};
+use super::tone;
 use super::{detect, DetectOptions, Detection, Model};
 use crate::error::{Error, Result};
 use crate::image::ImageView;
@@ -159,16 +160,28 @@ pub struct Evidence {
     /// The ink inside the head ([`facing::head_ink`] at BlazePose's
     /// head, else the sketch model's), `None` without a candidate: evidence of the facing.
     pub head_ink: Option<facing::HeadInk>,
+    /// The image's tone around the same candidate ([`tone::image_tone`]), `None` without a
+    /// candidate (or when it cannot be measured): a sign of a photo. `None` counts as a drawing.
+    pub tone: Option<tone::ImageTone>,
+}
+
+/// The candidate the image evidence of `e` is measured at: BlazePose's figure, else the sketch
+/// model's best.
+fn measured_candidate(e: &Evidence) -> Option<&Joints2> {
+    e.blazepose.as_ref().map(|b| &b.joints).or_else(|| e.sketch.as_ref().and_then(|v| v.first()).map(|d| &d.joints))
 }
 
 /// The head ink of `image` for the candidates of `e` ([`Evidence::head_ink`]).
 pub fn head_ink_of(image: &ImageView<'_>, e: &Evidence) -> Option<facing::HeadInk> {
-    let j = e
-        .blazepose
-        .as_ref()
-        .map(|b| &b.joints)
-        .or_else(|| e.sketch.as_ref().and_then(|v| v.first()).map(|d| &d.joints));
-    j.and_then(|j| facing::head_ink(image, j))
+    measured_candidate(e).and_then(|j| facing::head_ink(image, j))
+}
+
+/// `e` with its head ink and tone measured on `image` ([`Evidence::head_ink`],
+/// [`Evidence::tone`]).
+pub fn with_image_evidence(image: &ImageView<'_>, mut e: Evidence) -> Evidence {
+    e.head_ink = head_ink_of(image, &e);
+    e.tone = measured_candidate(&e).and_then(|j| tone::image_tone(image, j).ok());
+    e
 }
 
 /// Runs the backends `backend` names on `image` (1, 3 or 4 channels) and collects their
@@ -206,12 +219,11 @@ pub fn gather(
     };
     let (sketch, blazepose) = rayon::join(run_sketch, run_blazepose);
     let (sketch, blazepose) = (sketch?, blazepose?);
-    let mut evidence = Evidence { sketch, sketch_threshold: model.thresh, blazepose, head_ink: None };
+    let evidence = Evidence { sketch, sketch_threshold: model.thresh, blazepose, head_ink: None, tone: None };
     if backend == Backend::Auto {
         return retry_blazepose_from_sketch(image, net, evidence, options);
     }
-    evidence.head_ink = head_ink_of(image, &evidence);
-    Ok(evidence)
+    Ok(with_image_evidence(image, evidence))
 }
 
 /// `Auto`'s last step of [`gather`]: BlazePose unsure from the ink box (pose flag under
@@ -234,9 +246,7 @@ pub fn retry_blazepose_from_sketch(
         }
         (b, _) => b,
     };
-    let mut e = Evidence { sketch, sketch_threshold, blazepose, head_ink: None };
-    e.head_ink = head_ink_of(image, &e);
-    Ok(e)
+    Ok(with_image_evidence(image, Evidence { sketch, sketch_threshold, blazepose, head_ink: None, tone: None }))
 }
 
 /// The figure [`detect_figure`] returns.
@@ -444,6 +454,19 @@ pub fn evidence_facing_features(evidence: &Evidence) -> [f64; facing::NUM_FEATUR
     facing::facing_features(&input)
 }
 
+/// The facing the labelling rule acts on: the decided one ([`facing::decided`]), except that
+/// on a photo-like image ([`tone::ImageTone::photo_like`]) a back view is not decided (the
+/// facing model knows drawings; on photos its "back" is as often a person facing the camera).
+pub fn facing_acted_on(evidence: &Evidence, probabilities: &[f64; 4]) -> facing::Facing {
+    let decided = facing::decided(probabilities);
+    let photo = evidence.tone.is_some_and(|t| t.photo_like());
+    if photo && decided == facing::Facing::Back {
+        facing::Facing::Unknown
+    } else {
+        decided
+    }
+}
+
 /// The facing probabilities of `evidence` under `model`.
 pub fn facing_probabilities(evidence: &Evidence, model: &FacingModel) -> [f64; 4] {
     model.probabilities(&evidence_facing_features(evidence))
@@ -497,8 +520,9 @@ pub fn decide(
         None => FacingModel::embedded()?,
     };
     let probabilities = facing_probabilities(evidence, model);
+    let acted = facing_acted_on(evidence, &probabilities);
     if options.facing_rule {
-        let target = facing::target_handedness(facing::decided(&probabilities), &probabilities);
+        let target = facing::target_handedness(acted, &probabilities);
         for c in &mut cands {
             if facing::needs_swap(&c.joints, target) {
                 (c.joints, c.conf, c.swapped) = (facing::swap_sides(&c.joints), facing::mirror_values(&c.conf), true);
@@ -572,7 +596,7 @@ pub fn decide(
     };
     let confidence = mean(&best.conf);
     let (landmark_depth, landmark_joints) = landmark_view(evidence, &best.joints, blazepose_swapped);
-    let facing = facing::estimate(&best.joints, probabilities, best.swapped);
+    let facing = FacingEstimate { facing: acted, ..facing::estimate(&best.joints, probabilities, best.swapped) };
     Ok(Figure {
         backend: best.backend,
         joints: best.joints,
@@ -715,6 +739,7 @@ mod tests {
             sketch_threshold: THRESH,
             blazepose: Some(blazepose(flag, standing(50.0), [bp_conf; NUM_JOINTS])),
             head_ink: None,
+            tone: None,
         }
     }
 
@@ -725,6 +750,7 @@ mod tests {
             sketch_threshold: THRESH,
             blazepose: Some(blazepose(0.9, bp, [0.6; NUM_JOINTS])),
             head_ink: None,
+            tone: None,
         }
     }
 
@@ -733,6 +759,26 @@ mod tests {
             Err(Error::NoFigure { score, threshold }) => (score, threshold),
             other => panic!("expected NoFigure, got {other:?}"),
         }
+    }
+
+    /// Issue 51: on a photo-like image a back view is not acted on (its labelling falls back to
+    /// the front's default); on a drawing, or without a tone, it is; other facings are as decided.
+    #[test]
+    fn a_back_view_is_acted_on_only_on_drawings() {
+        let tone =
+            |paper: f64, edges: f64| tone::ImageTone { paper, mid: 0.0, saturation: 0.0, edges, edges_outside: 0.0 };
+        let with = |t: Option<tone::ImageTone>| Evidence { tone: t, ..both(THRESH, 0.9, 0.9, 0.9) };
+        let back = [0.1, 0.8, 0.05, 0.05];
+        let front = [0.8, 0.1, 0.05, 0.05];
+        let (drawing, photo, stylised) = (tone(0.96, 0.04), tone(0.3, 0.2), tone(0.85, 0.3));
+        assert!(!drawing.photo_like() && photo.photo_like() && stylised.photo_like());
+        assert_eq!(facing_acted_on(&with(Some(drawing)), &back), facing::Facing::Back);
+        assert_eq!(facing_acted_on(&with(None), &back), facing::Facing::Back);
+        assert_eq!(facing_acted_on(&with(Some(photo)), &back), facing::Facing::Unknown);
+        assert_eq!(facing_acted_on(&with(Some(stylised)), &back), facing::Facing::Unknown);
+        assert_eq!(facing_acted_on(&with(Some(photo)), &front), facing::Facing::Front);
+        let even = [0.3, 0.3, 0.2, 0.2];
+        assert_eq!(facing_acted_on(&with(Some(drawing)), &even), facing::Facing::Unknown);
     }
 
     /// Issue 52 finding 13 (`decide`'s `>=` → `<`): per image, the referee chooses between the
@@ -780,7 +826,7 @@ mod tests {
         assert_eq!(no_figure(decide(&both(THRESH - 0.1, 0.9, 0.3, 0.9), &cal, &o, None)), (THRESH - 0.1, THRESH));
         let bp_only = Evidence { sketch: None, ..both(0.0, 0.9, 0.3, 0.9) };
         assert_eq!(no_figure(decide(&bp_only, &cal, &o, None)), (0.3, 0.5));
-        let neither = Evidence { sketch: None, sketch_threshold: THRESH, blazepose: None, head_ink: None };
+        let neither = Evidence { sketch: None, sketch_threshold: THRESH, blazepose: None, head_ink: None, tone: None };
         assert_eq!(no_figure(decide(&neither, &cal, &o, None)), (f64::NEG_INFINITY, THRESH));
         // Not strict, the low-flag BlazePose figure is kept when the presence says so.
         let lenient = FigureOptions { min_presence: 0.0, ..FigureOptions::default() };
@@ -906,7 +952,13 @@ mod tests {
         let list = [THRESH + 1.0, THRESH + 0.2, THRESH, THRESH - 0.1]
             .map(|s| sketch(s, standing(0.0), [0.76; NUM_JOINTS]))
             .to_vec();
-        let e = Evidence { sketch: Some(list.clone()), sketch_threshold: THRESH, blazepose: None, head_ink: None };
+        let e = Evidence {
+            sketch: Some(list.clone()),
+            sketch_threshold: THRESH,
+            blazepose: None,
+            head_ink: None,
+            tone: None,
+        };
         let f = decide(&e, &cal, &o, None).unwrap();
         assert_eq!(f.others, list[1..3].to_vec());
         assert_eq!(f.raw_score, THRESH + 1.0);

@@ -20,6 +20,7 @@ pub mod landmark;
 pub mod model;
 pub mod normalise;
 pub mod pyramid;
+pub mod tone;
 pub mod tree;
 
 use rayon::prelude::*;

@@ -58,6 +58,7 @@ pub fn gather_sample(
         sketch_threshold: fmp.sketch_threshold,
         blazepose: bp.blazepose,
         head_ink: None,
+        tone: None,
     };
     let evidence = retry_blazepose_from_sketch(image, net, evidence, options)?;
     let t3 = std::time::Instant::now();
@@ -78,6 +79,7 @@ fn restricted(s: &Sample, backend: Backend) -> Evidence {
             Backend::Auto => e.blazepose.clone(),
         },
         head_ink: e.head_ink,
+        tone: e.tone,
     }
 }
 

@@ -141,8 +141,9 @@ pub struct Misread {
     pub features: [f64; NUM_FEATURES],
 }
 
-/// The samples with a yaw and evidence of a figure whose decided facing under `model` is not
-/// the true one.
+/// The samples with a yaw and evidence of a figure whose facing under `model`, as the detector
+/// acts on it ([`sketchbody::detect::figure::facing_acted_on`]: no back view on a photo-like
+/// image), is not the true one.
 pub fn misread(samples: &[Sample], model: &FacingModel) -> Vec<Misread> {
     let mut out = Vec::new();
     for (index, s) in samples.iter().enumerate() {
@@ -152,7 +153,7 @@ pub fn misread(samples: &[Sample], model: &FacingModel) -> Vec<Misread> {
         }
         let features = evidence_facing_features(&s.evidence);
         let probabilities = model.probabilities(&features);
-        let decided = sketchbody::detect::facing::decided(&probabilities);
+        let decided = sketchbody::detect::figure::facing_acted_on(&s.evidence, &probabilities);
         if decided != Facing::of_yaw(yaw_deg) {
             out.push(Misread { index, yaw_deg, decided, probabilities, features });
         }
@@ -162,7 +163,8 @@ pub fn misread(samples: &[Sample], model: &FacingModel) -> Vec<Misread> {
 
 /// The columns of [`dump_rows`].
 pub const DUMP_HEADER: &str = "set,index,yaw_deg,true_facing,features,p_front,p_back,p_left,p_right,decided,\
-blazepose_filled,blazepose_flag,sketch_recognised,off_backend,off_handedness,off_pck,off_swapped_pck,on_pck,on_swapped";
+blazepose_filled,blazepose_flag,sketch_recognised,off_backend,off_handedness,off_pck,off_swapped_pck,on_pck,on_swapped,\
+tone_paper,tone_mid,tone_saturation,tone_edges,tone_edges_outside";
 
 /// One CSV row per sample of `samples` (set `label`) with a figure: its facing features (space
 /// separated, [`sketchbody::detect::facing::FEATURES`] without the bias) and probabilities
@@ -204,8 +206,10 @@ pub fn dump_rows(
         };
         let feats: Vec<String> = x[1..].iter().map(|v| format!("{v:.4}")).collect();
         let bp = s.evidence.blazepose.as_ref();
+        let tone = s.evidence.tone.map_or([f64::NAN; 5], |t| [t.paper, t.mid, t.saturation, t.edges, t.edges_outside]);
+        let tone: Vec<String> = tone.iter().map(|v| format!("{v:.4}")).collect();
         rows.push(format!(
-            "{},{i},{},{},{},{:.4},{:.4},{:.4},{:.4},{},{},{:.4},{},{},{off_h:.4},{off_pck:.4},{off_sw:.4},{on_pck:.4},{on_swapped}",
+            "{},{i},{},{},{},{:.4},{:.4},{:.4},{:.4},{},{},{:.4},{},{},{off_h:.4},{off_pck:.4},{off_sw:.4},{on_pck:.4},{on_swapped},{}",
             label.replace(',', ";"),
             s.yaw_deg.map_or("".into(), |y| format!("{y:.1}")),
             s.yaw_deg.map_or("", |y| Facing::of_yaw(y).name()),
@@ -220,6 +224,7 @@ pub fn dump_rows(
             s.evidence.sketch.as_ref().and_then(|v| v.first()).is_some_and(|d| d.score
                 >= options.sketch.threshold.unwrap_or(s.evidence.sketch_threshold)),
             off.as_ref().map_or("none", |f| f.backend.name()),
+            tone.join(","),
         ));
     }
     Ok(rows)
