@@ -49,6 +49,19 @@ pub fn one_malloc_arena() {
     }
 }
 
+/// Hands the allocator's free pages back to the system (glibc's `malloc_trim`; elsewhere a
+/// no-op). With [`one_malloc_arena`] freed memory stays in the process until trimmed, so `run`
+/// calls this between the fit and writing its files: the writing's buffers then reuse the
+/// returned pages instead of adding to the detection's high-water mark (docs/benchmarks.md,
+/// issue 50).
+pub fn release_free_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only returns free pages of the allocator's own heap to the system.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+}
+
 /// Runs a command's result to an exit status: 0, or the error printed as one line
 /// `PROGRAM: message` on standard error and status 1.
 pub fn exit_code(program: &str, result: Result<(), CliError>) -> std::process::ExitCode {

@@ -50,7 +50,7 @@ use crate::detect::NO_FIGURE_HINT;
 use crate::export_formats::{file_list, write_rigged, Format};
 use crate::fit_args::{score_name, FitArgs};
 use crate::rig_args::RigArgs;
-use crate::CliError;
+use crate::{release_free_memory, CliError};
 
 /// Arguments of `sketchbody run`.
 #[derive(clap::Args)]
@@ -657,6 +657,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
         _ => CliError(format!("{}: {e}", a.sketch.display())),
     })?;
+    release_free_memory();
     let t_write = Instant::now();
     let tris = r.mesh.triangles();
     let over = overlay(sketch, &r.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &r.pose.camera)?;
