@@ -44,6 +44,12 @@ impl WeakPerspective {
         Ok(())
     }
 
+    /// The camera of the same view in the image scaled by `f` (pixels × `f`): scales and
+    /// translation times `f`, rotation kept.
+    pub fn scaled_image(&self, f: f64) -> WeakPerspective {
+        WeakPerspective { sx: self.sx * f, sy: self.sy * f, r: self.r, t: [self.t[0] * f, self.t[1] * f] }
+    }
+
     /// Projects a 3-D point (metres) to pixels.
     pub fn project(&self, x: &Vector3<f64>) -> [f64; 2] {
         let c = self.r * x;

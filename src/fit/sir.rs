@@ -373,9 +373,7 @@ impl ViewEvidence {
         let (iw, ih) = (edges.width(), edges.height());
         let f = (options.raster_max_side as f64 / iw.max(ih) as f64).min(1.0);
         let (rw, rh) = (((iw as f64 * f).round() as usize).max(1), ((ih as f64 * f).round() as usize).max(1));
-        let cam = camera;
-        let raster_camera =
-            WeakPerspective { sx: cam.sx * f, sy: cam.sy * f, r: cam.r, t: [cam.t[0] * f, cam.t[1] * f] };
+        let raster_camera = camera.scaled_image(f);
         let skeleton_px: Vec<[f64; 2]> = BONES
             .iter()
             .flat_map(|&(a, b)| {

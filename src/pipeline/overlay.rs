@@ -86,27 +86,18 @@ pub fn overlay(
     camera: &WeakPerspective,
 ) -> Result<RgbImage> {
     let n = sketch.width().max(sketch.height()).div_ceil(MAX_OVERLAY_SIDE);
-    if n <= 1 {
-        return draw(sketch, joints, pose, vertices, tris, camera);
-    }
-    let k = 1.0 / n as f64;
-    let mut small_joints = *joints;
-    for p in &mut small_joints.xy {
-        *p = [p[0] * k, p[1] * k];
-    }
-    let small_camera =
-        WeakPerspective { sx: camera.sx * k, sy: camera.sy * k, r: camera.r, t: [camera.t[0] * k, camera.t[1] * k] };
-    draw(&sketch.box_shrunk(n), &small_joints, pose, vertices, tris, &small_camera)
-}
-
-fn draw(
-    sketch: &GrayImage,
-    joints: &Joints2,
-    pose: &Joints3,
-    vertices: &[[f32; 3]],
-    tris: &[[u32; 3]],
-    camera: &WeakPerspective,
-) -> Result<RgbImage> {
+    let shrunk;
+    let (sketch, joints, camera) = if n > 1 {
+        let k = 1.0 / n as f64;
+        let mut small_joints = *joints;
+        for p in &mut small_joints.xy {
+            *p = [p[0] * k, p[1] * k];
+        }
+        shrunk = (sketch.box_shrunk(n), small_joints, camera.scaled_image(k));
+        (&shrunk.0, &shrunk.1, &shrunk.2)
+    } else {
+        (sketch, joints, camera)
+    };
     let (w, h) = (sketch.width(), sketch.height());
     let pw = side_panel_width(w, h);
     let data = sketch.as_bytes().chunks_exact(w).flat_map(|row| {
@@ -119,8 +110,7 @@ fn draw(
     let mut img = RgbImage::from_vec(w + pw, h, data.collect())?;
     let f = (MAX_RASTER_SIDE as f64 / w.max(h) as f64).min(1.0);
     let (rw, rh) = (((w as f64 * f).round() as usize).max(1), ((h as f64 * f).round() as usize).max(1));
-    let cam =
-        WeakPerspective { sx: camera.sx * f, sy: camera.sy * f, r: camera.r, t: [camera.t[0] * f, camera.t[1] * f] };
+    let cam = camera.scaled_image(f);
     let mut raster = Rasterizer::new();
     match raster.rasterize(vertices, tris, &cam, rw, rh, false) {
         Ok(_) => {
