@@ -2,11 +2,10 @@
 //! on the average of the two genders' mean shapes) whose vertices are a subset of the body's, so
 //! its PCA rows, joint basis and skin weights are plain subsets of the model's. The shape fit
 //! synthesises, skins and rasterises only these vertices, several times cheaper than the full
-//! mesh, for a silhouette that stays within about a pixel of the full one at the fit's raster
-//! resolution (tested in `tests/fit_proxy.rs`). Built once per model on first use (about
-//! 0.1–0.25 s)
-//! ([`BodyModel::fit_proxy`]); for the embedded model the decimation's result is read from a
-//! precomputed table instead (`assets/fit_proxy.bin`, [`FitProxy::to_table`]), used only when
+//! mesh, for a silhouette within about a pixel (at most 2 px) of the full one at the fit's raster
+//! resolution (tested in `tests/fit_proxy.rs`). Made once per model on first use
+//! ([`BodyModel::fit_proxy`]): for the embedded model the decimation's result is read from a
+//! precomputed table (`assets/fit_proxy.bin`, [`FitProxy::to_table`]), used only when
 //! the fingerprint of the decimation's input (target, average mean shape, triangles) matches.
 
 use std::sync::OnceLock;
@@ -18,7 +17,7 @@ use crate::error::Result;
 use crate::skeleton::Joints3;
 
 /// Vertices kept by the proxy of [`BodyModel::fit_proxy`] (of 13380 in the MakeHuman body).
-pub const PROXY_VERTICES: usize = 2500;
+pub const PROXY_VERTICES: usize = 1000;
 
 /// The embedded model's proxy at [`PROXY_VERTICES`], precomputed ([`FitProxy::to_table`]; the
 /// test suite checks it is today's decimation byte for byte).
