@@ -147,7 +147,13 @@ fn decode_png(bytes: &[u8], path: &Path) -> Result<RgbImage> {
     let rgb = match &img {
         // A gray PNG (the common sketch) expands to equal channels: the conversion `to_rgb8`
         // makes, without its per-pixel colour-space path.
-        image::DynamicImage::ImageLuma8(gray) => gray.as_raw().iter().flat_map(|&v| [v; 3]).collect(),
+        image::DynamicImage::ImageLuma8(gray) => {
+            let mut rgb = vec![0u8; 3 * gray.as_raw().len()];
+            for (p, &v) in rgb.chunks_exact_mut(3).zip(gray.as_raw()) {
+                p.fill(v);
+            }
+            rgb
+        }
         _ if img.color().has_alpha() => img.to_rgba8().pixels().flat_map(|p| over_white(p.0)).collect(),
         _ => img.to_rgb8().into_raw(),
     };
