@@ -15,6 +15,7 @@ use sketchbody::camera::WeakPerspective;
 use sketchbody::fit::distance_transform;
 use sketchbody::raster::{Facing, Rasterizer};
 use sketchbody::Error;
+use std::path::Path;
 
 #[test]
 fn proxy_is_a_deterministic_closed_subset_and_synthesises_like_the_model() {
@@ -59,8 +60,9 @@ fn proxy_is_a_deterministic_closed_subset_and_synthesises_like_the_model() {
 
 /// Full-mesh (both windings) vs proxy (viewer-facing triangles only) silhouettes at 256², 24
 /// random shapes, poses and cameras (80–130 px/m): per image, the pixels where they differ are
-/// under 2.5% of the full silhouette's area, and every differing pixel lies within 2 px of the
-/// full silhouette's boundary; over all images under 1.5% differ and 99% of them within 1 px.
+/// under 3% of the full silhouette's area, and every differing pixel lies within 2 px of the
+/// full silhouette's boundary; over all images under 2% differ and 99% of them within 1 px
+/// (at 1300 vertices: 1.75%, worst image 2.4%, 99.5% within 1 px).
 #[test]
 fn proxy_silhouette_agrees_with_the_full_mesh() {
     let model = BodyModel::embedded().unwrap();
@@ -114,7 +116,7 @@ fn proxy_silhouette_agrees_with_the_full_mesh() {
         let fraction = differ.len() as f64 / area as f64;
         assert!(area > 1000, "case {case}: {area} px");
         assert!(
-            fraction < 0.025 && max_d <= 2.0,
+            fraction < 0.03 && max_d <= 2.0,
             "case {case} ({g:?}): {} of {area} px differ, max {max_d} px from the boundary",
             differ.len()
         );
@@ -127,5 +129,24 @@ fn proxy_silhouette_agrees_with_the_full_mesh() {
     let overall = differ_total as f64 / area_total as f64;
     let near = within1 as f64 / differ_total.max(1) as f64;
     println!("proxy vs full silhouettes: {differ_total} of {area_total} px differ ({:.2}%), worst image {:.2}%, worst distance {worst_dist} px, {:.1}% within 1 px", 100.0 * overall, 100.0 * worst_fraction, 100.0 * near);
-    assert!(overall < 0.015 && near >= 0.99, "{overall} {near}");
+    assert!(overall < 0.02 && near >= 0.99, "{overall} {near}");
+}
+
+/// The embedded model's precomputed proxy table (`assets/fit_proxy.bin`, what
+/// `BodyModel::fit_proxy` reads instead of decimating at start-up) is today's decimation byte
+/// for byte. `SKB_BLESS_PROXY=1` rewrites it.
+#[test]
+fn the_precomputed_proxy_table_is_todays_decimation() {
+    let model = BodyModel::embedded().unwrap();
+    let fresh = FitProxy::new(&model, PROXY_VERTICES).unwrap().to_table(&model, PROXY_VERTICES);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/fit_proxy.bin");
+    if std::env::var_os("SKB_BLESS_PROXY").is_some() {
+        std::fs::write(&path, &fresh).unwrap();
+    }
+    let stored = std::fs::read(&path).unwrap();
+    assert!(stored == fresh, "assets/fit_proxy.bin is not today's decimation: rerun this test with SKB_BLESS_PROXY=1");
+    assert_eq!(
+        stored.len(),
+        8 + 8 + 8 + 4 * (model.fit_proxy().unwrap().kept().len() + 3 * model.fit_proxy().unwrap().triangles().len())
+    );
 }

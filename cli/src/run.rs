@@ -660,46 +660,63 @@ pub fn run(a: Args) -> Result<(), CliError> {
     release_free_memory();
     let t_write = Instant::now();
     let tris = r.mesh.triangles();
-    let over = overlay(sketch, &r.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &r.pose.camera)?;
-    let texture_img = match (&r.mesh.uvs, a.no_texture) {
-        (Some(uvs), false) => Some((
-            project_sketch(sketch_rgb, &r.posed_vertices, &r.mesh.quads, uvs, &r.pose.camera, a.texture_size)?.0,
-            uvs,
-        )),
-        _ => None,
+    let textured = r.mesh.uvs.is_some() && !a.no_texture;
+    let mtl = textured.then_some("body.mtl");
+    // Two independent halves of about equal cost, written on two threads: the overlays, the
+    // OBJs and the JSON files; the texture, the previews and the rigged exports (which embed
+    // the texture).
+    let overlays_and_meshes = || -> Result<(), CliError> {
+        let over = overlay(sketch, &r.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &r.pose.camera)?;
+        save_png(&over.view(), &staging.path("overlay.png"))?;
+        let uvs = r.mesh.uvs.as_ref();
+        write_obj_with_material(&staging.path("body.obj"), &r.posed_vertices, &r.mesh.quads, uvs, mtl)?;
+        write_obj_with_material(&staging.path("body_rest.obj"), &r.mesh.vertices, &r.mesh.quads, uvs, mtl)?;
+        write_joints2d_with(&staging.path("joints2d.json"), &r.joints2d, r.detection.as_ref())?;
+        let mut pose_bytes =
+            serde_json::to_vec_pretty(&pose3d_json(&r.pose, &dict, &opts.pose)).map_err(|e| CliError(e.to_string()))?;
+        pose_bytes.push(b'\n');
+        write_atomic(&staging.path("pose3d.json"), &pose_bytes)?;
+        for (v, vr) in inputs.views.iter().zip(&r.views) {
+            let name = vr.label.name();
+            let over = overlay(&v.gray, &vr.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &vr.camera)?;
+            save_png(&over.view(), &staging.path(&format!("overlay_{name}.png")))?;
+            let panel = compare_preview(&v.rgb, &r.posed_vertices, &tris, None, &vr.camera, a.preview_size)?;
+            save_png(&panel.view(), &staging.path(&format!("preview_{name}.png")))?;
+            write_joints2d_with(&staging.path(&format!("joints2d_{name}.json")), &vr.joints2d, None)?;
+        }
+        Ok(())
     };
-    let surface =
-        texture_img.as_ref().map(|(img, uvs)| SurfaceTexture::for_quads(img, &r.mesh.quads, uvs)).transpose()?;
-    let views =
-        compare_preview(sketch_rgb, &r.posed_vertices, &tris, surface.as_ref(), &r.pose.camera, a.preview_size)?;
-    let keys = if a.rig.shape_keys() { shape_keys(&model, &r)? } else { Vec::new() };
-    let scene = RigScene::build_with_shape_keys(model.rig(), &r.mesh, &r.ik_pose, &rig_options, &keys)?;
-    let texture = texture_img.as_ref().map(|(img, _)| encode_png(&img.view())).transpose()?;
-    let frame = ExportFrame { units: a.units, up: a.up };
-    write_rigged(&a.format, |name| staging.path(name), &r.mesh, &scene, texture.as_deref(), &frame)?;
-    let mtl = texture.as_ref().map(|_| "body.mtl");
-    if let Some(png) = &texture {
-        write_atomic(&staging.path("body_texture.png"), png)?;
-        write_atomic(&staging.path("body.mtl"), mtl_string("body_texture.png").as_bytes())?;
-    }
-    let uvs = r.mesh.uvs.as_ref();
-    write_obj_with_material(&staging.path("body.obj"), &r.posed_vertices, &r.mesh.quads, uvs, mtl)?;
-    write_obj_with_material(&staging.path("body_rest.obj"), &r.mesh.vertices, &r.mesh.quads, uvs, mtl)?;
-    write_joints2d_with(&staging.path("joints2d.json"), &r.joints2d, r.detection.as_ref())?;
-    let mut pose_bytes =
-        serde_json::to_vec_pretty(&pose3d_json(&r.pose, &dict, &opts.pose)).map_err(|e| CliError(e.to_string()))?;
-    pose_bytes.push(b'\n');
-    write_atomic(&staging.path("pose3d.json"), &pose_bytes)?;
-    save_png(&over.view(), &staging.path("overlay.png"))?;
-    for (v, vr) in inputs.views.iter().zip(&r.views) {
-        let name = vr.label.name();
-        let over = overlay(&v.gray, &vr.joints2d, &r.pose.joints, &r.posed_vertices, &tris, &vr.camera)?;
-        save_png(&over.view(), &staging.path(&format!("overlay_{name}.png")))?;
-        let panel = compare_preview(&v.rgb, &r.posed_vertices, &tris, None, &vr.camera, a.preview_size)?;
-        save_png(&panel.view(), &staging.path(&format!("preview_{name}.png")))?;
-        write_joints2d_with(&staging.path(&format!("joints2d_{name}.json")), &vr.joints2d, None)?;
-    }
-    save_png(&views.view(), &staging.path("preview.png"))?;
+    let textured_and_rigged = || -> Result<(), CliError> {
+        let texture_img = match (&r.mesh.uvs, textured) {
+            (Some(uvs), true) => Some((
+                project_sketch(sketch_rgb, &r.posed_vertices, &r.mesh.quads, uvs, &r.pose.camera, a.texture_size)?.0,
+                uvs,
+            )),
+            _ => None,
+        };
+        let surface =
+            texture_img.as_ref().map(|(img, uvs)| SurfaceTexture::for_quads(img, &r.mesh.quads, uvs)).transpose()?;
+        let views =
+            compare_preview(sketch_rgb, &r.posed_vertices, &tris, surface.as_ref(), &r.pose.camera, a.preview_size)?;
+        save_png(&views.view(), &staging.path("preview.png"))?;
+        let keys = if a.rig.shape_keys() { shape_keys(&model, &r)? } else { Vec::new() };
+        let scene = RigScene::build_with_shape_keys(model.rig(), &r.mesh, &r.ik_pose, &rig_options, &keys)?;
+        let texture = texture_img.as_ref().map(|(img, _)| encode_png(&img.view())).transpose()?;
+        let frame = ExportFrame { units: a.units, up: a.up };
+        write_rigged(&a.format, |name| staging.path(name), &r.mesh, &scene, texture.as_deref(), &frame)?;
+        if let Some(png) = &texture {
+            write_atomic(&staging.path("body_texture.png"), png)?;
+            write_atomic(&staging.path("body.mtl"), mtl_string("body_texture.png").as_bytes())?;
+        }
+        Ok(())
+    };
+    let (first, second) = std::thread::scope(|s| {
+        let first = s.spawn(overlays_and_meshes);
+        let second = textured_and_rigged();
+        (first.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)), second)
+    });
+    first?;
+    second?;
     let text = report(
         &a,
         &opts,

@@ -2,10 +2,11 @@
 //! on the average of the two genders' mean shapes) whose vertices are a subset of the body's, so
 //! its PCA rows, joint basis and skin weights are plain subsets of the model's. The shape fit
 //! synthesises, skins and rasterises only these vertices, several times cheaper than the full
-//! mesh, for a silhouette that stays within about a pixel of the full one at the fit's raster
-//! resolution (tested in `tests/fit_proxy.rs`). Built once per model on first use (about
-//! 0.1–0.25 s)
-//! ([`BodyModel::fit_proxy`]).
+//! mesh, for a silhouette within about a pixel (at most 2 px) of the full one at the fit's raster
+//! resolution (tested in `tests/fit_proxy.rs`). Made once per model on first use
+//! ([`BodyModel::fit_proxy`]): for the embedded model the decimation's result is read from a
+//! precomputed table (`assets/fit_proxy.bin`, [`FitProxy::to_table`]), used only when
+//! the fingerprint of the decimation's input (target, average mean shape, triangles) matches.
 
 use std::sync::OnceLock;
 
@@ -16,7 +17,41 @@ use crate::error::Result;
 use crate::skeleton::Joints3;
 
 /// Vertices kept by the proxy of [`BodyModel::fit_proxy`] (of 13380 in the MakeHuman body).
-pub const PROXY_VERTICES: usize = 2500;
+pub const PROXY_VERTICES: usize = 1300;
+
+/// The embedded model's proxy at [`PROXY_VERTICES`], precomputed ([`FitProxy::to_table`]; the
+/// test suite checks it is today's decimation byte for byte).
+static EMBEDDED_TABLE: &[u8] = include_bytes!("../../assets/fit_proxy.bin");
+
+/// First bytes of a proxy table.
+const TABLE_MAGIC: &[u8; 8] = b"SKBPRXY1";
+
+/// The decimation's input: the average of the two genders' mean shapes, and the body's
+/// triangles.
+fn decimation_input(model: &BodyModel) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let (f, m) = (model.space(Gender::Female).mean(), model.space(Gender::Male).mean());
+    let average = f.iter().zip(m).map(|(a, b)| std::array::from_fn(|c| 0.5 * (a[c] + b[c]))).collect();
+    (average, model.triangles())
+}
+
+/// 64-bit FNV-1a fingerprint of a decimation's input (target, positions' f32 bits, triangles).
+fn fingerprint(target: usize, positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> u64 {
+    let words = std::iter::once(target as u64)
+        .chain([positions.len() as u64, triangles.len() as u64])
+        .chain(positions.iter().flatten().map(|c| c.to_bits() as u64))
+        .chain(triangles.iter().flatten().map(|&i| i as u64));
+    words.fold(0xcbf2_9ce4_8422_2325u64, |h, w| {
+        w.to_le_bytes().iter().fold(h, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+    })
+}
+
+/// Reads little-endian u32s from `bytes` at `*at`, advancing it; `None` past the end.
+fn read_u32s(bytes: &[u8], at: &mut usize, n: usize) -> Option<Vec<u32>> {
+    let end = at.checked_add(n.checked_mul(4)?)?;
+    let chunk = bytes.get(*at..end)?;
+    *at = end;
+    Some(chunk.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
+}
 
 /// One gender's shape space restricted to the proxy's vertices.
 #[derive(Clone, Debug)]
@@ -94,20 +129,62 @@ impl FitProxy {
     /// Decimates `model`'s body to at most `target_vertices` vertices (see the module docs).
     /// Errors: a target of 0.
     pub fn new(model: &BodyModel, target_vertices: usize) -> Result<Self> {
-        let (f, m) = (model.space(Gender::Female).mean(), model.space(Gender::Male).mean());
-        let average: Vec<[f32; 3]> =
-            f.iter().zip(m).map(|(a, b)| std::array::from_fn(|c| 0.5 * (a[c] + b[c]))).collect();
-        let d = decimate(&average, &model.triangles(), target_vertices)?;
-        Ok(Self {
-            skin: d.kept.iter().map(|&i| model.skin[i as usize]).collect(),
+        let (average, triangles) = decimation_input(model);
+        let d = decimate(&average, &triangles, target_vertices)?;
+        Ok(Self::from_parts(model, d.kept, d.triangles))
+    }
+
+    fn from_parts(model: &BodyModel, kept: Vec<u32>, triangles: Vec<[u32; 3]>) -> Self {
+        Self {
+            skin: kept.iter().map(|&i| model.skin[i as usize]).collect(),
             spaces: [
-                ProxySpace::new(model.space(Gender::Female), &d.kept),
-                ProxySpace::new(model.space(Gender::Male), &d.kept),
+                ProxySpace::new(model.space(Gender::Female), &kept),
+                ProxySpace::new(model.space(Gender::Male), &kept),
             ],
-            kept: d.kept,
-            triangles: d.triangles,
+            kept,
+            triangles,
             blended: OnceLock::new(),
-        })
+        }
+    }
+
+    /// This proxy as a table (a new buffer) that [`BodyModel::fit_proxy`] reads instead of
+    /// decimating `model` again at `target_vertices` (`model` and the target must be those it
+    /// was built from): the magic `SKBPRXY1`, the decimation input's fingerprint (u64), then
+    /// the number of kept vertices and of triangles, the kept indices and the triangles' indices
+    /// (u32 each, all little-endian).
+    pub fn to_table(&self, model: &BodyModel, target_vertices: usize) -> Vec<u8> {
+        let (average, triangles) = decimation_input(model);
+        let mut out = TABLE_MAGIC.to_vec();
+        out.extend_from_slice(&fingerprint(target_vertices, &average, &triangles).to_le_bytes());
+        for n in [self.kept.len(), self.triangles.len()] {
+            out.extend_from_slice(&(n as u32).to_le_bytes());
+        }
+        for &i in self.kept.iter().chain(self.triangles.iter().flatten()) {
+            out.extend_from_slice(&i.to_le_bytes());
+        }
+        out
+    }
+
+    /// The proxy of `model` at `target_vertices` from `table` ([`FitProxy::to_table`]); `None`
+    /// when the table is for another model or target, or is malformed (then decimate).
+    fn from_table(model: &BodyModel, target_vertices: usize, table: &[u8]) -> Option<Self> {
+        let rest = table.strip_prefix(TABLE_MAGIC)?;
+        let (average, triangles) = decimation_input(model);
+        let stored = u64::from_le_bytes(rest.get(..8)?.try_into().ok()?);
+        if stored != fingerprint(target_vertices, &average, &triangles) {
+            return None;
+        }
+        let mut at = 8;
+        let counts = read_u32s(rest, &mut at, 2)?;
+        let kept = read_u32s(rest, &mut at, counts[0] as usize)?;
+        let flat = read_u32s(rest, &mut at, 3 * counts[1] as usize)?;
+        let ascending = kept.windows(2).all(|w| w[0] < w[1]);
+        let in_range = kept.last().is_some_and(|&i| (i as usize) < model.num_vertices())
+            && flat.iter().all(|&i| (i as usize) < kept.len());
+        if at != rest.len() || !ascending || !in_range {
+            return None;
+        }
+        Some(Self::from_parts(model, kept, flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()))
     }
 
     /// Indices of the proxy's vertices in the body mesh, ascending.
@@ -152,13 +229,49 @@ impl FitProxy {
 pub(crate) struct ProxyCell(OnceLock<FitProxy>);
 
 impl BodyModel {
-    /// The model's fit proxy with [`PROXY_VERTICES`] vertices, built on first use (a fraction
-    /// of a second) and then shared. Thread-safe.
+    /// The model's fit proxy with [`PROXY_VERTICES`] vertices, made on first use (read from
+    /// the precomputed table for the embedded model, else decimated in a fraction of a second)
+    /// and then shared. Thread-safe.
     pub fn fit_proxy(&self) -> Result<&FitProxy> {
         if let Some(p) = self.proxy.0.get() {
             return Ok(p);
         }
-        let built = FitProxy::new(self, PROXY_VERTICES)?;
+        let built = match FitProxy::from_table(self, PROXY_VERTICES, EMBEDDED_TABLE) {
+            Some(p) => p,
+            None => FitProxy::new(self, PROXY_VERTICES)?,
+        };
         Ok(self.proxy.0.get_or_init(|| built))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A table reads back as the proxy it was written from, and only for its own model and
+    /// target; truncated, extended or out-of-range tables are refused (the caller decimates).
+    #[test]
+    fn a_table_reads_back_only_for_its_model_and_target_and_when_well_formed() {
+        let model = BodyModel::embedded().unwrap();
+        let target = 300;
+        let proxy = FitProxy::new(&model, target).unwrap();
+        let table = proxy.to_table(&model, target);
+        let read = FitProxy::from_table(&model, target, &table).unwrap();
+        assert_eq!(
+            (read.kept(), read.triangles(), read.skin_weights()),
+            (proxy.kept(), proxy.triangles(), proxy.skin_weights())
+        );
+        assert!(FitProxy::from_table(&model, target + 1, &table).is_none());
+        assert!(FitProxy::from_table(&model, target, &table[..table.len() - 4]).is_none());
+        assert!(FitProxy::from_table(&model, target, &[&table[..], &[0; 4]].concat()).is_none());
+        assert!(FitProxy::from_table(&model, target, &table[1..]).is_none());
+        assert!(FitProxy::from_table(&model, target, &[]).is_none());
+        let mut bad = table.clone();
+        let last = bad.len() - 4;
+        bad[last..].copy_from_slice(&(proxy.kept().len() as u32).to_le_bytes());
+        assert!(FitProxy::from_table(&model, target, &bad).is_none(), "a triangle index past the kept vertices");
+        let mut other = model.clone();
+        other.skin[0] = other.skin[1];
+        assert!(FitProxy::from_table(&other, target, &table).is_some(), "skin weights are not the decimation's input");
     }
 }

@@ -8,7 +8,7 @@
 //! moves less than `tolerance` standard deviations in every component, or after
 //! `max_iterations`. The result is `Y* = Σ w Y` of the last iteration (and the best sample).
 //! Samples are evaluated on the model's fit proxy ([`BodyModel::fit_proxy`]: a decimated body
-//! whose vertices are a subset of the body's, 2500 of 13380), drawing only its viewer-facing
+//! whose vertices are a subset of the body's, 1300 of 13380), drawing only its viewer-facing
 //! triangles and scoring only the silhouette's bounding box — several times faster than the
 //! full mesh for a silhouette within about a pixel of it.
 //!

@@ -21,13 +21,15 @@ pub fn rgb_to_gray_pixel(r: u8, g: u8, b: u8) -> u8 {
 /// order R, G, B[, A]; alpha ignored) use OpenCV's `COLOR_RGB2GRAY` arithmetic.
 pub fn to_gray(src: &ImageView<'_>) -> Result<GrayImage> {
     let (w, h, c) = (src.width(), src.height(), src.channels());
-    let mut data = Vec::with_capacity(w * h);
-    for y in 0..h {
+    let mut data = vec![0u8; w * h];
+    for (y, out) in data.chunks_exact_mut(w.max(1)).enumerate().take(h) {
         let row = src.row(y);
         if c == 1 {
-            data.extend_from_slice(row);
+            out.copy_from_slice(&row[..w]);
         } else {
-            data.extend(row.chunks_exact(c).map(|p| rgb_to_gray_pixel(p[0], p[1], p[2])));
+            for (o, p) in out.iter_mut().zip(row.chunks_exact(c)) {
+                *o = rgb_to_gray_pixel(p[0], p[1], p[2]);
+            }
         }
     }
     GrayImage::from_vec(w, h, data)

@@ -144,10 +144,18 @@ fn decode_png(bytes: &[u8], path: &Path) -> Result<RgbImage> {
     let orientation = decoder.orientation().map_err(err)?;
     let mut img = image::DynamicImage::from_decoder(decoder).map_err(err)?;
     img.apply_orientation(orientation);
-    let rgb = if img.color().has_alpha() {
-        img.to_rgba8().pixels().flat_map(|p| over_white(p.0)).collect()
-    } else {
-        img.to_rgb8().into_raw()
+    let rgb = match &img {
+        // A gray PNG (the common sketch) expands to equal channels: the conversion `to_rgb8`
+        // makes, without its per-pixel colour-space path.
+        image::DynamicImage::ImageLuma8(gray) => {
+            let mut rgb = vec![0u8; 3 * gray.as_raw().len()];
+            for (p, &v) in rgb.chunks_exact_mut(3).zip(gray.as_raw()) {
+                p.fill(v);
+            }
+            rgb
+        }
+        _ if img.color().has_alpha() => img.to_rgba8().pixels().flat_map(|p| over_white(p.0)).collect(),
+        _ => img.to_rgb8().into_raw(),
     };
     RgbImage::from_vec(img.width() as usize, img.height() as usize, rgb)
 }
@@ -218,6 +226,29 @@ mod tests {
         let rgb = [9u8, 8, 7, 99, 6, 5, 4, 99];
         let r = RgbImage::from_view(&ImageView::new(&rgb, 1, 2, 3, 4).unwrap()).unwrap();
         assert_eq!(r.as_bytes(), &[9, 8, 7, 6, 5, 4]);
+    }
+
+    /// A gray PNG decodes to the RGB image the image crate's own conversion gives (every gray
+    /// level, rows of odd width), and to the same gray image again.
+    #[test]
+    fn gray_png_decodes_as_the_image_crates_rgb_conversion() {
+        let (w, h) = (37u32, 7u32);
+        let levels: Vec<u8> = (0..w * h).map(|i| (i * 7 % 256) as u8).collect();
+        let mut png = Vec::new();
+        image::codecs::png::PngEncoder::new(&mut png).write_image(&levels, w, h, image::ExtendedColorType::L8).unwrap();
+        let ours = decode_rgb_image(&png, Path::new("gray.png")).unwrap();
+        let theirs =
+            image::DynamicImage::ImageLuma8(image::GrayImage::from_raw(w, h, levels.clone()).unwrap()).to_rgb8();
+        assert_eq!(ours.as_bytes(), theirs.as_raw().as_slice());
+        assert!((0..=255u8).all(|v| image::DynamicImage::ImageLuma8(image::GrayImage::from_pixel(
+            1,
+            1,
+            image::Luma([v])
+        ))
+        .to_rgb8()
+        .as_raw()[..]
+            == [v; 3]));
+        assert_eq!(crate::image::to_gray(&ours.view()).unwrap().as_bytes(), &levels[..]);
     }
 
     #[test]

@@ -10,7 +10,7 @@ use super::{edge_functions, row_span, HALF, SUB, SUB_BITS};
 
 /// Triangles whose bounding box holds at most this many pixel columns are tested centre by
 /// centre instead of solving each row's span.
-const NARROW: i64 = 4;
+const NARROW: i64 = 8;
 
 /// Which triangles a mask draws.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
