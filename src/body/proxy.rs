@@ -28,21 +28,29 @@ const TABLE_MAGIC: &[u8; 8] = b"SKBPRXY1";
 
 /// The decimation's input: the average of the two genders' mean shapes, and the body's
 /// triangles.
-fn decimation_input(model: &BodyModel) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-    let (f, m) = (model.space(Gender::Female).mean(), model.space(Gender::Male).mean());
-    let average = f.iter().zip(m).map(|(a, b)| std::array::from_fn(|c| 0.5 * (a[c] + b[c]))).collect();
-    (average, model.triangles())
+struct DecimationInput {
+    average: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
 }
 
-/// 64-bit FNV-1a fingerprint of a decimation's input (target, positions' f32 bits, triangles).
-fn fingerprint(target: usize, positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> u64 {
-    let words = std::iter::once(target as u64)
-        .chain([positions.len() as u64, triangles.len() as u64])
-        .chain(positions.iter().flatten().map(|c| c.to_bits() as u64))
-        .chain(triangles.iter().flatten().map(|&i| i as u64));
-    words.fold(0xcbf2_9ce4_8422_2325u64, |h, w| {
-        w.to_le_bytes().iter().fold(h, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
-    })
+impl DecimationInput {
+    fn of(model: &BodyModel) -> Self {
+        let (f, m) = (model.space(Gender::Female).mean(), model.space(Gender::Male).mean());
+        let average = f.iter().zip(m).map(|(a, b)| std::array::from_fn(|c| 0.5 * (a[c] + b[c]))).collect();
+        Self { average, triangles: model.triangles() }
+    }
+
+    /// 64-bit FNV-1a fingerprint of this input decimated to `target` vertices (the target, the
+    /// positions' f32 bits, the triangles).
+    fn fingerprint(&self, target: usize) -> u64 {
+        let words = [target as u64, self.average.len() as u64, self.triangles.len() as u64]
+            .into_iter()
+            .chain(self.average.iter().flatten().map(|c| c.to_bits() as u64))
+            .chain(self.triangles.iter().flatten().map(|&i| i as u64));
+        words.fold(0xcbf2_9ce4_8422_2325u64, |h, w| {
+            w.to_le_bytes().iter().fold(h, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+        })
+    }
 }
 
 /// Reads little-endian u32s from `bytes` at `*at`, advancing it; `None` past the end.
@@ -129,8 +137,11 @@ impl FitProxy {
     /// Decimates `model`'s body to at most `target_vertices` vertices (see the module docs).
     /// Errors: a target of 0.
     pub fn new(model: &BodyModel, target_vertices: usize) -> Result<Self> {
-        let (average, triangles) = decimation_input(model);
-        let d = decimate(&average, &triangles, target_vertices)?;
+        Self::decimated(model, &DecimationInput::of(model), target_vertices)
+    }
+
+    fn decimated(model: &BodyModel, input: &DecimationInput, target_vertices: usize) -> Result<Self> {
+        let d = decimate(&input.average, &input.triangles, target_vertices)?;
         Ok(Self::from_parts(model, d.kept, d.triangles))
     }
 
@@ -153,9 +164,8 @@ impl FitProxy {
     /// the number of kept vertices and of triangles, the kept indices and the triangles' indices
     /// (u32 each, all little-endian).
     pub fn to_table(&self, model: &BodyModel, target_vertices: usize) -> Vec<u8> {
-        let (average, triangles) = decimation_input(model);
         let mut out = TABLE_MAGIC.to_vec();
-        out.extend_from_slice(&fingerprint(target_vertices, &average, &triangles).to_le_bytes());
+        out.extend_from_slice(&DecimationInput::of(model).fingerprint(target_vertices).to_le_bytes());
         for n in [self.kept.len(), self.triangles.len()] {
             out.extend_from_slice(&(n as u32).to_le_bytes());
         }
@@ -165,13 +175,13 @@ impl FitProxy {
         out
     }
 
-    /// The proxy of `model` at `target_vertices` from `table` ([`FitProxy::to_table`]); `None`
-    /// when the table is for another model or target, or is malformed (then decimate).
-    fn from_table(model: &BodyModel, target_vertices: usize, table: &[u8]) -> Option<Self> {
+    /// The proxy of `model` (decimation input `input`) at `target_vertices` from `table`
+    /// ([`FitProxy::to_table`]); `None` when the table is for another model or target, or is
+    /// malformed (then decimate).
+    fn from_table(model: &BodyModel, input: &DecimationInput, target_vertices: usize, table: &[u8]) -> Option<Self> {
         let rest = table.strip_prefix(TABLE_MAGIC)?;
-        let (average, triangles) = decimation_input(model);
         let stored = u64::from_le_bytes(rest.get(..8)?.try_into().ok()?);
-        if stored != fingerprint(target_vertices, &average, &triangles) {
+        if stored != input.fingerprint(target_vertices) {
             return None;
         }
         let mut at = 8;
@@ -236,9 +246,10 @@ impl BodyModel {
         if let Some(p) = self.proxy.0.get() {
             return Ok(p);
         }
-        let built = match FitProxy::from_table(self, PROXY_VERTICES, EMBEDDED_TABLE) {
+        let input = DecimationInput::of(self);
+        let built = match FitProxy::from_table(self, &input, PROXY_VERTICES, EMBEDDED_TABLE) {
             Some(p) => p,
-            None => FitProxy::new(self, PROXY_VERTICES)?,
+            None => FitProxy::decimated(self, &input, PROXY_VERTICES)?,
         };
         Ok(self.proxy.0.get_or_init(|| built))
     }
@@ -256,22 +267,29 @@ mod tests {
         let target = 300;
         let proxy = FitProxy::new(&model, target).unwrap();
         let table = proxy.to_table(&model, target);
-        let read = FitProxy::from_table(&model, target, &table).unwrap();
+        let input = DecimationInput::of(&model);
+        let read = FitProxy::from_table(&model, &input, target, &table).unwrap();
         assert_eq!(
             (read.kept(), read.triangles(), read.skin_weights()),
             (proxy.kept(), proxy.triangles(), proxy.skin_weights())
         );
-        assert!(FitProxy::from_table(&model, target + 1, &table).is_none());
-        assert!(FitProxy::from_table(&model, target, &table[..table.len() - 4]).is_none());
-        assert!(FitProxy::from_table(&model, target, &[&table[..], &[0; 4]].concat()).is_none());
-        assert!(FitProxy::from_table(&model, target, &table[1..]).is_none());
-        assert!(FitProxy::from_table(&model, target, &[]).is_none());
+        assert!(FitProxy::from_table(&model, &input, target + 1, &table).is_none());
+        assert!(FitProxy::from_table(&model, &input, target, &table[..table.len() - 4]).is_none());
+        assert!(FitProxy::from_table(&model, &input, target, &[&table[..], &[0; 4]].concat()).is_none());
+        assert!(FitProxy::from_table(&model, &input, target, &table[1..]).is_none());
+        assert!(FitProxy::from_table(&model, &input, target, &[]).is_none());
         let mut bad = table.clone();
         let last = bad.len() - 4;
         bad[last..].copy_from_slice(&(proxy.kept().len() as u32).to_le_bytes());
-        assert!(FitProxy::from_table(&model, target, &bad).is_none(), "a triangle index past the kept vertices");
+        assert!(
+            FitProxy::from_table(&model, &input, target, &bad).is_none(),
+            "a triangle index past the kept vertices"
+        );
         let mut other = model.clone();
         other.skin[0] = other.skin[1];
-        assert!(FitProxy::from_table(&other, target, &table).is_some(), "skin weights are not the decimation's input");
+        assert!(
+            FitProxy::from_table(&other, &DecimationInput::of(&other), target, &table).is_some(),
+            "skin weights are not the decimation's input"
+        );
     }
 }
