@@ -6,7 +6,7 @@
 //! accuracy, the log loss and a calibration table (predicted vs observed share of males in
 //! five bins of the predicted probability). `--shipped` evaluates the shipped classifier instead
 //! of training one. `--fits` trains the final choice of the automatic gender (the classifier's
-//! log-odds with the two gendered fits' score margin); `--recalibrate` refits that combination's
+//! log-odds with the two gendered fits' score margin; with `--margin-only` the margin alone); `--recalibrate` refits that combination's
 //! intercept to automatic-gender runs of sketches it was not trained on.
 
 use std::fmt::Write as _;
@@ -37,6 +37,10 @@ pub struct Args {
     /// DATASET=RF,RM with RF / RM run-dataset results of `--gender f` / `--gender m`. Repeatable.
     #[arg(long, value_parser = parse_fits)]
     fits: Vec<(PathBuf, PathBuf, PathBuf)>,
+    /// With --fits: train the decision by the score margin alone (the classifier's log-odds
+    /// weighted 0, no intercept; `train_margin_only`) instead of the two-input combination.
+    #[arg(long, requires = "fits")]
+    margin_only: bool,
     /// Test set of the combination, same form as --fits. Repeatable.
     #[arg(long, value_parser = parse_fits)]
     test_fits: Vec<(PathBuf, PathBuf, PathBuf)>,
@@ -292,9 +296,14 @@ fn run_fits(a: &Args) -> Result<(), CliError> {
         for (d, f, m) in &a.fits {
             train.extend(load_fits(d, f, m, a.first, &classifier)?);
         }
-        let c = sketchbody_lab::fit::gender::train_margin_combination(&train, a.ridge)?;
+        let c = if a.margin_only {
+            sketchbody_lab::fit::gender::train_margin_only(&train)?
+        } else {
+            sketchbody_lab::fit::gender::train_margin_combination(&train, a.ridge)?
+        };
         let males = train.iter().filter(|s| s.2).count();
-        println!("trained on {} samples ({} f / {males} m), ridge {}", train.len(), train.len() - males, a.ridge);
+        let how = if a.margin_only { "the margin alone".to_string() } else { format!("ridge {}", a.ridge) };
+        println!("trained on {} samples ({} f / {males} m), {how}", train.len(), train.len() - males);
         print_combination(&c);
         let probs: Vec<(f64, bool)> = train.iter().map(|&(z, m, male)| (c.male_probability(z, m), male)).collect();
         println!("training set:\n{}", report_probs(&probs));

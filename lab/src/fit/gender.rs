@@ -36,6 +36,45 @@ pub fn train_margin_combination(samples: &[(f64, f64, bool)], ridge: f64) -> Res
     })
 }
 
+/// The decision by the score margin alone (male fit's best score − female fit's): `P(male) =
+/// σ(slope × margin)`, the classifier's log-odds weighted 0 and no intercept (equal scores are
+/// an even chance), the slope fitted by maximum likelihood to `(classifier log-odds, score
+/// margin, is_male)` (the log-odds ignored). Deterministic (Newton's method on one unknown).
+/// Errors: `OutOfRange` without both sexes among the samples with a finite, non-zero margin, or
+/// when the margins separate the sexes perfectly (no finite maximum).
+pub fn train_margin_only(samples: &[(f64, f64, bool)]) -> Result<MarginCombination> {
+    let rows: Vec<(f64, bool)> =
+        samples.iter().filter(|s| s.1.is_finite() && s.1 != 0.0).map(|&(_, m, male)| (m, male)).collect();
+    let males = rows.iter().filter(|s| s.1).count();
+    if males == 0 || males == rows.len() {
+        return Err(Error::OutOfRange {
+            name: "gender margin training set",
+            detail: format!("{} samples with a margin, {males} male: need both sexes", rows.len()),
+        });
+    }
+    let mut slope = 0.0f64;
+    for _ in 0..200 {
+        let (mut gradient, mut curvature) = (0.0, 0.0);
+        for &(m, male) in &rows {
+            let p = sigmoid(slope * m);
+            gradient += (f64::from(u8::from(male)) - p) * m;
+            curvature += p * (1.0 - p) * m * m;
+        }
+        let step = gradient / curvature.max(1e-12);
+        slope += step.clamp(-50.0, 50.0);
+        if !(slope.abs() < 1e6) {
+            break;
+        }
+        if step.abs() < 1e-10 * slope.abs().max(1.0) {
+            return Ok(MarginCombination { means: [0.0, 0.0], scales: [1.0, 1.0], coefficients: [0.0, slope], intercept: 0.0 });
+        }
+    }
+    Err(Error::OutOfRange {
+        name: "gender margin training set",
+        detail: format!("the margins separate the sexes (slope {slope:.3e} did not settle): no finite maximum"),
+    })
+}
+
 /// `c` with its intercept refitted (maximum likelihood, the other parameters
 /// kept) to `(classifier log-odds, score margin, is_male)` of sketches it was not trained
 /// on: a recalibration for sketches whose gender evidence reads one sex more often than the
@@ -231,6 +270,31 @@ mod tests {
         let one_class: Vec<_> = data.iter().map(|(f, _)| (*f, true)).collect();
         assert!(train_gender_classifier(&one_class, 1.0).is_err());
         assert!(train_gender_classifier(&data, -1.0).is_err());
+    }
+
+    #[test]
+    fn margin_only_recovers_the_slope_and_ignores_the_classifier() {
+        // Males drawn with probability σ(9 × margin); the classifier's log-odds are noise that
+        // the decision must not read.
+        let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(11);
+        let samples: Vec<(f64, f64, bool)> = (0..6000)
+            .map(|_| {
+                let m = rand::Rng::random_range(&mut rng, -0.6..0.6);
+                let l = rand::Rng::random_range(&mut rng, -5.0..5.0);
+                (l, m, rand::Rng::random::<f64>(&mut rng) < sigmoid(9.0 * m))
+            })
+            .collect();
+        let c = train_margin_only(&samples).unwrap();
+        assert!((c.coefficients[1] - 9.0).abs() < 0.8, "{c:?}");
+        assert_eq!((c.coefficients[0], c.intercept), (0.0, 0.0));
+        assert_eq!(c.male_probability(-4.0, 0.1), c.male_probability(4.0, 0.1), "the log-odds are not read");
+        assert!(c.male_probability(0.0, 0.2) > 0.8 && c.male_probability(0.0, -0.2) < 0.2);
+        // Perfectly separated margins, one sex, or no usable margin: no finite slope.
+        let separated: Vec<_> = samples.iter().map(|&(l, m, _)| (l, m, m > 0.0)).collect();
+        assert!(train_margin_only(&separated).is_err());
+        let males: Vec<_> = samples.iter().map(|&(l, m, _)| (l, m, true)).collect();
+        assert!(train_margin_only(&males).is_err());
+        assert!(train_margin_only(&[(0.0, f64::NAN, true), (0.0, 0.0, false)]).is_err());
     }
 
     #[test]
