@@ -66,7 +66,12 @@ pub fn train_margin_only(samples: &[(f64, f64, bool)]) -> Result<MarginCombinati
             break;
         }
         if step.abs() < 1e-10 * slope.abs().max(1.0) {
-            return Ok(MarginCombination { means: [0.0, 0.0], scales: [1.0, 1.0], coefficients: [0.0, slope], intercept: 0.0 });
+            return Ok(MarginCombination {
+                means: [0.0, 0.0],
+                scales: [1.0, 1.0],
+                coefficients: [0.0, slope],
+                intercept: 0.0,
+            });
         }
     }
     Err(Error::OutOfRange {
