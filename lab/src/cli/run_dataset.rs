@@ -282,6 +282,10 @@ fn one(s: &Shared, dataset: &Path, out: &Path, stem: &str) -> Result<f64, CliErr
         }),
         "low_evidence": r.low_evidence,
         "scores": scores,
+        "fit_iteration_best": r.fits.iter().map(|g| json!({
+            "space": g.space.name(),
+            "best": g.fit.as_ref().map(|f| f.history.iter().map(|i| finite(i.best_score)).collect::<Vec<_>>()),
+        })).collect::<Vec<_>>(),
         "score": finite(r.score),
         "shape_weights": r.weights,
         "fit_shape_weights": r.chosen_fit().and_then(|g| g.fit.as_ref()).map(|f| &f.weights),
