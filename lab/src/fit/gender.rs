@@ -43,41 +43,10 @@ pub fn train_margin_combination(samples: &[(f64, f64, bool)], ridge: f64) -> Res
 /// Errors: `OutOfRange` without both sexes among the samples with a finite, non-zero margin, or
 /// when the margins separate the sexes perfectly (no finite maximum).
 pub fn train_margin_only(samples: &[(f64, f64, bool)]) -> Result<MarginCombination> {
-    let rows: Vec<(f64, bool)> =
-        samples.iter().filter(|s| s.1.is_finite() && s.1 != 0.0).map(|&(_, m, male)| (m, male)).collect();
-    let males = rows.iter().filter(|s| s.1).count();
-    if males == 0 || males == rows.len() {
-        return Err(Error::OutOfRange {
-            name: "gender margin training set",
-            detail: format!("{} samples with a margin, {males} male: need both sexes", rows.len()),
-        });
-    }
-    let mut slope = 0.0f64;
-    for _ in 0..200 {
-        let (mut gradient, mut curvature) = (0.0, 0.0);
-        for &(m, male) in &rows {
-            let p = sigmoid(slope * m);
-            gradient += (f64::from(u8::from(male)) - p) * m;
-            curvature += p * (1.0 - p) * m * m;
-        }
-        let step = gradient / curvature.max(1e-12);
-        slope += step.clamp(-50.0, 50.0);
-        if !(slope.abs() < 1e6) {
-            break;
-        }
-        if step.abs() < 1e-10 * slope.abs().max(1.0) {
-            return Ok(MarginCombination {
-                means: [0.0, 0.0],
-                scales: [1.0, 1.0],
-                coefficients: [0.0, slope],
-                intercept: 0.0,
-            });
-        }
-    }
-    Err(Error::OutOfRange {
-        name: "gender margin training set",
-        detail: format!("the margins separate the sexes (slope {slope:.3e} did not settle): no finite maximum"),
-    })
+    let rows: Vec<(f64, f64, bool)> =
+        samples.iter().filter(|s| s.1.is_finite() && s.1 != 0.0).map(|&(_, m, male)| (0.0, m, male)).collect();
+    let slope = fit_one_coefficient(&rows, 50.0, "gender margin training set")?;
+    Ok(MarginCombination { means: [0.0, 0.0], scales: [1.0, 1.0], coefficients: [0.0, slope], intercept: 0.0 })
 }
 
 /// `c` with its intercept refitted (maximum likelihood, the other parameters
@@ -87,33 +56,48 @@ pub fn train_margin_only(samples: &[(f64, f64, bool)]) -> Result<MarginCombinati
 /// `OutOfRange` without both sexes among the samples (the likelihood has no maximum) or
 /// when every sample's inputs are non-finite.
 pub fn recalibrated(c: &MarginCombination, samples: &[(f64, f64, bool)]) -> Result<MarginCombination> {
-    let z: Vec<(f64, bool)> = samples
+    let rows: Vec<(f64, f64, bool)> = samples
         .iter()
         .filter(|(l, m, _)| l.is_finite() || m.is_finite())
-        .map(|&(l, m, male)| (c.combined_log_odds(l, m), male))
+        .map(|&(l, m, male)| (c.combined_log_odds(l, m), 1.0, male))
         .collect();
-    let males = z.iter().filter(|s| s.1).count();
-    if males == 0 || males == z.len() {
+    let shift = fit_one_coefficient(&rows, 2.0, "gender recalibration set")?;
+    Ok(MarginCombination { intercept: c.intercept + shift, ..*c })
+}
+
+/// The maximum-likelihood `t` of `P(male) = σ(offset + t × x)` over `rows` of `(offset, x,
+/// is_male)`, by Newton's method from 0 with each step clamped to ±`max_step`. Errors:
+/// `OutOfRange` named `name` without both sexes among the rows, or when `t` does not settle
+/// (the rows separate the sexes: no finite maximum).
+fn fit_one_coefficient(rows: &[(f64, f64, bool)], max_step: f64, name: &'static str) -> Result<f64> {
+    let males = rows.iter().filter(|r| r.2).count();
+    if males == 0 || males == rows.len() {
         return Err(Error::OutOfRange {
-            name: "gender recalibration set",
-            detail: format!("{} usable samples, {males} male: need both sexes", z.len()),
+            name,
+            detail: format!("{} usable samples, {males} male: need both sexes", rows.len()),
         });
     }
-    let mut shift = 0.0;
-    for _ in 0..100 {
+    let mut t = 0.0f64;
+    for _ in 0..200 {
         let (mut gradient, mut curvature) = (0.0, 0.0);
-        for &(zi, male) in &z {
-            let p = sigmoid(zi + shift);
-            gradient += f64::from(u8::from(male)) - p;
-            curvature += p * (1.0 - p);
+        for &(offset, x, male) in rows {
+            let p = sigmoid(offset + t * x);
+            gradient += (f64::from(u8::from(male)) - p) * x;
+            curvature += p * (1.0 - p) * x * x;
         }
         let step = gradient / curvature.max(1e-12);
-        shift += step.clamp(-2.0, 2.0);
-        if step.abs() < 1e-12 {
+        t += step.clamp(-max_step, max_step);
+        if !(t.abs() < 1e6) {
             break;
         }
+        if step.abs() < 1e-10 * t.abs().max(1.0) {
+            return Ok(t);
+        }
     }
-    Ok(MarginCombination { intercept: c.intercept + shift, ..*c })
+    Err(Error::OutOfRange {
+        name,
+        detail: format!("the samples separate the sexes ({t:.3e} did not settle): no finite maximum"),
+    })
 }
 
 /// A fitted logistic regression on standardised inputs.
