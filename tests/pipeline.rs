@@ -160,9 +160,34 @@ fn default_automatic_gender_chooses_between_both_gendered_fits() {
     assert_ne!(rc.fits[0].score, rf.fits[0].score, "the deciding fits are other fits");
     assert_eq!(rc.gender, rf.gender);
     assert_eq!((&rc.weights, rc.fits[2].score), (&rf.weights, rf.fits[2].score), "the same final fit");
-    let bad = PipelineOptions { gender_decision_samples: Some(1), ..full };
+    let bad = PipelineOptions { gender_decision_samples: Some(1), ..full.clone() };
     let e = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &bad, &mut |_| true).unwrap_err();
     assert!(matches!(e, Error::OutOfRange { name: "samples", .. }), "{e:?}");
+
+    // Shorter deciding fits (their own iterations) are the first iterations of the full ones:
+    // the same samples, so each best score is the best of those iterations; the chosen
+    // gender's fit is as it was. Never longer than the fit's own iterations.
+    let iterations = |g: &sketchbody::pipeline::GenderFit| g.fit.as_ref().unwrap().history.len();
+    let short = PipelineOptions { gender_decision_iterations: Some(2), ..full.clone() };
+    let rsh = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &short, &mut |_| true).unwrap();
+    assert_eq!(rf.fits.iter().map(iterations).collect::<Vec<_>>(), [3, 3, 3]);
+    assert_eq!(rsh.fits.iter().map(iterations).collect::<Vec<_>>(), [2, 2, 3]);
+    for k in 0..2 {
+        let (a, b) = (rf.fits[k].fit.as_ref().unwrap(), rsh.fits[k].fit.as_ref().unwrap());
+        assert_eq!(a.history[..2], b.history[..]);
+        let best2 = b.history.iter().map(|h| h.best_score).fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(rsh.fits[k].score, best2);
+    }
+    assert_eq!((&rsh.weights, rsh.fits[2].score), (&rf.weights, rf.fits[2].score), "the same final fit");
+    let long = PipelineOptions { gender_decision_iterations: Some(50), ..full.clone() };
+    let rl = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &long, &mut |_| true).unwrap();
+    assert_eq!(
+        rl.fits.iter().map(|g| g.score).collect::<Vec<_>>(),
+        rf.fits.iter().map(|g| g.score).collect::<Vec<_>>()
+    );
+    let zero = PipelineOptions { gender_decision_iterations: Some(0), ..full };
+    let e = run_pipeline(&model, &dict, &sketch, &GivenJoints(j), &zero, &mut |_| true).unwrap_err();
+    assert!(matches!(e, Error::OutOfRange { name: "iterations", .. }), "{e:?}");
 }
 
 #[test]

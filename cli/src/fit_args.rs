@@ -129,6 +129,9 @@ pub struct FitArgs {
     /// Samples per iteration of each deciding fit with --classify-gender (default: --samples).
     #[arg(long, value_parser = crate::ranges::count(2..=100_000))]
     pub gender_decision_samples: Option<usize>,
+    /// Most SIR iterations of each deciding fit with --classify-gender (`0`: --iterations).
+    #[arg(long, default_value_t = PipelineOptions::default().gender_decision_iterations.unwrap_or(0), value_parser = crate::ranges::count(0..=1000))]
+    pub gender_decision_iterations: usize,
     /// When the height is unknown (no --height) and the joints are given, calibrate the fitted
     /// body: map a gendered fit's shape weights, then scale it to the calibrated height (the fit
     /// alone draws the body toward the prior's mean; `--calibrate-fit false` keeps the fit's
@@ -194,6 +197,8 @@ impl FitArgs {
             gender_decision_dims: self.gender_decision_dims.map(|d| d as usize),
             gender_decision_seeds: self.gender_decision_seeds as usize,
             gender_decision_samples: self.gender_decision_samples,
+            gender_decision_iterations: (self.gender_decision_iterations > 0)
+                .then_some(self.gender_decision_iterations),
             calibrate_fit: self.calibrate_fit,
             ..PipelineOptions::default()
         }

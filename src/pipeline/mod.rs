@@ -119,6 +119,12 @@ pub struct PipelineOptions {
     /// (`None`: the fit's [`FitOptions::samples`]). Only the score margin is read from them, so
     /// they may be cheaper than the fit of the chosen gender. In 2..=100000.
     pub gender_decision_samples: Option<usize>,
+    /// Most SIR iterations of each deciding fit under [`PipelineOptions::classify_gender`], at
+    /// most the fit's [`FitOptions::max_iterations`] (`None`: the fit's). A deciding fit's best score has
+    /// settled enough to choose the gender after 5 of 8 iterations, which
+    /// [`MarginCombination::SHIPPED`] was trained on (docs/benchmarks-history.md, "Five-iteration
+    /// deciding fits"). Default `Some(5)`. In 1..=1000.
+    pub gender_decision_iterations: Option<usize>,
     /// When the character's height is unknown (`fit.height` is `None`) and the 2-D joints are
     /// given, calibrate the fitted body with [`FitCalibration::SHIPPED`]: map a gendered fit's
     /// shape weights, then scale the rest body to the calibrated height. The fit alone draws
@@ -144,6 +150,7 @@ impl Default for PipelineOptions {
             gender_decision_dims: None,
             gender_decision_seeds: 1,
             gender_decision_samples: None,
+            gender_decision_iterations: Some(5),
             calibrate_fit: true,
         }
     }
@@ -188,8 +195,8 @@ pub struct PipelineResult {
     /// ([`PipelineOptions::gender_decision_seeds`]), followed by the
     /// chosen gender's refit when [`PipelineOptions::gender_decision_dims`] differs from the
     /// fit's dimensions, the fit's [`FitOptions::initial_factor`] is not 1 (the deciding fits
-    /// use a flat population) or [`PipelineOptions::gender_decision_samples`] differs from the
-    /// fit's samples. The result's fit is [`PipelineResult::chosen_fit`].
+    /// use a flat population) or [`PipelineOptions::gender_decision_samples`] or
+    /// [`PipelineOptions::gender_decision_iterations`] differs from the fit's samples or iterations. The result's fit is [`PipelineResult::chosen_fit`].
     pub fits: Vec<GenderFit>,
     /// The space of the result (the chosen fit's).
     pub space: ShapeChoice,
@@ -455,6 +462,7 @@ pub fn run_pipeline_views(
             dims: options.gender_decision_dims,
             seeds: options.gender_decision_seeds,
             samples: options.gender_decision_samples,
+            iterations: options.gender_decision_iterations,
         };
         let (body, male) = classify_and_fit(model, &sketch, &fit, &choice, decision, log_odds, &mut cb, interim)?;
         (body, Some(male.max(1.0 - male)))
@@ -562,6 +570,8 @@ struct Decision {
     seeds: usize,
     /// [`PipelineOptions::gender_decision_samples`].
     samples: Option<usize>,
+    /// [`PipelineOptions::gender_decision_iterations`].
+    iterations: Option<usize>,
 }
 
 /// [`PipelineOptions::classify_gender`]: both gendered fits in the decision's dimensions
@@ -592,9 +602,11 @@ fn classify_and_fit(
     let space = |g: Gender| model.shape_space(ShapeChoice::Gendered(g));
     let decision_dims = |g: Gender| -> Result<usize> { Ok(decision.dims.unwrap_or(space(g)?.default_dim())) };
     let decision_samples = decision.samples.unwrap_or(fit.samples);
+    let decision_iterations = decision.iterations.map_or(fit.max_iterations, |n| n.min(fit.max_iterations));
     let refit = |g: Gender| -> Result<bool> {
         Ok(fit.initial_factor != 1
             || decision_samples != fit.samples
+            || decision_iterations != fit.max_iterations
             || decision_dims(g)? != fit.dims.unwrap_or(space(g)?.gmm().dims()))
     };
     let deciding_fits = 2 * decision.seeds;
@@ -613,6 +625,7 @@ fn classify_and_fit(
                 dims: Some(decision_dims(g)?),
                 initial_factor: 1,
                 samples: decision_samples,
+                max_iterations: decision_iterations,
                 seed,
                 ..fit.clone()
             };
