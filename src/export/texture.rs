@@ -45,12 +45,23 @@ pub fn check_texture_size(size: usize) -> Result<()> {
     Ok(())
 }
 
+/// Longest side, pixels, of the depth raster that decides which texels of a `size`-texel
+/// texture the sketch sees: twice the texture's side (a texel's footprint on the body is no
+/// finer), at least [`MIN_DEPTH_SIDE`], at most [`MAX_RASTER_SIDE`].
+fn depth_side(size: usize) -> usize {
+    (2 * size).clamp(MIN_DEPTH_SIDE, MAX_RASTER_SIDE)
+}
+
+/// Sketches up to this many pixels a side decide visibility at their own pixels whatever the
+/// texture's size.
+pub const MIN_DEPTH_SIDE: usize = 1024;
+
 /// Projects `sketch` (colour, same pixels as the image the pose was estimated on) onto the
 /// posed mesh (`posed` vertices, metres, model frame; `quads` with per-corner `uvs`) through
 /// `camera`, into a `size`×`size` texture (row 0 is the top, v = 1). A sketch that sees no face
-/// gives an all-neutral texture. Sketches of any size the library loads work: above 4096 px a
-/// side, which texel is seen is decided on a depth raster scaled down to 4096 px (the colour is
-/// still the sketch's own). Errors: `size` 0 or above 4096 ([`check_texture_size`]), UV faces that do not match the
+/// gives an all-neutral texture. Sketches of any size the library loads work: which texel is
+/// seen is decided on a depth raster of the sketch scaled down to [`depth_side`] (twice the
+/// texture's side, at least [`MIN_DEPTH_SIDE`] px; the colour is still the sketch's own). Errors: `size` 0 or above 4096 ([`check_texture_size`]), UV faces that do not match the
 /// quads or index out of range, a non-finite vertex ([`Error::OutOfRange`] / [`Error::NonFinite`]).
 pub fn project_sketch(
     sketch: &RgbImage,
@@ -77,12 +88,13 @@ pub fn project_sketch(
     camera.validate()?;
     let (w, h) = (sketch.width(), sketch.height());
     let tris = crate::body::rig::quads_to_triangles(quads);
-    // The visibility depth at the sketch's pixels, or scaled down to the rasteriser's largest
-    // side for larger sketches (the colour is still sampled at full resolution).
-    let f = (MAX_RASTER_SIDE as f64 / w.max(h) as f64).min(1.0);
+    // The visibility depth at the sketch's pixels, or scaled down to `depth_side` for larger
+    // sketches (the colour is still sampled at full resolution).
+    let depth_side = depth_side(size);
+    let f = (depth_side as f64 / w.max(h) as f64).min(1.0);
     let (rw, rh) = (
-        ((w as f64 * f).round() as usize).clamp(1, MAX_RASTER_SIDE),
-        ((h as f64 * f).round() as usize).clamp(1, MAX_RASTER_SIDE),
+        ((w as f64 * f).round() as usize).clamp(1, depth_side),
+        ((h as f64 * f).round() as usize).clamp(1, depth_side),
     );
     let (fx, fy) = (rw as f64 / w as f64, rh as f64 / h as f64);
     let depth_camera = WeakPerspective {
@@ -333,9 +345,10 @@ mod tests {
     }
 
     /// Issue 52 finding 1: a sketch wider than the rasteriser's 4096 px is textured (it failed
-    /// with "raster size is out of range"), and occlusion is still decided: a square half hidden
-    /// behind a nearer one gives the same visible texels as on a small sketch, to one texel row
-    /// along the hidden edge.
+    /// with "raster size is out of range"), and occlusion is still decided on the depth raster
+    /// scaled down to [`depth_side`] (here 1024 px, an eighth of the sketch): a square half
+    /// hidden behind a nearer one gives the same visible texels as on a small sketch, to one
+    /// texel row along the hidden edge.
     #[test]
     fn sketches_above_the_raster_side_are_textured_with_occlusion() {
         // Square A at z = 0 (texture's left half), square B at z = 0.5 over A's left half
@@ -362,6 +375,7 @@ mod tests {
         assert_eq!(s.texels, 32 * 32);
         assert!(s.visible > 700 && s.visible < 800, "B whole, half of A: {}", s.visible);
         assert!(w.visible.abs_diff(s.visible) <= 32, "wide {} vs small {}", w.visible, s.visible);
+        assert_eq!((depth_side(32), depth_side(1024), depth_side(4096)), (MIN_DEPTH_SIDE, 2048, MAX_RASTER_SIDE));
         let red = img.as_bytes().chunks(3).filter(|p| *p == [200, 30, 30]).count();
         assert_eq!(red, w.visible);
     }
