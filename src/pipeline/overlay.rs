@@ -100,14 +100,17 @@ pub fn overlay(
     };
     let (w, h) = (sketch.width(), sketch.height());
     let pw = side_panel_width(w, h);
-    let data = sketch.as_bytes().chunks_exact(w).flat_map(|row| {
-        let ink = row.iter().flat_map(|&g| {
-            let v = (128 + g as u16 / 2) as u8;
-            [v, v, v]
-        });
-        ink.chain(PANEL.repeat(pw))
-    });
-    let mut img = RgbImage::from_vec(w + pw, h, data.collect())?;
+    let mut data = vec![0u8; 3 * (w + pw) * h];
+    for (row, out) in sketch.as_bytes().chunks_exact(w).zip(data.chunks_exact_mut(3 * (w + pw))) {
+        let (ink, panel) = out.split_at_mut(3 * w);
+        for (&g, px) in row.iter().zip(ink.chunks_exact_mut(3)) {
+            px.fill((128 + g as u16 / 2) as u8);
+        }
+        for px in panel.chunks_exact_mut(3) {
+            px.copy_from_slice(&PANEL);
+        }
+    }
+    let mut img = RgbImage::from_vec(w + pw, h, data)?;
     let f = (MAX_RASTER_SIDE as f64 / w.max(h) as f64).min(1.0);
     let (rw, rh) = (((w as f64 * f).round() as usize).max(1), ((h as f64 * f).round() as usize).max(1));
     let cam = camera.scaled_image(f);
