@@ -191,7 +191,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         return Ok(());
     }
     let model = Model::embedded()?;
-    let net = LandmarkNet::embedded()?;
+    let net = LandmarkNet::embedded_deferred();
     let options = FigureOptions {
         backend: a.detector,
         strict: a.strict,

@@ -596,7 +596,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let mut net = None;
     if sheet_detection {
         detector = Some(Model::embedded()?);
-        net = Some(LandmarkNet::embedded()?);
+        net = Some(LandmarkNet::embedded_deferred());
     }
     let inputs = if a.sheet {
         load_sheet(&a, detector.as_ref().zip(net.as_ref()), &figure_options, &dict)?
@@ -608,7 +608,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
             detector = Some(Model::embedded()?);
         }
         if net.is_none() {
-            net = Some(LandmarkNet::embedded()?);
+            net = Some(LandmarkNet::embedded_deferred());
         }
     }
     let detectors = detector.as_ref().zip(net.as_ref());

@@ -38,10 +38,29 @@ pub struct RawOutput {
     pub heatmap: Option<Vec<f32>>,
 }
 
-/// A loaded, optimised landmark network (cheap to share: clones share the plan).
+/// A loaded, optimised landmark network (cheap to share: clones share the plan), or the
+/// embedded one to be built at its first inference ([`LandmarkNet::embedded_deferred`]).
 #[derive(Clone)]
 pub struct LandmarkNet {
-    plan: Arc<TypedRunnableModel>,
+    plan: Plan,
+}
+
+/// Where a [`LandmarkNet`]'s runnable plan is.
+#[derive(Clone)]
+enum Plan {
+    /// Built.
+    Built(Arc<TypedRunnableModel>),
+    /// The embedded model's shared plan, built by the first caller that needs it.
+    Embedded,
+}
+
+/// The embedded model's plan, parsed and optimised once per process (concurrent first callers
+/// wait for the one building it).
+fn embedded_plan() -> Result<Arc<TypedRunnableModel>> {
+    static PLAN: OnceLock<std::result::Result<Arc<TypedRunnableModel>, String>> = OnceLock::new();
+    PLAN.get_or_init(|| LandmarkNet::from_onnx(EMBEDDED_ONNX).and_then(|n| n.plan()).map_err(|e| e.to_string()))
+        .clone()
+        .map_err(Error::CorruptData)
 }
 
 impl std::fmt::Debug for LandmarkNet {
@@ -89,15 +108,30 @@ impl LandmarkNet {
             typed
         };
         let plan = typed.into_optimized().map_err(corrupt)?.into_runnable().map_err(corrupt)?;
-        Ok(Self { plan })
+        Ok(Self { plan: Plan::Built(plan) })
     }
 
-    /// The embedded model, parsed once per process (later calls clone the shared plan).
+    /// The embedded model, parsed and optimised once per process (0.2 s; later calls share the
+    /// plan). Errors: `CorruptData` if the embedded bytes are damaged (a build fault).
     pub fn embedded() -> Result<Self> {
-        static NET: OnceLock<std::result::Result<LandmarkNet, String>> = OnceLock::new();
-        NET.get_or_init(|| Self::from_onnx(EMBEDDED_ONNX).map_err(|e| e.to_string()))
-            .clone()
-            .map_err(Error::CorruptData)
+        Ok(Self { plan: Plan::Built(embedded_plan()?) })
+    }
+
+    /// The embedded model without building it now: the first inference builds it (once per
+    /// process, shared with [`LandmarkNet::embedded`]) on the thread that runs it. A caller that
+    /// detects at once gains the build's time where detection runs the network beside the
+    /// sketch model ([`crate::detect::figure::gather`]); the embedded bytes' errors then come
+    /// from [`LandmarkNet::run`].
+    pub fn embedded_deferred() -> Self {
+        Self { plan: Plan::Embedded }
+    }
+
+    /// The runnable plan (built now for a deferred embedded net).
+    fn plan(&self) -> Result<Arc<TypedRunnableModel>> {
+        match &self.plan {
+            Plan::Built(plan) => Ok(plan.clone()),
+            Plan::Embedded => embedded_plan(),
+        }
     }
 
     /// Runs the network on a 256×256×3 HWC tensor in [0, 1] ([`super::crop::crop_tensor`]).
@@ -109,7 +143,7 @@ impl LandmarkNet {
         }
         let input: Tensor =
             tract_ndarray::Array4::from_shape_vec((1, INPUT_SIDE, INPUT_SIDE, 3), tensor).map_err(corrupt)?.into();
-        let out = self.plan.run(tvec!(input.into())).map_err(corrupt)?;
+        let out = self.plan()?.run(tvec!(input.into())).map_err(corrupt)?;
         let lm = out[0].to_plain_array_view::<f32>().map_err(corrupt)?;
         let flag = out[1].to_plain_array_view::<f32>().map_err(corrupt)?;
         let lm: Vec<f32> = lm.iter().copied().collect();
@@ -516,6 +550,11 @@ mod tests {
         let net = LandmarkNet::embedded().unwrap();
         assert!(matches!(net.run(vec![0.5; 10]), Err(Error::OutOfRange { .. })));
         let out = net.run(vec![1.0; INPUT_SIDE * INPUT_SIDE * 3]).unwrap();
+        // The deferred net runs the same shared plan.
+        let deferred = LandmarkNet::embedded_deferred();
+        assert!(matches!(deferred.plan, Plan::Embedded));
+        assert_eq!(deferred.run(vec![1.0; INPUT_SIDE * INPUT_SIDE * 3]).unwrap(), out);
+        assert!(Arc::ptr_eq(&deferred.plan().unwrap(), &net.plan().unwrap()));
         assert_eq!(out.landmarks.len(), NUM_OUTPUT_LANDMARKS);
         assert!((0.0..=1.0).contains(&out.pose_flag));
         let heatmap = out.heatmap.expect("the asset has MediaPipe's heatmap output");
@@ -529,8 +568,9 @@ mod tests {
     fn rewritten_depthwise_is_bit_identical() {
         let rewritten = LandmarkNet::build(EMBEDDED_ONNX, true).unwrap();
         let plain = LandmarkNet::build(EMBEDDED_ONNX, false).unwrap();
-        let count =
-            |net: &LandmarkNet, name: &str| net.plan.model().nodes().iter().filter(|n| n.op().name() == name).count();
+        let count = |net: &LandmarkNet, name: &str| {
+            net.plan().unwrap().model().nodes().iter().filter(|n| n.op().name() == name).count()
+        };
         assert_eq!(count(&plain, "Subsample") + count(&plain, "ZeroPad"), 0);
         assert!(count(&rewritten, "Subsample") >= 2, "the 128² and 64² stride-2 convolutions are split");
         assert!(count(&rewritten, "ZeroPad") >= 10);
