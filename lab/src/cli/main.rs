@@ -21,6 +21,7 @@ mod fit_landmark_joints;
 mod learn_poses;
 mod make_dataset;
 mod negative_page;
+mod gender_outline;
 mod pose_error;
 mod render_sketch;
 mod run_dataset;
@@ -94,6 +95,9 @@ enum Command {
     ShapeFloor(shape_floor::Args),
     /// The 3-D pose step's error on a run-dataset results folder (limb directions, PA-MPJPE).
     PoseError(pose_error::Args),
+    /// The gender classifier's features measured on the Canny edges and on the filled figure's
+    /// outline, ground-truth joints (issue 47's renderer comparison).
+    GenderOutline(gender_outline::Args),
 }
 
 fn main() -> ExitCode {
@@ -120,6 +124,7 @@ fn main() -> ExitCode {
         Command::NegativePage(a) => negative_page::run(a),
         Command::ShapeFloor(a) => shape_floor::run(a),
         Command::PoseError(a) => pose_error::run(a),
+        Command::GenderOutline(a) => gender_outline::run(a),
     };
     exit_code("sketchbody-lab", result)
 }
