@@ -1,5 +1,7 @@
 //! Colour to gray conversion with OpenCV's `COLOR_RGB2GRAY` weights and rounding.
 
+use rayon::prelude::*;
+
 use super::view::{GrayImage, ImageView};
 use crate::error::Result;
 
@@ -22,7 +24,8 @@ pub fn rgb_to_gray_pixel(r: u8, g: u8, b: u8) -> u8 {
 pub fn to_gray(src: &ImageView<'_>) -> Result<GrayImage> {
     let (w, h, c) = (src.width(), src.height(), src.channels());
     let mut data = vec![0u8; w * h];
-    for (y, out) in data.chunks_exact_mut(w.max(1)).enumerate().take(h) {
+    // Rows convert independently: in parallel (rayon; the same bytes on any thread count).
+    data.par_chunks_exact_mut(w.max(1)).enumerate().take(h).for_each(|(y, out)| {
         let row = src.row(y);
         if c == 1 {
             out.copy_from_slice(&row[..w]);
@@ -31,7 +34,7 @@ pub fn to_gray(src: &ImageView<'_>) -> Result<GrayImage> {
                 *o = rgb_to_gray_pixel(p[0], p[1], p[2]);
             }
         }
-    }
+    });
     GrayImage::from_vec(w, h, data)
 }
 

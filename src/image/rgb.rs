@@ -2,6 +2,8 @@
 
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use super::view::{check_size, ImageView};
 use crate::error::{Error, Result, MAX_DECODED_PIXELS};
 
@@ -148,10 +150,13 @@ fn decode_png(bytes: &[u8], path: &Path) -> Result<RgbImage> {
         // A gray PNG (the common sketch) expands to equal channels: the conversion `to_rgb8`
         // makes, without its per-pixel colour-space path.
         image::DynamicImage::ImageLuma8(gray) => {
+            let row = (gray.width() as usize).max(1);
             let mut rgb = vec![0u8; 3 * gray.as_raw().len()];
-            for (p, &v) in rgb.chunks_exact_mut(3).zip(gray.as_raw()) {
-                p.fill(v);
-            }
+            rgb.par_chunks_mut(3 * row).zip(gray.as_raw().par_chunks(row)).for_each(|(out, src)| {
+                for (p, &v) in out.chunks_exact_mut(3).zip(src) {
+                    p.fill(v);
+                }
+            });
             rgb
         }
         _ if img.color().has_alpha() => img.to_rgba8().pixels().flat_map(|p| over_white(p.0)).collect(),
