@@ -61,8 +61,9 @@ pub const MIN_DEPTH_SIDE: usize = 1024;
 /// `camera`, into a `size`×`size` texture (row 0 is the top, v = 1). A sketch that sees no face
 /// gives an all-neutral texture. Sketches of any size the library loads work: which texel is
 /// seen is decided on a depth raster of the sketch scaled down to [`depth_side`] (twice the
-/// texture's side, at least [`MIN_DEPTH_SIDE`] px; the colour is still the sketch's own). Errors: `size` 0 or above 4096 ([`check_texture_size`]), UV faces that do not match the
-/// quads or index out of range, a non-finite vertex ([`Error::OutOfRange`] / [`Error::NonFinite`]).
+/// texture's side, at least [`MIN_DEPTH_SIDE`] px; the colour is still the sketch's own).
+/// Errors: `size` 0 or above 4096 ([`check_texture_size`]), UV faces that do not match the quads
+/// or index out of range, a non-finite vertex ([`Error::OutOfRange`] / [`Error::NonFinite`]).
 pub fn project_sketch(
     sketch: &RgbImage,
     posed: &[[f32; 3]],

@@ -120,8 +120,8 @@ pub struct PipelineOptions {
     /// they may be cheaper than the fit of the chosen gender. In 2..=100000.
     pub gender_decision_samples: Option<usize>,
     /// Most SIR iterations of each deciding fit under [`PipelineOptions::classify_gender`], at
-    /// most the fit's [`FitOptions::max_iterations`] (`None`: the fit's). A deciding fit's best score has
-    /// settled enough to choose the gender after 5 of 8 iterations, which
+    /// most the fit's [`FitOptions::max_iterations`] (`None`: the fit's). A deciding fit's best
+    /// score has settled enough to choose the gender after 5 of 8 iterations, which
     /// [`MarginCombination::SHIPPED`] was trained on (docs/benchmarks-history.md, "Five-iteration
     /// deciding fits"). Default `Some(5)`. In 1..=1000.
     pub gender_decision_iterations: Option<usize>,
@@ -196,7 +196,8 @@ pub struct PipelineResult {
     /// chosen gender's refit when [`PipelineOptions::gender_decision_dims`] differs from the
     /// fit's dimensions, the fit's [`FitOptions::initial_factor`] is not 1 (the deciding fits
     /// use a flat population) or [`PipelineOptions::gender_decision_samples`] or
-    /// [`PipelineOptions::gender_decision_iterations`] differs from the fit's samples or iterations. The result's fit is [`PipelineResult::chosen_fit`].
+    /// [`PipelineOptions::gender_decision_iterations`] differs from the fit's samples or
+    /// iterations. The result's fit is [`PipelineResult::chosen_fit`].
     pub fits: Vec<GenderFit>,
     /// The space of the result (the chosen fit's).
     pub space: ShapeChoice,

@@ -109,8 +109,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
             .map_err(|_| CliError(format!("{}: joints3d must hold {NUM_JOINTS} joints", tp.display())))?;
         let camera = truth.camera.to_camera()?;
         let first = gender_features(&joints, &edges, &pose, &camera)?;
-        let closed = if a.close > 0 { dilated(&edges, a.close)? } else { edges.clone() };
-        let filled = gender_features(&joints, &filled_outline(&closed, &joints)?, &pose, &camera)?;
+        let closed = if a.close > 0 { Some(dilated(&edges, a.close)?) } else { None };
+        let filled =
+            gender_features(&joints, &filled_outline(closed.as_ref().unwrap_or(&edges), &joints)?, &pose, &camera)?;
         let line = serde_json::json!({
             "stem": stem, "gender": truth.gender, "first": first.values, "filled": filled.values,
         });
