@@ -16,6 +16,8 @@
 #    `HeightCalibration::SHIPPED`.
 #
 # Needs ../shared/data/mocap beside the repository (or SKB_SHARED_DATA) and a release build.
+# FIT_ARGS (optional, word-split): fit options passed to every `run-dataset`, to train the
+# calibration for fits other than the default (e.g. FIT_ARGS="--initial-factor 4").
 set -euo pipefail
 work=${1:?usage: scripts/train-fit-calibration.sh WORK_DIR}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -44,7 +46,7 @@ for seed in 79 80 81; do
     ds=$work/ds$seed
     "$skb" make-dataset 1200 --seed $seed --mocap "$work/mocap" --out "$ds"
     for fold in A B; do mkdir -p "$ds$fold"; done
-    for j in "$ds"/*.json; do
+    for j in "$ds"/[0-9]*.json; do
         stem=$(basename "$j" .json)
         clip=$(grep -o '"pose_source": *"mocap:[^:"]*' "$j" | sed 's/.*mocap://')
         fold=$(fold_of "$clip")
@@ -52,7 +54,7 @@ for seed in 79 80 81; do
         for ext in json mesh png; do ln -sf "$ds/$stem.$ext" "$ds$fold/$stem.$ext"; done
     done
     for fold in A B; do
-        "$skb" run-dataset "$ds$fold" --out "$work/r$seed$fold" --gender truth --dictionary "$work/dict$fold.skbpd"
+        "$skb" run-dataset "$ds$fold" --out "$work/r$seed$fold" --gender truth --dictionary "$work/dict$fold.skbpd" ${FIT_ARGS:-}
         # calibrate-fit reads the results' JSON only; the meshes would take 3 MB a sketch.
         find "$work/r$seed$fold" -name '*.obj' -delete
         train+=(--train "$ds$fold=$work/r$seed$fold")
