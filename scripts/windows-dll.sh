@@ -67,23 +67,27 @@ check_package() {
   echo "windows-dll: $(dll_exports "$dll" | wc -l) exports match the header; imports: $(paste -sd' ' <<<"$imports")"
 }
 
-# wine_run NAME ARGS...: runs NAME.exe of the tests' folder (beside sketchbody.dll, as a plug-in
-# sits beside it) under Wine. A run that fails because Wine itself lost its server ("wine client
-# error: ... recvmsg: Connection reset by peer", seen about once in ten full runs on this kind of
-# machine, never from the test) is run once more; any other failure fails.
-wine_run() {
-  local exe=$1 log status
+# wine_exe NAME ARGS...: runs NAME.exe of the tests' folder (beside sketchbody.dll, as a plug-in
+# sits beside it) under Wine, once.
+wine_exe() {
+  local exe=$1
   shift
-  echo "== wine $exe.exe $*"
+  WINEPREFIX="$out_dir/wine" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=" wine "$tests/$exe.exe" "$@"
+}
+
+# wine_run NAME ARGS...: wine_exe, except that a run that fails because Wine itself lost its
+# server ("wine client error: ... recvmsg: Connection reset by peer", seen about once in ten full
+# runs on this kind of machine, never from the test) is run once more; any other failure fails.
+wine_run() {
+  local log status=0
+  echo "== wine $1.exe ${*:2}"
   log=$(mktemp)
-  status=0
-  WINEPREFIX="$out_dir/wine" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=" wine "$tests/$exe.exe" "$@" \
-    >"$log" 2>&1 || status=$?
+  wine_exe "$@" >"$log" 2>&1 || status=$?
   cat "$log"
   if [ "$status" -ne 0 ] && grep -q '^wine client error' "$log"; then
-    echo "== Wine lost its server (not the test): wine $exe.exe once more"
+    echo "== Wine lost its server (not the test): wine $1.exe once more"
     status=0
-    WINEPREFIX="$out_dir/wine" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=" wine "$tests/$exe.exe" "$@" || status=$?
+    wine_exe "$@" || status=$?
   fi
   rm -f "$log"
   return "$status"
